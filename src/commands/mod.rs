@@ -1,0 +1,17 @@
+pub mod check;
+pub mod run;
+pub mod verify;
+
+use slipfront::scenario::{Scenario, DEFAULT_SCENARIO, DEFAULT_SCENARIO_NAME};
+use std::path::Path;
+
+/// The scenario at `path`, or the built-in default, with overrides applied.
+pub fn load_scenario(path: Option<&Path>, set: &[String]) -> anyhow::Result<(Scenario, String)> {
+    Ok(match path {
+        Some(p) => (Scenario::load(p, set)?, p.display().to_string()),
+        None => (
+            Scenario::parse(DEFAULT_SCENARIO, DEFAULT_SCENARIO_NAME, set)?,
+            DEFAULT_SCENARIO_NAME.to_string(),
+        ),
+    })
+}

@@ -1,0 +1,133 @@
+//! CPU twin of `shaders/bulk_forces.wgsl`: springs, dashpots, foundation and
+//! external loads on each block. Gather form (each block sums its own bonds),
+//! so blocks are independent and the result does not depend on threading.
+
+use crate::lattice::{FLAG_DRIVEN, FLAG_INTERFACE, FLAG_TOP, STENCIL};
+use crate::real::Real;
+use crate::step_params::{Consts, StepParams};
+
+/// Per-bond constants in the engine's precision, built once.
+#[derive(Debug, Clone, Copy)]
+pub struct BondConsts<T> {
+    pub dx: i32,
+    pub dz: i32,
+    pub r0: [T; 2],
+    pub rest: T,
+    pub k: T,
+}
+
+pub fn bond_consts<T: Real>(c: &Consts<T>) -> [BondConsts<T>; 8] {
+    STENCIL.map(|b| BondConsts {
+        dx: b.dx,
+        dz: b.dz,
+        r0: [
+            T::from_f64(b.dx as f64) * c.spacing,
+            T::from_f64(b.dz as f64) * c.spacing,
+        ],
+        rest: T::from_f64(b.length_factor) * c.spacing,
+        k: T::from_f64(b.stiffness_factor) * c.k,
+    })
+}
+
+/// Read-only block state the force kernels see.
+#[derive(Clone, Copy)]
+pub struct Blocks<'a, T> {
+    pub disp: &'a [[T; 2]],
+    pub vel: &'a [[T; 2]],
+    pub flags: &'a [u32],
+}
+
+/// Force on block `i` from everything but friction.
+#[inline]
+#[allow(clippy::too_many_arguments)]
+pub fn bulk_force<T: Real>(
+    c: &Consts<T>,
+    bonds: &[BondConsts<T>; 8],
+    p: &StepParams<T>,
+    drive_origin: T,
+    b: Blocks<'_, T>,
+    i: usize,
+) -> [T; 2] {
+    let (ix, iz) = ((i % c.nx) as i32, (i / c.nx) as i32);
+    let ui = b.disp[i];
+    let vi = b.vel[i];
+    let mut fx = T::zero();
+    let mut fz = T::zero();
+    for bond in bonds {
+        let jx = ix + bond.dx;
+        let jz = iz + bond.dz;
+        if jx < 0 || jz < 0 || jx >= c.nx as i32 || jz >= c.nz as i32 {
+            continue;
+        }
+        let j = jz as usize * c.nx + jx as usize;
+        let du = [b.disp[j][0] - ui[0], b.disp[j][1] - ui[1]];
+        let r = [bond.r0[0] + du[0], bond.r0[1] + du[1]];
+        let len = (r[0] * r[0] + r[1] * r[1]).sqrt();
+        // Elongation without cancellation: (|r|² − l²)/(|r| + l).
+        let two = T::one() + T::one();
+        let stretch = (two * (bond.r0[0] * du[0] + bond.r0[1] * du[1])
+            + (du[0] * du[0] + du[1] * du[1]))
+            / (len + bond.rest);
+        let inv_len = T::one() / len;
+        let n = [r[0] * inv_len, r[1] * inv_len];
+        let spring = bond.k * stretch;
+        fx = fx + spring * n[0];
+        fz = fz + spring * n[1];
+        let dv = [b.vel[j][0] - vi[0], b.vel[j][1] - vi[1]];
+        if c.bond_damping {
+            let along = c.eta * (dv[0] * n[0] + dv[1] * n[1]);
+            fx = fx + along * n[0];
+            fz = fz + along * n[1];
+        } else {
+            fx = fx + c.eta * dv[0];
+            fz = fz + c.eta * dv[1];
+        }
+    }
+    let flags = b.flags[i];
+    if flags & FLAG_INTERFACE != 0 {
+        fz = fz + c.k_foundation * (-ui[1]).max(T::zero());
+    }
+    if flags & FLAG_TOP != 0 {
+        let share = top_share(c, ix as usize);
+        fz = fz - p.normal_total * share;
+        fx = fx + p.top_tangential_total * share;
+    }
+    if flags & FLAG_DRIVEN != 0 && !p.preparing {
+        fx = fx + c.drive_stiffness * (p.drive_offset - (ui[0] - drive_origin));
+    }
+    fx = fx - p.relax_eta * vi[0];
+    fz = fz - p.relax_eta * vi[1];
+    [fx, fz]
+}
+
+/// Share of a top-row total force on column `ix` (edge blocks half).
+#[inline]
+pub fn top_share<T: Real>(c: &Consts<T>, ix: usize) -> T {
+    if c.nx == 1 {
+        T::one()
+    } else {
+        let full = T::one() / T::from_f64((c.nx - 1) as f64);
+        if ix == 0 || ix == c.nx - 1 {
+            full * T::from_f64(0.5)
+        } else {
+            full
+        }
+    }
+}
+
+/// Twin of the `bulk_forces` entry point: fills `force` for the blocks
+/// starting at `first`.
+#[allow(clippy::too_many_arguments)]
+pub fn bulk_forces<T: Real>(
+    c: &Consts<T>,
+    bonds: &[BondConsts<T>; 8],
+    p: &StepParams<T>,
+    drive_origin: T,
+    b: Blocks<'_, T>,
+    force: &mut [[T; 2]],
+    first: usize,
+) {
+    for (k, f) in force.iter_mut().enumerate() {
+        *f = bulk_force(c, bonds, p, drive_origin, b, first + k);
+    }
+}

@@ -1,0 +1,33 @@
+//! CPU twin of `shaders/coulomb.wgsl`: Amontons–Coulomb friction per
+//! interface block. Stuck: friction cancels the other forces and the
+//! velocity (exact static friction) while that takes at most μs·p. Sliding:
+//! μd·p against the sliding direction until the velocity changes sign.
+
+use super::junctions::foundation_normal;
+use crate::real::Real;
+use crate::step_params::{Consts, StepParams};
+
+/// Returns (friction along x, normal force p) and updates the sliding
+/// direction `dir` (0 stuck, ±1 sliding).
+pub fn coulomb<T: Real>(
+    c: &Consts<T>,
+    p: &StepParams<T>,
+    u: [T; 2],
+    v: [T; 2],
+    other_force_x: T,
+    dir: &mut i32,
+) -> (T, T) {
+    let normal = foundation_normal(c, u[1]);
+    if *dir != 0 && v[0] * T::from_f64(*dir as f64) <= T::zero() {
+        *dir = 0;
+    }
+    if *dir == 0 {
+        // Friction that brings the block to rest this step.
+        let hold = -other_force_x - c.mass * v[0] / c.dt;
+        if p.preparing || hold.abs() <= c.mu_s * normal {
+            return (hold, normal);
+        }
+        *dir = if other_force_x > T::zero() { 1 } else { -1 };
+    }
+    (-c.mu_d * normal * T::from_f64(*dir as f64), normal)
+}

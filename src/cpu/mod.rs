@@ -1,0 +1,299 @@
+//! The CPU reference engine, in f64 or in f32 (mirroring the GPU's
+//! arithmetic). Each phase is a twin of a WGSL kernel in `shaders/`, with the
+//! same name and buffer layout.
+
+pub mod bulk_forces;
+pub mod coulomb;
+pub mod junctions;
+pub mod verlet;
+
+pub use junctions::PINNED;
+
+use crate::engine::{blow_up, Engine, EngineError, Snapshot};
+use crate::lattice::{block_flags, initial_displacement};
+use crate::model::{Driver, Model};
+use crate::real::Real;
+use crate::scenario::FrictionLaw;
+use crate::step_params::{step_params, Consts};
+use bulk_forces::{bond_consts, Blocks, BondConsts};
+use junctions::JunctionSlots;
+use rayon::prelude::*;
+
+/// Lattices smaller than this run single-threaded: below it the fork-join
+/// cost per phase exceeds the work.
+const PARALLEL_MIN_BLOCKS: usize = 4096;
+
+/// The CPU engine over one model.
+pub struct CpuEngine<T: Real> {
+    model: Model,
+    consts: Consts<T>,
+    bonds: [BondConsts<T>; 8],
+    speed_limit: T,
+    flags: Vec<u32>,
+    disp: Vec<[T; 2]>,
+    vel: Vec<[T; 2]>,
+    force: Vec<[T; 2]>,
+    friction: Vec<T>,
+    normal: Vec<T>,
+    anchor: Vec<T>,
+    junction_stiffness: Vec<T>,
+    repin_step: Vec<u32>,
+    ruptures: Vec<u32>,
+    slide_dir: Vec<i32>,
+    drive_origin: T,
+    step: u64,
+    pool: Option<rayon::ThreadPool>,
+}
+
+impl<T: Real> CpuEngine<T> {
+    /// `threads`: 1 for the deterministic single-thread mode, 0 for all
+    /// cores. Results are identical either way (no cross-block reductions).
+    pub fn new(model: &Model, threads: usize) -> Result<Self, EngineError> {
+        let consts = Consts::<T>::new(model);
+        let n = model.n_blocks();
+        let nj = model.n_junctions();
+        let threads = if threads == 0 {
+            std::thread::available_parallelism().map_or(1, |n| n.get())
+        } else {
+            threads
+        };
+        let pool = if threads > 1 && n >= PARALLEL_MIN_BLOCKS {
+            Some(
+                rayon::ThreadPoolBuilder::new()
+                    .num_threads(threads)
+                    .build()
+                    .map_err(|e| EngineError::Gpu(format!("thread pool: {e}")))?,
+            )
+        } else {
+            None
+        };
+        let disp = initial_displacement(model)
+            .into_iter()
+            .map(|u| [T::from_f64(u[0]), T::from_f64(u[1])])
+            .collect();
+        Ok(CpuEngine {
+            consts,
+            bonds: bond_consts(&consts),
+            speed_limit: T::from_f64(model.pressure_wave_speed()),
+            flags: block_flags(model),
+            disp,
+            vel: vec![[T::zero(); 2]; n],
+            force: vec![[T::zero(); 2]; n],
+            friction: vec![T::zero(); model.nx],
+            normal: vec![T::zero(); model.nx],
+            anchor: vec![T::zero(); nj],
+            junction_stiffness: vec![T::zero(); nj],
+            repin_step: vec![PINNED; nj],
+            ruptures: vec![0; nj],
+            slide_dir: vec![0; model.nx],
+            drive_origin: T::zero(),
+            step: 0,
+            pool,
+            model: model.clone(),
+        })
+    }
+
+    pub fn threads(&self) -> usize {
+        self.pool.as_ref().map_or(1, |p| p.current_num_threads())
+    }
+
+    /// One leapfrog step: bulk forces, friction, update.
+    fn step_once(&mut self) -> Result<(), EngineError> {
+        let c = &self.consts;
+        let p = step_params(c, self.step);
+        let nx = c.nx;
+        let blocks = Blocks {
+            disp: &self.disp,
+            vel: &self.vel,
+            flags: &self.flags,
+        };
+        let (bonds, origin) = (&self.bonds, self.drive_origin);
+        let rows_per_task = (PARALLEL_MIN_BLOCKS / 4 / nx).max(1);
+        match &self.pool {
+            Some(pool) => pool.install(|| {
+                self.force
+                    .par_chunks_mut(nx * rows_per_task)
+                    .enumerate()
+                    .for_each(|(t, chunk)| {
+                        let first = t * nx * rows_per_task;
+                        bulk_forces::bulk_forces(c, bonds, &p, origin, blocks, chunk, first)
+                    })
+            }),
+            None => bulk_forces::bulk_forces(c, bonds, &p, origin, blocks, &mut self.force, 0),
+        }
+
+        match self.model.law {
+            FrictionLaw::None => {}
+            FrictionLaw::Coulomb => {
+                for ix in 0..nx {
+                    let (f, n) = coulomb::coulomb(
+                        c,
+                        &p,
+                        self.disp[ix],
+                        self.vel[ix],
+                        self.force[ix][0],
+                        &mut self.slide_dir[ix],
+                    );
+                    self.friction[ix] = f;
+                    self.normal[ix] = n;
+                }
+            }
+            FrictionLaw::Junctions | FrictionLaw::SingleJunction => {
+                let ns = c.junction_count;
+                let (disp, vel) = (&self.disp, &self.vel);
+                let run = |ix: usize,
+                           out: (&mut T, &mut T),
+                           a: &mut [T],
+                           k: &mut [T],
+                           r: &mut [u32],
+                           n: &mut [u32]| {
+                    let slots = JunctionSlots {
+                        anchor: a,
+                        stiffness: k,
+                        repin_step: r,
+                        ruptures: n,
+                    };
+                    let (f, p_n) = junctions::junctions(c, &p, ix, disp[ix], vel[ix], slots);
+                    *out.0 = f;
+                    *out.1 = p_n;
+                };
+                match &self.pool {
+                    Some(pool) => pool.install(|| {
+                        self.friction
+                            .par_iter_mut()
+                            .zip(self.normal.par_iter_mut())
+                            .zip(self.anchor.par_chunks_mut(ns))
+                            .zip(self.junction_stiffness.par_chunks_mut(ns))
+                            .zip(self.repin_step.par_chunks_mut(ns))
+                            .zip(self.ruptures.par_chunks_mut(ns))
+                            .enumerate()
+                            .for_each(|(ix, (((((f, pn), a), k), r), n))| {
+                                run(ix, (f, pn), a, k, r, n)
+                            })
+                    }),
+                    None => {
+                        for ix in 0..nx {
+                            let s = ix * ns..(ix + 1) * ns;
+                            run(
+                                ix,
+                                (&mut self.friction[ix], &mut self.normal[ix]),
+                                &mut self.anchor[s.clone()],
+                                &mut self.junction_stiffness[s.clone()],
+                                &mut self.repin_step[s.clone()],
+                                &mut self.ruptures[s],
+                            );
+                        }
+                    }
+                }
+            }
+        }
+
+        let has_friction = self.model.law != FrictionLaw::None;
+        let (force, friction, flags) = (&self.force, &self.friction, &self.flags);
+        let limit = self.speed_limit;
+        let update = |i: usize, u: &mut [T; 2], v: &mut [T; 2]| {
+            let fr = if has_friction && i < nx {
+                friction[i]
+            } else {
+                T::zero()
+            };
+            verlet::verlet(c, &p, flags[i], force[i], fr, u, v, limit)
+        };
+        let bad = match &self.pool {
+            Some(pool) => pool.install(|| {
+                self.disp
+                    .par_iter_mut()
+                    .zip(self.vel.par_iter_mut())
+                    .enumerate()
+                    .with_min_len(nx * rows_per_task)
+                    .filter_map(|(i, (u, v))| (!update(i, u, v)).then_some(i))
+                    .min()
+            }),
+            None => {
+                let mut bad = None;
+                for (i, (u, v)) in self.disp.iter_mut().zip(self.vel.iter_mut()).enumerate() {
+                    if !update(i, u, v) && bad.is_none() {
+                        bad = Some(i);
+                    }
+                }
+                bad
+            }
+        };
+        self.step += 1;
+        if let Some(i) = bad {
+            let u = self.disp[i].map(Real::as_f64);
+            let v = self.vel[i].map(Real::as_f64);
+            return Err(blow_up(&self.model, self.step, i, u, v));
+        }
+        Ok(())
+    }
+}
+
+impl<T: Real> Engine for CpuEngine<T> {
+    fn model(&self) -> &Model {
+        &self.model
+    }
+
+    fn steps_done(&self) -> u64 {
+        self.step
+    }
+
+    fn advance(&mut self, n: u64) -> Result<(), EngineError> {
+        for _ in 0..n {
+            self.step_once()?;
+        }
+        Ok(())
+    }
+
+    fn snapshot(&mut self) -> Result<Snapshot, EngineError> {
+        let f = |v: &[T]| v.iter().map(|x| x.as_f64()).collect::<Vec<_>>();
+        let f2 = |v: &[[T; 2]]| v.iter().map(|x| x.map(Real::as_f64)).collect::<Vec<_>>();
+        Ok(Snapshot {
+            step: self.step,
+            time: self.model.time_of_step(self.step),
+            disp: f2(&self.disp),
+            vel: f2(&self.vel),
+            friction: f(&self.friction),
+            normal: f(&self.normal),
+            anchor: f(&self.anchor),
+            junction_stiffness: f(&self.junction_stiffness),
+            repin_step: self.repin_step.clone(),
+            ruptures: self.ruptures.clone(),
+            slide_dir: self.slide_dir.clone(),
+        })
+    }
+
+    fn begin_driving(&mut self) -> Result<(), EngineError> {
+        if let Driver::SideSpring { row, .. } = self.model.driver {
+            self.drive_origin = self.disp[row * self.model.nx][0];
+        }
+        if self.model.trigger.is_some() {
+            let ns = self.consts.junction_count;
+            let mut anchors = vec![0.0; ns];
+            for ix in 0..self.model.nx {
+                let s = ix * ns..(ix + 1) * ns;
+                let stiffness: Vec<f64> = self.junction_stiffness[s.clone()]
+                    .iter()
+                    .map(|k| k.as_f64())
+                    .collect();
+                let normal = junctions::foundation_normal(&self.consts, self.disp[ix][1]);
+                crate::trigger::trigger_anchors(
+                    &self.model,
+                    ix,
+                    self.disp[ix][0].as_f64(),
+                    normal.as_f64(),
+                    &stiffness,
+                    &mut anchors,
+                );
+                for (dst, a) in self.anchor[s].iter_mut().zip(&anchors) {
+                    *dst = T::from_f64(*a);
+                }
+            }
+        }
+        Ok(())
+    }
+
+    fn describe(&self) -> String {
+        format!("cpu {} ({} thread(s))", T::NAME, self.threads())
+    }
+}

@@ -1,0 +1,39 @@
+//! CPU twin of `shaders/verlet.wgsl`: the leapfrog update
+//! v ← v + dt·F/m, u ← u + dt·v, with constraints and prescribed motion.
+
+use crate::lattice::{FLAG_FIX_X, FLAG_FIX_Z, FLAG_PRESCRIBED_X};
+use crate::real::Real;
+use crate::step_params::{Consts, StepParams};
+
+/// Updates one block; returns false if the result is not finite or faster
+/// than `speed_limit` (a blow-up).
+#[inline]
+#[allow(clippy::too_many_arguments)]
+pub fn verlet<T: Real>(
+    c: &Consts<T>,
+    p: &StepParams<T>,
+    flags: u32,
+    force: [T; 2],
+    friction: T,
+    u: &mut [T; 2],
+    v: &mut [T; 2],
+    speed_limit: T,
+) -> bool {
+    let mut vx = v[0] + c.dt * ((force[0] + friction) * c.inv_mass);
+    let mut vz = v[1] + c.dt * (force[1] * c.inv_mass);
+    if flags & FLAG_FIX_X != 0 {
+        vx = T::zero();
+    }
+    if flags & FLAG_FIX_Z != 0 {
+        vz = T::zero();
+    }
+    if flags & FLAG_PRESCRIBED_X != 0 {
+        vx = p.top_velocity;
+    }
+    v[0] = vx;
+    v[1] = vz;
+    u[0] = u[0] + c.dt * vx;
+    u[1] = u[1] + c.dt * vz;
+    // NaN fails every comparison, so this also catches non-finite values.
+    vx.abs() <= speed_limit && vz.abs() <= speed_limit && u[0].is_finite() && u[1].is_finite()
+}

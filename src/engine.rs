@@ -1,0 +1,128 @@
+//! What every engine offers, the state it reports, and the stepping driver
+//! shared by all of them (phase change at the start of driving).
+
+use crate::model::Model;
+
+/// Full engine state, converted to f64 for analysis and output.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Snapshot {
+    /// Global step count (0 at the start of the normal-load phase).
+    pub step: u64,
+    /// Time since driving started (s); negative in the normal-load phase.
+    pub time: f64,
+    pub disp: Vec<[f64; 2]>,
+    pub vel: Vec<[f64; 2]>,
+    /// Friction force along x on each interface block (N).
+    pub friction: Vec<f64>,
+    /// Normal force p on each interface block (N).
+    pub normal: Vec<f64>,
+    /// Junction arrays, index `ix * Ns + j`.
+    pub anchor: Vec<f64>,
+    pub junction_stiffness: Vec<f64>,
+    pub repin_step: Vec<u32>,
+    pub ruptures: Vec<u32>,
+    /// Amontons–Coulomb sliding direction per interface block.
+    pub slide_dir: Vec<i32>,
+}
+
+impl Snapshot {
+    /// Fraction of pinned junctions on each interface block.
+    pub fn pinned_fraction(&self, nx: usize) -> Vec<f64> {
+        if self.repin_step.is_empty() {
+            return self
+                .slide_dir
+                .iter()
+                .map(|&d| (d == 0) as u8 as f64)
+                .collect();
+        }
+        let ns = self.repin_step.len() / nx;
+        self.repin_step
+            .chunks(ns)
+            .map(|c| c.iter().filter(|&&r| r == crate::cpu::PINNED).count() as f64 / ns as f64)
+            .collect()
+    }
+
+    pub fn total_friction(&self) -> f64 {
+        self.friction.iter().sum()
+    }
+
+    pub fn total_ruptures(&self) -> u64 {
+        self.ruptures.iter().map(|&r| r as u64).sum()
+    }
+
+    pub fn kinetic_energy(&self, mass: f64) -> f64 {
+        0.5 * mass
+            * self
+                .vel
+                .iter()
+                .map(|v| v[0] * v[0] + v[1] * v[1])
+                .sum::<f64>()
+    }
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum EngineError {
+    #[error(
+        "the run blew up at step {step} (t = {time:.6e} s): block (ix = {ix}, iz = {iz}) has \
+         u = ({ux:.3e}, {uz:.3e}) m, v = ({vx:.3e}, {vz:.3e}) m/s (non-finite or faster than \
+         the P-wave speed); reduce time.dt or check the loads"
+    )]
+    BlowUp {
+        step: u64,
+        time: f64,
+        ix: usize,
+        iz: usize,
+        ux: f64,
+        uz: f64,
+        vx: f64,
+        vz: f64,
+    },
+    #[error("GPU: {0}")]
+    Gpu(String),
+}
+
+/// A simulation engine over one model.
+pub trait Engine {
+    fn model(&self) -> &Model;
+    /// Steps done so far.
+    fn steps_done(&self) -> u64;
+    /// Advances `n` steps. The caller never crosses the start of driving in
+    /// one call (see [`advance_to`]).
+    fn advance(&mut self, n: u64) -> Result<(), EngineError>;
+    /// Reads the whole state back.
+    fn snapshot(&mut self) -> Result<Snapshot, EngineError>;
+    /// Called once when driving starts: fixes the driver origin and applies
+    /// the trigger's initial junction forces.
+    fn begin_driving(&mut self) -> Result<(), EngineError>;
+    /// Backend, adapter and precision, for logs and metadata.
+    fn describe(&self) -> String;
+}
+
+/// Advances `engine` to global step `target`, calling `begin_driving` at the
+/// end of the normal-load phase.
+pub fn advance_to(engine: &mut dyn Engine, target: u64) -> Result<(), EngineError> {
+    let prep = engine.model().prep_steps;
+    while engine.steps_done() < target {
+        let s = engine.steps_done();
+        if s == prep {
+            engine.begin_driving()?;
+        }
+        let stop = if s < prep { target.min(prep) } else { target };
+        engine.advance(stop - s)?;
+    }
+    Ok(())
+}
+
+/// Builds the blow-up error for block `i` of a state.
+pub fn blow_up(model: &Model, step: u64, i: usize, u: [f64; 2], v: [f64; 2]) -> EngineError {
+    EngineError::BlowUp {
+        step,
+        time: model.time_of_step(step),
+        ix: i % model.nx,
+        iz: i / model.nx,
+        ux: u[0],
+        uz: u[1],
+        vx: v[0],
+        vz: v[1],
+    }
+}

@@ -1,0 +1,20 @@
+//! slipfront: a GPU-accelerated 2D spring-block simulator of the onset of
+//! frictional sliding (Trømborg et al., PNAS 2014), with a CPU reference.
+
+pub mod backend;
+pub mod cpu;
+pub mod engine;
+pub mod lattice;
+pub mod model;
+pub mod output;
+pub mod real;
+pub mod rng;
+pub mod runner;
+pub mod scenario;
+pub mod step_params;
+pub mod trigger;
+pub mod verify;
+
+pub use engine::{advance_to, Engine, EngineError, Snapshot};
+pub use model::Model;
+pub use scenario::Scenario;

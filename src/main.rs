@@ -1,0 +1,110 @@
+//! The `slipfront` command line.
+
+mod commands;
+
+use clap::{Parser, Subcommand};
+use slipfront::backend::{Backend, Precision};
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+#[derive(Parser)]
+#[command(
+    name = "slipfront",
+    version,
+    about = "2D spring-block simulator of the onset of frictional sliding"
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Run a scenario (the built-in Table S1 stick-slip scene when none is given).
+    Run {
+        scenario: Option<PathBuf>,
+        #[arg(long, value_enum, default_value = "auto")]
+        backend: Backend,
+        #[arg(long, value_enum)]
+        precision: Option<Precision>,
+        /// Override a scenario key: --set loading.drive.velocity=1e-3
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        set: Vec<String>,
+        /// Simulated time after the normal-load phase (s); overrides time.end.
+        #[arg(long)]
+        t_end: Option<f64>,
+        /// MCAP output file.
+        #[arg(short = 'o', long)]
+        output: Option<PathBuf>,
+        /// CPU threads (0: all cores, 1: deterministic single thread).
+        #[arg(long, default_value_t = 0)]
+        threads: usize,
+        /// Run even if dt is above the computed stability limit.
+        #[arg(long)]
+        allow_unstable: bool,
+        /// No progress bar.
+        #[arg(long)]
+        quiet: bool,
+    },
+    /// Derived quantities, stability limit, memory and terms, without running.
+    Check {
+        scenario: Option<PathBuf>,
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        set: Vec<String>,
+        #[arg(long)]
+        json: bool,
+    },
+    /// Run the validation cases and compare measured against expected.
+    Verify {
+        #[arg(long, value_enum, default_value = "cpu")]
+        backend: Backend,
+        #[arg(long, value_enum, default_value = "f64")]
+        precision: Precision,
+        #[arg(long)]
+        json: bool,
+    },
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Run {
+            scenario,
+            backend,
+            precision,
+            set,
+            t_end,
+            output,
+            threads,
+            allow_unstable,
+            quiet,
+        } => commands::run::run(commands::run::RunArgs {
+            scenario,
+            backend,
+            precision,
+            set,
+            t_end,
+            output,
+            threads,
+            allow_unstable,
+            quiet,
+        }),
+        Command::Check {
+            scenario,
+            set,
+            json,
+        } => commands::check::check(scenario, &set, json),
+        Command::Verify {
+            backend,
+            precision,
+            json,
+        } => commands::verify::verify(backend, precision, json),
+    };
+    match result {
+        Ok(code) => code,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::from(2)
+        }
+    }
+}

@@ -1,0 +1,244 @@
+//! Runs a scene to its end: advances the engine between output times,
+//! streams snapshots to the output sink, shows progress, and stops cleanly
+//! on Ctrl-C or a blow-up.
+
+use crate::engine::{advance_to, Engine, EngineError, Snapshot};
+use crate::model::{Driver, Model};
+use crate::output::{GlobalSample, McapSink};
+use crate::scenario::Scenario;
+use indicatif::{ProgressBar, ProgressStyle};
+use std::path::PathBuf;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Once;
+use std::time::Instant;
+
+static INTERRUPTED: AtomicBool = AtomicBool::new(false);
+static HANDLER: Once = Once::new();
+
+/// Steps between progress updates (and interrupt checks) at most.
+const MAX_CHUNK: u64 = 20_000;
+
+pub struct RunOptions {
+    pub output: Option<PathBuf>,
+    pub progress: bool,
+}
+
+/// What a finished (or interrupted) run reports.
+#[derive(Debug, Clone)]
+pub struct RunSummary {
+    pub backend: String,
+    pub steps: u64,
+    pub simulated_time: f64,
+    pub wall_seconds: f64,
+    pub block_steps_per_second: f64,
+    pub peak_drive_ratio: f64,
+    pub final_drive_ratio: f64,
+    pub ruptures: u64,
+    pub interrupted: bool,
+    pub output: Option<PathBuf>,
+}
+
+impl std::fmt::Display for RunSummary {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        writeln!(
+            f,
+            "run {}",
+            if self.interrupted {
+                "INTERRUPTED"
+            } else {
+                "complete"
+            }
+        )?;
+        writeln!(f, "  backend            {}", self.backend)?;
+        writeln!(f, "  steps              {}", self.steps)?;
+        writeln!(
+            f,
+            "  simulated time     {:.6} s after the normal-load phase",
+            self.simulated_time
+        )?;
+        writeln!(f, "  wall time          {:.2} s", self.wall_seconds)?;
+        writeln!(
+            f,
+            "  throughput         {:.3e} block-steps/s",
+            self.block_steps_per_second
+        )?;
+        writeln!(f, "  peak F/F_N         {:.4}", self.peak_drive_ratio)?;
+        writeln!(f, "  final F/F_N        {:.4}", self.final_drive_ratio)?;
+        writeln!(f, "  junction ruptures  {}", self.ruptures)?;
+        match &self.output {
+            Some(p) => write!(f, "  output             {}", p.display()),
+            None => write!(f, "  output             none (use -o run.mcap)"),
+        }
+    }
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum RunError {
+    #[error(transparent)]
+    Engine(#[from] EngineError),
+    #[error("output: {0}")]
+    Output(#[from] crate::output::OutputError),
+}
+
+/// Driving force (N) of the scene's driver in a snapshot.
+pub fn drive_force(model: &Model, snap: &Snapshot, origin: f64) -> f64 {
+    match model.driver {
+        Driver::SideSpring {
+            stiffness,
+            row,
+            velocity,
+        } => {
+            let t = snap.time.max(0.0);
+            stiffness * (velocity * t - (snap.disp[row * model.nx][0] - origin))
+        }
+        // Top loading: the friction the interface carries balances it.
+        _ => -snap.total_friction(),
+    }
+}
+
+/// The global series of one snapshot.
+pub fn global_sample(model: &Model, snap: &Snapshot, origin: f64) -> GlobalSample {
+    let force = drive_force(model, snap, origin);
+    let pinned = snap.pinned_fraction(model.nx);
+    GlobalSample {
+        time: snap.time,
+        step: snap.step,
+        drive_force: force,
+        drive_ratio: if model.normal_force > 0.0 {
+            force / model.normal_force
+        } else {
+            0.0
+        },
+        friction_force: snap.total_friction(),
+        pinned_fraction: pinned.iter().sum::<f64>() / pinned.len().max(1) as f64,
+        kinetic_energy: snap.kinetic_energy(model.mass),
+        ruptures: snap.total_ruptures(),
+    }
+}
+
+fn interval_steps(model: &Model, interval: f64) -> u64 {
+    if interval > 0.0 {
+        ((interval / model.dt).round() as u64).max(1)
+    } else {
+        0
+    }
+}
+
+fn next_multiple(step: u64, every: u64) -> u64 {
+    if every == 0 {
+        u64::MAX
+    } else {
+        (step / every + 1) * every
+    }
+}
+
+/// Runs `engine` over its whole scene.
+pub fn run_scene(
+    engine: &mut dyn Engine,
+    scenario: &Scenario,
+    opts: &RunOptions,
+) -> Result<RunSummary, RunError> {
+    HANDLER.call_once(|| {
+        let _ = ctrlc::set_handler(|| INTERRUPTED.store(true, Ordering::SeqCst));
+    });
+    let model = engine.model().clone();
+    let total = model.total_steps();
+    let mut sink = match &opts.output {
+        Some(p) => Some(McapSink::create(p, &model, scenario, &engine.describe())?),
+        None => None,
+    };
+    let every_global = interval_steps(&model, scenario.output.global_interval);
+    let every_interface = interval_steps(&model, scenario.output.interface_interval);
+    let every_bulk = interval_steps(&model, scenario.output.bulk_interval);
+    let bar = if opts.progress {
+        let b = ProgressBar::new(total);
+        b.set_style(
+            ProgressStyle::with_template("{bar:30} t = {msg} | {per_sec} | ETA {eta}")
+                .expect("valid template"),
+        );
+        b
+    } else {
+        ProgressBar::hidden()
+    };
+    let started = Instant::now();
+    let mut origin = 0.0;
+    let (mut peak, mut last) = (0.0f64, 0.0f64);
+    let mut ruptures = 0;
+    let mut interrupted = false;
+    let start_step = engine.steps_done();
+    while engine.steps_done() < total {
+        if INTERRUPTED.load(Ordering::SeqCst) {
+            interrupted = true;
+            break;
+        }
+        let s = engine.steps_done();
+        let mut target = (s + MAX_CHUNK).min(total);
+        if s < model.prep_steps {
+            target = target.min(model.prep_steps);
+        }
+        let out_step = if s >= model.prep_steps {
+            next_multiple(s - model.prep_steps, every_global)
+                .min(next_multiple(s - model.prep_steps, every_interface))
+                .min(next_multiple(s - model.prep_steps, every_bulk))
+                .saturating_add(model.prep_steps)
+        } else {
+            u64::MAX
+        };
+        target = target.min(out_step);
+        if let Err(e) = advance_to(engine, target) {
+            if let Some(sink) = sink.take() {
+                sink.finish()?;
+            }
+            bar.abandon();
+            return Err(e.into());
+        }
+        let s = engine.steps_done();
+        bar.set_position(s - start_step);
+        bar.set_message(format!("{:.6} s", model.time_of_step(s)));
+        if s == model.prep_steps {
+            let snap = engine.snapshot()?;
+            if let Driver::SideSpring { row, .. } = model.driver {
+                origin = snap.disp[row * model.nx][0];
+            }
+        }
+        if s == out_step {
+            let snap = engine.snapshot()?;
+            let d = s - model.prep_steps;
+            let g = global_sample(&model, &snap, origin);
+            peak = peak.max(g.drive_ratio);
+            last = g.drive_ratio;
+            ruptures = g.ruptures;
+            if let Some(sink) = sink.as_mut() {
+                if every_global > 0 && d % every_global == 0 {
+                    sink.write_global(&g)?;
+                }
+                if every_interface > 0 && d % every_interface == 0 {
+                    sink.write_interface(&model, &snap)?;
+                }
+                if every_bulk > 0 && d % every_bulk == 0 {
+                    sink.write_bulk(&model, &snap)?;
+                }
+            }
+        }
+    }
+    bar.finish_and_clear();
+    if let Some(sink) = sink {
+        sink.finish()?;
+    }
+    let final_snap = engine.snapshot()?;
+    let g = global_sample(&model, &final_snap, origin);
+    let wall = started.elapsed().as_secs_f64();
+    let steps = engine.steps_done() - start_step;
+    Ok(RunSummary {
+        backend: engine.describe(),
+        steps,
+        simulated_time: model.time_of_step(engine.steps_done()).max(0.0),
+        wall_seconds: wall,
+        block_steps_per_second: steps as f64 * model.n_blocks() as f64 / wall.max(1e-9),
+        peak_drive_ratio: peak.max(g.drive_ratio),
+        final_drive_ratio: if steps > 0 { g.drive_ratio } else { last },
+        ruptures: ruptures.max(g.ruptures),
+        interrupted,
+        output: opts.output.clone(),
+    })
+}

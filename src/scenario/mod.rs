@@ -1,0 +1,337 @@
+//! Scenario files: the TOML description of one simulation.
+//!
+//! Every key is required unless it belongs to a mode the scene does not use
+//! (those live in optional sub-tables). Unknown keys are refused by serde;
+//! ranges are checked by [`validate`], which names the key, the value, the
+//! allowed range and the line of the file.
+
+mod overrides;
+mod validate;
+
+pub use overrides::apply_override;
+pub use validate::validate;
+
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+
+/// The Table S1 side-driven stick-slip scene, run when no scenario is given.
+pub const DEFAULT_SCENARIO: &str = include_str!("../../scenarios/tromborg2014_stick_slip.toml");
+/// Name shown for the built-in default.
+pub const DEFAULT_SCENARIO_NAME: &str = "scenarios/tromborg2014_stick_slip.toml (built in)";
+
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Scenario {
+    pub name: String,
+    pub geometry: Geometry,
+    pub material: Material,
+    pub damping: Damping,
+    pub foundation: Foundation,
+    pub friction: Friction,
+    pub loading: Loading,
+    pub boundary: Boundary,
+    pub time: Time,
+    pub output: Output,
+    /// Optional initial displacement pulse (wave tests).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub pulse: Option<Pulse>,
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Geometry {
+    /// Slider length L along x (m).
+    pub length: f64,
+    /// Slider height H along z (m).
+    pub height: f64,
+    /// Out-of-plane width B (m).
+    pub width: f64,
+    /// Blocks along x.
+    pub nx: u32,
+    /// Blocks along z (row 0 is the interface).
+    pub nz: u32,
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Material {
+    /// Density ρ (kg/m³).
+    pub density: f64,
+    /// Young's modulus E (Pa).
+    pub youngs_modulus: f64,
+}
+
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum DampingForm {
+    /// F = η (v_j − v_i), the full relative velocity.
+    Full,
+    /// F = η ((v_j − v_i)·n) n, projected on the bond.
+    Bond,
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Damping {
+    /// η = ratio · √(k m); Table S1 uses √0.1.
+    pub ratio: f64,
+    pub form: DampingForm,
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Foundation {
+    /// k_f / k; Table S1 uses 0.5.
+    pub stiffness_ratio: f64,
+}
+
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum FrictionLaw {
+    /// Ns micro-junctions per interface block.
+    Junctions,
+    /// Amontons–Coulomb per interface block.
+    Coulomb,
+    /// One junction per block with slow post-rupture slip.
+    SingleJunction,
+    /// Frictionless (wave tests).
+    None,
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Friction {
+    pub law: FrictionLaw,
+    /// μs, the static (junction rupture) threshold.
+    pub static_coefficient: f64,
+    /// μd, the slipping friction level.
+    pub dynamic_coefficient: f64,
+    /// Required for `junctions` and `single_junction`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub junctions: Option<Junctions>,
+}
+
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum JunctionStiffness {
+    /// k_j = √(coefficient · f_N) at attachment.
+    NormalLoad,
+    /// k_j = constant_stiffness.
+    Constant,
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Junctions {
+    /// Ns, junctions per interface block.
+    pub count: u32,
+    pub stiffness: JunctionStiffness,
+    /// N/m², for `normal_load` stiffness (placeholder 39.2e9).
+    pub stiffness_coefficient: f64,
+    /// N/m, for `constant` stiffness.
+    pub constant_stiffness: f64,
+    /// ⟨t_R⟩ (s).
+    pub slip_time_mean: f64,
+    /// σ_R (s).
+    pub slip_time_std: f64,
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Loading {
+    pub normal: NormalLoad,
+    pub drive: Drive,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub trigger: Option<Trigger>,
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct NormalLoad {
+    /// F_N (N), spread over the top row.
+    pub force: f64,
+    /// Ramp duration (s) before driving starts; junctions cannot break.
+    pub ramp_time: f64,
+    /// Damped relaxation after the ramp (s).
+    pub relax_time: f64,
+    /// Extra damping on absolute velocity during relaxation, as a fraction of
+    /// 2√(k m) (the critical damping of one block on one spring).
+    pub relax_damping_ratio: f64,
+}
+
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum DriveMode {
+    /// Spring K on the trailing-edge column at height h, pulled at V.
+    SideSpring,
+    /// Uniform tangential force on the top row growing at `force_rate`.
+    TopForce,
+    /// Top row moved at constant velocity V.
+    TopVelocity,
+    /// No tangential driving.
+    None,
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Drive {
+    pub mode: DriveMode,
+    /// K (N/m), side_spring.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub stiffness: Option<f64>,
+    /// h (m) above the interface, side_spring.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub height: Option<f64>,
+    /// V (m/s), side_spring and top_velocity.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub velocity: Option<f64>,
+    /// dF/dt (N/s) of the total top force, top_force.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub force_rate: Option<f64>,
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Trigger {
+    /// τ/p, the initial junction force over its normal force, on average.
+    pub shear_prestress: f64,
+    /// Full width of the uniform distribution of junction force ratios.
+    pub force_width: f64,
+    /// Length (m) of the trailing-edge strip pushed over threshold at t = 0.
+    pub strip_length: f64,
+    /// τ/p in the trigger strip at t = 0 (above μs breaks it at once).
+    pub strip_prestress: f64,
+}
+
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum EdgeConstraint {
+    Free,
+    /// u_x = 0 on the row.
+    FixX,
+    /// u_z = 0 on the row.
+    FixZ,
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Boundary {
+    pub top: EdgeConstraint,
+    pub bottom: EdgeConstraint,
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Time {
+    /// Time step in seconds; give this or `dt_fraction`, not both.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub dt: Option<f64>,
+    /// Time step as a fraction of T = 2π√(m/k).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub dt_fraction: Option<f64>,
+    /// Simulated time after the normal-load phase (s).
+    pub end: f64,
+    /// Seed of the counter-based junction RNG.
+    pub seed: u32,
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Output {
+    /// Global series cadence (s); 0 disables.
+    pub global_interval: f64,
+    /// Interface fields cadence (s); 0 disables.
+    pub interface_interval: f64,
+    /// Bulk snapshots cadence (s); 0 disables.
+    pub bulk_interval: f64,
+}
+
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum Component {
+    X,
+    Z,
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Pulse {
+    /// Displacement component carried by the pulse.
+    pub component: Component,
+    /// Centre along x (m).
+    pub center: f64,
+    /// Gaussian standard deviation (m).
+    pub width: f64,
+    /// Peak displacement (m).
+    pub amplitude: f64,
+}
+
+/// A scenario error: every problem found, each naming key, value, range and line.
+#[derive(Debug, thiserror::Error)]
+#[error("invalid scenario {source_name}:\n  - {}", .problems.join("\n  - "))]
+pub struct ScenarioError {
+    pub source_name: String,
+    pub problems: Vec<String>,
+}
+
+impl Scenario {
+    /// The built-in default scene.
+    pub fn default_scene() -> Scenario {
+        Scenario::parse(DEFAULT_SCENARIO, DEFAULT_SCENARIO_NAME, &[])
+            .expect("built-in scenario is valid")
+    }
+
+    /// Reads a scenario file, applies `--set` overrides and validates it.
+    pub fn load(path: &Path, overrides: &[String]) -> Result<Scenario, ScenarioError> {
+        let name = path.display().to_string();
+        let text = std::fs::read_to_string(path).map_err(|e| ScenarioError {
+            source_name: name.clone(),
+            problems: vec![format!("cannot read scenario file `{name}`: {e}")],
+        })?;
+        Scenario::parse(&text, &name, overrides)
+    }
+
+    /// Parses TOML text, applies `key.path=value` overrides and validates.
+    pub fn parse(
+        text: &str,
+        source_name: &str,
+        overrides: &[String],
+    ) -> Result<Scenario, ScenarioError> {
+        let fail = |problems: Vec<String>| ScenarioError {
+            source_name: source_name.to_string(),
+            problems,
+        };
+        let scenario: Scenario = if overrides.is_empty() {
+            toml::from_str(text).map_err(|e| fail(vec![describe_toml_error(&e)]))?
+        } else {
+            let mut table: toml::Table = toml::from_str(text)
+                .map_err(|e: toml::de::Error| fail(vec![describe_toml_error(&e)]))?;
+            for item in overrides {
+                apply_override(&mut table, item).map_err(|p| fail(vec![p]))?;
+            }
+            Scenario::deserialize(table).map_err(|e| {
+                fail(vec![format!(
+                    "{} (after --set {})",
+                    e.message(),
+                    overrides.join(", --set ")
+                )])
+            })?
+        };
+        let problems = validate(&scenario, text);
+        if problems.is_empty() {
+            Ok(scenario)
+        } else {
+            Err(fail(problems))
+        }
+    }
+
+    /// TOML text of this scenario (the canonical form stored with outputs).
+    pub fn to_toml(&self) -> String {
+        toml::to_string(self).expect("scenario serialises")
+    }
+}
+
+fn describe_toml_error(e: &toml::de::Error) -> String {
+    // toml's Display already carries "line N, column M" and a snippet.
+    e.to_string().trim_end().replace('\n', "\n    ")
+}

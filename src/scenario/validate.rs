@@ -1,0 +1,303 @@
+//! Range checks on a parsed scenario. Each problem names the key, the value,
+//! the allowed range and, where the key is in the file, its line.
+
+use super::{DriveMode, FrictionLaw, JunctionStiffness, Scenario};
+
+/// Returns every problem found; empty when the scenario is valid.
+pub fn validate(s: &Scenario, text: &str) -> Vec<String> {
+    let mut c = Checker {
+        text,
+        problems: Vec::new(),
+    };
+    let g = &s.geometry;
+    c.positive("geometry.length", g.length);
+    c.positive("geometry.height", g.height);
+    c.positive("geometry.width", g.width);
+    c.range_u("geometry.nx", g.nx, 1, 1 << 16);
+    c.range_u("geometry.nz", g.nz, 1, 1 << 16);
+    if g.nx > 1 && g.nz > 1 && g.length > 0.0 && g.height > 0.0 {
+        let lx = g.length / (g.nx - 1) as f64;
+        let lz = g.height / (g.nz - 1) as f64;
+        if ((lx - lz) / lx).abs() > 1e-6 {
+            let line = c.line("geometry.height");
+            c.problems.push(format!(
+                "geometry.height = {} gives spacing H/(nz-1) = {lz:e} m but L/(nx-1) = {lx:e} m: \
+                 the lattice must be square (allowed: height = length*(nz-1)/(nx-1) = {}){line}",
+                g.height,
+                g.length * (g.nz - 1) as f64 / (g.nx - 1) as f64
+            ));
+        }
+    }
+    c.positive("material.density", s.material.density);
+    c.positive("material.youngs_modulus", s.material.youngs_modulus);
+    c.range("damping.ratio", s.damping.ratio, 0.0, 10.0);
+    c.range(
+        "foundation.stiffness_ratio",
+        s.foundation.stiffness_ratio,
+        0.0,
+        1e3,
+    );
+
+    let f = &s.friction;
+    c.range(
+        "friction.static_coefficient",
+        f.static_coefficient,
+        0.0,
+        10.0,
+    );
+    c.range(
+        "friction.dynamic_coefficient",
+        f.dynamic_coefficient,
+        0.0,
+        10.0,
+    );
+    if f.dynamic_coefficient > f.static_coefficient {
+        let line = c.line("friction.dynamic_coefficient");
+        c.problems.push(format!(
+            "friction.dynamic_coefficient = {} exceeds friction.static_coefficient = {} \
+             (allowed: 0 <= dynamic <= static){line}",
+            f.dynamic_coefficient, f.static_coefficient
+        ));
+    }
+    match (f.law, &f.junctions) {
+        (FrictionLaw::Junctions | FrictionLaw::SingleJunction, None) => c.problems.push(format!(
+            "missing table [friction.junctions], required by friction.law = \"{}\"",
+            law_name(f.law)
+        )),
+        (FrictionLaw::Junctions | FrictionLaw::SingleJunction, Some(j)) => {
+            if f.law == FrictionLaw::SingleJunction && j.count != 1 {
+                let line = c.line("friction.junctions.count");
+                c.problems.push(format!(
+                    "friction.junctions.count = {} but friction.law = \"single_junction\" needs \
+                     exactly 1 (allowed: 1){line}",
+                    j.count
+                ));
+            } else {
+                c.range_u("friction.junctions.count", j.count, 1, 4096);
+            }
+            match j.stiffness {
+                JunctionStiffness::NormalLoad => c.positive(
+                    "friction.junctions.stiffness_coefficient",
+                    j.stiffness_coefficient,
+                ),
+                JunctionStiffness::Constant => c.positive(
+                    "friction.junctions.constant_stiffness",
+                    j.constant_stiffness,
+                ),
+            }
+            c.range(
+                "friction.junctions.slip_time_mean",
+                j.slip_time_mean,
+                0.0,
+                1e3,
+            );
+            c.range(
+                "friction.junctions.slip_time_std",
+                j.slip_time_std,
+                0.0,
+                1e3,
+            );
+        }
+        _ => {}
+    }
+
+    let n = &s.loading.normal;
+    c.range("loading.normal.force", n.force, 0.0, 1e12);
+    c.range("loading.normal.ramp_time", n.ramp_time, 0.0, 1e3);
+    c.range("loading.normal.relax_time", n.relax_time, 0.0, 1e3);
+    c.range(
+        "loading.normal.relax_damping_ratio",
+        n.relax_damping_ratio,
+        0.0,
+        100.0,
+    );
+
+    let d = &s.loading.drive;
+    let needs: &[&str] = match d.mode {
+        DriveMode::SideSpring => &["stiffness", "height", "velocity"],
+        DriveMode::TopForce => &["force_rate"],
+        DriveMode::TopVelocity => &["velocity"],
+        DriveMode::None => &[],
+    };
+    for (key, value) in [
+        ("stiffness", d.stiffness),
+        ("height", d.height),
+        ("velocity", d.velocity),
+        ("force_rate", d.force_rate),
+    ] {
+        let path = format!("loading.drive.{key}");
+        match (needs.contains(&key), value) {
+            (true, None) => c.problems.push(format!(
+                "missing key {path}, required by loading.drive.mode = \"{}\"",
+                drive_name(d.mode)
+            )),
+            (false, Some(v)) => {
+                let line = c.line(&path);
+                c.problems.push(format!(
+                    "{path} = {v} is not used by loading.drive.mode = \"{}\" (allowed keys: {}){line}",
+                    drive_name(d.mode),
+                    needs.join(", ")
+                ))
+            }
+            (true, Some(v)) => match key {
+                "stiffness" => c.positive(&path, v),
+                "height" => c.range(&path, v, 0.0, s.geometry.height),
+                _ => c.range(&path, v, -1e3, 1e3),
+            },
+            (false, None) => {}
+        }
+    }
+    if let Some(t) = &s.loading.trigger {
+        c.range(
+            "loading.trigger.shear_prestress",
+            t.shear_prestress,
+            -10.0,
+            10.0,
+        );
+        c.range("loading.trigger.force_width", t.force_width, 0.0, 10.0);
+        c.range(
+            "loading.trigger.strip_length",
+            t.strip_length,
+            0.0,
+            s.geometry.length,
+        );
+        c.range(
+            "loading.trigger.strip_prestress",
+            t.strip_prestress,
+            -10.0,
+            10.0,
+        );
+        if !matches!(f.law, FrictionLaw::Junctions | FrictionLaw::SingleJunction) {
+            c.problems.push(format!(
+                "[loading.trigger] sets junction forces, but friction.law = \"{}\" has no \
+                 junctions (allowed with: junctions, single_junction)",
+                law_name(f.law)
+            ));
+        }
+    }
+
+    let t = &s.time;
+    match (t.dt, t.dt_fraction) {
+        (Some(dt), None) => c.range("time.dt", dt, 1e-15, 1.0),
+        (None, Some(fr)) => c.range("time.dt_fraction", fr, 1e-6, 1.0),
+        (Some(_), Some(_)) => c.problems.push(
+            "time.dt and time.dt_fraction are both set: give the time step one way only".into(),
+        ),
+        (None, None) => c
+            .problems
+            .push("missing key time.dt or time.dt_fraction: the time step is required".into()),
+    }
+    c.range("time.end", t.end, 0.0, 1e6);
+    let o = &s.output;
+    c.range("output.global_interval", o.global_interval, 0.0, 1e6);
+    c.range("output.interface_interval", o.interface_interval, 0.0, 1e6);
+    c.range("output.bulk_interval", o.bulk_interval, 0.0, 1e6);
+    if let Some(p) = &s.pulse {
+        c.range("pulse.center", p.center, 0.0, s.geometry.length);
+        c.range("pulse.width", p.width, 1e-12, s.geometry.length);
+        c.range(
+            "pulse.amplitude",
+            p.amplitude,
+            -s.geometry.height,
+            s.geometry.height,
+        );
+    }
+    c.problems
+}
+
+fn law_name(l: FrictionLaw) -> &'static str {
+    match l {
+        FrictionLaw::Junctions => "junctions",
+        FrictionLaw::Coulomb => "coulomb",
+        FrictionLaw::SingleJunction => "single_junction",
+        FrictionLaw::None => "none",
+    }
+}
+
+fn drive_name(m: DriveMode) -> &'static str {
+    match m {
+        DriveMode::SideSpring => "side_spring",
+        DriveMode::TopForce => "top_force",
+        DriveMode::TopVelocity => "top_velocity",
+        DriveMode::None => "none",
+    }
+}
+
+struct Checker<'a> {
+    text: &'a str,
+    problems: Vec<String>,
+}
+
+impl Checker<'_> {
+    fn line(&self, path: &str) -> String {
+        match line_of(self.text, path) {
+            Some(n) => format!(" (line {n})"),
+            None => " (set on the command line or defaulted)".to_string(),
+        }
+    }
+
+    fn range(&mut self, path: &str, v: f64, lo: f64, hi: f64) {
+        if !(v.is_finite() && v >= lo && v <= hi) {
+            let line = self.line(path);
+            self.problems.push(format!(
+                "{path} = {v} is out of range (allowed: {lo} to {hi}){line}"
+            ));
+        }
+    }
+
+    fn positive(&mut self, path: &str, v: f64) {
+        if !(v.is_finite() && v > 0.0) {
+            let line = self.line(path);
+            self.problems.push(format!(
+                "{path} = {v} is out of range (allowed: a finite value > 0){line}"
+            ));
+        }
+    }
+
+    fn range_u(&mut self, path: &str, v: u32, lo: u32, hi: u32) {
+        if v < lo || v > hi {
+            let line = self.line(path);
+            self.problems.push(format!(
+                "{path} = {v} is out of range (allowed: {lo} to {hi}){line}"
+            ));
+        }
+    }
+}
+
+/// 1-based line of `a.b.c` in simple TOML text (`[a.b]` header then `c = ...`).
+pub fn line_of(text: &str, path: &str) -> Option<usize> {
+    let (table, key) = match path.rsplit_once('.') {
+        Some((t, k)) => (t, k),
+        None => ("", path),
+    };
+    let mut current = String::new();
+    for (i, raw) in text.lines().enumerate() {
+        let line = raw.split('#').next().unwrap_or("").trim();
+        if let Some(h) = line.strip_prefix('[').and_then(|l| l.strip_suffix(']')) {
+            current = h.trim().to_string();
+            continue;
+        }
+        if current == table {
+            if let Some((k, _)) = line.split_once('=') {
+                if k.trim() == key {
+                    return Some(i + 1);
+                }
+            }
+        }
+    }
+    None
+}
+
+#[cfg(test)]
+mod tests {
+    use super::line_of;
+
+    #[test]
+    fn finds_lines_of_nested_keys() {
+        let text = "name = \"x\"\n[a]\nb = 1\n[a.c]\nb = 2 # note\n";
+        assert_eq!(line_of(text, "name"), Some(1));
+        assert_eq!(line_of(text, "a.b"), Some(3));
+        assert_eq!(line_of(text, "a.c.b"), Some(5));
+        assert_eq!(line_of(text, "a.d"), None);
+    }
+}

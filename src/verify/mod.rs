@@ -1,0 +1,113 @@
+//! Validation cases: measured against expected, each with its tolerance.
+//! Run by `slipfront verify` on any backend and by the integration tests.
+
+mod coulomb_block;
+mod elastic;
+mod junction_drag;
+mod rng_stats;
+mod waves;
+
+pub use coulomb_block::{coulomb_exact_position, CoulombExact};
+pub use junction_drag::renewal_friction_coefficient;
+
+use crate::engine::{Engine, EngineError};
+use crate::model::Model;
+use crate::scenario::Scenario;
+use serde::Serialize;
+
+/// One validation result.
+#[derive(Debug, Clone, Serialize, PartialEq)]
+pub struct CaseResult {
+    pub name: String,
+    pub measured: f64,
+    pub expected: f64,
+    /// Allowed |measured − expected| (absolute, in `unit`).
+    pub tolerance: f64,
+    pub unit: String,
+    pub pass: bool,
+}
+
+impl CaseResult {
+    pub fn new(name: &str, measured: f64, expected: f64, tolerance: f64, unit: &str) -> Self {
+        CaseResult {
+            name: name.to_string(),
+            measured,
+            expected,
+            tolerance,
+            unit: unit.to_string(),
+            pass: measured.is_finite() && (measured - expected).abs() <= tolerance,
+        }
+    }
+
+    /// A case that passes when `measured <= bound`.
+    pub fn at_most(name: &str, measured: f64, bound: f64, unit: &str) -> Self {
+        CaseResult {
+            name: name.to_string(),
+            measured,
+            expected: bound,
+            tolerance: 0.0,
+            unit: unit.to_string(),
+            pass: measured.is_finite() && measured <= bound,
+        }
+    }
+}
+
+/// Builds an engine for a model (the backend under test).
+pub type EngineFactory<'a> = &'a dyn Fn(&Model) -> Result<Box<dyn Engine>, EngineError>;
+
+/// Errors of the verification harness itself.
+#[derive(Debug, thiserror::Error)]
+pub enum VerifyError {
+    #[error(transparent)]
+    Engine(#[from] EngineError),
+    #[error(transparent)]
+    Model(#[from] crate::model::ModelError),
+}
+
+/// Every validation case, in order.
+pub fn run_all(factory: EngineFactory<'_>) -> Result<Vec<CaseResult>, VerifyError> {
+    let mut out = Vec::new();
+    out.extend(waves::wave_speed_cases(factory)?);
+    out.extend(elastic::elastic_constant_cases(factory)?);
+    out.extend(coulomb_block::coulomb_block_cases(factory)?);
+    out.extend(junction_drag::junction_drag_cases(factory)?);
+    out.extend(rng_stats::rng_cases(factory)?);
+    Ok(out)
+}
+
+/// The Table S1 scene stripped of loads, friction and damping: the base of
+/// the verification scenes, which then set what they test.
+pub fn bare_scene(name: &str) -> Scenario {
+    use crate::scenario::{DriveMode, EdgeConstraint, FrictionLaw};
+    let mut s = Scenario::default_scene();
+    s.name = name.to_string();
+    s.damping.ratio = 0.0;
+    s.foundation.stiffness_ratio = 0.0;
+    s.friction.law = FrictionLaw::None;
+    s.friction.junctions = None;
+    s.loading.normal.force = 0.0;
+    s.loading.normal.ramp_time = 0.0;
+    s.loading.normal.relax_time = 0.0;
+    s.loading.drive = crate::scenario::Drive {
+        mode: DriveMode::None,
+        stiffness: None,
+        height: None,
+        velocity: None,
+        force_rate: None,
+    };
+    s.boundary.top = EdgeConstraint::Free;
+    s.boundary.bottom = EdgeConstraint::Free;
+    s
+}
+
+/// Model of a verification scene (validated like a user's scenario).
+pub fn scene_model(s: &Scenario) -> Result<Model, VerifyError> {
+    let text = s.to_toml();
+    let problems = crate::scenario::validate(s, &text);
+    if !problems.is_empty() {
+        return Err(VerifyError::Model(crate::model::ModelError::Invalid(
+            problems.join("; "),
+        )));
+    }
+    Ok(Model::from_scenario(s, false)?)
+}
