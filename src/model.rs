@@ -128,8 +128,8 @@ impl StabilityLimit {
 #[derive(Debug, thiserror::Error)]
 pub enum ModelError {
     #[error(
-        "time step dt = {dt:e} s is above the stability limit {limit:e} s ({which}); \
-         use time.dt <= {limit:e} s (time.dt_fraction <= {fraction:.4}) or pass \
+        "time step dt = {dt:.4e} s is above the stability limit {limit:.4e} s ({which}); \
+         use time.dt <= {limit:.4e} s (time.dt_fraction <= {fraction:.4}) or pass \
          --allow-unstable to override"
     )]
     Unstable {

@@ -125,11 +125,7 @@ fn interval_steps(model: &Model, interval: f64) -> u64 {
 }
 
 fn next_multiple(step: u64, every: u64) -> u64 {
-    if every == 0 {
-        u64::MAX
-    } else {
-        (step / every + 1) * every
-    }
+    step.checked_div(every).map_or(u64::MAX, |n| (n + 1) * every)
 }
 
 /// Runs `engine` over its whole scene.
@@ -209,13 +205,13 @@ pub fn run_scene(
             last = g.drive_ratio;
             ruptures = g.ruptures;
             if let Some(sink) = sink.as_mut() {
-                if every_global > 0 && d % every_global == 0 {
+                if every_global > 0 && d.is_multiple_of(every_global) {
                     sink.write_global(&g)?;
                 }
-                if every_interface > 0 && d % every_interface == 0 {
+                if every_interface > 0 && d.is_multiple_of(every_interface) {
                     sink.write_interface(&model, &snap)?;
                 }
-                if every_bulk > 0 && d % every_bulk == 0 {
+                if every_bulk > 0 && d.is_multiple_of(every_bulk) {
                     sink.write_bulk(&model, &snap)?;
                 }
             }

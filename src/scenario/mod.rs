@@ -308,6 +308,16 @@ impl Scenario {
                 .map_err(|e: toml::de::Error| fail(vec![describe_toml_error(&e)]))?;
             for item in overrides {
                 apply_override(&mut table, item).map_err(|p| fail(vec![p]))?;
+                // time.dt and time.dt_fraction are alternatives: setting one drops the other.
+                let key = item.split_once('=').map_or("", |(k, _)| k.trim());
+                let other = match key {
+                    "time.dt" => Some("dt_fraction"),
+                    "time.dt_fraction" => Some("dt"),
+                    _ => None,
+                };
+                if let (Some(other), Some(toml::Value::Table(t))) = (other, table.get_mut("time")) {
+                    t.remove(other);
+                }
             }
             Scenario::deserialize(table).map_err(|e| {
                 fail(vec![format!(
@@ -317,7 +327,11 @@ impl Scenario {
                 )])
             })?
         };
-        let problems = validate(&scenario, text);
+        let overridden: Vec<&str> = overrides
+            .iter()
+            .map(|o| o.split_once('=').map_or(o.as_str(), |(k, _)| k).trim())
+            .collect();
+        let problems = validate(&scenario, text, &overridden);
         if problems.is_empty() {
             Ok(scenario)
         } else {

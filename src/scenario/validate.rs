@@ -4,9 +4,11 @@
 use super::{DriveMode, FrictionLaw, JunctionStiffness, Scenario};
 
 /// Returns every problem found; empty when the scenario is valid.
-pub fn validate(s: &Scenario, text: &str) -> Vec<String> {
+/// `overridden` lists the keys set with `--set` (their line is the command line).
+pub fn validate(s: &Scenario, text: &str, overridden: &[&str]) -> Vec<String> {
     let mut c = Checker {
         text,
+        overridden,
         problems: Vec::new(),
     };
     let g = &s.geometry;
@@ -225,11 +227,15 @@ fn drive_name(m: DriveMode) -> &'static str {
 
 struct Checker<'a> {
     text: &'a str,
+    overridden: &'a [&'a str],
     problems: Vec<String>,
 }
 
 impl Checker<'_> {
     fn line(&self, path: &str) -> String {
+        if self.overridden.contains(&path) {
+            return " (set on the command line)".to_string();
+        }
         match line_of(self.text, path) {
             Some(n) => format!(" (line {n})"),
             None => " (set on the command line or defaulted)".to_string(),

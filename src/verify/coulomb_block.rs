@@ -49,8 +49,21 @@ pub fn coulomb_exact_position(p: &CoulombExact, t: f64) -> f64 {
     }
 }
 
-/// Mean |x_num − x_exact| over the run, for a time step of `fraction`·T.
-fn coulomb_error(factory: EngineFactory<'_>, fraction: f64) -> Result<f64, VerifyError> {
+const DRIVE_STIFFNESS: f64 = 4.0e6;
+const NORMAL_FORCE: f64 = 10.0;
+/// Runs per time step, at driving speeds 10% apart: each puts the slip
+/// onset at another phase of the step grid, and their mean error shows the
+/// O(dt) envelope rather than one fortuitous phase (thesis Fig. A.3).
+const SPEEDS: usize = 8;
+
+/// Mean |x_num − x_exact| over one run at time step `fraction`·T, driven at
+/// `speed_factor` times the speed that makes the stick phase last five slip
+/// durations.
+fn coulomb_error(
+    factory: EngineFactory<'_>,
+    fraction: f64,
+    speed_factor: f64,
+) -> Result<f64, VerifyError> {
     let mut s = bare_scene("coulomb_block");
     s.geometry.nx = 1;
     s.geometry.nz = 1;
@@ -58,34 +71,41 @@ fn coulomb_error(factory: EngineFactory<'_>, fraction: f64) -> Result<f64, Verif
     s.geometry.height = 2.5e-3;
     s.foundation.stiffness_ratio = 0.5;
     s.friction.law = FrictionLaw::Coulomb;
-    s.loading.normal.force = 10.0;
-    s.loading.normal.ramp_time = 0.2e-3;
-    s.loading.normal.relax_time = 1.0e-3;
+    s.time.dt_fraction = Some(fraction);
+    let probe = scene_model(&s)?;
+    let mass = probe.mass;
+    // Times scale with the block: slip lasts π√(m/K); the foundation rings at √(k_f/m).
+    let slip_time = std::f64::consts::PI * (mass / DRIVE_STIFFNESS).sqrt();
+    let foundation_time = (mass / probe.k_foundation).sqrt();
+    let mu_s = s.friction.static_coefficient;
+    let speed = speed_factor * mu_s * NORMAL_FORCE / (DRIVE_STIFFNESS * 5.0 * slip_time);
+    s.loading.normal.force = NORMAL_FORCE;
+    s.loading.normal.ramp_time = 10.0 * foundation_time;
+    s.loading.normal.relax_time = 40.0 * foundation_time;
     // Critical damping of the block on its foundation: √(k_f/k) of 2√(km).
     s.loading.normal.relax_damping_ratio = 0.5f64.sqrt();
     s.loading.drive = Drive {
         mode: DriveMode::SideSpring,
-        stiffness: Some(4.0e6),
+        stiffness: Some(DRIVE_STIFFNESS),
         height: Some(0.0),
-        velocity: Some(4.0e-3),
+        velocity: Some(speed),
         force_rate: None,
     };
-    s.time.dt_fraction = Some(fraction);
-    s.time.end = 0.5e-3;
+    s.time.end = 9.0 * slip_time;
     let model = scene_model(&s)?;
     let mut engine = factory(&model)?;
     advance_to(engine.as_mut(), model.prep_steps)?;
     let start = engine.snapshot()?;
     let exact = CoulombExact {
         mass: model.mass,
-        stiffness: 4.0e6,
-        velocity: 4.0e-3,
+        stiffness: DRIVE_STIFFNESS,
+        velocity: speed,
         normal: start.normal[0],
         mu_s: model.mu_s,
         mu_d: model.mu_d,
     };
     let x0 = start.disp[0][0];
-    let samples = 400u64;
+    let samples = 90u64;
     let stride = (model.drive_steps / samples).max(1);
     let (mut sum, mut n) = (0.0, 0.0);
     let mut step = model.prep_steps;
@@ -99,19 +119,29 @@ fn coulomb_error(factory: EngineFactory<'_>, fraction: f64) -> Result<f64, Verif
     Ok(sum / n)
 }
 
+/// Mean error over the ensemble of driving speeds.
+fn coulomb_ensemble_error(factory: EngineFactory<'_>, fraction: f64) -> Result<f64, VerifyError> {
+    let mut total = 0.0;
+    for i in 0..SPEEDS {
+        total += coulomb_error(factory, fraction, 1.0 + 0.1 * i as f64)?;
+    }
+    Ok(total / SPEEDS as f64)
+}
+
 pub fn coulomb_block_cases(factory: EngineFactory<'_>) -> Result<Vec<CaseResult>, VerifyError> {
     let fractions = [1.0 / 50.0, 1.0 / 100.0, 1.0 / 200.0, 1.0 / 400.0];
     let mut errors = Vec::new();
     for f in fractions {
-        errors.push(coulomb_error(factory, f)?);
+        errors.push(coulomb_ensemble_error(factory, f)?);
     }
     let lx: Vec<f64> = fractions.iter().map(|f| f.ln()).collect();
     let ly: Vec<f64> = errors.iter().map(|e| e.ln()).collect();
     let order = super::waves::least_squares_slope(&lx, &ly);
-    // Slip amplitude 2(μs − μd)N/K = 1.15 µm; the error at T/50 must be small against it.
+    // Slip amplitude 2(μs − μd)N/K = 1.15 µm: the error at T/50 must stay
+    // under 1% of it, and fall with dt (T/400: an eighth of that bound).
     Ok(vec![
-        CaseResult::at_most("coulomb_block_error_dt_T50", errors[0], 2.0e-8, "m"),
-        CaseResult::at_most("coulomb_block_error_dt_T400", errors[3], 0.25e-8, "m"),
+        CaseResult::at_most("coulomb_block_error_dt_T50", errors[0], 1.0e-8, "m"),
+        CaseResult::at_most("coulomb_block_error_dt_T400", errors[3], 1.25e-9, "m"),
         CaseResult::new("coulomb_block_convergence_order", order, 1.0, 0.25, "1"),
     ])
 }
@@ -138,3 +168,4 @@ mod tests {
         assert!((after - slip).abs() < 0.05 * slip, "{after} vs {slip}");
     }
 }
+

@@ -103,7 +103,7 @@ pub fn bare_scene(name: &str) -> Scenario {
 /// Model of a verification scene (validated like a user's scenario).
 pub fn scene_model(s: &Scenario) -> Result<Model, VerifyError> {
     let text = s.to_toml();
-    let problems = crate::scenario::validate(s, &text);
+    let problems = crate::scenario::validate(s, &text, &[]);
     if !problems.is_empty() {
         return Err(VerifyError::Model(crate::model::ModelError::Invalid(
             problems.join("; "),

@@ -1,0 +1,74 @@
+//! The command line, end to end.
+
+use std::process::Command;
+
+fn slipfront(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_slipfront"))
+        .args(args)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .expect("runs")
+}
+
+#[test]
+fn check_reports_derived_quantities_as_json() {
+    let out = slipfront(&["check", "scenarios/tromborg2014_stick_slip.toml", "--json"]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(v["blocks"], serde_json::json!([57, 31]));
+    assert!((v["dt_over_period"].as_f64().unwrap() - 0.02).abs() < 1e-12);
+    assert_eq!(v["stable"], true);
+    let terms: Vec<&str> = v["terms"].as_array().unwrap().iter().map(|t| t.as_str().unwrap()).collect();
+    assert!(terms.contains(&"junctions") && terms.contains(&"side_spring"), "{terms:?}");
+}
+
+#[test]
+fn run_default_scene_briefly_writes_an_mcap_file() {
+    let dir = std::env::temp_dir().join(format!("slipfront-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("run.mcap");
+    let out = slipfront(&[
+        "run",
+        "--backend",
+        "cpu",
+        "--t-end",
+        "2e-4",
+        "--quiet",
+        "-o",
+        file.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.contains("run complete"), "{text}");
+    let bytes = std::fs::read(&file).unwrap();
+    let n = mcap::MessageStream::new(&bytes).unwrap().count();
+    // 2e-4 s at 1e-5 s global cadence and 2e-5 s interface cadence.
+    assert!(n >= 25, "{n} messages");
+}
+
+#[test]
+fn bad_input_exits_with_a_clear_message() {
+    let out = slipfront(&["check", "--set", "material.youngs_modulus=-3"]);
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("material.youngs_modulus = -3"), "{err}");
+    let out = slipfront(&["run", "--backend", "cpu", "--set", "time.dt=1e-5"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("stability limit"));
+    let out = slipfront(&["run", "missing.toml"]);
+    assert!(String::from_utf8_lossy(&out.stderr).contains("missing.toml"));
+}
+
+#[test]
+fn verify_json_lists_every_case_with_its_fields() {
+    let out = slipfront(&["verify", "--backend", "cpu", "--json"]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let cases = v.as_array().unwrap();
+    assert!(cases.len() >= 17);
+    for c in cases {
+        for key in ["name", "measured", "expected", "tolerance", "unit", "pass"] {
+            assert!(c.get(key).is_some(), "{key} missing in {c}");
+        }
+    }
+}

@@ -1,0 +1,91 @@
+//! CPU engine properties: threads do not change results, blow-ups stop with
+//! the step, time and block, the normal load is carried by the foundation.
+
+use slipfront::backend::{cpu_engine, Precision};
+use slipfront::cpu::CpuEngine;
+use slipfront::scenario::{Scenario, DEFAULT_SCENARIO};
+use slipfront::{advance_to, Engine, EngineError, Model};
+
+fn model(set: &[&str], allow_unstable: bool) -> Model {
+    let set: Vec<String> = set.iter().map(|s| s.to_string()).collect();
+    let s = Scenario::parse(DEFAULT_SCENARIO, "test", &set).unwrap();
+    Model::from_scenario(&s, allow_unstable).unwrap()
+}
+
+#[test]
+fn two_threads_give_bit_identical_results() {
+    // 129 × 65 = 8385 blocks, above the parallel threshold; short relaxation,
+    // then driving hard enough for ruptures.
+    let m = model(
+        &[
+            "geometry.nx=129",
+            "geometry.nz=65",
+            "geometry.height=0.073125",
+            "geometry.length=0.14625",
+            "loading.normal.ramp_time=2e-5",
+            "loading.normal.relax_time=2e-5",
+            "loading.drive.velocity=2.0",
+        ],
+        false,
+    );
+    let mut one = CpuEngine::<f64>::new(&m, 1).unwrap();
+    let mut two = CpuEngine::<f64>::new(&m, 2).unwrap();
+    assert_eq!(one.threads(), 1);
+    assert_eq!(two.threads(), 2);
+    let target = m.prep_steps + 400;
+    advance_to(&mut one, target).unwrap();
+    advance_to(&mut two, target).unwrap();
+    let (a, b) = (one.snapshot().unwrap(), two.snapshot().unwrap());
+    assert!(a.total_ruptures() > 0, "the comparison must cover ruptures");
+    assert_eq!(a, b);
+}
+
+#[test]
+fn unstable_step_stops_with_step_time_and_block() {
+    let m = model(&["time.dt_fraction=0.2"], true);
+    let mut e = cpu_engine(&m, Precision::F64, 1).unwrap();
+    let err = advance_to(e.as_mut(), m.total_steps()).unwrap_err();
+    let EngineError::BlowUp { step, ix, iz, .. } = err else {
+        panic!("expected a blow-up, got {err}")
+    };
+    assert!(step > 0 && ix < m.nx && iz < m.nz);
+    let text = err_text(&m);
+    assert!(text.contains("blew up at step") && text.contains("block (ix ="), "{text}");
+}
+
+fn err_text(m: &Model) -> String {
+    let mut e = cpu_engine(m, Precision::F64, 1).unwrap();
+    advance_to(e.as_mut(), m.total_steps()).unwrap_err().to_string()
+}
+
+#[test]
+fn foundation_carries_the_normal_load_after_relaxation() {
+    let m = model(&["time.end=0"], false);
+    let mut e = cpu_engine(&m, Precision::F64, 1).unwrap();
+    advance_to(e.as_mut(), m.total_steps()).unwrap();
+    let s = e.snapshot().unwrap();
+    let carried: f64 = s.normal.iter().sum();
+    assert!((carried - 1920.0).abs() < 1e-3 * 1920.0, "{carried}");
+    assert!(s.kinetic_energy(m.mass) < 1e-9, "not at rest");
+    // No junction broke while the load was applied.
+    assert_eq!(s.total_ruptures(), 0);
+}
+
+#[test]
+fn f32_tracks_f64_on_the_table_s1_scene() {
+    let m = model(&["loading.drive.velocity=0.5"], false);
+    let target = m.prep_steps + 2000;
+    let mut a = cpu_engine(&m, Precision::F64, 1).unwrap();
+    let mut b = cpu_engine(&m, Precision::F32, 1).unwrap();
+    advance_to(a.as_mut(), target).unwrap();
+    advance_to(b.as_mut(), target).unwrap();
+    let (a, b) = (a.snapshot().unwrap(), b.snapshot().unwrap());
+    let scale = a.disp.iter().map(|u| u[0].abs().max(u[1].abs())).fold(0.0, f64::max);
+    let err = a
+        .disp
+        .iter()
+        .zip(&b.disp)
+        .map(|(x, y)| (x[0] - y[0]).abs().max((x[1] - y[1]).abs()))
+        .fold(0.0, f64::max);
+    assert!(err < 1e-4 * scale, "max |u64 - u32| = {err:e}, scale {scale:e}");
+}

@@ -1,0 +1,103 @@
+//! Bad scenario input is refused with the key, the value, the allowed range
+//! and the line; never a panic.
+
+use slipfront::model::Model;
+use slipfront::scenario::{Scenario, DEFAULT_SCENARIO};
+
+fn parse_err(text: &str, set: &[&str]) -> String {
+    let set: Vec<String> = set.iter().map(|s| s.to_string()).collect();
+    Scenario::parse(text, "test.toml", &set)
+        .expect_err("must be refused")
+        .to_string()
+}
+
+#[test]
+fn default_scenario_is_valid_and_round_trips() {
+    let s = Scenario::default_scene();
+    let again = Scenario::parse(&s.to_toml(), "round trip", &[]).unwrap();
+    assert_eq!(s, again);
+}
+
+#[test]
+fn unknown_key_names_key_and_line() {
+    let text = DEFAULT_SCENARIO.replace("width = 0.006", "width = 0.006\nwidht = 1.0");
+    let e = parse_err(&text, &[]);
+    assert!(e.contains("widht"), "{e}");
+    assert!(e.contains("line"), "{e}");
+}
+
+#[test]
+fn missing_key_is_named() {
+    let text = DEFAULT_SCENARIO.replace("nz = 31", "");
+    let e = parse_err(&text, &[]);
+    assert!(e.contains("missing field `nz`"), "{e}");
+}
+
+#[test]
+fn out_of_range_value_names_key_value_range_and_line() {
+    let text = DEFAULT_SCENARIO.replace("density = 1200.0", "density = -1200.0");
+    let e = parse_err(&text, &[]);
+    assert!(e.contains("material.density = -1200"), "{e}");
+    assert!(e.contains("allowed: a finite value > 0"), "{e}");
+    let line = DEFAULT_SCENARIO
+        .lines()
+        .position(|l| l.starts_with("density"))
+        .unwrap()
+        + 1;
+    assert!(e.contains(&format!("(line {line})")), "{e}");
+}
+
+#[test]
+fn set_overrides_apply_and_are_checked() {
+    let s = Scenario::parse(DEFAULT_SCENARIO, "t", &["loading.drive.velocity=1e-3".into()]).unwrap();
+    assert_eq!(s.loading.drive.velocity, Some(1e-3));
+    let e = parse_err(DEFAULT_SCENARIO, &["friction.static_coefficient=-1"]);
+    assert!(e.contains("friction.static_coefficient = -1"), "{e}");
+    assert!(e.contains("command line"), "{e}");
+    let e = parse_err(DEFAULT_SCENARIO, &["friction.typo=1"]);
+    assert!(e.contains("typo"), "{e}");
+    let e = parse_err(DEFAULT_SCENARIO, &["friction.law=sticky"]);
+    assert!(e.contains("sticky"), "{e}");
+}
+
+#[test]
+fn keys_a_mode_does_not_use_are_refused_and_needed_ones_required() {
+    let e = parse_err(DEFAULT_SCENARIO, &["loading.drive.mode=none"]);
+    assert!(e.contains("loading.drive.stiffness = 4000000 is not used"), "{e}");
+    let text = DEFAULT_SCENARIO.replace("velocity = 4.0e-4   # V (m/s) [paper]", "");
+    let e = parse_err(&text, &[]);
+    assert!(e.contains("missing key loading.drive.velocity"), "{e}");
+}
+
+#[test]
+fn missing_file_is_named() {
+    let e = Scenario::load(std::path::Path::new("no/such/file.toml"), &[])
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("no/such/file.toml"), "{e}");
+}
+
+#[test]
+fn lattice_must_be_square() {
+    let e = parse_err(DEFAULT_SCENARIO, &["geometry.height=0.08"]);
+    assert!(e.contains("geometry.height = 0.08"), "{e}");
+    assert!(e.contains("square"), "{e}");
+}
+
+#[test]
+fn time_step_above_stability_limit_is_refused_with_the_limit() {
+    let s = Scenario::parse(DEFAULT_SCENARIO, "t", &["time.dt=1e-6".into()]).unwrap();
+    let e = Model::from_scenario(&s, false).unwrap_err().to_string();
+    assert!(e.contains("dt = 1.0000e-6 s is above the stability limit 6.6681e-7 s"), "{e}");
+    assert!(e.contains("6.6681e-7"), "{e}");
+    assert!(Model::from_scenario(&s, true).is_ok());
+}
+
+#[test]
+fn every_shipped_scenario_is_valid() {
+    for entry in std::fs::read_dir(concat!(env!("CARGO_MANIFEST_DIR"), "/scenarios")).unwrap() {
+        let path = entry.unwrap().path();
+        let s = Scenario::load(&path, &[]).unwrap_or_else(|e| panic!("{e}"));
+        Model::from_scenario(&s, false).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    }
+}
