@@ -23,8 +23,10 @@ fn drag(factory: EngineFactory<'_>, speed: f64) -> Result<(f64, f64), VerifyErro
     let mut s = bare_scene("junction_drag");
     s.geometry.nx = 1;
     s.geometry.nz = 1;
-    s.geometry.length = 2.5e-3;
-    s.geometry.height = 2.5e-3;
+    // A heavy block (72 g): its foundation period (0.65 ms) is long
+    // against the time step, so one step resolves the junction cycles.
+    s.geometry.length = 0.1;
+    s.geometry.height = 0.1;
     s.foundation.stiffness_ratio = 0.5;
     s.friction.law = FrictionLaw::Junctions;
     s.friction.junctions = Some(Junctions {
@@ -36,8 +38,10 @@ fn drag(factory: EngineFactory<'_>, speed: f64) -> Result<(f64, f64), VerifyErro
         slip_time_std: SLIP_STD,
     });
     s.loading.normal.force = NORMAL;
-    s.loading.normal.ramp_time = 0.1e-3;
-    s.loading.normal.relax_time = 0.4e-3;
+    // Ramp and relax over many periods of the block on its foundation.
+    let foundation_time = (scene_model(&s)?.mass / scene_model(&s)?.k_foundation).sqrt();
+    s.loading.normal.ramp_time = 10.0 * foundation_time;
+    s.loading.normal.relax_time = 40.0 * foundation_time;
     s.loading.normal.relax_damping_ratio = 0.5f64.sqrt();
     s.loading.drive = Drive {
         mode: DriveMode::TopVelocity,
@@ -52,7 +56,9 @@ fn drag(factory: EngineFactory<'_>, speed: f64) -> Result<(f64, f64), VerifyErro
     // Skip two cycles of start-up; average over 60 more.
     let skip = 2.0 * cycle;
     s.time.end = skip + 60.0 * cycle;
-    s.time.dt_fraction = Some(0.05);
+    // 300 steps per mean slip time: 30 per pinned phase at the fastest speed.
+    s.time.dt_fraction = None;
+    s.time.dt = Some(SLIP_MEAN / 300.0);
     let model = scene_model(&s)?;
     let mut engine = factory(&model)?;
     let first = model.prep_steps + (skip / model.dt) as u64;

@@ -1,0 +1,72 @@
+//! Block-steps per second of the engines on the Table S1 scene and on a
+//! 1024×256 lattice with junctions. `cargo bench --bench throughput`;
+//! prints a Markdown table (see BENCHMARKS.md for recorded results).
+
+use slipfront::backend::{make_engine, Backend, Precision};
+use slipfront::scenario::{Scenario, DEFAULT_SCENARIO};
+use slipfront::{advance_to, Model};
+use std::time::Instant;
+
+fn scene(nx: u32, nz: u32) -> Model {
+    let l = 0.14 / 56.0;
+    let set = vec![
+        format!("geometry.nx={nx}"),
+        format!("geometry.nz={nz}"),
+        format!("geometry.length={}", l * (nx - 1) as f64),
+        format!("geometry.height={}", l * (nz - 1) as f64),
+        // Short normal-load phase, then driving hard so junctions rupture.
+        "loading.normal.ramp_time=2e-5".into(),
+        "loading.normal.relax_time=2e-5".into(),
+        "loading.drive.velocity=1.0".into(),
+    ];
+    let s = Scenario::parse(DEFAULT_SCENARIO, "bench", &set).expect("bench scene");
+    Model::from_scenario(&s, false).expect("bench model")
+}
+
+fn measure(model: &Model, backend: Backend, precision: Precision, threads: usize) -> Option<(f64, String)> {
+    let mut engine = make_engine(model, backend, precision, threads).ok()?;
+    // Warm up past the normal-load phase, then time at least ~2 s.
+    advance_to(engine.as_mut(), model.prep_steps + 10).ok()?;
+    let mut steps = 16u64;
+    loop {
+        let start = engine.steps_done();
+        let t0 = Instant::now();
+        advance_to(engine.as_mut(), start + steps).ok()?;
+        engine.snapshot().ok()?; // include the final synchronisation
+        let dt = t0.elapsed().as_secs_f64();
+        if dt > 2.0 || steps > 1 << 24 {
+            return Some((steps as f64 * model.n_blocks() as f64 / dt, engine.describe()));
+        }
+        steps *= if dt < 0.2 { 8 } else { 2 };
+    }
+}
+
+fn main() {
+    let filter: Vec<String> = std::env::args().skip(1).filter(|a| !a.starts_with('-')).collect();
+    let scenes = [("table_s1_57x31", scene(57, 31)), ("lattice_1024x256", scene(1024, 256))];
+    println!("| scene | engine | block-steps/s | steps/s |");
+    println!("| --- | --- | ---: | ---: |");
+    for (name, model) in &scenes {
+        if !filter.is_empty() && !filter.iter().any(|f| name.contains(f.as_str())) {
+            continue;
+        }
+        let mut configs = vec![
+            (Backend::Cpu, Precision::F64, 1),
+            (Backend::Cpu, Precision::F64, 2),
+            (Backend::Cpu, Precision::F32, 1),
+            (Backend::Cpu, Precision::F32, 2),
+        ];
+        if std::env::var("SLIPFRONT_BENCH_GPU").is_ok() {
+            configs.push((Backend::Gpu, Precision::F32, 0));
+        }
+        for (backend, precision, threads) in configs {
+            match measure(model, backend, precision, threads) {
+                Some((rate, what)) => println!(
+                    "| {name} | {what} | {rate:.3e} | {:.3e} |",
+                    rate / model.n_blocks() as f64
+                ),
+                None => println!("| {name} | {backend:?} {precision:?} | unavailable | |"),
+            }
+        }
+    }
+}
