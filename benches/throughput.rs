@@ -23,7 +23,12 @@ fn scene(nx: u32, nz: u32) -> Model {
     Model::from_scenario(&s, false).expect("bench model")
 }
 
-fn measure(model: &Model, backend: Backend, precision: Precision, threads: usize) -> Option<(f64, String)> {
+fn measure(
+    model: &Model,
+    backend: Backend,
+    precision: Precision,
+    threads: usize,
+) -> Option<(f64, String)> {
     let mut engine = make_engine(model, backend, precision, threads).ok()?;
     // Warm up past the normal-load phase, then time at least ~2 s.
     advance_to(engine.as_mut(), model.prep_steps + 10).ok()?;
@@ -35,15 +40,24 @@ fn measure(model: &Model, backend: Backend, precision: Precision, threads: usize
         engine.snapshot().ok()?; // include the final synchronisation
         let dt = t0.elapsed().as_secs_f64();
         if dt > 2.0 || steps > 1 << 24 {
-            return Some((steps as f64 * model.n_blocks() as f64 / dt, engine.describe()));
+            return Some((
+                steps as f64 * model.n_blocks() as f64 / dt,
+                engine.describe(),
+            ));
         }
         steps *= if dt < 0.2 { 8 } else { 2 };
     }
 }
 
 fn main() {
-    let filter: Vec<String> = std::env::args().skip(1).filter(|a| !a.starts_with('-')).collect();
-    let scenes = [("table_s1_57x31", scene(57, 31)), ("lattice_1024x256", scene(1024, 256))];
+    let filter: Vec<String> = std::env::args()
+        .skip(1)
+        .filter(|a| !a.starts_with('-'))
+        .collect();
+    let scenes = [
+        ("table_s1_57x31", scene(57, 31)),
+        ("lattice_1024x256", scene(1024, 256)),
+    ];
     println!("| scene | engine | block-steps/s | steps/s |");
     println!("| --- | --- | ---: | ---: |");
     for (name, model) in &scenes {

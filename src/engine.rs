@@ -26,6 +26,36 @@ pub struct Snapshot {
 }
 
 impl Snapshot {
+    /// Converts engine buffers (the layout shared by the CPU twins and the
+    /// WGSL kernels) to a snapshot.
+    #[allow(clippy::too_many_arguments)]
+    pub fn from_buffers<T: crate::real::Real>(
+        model: &Model,
+        step: u64,
+        disp: &[[T; 2]],
+        vel: &[[T; 2]],
+        contact: &[[T; 2]],
+        junction_spring: &[[T; 2]],
+        junction_state: &[[u32; 2]],
+        slide_dir: &[i32],
+    ) -> Snapshot {
+        let f2 = |v: &[[T; 2]]| v.iter().map(|x| x.map(|y| y.as_f64())).collect::<Vec<_>>();
+        let col = |v: &[[T; 2]], k: usize| v.iter().map(|x| x[k].as_f64()).collect::<Vec<_>>();
+        Snapshot {
+            step,
+            time: model.time_of_step(step),
+            disp: f2(disp),
+            vel: f2(vel),
+            friction: col(contact, 0),
+            normal: col(contact, 1),
+            anchor: col(junction_spring, 0),
+            junction_stiffness: col(junction_spring, 1),
+            repin_step: junction_state.iter().map(|s| s[0]).collect(),
+            ruptures: junction_state.iter().map(|s| s[1]).collect(),
+            slide_dir: slide_dir.to_vec(),
+        }
+    }
+
     /// Fraction of pinned junctions on each interface block.
     pub fn pinned_fraction(&self, nx: usize) -> Vec<f64> {
         if self.repin_step.is_empty() {

@@ -125,7 +125,8 @@ fn interval_steps(model: &Model, interval: f64) -> u64 {
 }
 
 fn next_multiple(step: u64, every: u64) -> u64 {
-    step.checked_div(every).map_or(u64::MAX, |n| (n + 1) * every)
+    step.checked_div(every)
+        .map_or(u64::MAX, |n| (n + 1) * every)
 }
 
 /// Runs `engine` over its whole scene.

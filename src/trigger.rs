@@ -1,39 +1,33 @@
 //! Set-up done once when driving starts: the side spring's origin and the
 //! trigger's initial junction forces. Host code shared by both engines.
 
+use crate::engine::Snapshot;
 use crate::model::Model;
 use crate::rng::{draw_key, pcg_hash, unit_from_bits, TRIGGER_STREAM};
 
-/// New anchors for the junctions of interface block `ix` so that junction
-/// `j` carries force −r·f_N, with r uniform in prestress ± width/2 (or the
-/// strip prestress inside the trigger strip).
-pub fn trigger_anchors(
-    model: &Model,
-    ix: usize,
-    ux: f64,
-    normal: f64,
-    stiffness: &[f64],
-    anchor: &mut [f64],
-) {
-    let Some(t) = model.trigger else { return };
-    let ns = stiffness.len();
-    let f_n = normal / ns as f64;
-    for j in 0..ns {
-        let ratio = if ix < t.strip_blocks {
-            t.strip_prestress
-        } else {
-            let bits = pcg_hash(draw_key(
-                model.seed ^ TRIGGER_STREAM,
-                ix as u32,
-                j as u32,
-                0,
-            ));
-            t.shear_prestress + t.force_width * (unit_from_bits::<f64>(bits) - 0.5)
-        };
-        anchor[j] = if stiffness[j] > 0.0 {
-            ux - ratio * f_n / stiffness[j]
-        } else {
-            ux
-        };
+/// New anchors (index ix·Ns + j) so that junction j of interface block ix
+/// carries force −r·f_N, with r uniform in prestress ± width/2, or the strip
+/// prestress inside the trigger strip. Computed from the state when driving
+/// starts; both engines upload the result.
+pub fn trigger_anchors(model: &Model, snap: &Snapshot) -> Vec<f64> {
+    let Some(t) = model.trigger else {
+        return snap.anchor.clone();
+    };
+    let ns = model.junctions.map_or(0, |j| j.count);
+    let mut anchors = Vec::with_capacity(snap.anchor.len());
+    for ix in 0..model.nx {
+        let ux = snap.disp[ix][0];
+        let f_n = model.k_foundation * (-snap.disp[ix][1]).max(0.0) / ns as f64;
+        for j in 0..ns {
+            let ratio = if ix < t.strip_blocks {
+                t.strip_prestress
+            } else {
+                let key = draw_key(model.seed ^ TRIGGER_STREAM, ix as u32, j as u32, 0);
+                t.shear_prestress + t.force_width * (unit_from_bits::<f64>(pcg_hash(key)) - 0.5)
+            };
+            let k = snap.junction_stiffness[ix * ns + j];
+            anchors.push(if k > 0.0 { ux - ratio * f_n / k } else { ux });
+        }
     }
+    anchors
 }

@@ -13,13 +13,25 @@ fn slipfront(args: &[&str]) -> std::process::Output {
 #[test]
 fn check_reports_derived_quantities_as_json() {
     let out = slipfront(&["check", "scenarios/tromborg2014_stick_slip.toml", "--json"]);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(v["blocks"], serde_json::json!([57, 31]));
     assert!((v["dt_over_period"].as_f64().unwrap() - 0.02).abs() < 1e-12);
     assert_eq!(v["stable"], true);
-    let terms: Vec<&str> = v["terms"].as_array().unwrap().iter().map(|t| t.as_str().unwrap()).collect();
-    assert!(terms.contains(&"junctions") && terms.contains(&"side_spring"), "{terms:?}");
+    let terms: Vec<&str> = v["terms"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|t| t.as_str().unwrap())
+        .collect();
+    assert!(
+        terms.contains(&"junctions") && terms.contains(&"side_spring"),
+        "{terms:?}"
+    );
 }
 
 #[test]
@@ -37,7 +49,11 @@ fn run_default_scene_briefly_writes_an_mcap_file() {
         "-o",
         file.to_str().unwrap(),
     ]);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let text = String::from_utf8_lossy(&out.stdout);
     assert!(text.contains("run complete"), "{text}");
     let bytes = std::fs::read(&file).unwrap();
@@ -62,7 +78,11 @@ fn bad_input_exits_with_a_clear_message() {
 #[test]
 fn verify_json_lists_every_case_with_its_fields() {
     let out = slipfront(&["verify", "--backend", "cpu", "--json"]);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     let cases = v.as_array().unwrap();
     assert!(cases.len() >= 17);

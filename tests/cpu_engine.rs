@@ -50,12 +50,17 @@ fn unstable_step_stops_with_step_time_and_block() {
     };
     assert!(step > 0 && ix < m.nx && iz < m.nz);
     let text = err_text(&m);
-    assert!(text.contains("blew up at step") && text.contains("block (ix ="), "{text}");
+    assert!(
+        text.contains("blew up at step") && text.contains("block (ix ="),
+        "{text}"
+    );
 }
 
 fn err_text(m: &Model) -> String {
     let mut e = cpu_engine(m, Precision::F64, 1).unwrap();
-    advance_to(e.as_mut(), m.total_steps()).unwrap_err().to_string()
+    advance_to(e.as_mut(), m.total_steps())
+        .unwrap_err()
+        .to_string()
 }
 
 #[test]
@@ -80,12 +85,19 @@ fn f32_tracks_f64_on_the_table_s1_scene() {
     advance_to(a.as_mut(), target).unwrap();
     advance_to(b.as_mut(), target).unwrap();
     let (a, b) = (a.snapshot().unwrap(), b.snapshot().unwrap());
-    let scale = a.disp.iter().map(|u| u[0].abs().max(u[1].abs())).fold(0.0, f64::max);
+    let scale = a
+        .disp
+        .iter()
+        .map(|u| u[0].abs().max(u[1].abs()))
+        .fold(0.0, f64::max);
     let err = a
         .disp
         .iter()
         .zip(&b.disp)
         .map(|(x, y)| (x[0] - y[0]).abs().max((x[1] - y[1]).abs()))
         .fold(0.0, f64::max);
-    assert!(err < 1e-4 * scale, "max |u64 - u32| = {err:e}, scale {scale:e}");
+    assert!(
+        err < 1e-4 * scale,
+        "max |u64 - u32| = {err:e}, scale {scale:e}"
+    );
 }

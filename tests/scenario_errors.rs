@@ -49,7 +49,12 @@ fn out_of_range_value_names_key_value_range_and_line() {
 
 #[test]
 fn set_overrides_apply_and_are_checked() {
-    let s = Scenario::parse(DEFAULT_SCENARIO, "t", &["loading.drive.velocity=1e-3".into()]).unwrap();
+    let s = Scenario::parse(
+        DEFAULT_SCENARIO,
+        "t",
+        &["loading.drive.velocity=1e-3".into()],
+    )
+    .unwrap();
     assert_eq!(s.loading.drive.velocity, Some(1e-3));
     let e = parse_err(DEFAULT_SCENARIO, &["friction.static_coefficient=-1"]);
     assert!(e.contains("friction.static_coefficient = -1"), "{e}");
@@ -63,7 +68,10 @@ fn set_overrides_apply_and_are_checked() {
 #[test]
 fn keys_a_mode_does_not_use_are_refused_and_needed_ones_required() {
     let e = parse_err(DEFAULT_SCENARIO, &["loading.drive.mode=none"]);
-    assert!(e.contains("loading.drive.stiffness = 4000000 is not used"), "{e}");
+    assert!(
+        e.contains("loading.drive.stiffness = 4000000 is not used"),
+        "{e}"
+    );
     let text = DEFAULT_SCENARIO.replace("velocity = 4.0e-4   # V (m/s) [paper]", "");
     let e = parse_err(&text, &[]);
     assert!(e.contains("missing key loading.drive.velocity"), "{e}");
@@ -88,7 +96,10 @@ fn lattice_must_be_square() {
 fn time_step_above_stability_limit_is_refused_with_the_limit() {
     let s = Scenario::parse(DEFAULT_SCENARIO, "t", &["time.dt=1e-6".into()]).unwrap();
     let e = Model::from_scenario(&s, false).unwrap_err().to_string();
-    assert!(e.contains("dt = 1.0000e-6 s is above the stability limit 6.6681e-7 s"), "{e}");
+    assert!(
+        e.contains("dt = 1.0000e-6 s is above the stability limit 6.6681e-7 s"),
+        "{e}"
+    );
     assert!(e.contains("6.6681e-7"), "{e}");
     assert!(Model::from_scenario(&s, true).is_ok());
 }

@@ -9,7 +9,12 @@ fn failures(results: &[CaseResult]) -> Vec<String> {
     results
         .iter()
         .filter(|r| !r.pass)
-        .map(|r| format!("{}: {} vs {} ± {}", r.name, r.measured, r.expected, r.tolerance))
+        .map(|r| {
+            format!(
+                "{}: {} vs {} ± {}",
+                r.name, r.measured, r.expected, r.tolerance
+            )
+        })
         .collect()
 }
 
@@ -46,8 +51,14 @@ fn failed_names(perturb: impl Fn(&mut Model)) -> Vec<String> {
 fn negative_control_heavier_blocks_fail_the_wave_speed_cases() {
     // 5% more mass: waves 2.4% slower, past the 2% tolerance.
     let failed = failed_names(|m| m.mass *= 1.05);
-    assert!(failed.iter().any(|n| n.starts_with("p_wave_speed_113")), "{failed:?}");
-    assert!(failed.iter().any(|n| n.starts_with("s_wave_speed_113")), "{failed:?}");
+    assert!(
+        failed.iter().any(|n| n.starts_with("p_wave_speed_113")),
+        "{failed:?}"
+    );
+    assert!(
+        failed.iter().any(|n| n.starts_with("s_wave_speed_113")),
+        "{failed:?}"
+    );
 }
 
 #[test]
@@ -56,12 +67,21 @@ fn negative_control_stiffer_springs_fail_the_elastic_case() {
         m.k *= 1.02;
         m.k_diag *= 1.02;
     });
-    assert!(failed.contains(&"static_youngs_modulus".to_string()), "{failed:?}");
+    assert!(
+        failed.contains(&"static_youngs_modulus".to_string()),
+        "{failed:?}"
+    );
 }
 
 #[test]
 fn negative_control_changed_friction_fails_coulomb_and_drag_cases() {
     let failed = failed_names(|m| m.mu_d *= 1.05);
-    assert!(failed.iter().any(|n| n.starts_with("coulomb_block_error")), "{failed:?}");
-    assert!(failed.iter().any(|n| n.starts_with("junction_drag")), "{failed:?}");
+    assert!(
+        failed.iter().any(|n| n.starts_with("coulomb_block_error")),
+        "{failed:?}"
+    );
+    assert!(
+        failed.iter().any(|n| n.starts_with("junction_drag")),
+        "{failed:?}"
+    );
 }

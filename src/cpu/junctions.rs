@@ -9,12 +9,13 @@ use crate::step_params::{Consts, StepParams};
 /// `repin_step` value of a pinned junction.
 pub const PINNED: u32 = u32::MAX;
 
-/// The junction arrays of one interface block (length Ns each).
+/// The junction arrays of one interface block (length Ns each), laid out
+/// as the GPU's `junction_spring` and `junction_state` buffers.
 pub struct JunctionSlots<'a, T> {
-    pub anchor: &'a mut [T],
-    pub stiffness: &'a mut [T],
-    pub repin_step: &'a mut [u32],
-    pub ruptures: &'a mut [u32],
+    /// (anchor a_ij, stiffness k_j) per junction.
+    pub spring: &'a mut [[T; 2]],
+    /// (re-pin step or PINNED, rupture count) per junction.
+    pub state: &'a mut [[u32; 2]],
 }
 
 /// Normal force the foundation carries under interface block with u_z.
@@ -51,22 +52,26 @@ pub fn junctions<T: Real>(
     let sliding = -c.mu_d * f_n * velocity_sign(v[0]);
     let step = p.step as u32;
     let mut total = T::zero();
-    for j in 0..slots.anchor.len() {
-        if slots.repin_step[j] != PINNED && step >= slots.repin_step[j] {
-            slots.anchor[j] = u[0];
-            slots.stiffness[j] = c.junction_stiffness(f_n);
-            slots.repin_step[j] = PINNED;
+    for (j, (spring, state)) in slots
+        .spring
+        .iter_mut()
+        .zip(slots.state.iter_mut())
+        .enumerate()
+    {
+        if state[0] != PINNED && step >= state[0] {
+            *spring = [u[0], c.junction_stiffness(f_n)];
+            state[0] = PINNED;
         }
         let mut f = sliding;
-        if slots.repin_step[j] == PINNED {
+        if state[0] == PINNED {
             if p.preparing {
                 // While the normal load is applied, attachment is continuous.
-                slots.stiffness[j] = c.junction_stiffness(f_n);
+                spring[1] = c.junction_stiffness(f_n);
             }
-            f = -slots.stiffness[j] * (u[0] - slots.anchor[j]);
+            f = -spring[1] * (u[0] - spring[0]);
             if !p.preparing && f.abs() > threshold {
-                let count = slots.ruptures[j].wrapping_add(1);
-                slots.ruptures[j] = count;
+                let count = state[1].wrapping_add(1);
+                state[1] = count;
                 let n = slip_steps(
                     c.seed,
                     ix as u32,
@@ -75,7 +80,7 @@ pub fn junctions<T: Real>(
                     c.slip_mean_steps,
                     c.slip_std_steps,
                 );
-                slots.repin_step[j] = step.saturating_add(n);
+                state[0] = step.saturating_add(n);
                 f = sliding;
             }
         }

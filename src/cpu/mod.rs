@@ -33,12 +33,12 @@ pub struct CpuEngine<T: Real> {
     disp: Vec<[T; 2]>,
     vel: Vec<[T; 2]>,
     force: Vec<[T; 2]>,
-    friction: Vec<T>,
-    normal: Vec<T>,
-    anchor: Vec<T>,
-    junction_stiffness: Vec<T>,
-    repin_step: Vec<u32>,
-    ruptures: Vec<u32>,
+    /// (friction along x, normal force) per interface block.
+    contact: Vec<[T; 2]>,
+    /// (anchor, stiffness) per junction, index ix·Ns + j.
+    junction_spring: Vec<[T; 2]>,
+    /// (re-pin step or PINNED, rupture count) per junction.
+    junction_state: Vec<[u32; 2]>,
     slide_dir: Vec<i32>,
     drive_origin: T,
     step: u64,
@@ -79,12 +79,9 @@ impl<T: Real> CpuEngine<T> {
             disp,
             vel: vec![[T::zero(); 2]; n],
             force: vec![[T::zero(); 2]; n],
-            friction: vec![T::zero(); model.nx],
-            normal: vec![T::zero(); model.nx],
-            anchor: vec![T::zero(); nj],
-            junction_stiffness: vec![T::zero(); nj],
-            repin_step: vec![PINNED; nj],
-            ruptures: vec![0; nj],
+            contact: vec![[T::zero(); 2]; model.nx],
+            junction_spring: vec![[T::zero(); 2]; nj],
+            junction_state: vec![[PINNED, 0]; nj],
             slide_dir: vec![0; model.nx],
             drive_origin: T::zero(),
             step: 0,
@@ -134,54 +131,36 @@ impl<T: Real> CpuEngine<T> {
                         self.force[ix][0],
                         &mut self.slide_dir[ix],
                     );
-                    self.friction[ix] = f;
-                    self.normal[ix] = n;
+                    self.contact[ix] = [f, n];
                 }
             }
             FrictionLaw::Junctions | FrictionLaw::SingleJunction => {
                 let ns = c.junction_count;
                 let (disp, vel) = (&self.disp, &self.vel);
-                let run = |ix: usize,
-                           out: (&mut T, &mut T),
-                           a: &mut [T],
-                           k: &mut [T],
-                           r: &mut [u32],
-                           n: &mut [u32]| {
-                    let slots = JunctionSlots {
-                        anchor: a,
-                        stiffness: k,
-                        repin_step: r,
-                        ruptures: n,
+                let run =
+                    |ix: usize, out: &mut [T; 2], spring: &mut [[T; 2]], state: &mut [[u32; 2]]| {
+                        let slots = JunctionSlots { spring, state };
+                        let (f, p_n) = junctions::junctions(c, &p, ix, disp[ix], vel[ix], slots);
+                        *out = [f, p_n];
                     };
-                    let (f, p_n) = junctions::junctions(c, &p, ix, disp[ix], vel[ix], slots);
-                    *out.0 = f;
-                    *out.1 = p_n;
-                };
                 match &self.pool {
                     Some(pool) => pool.install(|| {
-                        self.friction
+                        self.contact
                             .par_iter_mut()
-                            .zip(self.normal.par_iter_mut())
-                            .zip(self.anchor.par_chunks_mut(ns))
-                            .zip(self.junction_stiffness.par_chunks_mut(ns))
-                            .zip(self.repin_step.par_chunks_mut(ns))
-                            .zip(self.ruptures.par_chunks_mut(ns))
+                            .zip(self.junction_spring.par_chunks_mut(ns))
+                            .zip(self.junction_state.par_chunks_mut(ns))
                             .enumerate()
-                            .for_each(|(ix, (((((f, pn), a), k), r), n))| {
-                                run(ix, (f, pn), a, k, r, n)
-                            })
+                            .for_each(|(ix, ((out, spring), state))| run(ix, out, spring, state))
                     }),
                     None => {
-                        for ix in 0..nx {
-                            let s = ix * ns..(ix + 1) * ns;
-                            run(
-                                ix,
-                                (&mut self.friction[ix], &mut self.normal[ix]),
-                                &mut self.anchor[s.clone()],
-                                &mut self.junction_stiffness[s.clone()],
-                                &mut self.repin_step[s.clone()],
-                                &mut self.ruptures[s],
-                            );
+                        for (ix, ((out, spring), state)) in self
+                            .contact
+                            .iter_mut()
+                            .zip(self.junction_spring.chunks_mut(ns))
+                            .zip(self.junction_state.chunks_mut(ns))
+                            .enumerate()
+                        {
+                            run(ix, out, spring, state);
                         }
                     }
                 }
@@ -189,11 +168,11 @@ impl<T: Real> CpuEngine<T> {
         }
 
         let has_friction = self.model.law != FrictionLaw::None;
-        let (force, friction, flags) = (&self.force, &self.friction, &self.flags);
+        let (force, contact, flags) = (&self.force, &self.contact, &self.flags);
         let limit = self.speed_limit;
         let update = |i: usize, u: &mut [T; 2], v: &mut [T; 2]| {
             let fr = if has_friction && i < nx {
-                friction[i]
+                contact[i][0]
             } else {
                 T::zero()
             };
@@ -246,21 +225,16 @@ impl<T: Real> Engine for CpuEngine<T> {
     }
 
     fn snapshot(&mut self) -> Result<Snapshot, EngineError> {
-        let f = |v: &[T]| v.iter().map(|x| x.as_f64()).collect::<Vec<_>>();
-        let f2 = |v: &[[T; 2]]| v.iter().map(|x| x.map(Real::as_f64)).collect::<Vec<_>>();
-        Ok(Snapshot {
-            step: self.step,
-            time: self.model.time_of_step(self.step),
-            disp: f2(&self.disp),
-            vel: f2(&self.vel),
-            friction: f(&self.friction),
-            normal: f(&self.normal),
-            anchor: f(&self.anchor),
-            junction_stiffness: f(&self.junction_stiffness),
-            repin_step: self.repin_step.clone(),
-            ruptures: self.ruptures.clone(),
-            slide_dir: self.slide_dir.clone(),
-        })
+        Ok(Snapshot::from_buffers(
+            &self.model,
+            self.step,
+            &self.disp,
+            &self.vel,
+            &self.contact,
+            &self.junction_spring,
+            &self.junction_state,
+            &self.slide_dir,
+        ))
     }
 
     fn begin_driving(&mut self) -> Result<(), EngineError> {
@@ -268,26 +242,10 @@ impl<T: Real> Engine for CpuEngine<T> {
             self.drive_origin = self.disp[row * self.model.nx][0];
         }
         if self.model.trigger.is_some() {
-            let ns = self.consts.junction_count;
-            let mut anchors = vec![0.0; ns];
-            for ix in 0..self.model.nx {
-                let s = ix * ns..(ix + 1) * ns;
-                let stiffness: Vec<f64> = self.junction_stiffness[s.clone()]
-                    .iter()
-                    .map(|k| k.as_f64())
-                    .collect();
-                let normal = junctions::foundation_normal(&self.consts, self.disp[ix][1]);
-                crate::trigger::trigger_anchors(
-                    &self.model,
-                    ix,
-                    self.disp[ix][0].as_f64(),
-                    normal.as_f64(),
-                    &stiffness,
-                    &mut anchors,
-                );
-                for (dst, a) in self.anchor[s].iter_mut().zip(&anchors) {
-                    *dst = T::from_f64(*a);
-                }
+            let snap = self.snapshot()?;
+            let anchors = crate::trigger::trigger_anchors(&self.model, &snap);
+            for (spring, a) in self.junction_spring.iter_mut().zip(anchors) {
+                spring[0] = T::from_f64(a);
             }
         }
         Ok(())

@@ -168,4 +168,3 @@ mod tests {
         assert!((after - slip).abs() < 0.05 * slip, "{after} vs {slip}");
     }
 }
-
