@@ -2,6 +2,7 @@
 
 use crate::cpu::CpuEngine;
 use crate::engine::{Engine, EngineError};
+use crate::gpu::GpuEngine;
 use crate::model::Model;
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
@@ -41,8 +42,22 @@ pub fn make_engine(
 ) -> Result<Box<dyn Engine>, EngineError> {
     match backend {
         Backend::Cpu => cpu_engine(model, precision, threads),
-        Backend::Gpu | Backend::Auto => Err(EngineError::Gpu(
-            "the GPU engine is not built yet; use --backend cpu".into(),
-        )),
+        Backend::Gpu => {
+            if precision == Precision::F64 {
+                return Err(EngineError::Gpu(
+                    "the GPU engine computes in f32: use --precision f32 (or --backend cpu for f64)"
+                        .into(),
+                ));
+            }
+            Ok(Box::new(GpuEngine::new(model)?))
+        }
+        Backend::Auto => match GpuEngine::new(model) {
+            Ok(e) if precision == Precision::F32 => Ok(Box::new(e)),
+            Ok(_) => cpu_engine(model, precision, threads),
+            Err(e) => {
+                eprintln!("slipfront: no usable GPU adapter ({e}); running on the CPU");
+                cpu_engine(model, precision, threads)
+            }
+        },
     }
 }

@@ -2,8 +2,10 @@
 //! frictional sliding (Trømborg et al., PNAS 2014), with a CPU reference.
 
 pub mod backend;
+pub mod compare;
 pub mod cpu;
 pub mod engine;
+pub mod gpu;
 pub mod lattice;
 pub mod model;
 pub mod output;

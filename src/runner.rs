@@ -173,7 +173,8 @@ pub fn run_scene(
         if s < model.prep_steps {
             target = target.min(model.prep_steps);
         }
-        let out_step = if s >= model.prep_steps {
+        // Without an output file nothing is read back until the end.
+        let out_step = if s >= model.prep_steps && sink.is_some() {
             next_multiple(s - model.prep_steps, every_global)
                 .min(next_multiple(s - model.prep_steps, every_interface))
                 .min(next_multiple(s - model.prep_steps, every_bulk))

@@ -1,0 +1,85 @@
+// Phase 1: springs, dashpots, foundation and external loads on each block.
+// CPU twin: src/cpu/bulk_forces.rs. Terms a scene does not use are removed
+// by the pipeline-overridable constants below.
+
+override DAMPING_FORM: u32 = 1u;      // 0 none, 1 full relative velocity, 2 bond-projected
+override USE_FOUNDATION: bool = true;
+override USE_TOP_LOADS: bool = true;
+override USE_SIDE_SPRING: bool = true;
+override USE_RELAXATION: bool = true;
+
+const SQRT_2: f32 = 1.4142135;
+
+fn top_share(ix: u32) -> f32 {
+    if c.nx == 1u {
+        return 1.0;
+    }
+    if ix == 0u || ix == c.nx - 1u {
+        return c.top_share_edge;
+    }
+    return c.top_share_full;
+}
+
+@compute @workgroup_size(64)
+fn bulk_forces(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let i = thread_index(gid, groups);
+    if i >= c.n_blocks {
+        return;
+    }
+    let ix = i32(i % c.nx);
+    let iz = i32(i / c.nx);
+    let ui = disp[i];
+    let vi = vel[i];
+    var f = vec2<f32>(0.0, 0.0);
+    // Same bond order as lattice::STENCIL.
+    var dirs = array<vec2<i32>, 8>(
+        vec2<i32>(1, 0), vec2<i32>(-1, 0), vec2<i32>(0, 1), vec2<i32>(0, -1),
+        vec2<i32>(1, 1), vec2<i32>(-1, 1), vec2<i32>(1, -1), vec2<i32>(-1, -1));
+    for (var b = 0u; b < 8u; b++) {
+        let d = dirs[b];
+        let jx = ix + d.x;
+        let jz = iz + d.y;
+        if jx < 0 || jz < 0 || jx >= i32(c.nx) || jz >= i32(c.nz) {
+            continue;
+        }
+        let j = u32(jz) * c.nx + u32(jx);
+        let diagonal = b >= 4u;
+        let r0 = vec2<f32>(f32(d.x) * c.spacing, f32(d.y) * c.spacing);
+        let rest = select(c.spacing, SQRT_2 * c.spacing, diagonal);
+        let kb = select(c.k, 0.5 * c.k, diagonal);
+        let du = disp[j] - ui;
+        let r = r0 + du;
+        let len = sqrt(r.x * r.x + r.y * r.y);
+        // Elongation without cancellation: (|r|² − l²)/(|r| + l).
+        let stretch = (2.0 * (r0.x * du.x + r0.y * du.y) + (du.x * du.x + du.y * du.y)) / (len + rest);
+        let inv_len = 1.0 / len;
+        let n = vec2<f32>(r.x * inv_len, r.y * inv_len);
+        let spring = kb * stretch;
+        f = vec2<f32>(f.x + spring * n.x, f.y + spring * n.y);
+        if DAMPING_FORM != 0u {
+            let dv = vel[j] - vi;
+            if DAMPING_FORM == 2u {
+                let along = c.eta * (dv.x * n.x + dv.y * n.y);
+                f = vec2<f32>(f.x + along * n.x, f.y + along * n.y);
+            } else {
+                f = vec2<f32>(f.x + c.eta * dv.x, f.y + c.eta * dv.y);
+            }
+        }
+    }
+    let fl = flags[i];
+    if USE_FOUNDATION && (fl & FLAG_INTERFACE) != 0u {
+        f.y = f.y + foundation_normal(ui.y);
+    }
+    if USE_TOP_LOADS && (fl & FLAG_TOP) != 0u {
+        let share = top_share(u32(ix));
+        f.y = f.y - sp.normal_total * share;
+        f.x = f.x + sp.top_tangential_total * share;
+    }
+    if USE_SIDE_SPRING && (fl & FLAG_DRIVEN) != 0u && sp.preparing == 0u {
+        f.x = f.x + c.drive_stiffness * (sp.drive_offset - (ui.x - sp.drive_origin));
+    }
+    if USE_RELAXATION {
+        f = vec2<f32>(f.x - sp.relax_eta * vi.x, f.y - sp.relax_eta * vi.y);
+    }
+    force[i] = f;
+}

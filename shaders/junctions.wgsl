@@ -1,0 +1,54 @@
+// Phase 2 (junction friction): the Ns micro-junctions of each interface
+// block pin, break at mu_s f_N, slip at mu_d f_N for a drawn time and re-pin.
+// CPU twin: src/cpu/junctions.rs. One thread per interface block.
+
+fn junction_stiffness(f_n: f32) -> f32 {
+    if c.stiffness_normal_load != 0u {
+        return sqrt(c.junction_stiffness_value * f_n);
+    }
+    return c.junction_stiffness_value;
+}
+
+@compute @workgroup_size(64)
+fn junctions(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let ix = thread_index(gid, groups);
+    if ix >= c.nx {
+        return;
+    }
+    let u = disp[ix];
+    let v = vel[ix];
+    let normal = foundation_normal(u.y);
+    let f_n = normal / f32(c.junction_count);
+    let threshold = c.mu_s * f_n;
+    let sliding = -c.mu_d * f_n * sign(v.x);
+    let step = sp.step;
+    var total = 0.0;
+    for (var j = 0u; j < c.junction_count; j++) {
+        let idx = ix * c.junction_count + j;
+        var spring = junction_spring[idx];
+        var state = junction_state[idx];
+        if state.x != PINNED && step >= state.x {
+            spring = vec2<f32>(u.x, junction_stiffness(f_n));
+            state.x = PINNED;
+        }
+        var f = sliding;
+        if state.x == PINNED {
+            if sp.preparing != 0u {
+                // While the normal load is applied, attachment is continuous.
+                spring.y = junction_stiffness(f_n);
+            }
+            f = -spring.y * (u.x - spring.x);
+            if sp.preparing == 0u && abs(f) > threshold {
+                let count = state.y + 1u;
+                state.y = count;
+                let n = slip_steps(c.seed, ix, j, count, c.slip_mean_steps, c.slip_std_steps);
+                state.x = step + n;
+                f = sliding;
+            }
+        }
+        junction_spring[idx] = spring;
+        junction_state[idx] = state;
+        total = total + f;
+    }
+    contact[ix] = vec2<f32>(total, normal);
+}

@@ -1,0 +1,93 @@
+//! Host-side mirrors of the uniform structs in `shaders/common.wgsl`.
+
+use crate::step_params::{Consts, StepParams};
+use bytemuck::{Pod, Zeroable};
+
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Pod, Zeroable)]
+pub struct GpuConsts {
+    pub nx: u32,
+    pub nz: u32,
+    pub junction_count: u32,
+    pub seed: u32,
+    pub spacing: f32,
+    pub k: f32,
+    pub eta: f32,
+    pub k_foundation: f32,
+    pub mass: f32,
+    pub inv_mass: f32,
+    pub dt: f32,
+    pub mu_s: f32,
+    pub mu_d: f32,
+    pub junction_stiffness_value: f32,
+    pub slip_mean_steps: f32,
+    pub slip_std_steps: f32,
+    pub drive_stiffness: f32,
+    pub speed_limit: f32,
+    pub top_share_full: f32,
+    pub top_share_edge: f32,
+    pub stiffness_normal_load: u32,
+    pub n_blocks: u32,
+    pub _pad: [u32; 2],
+}
+
+impl GpuConsts {
+    pub fn new(c: &Consts<f32>, speed_limit: f32) -> Self {
+        use crate::cpu::bulk_forces::top_share;
+        GpuConsts {
+            nx: c.nx as u32,
+            nz: c.nz as u32,
+            junction_count: c.junction_count as u32,
+            seed: c.seed,
+            spacing: c.spacing,
+            k: c.k,
+            eta: c.eta,
+            k_foundation: c.k_foundation,
+            mass: c.mass,
+            inv_mass: c.inv_mass,
+            dt: c.dt,
+            mu_s: c.mu_s,
+            mu_d: c.mu_d,
+            junction_stiffness_value: c.junction_stiffness_value,
+            slip_mean_steps: c.slip_mean_steps,
+            slip_std_steps: c.slip_std_steps,
+            drive_stiffness: c.drive_stiffness,
+            speed_limit,
+            // Column 1 is interior whenever a full share is used (nx > 2).
+            top_share_full: top_share(c, 1),
+            top_share_edge: top_share(c, 0),
+            stiffness_normal_load: c.junction_stiffness_normal_load as u32,
+            n_blocks: (c.nx * c.nz) as u32,
+            _pad: [0; 2],
+        }
+    }
+}
+
+/// One step's loads, at a 256-byte stride in a dynamic uniform buffer.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Pod, Zeroable)]
+pub struct GpuStep {
+    pub step: u32,
+    pub preparing: u32,
+    pub normal_total: f32,
+    pub top_tangential_total: f32,
+    pub relax_eta: f32,
+    pub drive_offset: f32,
+    pub top_velocity: f32,
+    pub drive_origin: f32,
+}
+
+impl GpuStep {
+    pub fn new(p: &StepParams<f32>, drive_origin: f32) -> Self {
+        GpuStep {
+            step: p.step as u32,
+            preparing: p.preparing as u32,
+            normal_total: p.normal_total,
+            top_tangential_total: p.top_tangential_total,
+            relax_eta: p.relax_eta,
+            drive_offset: p.drive_offset,
+            top_velocity: p.top_velocity,
+            drive_origin,
+        }
+    }
+}

@@ -1,0 +1,417 @@
+//! The GPU engine: state in storage buffers, one WGSL kernel per phase, many
+//! steps encoded in one compute pass and one submit. The host writes the
+//! loads of each step (a pure function of the step count, computed by
+//! `step_params` as on the CPU) into a dynamic uniform buffer and reads the
+//! state back only when a snapshot is asked for.
+
+pub mod context;
+pub mod layout;
+pub mod shaders;
+
+use crate::engine::{blow_up, Engine, EngineError, Snapshot};
+use crate::lattice::{block_flags, initial_displacement};
+use crate::model::{Driver, Model};
+use crate::step_params::{step_params, Consts};
+use context::GpuContext;
+use layout::{GpuConsts, GpuStep};
+use shaders::{Phase, Variant};
+use wgpu::util::DeviceExt;
+
+/// Steps encoded per submit.
+const STEPS_PER_SUBMIT: u64 = 1024;
+const WORKGROUP: u32 = 64;
+
+struct Pipeline {
+    pipeline: wgpu::ComputePipeline,
+    /// Workgroups (x, y) for the phase's thread count.
+    groups: (u32, u32),
+}
+
+/// The storage buffers, in binding order 1..=8.
+struct StateBuffers {
+    disp: wgpu::Buffer,
+    vel: wgpu::Buffer,
+    force: wgpu::Buffer,
+    flags: wgpu::Buffer,
+    contact: wgpu::Buffer,
+    junction_spring: wgpu::Buffer,
+    junction_state: wgpu::Buffer,
+    slide_dir: wgpu::Buffer,
+}
+
+pub struct GpuEngine {
+    model: Model,
+    consts: Consts<f32>,
+    ctx: GpuContext,
+    buffers: StateBuffers,
+    step_buffer: wgpu::Buffer,
+    step_stride: u64,
+    state_group: wgpu::BindGroup,
+    step_group: wgpu::BindGroup,
+    pipelines: Vec<Pipeline>,
+    variant: Variant,
+    drive_origin: f32,
+    step: u64,
+    staging: Vec<u8>,
+}
+
+fn groups_for(threads: usize) -> (u32, u32) {
+    let groups = (threads as u32).div_ceil(WORKGROUP).max(1);
+    let x = groups.min(65_535);
+    (x, groups.div_ceil(x))
+}
+
+impl GpuEngine {
+    /// Builds the engine on the best adapter (hardware, else lavapipe).
+    pub fn new(model: &Model) -> Result<GpuEngine, EngineError> {
+        let ctx = GpuContext::open()?;
+        GpuEngine::with_context(model, ctx)
+    }
+
+    pub fn with_context(model: &Model, ctx: GpuContext) -> Result<GpuEngine, EngineError> {
+        let consts = Consts::<f32>::new(model);
+        let n = model.n_blocks();
+        let nj = model.n_junctions();
+        let limit = ctx.limits.max_storage_buffer_binding_size as u64;
+        let max_buffer = ctx.limits.max_buffer_size;
+        for (name, bytes) in [
+            ("block state", n as u64 * 8),
+            ("junction state", nj as u64 * 8),
+        ] {
+            if bytes > limit.min(max_buffer) {
+                return Err(EngineError::Gpu(format!(
+                    "the {name} buffer needs {bytes} bytes but {} allows at most {} per \
+                     storage binding: use a smaller lattice or fewer junctions",
+                    ctx.info.name,
+                    limit.min(max_buffer)
+                )));
+            }
+        }
+        let device = &ctx.device;
+        let storage = |label: &str, bytes: &[u8]| {
+            // Zero-sized bindings are invalid: pad empty arrays to one element.
+            let padded;
+            let contents = if bytes.is_empty() {
+                padded = vec![0u8; 16];
+                &padded[..]
+            } else {
+                bytes
+            };
+            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(label),
+                contents,
+                usage: wgpu::BufferUsages::STORAGE
+                    | wgpu::BufferUsages::COPY_SRC
+                    | wgpu::BufferUsages::COPY_DST,
+            })
+        };
+        let disp: Vec<[f32; 2]> = initial_displacement(model)
+            .into_iter()
+            .map(|u| [u[0] as f32, u[1] as f32])
+            .collect();
+        let zeros2 = |len: usize| vec![[0f32; 2]; len];
+        let buffers = StateBuffers {
+            disp: storage("disp", bytemuck::cast_slice(&disp)),
+            vel: storage("vel", bytemuck::cast_slice(&zeros2(n))),
+            force: storage("force", bytemuck::cast_slice(&zeros2(n))),
+            flags: storage("flags", bytemuck::cast_slice(&block_flags(model))),
+            contact: storage("contact", bytemuck::cast_slice(&zeros2(model.nx))),
+            junction_spring: storage("junction_spring", bytemuck::cast_slice(&zeros2(nj))),
+            junction_state: storage(
+                "junction_state",
+                bytemuck::cast_slice(&vec![[crate::cpu::PINNED, 0u32]; nj]),
+            ),
+            slide_dir: storage("slide_dir", bytemuck::cast_slice(&vec![0i32; model.nx])),
+        };
+        let gpu_consts = GpuConsts::new(&consts, model.pressure_wave_speed() as f32);
+        let consts_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("consts"),
+            contents: bytemuck::bytes_of(&gpu_consts),
+            usage: wgpu::BufferUsages::UNIFORM,
+        });
+        let step_stride = (ctx.limits.min_uniform_buffer_offset_alignment as u64).max(256);
+        let step_buffer = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("step loads"),
+            size: step_stride * STEPS_PER_SUBMIT,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let storage_entry = |binding: u32| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: wgpu::ShaderStages::COMPUTE,
+            ty: wgpu::BindingType::Buffer {
+                ty: wgpu::BufferBindingType::Storage { read_only: false },
+                has_dynamic_offset: false,
+                min_binding_size: None,
+            },
+            count: None,
+        };
+        let mut entries = vec![wgpu::BindGroupLayoutEntry {
+            binding: 0,
+            visibility: wgpu::ShaderStages::COMPUTE,
+            ty: wgpu::BindingType::Buffer {
+                ty: wgpu::BufferBindingType::Uniform,
+                has_dynamic_offset: false,
+                min_binding_size: None,
+            },
+            count: None,
+        }];
+        entries.extend((1..=8).map(storage_entry));
+        let state_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("state"),
+            entries: &entries,
+        });
+        let step_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("step"),
+            entries: &[wgpu::BindGroupLayoutEntry {
+                binding: 0,
+                visibility: wgpu::ShaderStages::COMPUTE,
+                ty: wgpu::BindingType::Buffer {
+                    ty: wgpu::BufferBindingType::Uniform,
+                    has_dynamic_offset: true,
+                    min_binding_size: wgpu::BufferSize::new(std::mem::size_of::<GpuStep>() as u64),
+                },
+                count: None,
+            }],
+        });
+        let b = &buffers;
+        let state_buffers = [
+            &consts_buffer,
+            &b.disp,
+            &b.vel,
+            &b.force,
+            &b.flags,
+            &b.contact,
+            &b.junction_spring,
+            &b.junction_state,
+            &b.slide_dir,
+        ];
+        let bind_entries: Vec<wgpu::BindGroupEntry> = state_buffers
+            .iter()
+            .enumerate()
+            .map(|(i, buf)| wgpu::BindGroupEntry {
+                binding: i as u32,
+                resource: buf.as_entire_binding(),
+            })
+            .collect();
+        let state_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("state"),
+            layout: &state_layout,
+            entries: &bind_entries,
+        });
+        let step_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("step"),
+            layout: &step_layout,
+            entries: &[wgpu::BindGroupEntry {
+                binding: 0,
+                resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                    buffer: &step_buffer,
+                    offset: 0,
+                    size: wgpu::BufferSize::new(std::mem::size_of::<GpuStep>() as u64),
+                }),
+            }],
+        });
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("slipfront"),
+            bind_group_layouts: &[Some(&state_layout), Some(&step_layout)],
+            immediate_size: 0,
+        });
+        let variant = Variant::for_model(model);
+        let mut pipelines = Vec::new();
+        for (phase, constants) in &variant.phases {
+            let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+                label: Some(phase.entry_point()),
+                source: wgpu::ShaderSource::Wgsl(phase.source().into()),
+            });
+            let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some(phase.entry_point()),
+                layout: Some(&pipeline_layout),
+                module: &module,
+                entry_point: Some(phase.entry_point()),
+                compilation_options: wgpu::PipelineCompilationOptions {
+                    constants,
+                    ..Default::default()
+                },
+                cache: None,
+            });
+            let threads = match phase {
+                Phase::BulkForces | Phase::Verlet => n,
+                Phase::Junctions | Phase::Coulomb => model.nx,
+            };
+            pipelines.push(Pipeline {
+                pipeline,
+                groups: groups_for(threads),
+            });
+        }
+        ctx.check()?;
+        Ok(GpuEngine {
+            model: model.clone(),
+            consts,
+            ctx,
+            buffers,
+            step_buffer,
+            step_stride,
+            state_group,
+            step_group,
+            pipelines,
+            variant,
+            drive_origin: 0.0,
+            step: 0,
+            staging: vec![0u8; step_stride as usize * STEPS_PER_SUBMIT as usize],
+        })
+    }
+
+    /// The pipelines this scene built.
+    pub fn variant(&self) -> &Variant {
+        &self.variant
+    }
+
+    pub fn adapter(&self) -> String {
+        self.ctx.describe()
+    }
+
+    fn read_buffer(&self, buffer: &wgpu::Buffer) -> Result<Vec<u8>, EngineError> {
+        let size = buffer.size();
+        let staging = self.ctx.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("readback"),
+            size,
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let mut encoder = self
+            .ctx
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
+        encoder.copy_buffer_to_buffer(buffer, 0, &staging, 0, size);
+        self.ctx.queue.submit([encoder.finish()]);
+        let slice = staging.slice(..);
+        let (tx, rx) = std::sync::mpsc::channel();
+        slice.map_async(wgpu::MapMode::Read, move |r| {
+            let _ = tx.send(r);
+        });
+        self.ctx
+            .device
+            .poll(wgpu::PollType::wait_indefinitely())
+            .map_err(|e| EngineError::Gpu(format!("device lost while reading back: {e}")))?;
+        rx.recv()
+            .map_err(|e| EngineError::Gpu(format!("readback: {e}")))?
+            .map_err(|e| EngineError::Gpu(format!("readback: {e}")))?;
+        let data = slice
+            .get_mapped_range()
+            .map_err(|e| EngineError::Gpu(format!("readback: {e}")))?
+            .to_vec();
+        staging.unmap();
+        self.ctx.check()?;
+        Ok(data)
+    }
+
+    fn read<T: bytemuck::Pod>(
+        &self,
+        buffer: &wgpu::Buffer,
+        len: usize,
+    ) -> Result<Vec<T>, EngineError> {
+        let bytes = self.read_buffer(buffer)?;
+        let all: &[T] = bytemuck::cast_slice(&bytes);
+        Ok(all[..len].to_vec())
+    }
+}
+
+impl Engine for GpuEngine {
+    fn model(&self) -> &Model {
+        &self.model
+    }
+
+    fn steps_done(&self) -> u64 {
+        self.step
+    }
+
+    fn advance(&mut self, n: u64) -> Result<(), EngineError> {
+        let mut left = n;
+        while left > 0 {
+            let k = left.min(STEPS_PER_SUBMIT);
+            for i in 0..k {
+                let loads =
+                    GpuStep::new(&step_params(&self.consts, self.step + i), self.drive_origin);
+                let at = (i * self.step_stride) as usize;
+                self.staging[at..at + std::mem::size_of::<GpuStep>()]
+                    .copy_from_slice(bytemuck::bytes_of(&loads));
+            }
+            let bytes = (k * self.step_stride) as usize;
+            self.ctx
+                .queue
+                .write_buffer(&self.step_buffer, 0, &self.staging[..bytes]);
+            let mut encoder =
+                self.ctx
+                    .device
+                    .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                        label: Some("steps"),
+                    });
+            {
+                let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                    label: Some("steps"),
+                    timestamp_writes: None,
+                });
+                pass.set_bind_group(0, &self.state_group, &[]);
+                for i in 0..k {
+                    pass.set_bind_group(1, &self.step_group, &[(i * self.step_stride) as u32]);
+                    for p in &self.pipelines {
+                        pass.set_pipeline(&p.pipeline);
+                        pass.dispatch_workgroups(p.groups.0, p.groups.1, 1);
+                    }
+                }
+            }
+            self.ctx.queue.submit([encoder.finish()]);
+            self.step += k;
+            left -= k;
+        }
+        self.ctx.check()
+    }
+
+    fn snapshot(&mut self) -> Result<Snapshot, EngineError> {
+        let m = &self.model;
+        let (n, nj) = (m.n_blocks(), m.n_junctions());
+        let b = &self.buffers;
+        let disp: Vec<[f32; 2]> = self.read(&b.disp, n)?;
+        let vel: Vec<[f32; 2]> = self.read(&b.vel, n)?;
+        let contact: Vec<[f32; 2]> = self.read(&b.contact, m.nx)?;
+        let spring: Vec<[f32; 2]> = self.read(&b.junction_spring, nj)?;
+        let state: Vec<[u32; 2]> = self.read(&b.junction_state, nj)?;
+        let slide: Vec<i32> = self.read(&b.slide_dir, m.nx)?;
+        let limit = m.pressure_wave_speed();
+        let snap =
+            Snapshot::from_buffers(m, self.step, &disp, &vel, &contact, &spring, &state, &slide);
+        // Blow-ups are found at readbacks (the GPU never stops to check).
+        if let Some(i) = (0..n).find(|&i| {
+            let (u, v) = (snap.disp[i], snap.vel[i]);
+            !(u[0].is_finite() && u[1].is_finite() && v[0].abs() <= limit && v[1].abs() <= limit)
+        }) {
+            return Err(blow_up(m, self.step, i, snap.disp[i], snap.vel[i]));
+        }
+        Ok(snap)
+    }
+
+    fn begin_driving(&mut self) -> Result<(), EngineError> {
+        let snap = self.snapshot()?;
+        if let Driver::SideSpring { row, .. } = self.model.driver {
+            self.drive_origin = snap.disp[row * self.model.nx][0] as f32;
+        }
+        if self.model.trigger.is_some() {
+            let anchors = crate::trigger::trigger_anchors(&self.model, &snap);
+            let spring: Vec<[f32; 2]> = anchors
+                .iter()
+                .zip(&snap.junction_stiffness)
+                .map(|(a, k)| [*a as f32, *k as f32])
+                .collect();
+            self.ctx.queue.write_buffer(
+                &self.buffers.junction_spring,
+                0,
+                bytemuck::cast_slice(&spring),
+            );
+        }
+        Ok(())
+    }
+
+    fn describe(&self) -> String {
+        format!("gpu f32 on {}", self.ctx.describe())
+    }
+}
