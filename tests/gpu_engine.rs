@@ -64,9 +64,9 @@ fn rupture_record(m: &Model, e: &mut dyn Engine, end: u64) -> (Vec<u32>, Vec<u64
         step += 20;
         advance_to(e, step).unwrap();
         let s = e.snapshot().unwrap();
-        for ix in 0..m.nx {
-            if first[ix] == u64::MAX && s.ruptures[ix * ns..(ix + 1) * ns].iter().any(|&r| r > 0) {
-                first[ix] = step;
+        for (ix, first) in first.iter_mut().enumerate() {
+            if *first == u64::MAX && s.ruptures[ix * ns..(ix + 1) * ns].iter().any(|&r| r > 0) {
+                *first = step;
             }
         }
     }

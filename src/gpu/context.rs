@@ -1,16 +1,40 @@
 //! Adapter selection: a hardware GPU, else a software one (lavapipe).
 
+use super::shaders::Phase;
 use crate::engine::EngineError;
+use std::collections::HashMap;
+use std::sync::{Arc, Mutex, OnceLock};
 
-/// The device an engine runs on, and what it is.
+/// The device engines run on, what it is, and what is built once on it:
+/// the bind group layouts and the compiled pipelines of each variant. One
+/// per process, shared by every engine (software drivers JIT-compile each
+/// pipeline and do not give that memory back).
+#[derive(Clone)]
 pub struct GpuContext {
     pub device: wgpu::Device,
     pub queue: wgpu::Queue,
     pub info: wgpu::AdapterInfo,
     pub limits: wgpu::Limits,
     /// The first uncaptured device error, if any (checked after submits).
-    pub error: std::sync::Arc<std::sync::Mutex<Option<String>>>,
+    pub error: Arc<Mutex<Option<String>>>,
+    pub state_layout: wgpu::BindGroupLayout,
+    pub step_layout: wgpu::BindGroupLayout,
+    pipeline_layout: wgpu::PipelineLayout,
+    pipelines: Arc<Mutex<HashMap<String, wgpu::ComputePipeline>>>,
 }
+
+static SHARED: OnceLock<Result<GpuContext, String>> = OnceLock::new();
+
+/// The process-wide context, opened on first use.
+pub fn shared() -> Result<GpuContext, EngineError> {
+    SHARED
+        .get_or_init(|| GpuContext::open().map_err(|e| e.to_string()))
+        .clone()
+        .map_err(EngineError::Gpu)
+}
+
+/// Size of one step's loads in the dynamic uniform buffer.
+pub const STEP_LOADS_SIZE: u64 = std::mem::size_of::<super::layout::GpuStep>() as u64;
 
 /// Lists the adapters with Vulkan/Metal/DX12 support, hardware first.
 pub fn adapters() -> Vec<wgpu::Adapter> {
@@ -48,21 +72,97 @@ impl GpuContext {
             ..Default::default()
         }))
         .map_err(|e| EngineError::Gpu(format!("cannot open {}: {e}", info.name)))?;
-        let error = std::sync::Arc::new(std::sync::Mutex::new(None));
+        let error = Arc::new(Mutex::new(None));
         let sink = error.clone();
-        device.on_uncaptured_error(std::sync::Arc::new(move |e: wgpu::Error| {
+        device.on_uncaptured_error(Arc::new(move |e: wgpu::Error| {
             let mut slot = sink.lock().expect("error slot");
             if slot.is_none() {
                 *slot = Some(e.to_string());
             }
         }));
+        let storage_entry = |binding: u32| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: wgpu::ShaderStages::COMPUTE,
+            ty: wgpu::BindingType::Buffer {
+                ty: wgpu::BufferBindingType::Storage { read_only: false },
+                has_dynamic_offset: false,
+                min_binding_size: None,
+            },
+            count: None,
+        };
+        let mut entries = vec![wgpu::BindGroupLayoutEntry {
+            binding: 0,
+            visibility: wgpu::ShaderStages::COMPUTE,
+            ty: wgpu::BindingType::Buffer {
+                ty: wgpu::BufferBindingType::Uniform,
+                has_dynamic_offset: false,
+                min_binding_size: None,
+            },
+            count: None,
+        }];
+        entries.extend((1..=8).map(storage_entry));
+        let state_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("state"),
+            entries: &entries,
+        });
+        let step_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("step"),
+            entries: &[wgpu::BindGroupLayoutEntry {
+                binding: 0,
+                visibility: wgpu::ShaderStages::COMPUTE,
+                ty: wgpu::BindingType::Buffer {
+                    ty: wgpu::BufferBindingType::Uniform,
+                    has_dynamic_offset: true,
+                    min_binding_size: wgpu::BufferSize::new(STEP_LOADS_SIZE),
+                },
+                count: None,
+            }],
+        });
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("slipfront"),
+            bind_group_layouts: &[Some(&state_layout), Some(&step_layout)],
+            immediate_size: 0,
+        });
         Ok(GpuContext {
             device,
             queue,
             info,
             limits,
             error,
+            state_layout,
+            step_layout,
+            pipeline_layout,
+            pipelines: Arc::new(Mutex::new(HashMap::new())),
         })
+    }
+
+    /// The pipeline of `phase` with `constants`, compiled once per process.
+    pub fn pipeline(&self, phase: Phase, constants: &[(&str, f64)]) -> wgpu::ComputePipeline {
+        let key = format!("{}{constants:?}", phase.entry_point());
+        let mut cache = self.pipelines.lock().expect("pipeline cache");
+        cache
+            .entry(key)
+            .or_insert_with(|| {
+                let module = self
+                    .device
+                    .create_shader_module(wgpu::ShaderModuleDescriptor {
+                        label: Some(phase.entry_point()),
+                        source: wgpu::ShaderSource::Wgsl(phase.source().into()),
+                    });
+                self.device
+                    .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                        label: Some(phase.entry_point()),
+                        layout: Some(&self.pipeline_layout),
+                        module: &module,
+                        entry_point: Some(phase.entry_point()),
+                        compilation_options: wgpu::PipelineCompilationOptions {
+                            constants,
+                            ..Default::default()
+                        },
+                        cache: None,
+                    })
+            })
+            .clone()
     }
 
     /// Adapter name, type and driver.

@@ -64,15 +64,14 @@ fn groups_for(threads: usize) -> (u32, u32) {
 impl GpuEngine {
     /// Builds the engine on the best adapter (hardware, else lavapipe).
     pub fn new(model: &Model) -> Result<GpuEngine, EngineError> {
-        let ctx = GpuContext::open()?;
-        GpuEngine::with_context(model, ctx)
+        GpuEngine::with_context(model, context::shared()?)
     }
 
     pub fn with_context(model: &Model, ctx: GpuContext) -> Result<GpuEngine, EngineError> {
         let consts = Consts::<f32>::new(model);
         let n = model.n_blocks();
         let nj = model.n_junctions();
-        let limit = ctx.limits.max_storage_buffer_binding_size as u64;
+        let limit = ctx.limits.max_storage_buffer_binding_size;
         let max_buffer = ctx.limits.max_buffer_size;
         for (name, bytes) in [
             ("block state", n as u64 * 8),
@@ -136,44 +135,6 @@ impl GpuEngine {
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        let storage_entry = |binding: u32| wgpu::BindGroupLayoutEntry {
-            binding,
-            visibility: wgpu::ShaderStages::COMPUTE,
-            ty: wgpu::BindingType::Buffer {
-                ty: wgpu::BufferBindingType::Storage { read_only: false },
-                has_dynamic_offset: false,
-                min_binding_size: None,
-            },
-            count: None,
-        };
-        let mut entries = vec![wgpu::BindGroupLayoutEntry {
-            binding: 0,
-            visibility: wgpu::ShaderStages::COMPUTE,
-            ty: wgpu::BindingType::Buffer {
-                ty: wgpu::BufferBindingType::Uniform,
-                has_dynamic_offset: false,
-                min_binding_size: None,
-            },
-            count: None,
-        }];
-        entries.extend((1..=8).map(storage_entry));
-        let state_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("state"),
-            entries: &entries,
-        });
-        let step_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("step"),
-            entries: &[wgpu::BindGroupLayoutEntry {
-                binding: 0,
-                visibility: wgpu::ShaderStages::COMPUTE,
-                ty: wgpu::BindingType::Buffer {
-                    ty: wgpu::BufferBindingType::Uniform,
-                    has_dynamic_offset: true,
-                    min_binding_size: wgpu::BufferSize::new(std::mem::size_of::<GpuStep>() as u64),
-                },
-                count: None,
-            }],
-        });
         let b = &buffers;
         let state_buffers = [
             &consts_buffer,
@@ -196,44 +157,25 @@ impl GpuEngine {
             .collect();
         let state_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("state"),
-            layout: &state_layout,
+            layout: &ctx.state_layout,
             entries: &bind_entries,
         });
         let step_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("step"),
-            layout: &step_layout,
+            layout: &ctx.step_layout,
             entries: &[wgpu::BindGroupEntry {
                 binding: 0,
                 resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
                     buffer: &step_buffer,
                     offset: 0,
-                    size: wgpu::BufferSize::new(std::mem::size_of::<GpuStep>() as u64),
+                    size: wgpu::BufferSize::new(context::STEP_LOADS_SIZE),
                 }),
             }],
-        });
-        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("slipfront"),
-            bind_group_layouts: &[Some(&state_layout), Some(&step_layout)],
-            immediate_size: 0,
         });
         let variant = Variant::for_model(model);
         let mut pipelines = Vec::new();
         for (phase, constants) in &variant.phases {
-            let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-                label: Some(phase.entry_point()),
-                source: wgpu::ShaderSource::Wgsl(phase.source().into()),
-            });
-            let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some(phase.entry_point()),
-                layout: Some(&pipeline_layout),
-                module: &module,
-                entry_point: Some(phase.entry_point()),
-                compilation_options: wgpu::PipelineCompilationOptions {
-                    constants,
-                    ..Default::default()
-                },
-                cache: None,
-            });
+            let pipeline = ctx.pipeline(*phase, constants);
             let threads = match phase {
                 Phase::BulkForces | Phase::Verlet => n,
                 Phase::Junctions | Phase::Coulomb => model.nx,
@@ -270,11 +212,13 @@ impl GpuEngine {
         self.ctx.describe()
     }
 
-    fn read_buffer(&self, buffer: &wgpu::Buffer) -> Result<Vec<u8>, EngineError> {
-        let size = buffer.size();
+    /// Copies `buffers` into one staging buffer with one submit and one
+    /// wait, and returns each buffer's bytes.
+    fn read_buffers(&self, buffers: &[&wgpu::Buffer]) -> Result<Vec<Vec<u8>>, EngineError> {
+        let total: u64 = buffers.iter().map(|b| b.size()).sum();
         let staging = self.ctx.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("readback"),
-            size,
+            size: total,
             usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
@@ -282,7 +226,11 @@ impl GpuEngine {
             .ctx
             .device
             .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
-        encoder.copy_buffer_to_buffer(buffer, 0, &staging, 0, size);
+        let mut offset = 0;
+        for b in buffers {
+            encoder.copy_buffer_to_buffer(b, 0, &staging, offset, b.size());
+            offset += b.size();
+        }
         self.ctx.queue.submit([encoder.finish()]);
         let slice = staging.slice(..);
         let (tx, rx) = std::sync::mpsc::channel();
@@ -302,18 +250,19 @@ impl GpuEngine {
             .to_vec();
         staging.unmap();
         self.ctx.check()?;
-        Ok(data)
+        let mut out = Vec::with_capacity(buffers.len());
+        let mut at = 0usize;
+        for b in buffers {
+            let size = b.size() as usize;
+            out.push(data[at..at + size].to_vec());
+            at += size;
+        }
+        Ok(out)
     }
+}
 
-    fn read<T: bytemuck::Pod>(
-        &self,
-        buffer: &wgpu::Buffer,
-        len: usize,
-    ) -> Result<Vec<T>, EngineError> {
-        let bytes = self.read_buffer(buffer)?;
-        let all: &[T] = bytemuck::cast_slice(&bytes);
-        Ok(all[..len].to_vec())
-    }
+fn cast_prefix<T: bytemuck::Pod>(bytes: &[u8], len: usize) -> Vec<T> {
+    bytemuck::cast_slice::<u8, T>(bytes)[..len].to_vec()
 }
 
 impl Engine for GpuEngine {
@@ -371,12 +320,20 @@ impl Engine for GpuEngine {
         let m = &self.model;
         let (n, nj) = (m.n_blocks(), m.n_junctions());
         let b = &self.buffers;
-        let disp: Vec<[f32; 2]> = self.read(&b.disp, n)?;
-        let vel: Vec<[f32; 2]> = self.read(&b.vel, n)?;
-        let contact: Vec<[f32; 2]> = self.read(&b.contact, m.nx)?;
-        let spring: Vec<[f32; 2]> = self.read(&b.junction_spring, nj)?;
-        let state: Vec<[u32; 2]> = self.read(&b.junction_state, nj)?;
-        let slide: Vec<i32> = self.read(&b.slide_dir, m.nx)?;
+        let raw = self.read_buffers(&[
+            &b.disp,
+            &b.vel,
+            &b.contact,
+            &b.junction_spring,
+            &b.junction_state,
+            &b.slide_dir,
+        ])?;
+        let disp: Vec<[f32; 2]> = cast_prefix(&raw[0], n);
+        let vel: Vec<[f32; 2]> = cast_prefix(&raw[1], n);
+        let contact: Vec<[f32; 2]> = cast_prefix(&raw[2], m.nx);
+        let spring: Vec<[f32; 2]> = cast_prefix(&raw[3], nj);
+        let state: Vec<[u32; 2]> = cast_prefix(&raw[4], nj);
+        let slide: Vec<i32> = cast_prefix(&raw[5], m.nx);
         let limit = m.pressure_wave_speed();
         let snap =
             Snapshot::from_buffers(m, self.step, &disp, &vel, &contact, &spring, &state, &slide);
