@@ -101,3 +101,45 @@ fn f32_tracks_f64_on_the_table_s1_scene() {
         "max |u64 - u32| = {err:e}, scale {scale:e}"
     );
 }
+
+#[test]
+fn trigger_breaks_the_strip_at_once_and_holds_the_rest() {
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/scenarios/triggered_front.toml"
+    );
+    let s = Scenario::load(std::path::Path::new(path), &[]).unwrap();
+    let m = Model::from_scenario(&s, false).unwrap();
+    let mut e = cpu_engine(&m, Precision::F64, 0).unwrap();
+    advance_to(e.as_mut(), m.prep_steps + 1).unwrap();
+    let snap = e.snapshot().unwrap();
+    let ns = m.junctions.unwrap().count;
+    let strip = m.trigger.unwrap().strip_blocks;
+    // Every junction of a loaded strip block broke on the first step (the
+    // top-row prestress force lifts the trailing corner off the track: with
+    // p = 0 there is nothing to break); none far ahead of the strip did.
+    for ix in 0..strip {
+        let broken = snap.ruptures[ix * ns..(ix + 1) * ns]
+            .iter()
+            .filter(|&&r| r == 1)
+            .count();
+        let expected = if snap.normal[ix] > 0.0 { ns } else { 0 };
+        assert_eq!(broken, expected, "block {ix}, normal {}", snap.normal[ix]);
+    }
+    assert!(snap.normal[strip - 1] > 0.0);
+    assert_eq!(snap.ruptures[(m.nx / 2) * ns..].iter().sum::<u32>(), 0);
+    // Junction forces away from the strip sit at the prescribed prestress.
+    let ix = m.nx / 2;
+    let f_n = snap.normal[ix] / ns as f64;
+    let mean: f64 = (0..ns)
+        .map(|j| {
+            let k = ix * ns + j;
+            snap.junction_stiffness[k] * (snap.disp[ix][0] - snap.anchor[k]) / f_n
+        })
+        .sum::<f64>()
+        / ns as f64;
+    assert!(
+        (mean - 0.3).abs() < 0.02,
+        "mean junction force ratio {mean}"
+    );
+}
