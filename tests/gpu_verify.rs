@@ -2,7 +2,7 @@
 //! Fails, never skips, when no adapter exists.
 
 use slipfront::gpu::GpuEngine;
-use slipfront::verify::run_all;
+use slipfront::verify::{failures, run_all};
 use slipfront::{Engine, EngineError, Model};
 
 // On 2-core lavapipe the whole list takes longer than 10 minutes (about

@@ -2,7 +2,7 @@
 //! whose model is perturbed must be flagged by the same comparators.
 
 use slipfront::backend::{cpu_engine, Precision};
-use slipfront::verify::{run_all, CaseResult};
+use slipfront::verify::{failures, run_all};
 use slipfront::Model;
 
 fn failures(results: &[CaseResult]) -> Vec<String> {

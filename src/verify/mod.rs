@@ -52,6 +52,20 @@ impl CaseResult {
     }
 }
 
+/// One line per failed case: name, measured, expected and tolerance.
+pub fn failures(results: &[CaseResult]) -> Vec<String> {
+    results
+        .iter()
+        .filter(|r| !r.pass)
+        .map(|r| {
+            format!(
+                "{}: {} vs {} ± {}",
+                r.name, r.measured, r.expected, r.tolerance
+            )
+        })
+        .collect()
+}
+
 /// Builds an engine for a model (the backend under test).
 pub type EngineFactory<'a> = &'a dyn Fn(&Model) -> Result<Box<dyn Engine>, EngineError>;
 
