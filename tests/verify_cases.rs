@@ -5,19 +5,6 @@ use slipfront::backend::{cpu_engine, Precision};
 use slipfront::verify::{failures, run_all};
 use slipfront::Model;
 
-fn failures(results: &[CaseResult]) -> Vec<String> {
-    results
-        .iter()
-        .filter(|r| !r.pass)
-        .map(|r| {
-            format!(
-                "{}: {} vs {} ± {}",
-                r.name, r.measured, r.expected, r.tolerance
-            )
-        })
-        .collect()
-}
-
 #[test]
 fn all_cases_pass_on_cpu_f64() {
     let f = |m: &Model| cpu_engine(m, Precision::F64, 1);
