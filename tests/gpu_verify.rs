@@ -15,15 +15,5 @@ fn every_verify_case_passes_on_the_gpu() {
     let factory =
         |m: &Model| -> Result<Box<dyn Engine>, EngineError> { Ok(Box::new(GpuEngine::new(m)?)) };
     let results = run_all(&factory).expect("a GPU adapter is required (lavapipe in CI)");
-    let failed: Vec<String> = results
-        .iter()
-        .filter(|r| !r.pass)
-        .map(|r| {
-            format!(
-                "{}: {} vs {} ± {}",
-                r.name, r.measured, r.expected, r.tolerance
-            )
-        })
-        .collect();
-    assert_eq!(failed, Vec::<String>::new());
+    assert_eq!(failures(&results), Vec::<String>::new());
 }
