@@ -61,7 +61,9 @@ const WORKGROUP: u32 = 64u;
 // (re-pin step or PINNED, rupture count) per junction.
 @group(0) @binding(7) var<storage, read_write> junction_state: array<vec2<u32>>;
 @group(0) @binding(8) var<storage, read_write> slide_dir: array<i32>;
-@group(1) @binding(0) var<uniform> sp: StepLoads;
+// A storage binding, not a uniform: lavapipe specialises shaders on uniform
+// contents and would recompile (and keep) a variant for every step.
+@group(1) @binding(0) var<storage, read> sp: StepLoads;
 
 // Linear thread index over a 2D grid of workgroups (large lattices need
 // more than 65535 workgroups along x).

@@ -5,12 +5,8 @@ use slipfront::gpu::GpuEngine;
 use slipfront::verify::{failures, run_all};
 use slipfront::{Engine, EngineError, Model};
 
-// On 2-core lavapipe the whole list takes longer than 10 minutes (about
-// 400 000 steps at ~0.3 ms of dispatch overhead each): run it with
-// `cargo test --release --test gpu_verify -- --ignored` or
-// `slipfront verify --backend gpu --precision f32`.
+// About 70 s on 2-core lavapipe.
 #[test]
-#[ignore = "over 10 minutes on lavapipe; run explicitly"]
 fn every_verify_case_passes_on_the_gpu() {
     let factory =
         |m: &Model| -> Result<Box<dyn Engine>, EngineError> { Ok(Box::new(GpuEngine::new(m)?)) };

@@ -72,3 +72,12 @@ fn negative_control_changed_friction_fails_coulomb_and_drag_cases() {
         "{failed:?}"
     );
 }
+
+#[test]
+fn negative_control_another_seed_fails_the_engine_draw_case() {
+    let failed = failed_names(|m| m.seed ^= 1);
+    assert!(
+        failed.contains(&"rng_engine_draws_match_counter".to_string()),
+        "{failed:?}"
+    );
+}

@@ -1,10 +1,12 @@
 use slipfront::backend::{make_engine, Backend, Precision};
-use slipfront::verify::run_all;
+use slipfront::verify::run_all_reporting;
 use std::process::ExitCode;
 
 pub fn verify(backend: Backend, precision: Precision, json: bool) -> anyhow::Result<ExitCode> {
     let factory = |m: &slipfront::Model| make_engine(m, backend, precision, 0);
-    let results = run_all(&factory)?;
+    let results = run_all_reporting(&factory, &mut |group, seconds| {
+        eprintln!("verify: {group} done in {seconds:.1} s")
+    })?;
     if json {
         println!("{}", serde_json::to_string_pretty(&results)?);
     } else {

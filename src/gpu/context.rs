@@ -33,7 +33,7 @@ pub fn shared() -> Result<GpuContext, EngineError> {
         .map_err(EngineError::Gpu)
 }
 
-/// Size of one step's loads in the dynamic uniform buffer.
+/// Size of one step's loads in the dynamically offset step buffer.
 pub const STEP_LOADS_SIZE: u64 = std::mem::size_of::<super::layout::GpuStep>() as u64;
 
 /// Lists the adapters with Vulkan/Metal/DX12 support, hardware first.
@@ -65,6 +65,13 @@ impl GpuContext {
         })?;
         let info = adapter.get_info();
         let limits = adapter.limits();
+        // 8 state buffers plus the per-step loads.
+        if limits.max_storage_buffers_per_shader_stage < 9 {
+            return Err(EngineError::Gpu(format!(
+                "{} allows {} storage buffers per shader stage; slipfront needs 9",
+                info.name, limits.max_storage_buffers_per_shader_stage
+            )));
+        }
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("slipfront"),
             required_features: wgpu::Features::empty(),
@@ -111,7 +118,7 @@ impl GpuContext {
                 binding: 0,
                 visibility: wgpu::ShaderStages::COMPUTE,
                 ty: wgpu::BindingType::Buffer {
-                    ty: wgpu::BufferBindingType::Uniform,
+                    ty: wgpu::BufferBindingType::Storage { read_only: true },
                     has_dynamic_offset: true,
                     min_binding_size: wgpu::BufferSize::new(STEP_LOADS_SIZE),
                 },

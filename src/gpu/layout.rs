@@ -63,7 +63,7 @@ impl GpuConsts {
     }
 }
 
-/// One step's loads, at a 256-byte stride in a dynamic uniform buffer.
+/// One step's loads, at a 256-byte stride in a dynamically offset storage buffer.
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Pod, Zeroable)]
 pub struct GpuStep {

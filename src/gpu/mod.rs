@@ -1,7 +1,7 @@
 //! The GPU engine: state in storage buffers, one WGSL kernel per phase, many
 //! steps encoded in one compute pass and one submit. The host writes the
 //! loads of each step (a pure function of the step count, computed by
-//! `step_params` as on the CPU) into a dynamic uniform buffer and reads the
+//! `step_params` as on the CPU) into a dynamically offset storage buffer and reads the
 //! state back only when a snapshot is asked for.
 
 pub mod context;
@@ -128,11 +128,11 @@ impl GpuEngine {
             contents: bytemuck::bytes_of(&gpu_consts),
             usage: wgpu::BufferUsages::UNIFORM,
         });
-        let step_stride = (ctx.limits.min_uniform_buffer_offset_alignment as u64).max(256);
+        let step_stride = (ctx.limits.min_storage_buffer_offset_alignment as u64).max(256);
         let step_buffer = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("step loads"),
             size: step_stride * STEPS_PER_SUBMIT,
-            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
         let b = &buffers;

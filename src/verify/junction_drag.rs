@@ -4,7 +4,7 @@
 
 use super::{bare_scene, scene_model, CaseResult, EngineFactory, VerifyError};
 use crate::engine::advance_to;
-use crate::scenario::{Drive, DriveMode, FrictionLaw, JunctionStiffness, Junctions};
+use crate::scenario::{Drive, DriveMode, FrictionLaw, JunctionStiffness, Junctions, Scenario};
 
 /// The renewal prediction of the steady friction coefficient.
 pub fn renewal_friction_coefficient(mu_s: f64, mu_d: f64, pinned_time: f64, slip_time: f64) -> f64 {
@@ -17,29 +17,35 @@ const SLIP_MEAN: f64 = 0.2e-3;
 const SLIP_STD: f64 = 0.06e-3;
 const STIFFNESS: f64 = 5.0e4;
 
-/// Measured mean friction coefficient when dragged at `speed`, and the
-/// pinned time t_a of the renewal argument.
-fn drag(factory: EngineFactory<'_>, speed: f64) -> Result<(f64, f64), VerifyError> {
+/// One heavy interface block (72 g) with `count` junctions of constant
+/// stiffness, normal load NORMAL, its top dragged at `speed`. The foundation
+/// period (0.65 ms) is long against the time step, so one step resolves the
+/// junction cycles. The time step is ⟨t_R⟩/300.
+pub(super) fn dragged_block(
+    count: u32,
+    speed: f64,
+    slip_mean: f64,
+    slip_std: f64,
+) -> Result<Scenario, VerifyError> {
     let mut s = bare_scene("junction_drag");
     s.geometry.nx = 1;
     s.geometry.nz = 1;
-    // A heavy block (72 g): its foundation period (0.65 ms) is long
-    // against the time step, so one step resolves the junction cycles.
     s.geometry.length = 0.1;
     s.geometry.height = 0.1;
     s.foundation.stiffness_ratio = 0.5;
     s.friction.law = FrictionLaw::Junctions;
     s.friction.junctions = Some(Junctions {
-        count: NS,
+        count,
         stiffness: JunctionStiffness::Constant,
         stiffness_coefficient: 39.2e9,
         constant_stiffness: STIFFNESS,
-        slip_time_mean: SLIP_MEAN,
-        slip_time_std: SLIP_STD,
+        slip_time_mean: slip_mean,
+        slip_time_std: slip_std,
     });
     s.loading.normal.force = NORMAL;
     // Ramp and relax over many periods of the block on its foundation.
-    let foundation_time = (scene_model(&s)?.mass / scene_model(&s)?.k_foundation).sqrt();
+    let probe = scene_model(&s)?;
+    let foundation_time = (probe.mass / probe.k_foundation).sqrt();
     s.loading.normal.ramp_time = 10.0 * foundation_time;
     s.loading.normal.relax_time = 40.0 * foundation_time;
     s.loading.normal.relax_damping_ratio = 0.5f64.sqrt();
@@ -50,15 +56,21 @@ fn drag(factory: EngineFactory<'_>, speed: f64) -> Result<(f64, f64), VerifyErro
         velocity: Some(speed),
         force_rate: None,
     };
+    s.time.dt_fraction = None;
+    s.time.dt = Some(slip_mean / 300.0);
+    Ok(s)
+}
+
+/// Measured mean friction coefficient when dragged at `speed`, and the
+/// pinned time t_a of the renewal argument.
+fn drag(factory: EngineFactory<'_>, speed: f64) -> Result<(f64, f64), VerifyError> {
+    let mut s = dragged_block(NS, speed, SLIP_MEAN, SLIP_STD)?;
     let f_n = NORMAL / NS as f64;
     let pinned_time = s.friction.static_coefficient * f_n / (STIFFNESS * speed);
     let cycle = pinned_time + SLIP_MEAN;
     // Skip two cycles of start-up; average over 60 more.
     let skip = 2.0 * cycle;
     s.time.end = skip + 60.0 * cycle;
-    // 300 steps per mean slip time: 30 per pinned phase at the fastest speed.
-    s.time.dt_fraction = None;
-    s.time.dt = Some(SLIP_MEAN / 300.0);
     let model = scene_model(&s)?;
     let mut engine = factory(&model)?;
     let first = model.prep_steps + (skip / model.dt) as u64;

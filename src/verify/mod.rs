@@ -78,14 +78,33 @@ pub enum VerifyError {
     Model(#[from] crate::model::ModelError),
 }
 
+type CaseGroup = fn(EngineFactory<'_>) -> Result<Vec<CaseResult>, VerifyError>;
+
+/// The groups of cases, in order, by name.
+const GROUPS: [(&str, CaseGroup); 5] = [
+    ("wave speeds", waves::wave_speed_cases),
+    ("elastic constants", elastic::elastic_constant_cases),
+    ("coulomb block", coulomb_block::coulomb_block_cases),
+    ("junction drag", junction_drag::junction_drag_cases),
+    ("rng", rng_stats::rng_cases),
+];
+
 /// Every validation case, in order.
 pub fn run_all(factory: EngineFactory<'_>) -> Result<Vec<CaseResult>, VerifyError> {
+    run_all_reporting(factory, &mut |_, _| {})
+}
+
+/// Every validation case; `done(group, seconds)` is called after each group.
+pub fn run_all_reporting(
+    factory: EngineFactory<'_>,
+    done: &mut dyn FnMut(&str, f64),
+) -> Result<Vec<CaseResult>, VerifyError> {
     let mut out = Vec::new();
-    out.extend(waves::wave_speed_cases(factory)?);
-    out.extend(elastic::elastic_constant_cases(factory)?);
-    out.extend(coulomb_block::coulomb_block_cases(factory)?);
-    out.extend(junction_drag::junction_drag_cases(factory)?);
-    out.extend(rng_stats::rng_cases(factory)?);
+    for (name, group) in GROUPS {
+        let start = std::time::Instant::now();
+        out.extend(group(factory)?);
+        done(name, start.elapsed().as_secs_f64());
+    }
     Ok(out)
 }
 
