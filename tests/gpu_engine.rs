@@ -198,3 +198,22 @@ fn large_lattice_with_junctions_runs() {
     // The top row has been pushed down, the rest is still finite.
     assert!(s.disp[(511 * 2048) + 1000][1] < 0.0);
 }
+
+#[test]
+fn a_lattice_beyond_the_adapter_limits_is_refused_clearly() {
+    // 16385 × 16384 blocks: 2^31 + 2^17 bytes of displacements, more than
+    // any adapter binds in one storage buffer (2 GiB at most).
+    let l = 0.14 / 56.0;
+    let m = model(&[
+        "geometry.nx=16385",
+        "geometry.nz=16384",
+        &format!("geometry.length={}", l * 16384.0),
+        &format!("geometry.height={}", l * 16383.0),
+    ]);
+    let err = match GpuEngine::new(&m) {
+        Ok(_) => panic!("a 2.1 GB buffer must be refused"),
+        Err(e) => e.to_string(),
+    };
+    assert!(err.contains("block state buffer needs"), "{err}");
+    assert!(err.contains("smaller lattice"), "{err}");
+}
