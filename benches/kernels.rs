@@ -19,7 +19,11 @@ fn model() -> Model {
         format!("geometry.length={}", l * 1023.0),
         format!("geometry.height={}", l * 255.0),
     ];
-    Model::from_scenario(&Scenario::parse(DEFAULT_SCENARIO, "bench", &set).unwrap(), false).unwrap()
+    Model::from_scenario(
+        &Scenario::parse(DEFAULT_SCENARIO, "bench", &set).unwrap(),
+        false,
+    )
+    .unwrap()
 }
 
 fn kernels(c: &mut Criterion) {
@@ -38,7 +42,11 @@ fn kernels(c: &mut Criterion) {
         .collect();
     let vel = vec![[1e-4, 0.0]; n];
     let mut force = vec![[0.0; 2]; n];
-    let blocks = Blocks { disp: &disp, vel: &vel, flags: &flags };
+    let blocks = Blocks {
+        disp: &disp,
+        vel: &vel,
+        flags: &flags,
+    };
 
     let mut g = c.benchmark_group("cpu_twins_1024x256_f64");
     g.throughput(Throughput::Elements(n as u64));
@@ -67,7 +75,9 @@ fn kernels(c: &mut Criterion) {
     g.bench_function("verlet", |b| {
         b.iter(|| {
             for i in 0..n {
-                black_box(verlet(&consts, &p, flags[i], force[i], 0.0, &mut u[i], &mut v[i], 1e3));
+                black_box(verlet(
+                    &consts, &p, flags[i], force[i], 0.0, &mut u[i], &mut v[i], 1e3,
+                ));
             }
         })
     });

@@ -4,6 +4,7 @@
 pub mod backend;
 pub mod compare;
 pub mod cpu;
+pub mod energy;
 pub mod engine;
 pub mod gpu;
 pub mod lattice;

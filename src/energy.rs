@@ -1,0 +1,171 @@
+//! Energy bookkeeping: the energy stored in a state and the power flowing
+//! in and out of it, so that a run can be checked against
+//! work in = change of stored energy + dissipation.
+//!
+//! The system is the slider plus its driving spring. Stored: kinetic energy,
+//! bulk springs, foundation, side spring. Power in: the puller of the side
+//! spring, the normal and tangential top loads, the friction forces (all
+//! junction forces, pinned or slipping, taken as external). Dissipated: the
+//! dashpots and the relaxation damping.
+
+use crate::engine::Snapshot;
+use crate::lattice::STENCIL;
+use crate::model::{Driver, Model};
+use crate::scenario::DampingForm;
+
+/// Energy stored in a state (J).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct StoredEnergy {
+    pub kinetic: f64,
+    pub springs: f64,
+    pub foundation: f64,
+    pub drive_spring: f64,
+}
+
+impl StoredEnergy {
+    pub fn total(&self) -> f64 {
+        self.kinetic + self.springs + self.foundation + self.drive_spring
+    }
+}
+
+/// Bonds counted once: the stencil directions pointing "forward".
+fn forward_bonds() -> impl Iterator<Item = &'static crate::lattice::Bond> {
+    STENCIL
+        .iter()
+        .filter(|b| b.dz > 0 || (b.dz == 0 && b.dx > 0))
+}
+
+/// Visits every bond once with (i, j, rest length, stiffness).
+fn for_each_bond(m: &Model, mut f: impl FnMut(usize, usize, [f64; 2], f64, f64)) {
+    for iz in 0..m.nz as i64 {
+        for ix in 0..m.nx as i64 {
+            for b in forward_bonds() {
+                let (jx, jz) = (ix + b.dx as i64, iz + b.dz as i64);
+                if jx < 0 || jx >= m.nx as i64 || jz >= m.nz as i64 {
+                    continue;
+                }
+                let i = (iz * m.nx as i64 + ix) as usize;
+                let j = (jz * m.nx as i64 + jx) as usize;
+                let r0 = [b.dx as f64 * m.spacing, b.dz as f64 * m.spacing];
+                f(
+                    i,
+                    j,
+                    r0,
+                    b.length_factor * m.spacing,
+                    b.stiffness_factor * m.k,
+                );
+            }
+        }
+    }
+}
+
+/// Stored energy of a state; `drive_origin` is u_x of the driven block when
+/// driving started.
+pub fn stored_energy(m: &Model, s: &Snapshot, drive_origin: f64) -> StoredEnergy {
+    let mut e = StoredEnergy {
+        kinetic: s.kinetic_energy(m.mass),
+        ..Default::default()
+    };
+    for_each_bond(m, |i, j, r0, rest, k| {
+        let du = [s.disp[j][0] - s.disp[i][0], s.disp[j][1] - s.disp[i][1]];
+        let r = [r0[0] + du[0], r0[1] + du[1]];
+        let stretch = (r[0] * r[0] + r[1] * r[1]).sqrt() - rest;
+        e.springs += 0.5 * k * stretch * stretch;
+    });
+    for ix in 0..m.nx {
+        let pen = (-s.disp[ix][1]).max(0.0);
+        e.foundation += 0.5 * m.k_foundation * pen * pen;
+    }
+    if let Driver::SideSpring {
+        stiffness,
+        row,
+        velocity,
+    } = m.driver
+    {
+        let stretch = velocity * s.time.max(0.0) - (s.disp[row * m.nx][0] - drive_origin);
+        e.drive_spring = 0.5 * stiffness * stretch * stretch;
+    }
+    e
+}
+
+/// Power terms (W) at one step, from the state before and after it:
+/// forces from `before` (positions and loads of step n), velocities averaged
+/// over the step (the leapfrog's exact kinetic-energy identity).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Power {
+    pub drive: f64,
+    pub top_loads: f64,
+    pub friction: f64,
+    /// Dissipated by dashpots and relaxation damping (≥ 0).
+    pub damping: f64,
+}
+
+pub fn step_power(m: &Model, before: &Snapshot, after: &Snapshot, drive_origin: f64) -> Power {
+    let vbar = |i: usize| {
+        [
+            0.5 * (before.vel[i][0] + after.vel[i][0]),
+            0.5 * (before.vel[i][1] + after.vel[i][1]),
+        ]
+    };
+    let mut p = Power::default();
+    if let Driver::SideSpring {
+        stiffness,
+        row,
+        velocity,
+    } = m.driver
+    {
+        if before.time >= 0.0 {
+            // The puller moves the spring's far end at V.
+            let stretch = velocity * before.time - (before.disp[row * m.nx][0] - drive_origin);
+            p.drive = stiffness * stretch * velocity;
+        }
+    }
+    let ramp = if m.ramp_steps == 0 || before.step >= m.ramp_steps {
+        1.0
+    } else {
+        before.step as f64 / m.ramp_steps as f64
+    };
+    let top_tangential = m
+        .trigger
+        .map_or(0.0, |t| t.shear_prestress * m.normal_force)
+        * ramp
+        + match m.driver {
+            Driver::TopForce { rate } => rate * before.time.max(0.0),
+            _ => 0.0,
+        };
+    for ix in 0..m.nx {
+        let i = (m.nz - 1) * m.nx + ix;
+        let share = m.top_share(ix);
+        let v = vbar(i);
+        p.top_loads += -m.normal_force * ramp * share * v[1] + top_tangential * share * v[0];
+    }
+    for ix in 0..m.nx {
+        // Friction of step n is in the snapshot after it.
+        p.friction += after.friction.get(ix).copied().unwrap_or(0.0) * vbar(ix)[0];
+    }
+    for_each_bond(m, |i, j, r0, _, _| {
+        let (vi, vj) = (vbar(i), vbar(j));
+        let dv = [vj[0] - vi[0], vj[1] - vi[1]];
+        p.damping += match m.damping_form {
+            DampingForm::Full => m.eta * (dv[0] * dv[0] + dv[1] * dv[1]),
+            DampingForm::Bond => {
+                let du = [
+                    before.disp[j][0] - before.disp[i][0],
+                    before.disp[j][1] - before.disp[i][1],
+                ];
+                let r = [r0[0] + du[0], r0[1] + du[1]];
+                let len = (r[0] * r[0] + r[1] * r[1]).sqrt();
+                let along = (dv[0] * r[0] + dv[1] * r[1]) / len;
+                m.eta * along * along
+            }
+        };
+    });
+    let relaxing = before.step < m.prep_steps && before.step >= m.ramp_steps;
+    if relaxing {
+        for i in 0..m.n_blocks() {
+            let v = vbar(i);
+            p.damping += m.relax_eta * (v[0] * v[0] + v[1] * v[1]);
+        }
+    }
+    p
+}
