@@ -9,6 +9,7 @@ pub mod engine;
 pub mod gpu;
 pub mod lattice;
 pub mod model;
+pub mod observables;
 pub mod output;
 pub mod real;
 pub mod rng;

@@ -7,7 +7,8 @@ mod junction_drag;
 mod rng_stats;
 mod waves;
 
-pub use coulomb_block::{coulomb_exact_position, CoulombExact};
+pub use coulomb_block::{coulomb_ensemble_error, coulomb_exact_position, CoulombExact};
+pub use waves::measure_wave_speed;
 pub use junction_drag::renewal_friction_coefficient;
 
 use crate::engine::{Engine, EngineError};

@@ -1,0 +1,203 @@
+//! Work-precision study: run time against error for time steps T/10 … T/400,
+//! CPU f64/f32 (and the GPU with SLIPFRONT_BENCH_GPU=1), for
+//!   a. the P-wave speed against the lattice value (57 × 31),
+//!   b. the single-block Amontons–Coulomb trajectory against the exact solution,
+//!   c. the first full sliding event of a side-driven 29 × 16 lattice (time
+//!      and loading-curve peak) against an f64 run at T/800.
+//! Prints a Markdown table and writes an SVG log-log plot (error against run
+//! time) to the path given by SLIPFRONT_PLOT (default work_precision.svg).
+
+use slipfront::backend::{make_engine, Backend, Precision};
+use slipfront::observables::{first_full_sliding, FirstEvent};
+use slipfront::scenario::{Component, Scenario, DEFAULT_SCENARIO};
+use slipfront::verify::{coulomb_ensemble_error, measure_wave_speed};
+use slipfront::{Engine, EngineError, Model};
+use std::time::Instant;
+
+const FRACTIONS: [f64; 6] = [0.1, 0.05, 0.02, 0.01, 0.005, 0.0025];
+
+fn stick_slip_model(fraction: f64) -> Result<Model, String> {
+    let set: Vec<String> = [
+        "geometry.nx=29",
+        "geometry.nz=16",
+        "geometry.length=0.07",
+        "geometry.height=0.0375",
+        "loading.normal.ramp_time=2e-4",
+        "loading.normal.relax_time=3e-4",
+        "loading.drive.velocity=0.04",
+        &format!("time.dt_fraction={fraction}"),
+    ]
+    .iter()
+    .map(|s| s.to_string())
+    .collect();
+    let s = Scenario::parse(DEFAULT_SCENARIO, "work_precision", &set).map_err(|e| e.to_string())?;
+    Model::from_scenario(&s, false).map_err(|e| e.to_string())
+}
+
+fn first_event(engine: &mut dyn Engine) -> Result<FirstEvent, String> {
+    first_full_sliding(engine, 0.05, 2e-6, 1e-3)
+        .map_err(|e| e.to_string())?
+        .ok_or_else(|| "no full sliding event".to_string())
+}
+
+struct Point {
+    observable: &'static str,
+    engine: String,
+    fraction: f64,
+    seconds: f64,
+    error: f64,
+}
+
+/// Points from a CSV written by an earlier run (observable,engine,fraction,seconds,error).
+fn read_csv(path: &str) -> Vec<Point> {
+    let observables = [
+        "a. P-wave speed (relative)",
+        "b. Coulomb block (mean |x − x_exact|)",
+        "c. first full slip (time, peak; relative)",
+    ];
+    std::fs::read_to_string(path)
+        .expect("csv")
+        .lines()
+        .skip(1)
+        .map(|l| {
+            let f: Vec<&str> = l.split(',').collect();
+            Point {
+                observable: observables.iter().find(|o| o.starts_with(f[0])).expect("observable"),
+                engine: f[1].to_string(),
+                fraction: f[2].parse().unwrap(),
+                seconds: f[3].parse().unwrap(),
+                error: f[4].parse().unwrap(),
+            }
+        })
+        .collect()
+}
+
+fn write_outputs(points: &[Point]) {
+    let path = std::env::var("SLIPFRONT_PLOT").unwrap_or("work_precision.svg".into());
+    std::fs::write(&path, svg(points)).expect("write plot");
+    let csv_path = path.replace(".svg", ".csv");
+    let mut csv = String::from("observable,engine,fraction,seconds,error\n");
+    for p in points {
+        csv += &format!("{},{},{},{},{}\n", &p.observable[..2], p.engine, p.fraction, p.seconds, p.error);
+    }
+    std::fs::write(&csv_path, csv).expect("write csv");
+    println!("plot: {path}, data: {csv_path}");
+}
+
+fn main() {
+    if let Ok(csv) = std::env::var("SLIPFRONT_REPLOT") {
+        write_outputs(&read_csv(&csv));
+        return;
+    }
+    let mut engines = vec![(Backend::Cpu, Precision::F64), (Backend::Cpu, Precision::F32)];
+    if std::env::var("SLIPFRONT_BENCH_GPU").is_ok() {
+        engines.push((Backend::Gpu, Precision::F32));
+    }
+    let reference = {
+        let m = stick_slip_model(0.00125).expect("reference scene");
+        let mut e = make_engine(&m, Backend::Cpu, Precision::F64, 1).unwrap();
+        first_event(e.as_mut()).expect("reference event")
+    };
+    println!(
+        "reference (cpu f64, T/800): first full sliding at {:.5e} s, peak F/F_N {:.5}, drop {:.5}",
+        reference.time, reference.peak_ratio, reference.drop
+    );
+    println!("| observable | engine | dt | run time (s) | error |");
+    println!("| --- | --- | ---: | ---: | ---: |");
+    let mut points = Vec::new();
+    for &(backend, precision) in &engines {
+        let label = format!("{backend:?} {precision:?}").to_lowercase();
+        let factory = |m: &Model| -> Result<Box<dyn Engine>, EngineError> {
+            make_engine(m, backend, precision, 1)
+        };
+        for f in FRACTIONS {
+            let mut record = |observable: &'static str, result: Result<f64, String>, seconds: f64, unit: &str| {
+                match result {
+                    Ok(error) => {
+                        println!("| {observable} | {label} | T/{:.0} | {seconds:.3} | {error:.3e} {unit} |", 1.0 / f);
+                        points.push(Point { observable, engine: label.clone(), fraction: f, seconds, error });
+                    }
+                    Err(why) => println!(
+                        "| {observable} | {label} | T/{:.0} | | {} |",
+                        1.0 / f,
+                        why.lines().next().unwrap_or("").chars().take(90).collect::<String>()
+                    ),
+                }
+            };
+            let t = Instant::now();
+            let r = measure_wave_speed(&factory, Component::X, 57, f)
+                .map(|(c, c0)| ((c - c0) / c0).abs())
+                .map_err(|e| e.to_string());
+            record("a. P-wave speed (relative)", r, t.elapsed().as_secs_f64(), "");
+            let t = Instant::now();
+            let r = coulomb_ensemble_error(&factory, f).map_err(|e| e.to_string());
+            record("b. Coulomb block (mean |x − x_exact|)", r, t.elapsed().as_secs_f64(), "m");
+            let t = Instant::now();
+            let r = stick_slip_model(f).and_then(|m| {
+                let mut e = make_engine(&m, backend, precision, 1).map_err(|e| e.to_string())?;
+                let ev = first_event(e.as_mut())?;
+                Ok(((ev.time - reference.time) / reference.time)
+                    .abs()
+                    .max(((ev.peak_ratio - reference.peak_ratio) / reference.peak_ratio).abs()))
+            });
+            record("c. first full slip (time, peak; relative)", r, t.elapsed().as_secs_f64(), "");
+        }
+    }
+    write_outputs(&points);
+}
+
+/// Three log-log panels (one per observable): error against run time.
+fn svg(points: &[Point]) -> String {
+    let mut observables: Vec<&str> = Vec::new();
+    for p in points {
+        if !observables.contains(&p.observable) {
+            observables.push(p.observable);
+        }
+    }
+    let engines: Vec<String> = {
+        let mut v: Vec<String> = points.iter().map(|p| p.engine.clone()).collect();
+        v.sort();
+        v.dedup();
+        v
+    };
+    let colours = ["#1f77b4", "#d62728", "#2ca02c", "#9467bd"];
+    let (w, h, pad) = (420.0, 320.0, 55.0);
+    let mut out = format!(
+        "<svg xmlns='http://www.w3.org/2000/svg' width='{}' height='{}' font-family='sans-serif' font-size='11'>\n",
+        w * observables.len() as f64,
+        h + 30.0
+    );
+    for (k, obs) in observables.iter().enumerate() {
+        let pts: Vec<&Point> = points.iter().filter(|p| p.observable == *obs && p.error > 0.0).collect();
+        if pts.is_empty() {
+            continue;
+        }
+        let lx = |v: f64| v.max(1e-6).log10();
+        let (x0, x1) = pts.iter().fold((f64::MAX, f64::MIN), |a, p| (a.0.min(lx(p.seconds)), a.1.max(lx(p.seconds))));
+        let (y0, y1) = pts.iter().fold((f64::MAX, f64::MIN), |a, p| (a.0.min(lx(p.error)), a.1.max(lx(p.error))));
+        let (x0, x1, y0, y1) = (x0.floor(), x1.ceil(), y0.floor(), y1.ceil());
+        let ox = k as f64 * w;
+        let px = |v: f64| ox + pad + (lx(v) - x0) / (x1 - x0).max(1e-9) * (w - 1.5 * pad);
+        let py = |v: f64| h - pad + 20.0 - (lx(v) - y0) / (y1 - y0).max(1e-9) * (h - 1.5 * pad);
+        out += &format!(
+            "<rect x='{}' y='{}' width='{}' height='{}' fill='none' stroke='black'/>\n<text x='{}' y='14'>{}</text>\n",
+            ox + pad, 20.0 + 0.5 * pad, w - 1.5 * pad, h - 1.5 * pad, ox + pad, obs
+        );
+        out += &format!("<text x='{}' y='{}'>run time (s), 10^{x0:.0} … 10^{x1:.0}</text>\n", ox + pad, h + 15.0);
+        out += &format!("<text x='{}' y='{}' transform='rotate(-90 {} {})'>error, 10^{y0:.0} … 10^{y1:.0}</text>\n", ox + 15.0, h - pad, ox + 15.0, h - pad);
+        for (e, engine) in engines.iter().enumerate() {
+            let series: Vec<&&Point> = pts.iter().filter(|p| &p.engine == engine).collect();
+            let colour = colours[e % colours.len()];
+            let path: Vec<String> = series.iter().map(|p| format!("{:.1},{:.1}", px(p.seconds), py(p.error))).collect();
+            out += &format!("<polyline points='{}' fill='none' stroke='{colour}'/>\n", path.join(" "));
+            for p in &series {
+                out += &format!(
+                    "<circle cx='{:.1}' cy='{:.1}' r='3' fill='{colour}'/><text x='{:.1}' y='{:.1}' fill='{colour}'>T/{:.0}</text>\n",
+                    px(p.seconds), py(p.error), px(p.seconds) + 4.0, py(p.error) - 4.0, 1.0 / p.fraction
+                );
+            }
+            out += &format!("<text x='{}' y='{}' fill='{colour}'>{engine}</text>\n", ox + w - 2.0 * pad, 40.0 + 14.0 * e as f64 + 0.5 * pad);
+        }
+    }
+    out + "</svg>\n"
+}
