@@ -9,13 +9,19 @@ use slipfront::{advance_to, Model};
 use std::time::Instant;
 
 fn main() {
-    let mode = std::env::args().skip(1).find(|a| !a.starts_with('-')).unwrap_or("f32".into());
+    let mode = std::env::args()
+        .skip(1)
+        .find(|a| !a.starts_with('-'))
+        .unwrap_or("f32".into());
     let (backend, precision) = match mode.as_str() {
         "f64" => (Backend::Cpu, Precision::F64),
         "gpu" => (Backend::Gpu, Precision::F32),
         _ => (Backend::Cpu, Precision::F32),
     };
-    let steps: u64 = std::env::var("SLIPFRONT_SOAK_STEPS").ok().and_then(|s| s.parse().ok()).unwrap_or(10_000_000);
+    let steps: u64 = std::env::var("SLIPFRONT_SOAK_STEPS")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(10_000_000);
     let s = Scenario::parse(DEFAULT_SCENARIO, "soak", &["time.end=3.0".into()]).unwrap();
     let m = Model::from_scenario(&s, false).unwrap();
     let mut e = make_engine(&m, backend, precision, 0).unwrap();
@@ -36,7 +42,14 @@ fn main() {
             std::process::exit(1);
         }
         let snap = e.snapshot().unwrap();
-        assert!(snap.disp.iter().chain(&snap.vel).flatten().all(|x| x.is_finite()), "non-finite at {step}");
+        assert!(
+            snap.disp
+                .iter()
+                .chain(&snap.vel)
+                .flatten()
+                .all(|x| x.is_finite()),
+            "non-finite at {step}"
+        );
         let g = global_sample(&m, &snap, origin);
         let normal = snap.normal.iter().sum::<f64>() / m.normal_force;
         let mean_uz = snap.disp.iter().map(|u| u[1]).sum::<f64>() / m.n_blocks() as f64;
@@ -46,7 +59,14 @@ fn main() {
         if (step - m.prep_steps) % 1_000_000 == 0 {
             println!(
                 "| {} | {:.4} | {:.4} | {:.3} | {:.5} | {:.4e} | {:.3e} | {} |",
-                step - m.prep_steps, g.time, g.drive_ratio, g.pinned_fraction, normal, mean_uz, g.kinetic_energy, g.ruptures
+                step - m.prep_steps,
+                g.time,
+                g.drive_ratio,
+                g.pinned_fraction,
+                normal,
+                mean_uz,
+                g.kinetic_energy,
+                g.ruptures
             );
         }
     }

@@ -62,7 +62,10 @@ fn read_csv(path: &str) -> Vec<Point> {
         .map(|l| {
             let f: Vec<&str> = l.split(',').collect();
             Point {
-                observable: observables.iter().find(|o| o.starts_with(f[0])).expect("observable"),
+                observable: observables
+                    .iter()
+                    .find(|o| o.starts_with(f[0]))
+                    .expect("observable"),
                 engine: f[1].to_string(),
                 fraction: f[2].parse().unwrap(),
                 seconds: f[3].parse().unwrap(),
@@ -78,7 +81,14 @@ fn write_outputs(points: &[Point]) {
     let csv_path = path.replace(".svg", ".csv");
     let mut csv = String::from("observable,engine,fraction,seconds,error\n");
     for p in points {
-        csv += &format!("{},{},{},{},{}\n", &p.observable[..2], p.engine, p.fraction, p.seconds, p.error);
+        csv += &format!(
+            "{},{},{},{},{}\n",
+            &p.observable[..2],
+            p.engine,
+            p.fraction,
+            p.seconds,
+            p.error
+        );
     }
     std::fs::write(&csv_path, csv).expect("write csv");
     println!("plot: {path}, data: {csv_path}");
@@ -89,7 +99,10 @@ fn main() {
         write_outputs(&read_csv(&csv));
         return;
     }
-    let mut engines = vec![(Backend::Cpu, Precision::F64), (Backend::Cpu, Precision::F32)];
+    let mut engines = vec![
+        (Backend::Cpu, Precision::F64),
+        (Backend::Cpu, Precision::F32),
+    ];
     if std::env::var("SLIPFRONT_BENCH_GPU").is_ok() {
         engines.push((Backend::Gpu, Precision::F32));
     }
@@ -111,16 +124,30 @@ fn main() {
             make_engine(m, backend, precision, 1)
         };
         for f in FRACTIONS {
-            let mut record = |observable: &'static str, result: Result<f64, String>, seconds: f64, unit: &str| {
+            let mut record = |observable: &'static str,
+                              result: Result<f64, String>,
+                              seconds: f64,
+                              unit: &str| {
                 match result {
                     Ok(error) => {
                         println!("| {observable} | {label} | T/{:.0} | {seconds:.3} | {error:.3e} {unit} |", 1.0 / f);
-                        points.push(Point { observable, engine: label.clone(), fraction: f, seconds, error });
+                        points.push(Point {
+                            observable,
+                            engine: label.clone(),
+                            fraction: f,
+                            seconds,
+                            error,
+                        });
                     }
                     Err(why) => println!(
                         "| {observable} | {label} | T/{:.0} | | {} |",
                         1.0 / f,
-                        why.lines().next().unwrap_or("").chars().take(90).collect::<String>()
+                        why.lines()
+                            .next()
+                            .unwrap_or("")
+                            .chars()
+                            .take(90)
+                            .collect::<String>()
                     ),
                 }
             };
@@ -128,10 +155,20 @@ fn main() {
             let r = measure_wave_speed(&factory, Component::X, 57, f)
                 .map(|(c, c0)| ((c - c0) / c0).abs())
                 .map_err(|e| e.to_string());
-            record("a. P-wave speed (relative)", r, t.elapsed().as_secs_f64(), "");
+            record(
+                "a. P-wave speed (relative)",
+                r,
+                t.elapsed().as_secs_f64(),
+                "",
+            );
             let t = Instant::now();
             let r = coulomb_ensemble_error(&factory, f).map_err(|e| e.to_string());
-            record("b. Coulomb block (mean |x − x_exact|)", r, t.elapsed().as_secs_f64(), "m");
+            record(
+                "b. Coulomb block (mean |x − x_exact|)",
+                r,
+                t.elapsed().as_secs_f64(),
+                "m",
+            );
             let t = Instant::now();
             let r = stick_slip_model(f).and_then(|m| {
                 let mut e = make_engine(&m, backend, precision, 1).map_err(|e| e.to_string())?;
@@ -140,7 +177,12 @@ fn main() {
                     .abs()
                     .max(((ev.peak_ratio - reference.peak_ratio) / reference.peak_ratio).abs()))
             });
-            record("c. first full slip (time, peak; relative)", r, t.elapsed().as_secs_f64(), "");
+            record(
+                "c. first full slip (time, peak; relative)",
+                r,
+                t.elapsed().as_secs_f64(),
+                "",
+            );
         }
     }
     write_outputs(&points);
@@ -168,13 +210,20 @@ fn svg(points: &[Point]) -> String {
         h + 30.0
     );
     for (k, obs) in observables.iter().enumerate() {
-        let pts: Vec<&Point> = points.iter().filter(|p| p.observable == *obs && p.error > 0.0).collect();
+        let pts: Vec<&Point> = points
+            .iter()
+            .filter(|p| p.observable == *obs && p.error > 0.0)
+            .collect();
         if pts.is_empty() {
             continue;
         }
         let lx = |v: f64| v.max(1e-6).log10();
-        let (x0, x1) = pts.iter().fold((f64::MAX, f64::MIN), |a, p| (a.0.min(lx(p.seconds)), a.1.max(lx(p.seconds))));
-        let (y0, y1) = pts.iter().fold((f64::MAX, f64::MIN), |a, p| (a.0.min(lx(p.error)), a.1.max(lx(p.error))));
+        let (x0, x1) = pts.iter().fold((f64::MAX, f64::MIN), |a, p| {
+            (a.0.min(lx(p.seconds)), a.1.max(lx(p.seconds)))
+        });
+        let (y0, y1) = pts.iter().fold((f64::MAX, f64::MIN), |a, p| {
+            (a.0.min(lx(p.error)), a.1.max(lx(p.error)))
+        });
         let (x0, x1, y0, y1) = (x0.floor(), x1.ceil(), y0.floor(), y1.ceil());
         let ox = k as f64 * w;
         let px = |v: f64| ox + pad + (lx(v) - x0) / (x1 - x0).max(1e-9) * (w - 1.5 * pad);
@@ -183,20 +232,34 @@ fn svg(points: &[Point]) -> String {
             "<rect x='{}' y='{}' width='{}' height='{}' fill='none' stroke='black'/>\n<text x='{}' y='14'>{}</text>\n",
             ox + pad, 20.0 + 0.5 * pad, w - 1.5 * pad, h - 1.5 * pad, ox + pad, obs
         );
-        out += &format!("<text x='{}' y='{}'>run time (s), 10^{x0:.0} … 10^{x1:.0}</text>\n", ox + pad, h + 15.0);
+        out += &format!(
+            "<text x='{}' y='{}'>run time (s), 10^{x0:.0} … 10^{x1:.0}</text>\n",
+            ox + pad,
+            h + 15.0
+        );
         out += &format!("<text x='{}' y='{}' transform='rotate(-90 {} {})'>error, 10^{y0:.0} … 10^{y1:.0}</text>\n", ox + 15.0, h - pad, ox + 15.0, h - pad);
         for (e, engine) in engines.iter().enumerate() {
             let series: Vec<&&Point> = pts.iter().filter(|p| &p.engine == engine).collect();
             let colour = colours[e % colours.len()];
-            let path: Vec<String> = series.iter().map(|p| format!("{:.1},{:.1}", px(p.seconds), py(p.error))).collect();
-            out += &format!("<polyline points='{}' fill='none' stroke='{colour}'/>\n", path.join(" "));
+            let path: Vec<String> = series
+                .iter()
+                .map(|p| format!("{:.1},{:.1}", px(p.seconds), py(p.error)))
+                .collect();
+            out += &format!(
+                "<polyline points='{}' fill='none' stroke='{colour}'/>\n",
+                path.join(" ")
+            );
             for p in &series {
                 out += &format!(
                     "<circle cx='{:.1}' cy='{:.1}' r='3' fill='{colour}'/><text x='{:.1}' y='{:.1}' fill='{colour}'>T/{:.0}</text>\n",
                     px(p.seconds), py(p.error), px(p.seconds) + 4.0, py(p.error) - 4.0, 1.0 / p.fraction
                 );
             }
-            out += &format!("<text x='{}' y='{}' fill='{colour}'>{engine}</text>\n", ox + w - 2.0 * pad, 40.0 + 14.0 * e as f64 + 0.5 * pad);
+            out += &format!(
+                "<text x='{}' y='{}' fill='{colour}'>{engine}</text>\n",
+                ox + w - 2.0 * pad,
+                40.0 + 14.0 * e as f64 + 0.5 * pad
+            );
         }
     }
     out + "</svg>\n"

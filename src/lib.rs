@@ -1,6 +1,7 @@
 //! slipfront: a GPU-accelerated 2D spring-block simulator of the onset of
 //! frictional sliding (Trømborg et al., PNAS 2014), with a CPU reference.
 
+pub mod analysis;
 pub mod backend;
 pub mod compare;
 pub mod cpu;

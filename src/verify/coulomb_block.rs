@@ -120,7 +120,10 @@ fn coulomb_error(
 }
 
 /// Mean error (m) over the ensemble of driving speeds, at dt = `fraction`·T.
-pub fn coulomb_ensemble_error(factory: EngineFactory<'_>, fraction: f64) -> Result<f64, VerifyError> {
+pub fn coulomb_ensemble_error(
+    factory: EngineFactory<'_>,
+    fraction: f64,
+) -> Result<f64, VerifyError> {
     let mut total = 0.0;
     for i in 0..SPEEDS {
         total += coulomb_error(factory, fraction, 1.0 + 0.1 * i as f64)?;

@@ -8,8 +8,8 @@ mod rng_stats;
 mod waves;
 
 pub use coulomb_block::{coulomb_ensemble_error, coulomb_exact_position, CoulombExact};
-pub use waves::measure_wave_speed;
 pub use junction_drag::renewal_friction_coefficient;
+pub use waves::measure_wave_speed;
 
 use crate::engine::{Engine, EngineError};
 use crate::model::Model;

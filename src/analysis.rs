@@ -1,0 +1,297 @@
+//! Event analysis of interface time series: slip events (start, end, full
+//! or partial, rupture length, slip), the front tip against time from the
+//! junction rupture times, the front speed along x, the slip speed behind
+//! the tip, and the Gini coefficient of each block's slip history.
+
+/// Interface fields sampled over time: `pinned[k][ix]` etc. at `time[k]`.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct InterfaceSeries {
+    pub time: Vec<f64>,
+    /// Block spacing along x (m).
+    pub spacing: f64,
+    /// Fraction of pinned junctions per block.
+    pub pinned: Vec<Vec<f64>>,
+    /// Slip u_x − u_x(0) per block (m).
+    pub slip: Vec<Vec<f64>>,
+    /// Slip speed v_x per block (m/s).
+    pub slip_speed: Vec<Vec<f64>>,
+}
+
+/// A block counts as ruptured while fewer than this fraction of its
+/// junctions are pinned.
+pub const RUPTURED_BELOW: f64 = 0.5;
+
+/// One slip event.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Event {
+    /// Sample indices of the first and last sample with a ruptured block.
+    pub first: usize,
+    pub last: usize,
+    pub start: f64,
+    pub end: f64,
+    /// Every block ruptured during the event.
+    pub full: bool,
+    /// Extent of the ruptured blocks (m).
+    pub rupture_length: f64,
+    /// Mean slip of the interface over the event (m).
+    pub slip: f64,
+    /// Per block: time it first ruptured in the event (None if it did not).
+    pub rupture_time: Vec<Option<f64>>,
+}
+
+impl InterfaceSeries {
+    pub fn nx(&self) -> usize {
+        self.pinned.first().map_or(0, Vec::len)
+    }
+
+    fn any_ruptured(&self, k: usize) -> bool {
+        self.pinned[k].iter().any(|&p| p < RUPTURED_BELOW)
+    }
+
+    /// Events: maximal runs of samples in which at least one block is
+    /// ruptured.
+    pub fn events(&self) -> Vec<Event> {
+        let mut out = Vec::new();
+        let n = self.time.len();
+        let mut k = 0;
+        while k < n {
+            if !self.any_ruptured(k) {
+                k += 1;
+                continue;
+            }
+            let first = k;
+            while k + 1 < n && self.any_ruptured(k + 1) {
+                k += 1;
+            }
+            out.push(self.event(first, k));
+            k += 1;
+        }
+        out
+    }
+
+    fn event(&self, first: usize, last: usize) -> Event {
+        let nx = self.nx();
+        let mut rupture_time = vec![None; nx];
+        for k in first..=last {
+            for (ix, t) in rupture_time.iter_mut().enumerate() {
+                if t.is_none() && self.pinned[k][ix] < RUPTURED_BELOW {
+                    *t = Some(self.time[k]);
+                }
+            }
+        }
+        let ruptured: Vec<usize> = (0..nx).filter(|&ix| rupture_time[ix].is_some()).collect();
+        let (lo, hi) = (ruptured[0], *ruptured.last().expect("non-empty"));
+        // Slip from the sample before the event to the last one of it.
+        let before = first.saturating_sub(1);
+        let slip = (0..nx)
+            .map(|ix| self.slip[last][ix] - self.slip[before][ix])
+            .sum::<f64>()
+            / nx as f64;
+        Event {
+            first,
+            last,
+            start: self.time[first],
+            end: self.time[last],
+            full: ruptured.len() == nx,
+            rupture_length: (hi - lo + 1) as f64 * self.spacing,
+            slip,
+            rupture_time,
+        }
+    }
+
+    /// Front tip position against time: at each sample of the event, the
+    /// farthest ruptured block from the trailing edge, (t, x_tip).
+    pub fn front_tip(&self, e: &Event) -> Vec<(f64, f64)> {
+        (e.first..=e.last)
+            .map(|k| {
+                let tip = e
+                    .rupture_time
+                    .iter()
+                    .enumerate()
+                    .filter(|(_, t)| t.is_some_and(|t| t <= self.time[k]))
+                    .map(|(ix, _)| ix)
+                    .max()
+                    .unwrap_or(0);
+                (self.time[k], tip as f64 * self.spacing)
+            })
+            .collect()
+    }
+
+    /// Front speed along x from the rupture times: over a window of `w`
+    /// blocks, v(x) = w·l / (t_r(ix + w) − t_r(ix)), at the window's centre.
+    /// Infinite where both blocks ruptured in the same sample.
+    pub fn front_speed(&self, e: &Event, w: usize) -> Vec<(f64, f64)> {
+        let t = &e.rupture_time;
+        (0..t.len().saturating_sub(w))
+            .filter_map(|ix| match (t[ix], t[ix + w]) {
+                (Some(a), Some(b)) => {
+                    let x = (ix as f64 + 0.5 * w as f64) * self.spacing;
+                    Some((x, w as f64 * self.spacing / (b - a).abs()))
+                }
+                _ => None,
+            })
+            .collect()
+    }
+
+    /// Peak slip speed of each ruptured block during the event, (x, v).
+    pub fn slip_speed_behind_tip(&self, e: &Event) -> Vec<(f64, f64)> {
+        e.rupture_time
+            .iter()
+            .enumerate()
+            .filter(|(_, t)| t.is_some())
+            .map(|(ix, _)| {
+                let peak = (e.first..=e.last)
+                    .map(|k| self.slip_speed[k][ix].abs())
+                    .fold(0.0, f64::max);
+                (ix as f64 * self.spacing, peak)
+            })
+            .collect()
+    }
+
+    /// Gini coefficient of each block's slip increments over the event
+    /// (0: slip spread evenly in time; → 1: all slip in one sample).
+    pub fn slip_gini(&self, e: &Event) -> Vec<f64> {
+        let before = e.first.saturating_sub(1);
+        (0..self.nx())
+            .map(|ix| {
+                let inc: Vec<f64> = (before..e.last)
+                    .map(|k| (self.slip[k + 1][ix] - self.slip[k][ix]).abs())
+                    .collect();
+                gini(&inc)
+            })
+            .collect()
+    }
+}
+
+/// Gini coefficient of non-negative values: Σ|x_i − x_j| / (2 n² mean).
+pub fn gini(values: &[f64]) -> f64 {
+    let n = values.len();
+    let total: f64 = values.iter().sum();
+    if n == 0 || total <= 0.0 {
+        return 0.0;
+    }
+    let mut sorted = values.to_vec();
+    sorted.sort_by(|a, b| a.total_cmp(b));
+    // Σ_i (2i − n − 1) x_(i) / (n Σ x), i = 1..n, equals the pairwise form.
+    let weighted: f64 = sorted
+        .iter()
+        .enumerate()
+        .map(|(i, x)| (2.0 * (i as f64 + 1.0) - n as f64 - 1.0) * x)
+        .sum();
+    weighted / (n as f64 * total)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A front from the trailing edge at speed `c` starting at t0, the
+    /// blocks behind it slipping at `v` until `t_end`; plus, earlier, a
+    /// precursor over the first `arrest` blocks.
+    fn synthetic(c: f64, v: f64) -> InterfaceSeries {
+        let (nx, l, dt) = (50usize, 1e-3, 1e-6);
+        let mut s = InterfaceSeries {
+            spacing: l,
+            ..Default::default()
+        };
+        let mut slip = vec![0.0; nx];
+        for k in 0..400 {
+            let t = k as f64 * dt;
+            let mut pinned = vec![1.0; nx];
+            let mut speed = vec![0.0; nx];
+            for ix in 0..nx {
+                let x = ix as f64 * l;
+                // Precursor: 10 blocks, 20..40 µs.
+                let precursor = ix < 10 && (20..40).contains(&k);
+                // Full event: front from t0 = 100 µs, arrest at 300 µs.
+                let main = t >= 100e-6 + x / c && t < 300e-6;
+                if precursor || main {
+                    pinned[ix] = 0.0;
+                    speed[ix] = v;
+                    slip[ix] += v * dt;
+                }
+            }
+            s.time.push(t);
+            s.pinned.push(pinned);
+            s.slip.push(slip.clone());
+            s.slip_speed.push(speed);
+        }
+        s
+    }
+
+    #[test]
+    fn finds_a_precursor_and_a_full_event() {
+        let s = synthetic(1000.0, 0.5);
+        let e = s.events();
+        assert_eq!(e.len(), 2, "{e:?}");
+        assert!(!e[0].full);
+        assert!((e[0].rupture_length - 10e-3).abs() < 1e-12);
+        assert!((e[0].start - 20e-6).abs() < 1e-9, "{}", e[0].start);
+        assert!((e[0].end - 39e-6).abs() < 1e-9, "{}", e[0].end);
+        assert!(e[1].full);
+        assert!((e[1].start - 100e-6).abs() <= 1.0001e-6, "{}", e[1].start);
+        assert!((e[1].rupture_length - 50e-3).abs() < 1e-12);
+        // Mean slip of the full event: v × (300 µs − t_r(x)) averaged over x.
+        let expected: f64 = (0..50)
+            .map(|ix| 0.5 * (300e-6 - (100e-6 + ix as f64 * 1e-6)))
+            .sum::<f64>()
+            / 50.0;
+        assert!(
+            (e[1].slip - expected).abs() < 0.02 * expected,
+            "{} vs {expected}",
+            e[1].slip
+        );
+    }
+
+    #[test]
+    fn front_tip_and_speed_recover_the_imposed_speed() {
+        for c in [1000.0, 100.0] {
+            let s = synthetic(c, 0.5);
+            let e = &s.events()[1];
+            let tip = s.front_tip(e);
+            // The tip reaches x at 100 µs + x/c.
+            let (t, x) = tip[30];
+            assert!(
+                (x - (t - 100e-6) * c).abs() <= 1.5e-3,
+                "c = {c}: tip {x} at {t}"
+            );
+            let speeds = s.front_speed(e, 10);
+            let mean = speeds.iter().map(|p| p.1).sum::<f64>() / speeds.len() as f64;
+            assert!((mean - c).abs() < 0.1 * c, "c = {c}: measured {mean}");
+        }
+    }
+
+    #[test]
+    fn slip_speed_behind_the_tip_is_the_imposed_one() {
+        let s = synthetic(1000.0, 0.7);
+        let e = &s.events()[1];
+        for (_, v) in s.slip_speed_behind_tip(e) {
+            assert!((v - 0.7).abs() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn gini_of_even_and_concentrated_slip() {
+        assert!(gini(&[1.0; 10]).abs() < 1e-12);
+        let mut one = vec![0.0; 10];
+        one[3] = 5.0;
+        assert!((gini(&one) - 0.9).abs() < 1e-12);
+        assert_eq!(gini(&[]), 0.0);
+        // Pairwise definition on a small sample.
+        let x: [f64; 3] = [1.0, 2.0, 7.0];
+        let pairwise: f64 = x
+            .iter()
+            .flat_map(|a| x.iter().map(move |b| (a - b).abs()))
+            .sum::<f64>()
+            / (2.0 * 9.0 * (10.0 / 3.0));
+        assert!((gini(&x) - pairwise).abs() < 1e-12);
+        // In the synthetic event every block slips evenly while it slips.
+        let s = synthetic(1000.0, 0.5);
+        let e = &s.events()[1];
+        let g = s.slip_gini(e);
+        assert!(
+            g[0] < g[49],
+            "blocks that slip for less time concentrate their slip"
+        );
+    }
+}
