@@ -56,7 +56,7 @@ fn main() {
         lo = lo.min(normal);
         hi = hi.max(normal);
         max_ratio = max_ratio.max(g.drive_ratio);
-        if (step - m.prep_steps) % 1_000_000 == 0 {
+        if (step - m.prep_steps).is_multiple_of(1_000_000) {
             println!(
                 "| {} | {:.4} | {:.4} | {:.3} | {:.5} | {:.4e} | {:.3e} | {} |",
                 step - m.prep_steps,
