@@ -12,6 +12,7 @@ pub mod lattice;
 pub mod model;
 pub mod observables;
 pub mod output;
+pub mod plot;
 pub mod real;
 pub mod rng;
 pub mod runner;

@@ -54,6 +54,15 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+    /// Channels, counts, time span and events of a run file.
+    Info { file: PathBuf },
+    /// Write PNGs of a run: space–time map, loading curve, front speed.
+    Plot {
+        file: PathBuf,
+        /// Folder for the PNGs (default: beside the run file).
+        #[arg(short = 'o', long)]
+        out_dir: Option<PathBuf>,
+    },
     /// Run the validation cases and compare measured against expected.
     Verify {
         #[arg(long, value_enum, default_value = "cpu")]
@@ -94,6 +103,8 @@ fn main() -> ExitCode {
             set,
             json,
         } => commands::check::check(scenario, &set, json),
+        Command::Info { file } => commands::info::info(&file),
+        Command::Plot { file, out_dir } => commands::plot::plot(&file, out_dir),
         Command::Verify {
             backend,
             precision,

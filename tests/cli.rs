@@ -60,6 +60,33 @@ fn run_default_scene_briefly_writes_an_mcap_file() {
     let n = mcap::MessageStream::new(&bytes).unwrap().count();
     // 2e-4 s at 1e-5 s global cadence and 2e-5 s interface cadence.
     assert!(n >= 25, "{n} messages");
+    let out = slipfront(&["info", file.to_str().unwrap()]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        text.contains("/interface") && text.contains("events"),
+        "{text}"
+    );
+    let out = slipfront(&["plot", file.to_str().unwrap()]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    for name in [
+        "run_spacetime.png",
+        "run_loading.png",
+        "run_front_speed.png",
+    ] {
+        assert!(dir.join(name).exists(), "{name}");
+    }
+    let out = slipfront(&["info", "no_such.mcap"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("no_such.mcap"));
 }
 
 #[test]

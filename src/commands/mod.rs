@@ -1,4 +1,6 @@
 pub mod check;
+pub mod info;
+pub mod plot;
 pub mod run;
 pub mod verify;
 

@@ -1,7 +1,14 @@
 //! MCAP output streamed while the engine runs: metadata, the scenario as an
-//! attachment, and one channel per output kind. Messages are JSON with a
-//! JSON Schema (MCAP well-known encodings); chunks are zstd-compressed and
-//! flushed every few seconds so that a killed run leaves a readable file.
+//! attachment, and one channel per output kind. Messages are protobuf with
+//! their FileDescriptorSet as the schema (MCAP well-known encoding), so that
+//! Foxglove and the `mcap` Python reader decode numeric arrays; chunks are
+//! zstd-compressed and flushed every few seconds so that a killed run leaves
+//! a readable file.
+
+pub mod messages;
+pub mod reader;
+
+use prost::Message;
 
 use crate::engine::Snapshot;
 use crate::model::Model;
@@ -24,8 +31,8 @@ pub enum OutputError {
     },
     #[error("MCAP: {0}")]
     Mcap(#[from] mcap::McapError),
-    #[error("JSON: {0}")]
-    Json(#[from] serde_json::Error),
+    #[error("cannot read `{path}`: {why}")]
+    Read { path: String, why: String },
 }
 
 /// One sample of the global series.
@@ -41,29 +48,6 @@ pub struct GlobalSample {
     pub ruptures: u64,
 }
 
-#[derive(Serialize)]
-struct InterfaceMessage<'a> {
-    time: f64,
-    step: u64,
-    shear_stress: &'a [f64],
-    normal_stress: &'a [f64],
-    pinned_fraction: &'a [f64],
-    slip: &'a [f64],
-    slip_speed: &'a [f64],
-}
-
-#[derive(Serialize)]
-struct BulkMessage<'a> {
-    time: f64,
-    step: u64,
-    nx: usize,
-    nz: usize,
-    ux: &'a [f64],
-    uz: &'a [f64],
-    vx: &'a [f64],
-    vz: &'a [f64],
-}
-
 pub struct McapSink {
     writer: mcap::Writer<BufWriter<File>>,
     global: u16,
@@ -72,21 +56,6 @@ pub struct McapSink {
     sequence: u32,
     last_flush: Instant,
     slip_origin: Option<Vec<f64>>,
-}
-
-fn schema(properties: &[&str], arrays: &[&str]) -> Vec<u8> {
-    let mut props = serde_json::Map::new();
-    for p in properties {
-        props.insert(p.to_string(), serde_json::json!({"type": "number"}));
-    }
-    for a in arrays {
-        props.insert(
-            a.to_string(),
-            serde_json::json!({"type": "array", "items": {"type": "number"}}),
-        );
-    }
-    serde_json::to_vec(&serde_json::json!({"type": "object", "properties": props}))
-        .expect("schema serialises")
 }
 
 impl McapSink {
@@ -136,46 +105,14 @@ impl McapSink {
             media_type: "application/toml".into(),
             data: std::borrow::Cow::Owned(toml.into_bytes()),
         })?;
-        let g = writer.add_schema(
-            "slipfront.Global",
-            "jsonschema",
-            &schema(
-                &[
-                    "time",
-                    "step",
-                    "drive_force",
-                    "drive_ratio",
-                    "friction_force",
-                    "pinned_fraction",
-                    "kinetic_energy",
-                    "ruptures",
-                ],
-                &[],
-            ),
-        )?;
-        let i = writer.add_schema(
-            "slipfront.Interface",
-            "jsonschema",
-            &schema(
-                &["time", "step"],
-                &[
-                    "shear_stress",
-                    "normal_stress",
-                    "pinned_fraction",
-                    "slip",
-                    "slip_speed",
-                ],
-            ),
-        )?;
-        let b = writer.add_schema(
-            "slipfront.Bulk",
-            "jsonschema",
-            &schema(&["time", "step", "nx", "nz"], &["ux", "uz", "vx", "vz"]),
-        )?;
+        let descriptor = messages::descriptor_set();
+        let g = writer.add_schema("slipfront.Global", "protobuf", &descriptor)?;
+        let i = writer.add_schema("slipfront.Interface", "protobuf", &descriptor)?;
+        let b = writer.add_schema("slipfront.Bulk", "protobuf", &descriptor)?;
         let none = BTreeMap::new();
-        let global = writer.add_channel(g, "/global", "json", &none)?;
-        let interface = writer.add_channel(i, "/interface", "json", &none)?;
-        let bulk = writer.add_channel(b, "/bulk", "json", &none)?;
+        let global = writer.add_channel(g, "/global", "protobuf", &none)?;
+        let interface = writer.add_channel(i, "/interface", "protobuf", &none)?;
+        let bulk = writer.add_channel(b, "/bulk", "protobuf", &none)?;
         Ok(McapSink {
             writer,
             global,
@@ -207,8 +144,17 @@ impl McapSink {
     }
 
     pub fn write_global(&mut self, g: &GlobalSample) -> Result<(), OutputError> {
-        let data = serde_json::to_vec(g)?;
-        self.write(self.global, g.time, &data)
+        let msg = messages::Global {
+            time: g.time,
+            step: g.step,
+            drive_force: g.drive_force,
+            drive_ratio: g.drive_ratio,
+            friction_force: g.friction_force,
+            pinned_fraction: g.pinned_fraction,
+            kinetic_energy: g.kinetic_energy,
+            ruptures: g.ruptures,
+        };
+        self.write(self.global, g.time, &msg.encode_to_vec())
     }
 
     pub fn write_interface(&mut self, model: &Model, snap: &Snapshot) -> Result<(), OutputError> {
@@ -219,36 +165,32 @@ impl McapSink {
         let shear: Vec<f64> = snap.friction.iter().map(|f| -f / area).collect();
         let normal: Vec<f64> = snap.normal.iter().map(|p| p / area).collect();
         let speed: Vec<f64> = (0..model.nx).map(|ix| snap.vel[ix][0]).collect();
-        let msg = InterfaceMessage {
+        let msg = messages::Interface {
             time: snap.time,
             step: snap.step,
-            shear_stress: &shear,
-            normal_stress: &normal,
-            pinned_fraction: &snap.pinned_fraction(model.nx),
-            slip: &slip,
-            slip_speed: &speed,
+            shear_stress: shear,
+            normal_stress: normal,
+            pinned_fraction: snap.pinned_fraction(model.nx),
+            slip,
+            slip_speed: speed,
         };
-        let data = serde_json::to_vec(&msg)?;
+        let data = msg.encode_to_vec();
         self.write(self.interface, snap.time, &data)
     }
 
     pub fn write_bulk(&mut self, model: &Model, snap: &Snapshot) -> Result<(), OutputError> {
-        let ux: Vec<f64> = snap.disp.iter().map(|u| u[0]).collect();
-        let uz: Vec<f64> = snap.disp.iter().map(|u| u[1]).collect();
-        let vx: Vec<f64> = snap.vel.iter().map(|v| v[0]).collect();
-        let vz: Vec<f64> = snap.vel.iter().map(|v| v[1]).collect();
-        let msg = BulkMessage {
+        let col = |f: &dyn Fn(usize) -> f64| (0..snap.disp.len()).map(|i| f(i) as f32).collect();
+        let msg = messages::Bulk {
             time: snap.time,
             step: snap.step,
-            nx: model.nx,
-            nz: model.nz,
-            ux: &ux,
-            uz: &uz,
-            vx: &vx,
-            vz: &vz,
+            nx: model.nx as u32,
+            nz: model.nz as u32,
+            ux: col(&|i| snap.disp[i][0]),
+            uz: col(&|i| snap.disp[i][1]),
+            vx: col(&|i| snap.vel[i][0]),
+            vz: col(&|i| snap.vel[i][1]),
         };
-        let data = serde_json::to_vec(&msg)?;
-        self.write(self.bulk, snap.time, &data)
+        self.write(self.bulk, snap.time, &msg.encode_to_vec())
     }
 
     pub fn finish(mut self) -> Result<(), OutputError> {

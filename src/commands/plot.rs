@@ -1,0 +1,27 @@
+use slipfront::output::reader::RunFile;
+use slipfront::plot::{front_speed_plot, loading_curve, spacetime_map};
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+pub fn plot(path: &Path, out_dir: Option<PathBuf>) -> anyhow::Result<ExitCode> {
+    let run = RunFile::read(path)?;
+    let dir = out_dir.unwrap_or_else(|| path.parent().map(Path::to_path_buf).unwrap_or_default());
+    std::fs::create_dir_all(&dir)?;
+    let stem = path
+        .file_stem()
+        .map_or("run".into(), |s| s.to_string_lossy().into_owned());
+    let series = run.interface_series();
+    let events = series.events();
+    let time: Vec<f64> = run.global.iter().map(|m| m.time).collect();
+    let ratio: Vec<f64> = run.global.iter().map(|m| m.drive_ratio).collect();
+    for (name, canvas) in [
+        ("spacetime", spacetime_map(&series)),
+        ("loading", loading_curve(&time, &ratio, &events)),
+        ("front_speed", front_speed_plot(&series, &events)),
+    ] {
+        let file = dir.join(format!("{stem}_{name}.png"));
+        canvas.save(&file)?;
+        println!("{}", file.display());
+    }
+    Ok(ExitCode::SUCCESS)
+}

@@ -1,0 +1,98 @@
+//! Reading a run back: metadata, the scenario, and every channel decoded.
+//! Reads record by record, so a file cut short by a killed run yields
+//! everything up to its last complete chunk.
+
+use super::messages::{Bulk, Global, Interface};
+use super::OutputError;
+use crate::analysis::InterfaceSeries;
+use mcap::records::Record;
+use prost::Message;
+use std::collections::{BTreeMap, HashMap};
+use std::path::Path;
+
+/// A run file, decoded.
+#[derive(Debug, Default)]
+pub struct RunFile {
+    pub metadata: BTreeMap<String, String>,
+    pub scenario: Option<String>,
+    pub global: Vec<Global>,
+    pub interface: Vec<Interface>,
+    pub bulk: Vec<Bulk>,
+    /// The file ended before its summary (the run was killed).
+    pub truncated: bool,
+}
+
+impl RunFile {
+    pub fn read(path: &Path) -> Result<RunFile, OutputError> {
+        let fail = |why: String| OutputError::Read {
+            path: path.display().to_string(),
+            why,
+        };
+        let bytes = std::fs::read(path).map_err(|e| fail(e.to_string()))?;
+        let reader = mcap::read::ChunkFlattener::new(&bytes).map_err(|e| fail(e.to_string()))?;
+        let mut run = RunFile::default();
+        let mut topics: HashMap<u16, String> = HashMap::new();
+        let mut saw_footer = false;
+        for record in reader {
+            let record = match record {
+                Ok(r) => r,
+                Err(_) => {
+                    run.truncated = true;
+                    break;
+                }
+            };
+            match record {
+                Record::Channel(c) => {
+                    topics.insert(c.id, c.topic);
+                }
+                Record::Metadata(m) if m.name == "slipfront" => run.metadata = m.metadata,
+                Record::Attachment { header, data, .. } if header.name == "scenario.toml" => {
+                    run.scenario = Some(String::from_utf8_lossy(&data).into_owned())
+                }
+                Record::Message { header, data } => {
+                    let bad =
+                        |e: prost::DecodeError| fail(format!("message {}: {e}", header.sequence));
+                    match topics.get(&header.channel_id).map(String::as_str) {
+                        Some("/global") => run.global.push(Global::decode(&data[..]).map_err(bad)?),
+                        Some("/interface") => run
+                            .interface
+                            .push(Interface::decode(&data[..]).map_err(bad)?),
+                        Some("/bulk") => run.bulk.push(Bulk::decode(&data[..]).map_err(bad)?),
+                        _ => {}
+                    }
+                }
+                Record::Footer(_) => saw_footer = true,
+                _ => {}
+            }
+        }
+        run.truncated |= !saw_footer;
+        Ok(run)
+    }
+
+    /// Lattice spacing from the metadata (m).
+    pub fn spacing(&self) -> f64 {
+        self.metadata
+            .get("spacing")
+            .and_then(|s| s.parse().ok())
+            .unwrap_or(1.0)
+    }
+
+    /// The interface channel as a series for the event analysis.
+    pub fn interface_series(&self) -> InterfaceSeries {
+        InterfaceSeries {
+            time: self.interface.iter().map(|m| m.time).collect(),
+            spacing: self.spacing(),
+            pinned: self
+                .interface
+                .iter()
+                .map(|m| m.pinned_fraction.clone())
+                .collect(),
+            slip: self.interface.iter().map(|m| m.slip.clone()).collect(),
+            slip_speed: self
+                .interface
+                .iter()
+                .map(|m| m.slip_speed.clone())
+                .collect(),
+        }
+    }
+}
