@@ -36,6 +36,16 @@ pub struct RunSummary {
     pub ruptures: u64,
     pub interrupted: bool,
     pub output: Option<PathBuf>,
+    /// Peak resident memory of the process (bytes), where the OS tells.
+    pub peak_memory: Option<u64>,
+}
+
+/// Peak resident set size of this process (Linux: VmHWM).
+pub fn peak_memory() -> Option<u64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kb * 1024)
 }
 
 impl std::fmt::Display for RunSummary {
@@ -65,6 +75,9 @@ impl std::fmt::Display for RunSummary {
         writeln!(f, "  peak F/F_N         {:.4}", self.peak_drive_ratio)?;
         writeln!(f, "  final F/F_N        {:.4}", self.final_drive_ratio)?;
         writeln!(f, "  junction ruptures  {}", self.ruptures)?;
+        if let Some(b) = self.peak_memory {
+            writeln!(f, "  peak memory        {:.1} MiB", b as f64 / 1048576.0)?;
+        }
         match &self.output {
             Some(p) => write!(f, "  output             {}", p.display()),
             None => write!(f, "  output             none (use -o run.mcap)"),
@@ -147,6 +160,10 @@ pub fn run_scene(
     let every_global = interval_steps(&model, scenario.output.global_interval);
     let every_interface = interval_steps(&model, scenario.output.interface_interval);
     let every_bulk = interval_steps(&model, scenario.output.bulk_interval);
+    // Interface output speeds up to `fast_interval` while any interface block
+    // slips faster than `fast_slip_speed` (decided at each read-back).
+    let every_fast = interval_steps(&model, scenario.output.fast_interval);
+    let mut fast = false;
     let bar = if opts.progress {
         let b = ProgressBar::new(total);
         b.set_style(
@@ -178,6 +195,11 @@ pub fn run_scene(
             next_multiple(s - model.prep_steps, every_global)
                 .min(next_multiple(s - model.prep_steps, every_interface))
                 .min(next_multiple(s - model.prep_steps, every_bulk))
+                .min(if fast {
+                    next_multiple(s - model.prep_steps, every_fast)
+                } else {
+                    u64::MAX
+                })
                 .saturating_add(model.prep_steps)
         } else {
             u64::MAX
@@ -206,11 +228,16 @@ pub fn run_scene(
             peak = peak.max(g.drive_ratio);
             last = g.drive_ratio;
             ruptures = g.ruptures;
+            let max_slip_speed = (0..model.nx)
+                .map(|ix| snap.vel[ix][0].abs())
+                .fold(0.0, f64::max);
+            fast = every_fast > 0 && max_slip_speed > scenario.output.fast_slip_speed;
             if let Some(sink) = sink.as_mut() {
                 if every_global > 0 && d.is_multiple_of(every_global) {
                     sink.write_global(&g)?;
                 }
-                if every_interface > 0 && d.is_multiple_of(every_interface) {
+                let fast_due = fast && every_fast > 0 && d.is_multiple_of(every_fast);
+                if fast_due || (every_interface > 0 && d.is_multiple_of(every_interface)) {
                     sink.write_interface(&model, &snap)?;
                 }
                 if every_bulk > 0 && d.is_multiple_of(every_bulk) {
@@ -238,5 +265,6 @@ pub fn run_scene(
         ruptures: ruptures.max(g.ruptures),
         interrupted,
         output: opts.output.clone(),
+        peak_memory: peak_memory(),
     })
 }

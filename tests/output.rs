@@ -18,6 +18,7 @@ fn every_channel_reads_back_as_the_engine_state() {
         "output.global_interval=2.237101e-6",
         "output.interface_interval=4.474202e-6",
         "output.bulk_interval=1.1185505e-4",
+        "output.fast_interval=0",
     ]
     .iter()
     .map(|s| s.to_string())

@@ -244,6 +244,10 @@ pub struct Output {
     pub interface_interval: f64,
     /// Bulk snapshots cadence (s); 0 disables.
     pub bulk_interval: f64,
+    /// Interface cadence while the interface slips (s); 0 disables.
+    pub fast_interval: f64,
+    /// Slip speed (m/s) above which the fast cadence applies.
+    pub fast_slip_speed: f64,
 }
 
 #[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Eq)]

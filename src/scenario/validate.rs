@@ -194,6 +194,8 @@ pub fn validate(s: &Scenario, text: &str, overridden: &[&str]) -> Vec<String> {
     c.range("output.global_interval", o.global_interval, 0.0, 1e6);
     c.range("output.interface_interval", o.interface_interval, 0.0, 1e6);
     c.range("output.bulk_interval", o.bulk_interval, 0.0, 1e6);
+    c.range("output.fast_interval", o.fast_interval, 0.0, 1e6);
+    c.range("output.fast_slip_speed", o.fast_slip_speed, 0.0, 1e6);
     if let Some(p) = &s.pulse {
         c.range("pulse.center", p.center, 0.0, s.geometry.length);
         c.range("pulse.width", p.width, 1e-12, s.geometry.length);
