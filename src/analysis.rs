@@ -163,6 +163,70 @@ impl InterfaceSeries {
     }
 }
 
+/// Front speeds above this count as fast (m/s).
+pub const FAST_FRONT: f64 = 100.0;
+/// Front speeds below this count as slow (m/s).
+pub const SLOW_FRONT: f64 = 30.0;
+
+/// How the front speed evolved along x in an event.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum FrontKind {
+    /// Never slower than SLOW_FRONT.
+    Fast,
+    /// Fast, then slow, then fast again.
+    FastSlowFast,
+    /// Fast, then slow until arrest or the edge.
+    FastSlow,
+    /// Slow throughout.
+    Slow,
+}
+
+impl InterfaceSeries {
+    /// Classifies the front of `e` from its speed profile along x
+    /// (window of `w` blocks).
+    pub fn front_kind(&self, e: &Event, w: usize) -> FrontKind {
+        let v: Vec<f64> = self.front_speed(e, w).into_iter().map(|p| p.1).collect();
+        let first_fast = v.iter().position(|&x| x > FAST_FRONT);
+        let slow_after =
+            first_fast.and_then(|f| v[f..].iter().position(|&x| x < SLOW_FRONT).map(|k| f + k));
+        match (first_fast, slow_after) {
+            (None, _) => FrontKind::Slow,
+            (Some(_), None) => FrontKind::Fast,
+            (Some(_), Some(sl)) => {
+                if v[sl..].iter().any(|&x| x > FAST_FRONT) {
+                    FrontKind::FastSlowFast
+                } else {
+                    FrontKind::FastSlow
+                }
+            }
+        }
+    }
+}
+
+/// Least-squares proportionality v_slip = α·v_front through the origin in
+/// log space (α = exp(mean(ln v_slip − ln v_front))) and the correlation of
+/// ln v_slip with ln v_front, over (front speed, slip speed) pairs.
+pub fn slip_front_relation(pairs: &[(f64, f64)]) -> Option<(f64, f64)> {
+    let p: Vec<(f64, f64)> = pairs
+        .iter()
+        .filter(|(f, s)| f.is_finite() && *f > 0.0 && *s > 0.0)
+        .map(|(f, s)| (f.ln(), s.ln()))
+        .collect();
+    if p.len() < 3 {
+        return None;
+    }
+    let n = p.len() as f64;
+    let alpha = (p.iter().map(|(f, s)| s - f).sum::<f64>() / n).exp();
+    let (mf, ms) = (
+        p.iter().map(|q| q.0).sum::<f64>() / n,
+        p.iter().map(|q| q.1).sum::<f64>() / n,
+    );
+    let cov: f64 = p.iter().map(|(f, s)| (f - mf) * (s - ms)).sum();
+    let vf: f64 = p.iter().map(|(f, _)| (f - mf).powi(2)).sum();
+    let vs: f64 = p.iter().map(|(_, s)| (s - ms).powi(2)).sum();
+    Some((alpha, cov / (vf * vs).sqrt().max(1e-300)))
+}
+
 /// Gini coefficient of non-negative values: Σ|x_i − x_j| / (2 n² mean).
 pub fn gini(values: &[f64]) -> f64 {
     let n = values.len();
@@ -268,6 +332,51 @@ mod tests {
         for (_, v) in s.slip_speed_behind_tip(e) {
             assert!((v - 0.7).abs() < 1e-12);
         }
+    }
+
+    #[test]
+    fn front_kinds_and_the_slip_front_relation() {
+        let s = synthetic(1000.0, 0.5);
+        assert_eq!(s.front_kind(&s.events()[1], 5), FrontKind::Fast);
+        let slow = synthetic(10.0, 0.5);
+        assert_eq!(slow.front_kind(&slow.events()[1], 5), FrontKind::Slow);
+        // v_slip = 1e-3 v_front exactly.
+        let pairs: Vec<(f64, f64)> = [1.0, 10.0, 100.0, 1000.0]
+            .iter()
+            .map(|&f| (f, 1e-3 * f))
+            .collect();
+        let (alpha, r) = slip_front_relation(&pairs).unwrap();
+        assert!((alpha - 1e-3).abs() < 1e-12 && (r - 1.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn fast_slow_fast_is_recognised() {
+        // Rupture times: fast over blocks 0..15, slow over 15..30, fast after.
+        let mut t = 0.0;
+        let mut times = Vec::new();
+        for ix in 0..50 {
+            times.push(Some(t));
+            t += if (15..30).contains(&ix) {
+                1e-3 / 5.0
+            } else {
+                1e-3 / 1000.0
+            };
+        }
+        let s = InterfaceSeries {
+            spacing: 1e-3,
+            ..Default::default()
+        };
+        let e = Event {
+            first: 0,
+            last: 0,
+            start: 0.0,
+            end: t,
+            full: true,
+            rupture_length: 0.05,
+            slip: 0.0,
+            rupture_time: times,
+        };
+        assert_eq!(s.front_kind(&e, 3), FrontKind::FastSlowFast);
     }
 
     #[test]

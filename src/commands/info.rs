@@ -28,14 +28,54 @@ pub fn info(path: &Path) -> anyhow::Result<ExitCode> {
         "events      {} found (a block counts as slipping below half its junctions pinned)",
         events.len()
     );
+    // F/F_N at the start of each event, from the global series.
+    let ratio_at = |t: f64| {
+        run.global
+            .iter()
+            .min_by(|a, b| (a.time - t).abs().total_cmp(&(b.time - t).abs()))
+            .map_or(f64::NAN, |g| g.drive_ratio)
+    };
+    println!("  #    start (s)     end (s)       kind     length (m)  slip (m)    F/F_N   front           v_front (m/s) min..max");
+    let mut pairs = Vec::new();
     for (n, e) in events.iter().enumerate() {
+        let speeds: Vec<(f64, f64)> = series.front_speed(e, 3);
+        let finite: Vec<f64> = speeds
+            .iter()
+            .map(|p| p.1)
+            .filter(|v| v.is_finite())
+            .collect();
+        let (lo, hi) = finite
+            .iter()
+            .fold((f64::MAX, f64::MIN), |a, &v| (a.0.min(v), a.1.max(v)));
+        let peak_slip: Vec<(f64, f64)> = series.slip_speed_behind_tip(e);
+        for (x, v) in &speeds {
+            if let Some((_, s)) = peak_slip
+                .iter()
+                .find(|(px, _)| (px - x).abs() <= 1.5 * series.spacing)
+            {
+                pairs.push((*v, *s));
+            }
+        }
         println!(
-            "  {n:>3}  {:.6e} .. {:.6e} s  {:<7}  length {:.4e} m  slip {:.4e} m",
+            "  {n:<4} {:<13.6e} {:<13.6e} {:<8} {:<11.4e} {:<11.4e} {:<7.4} {:<15} {}",
             e.start,
             e.end,
             if e.full { "full" } else { "partial" },
             e.rupture_length,
-            e.slip
+            e.slip,
+            ratio_at(e.start),
+            format!("{:?}", series.front_kind(e, 3)),
+            if finite.is_empty() {
+                "-".to_string()
+            } else {
+                format!("{lo:.3e}..{hi:.3e}")
+            }
+        );
+    }
+    if let Some((alpha, r)) = slipfront::analysis::slip_front_relation(&pairs) {
+        println!(
+            "slip speed vs front speed: v_slip = {alpha:.3e} v_front (log-log correlation {r:.3}, {} points)",
+            pairs.len()
         );
     }
     Ok(ExitCode::SUCCESS)
