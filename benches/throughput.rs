@@ -49,6 +49,30 @@ fn measure(
     }
 }
 
+/// Per-kernel GPU timing (each phase alone), as cell-updates per second.
+fn profile(model: &Model) {
+    let Ok(mut engine) = slipfront::gpu::GpuEngine::new(model) else {
+        return;
+    };
+    let n = model.n_blocks();
+    let dispatches = (2e8 / n as f64).clamp(4.0, 2000.0) as u32;
+    if let Ok(phases) = engine.profile_phases(dispatches) {
+        for (name, seconds) in phases {
+            // Junction kernels update Ns junctions on each interface block.
+            let items = match name {
+                "junctions" => model.n_junctions(),
+                "coulomb" => model.nx,
+                _ => n,
+            };
+            println!(
+                "|   kernel `{name}` | {:.1} µs per dispatch | {:.3e} items/s | ({items} items) |",
+                seconds * 1e6,
+                items as f64 / seconds
+            );
+        }
+    }
+}
+
 fn main() {
     let filter: Vec<String> = std::env::args()
         .skip(1)
@@ -91,6 +115,7 @@ fn main() {
         if gpu {
             configs.push((Backend::Gpu, Precision::F32, 0));
         }
+        let profile_gpu = gpu && std::env::var("SLIPFRONT_BENCH_KERNELS").is_ok();
         for (backend, precision, threads) in configs {
             let bytes = model.memory_bytes(if precision == Precision::F64 { 8 } else { 4 }) as f64
                 / n as f64;
@@ -101,6 +126,9 @@ fn main() {
                 ),
                 None => println!("| {name} | {backend:?} {precision:?} | unavailable | | |"),
             }
+        }
+        if profile_gpu {
+            profile(&model);
         }
     }
 }

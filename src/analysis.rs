@@ -40,6 +40,17 @@ pub struct Event {
 }
 
 impl InterfaceSeries {
+    /// Samples `range` of the series.
+    pub fn slice(&self, range: std::ops::Range<usize>) -> InterfaceSeries {
+        InterfaceSeries {
+            time: self.time[range.clone()].to_vec(),
+            spacing: self.spacing,
+            pinned: self.pinned[range.clone()].to_vec(),
+            slip: self.slip[range.clone()].to_vec(),
+            slip_speed: self.slip_speed[range].to_vec(),
+        }
+    }
+
     pub fn nx(&self) -> usize {
         self.pinned.first().map_or(0, Vec::len)
     }

@@ -62,6 +62,9 @@ enum Command {
         /// Folder for the PNGs (default: beside the run file).
         #[arg(short = 'o', long)]
         out_dir: Option<PathBuf>,
+        /// Also write the space–time map of event N alone (see `info`).
+        #[arg(long)]
+        event: Option<usize>,
     },
     /// Run the validation cases and compare measured against expected.
     Verify {
@@ -104,7 +107,11 @@ fn main() -> ExitCode {
             json,
         } => commands::check::check(scenario, &set, json),
         Command::Info { file } => commands::info::info(&file),
-        Command::Plot { file, out_dir } => commands::plot::plot(&file, out_dir),
+        Command::Plot {
+            file,
+            out_dir,
+            event,
+        } => commands::plot::plot(&file, out_dir, event),
         Command::Verify {
             backend,
             precision,

@@ -3,7 +3,11 @@ use slipfront::plot::{front_speed_plot, loading_curve, spacetime_map};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
-pub fn plot(path: &Path, out_dir: Option<PathBuf>) -> anyhow::Result<ExitCode> {
+pub fn plot(
+    path: &Path,
+    out_dir: Option<PathBuf>,
+    event: Option<usize>,
+) -> anyhow::Result<ExitCode> {
     let run = RunFile::read(path)?;
     let dir = out_dir.unwrap_or_else(|| path.parent().map(Path::to_path_buf).unwrap_or_default());
     std::fs::create_dir_all(&dir)?;
@@ -21,6 +25,21 @@ pub fn plot(path: &Path, out_dir: Option<PathBuf>) -> anyhow::Result<ExitCode> {
     ] {
         let file = dir.join(format!("{stem}_{name}.png"));
         canvas.save(&file)?;
+        println!("{}", file.display());
+    }
+    if let Some(n) = event {
+        let e = events.get(n).ok_or_else(|| {
+            anyhow::anyhow!(
+                "--event {n}: the run has {} events (0 to {})",
+                events.len(),
+                events.len().saturating_sub(1)
+            )
+        })?;
+        // The event with a margin of 5% of its samples on either side.
+        let margin = (e.last - e.first) / 20 + 2;
+        let range = e.first.saturating_sub(margin)..(e.last + margin + 1).min(series.time.len());
+        let file = dir.join(format!("{stem}_event{n}_spacetime.png"));
+        spacetime_map(&series.slice(range)).save(&file)?;
         println!("{}", file.display());
     }
     Ok(ExitCode::SUCCESS)

@@ -203,6 +203,52 @@ impl GpuEngine {
         })
     }
 
+    /// Seconds per dispatch of each phase, each timed alone: `dispatches`
+    /// dispatches of one pipeline in one pass and submit, waited for. The
+    /// state is left meaningless (phases run out of order): use a throwaway
+    /// engine.
+    pub fn profile_phases(
+        &mut self,
+        dispatches: u32,
+    ) -> Result<Vec<(&'static str, f64)>, EngineError> {
+        let loads = GpuStep::new(&step_params(&self.consts, self.model.prep_steps), 0.0);
+        self.ctx
+            .queue
+            .write_buffer(&self.step_buffer, 0, bytemuck::bytes_of(&loads));
+        let mut out = Vec::new();
+        for (p, (phase, _)) in self.pipelines.iter().zip(&self.variant.phases) {
+            let run = |n: u32| -> Result<f64, EngineError> {
+                let start = std::time::Instant::now();
+                let mut encoder = self
+                    .ctx
+                    .device
+                    .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
+                {
+                    let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                        label: Some("profile"),
+                        timestamp_writes: None,
+                    });
+                    pass.set_bind_group(0, &self.state_group, &[]);
+                    pass.set_bind_group(1, &self.step_group, &[0]);
+                    pass.set_pipeline(&p.pipeline);
+                    for _ in 0..n {
+                        pass.dispatch_workgroups(p.groups.0, p.groups.1, 1);
+                    }
+                }
+                self.ctx.queue.submit([encoder.finish()]);
+                self.ctx
+                    .device
+                    .poll(wgpu::PollType::wait_indefinitely())
+                    .map_err(|e| EngineError::Gpu(format!("device lost: {e}")))?;
+                Ok(start.elapsed().as_secs_f64())
+            };
+            run(2)?; // warm-up
+            out.push((phase.entry_point(), run(dispatches)? / dispatches as f64));
+        }
+        self.ctx.check()?;
+        Ok(out)
+    }
+
     /// The pipelines this scene built.
     pub fn variant(&self) -> &Variant {
         &self.variant
