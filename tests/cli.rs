@@ -84,6 +84,9 @@ fn run_default_scene_briefly_writes_an_mcap_file() {
     ] {
         assert!(dir.join(name).exists(), "{name}");
     }
+    let out = slipfront(&["plot", file.to_str().unwrap(), "--event", "99"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--event 99"));
     let out = slipfront(&["info", "no_such.mcap"]);
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("no_such.mcap"));

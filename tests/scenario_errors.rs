@@ -112,3 +112,14 @@ fn every_shipped_scenario_is_valid() {
         Model::from_scenario(&s, false).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
     }
 }
+
+#[test]
+fn output_cadences_are_checked() {
+    let e = parse_err(DEFAULT_SCENARIO, &["output.fast_slip_speed=-1"]);
+    assert!(
+        e.contains("output.fast_slip_speed = -1 is out of range"),
+        "{e}"
+    );
+    let e = parse_err(DEFAULT_SCENARIO, &["output.fast_interval=nan"]);
+    assert!(e.contains("output.fast_interval = NaN"), "{e}");
+}
