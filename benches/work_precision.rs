@@ -9,7 +9,7 @@
 
 use slipfront::backend::{make_engine, Backend, Precision};
 use slipfront::observables::{first_full_sliding, FirstEvent};
-use slipfront::scenario::{Component, Scenario, DEFAULT_SCENARIO};
+use slipfront::scenario::Component;
 use slipfront::verify::{coulomb_ensemble_error, measure_wave_speed};
 use slipfront::{Engine, EngineError, Model};
 use std::time::Instant;
@@ -17,20 +17,9 @@ use std::time::Instant;
 const FRACTIONS: [f64; 6] = [0.1, 0.05, 0.02, 0.01, 0.005, 0.0025];
 
 fn stick_slip_model(fraction: f64) -> Result<Model, String> {
-    let set: Vec<String> = [
-        "geometry.nx=29",
-        "geometry.nz=16",
-        "geometry.length=0.07",
-        "geometry.height=0.0375",
-        "loading.normal.ramp_time=2e-4",
-        "loading.normal.relax_time=3e-4",
-        "loading.drive.velocity=0.04",
-        &format!("time.dt_fraction={fraction}"),
-    ]
-    .iter()
-    .map(|s| s.to_string())
-    .collect();
-    let s = Scenario::parse(DEFAULT_SCENARIO, "work_precision", &set).map_err(|e| e.to_string())?;
+    let dt = format!("time.dt_fraction={fraction}");
+    let s = slipfront::verify::small_scene(&["loading.drive.velocity=0.04", &dt])
+        .map_err(|e| e.to_string())?;
     Model::from_scenario(&s, false).map_err(|e| e.to_string())
 }
 

@@ -26,15 +26,8 @@ fn run_both(m: &Model, steps: u64) -> (Snapshot, Snapshot) {
     (c.snapshot().unwrap(), g.snapshot().unwrap())
 }
 
-/// A small side-driven lattice with short loading phases: 29 × 16 blocks.
-const SMALL: &[&str] = &[
-    "geometry.nx=29",
-    "geometry.nz=16",
-    "geometry.length=0.07",
-    "geometry.height=0.0375",
-    "loading.normal.ramp_time=2e-4",
-    "loading.normal.relax_time=3e-4",
-];
+/// The small side-driven scene of the cross-checks (29 × 16 blocks).
+const SMALL: &[&str] = &slipfront::verify::SMALL_SCENE;
 
 #[test]
 fn gpu_f32_matches_cpu_f32_field_by_field() {

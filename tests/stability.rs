@@ -5,27 +5,18 @@
 use slipfront::backend::{cpu_engine, Precision};
 use slipfront::energy::{step_power, stored_energy};
 use slipfront::model::{Driver, ModelError};
-use slipfront::scenario::{Component, Pulse, Scenario, DEFAULT_SCENARIO};
+use slipfront::scenario::{Component, Pulse, Scenario};
 use slipfront::{advance_to, EngineError, Model};
 
 /// A 29 × 16 Table S1 lattice with short loading phases, and `extra` keys.
 fn small(extra: &[&str]) -> Scenario {
-    let mut set: Vec<String> = [
-        "geometry.nx=29",
-        "geometry.nz=16",
-        "geometry.length=0.07",
-        "geometry.height=0.0375",
-        "loading.normal.ramp_time=2e-4",
-        "loading.normal.relax_time=3e-4",
+    let mut set = vec![
         "loading.drive.velocity=0.4",
         "friction.junctions.slip_time_mean=2e-4",
         "friction.junctions.slip_time_std=2e-5",
-    ]
-    .iter()
-    .map(|s| s.to_string())
-    .collect();
-    set.extend(extra.iter().map(|s| s.to_string()));
-    Scenario::parse(DEFAULT_SCENARIO, "stability", &set).unwrap()
+    ];
+    set.extend_from_slice(extra);
+    slipfront::verify::small_scene(&set).unwrap()
 }
 
 /// Whether `s` at `dt` runs `steps` steps without blowing up.

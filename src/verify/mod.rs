@@ -109,6 +109,28 @@ pub fn run_all_reporting(
     Ok(out)
 }
 
+/// Overrides that shrink the Table S1 scene to 29 × 16 blocks (same
+/// spacing) with short loading phases: the small side-driven scene of the
+/// GPU cross-checks, the stability tests and the time-step study.
+pub const SMALL_SCENE: [&str; 6] = [
+    "geometry.nx=29",
+    "geometry.nz=16",
+    "geometry.length=0.07",
+    "geometry.height=0.0375",
+    "loading.normal.ramp_time=2e-4",
+    "loading.normal.relax_time=3e-4",
+];
+
+/// The small side-driven scene with `extra` overrides after SMALL_SCENE.
+pub fn small_scene(extra: &[&str]) -> Result<Scenario, crate::scenario::ScenarioError> {
+    let set: Vec<String> = SMALL_SCENE
+        .iter()
+        .chain(extra)
+        .map(|s| s.to_string())
+        .collect();
+    Scenario::parse(crate::scenario::DEFAULT_SCENARIO, "small scene", &set)
+}
+
 /// The Table S1 scene stripped of loads, friction and damping: the base of
 /// the verification scenes, which then set what they test.
 pub fn bare_scene(name: &str) -> Scenario {
