@@ -13,6 +13,7 @@ pub mod model;
 pub mod observables;
 pub mod output;
 pub mod plot;
+pub mod precursors;
 pub mod real;
 pub mod rng;
 pub mod runner;

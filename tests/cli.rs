@@ -68,7 +68,7 @@ fn run_default_scene_briefly_writes_an_mcap_file() {
     );
     let text = String::from_utf8_lossy(&out.stdout);
     assert!(
-        text.contains("/interface") && text.contains("events"),
+        text.contains("/interface") && text.contains("events") && text.contains("precursors"),
         "{text}"
     );
     let out = slipfront(&["plot", file.to_str().unwrap()]);
@@ -90,6 +90,12 @@ fn run_default_scene_briefly_writes_an_mcap_file() {
     let out = slipfront(&["info", "no_such.mcap"]);
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("no_such.mcap"));
+    // A file that is not MCAP at all is refused, not read as an empty run.
+    let not_mcap = dir.join("scenario.mcap");
+    std::fs::write(&not_mcap, "name = \"x\"\n").unwrap();
+    let out = slipfront(&["info", not_mcap.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("not an MCAP file"));
 }
 
 #[test]

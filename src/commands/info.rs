@@ -1,4 +1,5 @@
 use slipfront::output::reader::RunFile;
+use slipfront::precursors::PrecursorSequence;
 use std::path::Path;
 use std::process::ExitCode;
 
@@ -72,6 +73,10 @@ pub fn info(path: &Path) -> anyhow::Result<ExitCode> {
             }
         );
     }
+    print_precursors(
+        &PrecursorSequence::from_events(&events, |e| ratio_at(e.start)),
+        series.spacing,
+    );
     if let Some((alpha, r)) = slipfront::analysis::slip_front_relation(&pairs) {
         println!(
             "slip speed vs front speed: v_slip = {alpha:.3e} v_front (log-log correlation {r:.3}, {} points)",
@@ -79,4 +84,33 @@ pub fn info(path: &Path) -> anyhow::Result<ExitCode> {
         );
     }
     Ok(ExitCode::SUCCESS)
+}
+
+/// The precursors before the first full event and whether they grow.
+fn print_precursors(seq: &PrecursorSequence, spacing: f64) {
+    let list = |p: &[slipfront::precursors::Precursor]| {
+        p.iter()
+            .map(|p| format!("{:.1} mm at {:.3}", p.length * 1e3, p.drive_ratio))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    let extended = seq.extended(spacing);
+    match seq.first_full_ratio {
+        Some(r) => println!(
+            "precursors  {} before the first full event (at F/F_N {r:.4}), {} longer than one block",
+            seq.precursors.len(),
+            extended.len()
+        ),
+        None => println!(
+            "precursors  {} partial events and no full event, {} longer than one block",
+            seq.precursors.len(),
+            extended.len()
+        ),
+    }
+    if !extended.is_empty() {
+        println!("  lengths against F/F_N: {}", list(&extended));
+    }
+    if let Some(r) = PrecursorSequence::growth(&extended) {
+        println!("  growth: rank correlation of length with F/F_N {r:.2} (+1: each longer than the last)");
+    }
 }

@@ -29,6 +29,12 @@ impl RunFile {
             why,
         };
         let bytes = std::fs::read(path).map_err(|e| fail(e.to_string()))?;
+        if !bytes.starts_with(mcap::MAGIC) {
+            return Err(fail(format!(
+                "not an MCAP file ({} bytes, no MCAP magic at the start)",
+                bytes.len()
+            )));
+        }
         let reader = mcap::read::ChunkFlattener::new(&bytes).map_err(|e| fail(e.to_string()))?;
         let mut run = RunFile::default();
         let mut topics: HashMap<u16, String> = HashMap::new();
