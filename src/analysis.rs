@@ -29,7 +29,9 @@ pub struct Event {
     pub last: usize,
     pub start: f64,
     pub end: f64,
-    /// Every block ruptured during the event.
+    /// The rupture spanned the whole interface, trailing to leading edge
+    /// (with short slip times a block inside may re-pin before it reads as
+    /// ruptured).
     pub full: bool,
     /// Extent of the ruptured blocks (m).
     pub rupture_length: f64,
@@ -62,7 +64,15 @@ impl InterfaceSeries {
     /// Events: maximal runs of samples in which at least one block is
     /// ruptured.
     pub fn events(&self) -> Vec<Event> {
-        let mut out = Vec::new();
+        self.events_separated_by(0.0)
+    }
+
+    /// Events as in [`Self::events`], but runs of ruptured samples less
+    /// than `quiet_gap` seconds apart count as one event. With short slip
+    /// times every block of a slow front can re-pin before the next one
+    /// breaks, which would otherwise split one front into many events.
+    pub fn events_separated_by(&self, quiet_gap: f64) -> Vec<Event> {
+        let mut runs: Vec<(usize, usize)> = Vec::new();
         let n = self.time.len();
         let mut k = 0;
         while k < n {
@@ -74,10 +84,13 @@ impl InterfaceSeries {
             while k + 1 < n && self.any_ruptured(k + 1) {
                 k += 1;
             }
-            out.push(self.event(first, k));
+            match runs.last_mut() {
+                Some(last) if self.time[first] - self.time[last.1] < quiet_gap => last.1 = k,
+                _ => runs.push((first, k)),
+            }
             k += 1;
         }
-        out
+        runs.into_iter().map(|(a, b)| self.event(a, b)).collect()
     }
 
     fn event(&self, first: usize, last: usize) -> Event {
@@ -103,7 +116,7 @@ impl InterfaceSeries {
             last,
             start: self.time[first],
             end: self.time[last],
-            full: ruptured.len() == nx,
+            full: lo == 0 && hi == nx - 1,
             rupture_length: (hi - lo + 1) as f64 * self.spacing,
             slip,
             rupture_time,
@@ -316,6 +329,32 @@ mod tests {
             "{} vs {expected}",
             e[1].slip
         );
+    }
+
+    #[test]
+    fn a_rupture_from_edge_to_edge_is_full_even_with_a_block_that_held() {
+        let mut s = synthetic(1000.0, 0.5);
+        for p in &mut s.pinned {
+            p[25] = 1.0;
+        }
+        let e = &s.events()[1];
+        assert!(e.full && e.rupture_time[25].is_none());
+        // Negative control: a rupture that stops short of the leading edge.
+        for p in &mut s.pinned {
+            p[49] = 1.0;
+        }
+        assert!(!s.events()[1].full);
+    }
+
+    #[test]
+    fn events_closer_than_the_quiet_gap_merge() {
+        let s = synthetic(1000.0, 0.5);
+        // Precursor ends at 39 µs, the full event starts at 100 µs.
+        assert_eq!(s.events_separated_by(50e-6).len(), 2);
+        let merged = s.events_separated_by(70e-6);
+        assert_eq!(merged.len(), 1);
+        assert!(merged[0].full);
+        assert_eq!(merged[0].start, s.time[20]);
     }
 
     #[test]

@@ -55,7 +55,12 @@ enum Command {
         json: bool,
     },
     /// Channels, counts, time span and events of a run file.
-    Info { file: PathBuf },
+    Info {
+        file: PathBuf,
+        /// Ruptures less than this many seconds apart belong to one event.
+        #[arg(long, default_value_t = DEFAULT_QUIET_GAP, value_parser = parse_quiet_gap)]
+        quiet_gap: f64,
+    },
     /// Write PNGs of a run: space–time map, loading curve, front speed.
     Plot {
         file: PathBuf,
@@ -65,6 +70,9 @@ enum Command {
         /// Also write the space–time map of event N alone (see `info`).
         #[arg(long)]
         event: Option<usize>,
+        /// Ruptures less than this many seconds apart belong to one event.
+        #[arg(long, default_value_t = DEFAULT_QUIET_GAP, value_parser = parse_quiet_gap)]
+        quiet_gap: f64,
     },
     /// Run the validation cases and compare measured against expected.
     Verify {
@@ -106,12 +114,13 @@ fn main() -> ExitCode {
             set,
             json,
         } => commands::check::check(scenario, &set, json),
-        Command::Info { file } => commands::info::info(&file),
+        Command::Info { file, quiet_gap } => commands::info::info(&file, quiet_gap),
         Command::Plot {
             file,
             out_dir,
             event,
-        } => commands::plot::plot(&file, out_dir, event),
+            quiet_gap,
+        } => commands::plot::plot(&file, out_dir, event, quiet_gap),
         Command::Verify {
             backend,
             precision,
@@ -124,5 +133,18 @@ fn main() -> ExitCode {
             eprintln!("error: {e:#}");
             ExitCode::from(2)
         }
+    }
+}
+
+/// Default quiet gap between events (s): longer than a slow front takes to
+/// cross one block, far shorter than a stick-slip cycle.
+const DEFAULT_QUIET_GAP: f64 = 1e-3;
+
+fn parse_quiet_gap(text: &str) -> Result<f64, String> {
+    match text.parse::<f64>() {
+        Ok(v) if v.is_finite() && v >= 0.0 => Ok(v),
+        _ => Err(format!(
+            "--quiet-gap = {text}: expected a time in seconds, 0 or more"
+        )),
     }
 }

@@ -3,7 +3,7 @@ use slipfront::precursors::PrecursorSequence;
 use std::path::Path;
 use std::process::ExitCode;
 
-pub fn info(path: &Path) -> anyhow::Result<ExitCode> {
+pub fn info(path: &Path, quiet_gap: f64) -> anyhow::Result<ExitCode> {
     let run = RunFile::read(path)?;
     println!("file        {}", path.display());
     if run.truncated {
@@ -24,9 +24,10 @@ pub fn info(path: &Path) -> anyhow::Result<ExitCode> {
     println!("  /interface  {:>8} messages, {}", i.len(), span(&i));
     println!("  /bulk       {:>8} messages, {}", b.len(), span(&b));
     let series = run.interface_series();
-    let events = series.events();
+    let events = series.events_separated_by(quiet_gap);
     println!(
-        "events      {} found (a block counts as slipping below half its junctions pinned)",
+        "events      {} found (a block counts as slipping below half its junctions pinned; \
+         ruptures less than {quiet_gap:e} s apart are one event)",
         events.len()
     );
     // F/F_N at the start of each event, from the global series.

@@ -7,6 +7,7 @@ pub fn plot(
     path: &Path,
     out_dir: Option<PathBuf>,
     event: Option<usize>,
+    quiet_gap: f64,
 ) -> anyhow::Result<ExitCode> {
     let run = RunFile::read(path)?;
     let dir = out_dir.unwrap_or_else(|| path.parent().map(Path::to_path_buf).unwrap_or_default());
@@ -15,7 +16,7 @@ pub fn plot(
         .file_stem()
         .map_or("run".into(), |s| s.to_string_lossy().into_owned());
     let series = run.interface_series();
-    let events = series.events();
+    let events = series.events_separated_by(quiet_gap);
     let time: Vec<f64> = run.global.iter().map(|m| m.time).collect();
     let ratio: Vec<f64> = run.global.iter().map(|m| m.drive_ratio).collect();
     for (name, canvas) in [
