@@ -41,6 +41,20 @@ pub struct Event {
     pub rupture_time: Vec<Option<f64>>,
 }
 
+impl Event {
+    /// Position of the block that ruptured first (m from the trailing
+    /// edge); the trailing-most of those that ruptured in the same sample.
+    pub fn origin(&self, spacing: f64) -> f64 {
+        let first = self
+            .rupture_time
+            .iter()
+            .enumerate()
+            .filter_map(|(ix, t)| t.map(|t| (t, ix)))
+            .min_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        first.map_or(f64::NAN, |(_, ix)| ix as f64 * spacing)
+    }
+}
+
 impl InterfaceSeries {
     /// Samples `range` of the series.
     pub fn slice(&self, range: std::ops::Range<usize>) -> InterfaceSeries {
@@ -319,6 +333,7 @@ mod tests {
         assert!(e[1].full);
         assert!((e[1].start - 100e-6).abs() <= 1.0001e-6, "{}", e[1].start);
         assert!((e[1].rupture_length - 50e-3).abs() < 1e-12);
+        assert_eq!(e[1].origin(s.spacing), 0.0);
         // Mean slip of the full event: v × (300 µs − t_r(x)) averaged over x.
         let expected: f64 = (0..50)
             .map(|ix| 0.5 * (300e-6 - (100e-6 + ix as f64 * 1e-6)))

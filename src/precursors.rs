@@ -5,11 +5,13 @@
 
 use crate::analysis::Event;
 
-/// One precursor: the driving ratio F/F_N at its start and its length (m).
+/// One precursor: the driving ratio F/F_N at its start, its length and
+/// where it started (m from the trailing edge).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Precursor {
     pub drive_ratio: f64,
     pub length: f64,
+    pub origin: f64,
 }
 
 /// The precursors of a run and the load of the first full event.
@@ -23,7 +25,7 @@ pub struct PrecursorSequence {
 impl PrecursorSequence {
     /// Splits `events` at the first full event; `ratio` gives F/F_N at the
     /// start of an event.
-    pub fn from_events(events: &[Event], ratio: impl Fn(&Event) -> f64) -> Self {
+    pub fn from_events(events: &[Event], spacing: f64, ratio: impl Fn(&Event) -> f64) -> Self {
         let first_full = events.iter().position(|e| e.full);
         let before = &events[..first_full.unwrap_or(events.len())];
         PrecursorSequence {
@@ -32,6 +34,7 @@ impl PrecursorSequence {
                 .map(|e| Precursor {
                     drive_ratio: ratio(e),
                     length: e.rupture_length,
+                    origin: e.origin(spacing),
                 })
                 .collect(),
             first_full_ratio: first_full.map(|k| ratio(&events[k])),
@@ -46,6 +49,16 @@ impl PrecursorSequence {
             .iter()
             .copied()
             .filter(|p| p.length > 1.5 * spacing)
+            .collect()
+    }
+
+    /// Extended precursors that started at the trailing edge (within two
+    /// blocks of it), where the driving spring loads the interface: the
+    /// published sequence. Others nucleate inside, at an earlier arrest.
+    pub fn from_trailing_edge(&self, spacing: f64) -> Vec<Precursor> {
+        self.extended(spacing)
+            .into_iter()
+            .filter(|p| p.origin <= 2.0 * spacing)
             .collect()
     }
 
@@ -107,7 +120,7 @@ mod tests {
             full,
             rupture_length: length,
             slip: 0.0,
-            rupture_time: Vec::new(),
+            rupture_time: vec![Some(start), None],
         }
     }
 
@@ -120,7 +133,7 @@ mod tests {
             .collect();
         events.push(event(0.14, true, 0.3));
         events.push(event(0.01, false, 0.31));
-        PrecursorSequence::from_events(&events, |e| e.start)
+        PrecursorSequence::from_events(&events, 0.0025, |e| e.start)
     }
 
     #[test]
@@ -158,9 +171,25 @@ mod tests {
     }
 
     #[test]
+    fn precursors_from_inside_are_told_apart() {
+        let mut events: Vec<Event> = [0.01, 0.03, 0.02]
+            .iter()
+            .enumerate()
+            .map(|(k, &l)| event(l, false, 0.1 + 0.01 * k as f64))
+            .collect();
+        // The third starts at block 10, not at the trailing edge.
+        events[2].rupture_time = vec![None; 12];
+        events[2].rupture_time[10] = Some(0.12);
+        let s = PrecursorSequence::from_events(&events, 0.0025, |e| e.start);
+        assert_eq!(s.precursors[2].origin, 0.025);
+        assert_eq!(s.extended(0.0025).len(), 3);
+        assert_eq!(s.from_trailing_edge(0.0025).len(), 2);
+    }
+
+    #[test]
     fn a_run_without_full_event_keeps_all_its_partial_events() {
         let events = vec![event(0.01, false, 0.1), event(0.02, false, 0.2)];
-        let s = PrecursorSequence::from_events(&events, |e| e.start);
+        let s = PrecursorSequence::from_events(&events, 0.0025, |e| e.start);
         assert_eq!(s.precursors.len(), 2);
         assert_eq!(s.first_full_ratio, None);
     }

@@ -37,7 +37,7 @@ pub fn info(path: &Path, quiet_gap: f64) -> anyhow::Result<ExitCode> {
             .min_by(|a, b| (a.time - t).abs().total_cmp(&(b.time - t).abs()))
             .map_or(f64::NAN, |g| g.drive_ratio)
     };
-    println!("  #    start (s)     end (s)       kind     length (m)  slip (m)    F/F_N   front           v_front (m/s) min..max");
+    println!("  #    start (s)     end (s)       kind     length (m)  from (m)    slip (m)    F/F_N   front           v_front (m/s) min..max");
     let mut pairs = Vec::new();
     for (n, e) in events.iter().enumerate() {
         let speeds: Vec<(f64, f64)> = series.front_speed(e, 3);
@@ -59,11 +59,12 @@ pub fn info(path: &Path, quiet_gap: f64) -> anyhow::Result<ExitCode> {
             }
         }
         println!(
-            "  {n:<4} {:<13.6e} {:<13.6e} {:<8} {:<11.4e} {:<11.4e} {:<7.4} {:<15} {}",
+            "  {n:<4} {:<13.6e} {:<13.6e} {:<8} {:<11.4e} {:<11.4e} {:<11.4e} {:<7.4} {:<15} {}",
             e.start,
             e.end,
             if e.full { "full" } else { "partial" },
             e.rupture_length,
+            e.origin(series.spacing),
             e.slip,
             ratio_at(e.start),
             format!("{:?}", series.front_kind(e, 3)),
@@ -75,7 +76,7 @@ pub fn info(path: &Path, quiet_gap: f64) -> anyhow::Result<ExitCode> {
         );
     }
     print_precursors(
-        &PrecursorSequence::from_events(&events, |e| ratio_at(e.start)),
+        &PrecursorSequence::from_events(&events, series.spacing, |e| ratio_at(e.start)),
         series.spacing,
     );
     if let Some((alpha, r)) = slipfront::analysis::slip_front_relation(&pairs) {
@@ -91,27 +92,43 @@ pub fn info(path: &Path, quiet_gap: f64) -> anyhow::Result<ExitCode> {
 fn print_precursors(seq: &PrecursorSequence, spacing: f64) {
     let list = |p: &[slipfront::precursors::Precursor]| {
         p.iter()
-            .map(|p| format!("{:.1} mm at {:.3}", p.length * 1e3, p.drive_ratio))
+            .map(|p| {
+                format!(
+                    "{:.1} mm at {:.3}{}",
+                    p.length * 1e3,
+                    p.drive_ratio,
+                    if p.origin > 2.0 * spacing {
+                        format!(" (from x = {:.1} mm)", p.origin * 1e3)
+                    } else {
+                        String::new()
+                    }
+                )
+            })
             .collect::<Vec<_>>()
             .join(", ")
     };
     let extended = seq.extended(spacing);
+    let trailing = seq.from_trailing_edge(spacing);
     match seq.first_full_ratio {
         Some(r) => println!(
-            "precursors  {} before the first full event (at F/F_N {r:.4}), {} longer than one block",
+            "precursors  {} before the first full event (at F/F_N {r:.4}), {} longer than one block, {} of them from the trailing edge",
             seq.precursors.len(),
-            extended.len()
+            extended.len(),
+            trailing.len()
         ),
         None => println!(
-            "precursors  {} partial events and no full event, {} longer than one block",
+            "precursors  {} partial events and no full event, {} longer than one block, {} of them from the trailing edge",
             seq.precursors.len(),
-            extended.len()
+            extended.len(),
+            trailing.len()
         ),
     }
     if !extended.is_empty() {
         println!("  lengths against F/F_N: {}", list(&extended));
     }
-    if let Some(r) = PrecursorSequence::growth(&extended) {
-        println!("  growth: rank correlation of length with F/F_N {r:.2} (+1: each longer than the last)");
+    if let Some(r) = PrecursorSequence::growth(&trailing) {
+        println!(
+            "  growth: rank correlation of length with F/F_N {r:.2} over those from the trailing edge (+1: each longer than the last)"
+        );
     }
 }
