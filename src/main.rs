@@ -86,6 +86,7 @@ enum Command {
 }
 
 fn main() -> ExitCode {
+    restore_default_sigpipe();
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Run {
@@ -146,5 +147,16 @@ fn parse_quiet_gap(text: &str) -> Result<f64, String> {
         _ => Err(format!(
             "--quiet-gap = {text}: expected a time in seconds, 0 or more"
         )),
+    }
+}
+
+/// Rust ignores SIGPIPE, so `slipfront info run.mcap | head` would panic
+/// on the closed pipe; restore the default so the process just ends, as
+/// other command-line tools do.
+fn restore_default_sigpipe() {
+    #[cfg(unix)]
+    // SAFETY: called first thing in main, before any thread or I/O exists.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
     }
 }
