@@ -1,8 +1,10 @@
 //! PNG pictures of a run: the space–time map of the fraction of pinned
 //! junctions (x across, time down, as in the thesis figures), the loading
-//! curve with events marked, and front speed against position.
+//! curve with events marked, front speed against position, and precursor
+//! length against load.
 
 use crate::analysis::{Event, InterfaceSeries};
+use crate::precursors::PrecursorSequence;
 use std::path::Path;
 
 /// A grey/RGB raster with simple drawing.
@@ -161,9 +163,79 @@ pub fn front_speed_plot(s: &InterfaceSeries, events: &[Event]) -> Canvas {
     c
 }
 
+/// Precursor length against F/F_N (x from 0 to the first full event's
+/// load, y from 0 to the interface length `length`): trailing-edge
+/// precursors black, the others grey, the first full event a red cross at
+/// full length. The picture of Rubinstein et al. (2007), Fig. 2.11 of the
+/// thesis.
+pub fn precursor_plot(seq: &PrecursorSequence, length: f64, spacing: f64) -> Canvas {
+    let mut c = Canvas::new(PLOT_W, PLOT_H);
+    frame(&mut c);
+    let top = seq
+        .precursors
+        .iter()
+        .map(|p| p.drive_ratio)
+        .chain(seq.first_full_ratio)
+        .fold(0.0f64, f64::max)
+        * 1.05;
+    let map = mapper((0.0, top.max(1e-12)), (0.0, length));
+    let dot = |c: &mut Canvas, (px, py): (i64, i64), colour| {
+        for dx in -3..=3 {
+            for dy in -3..=3 {
+                c.set(px + dx, py + dy, colour);
+            }
+        }
+    };
+    for p in &seq.precursors {
+        let colour = if p.origin <= 2.0 * spacing {
+            [0, 0, 0]
+        } else {
+            [160, 160, 160]
+        };
+        dot(&mut c, map(p.drive_ratio, p.length), colour);
+    }
+    if let Some(r) = seq.first_full_ratio {
+        let (px, py) = map(r, length);
+        c.line((px - 6, py - 6), (px + 6, py + 6), [220, 0, 0]);
+        c.line((px - 6, py + 6), (px + 6, py - 6), [220, 0, 0]);
+    }
+    c
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn precursors_are_drawn_at_their_load_and_length() {
+        use crate::precursors::Precursor;
+        let seq = PrecursorSequence {
+            precursors: vec![
+                Precursor {
+                    drive_ratio: 0.1,
+                    length: 0.03,
+                    origin: 0.0,
+                },
+                Precursor {
+                    drive_ratio: 0.15,
+                    length: 0.06,
+                    origin: 0.05,
+                },
+            ],
+            first_full_ratio: Some(0.2),
+        };
+        let c = precursor_plot(&seq, 0.14, 0.0025);
+        let map = mapper((0.0, 0.21), (0.0, 0.14));
+        let (x, y) = map(0.1, 0.03);
+        assert_eq!(c.get(x as usize, y as usize), [0, 0, 0]);
+        let (x, y) = map(0.15, 0.06);
+        assert_eq!(c.get(x as usize, y as usize), [160, 160, 160]);
+        let (x, y) = map(0.2, 0.14);
+        assert_eq!(c.get(x as usize, y as usize), [220, 0, 0]);
+        // Negative control: nothing where no precursor is.
+        let (x, y) = map(0.05, 0.1);
+        assert_eq!(c.get(x as usize, y as usize), [255, 255, 255]);
+    }
 
     #[test]
     fn a_front_appears_where_it_should_in_the_spacetime_png() {

@@ -81,6 +81,7 @@ fn run_default_scene_briefly_writes_an_mcap_file() {
         "run_spacetime.png",
         "run_loading.png",
         "run_front_speed.png",
+        "run_precursors.png",
     ] {
         assert!(dir.join(name).exists(), "{name}");
     }

@@ -72,6 +72,14 @@ fn every_channel_reads_back_as_the_engine_state() {
     assert_eq!(g.ruptures, snap.total_ruptures());
     assert_eq!(g.friction_force, snap.total_friction());
     assert!(g.ruptures > 0);
+    // The load at a time is that of the nearest global sample.
+    let mid = &run.global[40];
+    assert_eq!(run.drive_ratio_at(mid.time), mid.drive_ratio);
+    let after = &run.global[41];
+    let near_after = mid.time + 0.6 * (after.time - mid.time);
+    assert_eq!(run.drive_ratio_at(near_after), after.drive_ratio);
+    assert_eq!(run.drive_ratio_at(-1.0), run.global[0].drive_ratio);
+    assert_eq!(run.drive_ratio_at(1e9), g.drive_ratio);
 }
 
 #[test]

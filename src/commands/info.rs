@@ -30,13 +30,7 @@ pub fn info(path: &Path, quiet_gap: f64) -> anyhow::Result<ExitCode> {
          ruptures less than {quiet_gap:e} s apart are one event)",
         events.len()
     );
-    // F/F_N at the start of each event, from the global series.
-    let ratio_at = |t: f64| {
-        run.global
-            .iter()
-            .min_by(|a, b| (a.time - t).abs().total_cmp(&(b.time - t).abs()))
-            .map_or(f64::NAN, |g| g.drive_ratio)
-    };
+    let ratio_at = |t: f64| run.drive_ratio_at(t);
     println!("  #    start (s)     end (s)       kind     length (m)  from (m)    slip (m)    F/F_N   front           v_front (m/s) min..max");
     let mut pairs = Vec::new();
     for (n, e) in events.iter().enumerate() {

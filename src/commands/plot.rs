@@ -1,5 +1,6 @@
 use slipfront::output::reader::RunFile;
-use slipfront::plot::{front_speed_plot, loading_curve, spacetime_map};
+use slipfront::plot::{front_speed_plot, loading_curve, precursor_plot, spacetime_map};
+use slipfront::precursors::PrecursorSequence;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
@@ -19,10 +20,22 @@ pub fn plot(
     let events = series.events_separated_by(quiet_gap);
     let time: Vec<f64> = run.global.iter().map(|m| m.time).collect();
     let ratio: Vec<f64> = run.global.iter().map(|m| m.drive_ratio).collect();
+    let ratio_at = |t: f64| {
+        let k = time
+            .partition_point(|&x| x < t)
+            .min(time.len().saturating_sub(1));
+        ratio.get(k).copied().unwrap_or(f64::NAN)
+    };
+    let precursors = PrecursorSequence::from_events(&events, series.spacing, |e| ratio_at(e.start));
+    let length = (series.nx().max(2) - 1) as f64 * series.spacing;
     for (name, canvas) in [
         ("spacetime", spacetime_map(&series)),
         ("loading", loading_curve(&time, &ratio, &events)),
         ("front_speed", front_speed_plot(&series, &events)),
+        (
+            "precursors",
+            precursor_plot(&precursors, length, series.spacing),
+        ),
     ] {
         let file = dir.join(format!("{stem}_{name}.png"));
         canvas.save(&file)?;

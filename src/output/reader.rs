@@ -75,6 +75,17 @@ impl RunFile {
         Ok(run)
     }
 
+    /// F/F_N of the global sample nearest to time `t` (NaN without one).
+    pub fn drive_ratio_at(&self, t: f64) -> f64 {
+        let k = self.global.partition_point(|g| g.time < t);
+        [k.checked_sub(1), Some(k)]
+            .into_iter()
+            .flatten()
+            .filter_map(|i| self.global.get(i))
+            .min_by(|a, b| (a.time - t).abs().total_cmp(&(b.time - t).abs()))
+            .map_or(f64::NAN, |g| g.drive_ratio)
+    }
+
     /// Lattice spacing from the metadata (m).
     pub fn spacing(&self) -> f64 {
         self.metadata
