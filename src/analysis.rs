@@ -171,17 +171,24 @@ impl InterfaceSeries {
             .collect()
     }
 
-    /// Peak slip speed of each ruptured block during the event, (x, v).
-    pub fn slip_speed_behind_tip(&self, e: &Event) -> Vec<(f64, f64)> {
-        e.rupture_time
-            .iter()
-            .enumerate()
-            .filter(|(_, t)| t.is_some())
-            .map(|(ix, _)| {
-                let peak = (e.first..=e.last)
-                    .map(|k| self.slip_speed[k][ix].abs())
-                    .fold(0.0, f64::max);
-                (ix as f64 * self.spacing, peak)
+    /// Slip speed just behind the tip, on the same windows as
+    /// [`Self::front_speed`]: the peak slip speed of block ix while the
+    /// front runs on from it to block ix + w, at the window's centre
+    /// (x, v). Later motion of the block (a second front, waves from the
+    /// edges) is not the slip this front caused, so it is left out.
+    pub fn slip_speed_behind_tip(&self, e: &Event, w: usize) -> Vec<(f64, f64)> {
+        let t = &e.rupture_time;
+        (0..t.len().saturating_sub(w))
+            .filter_map(|ix| match (t[ix], t[ix + w]) {
+                (Some(a), Some(b)) => {
+                    let (from, to) = (a.min(b), a.max(b));
+                    let peak = (e.first..=e.last)
+                        .filter(|&k| self.time[k] >= from && self.time[k] <= to)
+                        .map(|k| self.slip_speed[k][ix].abs())
+                        .fold(0.0, f64::max);
+                    Some(((ix as f64 + 0.5 * w as f64) * self.spacing, peak))
+                }
+                _ => None,
             })
             .collect()
     }
@@ -263,6 +270,39 @@ pub fn slip_front_relation(pairs: &[(f64, f64)]) -> Option<(f64, f64)> {
     let vf: f64 = p.iter().map(|(f, _)| (f - mf).powi(2)).sum();
     let vs: f64 = p.iter().map(|(_, s)| (s - ms).powi(2)).sum();
     Some((alpha, cov / (vf * vs).sqrt().max(1e-300)))
+}
+
+/// (front speed, slip speed) pairs grouped by decade of front speed:
+/// (decade floor, count, median front speed, median slip speed), slowest
+/// first. Medians show the trend through the scatter of single crossings.
+pub fn slip_front_by_decade(pairs: &[(f64, f64)]) -> Vec<(f64, usize, f64, f64)> {
+    let mut groups: std::collections::BTreeMap<i32, Vec<(f64, f64)>> = Default::default();
+    for &(f, s) in pairs {
+        if f.is_finite() && f > 0.0 && s > 0.0 {
+            groups
+                .entry(f.log10().floor() as i32)
+                .or_default()
+                .push((f, s));
+        }
+    }
+    let median = |mut v: Vec<f64>| {
+        v.sort_by(|a, b| a.total_cmp(b));
+        let n = v.len();
+        if n % 2 == 1 {
+            v[n / 2]
+        } else {
+            0.5 * (v[n / 2 - 1] + v[n / 2])
+        }
+    };
+    groups
+        .into_iter()
+        .map(|(d, g)| {
+            let n = g.len();
+            let f = median(g.iter().map(|p| p.0).collect());
+            let s = median(g.iter().map(|p| p.1).collect());
+            (10f64.powi(d), n, f, s)
+        })
+        .collect()
 }
 
 /// Gini coefficient of non-negative values: Σ|x_i − x_j| / (2 n² mean).
@@ -392,11 +432,19 @@ mod tests {
 
     #[test]
     fn slip_speed_behind_the_tip_is_the_imposed_one() {
-        let s = synthetic(1000.0, 0.7);
+        let mut s = synthetic(1000.0, 0.7);
+        // Block 5 moves fast long after the front passed: not its front slip.
+        let late = s.time.iter().position(|&t| t >= 250e-6).unwrap();
+        s.slip_speed[late][5] = 9.0;
         let e = &s.events()[1];
-        for (_, v) in s.slip_speed_behind_tip(e) {
-            assert!((v - 0.7).abs() < 1e-12);
+        let v = s.slip_speed_behind_tip(e, 3);
+        assert_eq!(v.len(), 47);
+        for (_, v) in &v {
+            assert!((v - 0.7).abs() < 1e-12, "{v}");
         }
+        // Pairs with the front speeds at the same positions.
+        let f = s.front_speed(e, 3);
+        assert!(f.iter().zip(&v).all(|(a, b)| a.0 == b.0));
     }
 
     #[test]
@@ -442,6 +490,21 @@ mod tests {
             rupture_time: times,
         };
         assert_eq!(s.front_kind(&e, 3), FrontKind::FastSlowFast);
+    }
+
+    #[test]
+    fn slip_front_pairs_group_by_decade_with_medians() {
+        let pairs = [
+            (15.0, 0.015),
+            (20.0, 0.02),
+            (50.0, 0.9),
+            (1500.0, 1.5),
+            (f64::INFINITY, 3.0),
+        ];
+        let g = slip_front_by_decade(&pairs);
+        assert_eq!(g.len(), 2);
+        assert_eq!((g[0].0, g[0].1, g[0].2, g[0].3), (10.0, 3, 20.0, 0.02));
+        assert_eq!((g[1].0, g[1].1, g[1].2, g[1].3), (1000.0, 1, 1500.0, 1.5));
     }
 
     #[test]

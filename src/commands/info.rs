@@ -43,15 +43,9 @@ pub fn info(path: &Path, quiet_gap: f64) -> anyhow::Result<ExitCode> {
         let (lo, hi) = finite
             .iter()
             .fold((f64::MAX, f64::MIN), |a, &v| (a.0.min(v), a.1.max(v)));
-        let peak_slip: Vec<(f64, f64)> = series.slip_speed_behind_tip(e);
-        for (x, v) in &speeds {
-            if let Some((_, s)) = peak_slip
-                .iter()
-                .find(|(px, _)| (px - x).abs() <= 1.5 * series.spacing)
-            {
-                pairs.push((*v, *s));
-            }
-        }
+        // Same windows, so the pairs line up one to one.
+        let slip = series.slip_speed_behind_tip(e, 3);
+        pairs.extend(speeds.iter().zip(&slip).map(|(f, s)| (f.1, s.1)));
         println!(
             "  {n:<4} {:<13.6e} {:<13.6e} {:<8} {:<11.4e} {:<11.4e} {:<11.4e} {:<7.4} {:<15} {}",
             e.start,
@@ -78,6 +72,13 @@ pub fn info(path: &Path, quiet_gap: f64) -> anyhow::Result<ExitCode> {
             "slip speed vs front speed: v_slip = {alpha:.3e} v_front (log-log correlation {r:.3}, {} points)",
             pairs.len()
         );
+        println!("  front speed decade   count   median v_front   median v_slip   ratio");
+        for (decade, n, f, s) in slipfront::analysis::slip_front_by_decade(&pairs) {
+            println!(
+                "  {decade:<9.0e} m/s      {n:<7} {f:<16.3e} {s:<15.3e} {:.2e}",
+                s / f
+            );
+        }
     }
     Ok(ExitCode::SUCCESS)
 }
