@@ -110,6 +110,9 @@ fn bad_input_exits_with_a_clear_message() {
     assert!(String::from_utf8_lossy(&out.stderr).contains("stability limit"));
     let out = slipfront(&["run", "missing.toml"]);
     assert!(String::from_utf8_lossy(&out.stderr).contains("missing.toml"));
+    let out = slipfront(&["info", "--quiet-gap=-1", "run.mcap"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--quiet-gap = -1"));
 }
 
 #[test]
