@@ -67,10 +67,10 @@ pub fn info(path: &Path, quiet_gap: f64) -> anyhow::Result<ExitCode> {
         &PrecursorSequence::from_events(&events, series.spacing, |e| ratio_at(e.start)),
         series.spacing,
     );
-    if let Some((alpha, r)) = slipfront::analysis::slip_front_relation(&pairs) {
+    if let Some(fit) = slipfront::analysis::slip_front_relation(&pairs) {
         println!(
-            "slip speed vs front speed: v_slip = {alpha:.3e} v_front (log-log correlation {r:.3}, {} points)",
-            pairs.len()
+            "slip speed vs front speed: v_slip = {:.3e} v_front; fitted v_slip ∝ v_front^{:.2} (1: proportional), log-log correlation {:.3}, {} crossings",
+            fit.alpha, fit.exponent, fit.correlation, fit.points
         );
         println!("  front speed decade   count   median v_front   median v_slip   ratio");
         for (decade, n, f, s) in slipfront::analysis::slip_front_by_decade(&pairs) {
