@@ -187,7 +187,7 @@ pub fn precursor_plot(seq: &PrecursorSequence, length: f64, spacing: f64) -> Can
         }
     };
     for p in &seq.precursors {
-        let colour = if p.origin <= 2.0 * spacing {
+        let colour = if p.at_trailing_edge(spacing) {
             [0, 0, 0]
         } else {
             [160, 160, 160]

@@ -14,6 +14,15 @@ pub struct Precursor {
     pub origin: f64,
 }
 
+impl Precursor {
+    /// Started at the trailing edge (within two blocks of it), where the
+    /// driving spring loads the interface; others start inside, at an
+    /// earlier arrest point.
+    pub fn at_trailing_edge(&self, spacing: f64) -> bool {
+        self.origin <= 2.0 * spacing
+    }
+}
+
 /// The precursors of a run and the load of the first full event.
 #[derive(Debug, Clone, PartialEq)]
 pub struct PrecursorSequence {
@@ -52,13 +61,12 @@ impl PrecursorSequence {
             .collect()
     }
 
-    /// Extended precursors that started at the trailing edge (within two
-    /// blocks of it), where the driving spring loads the interface: the
-    /// published sequence. Others nucleate inside, at an earlier arrest.
+    /// Extended precursors that started at the trailing edge: the
+    /// published sequence.
     pub fn from_trailing_edge(&self, spacing: f64) -> Vec<Precursor> {
         self.extended(spacing)
             .into_iter()
-            .filter(|p| p.origin <= 2.0 * spacing)
+            .filter(|p| p.at_trailing_edge(spacing))
             .collect()
     }
 

@@ -92,7 +92,7 @@ fn print_precursors(seq: &PrecursorSequence, spacing: f64) {
                     "{:.1} mm at {:.3}{}",
                     p.length * 1e3,
                     p.drive_ratio,
-                    if p.origin > 2.0 * spacing {
+                    if !p.at_trailing_edge(spacing) {
                         format!(" (from x = {:.1} mm)", p.origin * 1e3)
                     } else {
                         String::new()
