@@ -75,14 +75,9 @@ impl InterfaceSeries {
         self.pinned[k].iter().any(|&p| p < RUPTURED_BELOW)
     }
 
-    /// Events: maximal runs of samples in which at least one block is
-    /// ruptured.
-    pub fn events(&self) -> Vec<Event> {
-        self.events_separated_by(0.0)
-    }
-
-    /// Events as in [`Self::events`], but runs of ruptured samples less
-    /// than `quiet_gap` seconds apart count as one event. With short slip
+    /// Events: runs of samples in which at least one block is ruptured,
+    /// runs less than `quiet_gap` seconds apart counting as one event
+    /// (0: every maximal run is its own event). With short slip
     /// times every block of a slow front can re-pin before the next one
     /// breaks, which would otherwise split one front into many events.
     pub fn events_separated_by(&self, quiet_gap: f64) -> Vec<Event> {
@@ -386,7 +381,7 @@ mod tests {
     #[test]
     fn finds_a_precursor_and_a_full_event() {
         let s = synthetic(1000.0, 0.5);
-        let e = s.events();
+        let e = s.events_separated_by(0.0);
         assert_eq!(e.len(), 2, "{e:?}");
         assert!(!e[0].full);
         assert!((e[0].rupture_length - 10e-3).abs() < 1e-12);
@@ -414,13 +409,13 @@ mod tests {
         for p in &mut s.pinned {
             p[25] = 1.0;
         }
-        let e = &s.events()[1];
+        let e = &s.events_separated_by(0.0)[1];
         assert!(e.full && e.rupture_time[25].is_none());
         // Negative control: a rupture that stops short of the leading edge.
         for p in &mut s.pinned {
             p[49] = 1.0;
         }
-        assert!(!s.events()[1].full);
+        assert!(!s.events_separated_by(0.0)[1].full);
     }
 
     #[test]
@@ -438,7 +433,7 @@ mod tests {
     fn front_tip_and_speed_recover_the_imposed_speed() {
         for c in [1000.0, 100.0] {
             let s = synthetic(c, 0.5);
-            let e = &s.events()[1];
+            let e = &s.events_separated_by(0.0)[1];
             let tip = s.front_tip(e);
             // The tip reaches x at 100 µs + x/c.
             let (t, x) = tip[30];
@@ -460,7 +455,7 @@ mod tests {
         for k in late..s.time.len() {
             s.slip[k][5] += 1e-3;
         }
-        let e = &s.events()[1];
+        let e = &s.events_separated_by(0.0)[1];
         let v = s.slip_speed_behind_tip(e, 3);
         assert_eq!(v.len(), 47);
         for (_, v) in &v {
@@ -474,9 +469,15 @@ mod tests {
     #[test]
     fn front_kinds_and_the_slip_front_relation() {
         let s = synthetic(1000.0, 0.5);
-        assert_eq!(s.front_kind(&s.events()[1], 5), FrontKind::Fast);
+        assert_eq!(
+            s.front_kind(&s.events_separated_by(0.0)[1], 5),
+            FrontKind::Fast
+        );
         let slow = synthetic(10.0, 0.5);
-        assert_eq!(slow.front_kind(&slow.events()[1], 5), FrontKind::Slow);
+        assert_eq!(
+            slow.front_kind(&slow.events_separated_by(0.0)[1], 5),
+            FrontKind::Slow
+        );
         // v_slip = 1e-3 v_front exactly.
         let pairs: Vec<(f64, f64)> = [1.0, 10.0, 100.0, 1000.0]
             .iter()
@@ -557,7 +558,7 @@ mod tests {
         assert!((gini(&x) - pairwise).abs() < 1e-12);
         // In the synthetic event every block slips evenly while it slips.
         let s = synthetic(1000.0, 0.5);
-        let e = &s.events()[1];
+        let e = &s.events_separated_by(0.0)[1];
         let g = s.slip_gini(e);
         assert!(
             g[0] < g[49],
