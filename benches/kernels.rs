@@ -3,7 +3,7 @@
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use slipfront::cpu::bulk_forces::{bond_consts, bulk_forces, Blocks};
-use slipfront::cpu::junctions::{junctions, JunctionSlots, PINNED};
+use slipfront::cpu::junctions::{junctions, JunctionSlots, JunctionSpring, PINNED};
 use slipfront::cpu::verlet::verlet;
 use slipfront::lattice::block_flags;
 use slipfront::scenario::{Scenario, DEFAULT_SCENARIO};
@@ -54,7 +54,13 @@ fn kernels(c: &mut Criterion) {
         b.iter(|| bulk_forces(&consts, &bonds, &p, 0.0, blocks, black_box(&mut force), 0))
     });
     let ns = consts.junction_count;
-    let mut spring = vec![[0.0, 1e5]; m.nx * ns];
+    let mut spring = vec![
+        JunctionSpring {
+            anchor: 0.0,
+            stiffness: 1e5
+        };
+        m.nx * ns
+    ];
     let mut state = vec![[PINNED, 0u32]; m.nx * ns];
     g.throughput(Throughput::Elements((m.nx * ns) as u64));
     g.bench_function("junctions", |b| {

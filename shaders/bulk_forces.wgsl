@@ -47,7 +47,8 @@ fn bulk_forces(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workg
         let r0 = vec2<f32>(f32(d.x) * c.spacing, f32(d.y) * c.spacing);
         let rest = select(c.spacing, SQRT_2 * c.spacing, diagonal);
         let kb = select(c.k, 0.5 * c.k, diagonal);
-        let du = disp[j] - ui;
+        let uj = disp[j];
+        let du = vec2<f32>(ds_diff(uj.x, ui.x), ds_diff(uj.z, ui.z));
         let r = r0 + du;
         let len = sqrt(r.x * r.x + r.y * r.y);
         // Elongation without cancellation: (|r|² − l²)/(|r| + l).
@@ -68,7 +69,7 @@ fn bulk_forces(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workg
     }
     let fl = flags[i];
     if USE_FOUNDATION && (fl & FLAG_INTERFACE) != 0u {
-        f.y = f.y + foundation_normal(ui.y);
+        f.y = f.y + foundation_normal(ui.z.x);
     }
     if USE_TOP_LOADS && (fl & FLAG_TOP) != 0u {
         let share = top_share(u32(ix));
@@ -76,7 +77,8 @@ fn bulk_forces(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workg
         f.x = f.x + sp.top_tangential_total * share;
     }
     if USE_SIDE_SPRING && (fl & FLAG_DRIVEN) != 0u && sp.preparing == 0u {
-        f.x = f.x + c.drive_stiffness * (sp.drive_offset - (ui.x - sp.drive_origin));
+        let drive_target = vec2<f32>(sp.drive_target_hi, sp.drive_target_lo);
+        f.x = f.x + c.drive_stiffness * ds_diff(drive_target, ui.x);
     }
     if USE_RELAXATION {
         f = vec2<f32>(f.x - sp.relax_eta * vi.x, f.y - sp.relax_eta * vi.y);

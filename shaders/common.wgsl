@@ -24,20 +24,38 @@ struct Consts {
     top_share_edge: f32,
     stiffness_normal_load: u32,
     n_blocks: u32,
-    _pad0: u32,
+    // Runtime 1.0: see double_single.wgsl.
+    one: f32,
     _pad1: u32,
 }
 
 // The loads of one step: src/step_params.rs computes them on the host.
+// drive_target_hi/lo: where the side spring's far end is (drive origin +
+// V t), a double-single coordinate. No step count: junctions count their
+// own slip steps down, so nothing on the device wraps in long runs.
 struct StepLoads {
-    step: u32,
     preparing: u32,
     normal_total: f32,
     top_tangential_total: f32,
     relax_eta: f32,
-    drive_offset: f32,
     top_velocity: f32,
-    drive_origin: f32,
+    drive_target_hi: f32,
+    drive_target_lo: f32,
+    _pad: u32,
+}
+
+// Per block: (hi, lo) of u_x and of u_z.
+struct Disp {
+    x: vec2<f32>,
+    z: vec2<f32>,
+}
+
+// Per junction: the anchor as a double-single coordinate, and the
+// stiffness taken when it pinned (src/cpu/junctions.rs JunctionSpring).
+struct JunctionSpring {
+    anchor_hi: f32,
+    anchor_lo: f32,
+    stiffness: f32,
 }
 
 const PINNED: u32 = 0xffffffffu;
@@ -50,15 +68,15 @@ const FLAG_PRESCRIBED_X: u32 = 32u;
 const WORKGROUP: u32 = 64u;
 
 @group(0) @binding(0) var<uniform> c: Consts;
-@group(0) @binding(1) var<storage, read_write> disp: array<vec2<f32>>;
+@group(0) @binding(1) var<storage, read_write> disp: array<Disp>;
 @group(0) @binding(2) var<storage, read_write> vel: array<vec2<f32>>;
 @group(0) @binding(3) var<storage, read_write> force: array<vec2<f32>>;
 @group(0) @binding(4) var<storage, read_write> flags: array<u32>;
 // (friction along x, normal force) per interface block.
 @group(0) @binding(5) var<storage, read_write> contact: array<vec2<f32>>;
-// (anchor, stiffness) per junction, index ix * Ns + j.
-@group(0) @binding(6) var<storage, read_write> junction_spring: array<vec2<f32>>;
-// (re-pin step or PINNED, rupture count) per junction.
+// Index ix * Ns + j.
+@group(0) @binding(6) var<storage, read_write> junction_spring: array<JunctionSpring>;
+// (slip steps left or PINNED, rupture count) per junction.
 @group(0) @binding(7) var<storage, read_write> junction_state: array<vec2<u32>>;
 @group(0) @binding(8) var<storage, read_write> slide_dir: array<i32>;
 // A storage binding, not a uniform: lavapipe specialises shaders on uniform

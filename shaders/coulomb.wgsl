@@ -10,7 +10,7 @@ fn coulomb(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroup
     let u = disp[ix];
     let v = vel[ix];
     let other = force[ix].x;
-    let normal = foundation_normal(u.y);
+    let normal = foundation_normal(u.z.x);
     var dir = slide_dir[ix];
     if dir != 0 && v.x * f32(dir) <= 0.0 {
         dir = 0;

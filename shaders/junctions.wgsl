@@ -1,5 +1,6 @@
 // Phase 2 (junction friction): the Ns micro-junctions of each interface
 // block pin, break at mu_s f_N, slip at mu_d f_N for a drawn time and re-pin.
+// A slipping junction counts its slip steps down (no global step count).
 // CPU twin: src/cpu/junctions.rs. One thread per interface block.
 
 fn junction_stiffness(f_n: f32) -> f32 {
@@ -17,32 +18,36 @@ fn junctions(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgro
     }
     let u = disp[ix];
     let v = vel[ix];
-    let normal = foundation_normal(u.y);
+    let normal = foundation_normal(u.z.x);
     let f_n = normal / f32(c.junction_count);
     let threshold = c.mu_s * f_n;
     let sliding = -c.mu_d * f_n * sign(v.x);
-    let step = sp.step;
     var total = 0.0;
     for (var j = 0u; j < c.junction_count; j++) {
         let idx = ix * c.junction_count + j;
         var spring = junction_spring[idx];
         var state = junction_state[idx];
-        if state.x != PINNED && step >= state.x {
-            spring = vec2<f32>(u.x, junction_stiffness(f_n));
-            state.x = PINNED;
+        if state.x != PINNED {
+            state.x = state.x - 1u;
+            if state.x == 0u {
+                spring = JunctionSpring(u.x.x, u.x.y, junction_stiffness(f_n));
+                state.x = PINNED;
+            }
         }
         var f = sliding;
         if state.x == PINNED {
             if sp.preparing != 0u {
                 // While the normal load is applied, attachment is continuous.
-                spring.y = junction_stiffness(f_n);
+                spring.stiffness = junction_stiffness(f_n);
             }
-            f = -spring.y * (u.x - spring.x);
+            let anchor = vec2<f32>(spring.anchor_hi, spring.anchor_lo);
+            f = -spring.stiffness * ds_diff(u.x, anchor);
             if sp.preparing == 0u && abs(f) > threshold {
                 let count = state.y + 1u;
                 state.y = count;
                 let n = slip_steps(c.seed, ix, j, count, c.slip_mean_steps, c.slip_std_steps);
-                state.x = step + n;
+                // PINNED - 1 at most: a countdown never reads as pinned.
+                state.x = min(n, PINNED - 1u);
                 f = sliding;
             }
         }

@@ -1,5 +1,6 @@
 // Phase 3: the leapfrog update v += dt F/m, u += dt v, with constraints and
-// prescribed motion. CPU twin: src/cpu/verlet.rs.
+// prescribed motion. CPU twin: src/cpu/verlet.rs. u is double-single, so
+// the increment dt v keeps its low bits.
 
 override USE_FRICTION: bool = true;
 
@@ -29,5 +30,5 @@ fn verlet(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups
     }
     vel[i] = vec2<f32>(vx, vz);
     let u = disp[i];
-    disp[i] = vec2<f32>(u.x + c.dt * vx, u.y + c.dt * vz);
+    disp[i] = Disp(ds_add(u.x, c.dt * vx), ds_add(u.z, c.dt * vz));
 }

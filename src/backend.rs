@@ -17,8 +17,15 @@ pub enum Backend {
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
 pub enum Precision {
+    /// f64 throughout (CPU only).
     F64,
+    /// Mixed: f32 forces and velocities, double-single (f32 + f32)
+    /// displacements, junction anchors and drive position. The GPU's mode.
     F32,
+    /// Plain f32 displacements (CPU only): loses creep below one f32 ulp of
+    /// u and changes long runs. Kept as the negative control of the
+    /// precision tests.
+    F32Plain,
 }
 
 /// Builds the CPU engine in the requested precision.
@@ -30,6 +37,7 @@ pub fn cpu_engine(
     Ok(match precision {
         Precision::F64 => Box::new(CpuEngine::<f64>::new(model, threads)?),
         Precision::F32 => Box::new(CpuEngine::<f32>::new(model, threads)?),
+        Precision::F32Plain => Box::new(CpuEngine::<f32, f32>::new(model, threads)?),
     })
 }
 
@@ -43,9 +51,10 @@ pub fn make_engine(
     match backend {
         Backend::Cpu => cpu_engine(model, precision, threads),
         Backend::Gpu => {
-            if precision == Precision::F64 {
+            if precision != Precision::F32 {
                 return Err(EngineError::Gpu(
-                    "the GPU engine computes in f32: use --precision f32 (or --backend cpu for f64)"
+                    "the GPU engine computes in mixed f32: use --precision f32 (or --backend cpu \
+                     for f64 and f32-plain)"
                         .into(),
                 ));
             }

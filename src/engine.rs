@@ -1,7 +1,9 @@
 //! What every engine offers, the state it reports, and the stepping driver
 //! shared by all of them (phase change at the start of driving).
 
+use crate::cpu::JunctionSpring;
 use crate::model::Model;
+use crate::real::{Coordinate, Real};
 
 /// Full engine state, converted to f64 for analysis and output.
 #[derive(Debug, Clone, Default, PartialEq)]
@@ -19,7 +21,8 @@ pub struct Snapshot {
     /// Junction arrays, index `ix * Ns + j`.
     pub anchor: Vec<f64>,
     pub junction_stiffness: Vec<f64>,
-    pub repin_step: Vec<u32>,
+    /// Steps each junction has left to slip, or `PINNED`.
+    pub slip_steps_left: Vec<u32>,
     pub ruptures: Vec<u32>,
     /// Amontons–Coulomb sliding direction per interface block.
     pub slide_dir: Vec<i32>,
@@ -29,13 +32,13 @@ impl Snapshot {
     /// Converts engine buffers (the layout shared by the CPU twins and the
     /// WGSL kernels) to a snapshot.
     #[allow(clippy::too_many_arguments)]
-    pub fn from_buffers<T: crate::real::Real>(
+    pub fn from_buffers<T: Real, C: Coordinate<T>>(
         model: &Model,
         step: u64,
-        disp: &[[T; 2]],
+        disp: &[[C; 2]],
         vel: &[[T; 2]],
         contact: &[[T; 2]],
-        junction_spring: &[[T; 2]],
+        junction_spring: &[JunctionSpring<C, T>],
         junction_state: &[[u32; 2]],
         slide_dir: &[i32],
     ) -> Snapshot {
@@ -44,13 +47,13 @@ impl Snapshot {
         Snapshot {
             step,
             time: model.time_of_step(step),
-            disp: f2(disp),
+            disp: disp.iter().map(|u| u.map(C::as_f64)).collect(),
             vel: f2(vel),
             friction: col(contact, 0),
             normal: col(contact, 1),
-            anchor: col(junction_spring, 0),
-            junction_stiffness: col(junction_spring, 1),
-            repin_step: junction_state.iter().map(|s| s[0]).collect(),
+            anchor: junction_spring.iter().map(|s| s.anchor.as_f64()).collect(),
+            junction_stiffness: junction_spring.iter().map(|s| s.stiffness.as_f64()).collect(),
+            slip_steps_left: junction_state.iter().map(|s| s[0]).collect(),
             ruptures: junction_state.iter().map(|s| s[1]).collect(),
             slide_dir: slide_dir.to_vec(),
         }
@@ -58,15 +61,15 @@ impl Snapshot {
 
     /// Fraction of pinned junctions on each interface block.
     pub fn pinned_fraction(&self, nx: usize) -> Vec<f64> {
-        if self.repin_step.is_empty() {
+        if self.slip_steps_left.is_empty() {
             return self
                 .slide_dir
                 .iter()
                 .map(|&d| (d == 0) as u8 as f64)
                 .collect();
         }
-        let ns = self.repin_step.len() / nx;
-        self.repin_step
+        let ns = self.slip_steps_left.len() / nx;
+        self.slip_steps_left
             .chunks(ns)
             .map(|c| c.iter().filter(|&&r| r == crate::cpu::PINNED).count() as f64 / ns as f64)
             .collect()

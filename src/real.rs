@@ -1,4 +1,15 @@
-//! The floating-point type an engine computes in (f64, or f32 as on the GPU).
+//! The number types an engine computes in: `Real` for forces and velocities
+//! (f64, or f32 as on the GPU), and `Coordinate` for what is accumulated over
+//! a whole run (displacements, junction anchors, the drive position).
+//!
+//! Why two: a block creeping at the drive speed moves v·dt ≈ 1e-10 m a step,
+//! below one f32 ulp of its displacement (≈ 1e-11 m at 1e-4 m, and far less
+//! for blocks deep in the stuck region), so a plain f32 displacement rounds
+//! creep away and changes when the interface fails. As in mixed-precision
+//! molecular dynamics (OpenMM's "mixed" mode), forces stay in f32 but each
+//! displacement is an unevaluated sum hi + lo of two f32 (`DoubleSingle`,
+//! ≈ 48 significant bits, every adapter has it), and every force reads a
+//! *difference* of two coordinates, rounded to f32 once.
 
 use num_traits::Float;
 
@@ -6,12 +17,16 @@ pub trait Real:
     Float + Send + Sync + Default + std::fmt::Debug + std::fmt::Display + bytemuck::Pod + 'static
 {
     const NAME: &'static str;
+    /// The coordinate type this precision uses by default: f64 itself, and
+    /// the double-single pair for f32 (mixed precision).
+    type Coord: Coordinate<Self>;
     fn from_f64(v: f64) -> Self;
     fn as_f64(self) -> f64;
 }
 
 impl Real for f64 {
     const NAME: &'static str = "f64";
+    type Coord = f64;
     #[inline]
     fn from_f64(v: f64) -> Self {
         v
@@ -24,6 +39,7 @@ impl Real for f64 {
 
 impl Real for f32 {
     const NAME: &'static str = "f32";
+    type Coord = DoubleSingle;
     #[inline]
     fn from_f64(v: f64) -> Self {
         v as f32
@@ -31,5 +47,180 @@ impl Real for f32 {
     #[inline]
     fn as_f64(self) -> f64 {
         self as f64
+    }
+}
+
+/// A run-long accumulated position in an engine computing in `T`.
+pub trait Coordinate<T: Real>:
+    Copy + Send + Sync + Default + std::fmt::Debug + PartialEq + 'static
+{
+    /// Name for logs: "f64", "f32" (plain) or "f32+f32" (double-single).
+    const NAME: &'static str;
+    /// Nearest representable coordinate.
+    fn from_f64(v: f64) -> Self;
+    /// Exact value (a double-single pair fits an f64 exactly).
+    fn as_f64(self) -> f64;
+    /// `self + d` for a small increment `d` (v·dt), keeping d's low bits.
+    fn add(self, d: T) -> Self;
+    /// `self − other`, rounded to `T` once.
+    fn diff(self, other: Self) -> T;
+    /// The value rounded to `T`.
+    fn value(self) -> T;
+}
+
+impl Coordinate<f64> for f64 {
+    const NAME: &'static str = "f64";
+    #[inline]
+    fn from_f64(v: f64) -> Self {
+        v
+    }
+    #[inline]
+    fn as_f64(self) -> f64 {
+        self
+    }
+    #[inline]
+    fn add(self, d: f64) -> Self {
+        self + d
+    }
+    #[inline]
+    fn diff(self, other: Self) -> f64 {
+        self - other
+    }
+    #[inline]
+    fn value(self) -> f64 {
+        self
+    }
+}
+
+/// Plain f32 coordinates: what the engines did before mixed precision.
+/// Kept on the CPU as the negative control of the long-run accuracy tests.
+impl Coordinate<f32> for f32 {
+    const NAME: &'static str = "f32";
+    #[inline]
+    fn from_f64(v: f64) -> Self {
+        v as f32
+    }
+    #[inline]
+    fn as_f64(self) -> f64 {
+        self as f64
+    }
+    #[inline]
+    fn add(self, d: f32) -> Self {
+        self + d
+    }
+    #[inline]
+    fn diff(self, other: Self) -> f32 {
+        self - other
+    }
+    #[inline]
+    fn value(self) -> f32 {
+        self
+    }
+}
+
+/// An unevaluated sum `hi + lo` of two f32 with |lo| ≤ ulp(hi)/2. Same
+/// layout as the WGSL `vec2<f32>` (hi, lo) of `shaders/double_single.wgsl`,
+/// whose `ds_add` and `ds_diff` are the twins of `add` and `diff` here,
+/// operation for operation.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct DoubleSingle {
+    pub hi: f32,
+    pub lo: f32,
+}
+
+impl DoubleSingle {
+    /// Knuth's two-sum of `hi + d`, then the error folded into `lo` and the
+    /// pair renormalised (fast two-sum). The GPU twin multiplies the
+    /// intermediate sums by a runtime 1.0 so that no compiler can
+    /// reassociate the error terms away; multiplying by 1.0 is exact, so
+    /// the results are the same bits.
+    #[inline]
+    pub fn add_f32(self, d: f32) -> Self {
+        let s = self.hi + d;
+        let b = s - self.hi;
+        let err = (self.hi - (s - b)) + (d - b);
+        let lo = self.lo + err;
+        let hi = s + lo;
+        DoubleSingle {
+            hi,
+            lo: lo - (hi - s),
+        }
+    }
+}
+
+impl Coordinate<f32> for DoubleSingle {
+    const NAME: &'static str = "f32+f32";
+    #[inline]
+    fn from_f64(v: f64) -> Self {
+        let hi = v as f32;
+        DoubleSingle {
+            hi,
+            lo: (v - hi as f64) as f32,
+        }
+    }
+    #[inline]
+    fn as_f64(self) -> f64 {
+        self.hi as f64 + self.lo as f64
+    }
+    #[inline]
+    fn add(self, d: f32) -> Self {
+        self.add_f32(d)
+    }
+    /// (hi − hi') + (lo − lo'): for nearby coordinates the first difference
+    /// is exact (Sterbenz), so the result carries T's full relative
+    /// precision of the *difference*, not of the coordinates.
+    #[inline]
+    fn diff(self, other: Self) -> f32 {
+        (self.hi - other.hi) + (self.lo - other.lo)
+    }
+    #[inline]
+    fn value(self) -> f32 {
+        self.hi
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn double_single_keeps_increments_below_one_f32_ulp() {
+        // 1e-4 m plus a million creep steps of 9e-11 m (the drive speed
+        // times dt): f32 loses them, the pair keeps them to ~1e-15 m.
+        let start = 1.0e-4;
+        let d = 9.0e-11f32;
+        let (mut plain, mut pair) = (start as f32, DoubleSingle::from_f64(start));
+        for _ in 0..1_000_000 {
+            plain = Coordinate::add(plain, d);
+            pair = pair.add(d);
+        }
+        let exact = start + 1.0e6 * d as f64;
+        assert!((pair.as_f64() - exact).abs() < 1e-14, "{pair:?}");
+        // The plain f32 sum is off by a large fraction of the 9e-5 m crept
+        // (the control: the test above could not pass with plain f32).
+        assert!((plain as f64 - exact).abs() > 1e-6, "{plain}");
+    }
+
+    #[test]
+    fn double_single_stays_normalised_and_differences_are_exact() {
+        let mut a = DoubleSingle::from_f64(0.1234567890123);
+        let mut b = DoubleSingle::from_f64(0.1234567890123);
+        for k in 0..10_000 {
+            let d = 1.0e-9 * ((k % 7) as f32 + 1.0);
+            a = a.add(d);
+            b = b.add(d * 0.5);
+            assert!(a.lo.abs() <= a.hi.abs() * f32::EPSILON);
+        }
+        // a − b = Σ d/2 over the loop, computed exactly in f64 below.
+        let expected: f64 = (0..10_000)
+            .map(|k| 0.5 * (1.0e-9 * ((k % 7) as f32 + 1.0)) as f64)
+            .sum();
+        let got = a.diff(b) as f64;
+        assert!((got - expected).abs() <= expected * 1e-6, "{got} {expected}");
+        assert_eq!(DoubleSingle::from_f64(0.3).as_f64(), {
+            let hi = 0.3f32;
+            hi as f64 + (0.3 - hi as f64) as f32 as f64
+        });
     }
 }

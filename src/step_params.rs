@@ -37,6 +37,10 @@ pub struct Consts<T> {
     pub drive_velocity: T,
     pub top_force_rate: T,
     pub top_prestress_force: T,
+    /// V and dt in f64: the drive position is a coordinate, kept exact (see
+    /// `crate::real::Coordinate`), whatever the engine computes in.
+    pub drive_velocity_exact: f64,
+    pub dt_exact: f64,
 }
 
 impl<T: Real> Consts<T> {
@@ -85,6 +89,8 @@ impl<T: Real> Consts<T> {
             top_prestress_force: c(m
                 .trigger
                 .map_or(0.0, |t| t.shear_prestress * m.normal_force)),
+            drive_velocity_exact: drive_velocity,
+            dt_exact: m.dt,
         }
     }
 
@@ -111,8 +117,9 @@ pub struct StepParams<T> {
     pub top_tangential_total: T,
     /// Absolute-velocity damping (kg/s).
     pub relax_eta: T,
-    /// Displacement the side spring's far end has been pulled, V·t (m).
-    pub drive_offset: T,
+    /// Displacement the side spring's far end has been pulled, V·t (m), in
+    /// f64: engines add it to the drive origin as a coordinate.
+    pub drive_offset: f64,
     /// Prescribed top-row velocity (m/s).
     pub top_velocity: T,
 }
@@ -140,7 +147,11 @@ pub fn step_params<T: Real>(c: &Consts<T>, step: u64) -> StepParams<T> {
         } else {
             T::zero()
         },
-        drive_offset: c.drive_velocity * drive_time,
+        drive_offset: if preparing {
+            0.0
+        } else {
+            c.drive_velocity_exact * ((step - c.prep_steps) as f64 * c.dt_exact)
+        },
         top_velocity: if preparing {
             T::zero()
         } else {

@@ -194,8 +194,8 @@ fn large_lattice_with_junctions_runs() {
 
 #[test]
 fn a_lattice_beyond_the_adapter_limits_is_refused_clearly() {
-    // 16385 × 16384 blocks: 2^31 + 2^17 bytes of displacements, more than
-    // any adapter binds in one storage buffer (2 GiB at most).
+    // 16385 × 16384 blocks: 2^32 + 2^18 bytes of double-single
+    // displacements, more than any adapter binds in one storage buffer.
     let l = 0.14 / 56.0;
     let m = model(&[
         "geometry.nx=16385",
@@ -207,6 +207,6 @@ fn a_lattice_beyond_the_adapter_limits_is_refused_clearly() {
         Ok(_) => panic!("a 2.1 GB buffer must be refused"),
         Err(e) => e.to_string(),
     };
-    assert!(err.contains("block state buffer needs"), "{err}");
+    assert!(err.contains("block displacement buffer needs"), "{err}");
     assert!(err.contains("smaller lattice"), "{err}");
 }

@@ -3,7 +3,7 @@
 //! so blocks are independent and the result does not depend on threading.
 
 use crate::lattice::{FLAG_DRIVEN, FLAG_INTERFACE, FLAG_TOP, STENCIL};
-use crate::real::Real;
+use crate::real::{Coordinate, Real};
 use crate::step_params::{Consts, StepParams};
 
 /// Per-bond constants in the engine's precision, built once.
@@ -30,22 +30,28 @@ pub fn bond_consts<T: Real>(c: &Consts<T>) -> [BondConsts<T>; 8] {
 }
 
 /// Read-only block state the force kernels see.
-#[derive(Clone, Copy)]
-pub struct Blocks<'a, T> {
-    pub disp: &'a [[T; 2]],
+pub struct Blocks<'a, T, C> {
+    pub disp: &'a [[C; 2]],
     pub vel: &'a [[T; 2]],
     pub flags: &'a [u32],
 }
 
-/// Force on block `i` from everything but friction.
+impl<T, C> Clone for Blocks<'_, T, C> {
+    fn clone(&self) -> Self {
+        *self
+    }
+}
+impl<T, C> Copy for Blocks<'_, T, C> {}
+
+/// Force on block `i` from everything but friction. `drive_target` is where
+/// the side spring's far end is (drive origin + V·t), as a coordinate.
 #[inline]
-#[allow(clippy::too_many_arguments)]
-pub fn bulk_force<T: Real>(
+pub fn bulk_force<T: Real, C: Coordinate<T>>(
     c: &Consts<T>,
     bonds: &[BondConsts<T>; 8],
     p: &StepParams<T>,
-    drive_origin: T,
-    b: Blocks<'_, T>,
+    drive_target: C,
+    b: Blocks<'_, T, C>,
     i: usize,
 ) -> [T; 2] {
     let (ix, iz) = ((i % c.nx) as i32, (i / c.nx) as i32);
@@ -60,7 +66,7 @@ pub fn bulk_force<T: Real>(
             continue;
         }
         let j = jz as usize * c.nx + jx as usize;
-        let du = [b.disp[j][0] - ui[0], b.disp[j][1] - ui[1]];
+        let du = [b.disp[j][0].diff(ui[0]), b.disp[j][1].diff(ui[1])];
         let r = [bond.r0[0] + du[0], bond.r0[1] + du[1]];
         let len = (r[0] * r[0] + r[1] * r[1]).sqrt();
         // Elongation without cancellation: (|r|² − l²)/(|r| + l).
@@ -85,7 +91,7 @@ pub fn bulk_force<T: Real>(
     }
     let flags = b.flags[i];
     if flags & FLAG_INTERFACE != 0 {
-        fz = fz + c.k_foundation * (-ui[1]).max(T::zero());
+        fz = fz + c.k_foundation * (-ui[1].value()).max(T::zero());
     }
     if flags & FLAG_TOP != 0 {
         let share = top_share(c, ix as usize);
@@ -93,7 +99,7 @@ pub fn bulk_force<T: Real>(
         fx = fx + p.top_tangential_total * share;
     }
     if flags & FLAG_DRIVEN != 0 && !p.preparing {
-        fx = fx + c.drive_stiffness * (p.drive_offset - (ui[0] - drive_origin));
+        fx = fx + c.drive_stiffness * drive_target.diff(ui[0]);
     }
     fx = fx - p.relax_eta * vi[0];
     fz = fz - p.relax_eta * vi[1];
@@ -118,16 +124,16 @@ pub fn top_share<T: Real>(c: &Consts<T>, ix: usize) -> T {
 /// Twin of the `bulk_forces` entry point: fills `force` for the blocks
 /// starting at `first`.
 #[allow(clippy::too_many_arguments)]
-pub fn bulk_forces<T: Real>(
+pub fn bulk_forces<T: Real, C: Coordinate<T>>(
     c: &Consts<T>,
     bonds: &[BondConsts<T>; 8],
     p: &StepParams<T>,
-    drive_origin: T,
-    b: Blocks<'_, T>,
+    drive_target: C,
+    b: Blocks<'_, T, C>,
     force: &mut [[T; 2]],
     first: usize,
 ) {
     for (k, f) in force.iter_mut().enumerate() {
-        *f = bulk_force(c, bonds, p, drive_origin, b, first + k);
+        *f = bulk_force(c, bonds, p, drive_target, b, first + k);
     }
 }

@@ -4,20 +4,20 @@
 //! μd·p against the sliding direction until the velocity changes sign.
 
 use super::junctions::foundation_normal;
-use crate::real::Real;
+use crate::real::{Coordinate, Real};
 use crate::step_params::{Consts, StepParams};
 
 /// Returns (friction along x, normal force p) and updates the sliding
 /// direction `dir` (0 stuck, ±1 sliding).
-pub fn coulomb<T: Real>(
+pub fn coulomb<T: Real, C: Coordinate<T>>(
     c: &Consts<T>,
     p: &StepParams<T>,
-    u: [T; 2],
+    u: [C; 2],
     v: [T; 2],
     other_force_x: T,
     dir: &mut i32,
 ) -> (T, T) {
-    let normal = foundation_normal(c, u[1]);
+    let normal = foundation_normal(c, u[1].value());
     if *dir != 0 && v[0] * T::from_f64(*dir as f64) <= T::zero() {
         *dir = 0;
     }

@@ -1,20 +1,31 @@
 //! CPU twin of `shaders/junctions.wgsl`: the Ns micro-junctions of one
 //! interface block pin, break at μs·f_N, slip for a drawn time at μd·f_N and
-//! re-pin with zero stretch.
+//! re-pin with zero stretch. A slipping junction counts down the steps left
+//! of its slip, so nothing here depends on the global step count (runs of
+//! any length, and fast-forward, never wrap it).
 
-use crate::real::Real;
+use crate::real::{Coordinate, Real};
 use crate::rng::slip_steps;
 use crate::step_params::{Consts, StepParams};
 
-/// `repin_step` value of a pinned junction.
+/// `slip_steps_left` value of a pinned junction.
 pub const PINNED: u32 = u32::MAX;
+
+/// A junction's spring: the anchor a_ij (a coordinate, like u) and the
+/// stiffness k_j taken when it pinned. Laid out as the WGSL `JunctionSpring`
+/// (anchor hi, anchor lo, stiffness) in mixed precision.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct JunctionSpring<C, T> {
+    pub anchor: C,
+    pub stiffness: T,
+}
 
 /// The junction arrays of one interface block (length Ns each), laid out
 /// as the GPU's `junction_spring` and `junction_state` buffers.
-pub struct JunctionSlots<'a, T> {
-    /// (anchor a_ij, stiffness k_j) per junction.
-    pub spring: &'a mut [[T; 2]],
-    /// (re-pin step or PINNED, rupture count) per junction.
+pub struct JunctionSlots<'a, T, C> {
+    pub spring: &'a mut [JunctionSpring<C, T>],
+    /// (slip steps left or PINNED, rupture count) per junction.
     pub state: &'a mut [[u32; 2]],
 }
 
@@ -38,19 +49,18 @@ pub fn velocity_sign<T: Real>(v: T) -> T {
 
 /// Advances the junctions of interface block `ix` by one step and returns
 /// (friction force on the block along x, normal force p).
-pub fn junctions<T: Real>(
+pub fn junctions<T: Real, C: Coordinate<T>>(
     c: &Consts<T>,
     p: &StepParams<T>,
     ix: usize,
-    u: [T; 2],
+    u: [C; 2],
     v: [T; 2],
-    slots: JunctionSlots<'_, T>,
+    slots: JunctionSlots<'_, T, C>,
 ) -> (T, T) {
-    let normal = foundation_normal(c, u[1]);
+    let normal = foundation_normal(c, u[1].value());
     let f_n = normal / T::from_f64(c.junction_count as f64);
     let threshold = c.mu_s * f_n;
     let sliding = -c.mu_d * f_n * velocity_sign(v[0]);
-    let step = p.step as u32;
     let mut total = T::zero();
     for (j, (spring, state)) in slots
         .spring
@@ -58,17 +68,23 @@ pub fn junctions<T: Real>(
         .zip(slots.state.iter_mut())
         .enumerate()
     {
-        if state[0] != PINNED && step >= state[0] {
-            *spring = [u[0], c.junction_stiffness(f_n)];
-            state[0] = PINNED;
+        if state[0] != PINNED {
+            state[0] -= 1;
+            if state[0] == 0 {
+                *spring = JunctionSpring {
+                    anchor: u[0],
+                    stiffness: c.junction_stiffness(f_n),
+                };
+                state[0] = PINNED;
+            }
         }
         let mut f = sliding;
         if state[0] == PINNED {
             if p.preparing {
                 // While the normal load is applied, attachment is continuous.
-                spring[1] = c.junction_stiffness(f_n);
+                spring.stiffness = c.junction_stiffness(f_n);
             }
-            f = -spring[1] * (u[0] - spring[0]);
+            f = -spring.stiffness * u[0].diff(spring.anchor);
             if !p.preparing && f.abs() > threshold {
                 let count = state[1].wrapping_add(1);
                 state[1] = count;
@@ -80,7 +96,8 @@ pub fn junctions<T: Real>(
                     c.slip_mean_steps,
                     c.slip_std_steps,
                 );
-                state[0] = step.saturating_add(n);
+                // PINNED − 1 at most: a countdown never reads as pinned.
+                state[0] = n.min(PINNED - 1);
                 f = sliding;
             }
         }

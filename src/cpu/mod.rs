@@ -1,18 +1,19 @@
-//! The CPU reference engine, in f64 or in f32 (mirroring the GPU's
-//! arithmetic). Each phase is a twin of a WGSL kernel in `shaders/`, with the
-//! same name and buffer layout.
+//! The CPU reference engine, in f64 or in mixed f32 (mirroring the GPU's
+//! arithmetic: f32 forces, double-single displacements), or in plain f32
+//! (the negative control of the precision tests). Each phase is a twin of a
+//! WGSL kernel in `shaders/`, with the same name and buffer layout.
 
 pub mod bulk_forces;
 pub mod coulomb;
 pub mod junctions;
 pub mod verlet;
 
-pub use junctions::PINNED;
+pub use junctions::{JunctionSpring, PINNED};
 
 use crate::engine::{blow_up, Engine, EngineError, Snapshot};
 use crate::lattice::{block_flags, initial_displacement};
 use crate::model::{Driver, Model};
-use crate::real::Real;
+use crate::real::{Coordinate, Real};
 use crate::scenario::FrictionLaw;
 use crate::step_params::{step_params, Consts};
 use bulk_forces::{bond_consts, Blocks, BondConsts};
@@ -23,29 +24,31 @@ use rayon::prelude::*;
 /// cost per phase exceeds the work.
 const PARALLEL_MIN_BLOCKS: usize = 4096;
 
-/// The CPU engine over one model.
-pub struct CpuEngine<T: Real> {
+/// The CPU engine over one model, computing in `T` with displacements,
+/// anchors and the drive position accumulated as `C` (by default f64 for
+/// f64, double-single for f32).
+pub struct CpuEngine<T: Real, C: Coordinate<T> = <T as Real>::Coord> {
     model: Model,
     consts: Consts<T>,
     bonds: [BondConsts<T>; 8],
     speed_limit: T,
     flags: Vec<u32>,
-    disp: Vec<[T; 2]>,
+    disp: Vec<[C; 2]>,
     vel: Vec<[T; 2]>,
     force: Vec<[T; 2]>,
     /// (friction along x, normal force) per interface block.
     contact: Vec<[T; 2]>,
     /// (anchor, stiffness) per junction, index ix·Ns + j.
-    junction_spring: Vec<[T; 2]>,
-    /// (re-pin step or PINNED, rupture count) per junction.
+    junction_spring: Vec<JunctionSpring<C, T>>,
+    /// (slip steps left or PINNED, rupture count) per junction.
     junction_state: Vec<[u32; 2]>,
     slide_dir: Vec<i32>,
-    drive_origin: T,
+    drive_origin: C,
     step: u64,
     pool: Option<rayon::ThreadPool>,
 }
 
-impl<T: Real> CpuEngine<T> {
+impl<T: Real, C: Coordinate<T>> CpuEngine<T, C> {
     /// `threads`: 1 for the deterministic single-thread mode, 0 for all
     /// cores. Results are identical either way (no cross-block reductions).
     pub fn new(model: &Model, threads: usize) -> Result<Self, EngineError> {
@@ -69,7 +72,7 @@ impl<T: Real> CpuEngine<T> {
         };
         let disp = initial_displacement(model)
             .into_iter()
-            .map(|u| [T::from_f64(u[0]), T::from_f64(u[1])])
+            .map(|u| [C::from_f64(u[0]), C::from_f64(u[1])])
             .collect();
         Ok(CpuEngine {
             consts,
@@ -80,10 +83,10 @@ impl<T: Real> CpuEngine<T> {
             vel: vec![[T::zero(); 2]; n],
             force: vec![[T::zero(); 2]; n],
             contact: vec![[T::zero(); 2]; model.nx],
-            junction_spring: vec![[T::zero(); 2]; nj],
+            junction_spring: vec![JunctionSpring::default(); nj],
             junction_state: vec![[PINNED, 0]; nj],
             slide_dir: vec![0; model.nx],
-            drive_origin: T::zero(),
+            drive_origin: C::default(),
             step: 0,
             pool,
             model: model.clone(),
@@ -104,7 +107,8 @@ impl<T: Real> CpuEngine<T> {
             vel: &self.vel,
             flags: &self.flags,
         };
-        let (bonds, origin) = (&self.bonds, self.drive_origin);
+        let bonds = &self.bonds;
+        let target = C::from_f64(self.drive_origin.as_f64() + p.drive_offset);
         let rows_per_task = (PARALLEL_MIN_BLOCKS / 4 / nx).max(1);
         match &self.pool {
             Some(pool) => pool.install(|| {
@@ -113,10 +117,10 @@ impl<T: Real> CpuEngine<T> {
                     .enumerate()
                     .for_each(|(t, chunk)| {
                         let first = t * nx * rows_per_task;
-                        bulk_forces::bulk_forces(c, bonds, &p, origin, blocks, chunk, first)
+                        bulk_forces::bulk_forces(c, bonds, &p, target, blocks, chunk, first)
                     })
             }),
-            None => bulk_forces::bulk_forces(c, bonds, &p, origin, blocks, &mut self.force, 0),
+            None => bulk_forces::bulk_forces(c, bonds, &p, target, blocks, &mut self.force, 0),
         }
 
         match self.model.law {
@@ -137,12 +141,14 @@ impl<T: Real> CpuEngine<T> {
             FrictionLaw::Junctions | FrictionLaw::SingleJunction => {
                 let ns = c.junction_count;
                 let (disp, vel) = (&self.disp, &self.vel);
-                let run =
-                    |ix: usize, out: &mut [T; 2], spring: &mut [[T; 2]], state: &mut [[u32; 2]]| {
-                        let slots = JunctionSlots { spring, state };
-                        let (f, p_n) = junctions::junctions(c, &p, ix, disp[ix], vel[ix], slots);
-                        *out = [f, p_n];
-                    };
+                let run = |ix: usize,
+                           out: &mut [T; 2],
+                           spring: &mut [JunctionSpring<C, T>],
+                           state: &mut [[u32; 2]]| {
+                    let slots = JunctionSlots { spring, state };
+                    let (f, p_n) = junctions::junctions(c, &p, ix, disp[ix], vel[ix], slots);
+                    *out = [f, p_n];
+                };
                 match &self.pool {
                     Some(pool) => pool.install(|| {
                         self.contact
@@ -170,7 +176,7 @@ impl<T: Real> CpuEngine<T> {
         let has_friction = self.model.law != FrictionLaw::None;
         let (force, contact, flags) = (&self.force, &self.contact, &self.flags);
         let limit = self.speed_limit;
-        let update = |i: usize, u: &mut [T; 2], v: &mut [T; 2]| {
+        let update = |i: usize, u: &mut [C; 2], v: &mut [T; 2]| {
             let fr = if has_friction && i < nx {
                 contact[i][0]
             } else {
@@ -200,7 +206,7 @@ impl<T: Real> CpuEngine<T> {
         };
         self.step += 1;
         if let Some(i) = bad {
-            let u = self.disp[i].map(Real::as_f64);
+            let u = self.disp[i].map(C::as_f64);
             let v = self.vel[i].map(Real::as_f64);
             return Err(blow_up(&self.model, self.step, i, u, v));
         }
@@ -208,7 +214,7 @@ impl<T: Real> CpuEngine<T> {
     }
 }
 
-impl<T: Real> Engine for CpuEngine<T> {
+impl<T: Real, C: Coordinate<T>> Engine for CpuEngine<T, C> {
     fn model(&self) -> &Model {
         &self.model
     }
@@ -245,13 +251,30 @@ impl<T: Real> Engine for CpuEngine<T> {
             let snap = self.snapshot()?;
             let anchors = crate::trigger::trigger_anchors(&self.model, &snap);
             for (spring, a) in self.junction_spring.iter_mut().zip(anchors) {
-                spring[0] = T::from_f64(a);
+                spring.anchor = C::from_f64(a);
             }
         }
         Ok(())
     }
 
     fn describe(&self) -> String {
-        format!("cpu {} ({} thread(s))", T::NAME, self.threads())
+        format!(
+            "cpu {} ({} thread(s))",
+            precision_name::<T, C>(),
+            self.threads()
+        )
+    }
+}
+
+/// "f64", "f32 mixed (double-single displacements)" or "f32 plain".
+pub fn precision_name<T: Real, C: Coordinate<T>>() -> String {
+    if T::NAME == C::NAME {
+        if T::NAME == "f64" {
+            "f64".into()
+        } else {
+            format!("{} plain", T::NAME)
+        }
+    } else {
+        format!("{} mixed ({} coordinates)", T::NAME, C::NAME)
     }
 }

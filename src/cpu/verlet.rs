@@ -1,21 +1,23 @@
 //! CPU twin of `shaders/verlet.wgsl`: the leapfrog update
 //! v ← v + dt·F/m, u ← u + dt·v, with constraints and prescribed motion.
+//! The displacement is a coordinate: the increment dt·v is added without
+//! losing its low bits (double-single in mixed precision).
 
 use crate::lattice::{FLAG_FIX_X, FLAG_FIX_Z, FLAG_PRESCRIBED_X};
-use crate::real::Real;
+use crate::real::{Coordinate, Real};
 use crate::step_params::{Consts, StepParams};
 
 /// Updates one block; returns false if the result is not finite or faster
 /// than `speed_limit` (a blow-up).
 #[inline]
 #[allow(clippy::too_many_arguments)]
-pub fn verlet<T: Real>(
+pub fn verlet<T: Real, C: Coordinate<T>>(
     c: &Consts<T>,
     p: &StepParams<T>,
     flags: u32,
     force: [T; 2],
     friction: T,
-    u: &mut [T; 2],
+    u: &mut [C; 2],
     v: &mut [T; 2],
     speed_limit: T,
 ) -> bool {
@@ -32,8 +34,11 @@ pub fn verlet<T: Real>(
     }
     v[0] = vx;
     v[1] = vz;
-    u[0] = u[0] + c.dt * vx;
-    u[1] = u[1] + c.dt * vz;
+    u[0] = u[0].add(c.dt * vx);
+    u[1] = u[1].add(c.dt * vz);
     // NaN fails every comparison, so this also catches non-finite values.
-    vx.abs() <= speed_limit && vz.abs() <= speed_limit && u[0].is_finite() && u[1].is_finite()
+    vx.abs() <= speed_limit
+        && vz.abs() <= speed_limit
+        && u[0].value().is_finite()
+        && u[1].value().is_finite()
 }

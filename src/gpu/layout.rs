@@ -1,5 +1,6 @@
 //! Host-side mirrors of the uniform structs in `shaders/common.wgsl`.
 
+use crate::real::{Coordinate, DoubleSingle};
 use crate::step_params::{Consts, StepParams};
 use bytemuck::{Pod, Zeroable};
 
@@ -28,7 +29,10 @@ pub struct GpuConsts {
     pub top_share_edge: f32,
     pub stiffness_normal_load: u32,
     pub n_blocks: u32,
-    pub _pad: [u32; 2],
+    /// 1.0, read at run time: guards the double-single sums against
+    /// reassociation (shaders/double_single.wgsl).
+    pub one: f32,
+    pub _pad: u32,
 }
 
 impl GpuConsts {
@@ -58,7 +62,8 @@ impl GpuConsts {
             top_share_edge: top_share(c, 0),
             stiffness_normal_load: c.junction_stiffness_normal_load as u32,
             n_blocks: (c.nx * c.nz) as u32,
-            _pad: [0; 2],
+            one: 1.0,
+            _pad: 0,
         }
     }
 }
@@ -67,27 +72,45 @@ impl GpuConsts {
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Pod, Zeroable)]
 pub struct GpuStep {
-    pub step: u32,
     pub preparing: u32,
     pub normal_total: f32,
     pub top_tangential_total: f32,
     pub relax_eta: f32,
-    pub drive_offset: f32,
     pub top_velocity: f32,
-    pub drive_origin: f32,
+    pub drive_target: DoubleSingle,
+    pub _pad: u32,
 }
 
 impl GpuStep {
-    pub fn new(p: &StepParams<f32>, drive_origin: f32) -> Self {
+    /// The loads of `p`, with the drive target origin + V·t formed in f64
+    /// and split into a double-single pair, as the CPU engine does.
+    pub fn new(p: &StepParams<f32>, drive_origin: DoubleSingle) -> Self {
         GpuStep {
-            step: p.step as u32,
             preparing: p.preparing as u32,
             normal_total: p.normal_total,
             top_tangential_total: p.top_tangential_total,
             relax_eta: p.relax_eta,
-            drive_offset: p.drive_offset,
             top_velocity: p.top_velocity,
-            drive_origin,
+            drive_target: DoubleSingle::from_f64(drive_origin.as_f64() + p.drive_offset),
+            _pad: 0,
+        }
+    }
+}
+
+/// A junction's spring as the WGSL `JunctionSpring` (anchor hi, anchor lo,
+/// stiffness): the bytes of the CPU twin's `JunctionSpring<DoubleSingle, f32>`.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Pod, Zeroable)]
+pub struct GpuJunctionSpring {
+    pub anchor: DoubleSingle,
+    pub stiffness: f32,
+}
+
+impl From<GpuJunctionSpring> for crate::cpu::JunctionSpring<DoubleSingle, f32> {
+    fn from(s: GpuJunctionSpring) -> Self {
+        crate::cpu::JunctionSpring {
+            anchor: s.anchor,
+            stiffness: s.stiffness,
         }
     }
 }

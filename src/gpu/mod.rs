@@ -13,8 +13,10 @@ use crate::lattice::{block_flags, initial_displacement};
 use crate::model::{Driver, Model};
 use crate::step_params::{step_params, Consts};
 use context::GpuContext;
-use layout::{GpuConsts, GpuStep};
+use crate::real::{Coordinate, DoubleSingle};
+use layout::{GpuConsts, GpuJunctionSpring, GpuStep};
 use shaders::{Phase, Variant};
+use bytemuck::Zeroable;
 use wgpu::util::DeviceExt;
 
 /// Steps encoded per submit.
@@ -50,7 +52,7 @@ pub struct GpuEngine {
     step_group: wgpu::BindGroup,
     pipelines: Vec<Pipeline>,
     variant: Variant,
-    drive_origin: f32,
+    drive_origin: DoubleSingle,
     step: u64,
     staging: Vec<u8>,
 }
@@ -74,8 +76,8 @@ impl GpuEngine {
         let limit = ctx.limits.max_storage_buffer_binding_size;
         let max_buffer = ctx.limits.max_buffer_size;
         for (name, bytes) in [
-            ("block state", n as u64 * 8),
-            ("junction state", nj as u64 * 8),
+            ("block displacement", n as u64 * 16),
+            ("junction spring", nj as u64 * 12),
         ] {
             if bytes > limit.min(max_buffer) {
                 return Err(EngineError::Gpu(format!(
@@ -104,9 +106,9 @@ impl GpuEngine {
                     | wgpu::BufferUsages::COPY_DST,
             })
         };
-        let disp: Vec<[f32; 2]> = initial_displacement(model)
+        let disp: Vec<[DoubleSingle; 2]> = initial_displacement(model)
             .into_iter()
-            .map(|u| [u[0] as f32, u[1] as f32])
+            .map(|u| u.map(DoubleSingle::from_f64))
             .collect();
         let zeros2 = |len: usize| vec![[0f32; 2]; len];
         let buffers = StateBuffers {
@@ -115,7 +117,10 @@ impl GpuEngine {
             force: storage("force", bytemuck::cast_slice(&zeros2(n))),
             flags: storage("flags", bytemuck::cast_slice(&block_flags(model))),
             contact: storage("contact", bytemuck::cast_slice(&zeros2(model.nx))),
-            junction_spring: storage("junction_spring", bytemuck::cast_slice(&zeros2(nj))),
+            junction_spring: storage(
+                "junction_spring",
+                bytemuck::cast_slice(&vec![GpuJunctionSpring::zeroed(); nj]),
+            ),
             junction_state: storage(
                 "junction_state",
                 bytemuck::cast_slice(&vec![[crate::cpu::PINNED, 0u32]; nj]),
@@ -197,7 +202,7 @@ impl GpuEngine {
             step_group,
             pipelines,
             variant,
-            drive_origin: 0.0,
+            drive_origin: DoubleSingle::default(),
             step: 0,
             staging: vec![0u8; step_stride as usize * STEPS_PER_SUBMIT as usize],
         })
@@ -211,7 +216,10 @@ impl GpuEngine {
         &mut self,
         dispatches: u32,
     ) -> Result<Vec<(&'static str, f64)>, EngineError> {
-        let loads = GpuStep::new(&step_params(&self.consts, self.model.prep_steps), 0.0);
+        let loads = GpuStep::new(
+            &step_params(&self.consts, self.model.prep_steps),
+            DoubleSingle::default(),
+        );
         self.ctx
             .queue
             .write_buffer(&self.step_buffer, 0, bytemuck::bytes_of(&loads));
@@ -374,10 +382,14 @@ impl Engine for GpuEngine {
             &b.junction_state,
             &b.slide_dir,
         ])?;
-        let disp: Vec<[f32; 2]> = cast_prefix(&raw[0], n);
+        let disp: Vec<[DoubleSingle; 2]> = cast_prefix(&raw[0], n);
         let vel: Vec<[f32; 2]> = cast_prefix(&raw[1], n);
         let contact: Vec<[f32; 2]> = cast_prefix(&raw[2], m.nx);
-        let spring: Vec<[f32; 2]> = cast_prefix(&raw[3], nj);
+        let spring: Vec<crate::cpu::JunctionSpring<DoubleSingle, f32>> =
+            cast_prefix::<GpuJunctionSpring>(&raw[3], nj)
+                .into_iter()
+                .map(Into::into)
+                .collect();
         let state: Vec<[u32; 2]> = cast_prefix(&raw[4], nj);
         let slide: Vec<i32> = cast_prefix(&raw[5], m.nx);
         let limit = m.pressure_wave_speed();
@@ -396,14 +408,17 @@ impl Engine for GpuEngine {
     fn begin_driving(&mut self) -> Result<(), EngineError> {
         let snap = self.snapshot()?;
         if let Driver::SideSpring { row, .. } = self.model.driver {
-            self.drive_origin = snap.disp[row * self.model.nx][0] as f32;
+            self.drive_origin = DoubleSingle::from_f64(snap.disp[row * self.model.nx][0]);
         }
         if self.model.trigger.is_some() {
             let anchors = crate::trigger::trigger_anchors(&self.model, &snap);
-            let spring: Vec<[f32; 2]> = anchors
+            let spring: Vec<GpuJunctionSpring> = anchors
                 .iter()
                 .zip(&snap.junction_stiffness)
-                .map(|(a, k)| [*a as f32, *k as f32])
+                .map(|(a, k)| GpuJunctionSpring {
+                    anchor: DoubleSingle::from_f64(*a),
+                    stiffness: *k as f32,
+                })
                 .collect();
             self.ctx.queue.write_buffer(
                 &self.buffers.junction_spring,
@@ -415,6 +430,9 @@ impl Engine for GpuEngine {
     }
 
     fn describe(&self) -> String {
-        format!("gpu f32 on {}", self.ctx.describe())
+        format!(
+            "gpu f32 mixed (f32+f32 coordinates) on {}",
+            self.ctx.describe()
+        )
     }
 }

@@ -1,10 +1,11 @@
-//! WGSL sources, composed per phase (common + rng + phase file), and the
+//! WGSL sources, composed per phase (common + double-single + rng + phase file), and the
 //! variant a scene needs: which pipelines exist and their override constants.
 
 use crate::model::{Driver, Model};
 use crate::scenario::{DampingForm, FrictionLaw};
 
 pub const COMMON: &str = include_str!("../../shaders/common.wgsl");
+pub const DOUBLE_SINGLE: &str = include_str!("../../shaders/double_single.wgsl");
 pub const RNG: &str = include_str!("../../shaders/rng.wgsl");
 pub const BULK_FORCES: &str = include_str!("../../shaders/bulk_forces.wgsl");
 pub const JUNCTIONS: &str = include_str!("../../shaders/junctions.wgsl");
@@ -46,7 +47,7 @@ impl Phase {
             Phase::Verlet => VERLET,
         };
         let rng = if self == Phase::Junctions { RNG } else { "" };
-        format!("{COMMON}\n{rng}\n{body}")
+        format!("{COMMON}\n{DOUBLE_SINGLE}\n{rng}\n{body}")
     }
 }
 

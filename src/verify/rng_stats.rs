@@ -24,14 +24,17 @@ fn engine_draw_cases(factory: EngineFactory<'_>) -> Result<Vec<CaseResult>, Veri
     // steps have re-pinned, and may have broken again, and are left out).
     let slipping: Vec<u32> = (0..count)
         .filter(|&j| {
-            snap.repin_step[j as usize] != crate::cpu::PINNED && snap.ruptures[j as usize] == 1
+            snap.slip_steps_left[j as usize] != crate::cpu::PINNED
+                && snap.ruptures[j as usize] == 1
         })
         .collect();
+    // The step each junction will re-pin at: now plus its steps left.
+    let repin_step = |j: u32| snap.step as i64 + snap.slip_steps_left[j as usize] as i64;
     let j0 = *slipping.first().unwrap_or(&0);
-    let first = snap.repin_step[j0 as usize] as i64 - draw(j0);
+    let first = repin_step(j0) - draw(j0);
     let durations: Vec<f64> = slipping
         .iter()
-        .map(|&j| (snap.repin_step[j as usize] as i64 - first) as f64)
+        .map(|&j| (repin_step(j) - first) as f64)
         .collect();
     let matching = slipping
         .iter()
