@@ -76,3 +76,88 @@ pub fn fields_over(errors: &[FieldError], tolerance: f64, velocity_floor: f64) -
         .map(|e| format!("{}: {:.3e} of {:.3e}", e.field, e.max_error, e.scale))
         .collect()
 }
+
+/// What a long side-driven run is about, for comparing precisions and
+/// engines: the precursors before the first full event (lengths and F/F_N)
+/// and the time and F/F_N of the first full event.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RunOutcome {
+    /// (rupture length in m, F/F_N at its start, start time in s) of each
+    /// precursor.
+    pub precursors: Vec<(f64, f64, f64)>,
+    /// (start time in s, F/F_N) of the first full event.
+    pub first_full: Option<(f64, f64)>,
+}
+
+impl RunOutcome {
+    /// The outcome recorded in a run file (events as `info` finds them).
+    pub fn from_run(run: &crate::output::reader::RunFile, quiet_gap: f64) -> RunOutcome {
+        let events = run.interface_series().events_separated_by(quiet_gap);
+        let first = events.iter().position(|e| e.full);
+        let before = &events[..first.unwrap_or(events.len())];
+        RunOutcome {
+            precursors: before
+                .iter()
+                .map(|e| (e.rupture_length, run.drive_ratio_at(e.start), e.start))
+                .collect(),
+            first_full: first.map(|k| (events[k].start, run.drive_ratio_at(events[k].start))),
+        }
+    }
+
+    /// One line: "30.0 mm, 50.0 mm; first full event at t = … s, F/F_N …".
+    pub fn describe(&self) -> String {
+        let lengths: Vec<String> = self
+            .precursors
+            .iter()
+            .map(|p| format!("{:.1} mm", p.0 * 1e3))
+            .collect();
+        let full = match self.first_full {
+            Some((t, r)) => format!("first full event at t = {t:.6} s, F/F_N {r:.5}"),
+            None => "no full event".into(),
+        };
+        format!("precursors [{}]; {full}", lengths.join(", "))
+    }
+}
+
+/// Where `other` departs from `reference`: a different precursor count or
+/// precursor lengths, a precursor or the first full event more than
+/// `rel_tol` (relative) away in start time or F/F_N. Empty when they agree.
+pub fn outcome_mismatch(reference: &RunOutcome, other: &RunOutcome, rel_tol: f64) -> Vec<String> {
+    let mut out = Vec::new();
+    let lengths = |o: &RunOutcome| o.precursors.iter().map(|p| p.0).collect::<Vec<_>>();
+    // Rupture lengths are whole numbers of blocks: equal, or a block apart.
+    let same_lengths = lengths(reference)
+        .iter()
+        .zip(lengths(other))
+        .all(|(a, b)| (a - b).abs() <= 1e-9 * a.abs().max(1e-3));
+    if reference.precursors.len() != other.precursors.len() || !same_lengths {
+        out.push(format!(
+            "precursors differ: {:?} m against {:?} m",
+            lengths(reference),
+            lengths(other)
+        ));
+    }
+    if out.is_empty() {
+        for (k, (a, b)) in reference.precursors.iter().zip(&other.precursors).enumerate() {
+            if (a.2 - b.2).abs() > rel_tol * a.2.abs() || (a.1 - b.1).abs() > rel_tol * a.1.abs() {
+                out.push(format!(
+                    "precursor {k} at t = {} s, F/F_N {} against t = {} s, F/F_N {}",
+                    b.2, b.1, a.2, a.1
+                ));
+            }
+        }
+    }
+    match (reference.first_full, other.first_full) {
+        (Some((ta, ra)), Some((tb, rb))) => {
+            if (ta - tb).abs() > rel_tol * ta.abs() {
+                out.push(format!("first full event at t = {tb} s against {ta} s"));
+            }
+            if (ra - rb).abs() > rel_tol * ra.abs() {
+                out.push(format!("first full event at F/F_N {rb} against {ra}"));
+            }
+        }
+        (None, None) => {}
+        (a, b) => out.push(format!("first full event {b:?} against {a:?}")),
+    }
+    out
+}

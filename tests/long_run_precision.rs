@@ -1,0 +1,82 @@
+//! Long-run accuracy of f32, the CI-sized version of
+//! `benches/long_run_precision.rs`: the precursors scene driven 5× faster
+//! (V = 2 mm/s) for 0.065 s (≈ 2.9e5 steps), long enough for three growing
+//! precursors. CPU f32 mixed and the GPU engine (lavapipe in CI) must
+//! reproduce f64's precursors (count, lengths, start time and F/F_N within
+//! 0.1%), as f64 does under a 1e-6 change of the drive speed. Plain f32
+//! displacements (the engines before mixed precision) are the negative
+//! control: measured, their second precursor starts 4.6% later and is one
+//! block longer, so the comparison must flag them.
+
+use slipfront::backend::{make_engine, Backend, Precision};
+use slipfront::compare::{outcome_mismatch, RunOutcome};
+use slipfront::output::reader::RunFile;
+use slipfront::runner::{run_scene, RunOptions};
+use slipfront::scenario::Scenario;
+use slipfront::Model;
+
+const SCENE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/scenarios/tromborg2014_precursors.toml");
+const V: f64 = 2.0e-3;
+
+fn outcome(label: &str, backend: Backend, precision: Precision, velocity: f64) -> RunOutcome {
+    let set = vec![
+        format!("loading.drive.velocity={velocity}"),
+        "time.end=0.065".to_string(),
+    ];
+    let s = Scenario::load(std::path::Path::new(SCENE), &set).unwrap();
+    let m = Model::from_scenario(&s, false).unwrap();
+    let mut e = make_engine(&m, backend, precision, 1)
+        .unwrap_or_else(|e| panic!("{label}: an engine is required (lavapipe in CI): {e}"));
+    let path = std::env::temp_dir().join(format!(
+        "slipfront_long_run_{}_{}.mcap",
+        std::process::id(),
+        label.replace(' ', "_")
+    ));
+    let opts = RunOptions {
+        output: Some(path.clone()),
+        progress: false,
+    };
+    run_scene(e.as_mut(), &s, &opts).unwrap();
+    let run = RunFile::read(&path).unwrap();
+    std::fs::remove_file(&path).unwrap();
+    RunOutcome::from_run(&run, 1e-3)
+}
+
+#[test]
+fn f32_mixed_on_cpu_and_gpu_keeps_the_precursors_of_f64_and_plain_f32_does_not() {
+    let cases = [
+        ("f64", Backend::Cpu, Precision::F64, V),
+        ("f64 perturbed", Backend::Cpu, Precision::F64, V * (1.0 + 1e-6)),
+        ("f32 mixed", Backend::Cpu, Precision::F32, V),
+        ("f32 plain", Backend::Cpu, Precision::F32Plain, V),
+        ("gpu f32 mixed", Backend::Gpu, Precision::F32, V),
+    ];
+    let outcomes: Vec<RunOutcome> = std::thread::scope(|sc| {
+        let runs: Vec<_> = cases
+            .iter()
+            .map(|&(l, b, p, v)| sc.spawn(move || outcome(l, b, p, v)))
+            .collect();
+        runs.into_iter().map(|h| h.join().unwrap()).collect()
+    });
+    let reference = &outcomes[0];
+    for ((label, ..), o) in cases.iter().zip(&outcomes) {
+        println!("{label:>14}: {}", o.describe());
+    }
+    // The scene must contain what is compared: three precursors longer
+    // than one block and no full event yet.
+    let extended = reference.precursors.iter().filter(|p| p.0 > 5e-3).count();
+    assert!(extended >= 3, "{}", reference.describe());
+    for k in [1, 2, 4] {
+        assert_eq!(
+            outcome_mismatch(reference, &outcomes[k], 1e-3),
+            Vec::<String>::new(),
+            "{}",
+            cases[k].0
+        );
+    }
+    assert!(
+        !outcome_mismatch(reference, &outcomes[3], 1e-3).is_empty(),
+        "plain f32 must depart from f64: {}",
+        outcomes[3].describe()
+    );
+}
