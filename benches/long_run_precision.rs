@@ -91,8 +91,8 @@ fn case(label: &str, backend: Backend, precision: Precision, set: &[String]) -> 
 
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
-    let scenario: PathBuf = arg(&args, "--scenario")
-        .unwrap_or_else(|| "scenarios/tromborg2014_precursors.toml".into());
+    let scenario: PathBuf =
+        arg(&args, "--scenario").unwrap_or_else(|| "scenarios/tromborg2014_precursors.toml".into());
     let t_end: f64 = arg(&args, "--t-end").unwrap_or(0.4);
     let quiet_gap = 1e-3;
     let base: Vec<String> = args
@@ -135,8 +135,7 @@ fn main() {
                 .map(|e| d.run.drive_ratio_at(e.start))
                 .sum::<f64>()
                 / full.len().max(1) as f64;
-            let mean_slip =
-                events.iter().map(|e| e.slip).sum::<f64>() / events.len().max(1) as f64;
+            let mean_slip = events.iter().map(|e| e.slip).sum::<f64>() / events.len().max(1) as f64;
             let precursors = RunOutcome::from_run(&d.run, quiet_gap).precursors.len();
             let row = [
                 events.len() as f64,

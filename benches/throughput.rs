@@ -110,6 +110,9 @@ fn main() {
                 (Backend::Cpu, Precision::F64, 2),
                 (Backend::Cpu, Precision::F32, 1),
                 (Backend::Cpu, Precision::F32, 2),
+                // Plain f32 displacements: the cost of mixed precision.
+                (Backend::Cpu, Precision::F32Plain, 1),
+                (Backend::Cpu, Precision::F32Plain, 2),
             ]);
         }
         if gpu {
@@ -117,7 +120,11 @@ fn main() {
         }
         let profile_gpu = gpu && std::env::var("SLIPFRONT_BENCH_KERNELS").is_ok();
         for (backend, precision, threads) in configs {
-            let bytes = model.memory_bytes(if precision == Precision::F64 { 8 } else { 4 }) as f64
+            let bytes = match precision {
+                Precision::F64 => model.memory_bytes(8, 8),
+                Precision::F32 => model.memory_bytes(4, 8),
+                Precision::F32Plain => model.memory_bytes(4, 4),
+            } as f64
                 / n as f64;
             match measure(&model, backend, precision, threads) {
                 Some((rate, what)) => println!(

@@ -138,7 +138,12 @@ pub fn outcome_mismatch(reference: &RunOutcome, other: &RunOutcome, rel_tol: f64
         ));
     }
     if out.is_empty() {
-        for (k, (a, b)) in reference.precursors.iter().zip(&other.precursors).enumerate() {
+        for (k, (a, b)) in reference
+            .precursors
+            .iter()
+            .zip(&other.precursors)
+            .enumerate()
+        {
             if (a.2 - b.2).abs() > rel_tol * a.2.abs() || (a.1 - b.1).abs() > rel_tol * a.1.abs() {
                 out.push(format!(
                     "precursor {k} at t = {} s, F/F_N {} against t = {} s, F/F_N {}",

@@ -52,7 +52,10 @@ impl Snapshot {
             friction: col(contact, 0),
             normal: col(contact, 1),
             anchor: junction_spring.iter().map(|s| s.anchor.as_f64()).collect(),
-            junction_stiffness: junction_spring.iter().map(|s| s.stiffness.as_f64()).collect(),
+            junction_stiffness: junction_spring
+                .iter()
+                .map(|s| s.stiffness.as_f64())
+                .collect(),
             slip_steps_left: junction_state.iter().map(|s| s[0]).collect(),
             ruptures: junction_state.iter().map(|s| s[1]).collect(),
             slide_dir: slide_dir.to_vec(),

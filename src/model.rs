@@ -388,11 +388,13 @@ impl Model {
         }
     }
 
-    /// Bytes of engine state per block at `real_bytes` per float.
-    pub fn memory_bytes(&self, real_bytes: usize) -> usize {
-        let blocks = self.n_blocks() * (6 * real_bytes + 4);
+    /// Bytes of engine state at `real_bytes` per float and `coord_bytes`
+    /// per accumulated coordinate (displacements, junction anchors): 8 and 8
+    /// for f64, 4 and 8 for mixed f32, 4 and 4 for plain f32.
+    pub fn memory_bytes(&self, real_bytes: usize, coord_bytes: usize) -> usize {
+        let blocks = self.n_blocks() * (2 * coord_bytes + 4 * real_bytes + 4);
         let interface = self.nx * (2 * real_bytes + 4);
-        let junctions = self.n_junctions() * (2 * real_bytes + 8);
+        let junctions = self.n_junctions() * (coord_bytes + real_bytes + 8);
         blocks + interface + junctions
     }
 

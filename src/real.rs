@@ -217,7 +217,10 @@ mod tests {
             .map(|k| 0.5 * (1.0e-9 * ((k % 7) as f32 + 1.0)) as f64)
             .sum();
         let got = a.diff(b) as f64;
-        assert!((got - expected).abs() <= expected * 1e-6, "{got} {expected}");
+        assert!(
+            (got - expected).abs() <= expected * 1e-6,
+            "{got} {expected}"
+        );
         assert_eq!(DoubleSingle::from_f64(0.3).as_f64(), {
             let hi = 0.3f32;
             hi as f64 + (0.3 - hi as f64) as f32 as f64

@@ -15,7 +15,10 @@ use slipfront::runner::{run_scene, RunOptions};
 use slipfront::scenario::Scenario;
 use slipfront::Model;
 
-const SCENE: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/scenarios/tromborg2014_precursors.toml");
+const SCENE: &str = concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/scenarios/tromborg2014_precursors.toml"
+);
 const V: f64 = 2.0e-3;
 
 fn outcome(label: &str, backend: Backend, precision: Precision, velocity: f64) -> RunOutcome {
@@ -46,7 +49,12 @@ fn outcome(label: &str, backend: Backend, precision: Precision, velocity: f64) -
 fn f32_mixed_on_cpu_and_gpu_keeps_the_precursors_of_f64_and_plain_f32_does_not() {
     let cases = [
         ("f64", Backend::Cpu, Precision::F64, V),
-        ("f64 perturbed", Backend::Cpu, Precision::F64, V * (1.0 + 1e-6)),
+        (
+            "f64 perturbed",
+            Backend::Cpu,
+            Precision::F64,
+            V * (1.0 + 1e-6),
+        ),
         ("f32 mixed", Backend::Cpu, Precision::F32, V),
         ("f32 plain", Backend::Cpu, Precision::F32Plain, V),
         ("gpu f32 mixed", Backend::Gpu, Precision::F32, V),

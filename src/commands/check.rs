@@ -38,7 +38,7 @@ pub fn check(scenario: Option<PathBuf>, set: &[String], json: bool) -> anyhow::R
             "driving": m.drive_steps,
             "total": m.total_steps(),
         },
-        "memory_bytes": { "f32": m.memory_bytes(4), "f64": m.memory_bytes(8) },
+        "memory_bytes": { "f32": m.memory_bytes(4, 8), "f64": m.memory_bytes(8, 8) },
         "terms": m.terms(),
     });
     if json {
@@ -92,8 +92,8 @@ pub fn check(scenario: Option<PathBuf>, set: &[String], json: bool) -> anyhow::R
         );
         println!(
             "memory          {:.2} MiB (f32), {:.2} MiB (f64)",
-            m.memory_bytes(4) as f64 / 1048576.0,
-            m.memory_bytes(8) as f64 / 1048576.0
+            m.memory_bytes(4, 8) as f64 / 1048576.0,
+            m.memory_bytes(8, 8) as f64 / 1048576.0
         );
         println!("terms           {}", m.terms().join(", "));
     }

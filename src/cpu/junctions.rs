@@ -105,3 +105,55 @@ pub fn junctions<T: Real, C: Coordinate<T>>(
     }
     (total, normal)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scenario::{Scenario, DEFAULT_SCENARIO};
+    use crate::step_params::step_params;
+
+    /// Junctions that break just before step 2³² re-pin after their drawn
+    /// slip time: the countdown does not see the global step, which used to
+    /// be cast to u32 (re-pin steps past 2³² saturated or wrapped).
+    #[test]
+    fn junctions_broken_near_step_2_pow_32_re_pin_after_their_slip_time() {
+        let s = Scenario::parse(DEFAULT_SCENARIO, "test", &[]).unwrap();
+        let m = crate::Model::from_scenario(&s, false).unwrap();
+        let c = Consts::<f64>::new(&m);
+        let ns = c.junction_count;
+        let mut spring = vec![
+            JunctionSpring {
+                anchor: 0.0,
+                stiffness: 1.0e5
+            };
+            ns
+        ];
+        let mut state = vec![[PINNED, 0u32]; ns];
+        // Compressed and stretched far past μs·f_N: every junction breaks.
+        let u = [1.0e-3, -1.0e-6];
+        let start = (1u64 << 32) - 3;
+        let mut pinned_at = vec![None; ns];
+        for step in start..start + 4 * c.slip_mean_steps as u64 {
+            let p = step_params(&c, step);
+            assert!(!p.preparing);
+            // After the first step the block sits at the anchors' position,
+            // so re-pinned junctions stay pinned.
+            let ux = if step == start { u[0] } else { 0.0 };
+            let slots = JunctionSlots {
+                spring: &mut spring,
+                state: &mut state,
+            };
+            junctions(&c, &p, 0, [ux, u[1]], [0.0; 2], slots);
+            for (j, s) in state.iter().enumerate() {
+                if s[0] == PINNED && pinned_at[j].is_none() {
+                    pinned_at[j] = Some(step);
+                }
+            }
+        }
+        for (j, at) in pinned_at.iter().enumerate() {
+            let n = slip_steps(c.seed, 0, j as u32, 1, c.slip_mean_steps, c.slip_std_steps);
+            assert_eq!(*at, Some(start + n as u64), "junction {j}");
+            assert_eq!(state[j][1], 1, "junction {j} broke once");
+        }
+    }
+}

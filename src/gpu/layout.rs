@@ -114,3 +114,30 @@ impl From<GpuJunctionSpring> for crate::cpu::JunctionSpring<DoubleSingle, f32> {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scenario::{Scenario, DEFAULT_SCENARIO};
+    use crate::step_params::step_params;
+
+    /// After 1e8 steps (22 s of driving) the drive target the GPU gets is
+    /// still origin + V·t to f64 round-off (a plain f32 would be ~1e-10 m
+    /// off, a whole creep step), and no field of the loads depends on a
+    /// 32-bit step count.
+    #[test]
+    fn loads_after_1e8_steps_keep_the_drive_position_exact() {
+        let s = Scenario::parse(DEFAULT_SCENARIO, "test", &[]).unwrap();
+        let m = crate::Model::from_scenario(&s, false).unwrap();
+        let c = Consts::<f32>::new(&m);
+        let origin = DoubleSingle::from_f64(1.234_567e-5);
+        for step in [m.prep_steps + 100_000_000, m.prep_steps + (1 << 32) + 7] {
+            let loads = GpuStep::new(&step_params(&c, step), origin);
+            let t = m.time_of_step(step);
+            let exact = origin.as_f64() + 4.0e-4 * t;
+            let got = loads.drive_target.as_f64();
+            assert!((got - exact).abs() <= exact * 1e-13, "{got} vs {exact}");
+            assert!(((exact as f32) as f64 - exact).abs() > 1e-12);
+        }
+    }
+}

@@ -11,12 +11,12 @@ pub mod shaders;
 use crate::engine::{blow_up, Engine, EngineError, Snapshot};
 use crate::lattice::{block_flags, initial_displacement};
 use crate::model::{Driver, Model};
-use crate::step_params::{step_params, Consts};
-use context::GpuContext;
 use crate::real::{Coordinate, DoubleSingle};
+use crate::step_params::{step_params, Consts};
+use bytemuck::Zeroable;
+use context::GpuContext;
 use layout::{GpuConsts, GpuJunctionSpring, GpuStep};
 use shaders::{Phase, Variant};
-use bytemuck::Zeroable;
 use wgpu::util::DeviceExt;
 
 /// Steps encoded per submit.
