@@ -63,7 +63,7 @@ fn for_each_bond(m: &Model, mut f: impl FnMut(usize, usize, [f64; 2], f64, f64))
 /// driving started.
 pub fn stored_energy(m: &Model, s: &Snapshot, drive_origin: f64) -> StoredEnergy {
     let mut e = StoredEnergy {
-        kinetic: s.kinetic_energy(m.mass),
+        kinetic: s.kinetic_energy_half(m.mass),
         ..Default::default()
     };
     for_each_bond(m, |i, j, r0, rest, k| {
@@ -103,8 +103,8 @@ pub struct Power {
 pub fn step_power(m: &Model, before: &Snapshot, after: &Snapshot, drive_origin: f64) -> Power {
     let vbar = |i: usize| {
         [
-            0.5 * (before.vel[i][0] + after.vel[i][0]),
-            0.5 * (before.vel[i][1] + after.vel[i][1]),
+            0.5 * (before.vel_half[i][0] + after.vel_half[i][0]),
+            0.5 * (before.vel_half[i][1] + after.vel_half[i][1]),
         ]
     };
     let mut p = Power::default();
@@ -141,7 +141,8 @@ pub fn step_power(m: &Model, before: &Snapshot, after: &Snapshot, drive_origin: 
     }
     for ix in 0..m.nx {
         // Friction of step n is in the snapshot after it.
-        p.friction += after.friction.get(ix).copied().unwrap_or(0.0) * vbar(ix)[0];
+        // The friction of the step before → after was evaluated at `before`.
+        p.friction += before.friction.get(ix).copied().unwrap_or(0.0) * vbar(ix)[0];
     }
     for_each_bond(m, |i, j, r0, _, _| {
         let (vi, vj) = (vbar(i), vbar(j));

@@ -12,8 +12,16 @@ pub struct Snapshot {
     pub step: u64,
     /// Time since driving started (s); negative in the normal-load phase.
     pub time: f64,
+    /// Displacement u(n) of each block (m).
     pub disp: Vec<[f64; 2]>,
+    /// Velocity at the same instant, v(n) = v(n−½) + (dt/2)·a(n), with the
+    /// constraints applied (m/s).
     pub vel: Vec<[f64; 2]>,
+    /// The leapfrog's own velocity v(n−½), over the step that led here: the
+    /// engine state, and what the energy ledger integrates with (m/s).
+    pub vel_half: Vec<[f64; 2]>,
+    /// Force on each block from everything but friction at u(n) (N).
+    pub force: Vec<[f64; 2]>,
     /// Friction force along x on each interface block (N).
     pub friction: Vec<f64>,
     /// Normal force p on each interface block (N).
@@ -37,6 +45,7 @@ impl Snapshot {
         step: u64,
         disp: &[[C; 2]],
         vel: &[[T; 2]],
+        force: &[[T; 2]],
         contact: &[[T; 2]],
         junction_spring: &[JunctionSpring<C, T>],
         junction_state: &[[u32; 2]],
@@ -44,12 +53,17 @@ impl Snapshot {
     ) -> Snapshot {
         let f2 = |v: &[[T; 2]]| v.iter().map(|x| x.map(|y| y.as_f64())).collect::<Vec<_>>();
         let col = |v: &[[T; 2]], k: usize| v.iter().map(|x| x[k].as_f64()).collect::<Vec<_>>();
+        let vel_half = f2(vel);
+        let force = f2(force);
+        let friction = col(contact, 0);
         Snapshot {
             step,
             time: model.time_of_step(step),
             disp: disp.iter().map(|u| u.map(C::as_f64)).collect(),
-            vel: f2(vel),
-            friction: col(contact, 0),
+            vel: synchronised_velocity(model, step, &vel_half, &force, &friction),
+            vel_half,
+            force,
+            friction,
             normal: col(contact, 1),
             anchor: junction_spring.iter().map(|s| s.anchor.as_f64()).collect(),
             junction_stiffness: junction_spring
@@ -86,14 +100,58 @@ impl Snapshot {
         self.ruptures.iter().map(|&r| r as u64).sum()
     }
 
+    /// Kinetic energy at the snapshot's instant (from `vel`).
     pub fn kinetic_energy(&self, mass: f64) -> f64 {
-        0.5 * mass
-            * self
-                .vel
-                .iter()
-                .map(|v| v[0] * v[0] + v[1] * v[1])
-                .sum::<f64>()
+        kinetic(&self.vel, mass)
     }
+
+    /// Kinetic energy of the half-step velocities (the energy ledger's).
+    pub fn kinetic_energy_half(&self, mass: f64) -> f64 {
+        kinetic(&self.vel_half, mass)
+    }
+}
+
+fn kinetic(vel: &[[f64; 2]], mass: f64) -> f64 {
+    0.5 * mass * vel.iter().map(|v| v[0] * v[0] + v[1] * v[1]).sum::<f64>()
+}
+
+/// v(n) = v(n−½) + (dt/2)·(F(n) + friction(n))/m, the velocity at the
+/// instant of u(n), with fixed components 0 and the prescribed top row at
+/// its prescribed velocity.
+pub fn synchronised_velocity(
+    model: &Model,
+    step: u64,
+    vel_half: &[[f64; 2]],
+    force: &[[f64; 2]],
+    friction: &[f64],
+) -> Vec<[f64; 2]> {
+    use crate::lattice::{block_flags, FLAG_FIX_X, FLAG_FIX_Z, FLAG_PRESCRIBED_X};
+    let half_dt_over_m = 0.5 * model.dt / model.mass;
+    let top_velocity = match model.driver {
+        crate::model::Driver::TopVelocity { velocity } if step >= model.prep_steps => velocity,
+        _ => 0.0,
+    };
+    block_flags(model)
+        .iter()
+        .enumerate()
+        .map(|(i, &flags)| {
+            let fr = friction.get(i).copied().unwrap_or(0.0);
+            let mut v = [
+                vel_half[i][0] + half_dt_over_m * (force[i][0] + fr),
+                vel_half[i][1] + half_dt_over_m * force[i][1],
+            ];
+            if flags & FLAG_FIX_X != 0 {
+                v[0] = 0.0;
+            }
+            if flags & FLAG_FIX_Z != 0 {
+                v[1] = 0.0;
+            }
+            if flags & FLAG_PRESCRIBED_X != 0 {
+                v[0] = top_velocity;
+            }
+            v
+        })
+        .collect()
 }
 
 #[derive(Debug, thiserror::Error)]
@@ -122,29 +180,23 @@ pub trait Engine {
     fn model(&self) -> &Model;
     /// Steps done so far.
     fn steps_done(&self) -> u64;
-    /// Advances `n` steps. The caller never crosses the start of driving in
-    /// one call (see [`advance_to`]).
+    /// Advances `n` steps. Each step ends with the forces, friction and
+    /// junction states of its new displacements, so a snapshot describes
+    /// one instant; when the step count reaches the end of the normal-load
+    /// phase the engine fixes the driver origin and applies the trigger's
+    /// junction forces before those forces.
     fn advance(&mut self, n: u64) -> Result<(), EngineError>;
     /// Reads the whole state back.
     fn snapshot(&mut self) -> Result<Snapshot, EngineError>;
-    /// Called once when driving starts: fixes the driver origin and applies
-    /// the trigger's initial junction forces.
-    fn begin_driving(&mut self) -> Result<(), EngineError>;
     /// Backend, adapter and precision, for logs and metadata.
     fn describe(&self) -> String;
 }
 
-/// Advances `engine` to global step `target`, calling `begin_driving` at the
-/// end of the normal-load phase.
+/// Advances `engine` to global step `target` (no-op if it is there or past).
 pub fn advance_to(engine: &mut dyn Engine, target: u64) -> Result<(), EngineError> {
-    let prep = engine.model().prep_steps;
-    while engine.steps_done() < target {
-        let s = engine.steps_done();
-        if s == prep {
-            engine.begin_driving()?;
-        }
-        let stop = if s < prep { target.min(prep) } else { target };
-        engine.advance(stop - s)?;
+    let s = engine.steps_done();
+    if target > s {
+        engine.advance(target - s)?;
     }
     Ok(())
 }

@@ -74,7 +74,7 @@ impl<T: Real, C: Coordinate<T>> CpuEngine<T, C> {
             .into_iter()
             .map(|u| [C::from_f64(u[0]), C::from_f64(u[1])])
             .collect();
-        Ok(CpuEngine {
+        let mut engine = CpuEngine {
             consts,
             bonds: bond_consts(&consts),
             speed_limit: T::from_f64(model.pressure_wave_speed()),
@@ -90,15 +90,23 @@ impl<T: Real, C: Coordinate<T>> CpuEngine<T, C> {
             step: 0,
             pool,
             model: model.clone(),
-        })
+        };
+        if model.prep_steps == 0 {
+            engine.begin_driving();
+        }
+        engine.force_pass();
+        Ok(engine)
     }
 
     pub fn threads(&self) -> usize {
         self.pool.as_ref().map_or(1, |p| p.current_num_threads())
     }
 
-    /// One leapfrog step: bulk forces, friction, update.
-    fn step_once(&mut self) -> Result<(), EngineError> {
+    /// Bulk forces and friction at the current state and step. Run at the
+    /// end of every step (and once at the start), so that forces, contact
+    /// and junction states always describe the same instant as the
+    /// displacements.
+    fn force_pass(&mut self) {
         let c = &self.consts;
         let p = step_params(c, self.step);
         let nx = c.nx;
@@ -173,6 +181,15 @@ impl<T: Real, C: Coordinate<T>> CpuEngine<T, C> {
             }
         }
 
+    }
+
+    /// One leapfrog step from the forces at the current state, then the
+    /// forces at the new one.
+    fn step_once(&mut self) -> Result<(), EngineError> {
+        let c = &self.consts;
+        let p = step_params(c, self.step);
+        let nx = c.nx;
+        let rows_per_task = (PARALLEL_MIN_BLOCKS / 4 / nx).max(1);
         let has_friction = self.model.law != FrictionLaw::None;
         let (force, contact, flags) = (&self.force, &self.contact, &self.flags);
         let limit = self.speed_limit;
@@ -210,7 +227,40 @@ impl<T: Real, C: Coordinate<T>> CpuEngine<T, C> {
             let v = self.vel[i].map(Real::as_f64);
             return Err(blow_up(&self.model, self.step, i, u, v));
         }
+        if self.step == self.model.prep_steps {
+            self.begin_driving();
+        }
+        self.force_pass();
         Ok(())
+    }
+
+    /// Once, when driving starts (before the forces of that step): fixes
+    /// the driver origin and applies the trigger's initial junction forces.
+    fn begin_driving(&mut self) {
+        if let Driver::SideSpring { row, .. } = self.model.driver {
+            self.drive_origin = self.disp[row * self.model.nx][0];
+        }
+        if self.model.trigger.is_some() {
+            let snap = self.snapshot_now();
+            let anchors = crate::trigger::trigger_anchors(&self.model, &snap);
+            for (spring, a) in self.junction_spring.iter_mut().zip(anchors) {
+                spring.anchor = C::from_f64(a);
+            }
+        }
+    }
+
+    fn snapshot_now(&self) -> Snapshot {
+        Snapshot::from_buffers(
+            &self.model,
+            self.step,
+            &self.disp,
+            &self.vel,
+            &self.force,
+            &self.contact,
+            &self.junction_spring,
+            &self.junction_state,
+            &self.slide_dir,
+        )
     }
 }
 
@@ -231,30 +281,7 @@ impl<T: Real, C: Coordinate<T>> Engine for CpuEngine<T, C> {
     }
 
     fn snapshot(&mut self) -> Result<Snapshot, EngineError> {
-        Ok(Snapshot::from_buffers(
-            &self.model,
-            self.step,
-            &self.disp,
-            &self.vel,
-            &self.contact,
-            &self.junction_spring,
-            &self.junction_state,
-            &self.slide_dir,
-        ))
-    }
-
-    fn begin_driving(&mut self) -> Result<(), EngineError> {
-        if let Driver::SideSpring { row, .. } = self.model.driver {
-            self.drive_origin = self.disp[row * self.model.nx][0];
-        }
-        if self.model.trigger.is_some() {
-            let snap = self.snapshot()?;
-            let anchors = crate::trigger::trigger_anchors(&self.model, &snap);
-            for (spring, a) in self.junction_spring.iter_mut().zip(anchors) {
-                spring.anchor = C::from_f64(a);
-            }
-        }
-        Ok(())
+        Ok(self.snapshot_now())
     }
 
     fn describe(&self) -> String {

@@ -136,7 +136,7 @@ impl GpuEngine {
         let step_stride = (ctx.limits.min_storage_buffer_offset_alignment as u64).max(256);
         let step_buffer = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("step loads"),
-            size: step_stride * STEPS_PER_SUBMIT,
+            size: step_stride * (STEPS_PER_SUBMIT + 1),
             usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
@@ -191,7 +191,7 @@ impl GpuEngine {
             });
         }
         ctx.check()?;
-        Ok(GpuEngine {
+        let mut engine = GpuEngine {
             model: model.clone(),
             consts,
             ctx,
@@ -204,8 +204,13 @@ impl GpuEngine {
             variant,
             drive_origin: DoubleSingle::default(),
             step: 0,
-            staging: vec![0u8; step_stride as usize * STEPS_PER_SUBMIT as usize],
-        })
+            staging: vec![0u8; step_stride as usize * (STEPS_PER_SUBMIT as usize + 1)],
+        };
+        if model.prep_steps == 0 {
+            engine.begin_driving()?;
+        }
+        engine.force_pass()?;
+        Ok(engine)
     }
 
     /// Seconds per dispatch of each phase, each timed alone: `dispatches`
@@ -266,6 +271,70 @@ impl GpuEngine {
         self.ctx.describe()
     }
 
+    /// Writes the loads of steps `first .. first + count` to the step
+    /// buffer, one per stride.
+    fn write_loads(&mut self, first: u64, count: u64) {
+        for i in 0..count {
+            let loads = GpuStep::new(&step_params(&self.consts, first + i), self.drive_origin);
+            let at = (i * self.step_stride) as usize;
+            self.staging[at..at + std::mem::size_of::<GpuStep>()]
+                .copy_from_slice(bytemuck::bytes_of(&loads));
+        }
+        let bytes = (count * self.step_stride) as usize;
+        self.ctx
+            .queue
+            .write_buffer(&self.step_buffer, 0, &self.staging[..bytes]);
+    }
+
+    /// Bulk forces and friction at the current state and step (at the
+    /// start, and when driving starts).
+    fn force_pass(&mut self) -> Result<(), EngineError> {
+        self.write_loads(self.step, 1);
+        let mut encoder = self
+            .ctx
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("forces"),
+            });
+        {
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("forces"),
+                timestamp_writes: None,
+            });
+            pass.set_bind_group(0, &self.state_group, &[]);
+            pass.set_bind_group(1, &self.step_group, &[0]);
+            dispatch(&mut pass, &self.pipelines[..self.pipelines.len() - 1]);
+        }
+        self.ctx.queue.submit([encoder.finish()]);
+        self.ctx.check()
+    }
+
+    /// Once, when driving starts: fixes the driver origin and applies the
+    /// trigger's initial junction forces (host code shared with the CPU).
+    fn begin_driving(&mut self) -> Result<(), EngineError> {
+        let snap = self.snapshot()?;
+        if let Driver::SideSpring { row, .. } = self.model.driver {
+            self.drive_origin = DoubleSingle::from_f64(snap.disp[row * self.model.nx][0]);
+        }
+        if self.model.trigger.is_some() {
+            let anchors = crate::trigger::trigger_anchors(&self.model, &snap);
+            let spring: Vec<GpuJunctionSpring> = anchors
+                .iter()
+                .zip(&snap.junction_stiffness)
+                .map(|(a, k)| GpuJunctionSpring {
+                    anchor: DoubleSingle::from_f64(*a),
+                    stiffness: *k as f32,
+                })
+                .collect();
+            self.ctx.queue.write_buffer(
+                &self.buffers.junction_spring,
+                0,
+                bytemuck::cast_slice(&spring),
+            );
+        }
+        Ok(())
+    }
+
     /// Copies `buffers` into one staging buffer with one submit and one
     /// wait, and returns each buffer's bytes.
     fn read_buffers(&self, buffers: &[&wgpu::Buffer]) -> Result<Vec<Vec<u8>>, EngineError> {
@@ -315,6 +384,13 @@ impl GpuEngine {
     }
 }
 
+fn dispatch(pass: &mut wgpu::ComputePass<'_>, pipelines: &[Pipeline]) {
+    for p in pipelines {
+        pass.set_pipeline(&p.pipeline);
+        pass.dispatch_workgroups(p.groups.0, p.groups.1, 1);
+    }
+}
+
 fn cast_prefix<T: bytemuck::Pod>(bytes: &[u8], len: usize) -> Vec<T> {
     bytemuck::cast_slice::<u8, T>(bytes)[..len].to_vec()
 }
@@ -329,20 +405,18 @@ impl Engine for GpuEngine {
     }
 
     fn advance(&mut self, n: u64) -> Result<(), EngineError> {
+        let prep = self.model.prep_steps;
         let mut left = n;
         while left > 0 {
-            let k = left.min(STEPS_PER_SUBMIT);
-            for i in 0..k {
-                let loads =
-                    GpuStep::new(&step_params(&self.consts, self.step + i), self.drive_origin);
-                let at = (i * self.step_stride) as usize;
-                self.staging[at..at + std::mem::size_of::<GpuStep>()]
-                    .copy_from_slice(bytemuck::bytes_of(&loads));
+            // A submit never crosses the start of driving: the forces of
+            // that step wait for the driver origin and trigger.
+            let mut k = left.min(STEPS_PER_SUBMIT);
+            if self.step < prep {
+                k = k.min(prep - self.step);
             }
-            let bytes = (k * self.step_stride) as usize;
-            self.ctx
-                .queue
-                .write_buffer(&self.step_buffer, 0, &self.staging[..bytes]);
+            // Step i's update uses the loads of step + i, the force pass
+            // after it those of step + i + 1.
+            self.write_loads(self.step, k + 1);
             let mut encoder =
                 self.ctx
                     .device
@@ -355,17 +429,24 @@ impl Engine for GpuEngine {
                     timestamp_writes: None,
                 });
                 pass.set_bind_group(0, &self.state_group, &[]);
+                let (forces, verlet) = self.pipelines.split_at(self.pipelines.len() - 1);
                 for i in 0..k {
                     pass.set_bind_group(1, &self.step_group, &[(i * self.step_stride) as u32]);
-                    for p in &self.pipelines {
-                        pass.set_pipeline(&p.pipeline);
-                        pass.dispatch_workgroups(p.groups.0, p.groups.1, 1);
+                    dispatch(&mut pass, verlet);
+                    if self.step + i + 1 != prep {
+                        let at = ((i + 1) * self.step_stride) as u32;
+                        pass.set_bind_group(1, &self.step_group, &[at]);
+                        dispatch(&mut pass, forces);
                     }
                 }
             }
             self.ctx.queue.submit([encoder.finish()]);
             self.step += k;
             left -= k;
+            if self.step == prep {
+                self.begin_driving()?;
+                self.force_pass()?;
+            }
         }
         self.ctx.check()
     }
@@ -377,6 +458,7 @@ impl Engine for GpuEngine {
         let raw = self.read_buffers(&[
             &b.disp,
             &b.vel,
+            &b.force,
             &b.contact,
             &b.junction_spring,
             &b.junction_state,
@@ -384,49 +466,27 @@ impl Engine for GpuEngine {
         ])?;
         let disp: Vec<[DoubleSingle; 2]> = cast_prefix(&raw[0], n);
         let vel: Vec<[f32; 2]> = cast_prefix(&raw[1], n);
-        let contact: Vec<[f32; 2]> = cast_prefix(&raw[2], m.nx);
+        let force: Vec<[f32; 2]> = cast_prefix(&raw[2], n);
+        let contact: Vec<[f32; 2]> = cast_prefix(&raw[3], m.nx);
         let spring: Vec<crate::cpu::JunctionSpring<DoubleSingle, f32>> =
-            cast_prefix::<GpuJunctionSpring>(&raw[3], nj)
+            cast_prefix::<GpuJunctionSpring>(&raw[4], nj)
                 .into_iter()
                 .map(Into::into)
                 .collect();
-        let state: Vec<[u32; 2]> = cast_prefix(&raw[4], nj);
-        let slide: Vec<i32> = cast_prefix(&raw[5], m.nx);
+        let state: Vec<[u32; 2]> = cast_prefix(&raw[5], nj);
+        let slide: Vec<i32> = cast_prefix(&raw[6], m.nx);
         let limit = m.pressure_wave_speed();
-        let snap =
-            Snapshot::from_buffers(m, self.step, &disp, &vel, &contact, &spring, &state, &slide);
+        let snap = Snapshot::from_buffers(
+            m, self.step, &disp, &vel, &force, &contact, &spring, &state, &slide,
+        );
         // Blow-ups are found at readbacks (the GPU never stops to check).
         if let Some(i) = (0..n).find(|&i| {
-            let (u, v) = (snap.disp[i], snap.vel[i]);
+            let (u, v) = (snap.disp[i], snap.vel_half[i]);
             !(u[0].is_finite() && u[1].is_finite() && v[0].abs() <= limit && v[1].abs() <= limit)
         }) {
-            return Err(blow_up(m, self.step, i, snap.disp[i], snap.vel[i]));
+            return Err(blow_up(m, self.step, i, snap.disp[i], snap.vel_half[i]));
         }
         Ok(snap)
-    }
-
-    fn begin_driving(&mut self) -> Result<(), EngineError> {
-        let snap = self.snapshot()?;
-        if let Driver::SideSpring { row, .. } = self.model.driver {
-            self.drive_origin = DoubleSingle::from_f64(snap.disp[row * self.model.nx][0]);
-        }
-        if self.model.trigger.is_some() {
-            let anchors = crate::trigger::trigger_anchors(&self.model, &snap);
-            let spring: Vec<GpuJunctionSpring> = anchors
-                .iter()
-                .zip(&snap.junction_stiffness)
-                .map(|(a, k)| GpuJunctionSpring {
-                    anchor: DoubleSingle::from_f64(*a),
-                    stiffness: *k as f32,
-                })
-                .collect();
-            self.ctx.queue.write_buffer(
-                &self.buffers.junction_spring,
-                0,
-                bytemuck::cast_slice(&spring),
-            );
-        }
-        Ok(())
     }
 
     fn describe(&self) -> String {
