@@ -180,7 +180,6 @@ impl<T: Real, C: Coordinate<T>> CpuEngine<T, C> {
                 }
             }
         }
-
     }
 
     /// One leapfrog step from the forces at the current state, then the
