@@ -245,6 +245,19 @@ impl Model {
             youngs_modulus: s.material.youngs_modulus,
             density: s.material.density,
         };
+        // A drive faster than the lattice's P wave cannot be represented:
+        // the engines flag any block that fast as a blow-up.
+        let drive_speed = match model.driver {
+            Driver::SideSpring { velocity, .. } | Driver::TopVelocity { velocity } => velocity,
+            _ => 0.0,
+        };
+        let c_p = model.pressure_wave_speed();
+        if drive_speed.abs() >= c_p {
+            return Err(ModelError::Invalid(format!(
+                "loading.drive.velocity = {drive_speed} m/s is out of range (allowed: below \
+                 the lattice P-wave speed, |V| < {c_p:.1} m/s)"
+            )));
+        }
         if !allow_unstable {
             let lim = model.stability_limit();
             let (limit, which) = [

@@ -6,6 +6,7 @@ use crate::engine::{advance_to, Engine, EngineError, Snapshot};
 use crate::model::{Driver, Model};
 use crate::output::{GlobalSample, McapSink};
 use crate::scenario::Scenario;
+use crate::step_params::{step_params, Consts};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -93,8 +94,13 @@ pub enum RunError {
     Output(#[from] crate::output::OutputError),
 }
 
-/// Driving force (N) of the scene's driver in a snapshot.
+/// Tangential force (N) the scene's driver applies at the snapshot's
+/// instant: the side spring's tension; the programmed top force (ramp plus
+/// any trigger prestress); for a prescribed top-row velocity, the
+/// constraint reaction that gives the row its prescribed velocity over the
+/// next step; 0 without a driver. Friction is reported apart.
 pub fn drive_force(model: &Model, snap: &Snapshot, origin: f64) -> f64 {
+    let loads = || step_params(&Consts::<f64>::new(model), snap.step);
     match model.driver {
         Driver::SideSpring {
             stiffness,
@@ -104,8 +110,20 @@ pub fn drive_force(model: &Model, snap: &Snapshot, origin: f64) -> f64 {
             let t = snap.time.max(0.0);
             stiffness * (velocity * t - (snap.disp[row * model.nx][0] - origin))
         }
-        // Top loading: the friction the interface carries balances it.
-        _ => -snap.total_friction(),
+        Driver::TopForce { .. } => loads().top_tangential_total,
+        Driver::TopVelocity { .. } => {
+            let v_next = loads().top_velocity;
+            let top = (model.nz - 1) * model.nx;
+            (top..top + model.nx)
+                .map(|i| {
+                    let friction = snap.friction.get(i).copied().unwrap_or(0.0);
+                    model.mass * (v_next - snap.vel_half[i][0]) / model.dt
+                        - snap.force[i][0]
+                        - friction
+                })
+                .sum()
+        }
+        Driver::None => 0.0,
     }
 }
 

@@ -123,3 +123,24 @@ fn output_cadences_are_checked() {
     let e = parse_err(DEFAULT_SCENARIO, &["output.fast_interval=nan"]);
     assert!(e.contains("output.fast_interval = NaN"), "{e}");
 }
+
+#[test]
+fn drive_speed_is_bounded_by_the_p_wave_speed_not_a_round_number() {
+    let model = |v: &str| {
+        let set = vec![format!("loading.drive.velocity={v}")];
+        Model::from_scenario(
+            &Scenario::parse(DEFAULT_SCENARIO, "t", &set).unwrap(),
+            false,
+        )
+    };
+    // 1500 m/s was refused by a ±1000 cap; it is below c_p ≈ 1720 m/s.
+    assert!(model("1500").is_ok());
+    let e = model("2000")
+        .expect_err("faster than the P wave")
+        .to_string();
+    assert!(e.contains("loading.drive.velocity = 2000"), "{e}");
+    assert!(e.contains("P-wave speed"), "{e}");
+    assert!(e.contains("1719.9"), "{e}");
+    let e = parse_err(DEFAULT_SCENARIO, &["loading.drive.velocity=inf"]);
+    assert!(e.contains("any finite value"), "{e}");
+}

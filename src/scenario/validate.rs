@@ -144,7 +144,11 @@ pub fn validate(s: &Scenario, text: &str, overridden: &[&str]) -> Vec<String> {
             (true, Some(v)) => match key {
                 "stiffness" => c.positive(&path, v),
                 "height" => c.range(&path, v, 0.0, s.geometry.height),
-                _ => c.range(&path, v, -1e3, 1e3),
+                // Any finite force rate: a too-fast load shows as a
+                // blow-up, stopped with its step, time and block.
+                "force_rate" => c.finite(&path, v),
+                // Bounded by the lattice's P-wave speed in Model.
+                _ => c.finite(&path, v),
             },
             (false, None) => {}
         }
@@ -249,6 +253,15 @@ impl Checker<'_> {
             let line = self.line(path);
             self.problems.push(format!(
                 "{path} = {v} is out of range (allowed: {lo} to {hi}){line}"
+            ));
+        }
+    }
+
+    fn finite(&mut self, path: &str, v: f64) {
+        if !v.is_finite() {
+            let line = self.line(path);
+            self.problems.push(format!(
+                "{path} = {v} is out of range (allowed: any finite value){line}"
             ));
         }
     }
