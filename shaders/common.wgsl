@@ -78,7 +78,8 @@ const WORKGROUP: u32 = 64u;
 @group(0) @binding(6) var<storage, read_write> junction_spring: array<JunctionSpring>;
 // (slip steps left or PINNED, rupture count) per junction.
 @group(0) @binding(7) var<storage, read_write> junction_state: array<vec2<u32>>;
-@group(0) @binding(8) var<storage, read_write> slide_dir: array<i32>;
+// (sliding direction 0/±1, stick → slip count) per interface block.
+@group(0) @binding(8) var<storage, read_write> slide: array<vec2<i32>>;
 // A storage binding, not a uniform: lavapipe specialises shaders on uniform
 // contents and would recompile (and keep) a variant for every step.
 @group(1) @binding(0) var<storage, read> sp: StepLoads;

@@ -11,7 +11,8 @@ fn coulomb(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroup
     let v = vel[ix];
     let other = force[ix].x;
     let normal = foundation_normal(u.z.x);
-    var dir = slide_dir[ix];
+    var state = slide[ix];
+    var dir = state.x;
     if dir != 0 && v.x * f32(dir) <= 0.0 {
         dir = 0;
     }
@@ -23,11 +24,12 @@ fn coulomb(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroup
             friction = hold;
         } else {
             dir = select(-1, 1, other > 0.0);
+            state.y = state.y + 1;
             friction = -c.mu_d * normal * f32(dir);
         }
     } else {
         friction = -c.mu_d * normal * f32(dir);
     }
-    slide_dir[ix] = dir;
+    slide[ix] = vec2<i32>(dir, state.y);
     contact[ix] = vec2<f32>(friction, normal);
 }

@@ -34,6 +34,8 @@ pub struct Snapshot {
     pub ruptures: Vec<u32>,
     /// Amontons–Coulomb sliding direction per interface block.
     pub slide_dir: Vec<i32>,
+    /// Amontons–Coulomb stick → slip transitions per interface block.
+    pub slips: Vec<u32>,
 }
 
 impl Snapshot {
@@ -49,7 +51,7 @@ impl Snapshot {
         contact: &[[T; 2]],
         junction_spring: &[JunctionSpring<C, T>],
         junction_state: &[[u32; 2]],
-        slide_dir: &[i32],
+        slide: &[[i32; 2]],
     ) -> Snapshot {
         let f2 = |v: &[[T; 2]]| v.iter().map(|x| x.map(|y| y.as_f64())).collect::<Vec<_>>();
         let col = |v: &[[T; 2]], k: usize| v.iter().map(|x| x[k].as_f64()).collect::<Vec<_>>();
@@ -72,7 +74,8 @@ impl Snapshot {
                 .collect(),
             slip_steps_left: junction_state.iter().map(|s| s[0]).collect(),
             ruptures: junction_state.iter().map(|s| s[1]).collect(),
-            slide_dir: slide_dir.to_vec(),
+            slide_dir: slide.iter().map(|s| s[0]).collect(),
+            slips: slide.iter().map(|s| s[1] as u32).collect(),
         }
     }
 
@@ -96,8 +99,13 @@ impl Snapshot {
         self.friction.iter().sum()
     }
 
+    /// Junction ruptures, or Amontons–Coulomb stick → slip transitions.
     pub fn total_ruptures(&self) -> u64 {
-        self.ruptures.iter().map(|&r| r as u64).sum()
+        self.ruptures
+            .iter()
+            .chain(&self.slips)
+            .map(|&r| r as u64)
+            .sum()
     }
 
     /// Kinetic energy at the snapshot's instant (from `vel`).

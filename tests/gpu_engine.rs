@@ -210,3 +210,46 @@ fn a_lattice_beyond_the_adapter_limits_is_refused_clearly() {
     assert!(err.contains("block displacement buffer needs"), "{err}");
     assert!(err.contains("smaller lattice"), "{err}");
 }
+
+/// Amontons–Coulomb stick → slip transitions count as ruptures (they were
+/// not counted at all): in the run summary and `/global.ruptures`, and the
+/// same per block on the GPU as on the CPU.
+#[test]
+fn coulomb_stick_slip_transitions_are_counted_as_ruptures_on_both_engines() {
+    use slipfront::runner::{run_scene, RunOptions};
+    let mut set: Vec<String> = SMALL.iter().map(|s| s.to_string()).collect();
+    set.extend(
+        [
+            "friction.law=coulomb",
+            "loading.drive.velocity=0.4",
+            "time.end=0.0015",
+        ]
+        .map(String::from),
+    );
+    let s = Scenario::parse(DEFAULT_SCENARIO, "coulomb", &set).unwrap();
+    let m = Model::from_scenario(&s, false).unwrap();
+    let opts = RunOptions {
+        output: None,
+        progress: false,
+    };
+    let mut c = cpu_engine(&m, Precision::F32, 1).unwrap();
+    let summary = run_scene(c.as_mut(), &s, &opts).unwrap();
+    assert!(summary.ruptures > 0, "{summary}");
+    let mut g = gpu(&m);
+    let on_gpu = run_scene(&mut g, &s, &opts).unwrap();
+    let (cs, gs) = (c.snapshot().unwrap(), g.snapshot().unwrap());
+    println!("cpu {} gpu {} slips", summary.ruptures, on_gpu.ruptures);
+    assert_eq!(cs.total_ruptures(), summary.ruptures);
+    let off = cs
+        .slips
+        .iter()
+        .zip(&gs.slips)
+        .map(|(a, b)| a.abs_diff(*b))
+        .sum::<u32>();
+    assert!(
+        off as u64 * 100 <= summary.ruptures,
+        "{:?} vs {:?}",
+        cs.slips,
+        gs.slips
+    );
+}

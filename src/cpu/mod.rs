@@ -42,7 +42,9 @@ pub struct CpuEngine<T: Real, C: Coordinate<T> = <T as Real>::Coord> {
     junction_spring: Vec<JunctionSpring<C, T>>,
     /// (slip steps left or PINNED, rupture count) per junction.
     junction_state: Vec<[u32; 2]>,
-    slide_dir: Vec<i32>,
+    /// (sliding direction, stick → slip count) per interface block
+    /// (Amontons–Coulomb).
+    slide: Vec<[i32; 2]>,
     drive_origin: C,
     step: u64,
     pool: Option<rayon::ThreadPool>,
@@ -85,7 +87,7 @@ impl<T: Real, C: Coordinate<T>> CpuEngine<T, C> {
             contact: vec![[T::zero(); 2]; model.nx],
             junction_spring: vec![JunctionSpring::default(); nj],
             junction_state: vec![[PINNED, 0]; nj],
-            slide_dir: vec![0; model.nx],
+            slide: vec![[0; 2]; model.nx],
             drive_origin: C::default(),
             step: 0,
             pool,
@@ -141,7 +143,7 @@ impl<T: Real, C: Coordinate<T>> CpuEngine<T, C> {
                         self.disp[ix],
                         self.vel[ix],
                         self.force[ix][0],
-                        &mut self.slide_dir[ix],
+                        &mut self.slide[ix],
                     );
                     self.contact[ix] = [f, n];
                 }
@@ -258,7 +260,7 @@ impl<T: Real, C: Coordinate<T>> CpuEngine<T, C> {
             &self.contact,
             &self.junction_spring,
             &self.junction_state,
-            &self.slide_dir,
+            &self.slide,
         )
     }
 }

@@ -38,7 +38,7 @@ struct StateBuffers {
     contact: wgpu::Buffer,
     junction_spring: wgpu::Buffer,
     junction_state: wgpu::Buffer,
-    slide_dir: wgpu::Buffer,
+    slide: wgpu::Buffer,
 }
 
 pub struct GpuEngine {
@@ -93,7 +93,7 @@ impl GpuEngine {
             // Zero-sized bindings are invalid: pad empty arrays to one element.
             let padded;
             let contents = if bytes.is_empty() {
-                padded = vec![0u8; 16];
+                padded = vec![0u8; 48]; // a whole number of every element size
                 &padded[..]
             } else {
                 bytes
@@ -125,7 +125,7 @@ impl GpuEngine {
                 "junction_state",
                 bytemuck::cast_slice(&vec![[crate::cpu::PINNED, 0u32]; nj]),
             ),
-            slide_dir: storage("slide_dir", bytemuck::cast_slice(&vec![0i32; model.nx])),
+            slide: storage("slide", bytemuck::cast_slice(&vec![[0i32; 2]; model.nx])),
         };
         let gpu_consts = GpuConsts::new(&consts, model.pressure_wave_speed() as f32);
         let consts_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
@@ -150,7 +150,7 @@ impl GpuEngine {
             &b.contact,
             &b.junction_spring,
             &b.junction_state,
-            &b.slide_dir,
+            &b.slide,
         ];
         let bind_entries: Vec<wgpu::BindGroupEntry> = state_buffers
             .iter()
@@ -462,7 +462,7 @@ impl Engine for GpuEngine {
             &b.contact,
             &b.junction_spring,
             &b.junction_state,
-            &b.slide_dir,
+            &b.slide,
         ])?;
         let disp: Vec<[DoubleSingle; 2]> = cast_prefix(&raw[0], n);
         let vel: Vec<[f32; 2]> = cast_prefix(&raw[1], n);
@@ -474,7 +474,7 @@ impl Engine for GpuEngine {
                 .map(Into::into)
                 .collect();
         let state: Vec<[u32; 2]> = cast_prefix(&raw[5], nj);
-        let slide: Vec<i32> = cast_prefix(&raw[6], m.nx);
+        let slide: Vec<[i32; 2]> = cast_prefix(&raw[6], m.nx);
         let limit = m.pressure_wave_speed();
         let snap = Snapshot::from_buffers(
             m, self.step, &disp, &vel, &force, &contact, &spring, &state, &slide,
