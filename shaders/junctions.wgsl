@@ -28,8 +28,9 @@ fn junctions(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgro
         var spring = junction_spring[idx];
         var state = junction_state[idx];
         if state.x != PINNED {
-            state.x = state.x - 1u;
-            if state.x == 0u {
+            // A lifted block (f_N = 0) keeps its junctions waiting at 0.
+            state.x = max(state.x, 1u) - 1u;
+            if state.x == 0u && f_n > 0.0 {
                 spring = JunctionSpring(u.x.x, u.x.y, junction_stiffness(f_n));
                 state.x = PINNED;
             }

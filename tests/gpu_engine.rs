@@ -253,3 +253,46 @@ fn coulomb_stick_slip_transitions_are_counted_as_ruptures_on_both_engines() {
         gs.slips
     );
 }
+
+/// Opening: driven at 40 m/s, interface blocks of the small scene lift off
+/// the track and land again. On both engines no junction re-pins while its
+/// block is lifted (none is ever pinned with zero stiffness, as happened
+/// before), and the GPU keeps the CPU's rupture counts and times.
+#[test]
+fn lifted_blocks_re_pin_only_when_pressed_back_on_both_engines() {
+    let m = stick_slip_scene(&["loading.drive.velocity=40"]);
+    let mut c = cpu_engine(&m, Precision::F32, 1).unwrap();
+    let mut g = gpu(&m);
+    let ns = m.junctions.unwrap().count;
+    let mut lifted = 0;
+    let end = m.prep_steps + 3000;
+    for step in (m.prep_steps..=end).step_by(100) {
+        for e in [c.as_mut(), &mut g as &mut dyn Engine] {
+            advance_to(e, step).unwrap();
+            let s = e.snapshot().unwrap();
+            for ix in 0..m.nx {
+                let block = ix * ns..(ix + 1) * ns;
+                let zero_pinned = block
+                    .filter(|&j| s.slip_steps_left[j] == slipfront::cpu::PINNED)
+                    .any(|j| s.junction_stiffness[j] <= 0.0);
+                assert!(
+                    !zero_pinned,
+                    "block {ix} at step {step}: pinned with k_j = 0"
+                );
+                lifted += (s.disp[ix][1] > 0.0) as u32;
+            }
+        }
+    }
+    assert!(lifted > 20, "the scene must lift blocks off: {lifted}");
+    let m2 = stick_slip_scene(&["loading.drive.velocity=40"]);
+    let reference = rupture_record(
+        &m2,
+        cpu_engine(&m2, Precision::F32, 1).unwrap().as_mut(),
+        end,
+    );
+    let on_gpu = rupture_record(&m2, &mut gpu(&m2), end);
+    assert_eq!(
+        stick_slip_mismatch(&reference, &on_gpu),
+        Vec::<String>::new()
+    );
+}

@@ -3,6 +3,14 @@
 //! re-pin with zero stretch. A slipping junction counts down the steps left
 //! of its slip, so nothing here depends on the global step count (runs of
 //! any length, and fast-forward, never wrap it).
+//!
+//! Opening: junctions only attach where the block touches the track. While
+//! a block is lifted off (f_N = 0), its pinned junctions break as soon as
+//! they carry any force (their threshold μs·f_N is 0) and a junction whose
+//! slip time is over waits; it re-pins at the first step the block is
+//! pressed back, with the stiffness of the normal force at that step.
+//! (Before, it re-pinned at f_N = 0 with k_j = √(c·0) = 0 and stayed pinned
+//! with no force for ever.)
 
 use crate::real::{Coordinate, Real};
 use crate::rng::slip_steps;
@@ -69,8 +77,8 @@ pub fn junctions<T: Real, C: Coordinate<T>>(
         .enumerate()
     {
         if state[0] != PINNED {
-            state[0] -= 1;
-            if state[0] == 0 {
+            state[0] = state[0].saturating_sub(1);
+            if state[0] == 0 && f_n > T::zero() {
                 *spring = JunctionSpring {
                     anchor: u[0],
                     stiffness: c.junction_stiffness(f_n),
@@ -155,5 +163,57 @@ mod tests {
             assert_eq!(*at, Some(start + n as u64), "junction {j}");
             assert_eq!(state[j][1], 1, "junction {j} broke once");
         }
+    }
+
+    /// A block lifted off the track while its junctions slip: none re-pins
+    /// while it is open (and none with zero stiffness); pressed back, all
+    /// re-pin at once with the stiffness of the new normal force and carry
+    /// force again.
+    #[test]
+    fn junctions_wait_while_the_block_is_lifted_and_re_pin_when_pressed_back() {
+        let s = Scenario::parse(DEFAULT_SCENARIO, "test", &[]).unwrap();
+        let m = crate::Model::from_scenario(&s, false).unwrap();
+        let c = Consts::<f64>::new(&m);
+        let ns = c.junction_count;
+        let mut spring = vec![
+            JunctionSpring {
+                anchor: 0.0,
+                stiffness: 1.0e5
+            };
+            ns
+        ];
+        let mut state = vec![[PINNED, 0u32]; ns];
+        let step0 = m.prep_steps + 10;
+        let pressed = -1.0e-6;
+        let run = |step: u64,
+                   ux: f64,
+                   uz: f64,
+                   spring: &mut [JunctionSpring<f64, f64>],
+                   state: &mut [[u32; 2]]| {
+            let slots = JunctionSlots { spring, state };
+            junctions(&c, &step_params(&c, step), 0, [ux, uz], [0.0; 2], slots)
+        };
+        // Break them all, then lift the block for longer than any slip.
+        run(step0, 1.0e-3, pressed, &mut spring, &mut state);
+        assert!(state.iter().all(|s| s[0] != PINNED));
+        let lifted = 1.0e-6;
+        let wait = 4 * c.slip_mean_steps as u64;
+        for step in step0 + 1..step0 + wait {
+            let (friction, normal) = run(step, 0.0, lifted, &mut spring, &mut state);
+            assert_eq!((friction, normal), (0.0, 0.0));
+            assert!(state.iter().all(|s| s[0] != PINNED), "none re-pins lifted");
+        }
+        assert!(state.iter().all(|s| s[0] == 0), "all waiting");
+        // Pressed back: every junction re-pins with k_j = sqrt(c f_N) > 0.
+        let back = step0 + wait;
+        run(back, 0.0, pressed, &mut spring, &mut state);
+        let f_n = c.k_foundation * 1.0e-6 / ns as f64;
+        let k = c.junction_stiffness(f_n);
+        assert!(k > 0.0);
+        assert!(state.iter().all(|s| s[0] == PINNED));
+        assert!(spring.iter().all(|s| s.stiffness == k && s.anchor == 0.0));
+        // And they hold: a small displacement meets −Ns·k_j·du.
+        let (friction, _) = run(back + 1, 1.0e-9, pressed, &mut spring, &mut state);
+        assert!((friction + ns as f64 * k * 1.0e-9).abs() < 1e-12 * ns as f64 * k);
     }
 }
