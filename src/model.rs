@@ -258,6 +258,29 @@ impl Model {
                  the lattice P-wave speed, |V| < {c_p:.1} m/s)"
             )));
         }
+        // What the run can represent: a slip time within the 32-bit slip
+        // countdown, and step times exact in f64.
+        if let Some(j) = model.junctions {
+            let longest = (j.slip_time_mean + 10.0 * j.slip_time_std) / model.dt;
+            if longest >= (u32::MAX - 1) as f64 {
+                return Err(ModelError::Invalid(format!(
+                    "friction.junctions.slip_time_mean + 10 slip_time_std = {:.4e} s is out of \
+                     range (allowed: below {:.4e} s, 2^32 - 2 steps of dt = {:.4e} s)",
+                    j.slip_time_mean + 10.0 * j.slip_time_std,
+                    (u32::MAX - 1) as f64 * model.dt,
+                    model.dt
+                )));
+            }
+        }
+        if model.total_steps() as f64 >= 2f64.powi(53) {
+            return Err(ModelError::Invalid(format!(
+                "time.end = {} s is out of range (allowed: below {:.4e} s, 2^53 steps of dt = \
+                 {:.4e} s, so that every step time is exact)",
+                s.time.end,
+                2f64.powi(53) * model.dt,
+                model.dt
+            )));
+        }
         if !allow_unstable {
             let lim = model.stability_limit();
             let (limit, which) = [

@@ -144,3 +144,34 @@ fn drive_speed_is_bounded_by_the_p_wave_speed_not_a_round_number() {
     let e = parse_err(DEFAULT_SCENARIO, &["loading.drive.velocity=inf"]);
     assert!(e.contains("any finite value"), "{e}");
 }
+
+#[test]
+fn ranges_come_from_what_the_run_can_represent() {
+    let model = |set: &[&str]| {
+        let set: Vec<String> = set.iter().map(|s| s.to_string()).collect();
+        Model::from_scenario(
+            &Scenario::parse(DEFAULT_SCENARIO, "t", &set).unwrap(),
+            false,
+        )
+    };
+    // Former round-number caps, now accepted: damping.ratio 20 (stable at
+    // a small enough dt), Ns = 8192, time.end 2e6 s; a 500 s slip time fits
+    // the 32-bit countdown at the Table S1 dt (2^32 steps = 985 s).
+    assert!(model(&["damping.ratio=20", "time.dt_fraction=0.001"]).is_ok());
+    assert!(model(&["friction.junctions.count=8192"]).is_ok());
+    assert!(model(&["friction.junctions.slip_time_mean=500"]).is_ok());
+    assert!(model(&["time.end=2e6"]).is_ok());
+    // The limits that remain name the reason.
+    let e = model(&["friction.junctions.slip_time_mean=1e4"])
+        .expect_err("longer than the 32-bit countdown")
+        .to_string();
+    assert!(e.contains("2^32 - 2 steps"), "{e}");
+    let e = model(&["time.end=1e10"])
+        .expect_err("past 2^53 steps")
+        .to_string();
+    assert!(e.contains("2^53 steps"), "{e}");
+    let e = parse_err(DEFAULT_SCENARIO, &["friction.junctions.count=20000000"]);
+    assert!(e.contains("1 to 16777216"), "{e}");
+    let e = parse_err(DEFAULT_SCENARIO, &["damping.ratio=-1"]);
+    assert!(e.contains("a finite value >= 0"), "{e}");
+}
