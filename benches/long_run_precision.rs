@@ -9,6 +9,11 @@
 //! cargo bench --bench long_run_precision -- [--t-end 0.4] [--gpu]
 //!     [--seeds 8] [--scenario scenarios/tromborg2014_precursors.toml]
 //!     [--set key=value ...]
+//!
+//! `--seeds N --reanalyse PREFIX [--t-max T]` reads the run files of an
+//! earlier (possibly interrupted) seed run, PREFIX_f64_seed_K.mcap and
+//! PREFIX_f32_seed_K.mcap, and tabulates them up to the time every file
+//! reached (or T).
 
 use slipfront::backend::{make_engine, Backend, Precision};
 use slipfront::compare::{outcome_mismatch, RunOutcome};
@@ -107,62 +112,41 @@ fn main() {
         scenario.display()
     );
     if let Some(seeds) = arg::<u32>(&args, "--seeds") {
-        let mut cases = Vec::new();
-        for seed in 1..=seeds {
-            let set = vec![format!("time.seed={seed}")];
-            cases.push(case(
-                &format!("f64 seed {seed}"),
-                Backend::Cpu,
-                Precision::F64,
-                &set,
-            ));
-            cases.push(case(
-                &format!("f32 seed {seed}"),
-                Backend::Cpu,
-                Precision::F32,
-                &set,
-            ));
-        }
-        let done = run_all(&scenario, t_end, &base, &cases);
-        println!("| run | events | full events | mean F/F_N of full events | mean slip per event (m) | precursors | wall (s) |");
-        println!("| --- | ---: | ---: | ---: | ---: | ---: | ---: |");
-        let mut totals = [[0.0f64; 4]; 2];
-        for (k, d) in done.iter().enumerate() {
-            let events = d.run.interface_series().events_separated_by(quiet_gap);
-            let full: Vec<_> = events.iter().filter(|e| e.full).collect();
-            let mean_ratio = full
-                .iter()
-                .map(|e| d.run.drive_ratio_at(e.start))
-                .sum::<f64>()
-                / full.len().max(1) as f64;
-            let mean_slip = events.iter().map(|e| e.slip).sum::<f64>() / events.len().max(1) as f64;
-            let precursors = RunOutcome::from_run(&d.run, quiet_gap).precursors.len();
-            let row = [
-                events.len() as f64,
-                full.len() as f64,
-                mean_ratio,
-                mean_slip,
-            ];
-            for (t, v) in totals[k % 2].iter_mut().zip(row) {
-                *t += v / seeds as f64;
+        let done: Vec<Done> = match arg::<String>(&args, "--reanalyse") {
+            Some(prefix) => (1..=seeds)
+                .flat_map(|seed| ["f64", "f32"].map(|p| format!("{p}_seed_{seed}")))
+                .map(|label| {
+                    let path = format!("{prefix}_{label}.mcap");
+                    let run = RunFile::read(std::path::Path::new(&path)).expect("run file");
+                    Done {
+                        label: label.replace('_', " "),
+                        run,
+                        wall: f64::NAN,
+                        describe: String::new(),
+                    }
+                })
+                .collect(),
+            None => {
+                let mut cases = Vec::new();
+                for seed in 1..=seeds {
+                    let set = vec![format!("time.seed={seed}")];
+                    cases.push(case(
+                        &format!("f64 seed {seed}"),
+                        Backend::Cpu,
+                        Precision::F64,
+                        &set,
+                    ));
+                    cases.push(case(
+                        &format!("f32 seed {seed}"),
+                        Backend::Cpu,
+                        Precision::F32,
+                        &set,
+                    ));
+                }
+                run_all(&scenario, t_end, &base, &cases)
             }
-            println!(
-                "| {} | {} | {} | {:.4} | {:.4e} | {} | {:.0} |",
-                d.label,
-                events.len(),
-                full.len(),
-                mean_ratio,
-                mean_slip,
-                precursors,
-                d.wall
-            );
-        }
-        for (name, t) in ["f64 mean", "f32 mean"].iter().zip(totals) {
-            println!(
-                "| **{name}** | {:.2} | {:.2} | {:.4} | {:.4e} | | |",
-                t[0], t[1], t[2], t[3]
-            );
-        }
+        };
+        seed_table(done, seeds, arg(&args, "--t-max"), quiet_gap);
         return;
     }
     let v: f64 = s.loading.drive.velocity.unwrap_or(0.0);
@@ -205,6 +189,62 @@ fn main() {
                 format!("DEPARTS: {}", verdict.join("; "))
             },
             d.wall
+        );
+    }
+}
+
+/// Event statistics of f64 and f32 runs (alternating in `done`) up to the
+/// time every run reached, or `t_max`.
+fn seed_table(mut done: Vec<Done>, seeds: u32, t_max: Option<f64>, quiet_gap: f64) {
+    let reached = done
+        .iter()
+        .map(|d| d.run.interface.last().map_or(0.0, |m| m.time))
+        .fold(f64::INFINITY, f64::min);
+    let t_max = t_max.unwrap_or(reached).min(reached);
+    for d in &mut done {
+        d.run.interface.retain(|m| m.time <= t_max);
+        d.run.global.retain(|m| m.time <= t_max);
+    }
+    println!("events up to t = {t_max:.4} s of driving");
+    println!("| run | events | full events | mean F/F_N of full events | mean slip per event (m) | precursors | wall (s) |");
+    println!("| --- | ---: | ---: | ---: | ---: | ---: | ---: |");
+    let mut totals = [[0.0f64; 5]; 2];
+    for (k, d) in done.iter().enumerate() {
+        let events = d.run.interface_series().events_separated_by(quiet_gap);
+        let full: Vec<_> = events.iter().filter(|e| e.full).collect();
+        let mean_ratio = full
+            .iter()
+            .map(|e| d.run.drive_ratio_at(e.start))
+            .sum::<f64>()
+            / full.len().max(1) as f64;
+        let mean_slip = events.iter().map(|e| e.slip).sum::<f64>() / events.len().max(1) as f64;
+        let precursors = RunOutcome::from_run(&d.run, quiet_gap).precursors.len();
+        let row = [
+            events.len() as f64,
+            full.len() as f64,
+            mean_ratio,
+            mean_slip,
+            precursors as f64,
+        ];
+        for (t, v) in totals[k % 2].iter_mut().zip(row) {
+            *t += v / seeds as f64;
+        }
+        let or_dash = |ok: bool, v: String| if ok { v } else { "-".into() };
+        println!(
+            "| {} | {} | {} | {} | {} | {} | {:.0} |",
+            d.label,
+            events.len(),
+            full.len(),
+            or_dash(!full.is_empty(), format!("{mean_ratio:.4}")),
+            or_dash(!events.is_empty(), format!("{mean_slip:.4e}")),
+            precursors,
+            d.wall
+        );
+    }
+    for (name, t) in ["f64 mean", "f32 mean"].iter().zip(totals) {
+        println!(
+            "| **{name}** | {:.2} | {:.2} | {:.4} | {:.4e} | {:.2} | |",
+            t[0], t[1], t[2], t[3], t[4]
         );
     }
 }
