@@ -1,7 +1,7 @@
 // Double-single coordinates: a displacement is the unevaluated sum hi + lo
 // of two f32 (vec2: x = hi, y = lo), so creep increments below one f32 ulp
-// of u are kept. CPU twin: src/real.rs (DoubleSingle::add_f32, diff), the
-// same operations in the same order.
+// of u are kept. CPU twins: src/real.rs DoubleSingle::ds_add and ds_diff,
+// the same operations in the same order.
 //
 // c.one is a runtime 1.0 from the uniform block. Multiplying the partial
 // sums by it is exact but opaque to the compiler, so no driver can
@@ -20,8 +20,4 @@ fn ds_add(a: vec2<f32>, d: f32) -> vec2<f32> {
 // a - b rounded to f32 once (exact leading difference for nearby values).
 fn ds_diff(a: vec2<f32>, b: vec2<f32>) -> f32 {
     return (a.x - b.x) + (a.y - b.y);
-}
-
-fn ds_from_f32(v: f32) -> vec2<f32> {
-    return vec2<f32>(v, 0.0);
 }

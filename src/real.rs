@@ -120,8 +120,8 @@ impl Coordinate<f32> for f32 {
 
 /// An unevaluated sum `hi + lo` of two f32 with |lo| ≤ ulp(hi)/2. Same
 /// layout as the WGSL `vec2<f32>` (hi, lo) of `shaders/double_single.wgsl`,
-/// whose `ds_add` and `ds_diff` are the twins of `add` and `diff` here,
-/// operation for operation.
+/// whose `ds_add` and `ds_diff` are the twins of the methods of the same
+/// names here, operation for operation.
 #[repr(C)]
 #[derive(Debug, Clone, Copy, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 pub struct DoubleSingle {
@@ -136,7 +136,7 @@ impl DoubleSingle {
     /// reassociate the error terms away; multiplying by 1.0 is exact, so
     /// the results are the same bits.
     #[inline]
-    pub fn add_f32(self, d: f32) -> Self {
+    pub fn ds_add(self, d: f32) -> Self {
         let s = self.hi + d;
         let b = s - self.hi;
         let err = (self.hi - (s - b)) + (d - b);
@@ -146,6 +146,14 @@ impl DoubleSingle {
             hi,
             lo: lo - (hi - s),
         }
+    }
+
+    /// (hi − hi') + (lo − lo'): for nearby coordinates the first difference
+    /// is exact (Sterbenz), so the result carries f32's full relative
+    /// precision of the *difference*, not of the coordinates.
+    #[inline]
+    pub fn ds_diff(self, other: Self) -> f32 {
+        (self.hi - other.hi) + (self.lo - other.lo)
     }
 }
 
@@ -165,14 +173,11 @@ impl Coordinate<f32> for DoubleSingle {
     }
     #[inline]
     fn add(self, d: f32) -> Self {
-        self.add_f32(d)
+        self.ds_add(d)
     }
-    /// (hi − hi') + (lo − lo'): for nearby coordinates the first difference
-    /// is exact (Sterbenz), so the result carries T's full relative
-    /// precision of the *difference*, not of the coordinates.
     #[inline]
     fn diff(self, other: Self) -> f32 {
-        (self.hi - other.hi) + (self.lo - other.lo)
+        self.ds_diff(other)
     }
     #[inline]
     fn value(self) -> f32 {
