@@ -5,7 +5,7 @@
 //! reproduce f64's precursors (count, lengths, start time and F/F_N within
 //! 0.1%), as f64 does under a 1e-6 change of the drive speed. Plain f32
 //! displacements (the engines before mixed precision) are the negative
-//! control: measured, their second precursor starts 4.6% later and is one
+//! control: measured, their third precursor starts 4.6% later and is one
 //! block longer, so the comparison must flag them.
 
 use slipfront::backend::{make_engine, Backend, Precision};
