@@ -3,8 +3,10 @@
 //! prints a Markdown table (see BENCHMARKS.md for recorded results).
 
 use slipfront::backend::{make_engine, Backend, Precision};
+use slipfront::gpu::{GpuEngine, GpuOptions, GpuPath};
 use slipfront::scenario::{Scenario, DEFAULT_SCENARIO};
 use slipfront::{advance_to, Model};
+use slipfront::{Engine, EngineError};
 use std::time::Instant;
 
 fn scene(nx: u32, nz: u32) -> Model {
@@ -23,13 +25,8 @@ fn scene(nx: u32, nz: u32) -> Model {
     Model::from_scenario(&s, false).expect("bench model")
 }
 
-fn measure(
-    model: &Model,
-    backend: Backend,
-    precision: Precision,
-    threads: usize,
-) -> Option<(f64, String)> {
-    let mut engine = make_engine(model, backend, precision, threads).ok()?;
+fn measure(model: &Model, engine: Result<Box<dyn Engine>, EngineError>) -> Option<(f64, String)> {
+    let mut engine = engine.ok()?;
     // Warm up past the normal-load phase, then time at least ~2 s.
     advance_to(engine.as_mut(), model.prep_steps + 10).ok()?;
     let mut steps = 16u64;
@@ -49,28 +46,13 @@ fn measure(
     }
 }
 
-/// Per-kernel GPU timing (each phase alone), as cell-updates per second.
-fn profile(model: &Model) {
-    let Ok(mut engine) = slipfront::gpu::GpuEngine::new(model) else {
-        return;
+/// The GPU engine on `path`.
+fn gpu_engine(model: &Model, path: GpuPath) -> Result<Box<dyn Engine>, EngineError> {
+    let opts = GpuOptions {
+        path,
+        ..GpuOptions::default()
     };
-    let n = model.n_blocks();
-    let dispatches = (2e8 / n as f64).clamp(4.0, 2000.0) as u32;
-    if let Ok(phases) = engine.profile_phases(dispatches) {
-        for (name, seconds) in phases {
-            // Junction kernels update Ns junctions on each interface block.
-            let items = match name {
-                "junctions" => model.n_junctions(),
-                "coulomb" => model.nx,
-                _ => n,
-            };
-            println!(
-                "|   kernel `{name}` | {:.1} µs per dispatch | {:.3e} items/s | ({items} items) |",
-                seconds * 1e6,
-                items as f64 / seconds
-            );
-        }
-    }
+    Ok(Box::new(GpuEngine::with_options(model, opts)?))
 }
 
 fn main() {
@@ -118,7 +100,6 @@ fn main() {
         if gpu {
             configs.push((Backend::Gpu, Precision::F32, 0));
         }
-        let profile_gpu = gpu && std::env::var("SLIPFRONT_BENCH_KERNELS").is_ok();
         for (backend, precision, threads) in configs {
             let bytes = match precision {
                 Precision::F64 => model.memory_bytes(8, 8),
@@ -126,16 +107,26 @@ fn main() {
                 Precision::F32Plain => model.memory_bytes(4, 4),
             } as f64
                 / n as f64;
-            match measure(&model, backend, precision, threads) {
-                Some((rate, what)) => println!(
-                    "| {name} | {what} | {rate:.3e} | {:.3e} | {bytes:.1} |",
-                    rate / n as f64
-                ),
-                None => println!("| {name} | {backend:?} {precision:?} | unavailable | | |"),
+            let paths = if backend == Backend::Gpu {
+                vec![Some(GpuPath::OneStep), Some(GpuPath::Persistent)]
+            } else {
+                vec![None]
+            };
+            for path in paths {
+                let engine = match path {
+                    Some(p) => gpu_engine(&model, p),
+                    None => make_engine(&model, backend, precision, threads),
+                };
+                match measure(&model, engine) {
+                    Some((rate, what)) => println!(
+                        "| {name} | {what} | {rate:.3e} | {:.3e} | {bytes:.1} |",
+                        rate / n as f64
+                    ),
+                    None => println!(
+                        "| {name} | {backend:?} {precision:?} {path:?} | unavailable | | |"
+                    ),
+                }
             }
-        }
-        if profile_gpu {
-            profile(&model);
         }
     }
 }

@@ -1,14 +1,12 @@
-// Phase 1: springs, dashpots, foundation and external loads on each block.
-// CPU twin: src/cpu/bulk_forces.rs. Terms a scene does not use are removed
-// by the pipeline-overridable constants below.
+// Springs, dashpots, foundation and external loads on one block.
+// CPU twin: src/cpu/bulk_forces.rs bulk_force. Terms a scene does not use
+// are removed by the pipeline-overridable constants below.
 
 override DAMPING_FORM: u32 = 1u;      // 0 none, 1 full relative velocity, 2 bond-projected
 override USE_FOUNDATION: bool = true;
 override USE_TOP_LOADS: bool = true;
 override USE_SIDE_SPRING: bool = true;
 override USE_RELAXATION: bool = true;
-
-const SQRT_2: f32 = 1.4142135;
 
 fn top_share(ix: u32) -> f32 {
     if c.nx == 1u {
@@ -20,34 +18,24 @@ fn top_share(ix: u32) -> f32 {
     return c.top_share_full;
 }
 
-@compute @workgroup_size(64)
-fn bulk_forces(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
-    let i = thread_index(gid, groups);
-    if i >= c.n_blocks {
-        return;
-    }
+fn bulk_force(i: u32, ld: Loads) -> vec2<f32> {
     let ix = i32(i % c.nx);
     let iz = i32(i / c.nx);
-    let ui = disp[i];
-    let vi = vel[i];
+    let ui = load_disp(i);
+    let vi = load_vel(i);
     var f = vec2<f32>(0.0, 0.0);
-    // Same bond order as lattice::STENCIL.
-    var dirs = array<vec2<i32>, 8>(
-        vec2<i32>(1, 0), vec2<i32>(-1, 0), vec2<i32>(0, 1), vec2<i32>(0, -1),
-        vec2<i32>(1, 1), vec2<i32>(-1, 1), vec2<i32>(1, -1), vec2<i32>(-1, -1));
     for (var b = 0u; b < 8u; b++) {
-        let d = dirs[b];
+        let d = STENCIL[b];
         let jx = ix + d.x;
         let jz = iz + d.y;
         if jx < 0 || jz < 0 || jx >= i32(c.nx) || jz >= i32(c.nz) {
             continue;
         }
         let j = u32(jz) * c.nx + u32(jx);
-        let diagonal = b >= 4u;
         let r0 = vec2<f32>(f32(d.x) * c.spacing, f32(d.y) * c.spacing);
-        let rest = select(c.spacing, SQRT_2 * c.spacing, diagonal);
-        let kb = select(c.k, 0.5 * c.k, diagonal);
-        let uj = disp[j];
+        let rest = STENCIL_LENGTH[b] * c.spacing;
+        let kb = STENCIL_STIFFNESS[b] * c.k;
+        let uj = load_disp(j);
         let du = vec2<f32>(ds_diff(uj.x, ui.x), ds_diff(uj.z, ui.z));
         let r = r0 + du;
         let len = sqrt(r.x * r.x + r.y * r.y);
@@ -58,7 +46,7 @@ fn bulk_forces(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workg
         let spring = kb * stretch;
         f = vec2<f32>(f.x + spring * n.x, f.y + spring * n.y);
         if DAMPING_FORM != 0u {
-            let dv = vel[j] - vi;
+            let dv = load_vel(j) - vi;
             if DAMPING_FORM == 2u {
                 let along = c.eta * (dv.x * n.x + dv.y * n.y);
                 f = vec2<f32>(f.x + along * n.x, f.y + along * n.y);
@@ -73,15 +61,14 @@ fn bulk_forces(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workg
     }
     if USE_TOP_LOADS && (fl & FLAG_TOP) != 0u {
         let share = top_share(u32(ix));
-        f.y = f.y - sp.normal_total * share;
-        f.x = f.x + sp.top_tangential_total * share;
+        f.y = f.y - ld.normal_total * share;
+        f.x = f.x + ld.top_tangential_total * share;
     }
-    if USE_SIDE_SPRING && (fl & FLAG_DRIVEN) != 0u && sp.preparing == 0u {
-        let drive_target = vec2<f32>(sp.drive_target_hi, sp.drive_target_lo);
-        f.x = f.x + c.drive_stiffness * ds_diff(drive_target, ui.x);
+    if USE_SIDE_SPRING && (fl & FLAG_DRIVEN) != 0u && !ld.preparing {
+        f.x = f.x + c.drive_stiffness * ds_diff(ld.drive_target, ui.x);
     }
     if USE_RELAXATION {
-        f = vec2<f32>(f.x - sp.relax_eta * vi.x, f.y - sp.relax_eta * vi.y);
+        f = vec2<f32>(f.x - ld.relax_eta * vi.x, f.y - ld.relax_eta * vi.y);
     }
-    force[i] = f;
+    return f;
 }

@@ -1,15 +1,9 @@
-// Phase 2 (Amontons–Coulomb friction) per interface block.
-// CPU twin: src/cpu/coulomb.rs.
+// Amontons–Coulomb friction on interface block ix, given the other forces
+// along x; returns (friction, normal force). CPU twin: src/cpu/coulomb.rs.
 
-@compute @workgroup_size(64)
-fn coulomb(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
-    let ix = thread_index(gid, groups);
-    if ix >= c.nx {
-        return;
-    }
-    let u = disp[ix];
-    let v = vel[ix];
-    let other = force[ix].x;
+fn coulomb(ix: u32, other: f32, ld: Loads) -> vec2<f32> {
+    let u = load_disp(ix);
+    let v = load_vel(ix);
     let normal = foundation_normal(u.z.x);
     var state = slide[ix];
     var dir = state.x;
@@ -20,7 +14,7 @@ fn coulomb(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroup
     if dir == 0 {
         // Friction that brings the block to rest this step.
         let hold = -other - c.mass * v.x / c.dt;
-        if sp.preparing != 0u || abs(hold) <= c.mu_s * normal {
+        if ld.preparing || abs(hold) <= c.mu_s * normal {
             friction = hold;
         } else {
             dir = select(-1, 1, other > 0.0);
@@ -31,5 +25,5 @@ fn coulomb(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroup
         friction = -c.mu_d * normal * f32(dir);
     }
     slide[ix] = vec2<i32>(dir, state.y);
-    contact[ix] = vec2<f32>(friction, normal);
+    return vec2<f32>(friction, normal);
 }

@@ -1,7 +1,9 @@
-// Phase 2 (junction friction): the Ns micro-junctions of each interface
-// block pin, break at mu_s f_N, slip at mu_d f_N for a drawn time and re-pin.
-// A slipping junction counts its slip steps down (no global step count).
-// CPU twin: src/cpu/junctions.rs. One thread per interface block.
+// Junction friction: the Ns micro-junctions of each interface block pin,
+// break at mu_s f_N, slip at mu_d f_N for a drawn time and re-pin. A
+// slipping junction counts its slip steps down (no global step count).
+// Lane l of block ix handles junctions l, l + JUNCTION_LANES, ...; the
+// caller adds the lane sums in lane order.
+// CPU twin: src/cpu/junctions.rs junction_lane.
 
 fn junction_stiffness(f_n: f32) -> f32 {
     if c.stiffness_normal_load != 0u {
@@ -10,20 +12,15 @@ fn junction_stiffness(f_n: f32) -> f32 {
     return c.junction_stiffness_value;
 }
 
-@compute @workgroup_size(64)
-fn junctions(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
-    let ix = thread_index(gid, groups);
-    if ix >= c.nx {
-        return;
-    }
-    let u = disp[ix];
-    let v = vel[ix];
+fn junction_lane(ix: u32, lane: u32, ld: Loads) -> f32 {
+    let u = load_disp(ix);
+    let v = load_vel(ix);
     let normal = foundation_normal(u.z.x);
     let f_n = normal / f32(c.junction_count);
     let threshold = c.mu_s * f_n;
     let sliding = -c.mu_d * f_n * sign(v.x);
     var total = 0.0;
-    for (var j = 0u; j < c.junction_count; j++) {
+    for (var j = lane; j < c.junction_count; j += JUNCTION_LANES) {
         let idx = ix * c.junction_count + j;
         var spring = junction_spring[idx];
         var state = junction_state[idx];
@@ -37,13 +34,13 @@ fn junctions(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgro
         }
         var f = sliding;
         if state.x == PINNED {
-            if sp.preparing != 0u {
+            if ld.preparing {
                 // While the normal load is applied, attachment is continuous.
                 spring.stiffness = junction_stiffness(f_n);
             }
             let anchor = vec2<f32>(spring.anchor_hi, spring.anchor_lo);
             f = -spring.stiffness * ds_diff(u.x, anchor);
-            if sp.preparing == 0u && abs(f) > threshold {
+            if !ld.preparing && abs(f) > threshold {
                 let count = state.y + 1u;
                 state.y = count;
                 let n = slip_steps(c.seed, ix, j, count, c.slip_mean_steps, c.slip_std_steps);
@@ -56,5 +53,5 @@ fn junctions(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgro
         junction_state[idx] = state;
         total = total + f;
     }
-    contact[ix] = vec2<f32>(total, normal);
+    return total;
 }

@@ -198,6 +198,10 @@ pub trait Engine {
     fn snapshot(&mut self) -> Result<Snapshot, EngineError>;
     /// Backend, adapter and precision, for logs and metadata.
     fn describe(&self) -> String;
+    /// GPU dispatches issued so far (None: not a GPU engine).
+    fn dispatches(&self) -> Option<u64> {
+        None
+    }
 }
 
 /// Advances `engine` to global step `target` (no-op if it is there or past).

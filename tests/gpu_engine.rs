@@ -4,9 +4,9 @@
 use slipfront::backend::{cpu_engine, Precision};
 use slipfront::compare::{compare_snapshots, fields_over};
 use slipfront::gpu::shaders::Variant;
-use slipfront::gpu::GpuEngine;
+use slipfront::gpu::{GpuEngine, GpuOptions, GpuPath};
 use slipfront::scenario::{Scenario, DEFAULT_SCENARIO};
-use slipfront::{advance_to, Engine, Model, Snapshot};
+use slipfront::{advance_to, Engine, EngineError, Model, Snapshot};
 
 fn model(set: &[&str]) -> Model {
     let set: Vec<String> = set.iter().map(|s| s.to_string()).collect();
@@ -18,9 +18,21 @@ fn gpu(m: &Model) -> GpuEngine {
     GpuEngine::new(m).unwrap_or_else(|e| panic!("a GPU adapter is required (lavapipe in CI): {e}"))
 }
 
-fn run_both(m: &Model, steps: u64) -> (Snapshot, Snapshot) {
+/// The engine on one kernel: every cross-check runs on both.
+fn gpu_on(m: &Model, path: GpuPath) -> GpuEngine {
+    let opts = GpuOptions {
+        path,
+        ..GpuOptions::default()
+    };
+    GpuEngine::with_options(m, opts)
+        .unwrap_or_else(|e| panic!("a GPU adapter is required (lavapipe in CI): {e}"))
+}
+
+const KERNELS: [GpuPath; 2] = [GpuPath::OneStep, GpuPath::Persistent];
+
+fn run_both(m: &Model, steps: u64, path: GpuPath) -> (Snapshot, Snapshot) {
     let mut c = cpu_engine(m, Precision::F32, 1).unwrap();
-    let mut g = gpu(m);
+    let mut g = gpu_on(m, path);
     advance_to(c.as_mut(), steps).unwrap();
     advance_to(&mut g, steps).unwrap();
     (c.snapshot().unwrap(), g.snapshot().unwrap())
@@ -33,18 +45,21 @@ const SMALL: &[&str] = &slipfront::verify::SMALL_SCENE;
 fn gpu_f32_matches_cpu_f32_field_by_field() {
     // Normal loading and 3000 steps of driving, before any junction breaks.
     let m = model(SMALL);
-    let (c, g) = run_both(&m, m.prep_steps + 3000);
-    assert_eq!(c.total_ruptures(), 0);
-    let errors = compare_snapshots(&c, &g);
-    // f32 kernels differ from the CPU twins only by the rounding of division
-    // and square roots: 1e-4 of each field's scale; velocities near rest are
-    // f32 force noise (k·l·2⁻²⁴·dt/m ≈ 3e-7 m/s a step), so they get a floor
-    // of 1e-5 m/s, 1% of the slowest slip speeds of interest.
-    assert_eq!(
-        fields_over(&errors, 1e-4, 1e-5),
-        Vec::<String>::new(),
-        "{errors:?}"
-    );
+    for path in KERNELS {
+        let (c, g) = run_both(&m, m.prep_steps + 3000, path);
+        assert_eq!(c.total_ruptures(), 0);
+        let errors = compare_snapshots(&c, &g);
+        // f32 kernels differ from the CPU twins only by the rounding of
+        // division and square roots: 1e-4 of each field's scale;
+        // velocities near rest are f32 force noise (k·l·2⁻²⁴·dt/m ≈ 3e-7
+        // m/s a step), so they get a floor of 1e-5 m/s, 1% of the slowest
+        // slip speeds of interest.
+        assert_eq!(
+            fields_over(&errors, 1e-4, 1e-5),
+            Vec::<String>::new(),
+            "{path:?}: {errors:?}"
+        );
+    }
 }
 
 /// Per-block rupture counts and the first rupture step of each block.
@@ -110,17 +125,20 @@ fn gpu_reproduces_rupture_counts_and_times_and_flags_a_1_percent_change() {
         reference.0.iter().sum::<u32>() > 100,
         "the window must contain ruptures"
     );
-    let on_gpu = rupture_record(&m, &mut gpu(&m), end);
     let diff = |a: &(Vec<u32>, Vec<u64>), b: &(Vec<u32>, Vec<u64>)| {
         let t: (u32, u32) = (a.0.iter().sum(), b.0.iter().sum());
         let d = a.1.iter().zip(&b.1).map(|(x, y)| x.abs_diff(*y)).max();
         format!("totals {t:?}, max first-rupture shift {d:?}")
     };
-    println!("gpu: {}", diff(&reference, &on_gpu));
-    assert_eq!(
-        stick_slip_mismatch(&reference, &on_gpu),
-        Vec::<String>::new()
-    );
+    for path in KERNELS {
+        let on_gpu = rupture_record(&m, &mut gpu_on(&m, path), end);
+        println!("gpu {path:?}: {}", diff(&reference, &on_gpu));
+        assert_eq!(
+            stick_slip_mismatch(&reference, &on_gpu),
+            Vec::<String>::new(),
+            "{path:?}"
+        );
+    }
     // Negative control: μs 1% higher must be flagged by the same comparator.
     let perturbed = stick_slip_scene(&["friction.static_coefficient=0.404"]);
     let changed = rupture_record(&perturbed, &mut gpu(&perturbed), end);
@@ -160,14 +178,14 @@ fn each_example_scenario_builds_only_the_terms_it_uses() {
         .1;
     assert_eq!(
         s1,
-        "bulk_forces(DAMPING_FORM=1,USE_FOUNDATION=1,USE_TOP_LOADS=1,USE_SIDE_SPRING=1,USE_RELAXATION=1) -> junctions() -> verlet(USE_FRICTION=1)"
+        "FRICTION_LAW=1,DAMPING_FORM=1,USE_FOUNDATION=1,USE_TOP_LOADS=1,USE_SIDE_SPRING=1,USE_RELAXATION=1"
     );
     // A frictionless, undamped wave test builds no friction kernel.
     let wave = slipfront::verify::bare_scene("wave");
     let v = Variant::for_model(&Model::from_scenario(&wave, false).unwrap()).describe();
     assert_eq!(
         v,
-        "bulk_forces(DAMPING_FORM=0,USE_FOUNDATION=0,USE_TOP_LOADS=0,USE_SIDE_SPRING=0,USE_RELAXATION=0) -> verlet(USE_FRICTION=0)"
+        "FRICTION_LAW=0,DAMPING_FORM=0,USE_FOUNDATION=0,USE_TOP_LOADS=0,USE_SIDE_SPRING=0,USE_RELAXATION=0"
     );
 }
 
@@ -295,4 +313,79 @@ fn lifted_blocks_re_pin_only_when_pressed_back_on_both_engines() {
         stick_slip_mismatch(&reference, &on_gpu),
         Vec::<String>::new()
     );
+}
+
+/// The kernel reports its dispatches: one per step on the one-step path,
+/// one per many steps on the persistent path (`describe` says how many).
+#[test]
+fn dispatches_per_step_are_one_or_one_per_batch() {
+    let m = model(SMALL);
+    let steps = 2000;
+    let mut one = gpu_on(&m, GpuPath::OneStep);
+    advance_to(&mut one, steps).unwrap();
+    assert_eq!(one.dispatches(), Some(steps));
+    let mut persistent = gpu_on(&m, GpuPath::Persistent);
+    advance_to(&mut persistent, steps).unwrap();
+    let d = persistent.dispatches().unwrap();
+    // Batches split at the end of the ramp and of the normal-load phase.
+    assert!(d * 100 <= steps, "{d} dispatches for {steps} steps");
+    println!("{}", persistent.describe());
+}
+
+/// A driver that cuts a persistent dispatch short (llvmpipe stops a
+/// shader's loops after 65535 iterations) is caught, not taken as done:
+/// on a software adapter, one dispatch of 4096 steps must fail with the
+/// reason; elsewhere it must run.
+#[test]
+fn a_persistent_dispatch_cut_short_is_an_error() {
+    let m = model(SMALL);
+    let opts = GpuOptions {
+        path: GpuPath::Persistent,
+        steps_per_dispatch: Some(4096),
+        ..GpuOptions::default()
+    };
+    let mut g = GpuEngine::with_options(&m, opts).expect("an adapter");
+    let result = advance_to(&mut g, 4000);
+    if g.adapter().contains("llvmpipe") {
+        let err = result
+            .expect_err("llvmpipe cuts 4000 steps short")
+            .to_string();
+        assert!(err.contains("cut a persistent dispatch short"), "{err}");
+    } else {
+        result.unwrap();
+    }
+}
+
+/// A run that blows up stops with the step and block where it happened, on
+/// both kernels, as the CPU does: junctions 10⁴× too stiff for the time
+/// step (forced past the stability check) blow up within a few hundred
+/// steps; the GPU must name the CPU f32 engine's step (within 5 steps) and
+/// an interface block, and stop there.
+#[test]
+fn a_blow_up_stops_the_run_at_its_step_and_block_on_both_kernels() {
+    let s = slipfront::verify::small_scene(&[
+        "loading.drive.velocity=0.4",
+        "friction.junctions.stiffness_coefficient=39.2e17",
+        "time.end=1e-3",
+    ])
+    .unwrap();
+    let m = Model::from_scenario(&s, true).unwrap();
+    let mut c = cpu_engine(&m, Precision::F32, 1).unwrap();
+    let Err(EngineError::BlowUp { step: at, .. }) = advance_to(c.as_mut(), m.total_steps())
+    else {
+        panic!("the CPU run must blow up");
+    };
+    for path in KERNELS {
+        let mut g = gpu_on(&m, path);
+        let err = advance_to(&mut g, m.total_steps()).unwrap_err();
+        let text = err.to_string();
+        let EngineError::BlowUp { step, iz, .. } = err else {
+            panic!("{path:?}: {text}");
+        };
+        println!("{path:?}: {text} (cpu step {at})");
+        assert!(step.abs_diff(at) <= 5, "{path:?}: step {step} vs {at}");
+        assert!(iz <= 1, "{path:?}: {text}");
+        assert!(text.contains("blew up at step"), "{text}");
+        assert_eq!(g.steps_done(), step);
+    }
 }

@@ -55,6 +55,12 @@ pub fn velocity_sign<T: Real>(v: T) -> T {
     }
 }
 
+/// Junctions of one block are summed in this many interleaved lanes (lane
+/// l holds junctions l, l + LANES, ...), then the lanes in order: the GPU
+/// gives each lane a thread and adds the lane sums in the same order, so
+/// CPU and GPU round the friction alike.
+pub const JUNCTION_LANES: usize = 64;
+
 /// Advances the junctions of interface block `ix` by one step and returns
 /// (friction force on the block along x, normal force p).
 pub fn junctions<T: Real, C: Coordinate<T>>(
@@ -65,17 +71,36 @@ pub fn junctions<T: Real, C: Coordinate<T>>(
     v: [T; 2],
     slots: JunctionSlots<'_, T, C>,
 ) -> (T, T) {
+    let mut total = T::zero();
+    for lane in 0..JUNCTION_LANES.min(c.junction_count) {
+        let slots = JunctionSlots {
+            spring: &mut *slots.spring,
+            state: &mut *slots.state,
+        };
+        total = total + junction_lane(c, p, ix, lane, u, v, slots);
+    }
+    (total, foundation_normal(c, u[1].value()))
+}
+
+/// Twin of the WGSL `junction_lane`: advances junctions `lane`,
+/// `lane + JUNCTION_LANES`, ... of block `ix` by one step and returns the
+/// sum of their forces on the block along x.
+pub fn junction_lane<T: Real, C: Coordinate<T>>(
+    c: &Consts<T>,
+    p: &StepParams<T>,
+    ix: usize,
+    lane: usize,
+    u: [C; 2],
+    v: [T; 2],
+    slots: JunctionSlots<'_, T, C>,
+) -> T {
     let normal = foundation_normal(c, u[1].value());
     let f_n = normal / T::from_f64(c.junction_count as f64);
     let threshold = c.mu_s * f_n;
     let sliding = -c.mu_d * f_n * velocity_sign(v[0]);
     let mut total = T::zero();
-    for (j, (spring, state)) in slots
-        .spring
-        .iter_mut()
-        .zip(slots.state.iter_mut())
-        .enumerate()
-    {
+    for j in (lane..c.junction_count).step_by(JUNCTION_LANES) {
+        let (spring, state) = (&mut slots.spring[j], &mut slots.state[j]);
         if state[0] != PINNED {
             state[0] = state[0].saturating_sub(1);
             if state[0] == 0 && f_n > T::zero() {
@@ -111,7 +136,7 @@ pub fn junctions<T: Real, C: Coordinate<T>>(
         }
         total = total + f;
     }
-    (total, normal)
+    total
 }
 
 #[cfg(test)]

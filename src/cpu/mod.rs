@@ -185,8 +185,10 @@ impl<T: Real, C: Coordinate<T>> CpuEngine<T, C> {
     }
 
     /// One leapfrog step from the forces at the current state, then the
-    /// forces at the new one.
-    fn step_once(&mut self) -> Result<(), EngineError> {
+    /// forces at the new one. Twin of the `one_step` and
+    /// `persistent_steps` kernels (which compute the forces at the start of
+    /// a step instead, the same sequence of operations).
+    fn one_step(&mut self) -> Result<(), EngineError> {
         let c = &self.consts;
         let p = step_params(c, self.step);
         let nx = c.nx;
@@ -276,7 +278,7 @@ impl<T: Real, C: Coordinate<T>> Engine for CpuEngine<T, C> {
 
     fn advance(&mut self, n: u64) -> Result<(), EngineError> {
         for _ in 0..n {
-            self.step_once()?;
+            self.one_step()?;
         }
         Ok(())
     }

@@ -1,6 +1,6 @@
 //! Adapter selection: a hardware GPU, else a software one (lavapipe).
 
-use super::shaders::Phase;
+use super::shaders::Kernel;
 use crate::engine::EngineError;
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex, OnceLock};
@@ -17,9 +17,13 @@ pub struct GpuContext {
     pub limits: wgpu::Limits,
     /// The first uncaptured device error, if any (checked after submits).
     pub error: Arc<Mutex<Option<String>>>,
-    pub state_layout: wgpu::BindGroupLayout,
-    pub step_layout: wgpu::BindGroupLayout,
-    pipeline_layout: wgpu::PipelineLayout,
+    /// Group 0 of each kernel (their state bindings differ).
+    pub one_step_layout: wgpu::BindGroupLayout,
+    pub persistent_layout: wgpu::BindGroupLayout,
+    /// Group 1: the step offset (dynamic) and the batch.
+    pub batch_layout: wgpu::BindGroupLayout,
+    one_step_pipeline_layout: wgpu::PipelineLayout,
+    persistent_pipeline_layout: wgpu::PipelineLayout,
     pipelines: Arc<Mutex<HashMap<String, wgpu::ComputePipeline>>>,
 }
 
@@ -33,8 +37,8 @@ pub fn shared() -> Result<GpuContext, EngineError> {
         .map_err(EngineError::Gpu)
 }
 
-/// Size of one step's loads in the dynamically offset step buffer.
-pub const STEP_LOADS_SIZE: u64 = std::mem::size_of::<super::layout::GpuStep>() as u64;
+/// Storage bindings the one-step kernel uses (the most of the two).
+const STORAGE_BINDINGS: u32 = 13;
 
 /// Lists the adapters with Vulkan/Metal/DX12 support, hardware first.
 pub fn adapters() -> Vec<wgpu::Adapter> {
@@ -65,10 +69,9 @@ impl GpuContext {
         })?;
         let info = adapter.get_info();
         let limits = adapter.limits();
-        // 8 state buffers plus the per-step loads.
-        if limits.max_storage_buffers_per_shader_stage < 9 {
+        if limits.max_storage_buffers_per_shader_stage < STORAGE_BINDINGS {
             return Err(EngineError::Gpu(format!(
-                "{} allows {} storage buffers per shader stage; slipfront needs 9",
+                "{} allows {} storage buffers per shader stage; slipfront needs {STORAGE_BINDINGS}",
                 info.name, limits.max_storage_buffers_per_shader_stage
             )));
         }
@@ -87,65 +90,81 @@ impl GpuContext {
                 *slot = Some(e.to_string());
             }
         }));
-        let storage_entry = |binding: u32| wgpu::BindGroupLayoutEntry {
-            binding,
-            visibility: wgpu::ShaderStages::COMPUTE,
-            ty: wgpu::BindingType::Buffer {
-                ty: wgpu::BufferBindingType::Storage { read_only: false },
-                has_dynamic_offset: false,
-                min_binding_size: None,
-            },
-            count: None,
-        };
-        let mut entries = vec![wgpu::BindGroupLayoutEntry {
-            binding: 0,
-            visibility: wgpu::ShaderStages::COMPUTE,
-            ty: wgpu::BindingType::Buffer {
-                ty: wgpu::BufferBindingType::Uniform,
-                has_dynamic_offset: false,
-                min_binding_size: None,
-            },
-            count: None,
-        }];
-        entries.extend((1..=8).map(storage_entry));
-        let state_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("state"),
-            entries: &entries,
-        });
-        let step_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("step"),
-            entries: &[wgpu::BindGroupLayoutEntry {
-                binding: 0,
+        let entry =
+            |binding: u32, ty: wgpu::BufferBindingType, dynamic: bool| wgpu::BindGroupLayoutEntry {
+                binding,
                 visibility: wgpu::ShaderStages::COMPUTE,
                 ty: wgpu::BindingType::Buffer {
-                    ty: wgpu::BufferBindingType::Storage { read_only: true },
-                    has_dynamic_offset: true,
-                    min_binding_size: wgpu::BufferSize::new(STEP_LOADS_SIZE),
+                    ty,
+                    has_dynamic_offset: dynamic,
+                    min_binding_size: None,
                 },
                 count: None,
-            }],
-        });
-        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("slipfront"),
-            bind_group_layouts: &[Some(&state_layout), Some(&step_layout)],
-            immediate_size: 0,
-        });
+            };
+        let read = wgpu::BufferBindingType::Storage { read_only: true };
+        let write = wgpu::BufferBindingType::Storage { read_only: false };
+        // Bindings 5..=11 (shaders/common.wgsl): force, flags (read only),
+        // contact, junction spring and state, slide, status.
+        let common = |mut v: Vec<wgpu::BindGroupLayoutEntry>| {
+            v.push(entry(0, wgpu::BufferBindingType::Uniform, false));
+            v.extend((5..=11).map(|b| entry(b, if b == 6 { read } else { write }, false)));
+            v
+        };
+        let layout = |label: &str, entries: Vec<wgpu::BindGroupLayoutEntry>| {
+            device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                label: Some(label),
+                entries: &entries,
+            })
+        };
+        let one_step_layout = layout(
+            "one step state",
+            common(vec![
+                entry(1, read, false),
+                entry(2, read, false),
+                entry(3, write, false),
+                entry(4, write, false),
+            ]),
+        );
+        let persistent_layout = layout(
+            "persistent state",
+            common(vec![
+                entry(1, write, false),
+                entry(2, write, false),
+                entry(12, write, false),
+            ]),
+        );
+        let batch_layout = layout("batch", vec![entry(0, read, true), entry(1, read, false)]);
+        let pipeline_layout = |state: &wgpu::BindGroupLayout| {
+            device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some("slipfront"),
+                bind_group_layouts: &[Some(state), Some(&batch_layout)],
+                immediate_size: 0,
+            })
+        };
+        let one_step_pipeline_layout = pipeline_layout(&one_step_layout);
+        let persistent_pipeline_layout = pipeline_layout(&persistent_layout);
         Ok(GpuContext {
             device,
             queue,
             info,
             limits,
             error,
-            state_layout,
-            step_layout,
-            pipeline_layout,
+            one_step_layout,
+            persistent_layout,
+            batch_layout,
+            one_step_pipeline_layout,
+            persistent_pipeline_layout,
             pipelines: Arc::new(Mutex::new(HashMap::new())),
         })
     }
 
-    /// The pipeline of `phase` with `constants`, compiled once per process.
-    pub fn pipeline(&self, phase: Phase, constants: &[(&str, f64)]) -> wgpu::ComputePipeline {
-        let key = format!("{}{constants:?}", phase.entry_point());
+    /// The pipeline of `kernel` with `constants`, compiled once per process.
+    pub fn pipeline(&self, kernel: Kernel, constants: &[(&str, f64)]) -> wgpu::ComputePipeline {
+        let layout = match kernel {
+            Kernel::OneStep => &self.one_step_pipeline_layout,
+            Kernel::Persistent => &self.persistent_pipeline_layout,
+        };
+        let key = format!("{}{constants:?}", kernel.entry_point());
         let mut cache = self.pipelines.lock().expect("pipeline cache");
         cache
             .entry(key)
@@ -153,15 +172,15 @@ impl GpuContext {
                 let module = self
                     .device
                     .create_shader_module(wgpu::ShaderModuleDescriptor {
-                        label: Some(phase.entry_point()),
-                        source: wgpu::ShaderSource::Wgsl(phase.source().into()),
+                        label: Some(kernel.entry_point()),
+                        source: wgpu::ShaderSource::Wgsl(kernel.source().into()),
                     });
                 self.device
                     .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                        label: Some(phase.entry_point()),
-                        layout: Some(&self.pipeline_layout),
+                        label: Some(kernel.entry_point()),
+                        layout: Some(layout),
                         module: &module,
-                        entry_point: Some(phase.entry_point()),
+                        entry_point: Some(kernel.entry_point()),
                         compilation_options: wgpu::PipelineCompilationOptions {
                             constants,
                             ..Default::default()

@@ -1,43 +1,247 @@
-//! Host-side mirrors of the uniform structs in `shaders/common.wgsl`.
+//! The structs the host shares with the WGSL kernels, declared once here:
+//! `gpu_struct!` defines the Rust struct and writes its WGSL declaration,
+//! and `wgsl_prelude` adds the constants both sides use (flags, PINNED,
+//! lanes, stencil). The shaders get these declarations prepended, so a
+//! field added here exists on both sides; a naga test checks the offsets.
 
+use crate::lattice::{
+    FLAG_DRIVEN, FLAG_FIX_X, FLAG_FIX_Z, FLAG_INTERFACE, FLAG_PRESCRIBED_X, FLAG_TOP, STENCIL,
+};
 use crate::real::{Coordinate, DoubleSingle};
-use crate::step_params::{Consts, StepParams};
+use crate::step_params::Consts;
 use bytemuck::{Pod, Zeroable};
 
-#[repr(C)]
-#[derive(Debug, Clone, Copy, Pod, Zeroable)]
-pub struct GpuConsts {
-    pub nx: u32,
-    pub nz: u32,
-    pub junction_count: u32,
-    pub seed: u32,
-    pub spacing: f32,
-    pub k: f32,
-    pub eta: f32,
-    pub k_foundation: f32,
-    pub mass: f32,
-    pub inv_mass: f32,
-    pub dt: f32,
-    pub mu_s: f32,
-    pub mu_d: f32,
-    pub junction_stiffness_value: f32,
-    pub slip_mean_steps: f32,
-    pub slip_std_steps: f32,
-    pub drive_stiffness: f32,
-    pub speed_limit: f32,
-    pub top_share_full: f32,
-    pub top_share_edge: f32,
-    pub stiffness_normal_load: u32,
-    pub n_blocks: u32,
-    /// 1.0, read at run time: guards the double-single sums against
-    /// reassociation (shaders/double_single.wgsl).
-    pub one: f32,
-    pub _pad: u32,
+/// Threads per workgroup of the one-step kernel.
+pub const WORKGROUP: u32 = 64;
+
+/// The WGSL name of a field type.
+pub trait WgslType {
+    const WGSL: &'static str;
+}
+impl WgslType for u32 {
+    const WGSL: &'static str = "u32";
+}
+impl WgslType for f32 {
+    const WGSL: &'static str = "f32";
+}
+impl WgslType for [f32; 2] {
+    const WGSL: &'static str = "vec2<f32>";
+}
+
+/// A struct shared with WGSL: its fields, types and byte offsets.
+pub trait GpuStruct {
+    const NAME: &'static str;
+    /// (field, WGSL type, byte offset in the Rust struct).
+    fn fields() -> Vec<(&'static str, &'static str, usize)>;
+    /// The WGSL declaration.
+    fn wgsl() -> String {
+        let body: String = Self::fields()
+            .iter()
+            .map(|(name, ty, _)| format!("    {name}: {ty},\n"))
+            .collect();
+        format!("struct {} {{\n{body}}}\n", Self::NAME)
+    }
+}
+
+macro_rules! gpu_struct {
+    ($(#[$meta:meta])* pub struct $name:ident as $wgsl:literal {
+        $($(#[$fmeta:meta])* pub $field:ident : $ty:ty),* $(,)?
+    }) => {
+        $(#[$meta])*
+        #[repr(C)]
+        #[derive(Debug, Clone, Copy, Pod, Zeroable)]
+        pub struct $name {
+            $($(#[$fmeta])* pub $field: $ty),*
+        }
+
+        impl GpuStruct for $name {
+            const NAME: &'static str = $wgsl;
+            fn fields() -> Vec<(&'static str, &'static str, usize)> {
+                vec![$((
+                    stringify!($field),
+                    <$ty as WgslType>::WGSL,
+                    std::mem::offset_of!($name, $field),
+                )),*]
+            }
+        }
+    };
+}
+
+gpu_struct! {
+    /// The run constants (uniform `c`).
+    pub struct GpuConsts as "Consts" {
+        pub nx: u32,
+        pub nz: u32,
+        pub junction_count: u32,
+        pub seed: u32,
+        pub spacing: f32,
+        pub k: f32,
+        pub eta: f32,
+        pub k_foundation: f32,
+        pub mass: f32,
+        pub inv_mass: f32,
+        pub dt: f32,
+        pub mu_s: f32,
+        pub mu_d: f32,
+        pub junction_stiffness_value: f32,
+        pub slip_mean_steps: f32,
+        pub slip_std_steps: f32,
+        pub drive_stiffness: f32,
+        pub speed_limit: f32,
+        pub top_share_full: f32,
+        pub top_share_edge: f32,
+        pub stiffness_normal_load: u32,
+        pub n_blocks: u32,
+        /// 1.0, read at run time: guards the double-single sums against
+        /// reassociation (shaders/double_single.wgsl).
+        pub one: f32,
+        pub normal_force: f32,
+        pub inv_ramp_steps: f32,
+        pub top_prestress_force: f32,
+        pub top_force_rate: f32,
+        pub relax_eta: f32,
+        pub drive_velocity: f32,
+        /// V·dt = hi + lo, hi with 12 significant bits so that i·hi is
+        /// exact for the step offsets i < 4096 of a batch.
+        pub drive_step_hi: f32,
+        pub drive_step_lo: f32,
+        pub _pad: u32,
+    }
+}
+
+gpu_struct! {
+    /// What the kernels need to compute the loads of the steps of one
+    /// batch (`shaders/common.wgsl` `loads_at`): steps `first + i`,
+    /// i < `steps`. Batches never cross the end of the ramp or of the
+    /// normal-load phase, so the phase flags hold for the whole batch.
+    pub struct GpuBatch as "Batch" {
+        /// Low 32 bits of the first step (used while ramping, < 2²⁴).
+        pub first_step: u32,
+        pub steps: u32,
+        pub preparing: u32,
+        pub ramping: u32,
+        pub relaxing: u32,
+        /// Driving time of the first step (s).
+        pub drive_time: f32,
+        /// The side spring's far end at the first step, double-single.
+        pub drive_target_hi: f32,
+        pub drive_target_lo: f32,
+        /// 1: the forces of the first step are already in `force` and
+        /// `contact` (a snapshot computed them): skip them.
+        pub forces_ready: u32,
+        /// 1: compute the forces of the first step only, no update.
+        pub forces_only: u32,
+        /// Steps per dispatch of the persistent kernel.
+        pub steps_per_dispatch: u32,
+        pub _pad: u32,
+    }
+}
+
+gpu_struct! {
+    /// A block's displacement: (hi, lo) of u_x and of u_z, the bytes of
+    /// the CPU twin's `[DoubleSingle; 2]`.
+    pub struct GpuDisp as "Disp" {
+        pub x: [f32; 2],
+        pub z: [f32; 2],
+    }
+}
+
+gpu_struct! {
+    /// A junction's spring (anchor hi, anchor lo, stiffness): the bytes of
+    /// the CPU twin's `JunctionSpring<DoubleSingle, f32>`.
+    pub struct GpuJunctionSpring as "JunctionSpring" {
+        pub anchor_hi: f32,
+        pub anchor_lo: f32,
+        pub stiffness: f32,
+    }
+}
+
+gpu_struct! {
+    /// The first blow-up of a batch, written by the kernel that saw it
+    /// (non-finite or faster than c_p): read back after every batch.
+    pub struct GpuStatus as "Status" {
+        pub flag: u32,
+        /// Step offset in the batch of the update that blew up.
+        pub step: u32,
+        pub block: u32,
+        pub ux: f32,
+        pub uz: f32,
+        pub vx: f32,
+        pub vz: f32,
+        /// Steps the persistent kernel has run, all dispatches (mod 2³²).
+        pub persistent_steps: u32,
+    }
+}
+
+/// The shared constants and structs, prepended to every shader module.
+pub fn wgsl_prelude() -> String {
+    let stencil: Vec<String> = STENCIL
+        .iter()
+        .map(|b| format!("vec2<i32>({}, {})", b.dx, b.dz))
+        .collect();
+    let lengths: Vec<String> = STENCIL
+        .iter()
+        .map(|b| format!("{:?}", b.length_factor as f32))
+        .collect();
+    let stiffness: Vec<String> = STENCIL
+        .iter()
+        .map(|b| format!("{:?}", b.stiffness_factor as f32))
+        .collect();
+    let mut s = String::from("// Generated from src/gpu/layout.rs: do not edit in the shaders.\n");
+    for (name, value) in [
+        ("PINNED", crate::cpu::PINNED),
+        ("FLAG_FIX_X", FLAG_FIX_X),
+        ("FLAG_FIX_Z", FLAG_FIX_Z),
+        ("FLAG_TOP", FLAG_TOP),
+        ("FLAG_INTERFACE", FLAG_INTERFACE),
+        ("FLAG_DRIVEN", FLAG_DRIVEN),
+        ("FLAG_PRESCRIBED_X", FLAG_PRESCRIBED_X),
+        ("WORKGROUP", WORKGROUP),
+        (
+            "JUNCTION_LANES",
+            crate::cpu::junctions::JUNCTION_LANES as u32,
+        ),
+    ] {
+        s += &format!("const {name}: u32 = {value}u;\n");
+    }
+    s += &format!(
+        "const STENCIL = array<vec2<i32>, 8>({});\n",
+        stencil.join(", ")
+    );
+    s += &format!(
+        "const STENCIL_LENGTH = array<f32, 8>({});\n",
+        lengths.join(", ")
+    );
+    s += &format!(
+        "const STENCIL_STIFFNESS = array<f32, 8>({});\n",
+        stiffness.join(", ")
+    );
+    for decl in [
+        GpuConsts::wgsl(),
+        GpuBatch::wgsl(),
+        GpuDisp::wgsl(),
+        GpuJunctionSpring::wgsl(),
+        GpuStatus::wgsl(),
+    ] {
+        s += &decl;
+    }
+    s
+}
+
+/// V·dt split as hi + lo with hi on 12 significant bits.
+fn split_drive_step(v_dt: f64) -> (f32, f32) {
+    if v_dt == 0.0 {
+        return (0.0, 0.0);
+    }
+    let scale = 2f64.powi(11 - v_dt.abs().log2().floor() as i32);
+    let hi = (v_dt * scale).round() / scale;
+    (hi as f32, (v_dt - hi) as f32)
 }
 
 impl GpuConsts {
     pub fn new(c: &Consts<f32>, speed_limit: f32) -> Self {
         use crate::cpu::bulk_forces::top_share;
+        let (drive_step_hi, drive_step_lo) = split_drive_step(c.drive_velocity_exact * c.dt_exact);
         GpuConsts {
             nx: c.nx as u32,
             nz: c.nz as u32,
@@ -63,53 +267,63 @@ impl GpuConsts {
             stiffness_normal_load: c.junction_stiffness_normal_load as u32,
             n_blocks: (c.nx * c.nz) as u32,
             one: 1.0,
+            normal_force: c.normal_force,
+            inv_ramp_steps: c.inv_ramp_steps,
+            top_prestress_force: c.top_prestress_force,
+            top_force_rate: c.top_force_rate,
+            relax_eta: c.relax_eta,
+            drive_velocity: c.drive_velocity,
+            drive_step_hi,
+            drive_step_lo,
             _pad: 0,
         }
     }
 }
 
-/// One step's loads, at a 256-byte stride in a dynamically offset storage buffer.
-#[repr(C)]
-#[derive(Debug, Clone, Copy, Pod, Zeroable)]
-pub struct GpuStep {
-    pub preparing: u32,
-    pub normal_total: f32,
-    pub top_tangential_total: f32,
-    pub relax_eta: f32,
-    pub top_velocity: f32,
-    pub drive_target: DoubleSingle,
-    pub _pad: u32,
-}
-
-impl GpuStep {
-    /// The loads of `p`, with the drive target origin + V·t formed in f64
-    /// and split into a double-single pair, as the CPU engine does.
-    pub fn new(p: &StepParams<f32>, drive_origin: DoubleSingle) -> Self {
-        GpuStep {
+impl GpuBatch {
+    /// The batch of `steps` steps from global step `first`, with the
+    /// drive target origin + V·t formed in f64 and split into a pair.
+    pub fn new(c: &Consts<f32>, first: u64, steps: u32, drive_origin: DoubleSingle) -> Self {
+        let p = crate::step_params::step_params(c, first);
+        let target = DoubleSingle::from_f64(drive_origin.as_f64() + p.drive_offset);
+        GpuBatch {
+            first_step: first as u32,
+            steps,
             preparing: p.preparing as u32,
-            normal_total: p.normal_total,
-            top_tangential_total: p.top_tangential_total,
-            relax_eta: p.relax_eta,
-            top_velocity: p.top_velocity,
-            drive_target: DoubleSingle::from_f64(drive_origin.as_f64() + p.drive_offset),
+            ramping: (first < c.ramp_steps) as u32,
+            relaxing: (p.preparing && first >= c.ramp_steps) as u32,
+            drive_time: if p.preparing {
+                0.0
+            } else {
+                ((first - c.prep_steps) as f64 * c.dt_exact) as f32
+            },
+            drive_target_hi: target.hi,
+            drive_target_lo: target.lo,
+            forces_ready: 0,
+            forces_only: 0,
+            steps_per_dispatch: steps,
             _pad: 0,
         }
     }
-}
-
-/// A junction's spring as the WGSL `JunctionSpring` (anchor hi, anchor lo,
-/// stiffness): the bytes of the CPU twin's `JunctionSpring<DoubleSingle, f32>`.
-#[repr(C)]
-#[derive(Debug, Clone, Copy, Pod, Zeroable)]
-pub struct GpuJunctionSpring {
-    pub anchor: DoubleSingle,
-    pub stiffness: f32,
 }
 
 impl From<GpuJunctionSpring> for crate::cpu::JunctionSpring<DoubleSingle, f32> {
     fn from(s: GpuJunctionSpring) -> Self {
         crate::cpu::JunctionSpring {
-            anchor: s.anchor,
+            anchor: DoubleSingle {
+                hi: s.anchor_hi,
+                lo: s.anchor_lo,
+            },
+            stiffness: s.stiffness,
+        }
+    }
+}
+
+impl From<crate::cpu::JunctionSpring<DoubleSingle, f32>> for GpuJunctionSpring {
+    fn from(s: crate::cpu::JunctionSpring<DoubleSingle, f32>) -> Self {
+        GpuJunctionSpring {
+            anchor_hi: s.anchor.hi,
+            anchor_lo: s.anchor.lo,
             stiffness: s.stiffness,
         }
     }
@@ -119,25 +333,101 @@ impl From<GpuJunctionSpring> for crate::cpu::JunctionSpring<DoubleSingle, f32> {
 mod tests {
     use super::*;
     use crate::scenario::{Scenario, DEFAULT_SCENARIO};
-    use crate::step_params::step_params;
 
-    /// After 1e8 steps (22 s of driving) the drive target the GPU gets is
-    /// still origin + V·t to f64 round-off (a plain f32 would be ~1e-10 m
-    /// off, a whole creep step), and no field of the loads depends on a
-    /// 32-bit step count.
-    #[test]
-    fn loads_after_1e8_steps_keep_the_drive_position_exact() {
+    fn table_s1() -> crate::Model {
         let s = Scenario::parse(DEFAULT_SCENARIO, "test", &[]).unwrap();
-        let m = crate::Model::from_scenario(&s, false).unwrap();
+        crate::Model::from_scenario(&s, false).unwrap()
+    }
+
+    /// The kernels add i·(V·dt) to the batch's first drive target as
+    /// i·hi + i·lo: after 1e8 and 2³² steps, and 4095 steps into a batch,
+    /// the target is still origin + V·t to f64 round-off (a plain f32
+    /// would be ~1e-10 m off, a whole creep step).
+    #[test]
+    fn drive_target_after_1e8_steps_stays_exact() {
+        let m = table_s1();
         let c = Consts::<f32>::new(&m);
+        let gc = GpuConsts::new(&c, 1.0);
         let origin = DoubleSingle::from_f64(1.234_567e-5);
-        for step in [m.prep_steps + 100_000_000, m.prep_steps + (1 << 32) + 7] {
-            let loads = GpuStep::new(&step_params(&c, step), origin);
-            let t = m.time_of_step(step);
-            let exact = origin.as_f64() + 4.0e-4 * t;
-            let got = loads.drive_target.as_f64();
-            assert!((got - exact).abs() <= exact * 1e-13, "{got} vs {exact}");
-            assert!(((exact as f32) as f64 - exact).abs() > 1e-12);
+        for first in [m.prep_steps + 100_000_000, m.prep_steps + (1 << 32) + 7] {
+            let b = GpuBatch::new(&c, first, 4096, origin);
+            for i in [0u32, 1, 4095] {
+                // The kernel's arithmetic (shaders/common.wgsl loads_at).
+                let target = DoubleSingle {
+                    hi: b.drive_target_hi,
+                    lo: b.drive_target_lo,
+                }
+                .ds_add(i as f32 * gc.drive_step_hi)
+                .ds_add(i as f32 * gc.drive_step_lo);
+                let t = m.time_of_step(first + i as u64);
+                let exact = origin.as_f64() + 4.0e-4 * t;
+                let got = target.as_f64();
+                assert!((got - exact).abs() <= exact * 1e-13, "{got} vs {exact}");
+                assert!(((exact as f32) as f64 - exact).abs() > 1e-12);
+            }
         }
+        let (hi, lo) = split_drive_step(4.0e-4 * m.dt);
+        assert_eq!((4095.0 * hi) as f64, 4095.0 * hi as f64);
+        assert!(((hi as f64 + lo as f64) / (4.0e-4 * m.dt) - 1.0).abs() < 1e-12);
+    }
+
+    /// Every shared struct has, in the WGSL the shaders see, the size and
+    /// the field offsets of its Rust twin (naga's layout): a field added,
+    /// reordered or misaligned on one side fails here, without a GPU.
+    #[test]
+    fn wgsl_structs_match_the_rust_layout() {
+        let src = wgsl_prelude();
+        let module = naga::front::wgsl::parse_str(&src).expect("prelude parses");
+        let mut layouter = naga::proc::Layouter::default();
+        layouter
+            .update(module.to_ctx())
+            .expect("layout of the prelude");
+        let check = |name: &str, size: usize, fields: Vec<(&str, &str, usize)>| {
+            let (handle, ty) = module
+                .types
+                .iter()
+                .find(|(_, t)| t.name.as_deref() == Some(name))
+                .unwrap_or_else(|| panic!("struct {name} missing in WGSL"));
+            let naga::TypeInner::Struct { members, span } = &ty.inner else {
+                panic!("{name} is not a struct");
+            };
+            assert_eq!(*span as usize, size, "{name}: WGSL size vs Rust size");
+            assert_eq!(layouter[handle].size as usize, size);
+            assert_eq!(members.len(), fields.len(), "{name}: field count");
+            for (m, (field, _, offset)) in members.iter().zip(fields) {
+                assert_eq!(m.name.as_deref(), Some(field), "{name}: field order");
+                assert_eq!(m.offset as usize, offset, "{name}.{field}: offset");
+            }
+        };
+        check("Consts", size_of::<GpuConsts>(), GpuConsts::fields());
+        check("Batch", size_of::<GpuBatch>(), GpuBatch::fields());
+        check("Disp", size_of::<GpuDisp>(), GpuDisp::fields());
+        assert_eq!(size_of::<GpuDisp>(), size_of::<[DoubleSingle; 2]>());
+        check(
+            "JunctionSpring",
+            size_of::<GpuJunctionSpring>(),
+            GpuJunctionSpring::fields(),
+        );
+        check("Status", size_of::<GpuStatus>(), GpuStatus::fields());
+        // The uniform block is a whole number of 16-byte rows.
+        assert_eq!(size_of::<GpuConsts>() % 16, 0);
+    }
+
+    /// The negative control of the layout test: a Rust struct whose
+    /// vec2 field sits at a 4-byte offset (WGSL aligns it to 8) is caught.
+    #[test]
+    fn layout_check_flags_a_misaligned_vec2() {
+        gpu_struct! {
+            pub struct Misaligned as "Misaligned" {
+                pub a: f32,
+                pub b: [f32; 2],
+            }
+        }
+        let module = naga::front::wgsl::parse_str(&Misaligned::wgsl()).unwrap();
+        let (_, ty) = module.types.iter().find(|(_, t)| t.name.is_some()).unwrap();
+        let naga::TypeInner::Struct { members, .. } = &ty.inner else {
+            panic!()
+        };
+        assert_ne!(members[1].offset as usize, Misaligned::fields()[1].2);
     }
 }

@@ -1,8 +1,16 @@
-//! The GPU engine: state in storage buffers, one WGSL kernel per phase, many
-//! steps encoded in one compute pass and one submit. The host writes the
-//! loads of each step (a pure function of the step count, computed by
-//! `step_params` as on the CPU) into a dynamically offset storage buffer and reads the
-//! state back only when a snapshot is asked for.
+//! The GPU engine: state in storage buffers, and one of two kernels:
+//!
+//! - `one_step` (any lattice): one dispatch per step, forces, friction and
+//!   the leapfrog update fused, reading the state of step n from one buffer
+//!   pair and writing step n+1 to the other;
+//! - `persistent_steps` (small lattices): one workgroup loops over up to
+//!   4096 steps inside one dispatch, with barriers between the phases.
+//!
+//! Steps go in batches (one submit each) whose loads the kernels compute
+//! from the batch's first step. After each batch the kernel's blow-up
+//! status is copied to a staging buffer and mapped asynchronously; at most
+//! `IN_FLIGHT` batches are queued, so a blow-up stops the run within a
+//! batch or two and `advance` returns only when its steps have run.
 
 pub mod context;
 pub mod layout;
@@ -12,53 +20,115 @@ use crate::engine::{blow_up, Engine, EngineError, Snapshot};
 use crate::lattice::{block_flags, initial_displacement};
 use crate::model::{Driver, Model};
 use crate::real::{Coordinate, DoubleSingle};
-use crate::step_params::{step_params, Consts};
+use crate::scenario::FrictionLaw;
+use crate::step_params::Consts;
 use bytemuck::Zeroable;
 use context::GpuContext;
-use layout::{GpuConsts, GpuJunctionSpring, GpuStep};
-use shaders::{Phase, Variant};
+use layout::{GpuBatch, GpuConsts, GpuJunctionSpring, GpuStatus, WORKGROUP};
+use shaders::{Kernel, Variant};
+use std::collections::VecDeque;
+use std::sync::mpsc;
 use wgpu::util::DeviceExt;
 
-/// Steps encoded per submit.
-const STEPS_PER_SUBMIT: u64 = 1024;
-const WORKGROUP: u32 = 64;
+/// Steps of one batch of the persistent kernel (one dispatch). The drive
+/// target arithmetic in the kernels needs it ≤ 4096.
+const PERSISTENT_BATCH: u64 = 4096;
+/// Dispatches of the one-step kernel per batch (one submit).
+const ONE_STEP_BATCH: u64 = 1024;
+/// Batches queued on the device at most.
+const IN_FLIGHT: usize = 2;
+/// Lattices up to this many blocks take the persistent kernel by default.
+pub const PERSISTENT_MAX_BLOCKS: usize = 8192;
+/// Threads of the persistent kernel's workgroup by default.
+pub const PERSISTENT_THREADS: u32 = 256;
 
-struct Pipeline {
-    pipeline: wgpu::ComputePipeline,
-    /// Workgroups (x, y) for the phase's thread count.
-    groups: (u32, u32),
+/// Which kernel steps the lattice.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum GpuPath {
+    /// The persistent kernel up to `PERSISTENT_MAX_BLOCKS` blocks, else one step per dispatch.
+    Auto,
+    /// One dispatch per step.
+    OneStep,
+    /// One workgroup, many steps per dispatch (any lattice: slow for large ones).
+    Persistent,
 }
 
-/// The storage buffers, in binding order 1..=8.
-struct StateBuffers {
-    disp: wgpu::Buffer,
-    vel: wgpu::Buffer,
+#[derive(Debug, Clone, Copy)]
+pub struct GpuOptions {
+    pub path: GpuPath,
+    pub persistent_threads: u32,
+    /// Steps per persistent dispatch instead of the adapter's safe default.
+    pub steps_per_dispatch: Option<u64>,
+}
+
+impl Default for GpuOptions {
+    fn default() -> Self {
+        GpuOptions {
+            path: GpuPath::Auto,
+            persistent_threads: PERSISTENT_THREADS,
+            steps_per_dispatch: None,
+        }
+    }
+}
+
+struct Buffers {
+    /// Two copies of u and v: the one-step kernel reads one, writes the other.
+    disp: [wgpu::Buffer; 2],
+    vel: [wgpu::Buffer; 2],
     force: wgpu::Buffer,
     flags: wgpu::Buffer,
     contact: wgpu::Buffer,
     junction_spring: wgpu::Buffer,
     junction_state: wgpu::Buffer,
     slide: wgpu::Buffer,
+    status: wgpu::Buffer,
+    lane_partial: wgpu::Buffer,
+}
+
+/// A submitted batch whose status copy is being mapped.
+struct InFlight {
+    staging: wgpu::Buffer,
+    submission: wgpu::SubmissionIndex,
+    mapped: mpsc::Receiver<Result<(), wgpu::BufferAsyncError>>,
+    first_step: u64,
+    /// The persistent kernel's step counter once this batch has run.
+    persistent_steps: u32,
 }
 
 pub struct GpuEngine {
     model: Model,
     consts: Consts<f32>,
     ctx: GpuContext,
-    buffers: StateBuffers,
-    step_buffer: wgpu::Buffer,
-    step_stride: u64,
-    state_group: wgpu::BindGroup,
-    step_group: wgpu::BindGroup,
-    pipelines: Vec<Pipeline>,
+    buffers: Buffers,
+    kernel: Kernel,
+    pipeline: wgpu::ComputePipeline,
+    /// One step: [reads copy 0, reads copy 1]; persistent: [copy 0].
+    state_groups: Vec<wgpu::BindGroup>,
+    batch_group: wgpu::BindGroup,
+    batch_buffer: wgpu::Buffer,
+    offset_stride: u64,
+    /// Workgroups (x, y) of a one-step dispatch.
+    groups: (u32, u32),
+    persistent_threads: u32,
+    /// Steps per persistent dispatch (bounded on software adapters).
+    steps_per_dispatch: u64,
+    /// Steps the persistent kernel has been asked to run (mod 2³²).
+    persistent_steps: u32,
     variant: Variant,
+    /// The copy of u and v that holds the current state.
+    current: usize,
     drive_origin: DoubleSingle,
+    /// Steps submitted.
     step: u64,
-    staging: Vec<u8>,
+    /// `force` and `contact` hold the forces of the current state.
+    forces_ready: bool,
+    in_flight: VecDeque<InFlight>,
+    spare_staging: Vec<wgpu::Buffer>,
+    dispatches: u64,
 }
 
-fn groups_for(threads: usize) -> (u32, u32) {
-    let groups = (threads as u32).div_ceil(WORKGROUP).max(1);
+fn groups_for(workgroups: u32) -> (u32, u32) {
+    let groups = workgroups.max(1);
     let x = groups.min(65_535);
     (x, groups.div_ceil(x))
 }
@@ -66,10 +136,18 @@ fn groups_for(threads: usize) -> (u32, u32) {
 impl GpuEngine {
     /// Builds the engine on the best adapter (hardware, else lavapipe).
     pub fn new(model: &Model) -> Result<GpuEngine, EngineError> {
-        GpuEngine::with_context(model, context::shared()?)
+        GpuEngine::with_options(model, GpuOptions::default())
     }
 
-    pub fn with_context(model: &Model, ctx: GpuContext) -> Result<GpuEngine, EngineError> {
+    pub fn with_options(model: &Model, opts: GpuOptions) -> Result<GpuEngine, EngineError> {
+        GpuEngine::with_context(model, context::shared()?, opts)
+    }
+
+    pub fn with_context(
+        model: &Model,
+        ctx: GpuContext,
+        opts: GpuOptions,
+    ) -> Result<GpuEngine, EngineError> {
         let consts = Consts::<f32>::new(model);
         let n = model.n_blocks();
         let nj = model.n_junctions();
@@ -88,6 +166,17 @@ impl GpuEngine {
                 )));
             }
         }
+        let kernel = match opts.path {
+            GpuPath::OneStep => Kernel::OneStep,
+            GpuPath::Persistent => Kernel::Persistent,
+            GpuPath::Auto if n <= PERSISTENT_MAX_BLOCKS => Kernel::Persistent,
+            GpuPath::Auto => Kernel::OneStep,
+        };
+        let persistent_threads = opts
+            .persistent_threads
+            .min(ctx.limits.max_compute_invocations_per_workgroup)
+            .min(ctx.limits.max_compute_workgroup_size_x)
+            .max(1);
         let device = &ctx.device;
         let storage = |label: &str, bytes: &[u8]| {
             // Zero-sized bindings are invalid: pad empty arrays to one element.
@@ -111,9 +200,17 @@ impl GpuEngine {
             .map(|u| u.map(DoubleSingle::from_f64))
             .collect();
         let zeros2 = |len: usize| vec![[0f32; 2]; len];
-        let buffers = StateBuffers {
-            disp: storage("disp", bytemuck::cast_slice(&disp)),
-            vel: storage("vel", bytemuck::cast_slice(&zeros2(n))),
+        let lanes =
+            crate::cpu::junctions::JUNCTION_LANES.min(model.junctions.map_or(0, |j| j.count));
+        let buffers = Buffers {
+            disp: [
+                storage("disp 0", bytemuck::cast_slice(&disp)),
+                storage("disp 1", bytemuck::cast_slice(&disp)),
+            ],
+            vel: [
+                storage("vel 0", bytemuck::cast_slice(&zeros2(n))),
+                storage("vel 1", bytemuck::cast_slice(&zeros2(n))),
+            ],
             force: storage("force", bytemuck::cast_slice(&zeros2(n))),
             flags: storage("flags", bytemuck::cast_slice(&block_flags(model))),
             contact: storage("contact", bytemuck::cast_slice(&zeros2(model.nx))),
@@ -126,6 +223,11 @@ impl GpuEngine {
                 bytemuck::cast_slice(&vec![[crate::cpu::PINNED, 0u32]; nj]),
             ),
             slide: storage("slide", bytemuck::cast_slice(&vec![[0i32; 2]; model.nx])),
+            status: storage("status", bytemuck::bytes_of(&GpuStatus::zeroed())),
+            lane_partial: storage(
+                "lane partial sums",
+                bytemuck::cast_slice(&vec![0f32; model.nx * lanes]),
+            ),
         };
         let gpu_consts = GpuConsts::new(&consts, model.pressure_wave_speed() as f32);
         let consts_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
@@ -133,186 +235,291 @@ impl GpuEngine {
             contents: bytemuck::bytes_of(&gpu_consts),
             usage: wgpu::BufferUsages::UNIFORM,
         });
-        let step_stride = (ctx.limits.min_storage_buffer_offset_alignment as u64).max(256);
-        let step_buffer = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("step loads"),
-            size: step_stride * (STEPS_PER_SUBMIT + 1),
+        // The step offsets 0..ONE_STEP_BATCH, one per dynamic-offset stride.
+        let offset_stride = (ctx.limits.min_storage_buffer_offset_alignment as u64).max(4);
+        let mut table = vec![0u8; (offset_stride * ONE_STEP_BATCH) as usize];
+        for i in 0..ONE_STEP_BATCH {
+            let at = (i * offset_stride) as usize;
+            table[at..at + 4].copy_from_slice(&(i as u32).to_le_bytes());
+        }
+        let offsets = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("step offsets"),
+            contents: &table,
+            usage: wgpu::BufferUsages::STORAGE,
+        });
+        let batch_buffer = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("batch"),
+            size: std::mem::size_of::<GpuBatch>() as u64,
             usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
         let b = &buffers;
-        let state_buffers = [
-            &consts_buffer,
-            &b.disp,
-            &b.vel,
-            &b.force,
-            &b.flags,
-            &b.contact,
-            &b.junction_spring,
-            &b.junction_state,
-            &b.slide,
-        ];
-        let bind_entries: Vec<wgpu::BindGroupEntry> = state_buffers
-            .iter()
-            .enumerate()
-            .map(|(i, buf)| wgpu::BindGroupEntry {
-                binding: i as u32,
-                resource: buf.as_entire_binding(),
-            })
-            .collect();
-        let state_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("state"),
-            layout: &ctx.state_layout,
-            entries: &bind_entries,
-        });
-        let step_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("step"),
-            layout: &ctx.step_layout,
-            entries: &[wgpu::BindGroupEntry {
-                binding: 0,
-                resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
-                    buffer: &step_buffer,
-                    offset: 0,
-                    size: wgpu::BufferSize::new(context::STEP_LOADS_SIZE),
-                }),
-            }],
+        let common = || {
+            vec![
+                whole(0, &consts_buffer),
+                whole(5, &b.force),
+                whole(6, &b.flags),
+                whole(7, &b.contact),
+                whole(8, &b.junction_spring),
+                whole(9, &b.junction_state),
+                whole(10, &b.slide),
+                whole(11, &b.status),
+            ]
+        };
+        let state_groups: Vec<wgpu::BindGroup> = match kernel {
+            Kernel::OneStep => (0..2)
+                .map(|from| {
+                    let to = 1 - from;
+                    let mut entries = common();
+                    entries.extend([
+                        whole(1, &b.disp[from]),
+                        whole(2, &b.vel[from]),
+                        whole(3, &b.disp[to]),
+                        whole(4, &b.vel[to]),
+                    ]);
+                    device.create_bind_group(&wgpu::BindGroupDescriptor {
+                        label: Some("one step state"),
+                        layout: &ctx.one_step_layout,
+                        entries: &entries,
+                    })
+                })
+                .collect(),
+            Kernel::Persistent => {
+                let mut entries = common();
+                entries.extend([
+                    whole(1, &b.disp[0]),
+                    whole(2, &b.vel[0]),
+                    whole(12, &b.lane_partial),
+                ]);
+                vec![device.create_bind_group(&wgpu::BindGroupDescriptor {
+                    label: Some("persistent state"),
+                    layout: &ctx.persistent_layout,
+                    entries: &entries,
+                })]
+            }
+        };
+        let batch_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("batch"),
+            layout: &ctx.batch_layout,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                        buffer: &offsets,
+                        offset: 0,
+                        size: wgpu::BufferSize::new(4),
+                    }),
+                },
+                whole(1, &batch_buffer),
+            ],
         });
         let variant = Variant::for_model(model);
-        let mut pipelines = Vec::new();
-        for (phase, constants) in &variant.phases {
-            let pipeline = ctx.pipeline(*phase, constants);
-            let threads = match phase {
-                Phase::BulkForces | Phase::Verlet => n,
-                Phase::Junctions | Phase::Coulomb => model.nx,
-            };
-            pipelines.push(Pipeline {
-                pipeline,
-                groups: groups_for(threads),
-            });
+        let mut constants = variant.constants.clone();
+        if kernel == Kernel::Persistent {
+            constants.push(("PERSISTENT_THREADS", persistent_threads as f64));
         }
+        let pipeline = ctx.pipeline(kernel, &constants);
+        let junction_groups = match model.law {
+            FrictionLaw::Junctions | FrictionLaw::SingleJunction => model.nx as u32,
+            _ => 0,
+        };
+        let plain_blocks = n as u32 - junction_groups;
+        let groups = groups_for(junction_groups + plain_blocks.div_ceil(WORKGROUP));
+        let steps_per_dispatch = opts
+            .steps_per_dispatch
+            .unwrap_or_else(|| {
+                persistent_steps_per_dispatch(model, persistent_threads, ctx.is_software())
+            })
+            .clamp(1, PERSISTENT_BATCH);
         ctx.check()?;
         let mut engine = GpuEngine {
             model: model.clone(),
             consts,
             ctx,
             buffers,
-            step_buffer,
-            step_stride,
-            state_group,
-            step_group,
-            pipelines,
+            kernel,
+            pipeline,
+            state_groups,
+            batch_group,
+            batch_buffer,
+            offset_stride,
+            groups,
+            persistent_threads,
+            steps_per_dispatch,
+            persistent_steps: 0,
             variant,
+            current: 0,
             drive_origin: DoubleSingle::default(),
             step: 0,
-            staging: vec![0u8; step_stride as usize * (STEPS_PER_SUBMIT as usize + 1)],
+            forces_ready: false,
+            in_flight: VecDeque::new(),
+            spare_staging: Vec::new(),
+            dispatches: 0,
         };
         if model.prep_steps == 0 {
             engine.begin_driving()?;
         }
-        engine.force_pass()?;
         Ok(engine)
     }
 
-    /// Seconds per dispatch of each phase, each timed alone: `dispatches`
-    /// dispatches of one pipeline in one pass and submit, waited for. The
-    /// state is left meaningless (phases run out of order): use a throwaway
-    /// engine.
-    pub fn profile_phases(
-        &mut self,
-        dispatches: u32,
-    ) -> Result<Vec<(&'static str, f64)>, EngineError> {
-        let loads = GpuStep::new(
-            &step_params(&self.consts, self.model.prep_steps),
-            DoubleSingle::default(),
-        );
-        self.ctx
-            .queue
-            .write_buffer(&self.step_buffer, 0, bytemuck::bytes_of(&loads));
-        let mut out = Vec::new();
-        for (p, (phase, _)) in self.pipelines.iter().zip(&self.variant.phases) {
-            let run = |n: u32| -> Result<f64, EngineError> {
-                let start = std::time::Instant::now();
-                let mut encoder = self
-                    .ctx
-                    .device
-                    .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
-                {
-                    let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                        label: Some("profile"),
-                        timestamp_writes: None,
-                    });
-                    pass.set_bind_group(0, &self.state_group, &[]);
-                    pass.set_bind_group(1, &self.step_group, &[0]);
-                    pass.set_pipeline(&p.pipeline);
-                    for _ in 0..n {
-                        pass.dispatch_workgroups(p.groups.0, p.groups.1, 1);
-                    }
-                }
-                self.ctx.queue.submit([encoder.finish()]);
-                self.ctx
-                    .device
-                    .poll(wgpu::PollType::wait_indefinitely())
-                    .map_err(|e| EngineError::Gpu(format!("device lost: {e}")))?;
-                Ok(start.elapsed().as_secs_f64())
-            };
-            run(2)?; // warm-up
-            out.push((phase.entry_point(), run(dispatches)? / dispatches as f64));
-        }
-        self.ctx.check()?;
-        Ok(out)
-    }
-
-    /// The pipelines this scene built.
+    /// The override constants this scene compiled with.
     pub fn variant(&self) -> &Variant {
         &self.variant
+    }
+
+    /// The kernel that steps this scene.
+    pub fn kernel(&self) -> Kernel {
+        self.kernel
     }
 
     pub fn adapter(&self) -> String {
         self.ctx.describe()
     }
 
-    /// Writes the loads of steps `first .. first + count` to the step
-    /// buffer, one per stride.
-    fn write_loads(&mut self, first: u64, count: u64) {
-        for i in 0..count {
-            let loads = GpuStep::new(&step_params(&self.consts, first + i), self.drive_origin);
-            let at = (i * self.step_stride) as usize;
-            self.staging[at..at + std::mem::size_of::<GpuStep>()]
-                .copy_from_slice(bytemuck::bytes_of(&loads));
+    /// Submits `steps` steps from the current one (or, with `forces_only`,
+    /// the forces of the current state), and the copy of the status.
+    fn submit_batch(&mut self, steps: u64, forces_only: bool) -> Result<(), EngineError> {
+        if self.in_flight.len() >= IN_FLIGHT {
+            self.retire_oldest()?;
         }
-        let bytes = (count * self.step_stride) as usize;
+        let mut batch = GpuBatch::new(&self.consts, self.step, steps as u32, self.drive_origin);
+        batch.forces_ready = self.forces_ready as u32;
+        batch.forces_only = forces_only as u32;
+        batch.steps_per_dispatch = self.steps_per_dispatch as u32;
         self.ctx
             .queue
-            .write_buffer(&self.step_buffer, 0, &self.staging[..bytes]);
-    }
-
-    /// Bulk forces and friction at the current state and step (at the
-    /// start, and when driving starts).
-    fn force_pass(&mut self) -> Result<(), EngineError> {
-        self.write_loads(self.step, 1);
+            .write_buffer(&self.batch_buffer, 0, bytemuck::bytes_of(&batch));
         let mut encoder = self
             .ctx
             .device
             .create_command_encoder(&wgpu::CommandEncoderDescriptor {
-                label: Some("forces"),
+                label: Some("steps"),
             });
         {
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("forces"),
+                label: Some("steps"),
                 timestamp_writes: None,
             });
-            pass.set_bind_group(0, &self.state_group, &[]);
-            pass.set_bind_group(1, &self.step_group, &[0]);
-            dispatch(&mut pass, &self.pipelines[..self.pipelines.len() - 1]);
+            pass.set_pipeline(&self.pipeline);
+            match self.kernel {
+                Kernel::OneStep => {
+                    for i in 0..steps {
+                        pass.set_bind_group(0, &self.state_groups[self.current], &[]);
+                        let offset = (i * self.offset_stride) as u32;
+                        pass.set_bind_group(1, &self.batch_group, &[offset]);
+                        pass.dispatch_workgroups(self.groups.0, self.groups.1, 1);
+                        if !forces_only {
+                            self.current = 1 - self.current;
+                        }
+                    }
+                    self.dispatches += steps;
+                }
+                Kernel::Persistent => {
+                    pass.set_bind_group(0, &self.state_groups[0], &[]);
+                    for d in 0..steps.div_ceil(self.steps_per_dispatch) {
+                        let offset = (d * self.offset_stride) as u32;
+                        pass.set_bind_group(1, &self.batch_group, &[offset]);
+                        pass.dispatch_workgroups(1, 1, 1);
+                        self.dispatches += 1;
+                    }
+                    self.persistent_steps = self.persistent_steps.wrapping_add(steps as u32);
+                }
+            }
         }
-        self.ctx.queue.submit([encoder.finish()]);
-        self.ctx.check()
+        let status_size = std::mem::size_of::<GpuStatus>() as u64;
+        let staging = self.spare_staging.pop().unwrap_or_else(|| {
+            self.ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("status readback"),
+                size: status_size,
+                usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            })
+        });
+        encoder.copy_buffer_to_buffer(&self.buffers.status, 0, &staging, 0, status_size);
+        let submission = self.ctx.queue.submit([encoder.finish()]);
+        let (tx, rx) = mpsc::channel();
+        staging.slice(..).map_async(wgpu::MapMode::Read, move |r| {
+            let _ = tx.send(r);
+        });
+        self.in_flight.push_back(InFlight {
+            staging,
+            submission,
+            mapped: rx,
+            first_step: self.step,
+            persistent_steps: self.persistent_steps,
+        });
+        if forces_only {
+            self.forces_ready = true;
+        } else {
+            self.step += steps;
+            self.forces_ready = false;
+        }
+        Ok(())
     }
 
-    /// Once, when driving starts: fixes the driver origin and applies the
-    /// trigger's initial junction forces (host code shared with the CPU).
+    /// Waits for the oldest batch and fails with its blow-up, if any.
+    fn retire_oldest(&mut self) -> Result<(), EngineError> {
+        let Some(batch) = self.in_flight.pop_front() else {
+            return Ok(());
+        };
+        self.ctx
+            .device
+            .poll(wgpu::PollType::Wait {
+                submission_index: Some(batch.submission),
+                timeout: None,
+            })
+            .map_err(|e| EngineError::Gpu(format!("device lost: {e}")))?;
+        batch
+            .mapped
+            .recv()
+            .map_err(|e| EngineError::Gpu(format!("status readback: {e}")))?
+            .map_err(|e| EngineError::Gpu(format!("status readback: {e}")))?;
+        let status: GpuStatus = {
+            let view = batch
+                .staging
+                .slice(..)
+                .get_mapped_range()
+                .map_err(|e| EngineError::Gpu(format!("status readback: {e}")))?;
+            *bytemuck::from_bytes(&view)
+        };
+        batch.staging.unmap();
+        self.spare_staging.push(batch.staging);
+        self.ctx.check()?;
+        if self.kernel == Kernel::Persistent
+            && status.flag == 0
+            && status.persistent_steps != batch.persistent_steps
+        {
+            return Err(EngineError::Gpu(format!(
+                "{} cut a persistent dispatch short ({} steps run in all, {} asked for): \
+                 use --gpu-path one-step",
+                self.ctx.info.name, status.persistent_steps, batch.persistent_steps
+            )));
+        }
+        if status.flag != 0 {
+            // The update of step first + s led to step first + s + 1.
+            let step = batch.first_step + status.step as u64 + 1;
+            self.in_flight.clear();
+            self.step = step;
+            let u = [status.ux as f64, status.uz as f64];
+            let v = [status.vx as f64, status.vz as f64];
+            return Err(blow_up(&self.model, step, status.block as usize, u, v));
+        }
+        Ok(())
+    }
+
+    /// Waits for every submitted batch.
+    fn drain(&mut self) -> Result<(), EngineError> {
+        while !self.in_flight.is_empty() {
+            self.retire_oldest()?;
+        }
+        Ok(())
+    }
+
+    /// Once, when driving starts (before the forces of that step): fixes
+    /// the driver origin and applies the trigger's initial junction forces
+    /// (host code shared with the CPU).
     fn begin_driving(&mut self) -> Result<(), EngineError> {
-        let snap = self.snapshot()?;
+        let snap = self.read_state()?;
         if let Driver::SideSpring { row, .. } = self.model.driver {
             self.drive_origin = DoubleSingle::from_f64(snap.disp[row * self.model.nx][0]);
         }
@@ -322,7 +529,8 @@ impl GpuEngine {
                 .iter()
                 .zip(&snap.junction_stiffness)
                 .map(|(a, k)| GpuJunctionSpring {
-                    anchor: DoubleSingle::from_f64(*a),
+                    anchor_hi: DoubleSingle::from_f64(*a).hi,
+                    anchor_lo: DoubleSingle::from_f64(*a).lo,
                     stiffness: *k as f32,
                 })
                 .collect();
@@ -332,62 +540,119 @@ impl GpuEngine {
                 bytemuck::cast_slice(&spring),
             );
         }
+        // The forces of this step change with the driver: recompute them.
+        self.forces_ready = false;
         Ok(())
     }
 
-    /// Copies `buffers` into one staging buffer with one submit and one
-    /// wait, and returns each buffer's bytes.
-    fn read_buffers(&self, buffers: &[&wgpu::Buffer]) -> Result<Vec<Vec<u8>>, EngineError> {
-        let total: u64 = buffers.iter().map(|b| b.size()).sum();
-        let staging = self.ctx.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("readback"),
-            size: total,
-            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
-        let mut encoder = self
-            .ctx
-            .device
-            .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
-        let mut offset = 0;
-        for b in buffers {
-            encoder.copy_buffer_to_buffer(b, 0, &staging, offset, b.size());
-            offset += b.size();
-        }
-        self.ctx.queue.submit([encoder.finish()]);
-        let slice = staging.slice(..);
-        let (tx, rx) = std::sync::mpsc::channel();
-        slice.map_async(wgpu::MapMode::Read, move |r| {
-            let _ = tx.send(r);
-        });
-        self.ctx
-            .device
-            .poll(wgpu::PollType::wait_indefinitely())
-            .map_err(|e| EngineError::Gpu(format!("device lost while reading back: {e}")))?;
-        rx.recv()
-            .map_err(|e| EngineError::Gpu(format!("readback: {e}")))?
-            .map_err(|e| EngineError::Gpu(format!("readback: {e}")))?;
-        let data = slice
-            .get_mapped_range()
-            .map_err(|e| EngineError::Gpu(format!("readback: {e}")))?
-            .to_vec();
-        staging.unmap();
-        self.ctx.check()?;
-        let mut out = Vec::with_capacity(buffers.len());
-        let mut at = 0usize;
-        for b in buffers {
-            let size = b.size() as usize;
-            out.push(data[at..at + size].to_vec());
-            at += size;
-        }
-        Ok(out)
+    /// The buffers as they are (forces possibly of the previous step).
+    fn read_state(&mut self) -> Result<Snapshot, EngineError> {
+        self.drain()?;
+        let m = &self.model;
+        let (n, nj) = (m.n_blocks(), m.n_junctions());
+        let b = &self.buffers;
+        let raw = read_buffers(
+            &self.ctx,
+            &[
+                &b.disp[self.current],
+                &b.vel[self.current],
+                &b.force,
+                &b.contact,
+                &b.junction_spring,
+                &b.junction_state,
+                &b.slide,
+            ],
+        )?;
+        let disp: Vec<[DoubleSingle; 2]> = cast_prefix(&raw[0], n);
+        let vel: Vec<[f32; 2]> = cast_prefix(&raw[1], n);
+        let force: Vec<[f32; 2]> = cast_prefix(&raw[2], n);
+        let contact: Vec<[f32; 2]> = cast_prefix(&raw[3], m.nx);
+        let spring: Vec<crate::cpu::JunctionSpring<DoubleSingle, f32>> =
+            cast_prefix::<GpuJunctionSpring>(&raw[4], nj)
+                .into_iter()
+                .map(Into::into)
+                .collect();
+        let state: Vec<[u32; 2]> = cast_prefix(&raw[5], nj);
+        let slide: Vec<[i32; 2]> = cast_prefix(&raw[6], m.nx);
+        Ok(Snapshot::from_buffers(
+            m, self.step, &disp, &vel, &force, &contact, &spring, &state, &slide,
+        ))
     }
 }
 
-fn dispatch(pass: &mut wgpu::ComputePass<'_>, pipelines: &[Pipeline]) {
-    for p in pipelines {
-        pass.set_pipeline(&p.pipeline);
-        pass.dispatch_workgroups(p.groups.0, p.groups.1, 1);
+/// Copies `buffers` into one staging buffer with one submit and one wait,
+/// and returns each buffer's bytes.
+fn read_buffers(ctx: &GpuContext, buffers: &[&wgpu::Buffer]) -> Result<Vec<Vec<u8>>, EngineError> {
+    let total: u64 = buffers.iter().map(|b| b.size()).sum();
+    let staging = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("readback"),
+        size: total,
+        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    let mut encoder = ctx
+        .device
+        .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
+    let mut offset = 0;
+    for b in buffers {
+        encoder.copy_buffer_to_buffer(b, 0, &staging, offset, b.size());
+        offset += b.size();
+    }
+    ctx.queue.submit([encoder.finish()]);
+    let slice = staging.slice(..);
+    let (tx, rx) = mpsc::channel();
+    slice.map_async(wgpu::MapMode::Read, move |r| {
+        let _ = tx.send(r);
+    });
+    ctx.device
+        .poll(wgpu::PollType::wait_indefinitely())
+        .map_err(|e| EngineError::Gpu(format!("device lost while reading back: {e}")))?;
+    rx.recv()
+        .map_err(|e| EngineError::Gpu(format!("readback: {e}")))?
+        .map_err(|e| EngineError::Gpu(format!("readback: {e}")))?;
+    let data = slice
+        .get_mapped_range()
+        .map_err(|e| EngineError::Gpu(format!("readback: {e}")))?
+        .to_vec();
+    staging.unmap();
+    ctx.check()?;
+    let mut out = Vec::with_capacity(buffers.len());
+    let mut at = 0usize;
+    for b in buffers {
+        let size = b.size() as usize;
+        out.push(data[at..at + size].to_vec());
+        at += size;
+    }
+    Ok(out)
+}
+
+/// Steps per dispatch of the persistent kernel. Hardware runs a whole batch
+/// in one dispatch. llvmpipe (lavapipe) silently ends a shader's loops after
+/// 65535 iterations per invocation in all, so there a dispatch runs at most
+/// half that many loop iterations, counted here per step for the busiest
+/// invocation: its blocks (8 bonds each) in both phases, its junction
+/// lanes (each with its junctions), one lane sum and the step loop.
+fn persistent_steps_per_dispatch(model: &Model, threads: u32, software: bool) -> u64 {
+    if !software {
+        return PERSISTENT_BATCH;
+    }
+    let t = threads as usize;
+    let (lanes, ns) = match (model.law, model.junctions) {
+        (FrictionLaw::Junctions | FrictionLaw::SingleJunction, Some(j)) => {
+            (crate::cpu::junctions::JUNCTION_LANES.min(j.count), j.count)
+        }
+        _ => (0, 0),
+    };
+    let blocks = model.n_blocks().div_ceil(t);
+    let items = (model.nx * lanes).div_ceil(t);
+    let per_step = 3 + blocks * 10 + items * (1 + ns.div_ceil(lanes.max(1))) + lanes;
+    (32_768 / per_step as u64).clamp(1, PERSISTENT_BATCH)
+}
+
+fn whole(binding: u32, buffer: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {
+    wgpu::BindGroupEntry {
+        binding,
+        resource: buffer.as_entire_binding(),
     }
 }
 
@@ -405,94 +670,53 @@ impl Engine for GpuEngine {
     }
 
     fn advance(&mut self, n: u64) -> Result<(), EngineError> {
-        let prep = self.model.prep_steps;
+        let (prep, ramp) = (self.model.prep_steps, self.model.ramp_steps);
+        let max_batch = match self.kernel {
+            Kernel::OneStep => ONE_STEP_BATCH,
+            Kernel::Persistent => PERSISTENT_BATCH.min(self.steps_per_dispatch * ONE_STEP_BATCH),
+        };
         let mut left = n;
         while left > 0 {
-            // A submit never crosses the start of driving: the forces of
-            // that step wait for the driver origin and trigger.
-            let mut k = left.min(STEPS_PER_SUBMIT);
-            if self.step < prep {
-                k = k.min(prep - self.step);
-            }
-            // Step i's update uses the loads of step + i, the force pass
-            // after it those of step + i + 1.
-            self.write_loads(self.step, k + 1);
-            let mut encoder =
-                self.ctx
-                    .device
-                    .create_command_encoder(&wgpu::CommandEncoderDescriptor {
-                        label: Some("steps"),
-                    });
-            {
-                let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                    label: Some("steps"),
-                    timestamp_writes: None,
-                });
-                pass.set_bind_group(0, &self.state_group, &[]);
-                let (forces, verlet) = self.pipelines.split_at(self.pipelines.len() - 1);
-                for i in 0..k {
-                    pass.set_bind_group(1, &self.step_group, &[(i * self.step_stride) as u32]);
-                    dispatch(&mut pass, verlet);
-                    if self.step + i + 1 != prep {
-                        let at = ((i + 1) * self.step_stride) as u32;
-                        pass.set_bind_group(1, &self.step_group, &[at]);
-                        dispatch(&mut pass, forces);
-                    }
+            // A batch never crosses the end of the ramp or of the
+            // normal-load phase: its loads are of one kind throughout.
+            let mut k = left.min(max_batch);
+            for boundary in [ramp, prep] {
+                if self.step < boundary {
+                    k = k.min(boundary - self.step);
                 }
             }
-            self.ctx.queue.submit([encoder.finish()]);
-            self.step += k;
+            self.submit_batch(k, false)?;
             left -= k;
             if self.step == prep {
                 self.begin_driving()?;
-                self.force_pass()?;
             }
         }
-        self.ctx.check()
+        self.drain()
     }
 
     fn snapshot(&mut self) -> Result<Snapshot, EngineError> {
-        let m = &self.model;
-        let (n, nj) = (m.n_blocks(), m.n_junctions());
-        let b = &self.buffers;
-        let raw = self.read_buffers(&[
-            &b.disp,
-            &b.vel,
-            &b.force,
-            &b.contact,
-            &b.junction_spring,
-            &b.junction_state,
-            &b.slide,
-        ])?;
-        let disp: Vec<[DoubleSingle; 2]> = cast_prefix(&raw[0], n);
-        let vel: Vec<[f32; 2]> = cast_prefix(&raw[1], n);
-        let force: Vec<[f32; 2]> = cast_prefix(&raw[2], n);
-        let contact: Vec<[f32; 2]> = cast_prefix(&raw[3], m.nx);
-        let spring: Vec<crate::cpu::JunctionSpring<DoubleSingle, f32>> =
-            cast_prefix::<GpuJunctionSpring>(&raw[4], nj)
-                .into_iter()
-                .map(Into::into)
-                .collect();
-        let state: Vec<[u32; 2]> = cast_prefix(&raw[5], nj);
-        let slide: Vec<[i32; 2]> = cast_prefix(&raw[6], m.nx);
-        let limit = m.pressure_wave_speed();
-        let snap = Snapshot::from_buffers(
-            m, self.step, &disp, &vel, &force, &contact, &spring, &state, &slide,
-        );
-        // Blow-ups are found at readbacks (the GPU never stops to check).
-        if let Some(i) = (0..n).find(|&i| {
-            let (u, v) = (snap.disp[i], snap.vel_half[i]);
-            !(u[0].is_finite() && u[1].is_finite() && v[0].abs() <= limit && v[1].abs() <= limit)
-        }) {
-            return Err(blow_up(m, self.step, i, snap.disp[i], snap.vel_half[i]));
+        self.drain()?;
+        if !self.forces_ready {
+            self.submit_batch(1, true)?;
         }
-        Ok(snap)
+        self.read_state()
     }
 
     fn describe(&self) -> String {
+        let kernel = match self.kernel {
+            Kernel::OneStep => "one-step kernel, 1 dispatch per step".to_string(),
+            Kernel::Persistent => format!(
+                "persistent kernel, 1 dispatch per {} steps, {} threads",
+                self.steps_per_dispatch, self.persistent_threads
+            ),
+        };
         format!(
-            "gpu f32 mixed (f32+f32 coordinates) on {}",
+            "gpu f32 mixed (f32+f32 coordinates), {kernel}, on {}",
             self.ctx.describe()
         )
+    }
+
+    fn dispatches(&self) -> Option<u64> {
+        Some(self.dispatches)
     }
 }

@@ -1,5 +1,7 @@
-//! WGSL sources, composed per phase (common + double-single + rng + phase file), and the
-//! variant a scene needs: which pipelines exist and their override constants.
+//! WGSL sources, composed per kernel (the generated prelude of
+//! `layout.rs`, the shared snippets, the state bindings of the kernel and
+//! its entry file), and the variant a scene needs: which kernel runs and
+//! its override constants.
 
 use crate::model::{Driver, Model};
 use crate::scenario::{DampingForm, FrictionLaw};
@@ -11,50 +13,57 @@ pub const BULK_FORCES: &str = include_str!("../../shaders/bulk_forces.wgsl");
 pub const JUNCTIONS: &str = include_str!("../../shaders/junctions.wgsl");
 pub const COULOMB: &str = include_str!("../../shaders/coulomb.wgsl");
 pub const VERLET: &str = include_str!("../../shaders/verlet.wgsl");
+pub const STATE_ONE_STEP: &str = include_str!("../../shaders/state_one_step.wgsl");
+pub const STATE_PERSISTENT: &str = include_str!("../../shaders/state_persistent.wgsl");
+pub const ONE_STEP: &str = include_str!("../../shaders/one_step.wgsl");
+pub const PERSISTENT: &str = include_str!("../../shaders/persistent.wgsl");
 
-/// A compute phase: its entry point (the CPU twin's name) and source.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Phase {
-    BulkForces,
-    Junctions,
-    Coulomb,
-    Verlet,
+/// A compute kernel: its entry point (the CPU twin's name) and source.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Kernel {
+    /// One step of any lattice per dispatch, ping-pong state buffers.
+    OneStep,
+    /// Many steps of a small lattice per dispatch, one workgroup.
+    Persistent,
 }
 
-impl Phase {
-    pub const ALL: [Phase; 4] = [
-        Phase::BulkForces,
-        Phase::Junctions,
-        Phase::Coulomb,
-        Phase::Verlet,
-    ];
+impl Kernel {
+    pub const ALL: [Kernel; 2] = [Kernel::OneStep, Kernel::Persistent];
 
     pub fn entry_point(self) -> &'static str {
         match self {
-            Phase::BulkForces => "bulk_forces",
-            Phase::Junctions => "junctions",
-            Phase::Coulomb => "coulomb",
-            Phase::Verlet => "verlet",
+            Kernel::OneStep => "one_step",
+            Kernel::Persistent => "persistent_steps",
         }
     }
 
-    /// The full WGSL module of this phase.
+    /// The full WGSL module of this kernel.
     pub fn source(self) -> String {
-        let body = match self {
-            Phase::BulkForces => BULK_FORCES,
-            Phase::Junctions => JUNCTIONS,
-            Phase::Coulomb => COULOMB,
-            Phase::Verlet => VERLET,
+        let (state, entry) = match self {
+            Kernel::OneStep => (STATE_ONE_STEP, ONE_STEP),
+            Kernel::Persistent => (STATE_PERSISTENT, PERSISTENT),
         };
-        let rng = if self == Phase::Junctions { RNG } else { "" };
-        format!("{COMMON}\n{DOUBLE_SINGLE}\n{rng}\n{body}")
+        let prelude = super::layout::wgsl_prelude();
+        [
+            prelude.as_str(),
+            COMMON,
+            state,
+            DOUBLE_SINGLE,
+            RNG,
+            BULK_FORCES,
+            JUNCTIONS,
+            COULOMB,
+            VERLET,
+            entry,
+        ]
+        .join("\n")
     }
 }
 
-/// The pipelines a scene builds, in dispatch order, with their constants.
+/// The override constants of a scene: terms it does not use are compiled out.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Variant {
-    pub phases: Vec<(Phase, Vec<(&'static str, f64)>)>,
+    pub constants: Vec<(&'static str, f64)>,
 }
 
 impl Variant {
@@ -71,9 +80,14 @@ impl Variant {
         let top_loads = m.normal_force != 0.0
             || m.trigger.is_some()
             || matches!(m.driver, Driver::TopForce { .. });
-        let mut phases = vec![(
-            Phase::BulkForces,
-            vec![
+        let law = match m.law {
+            FrictionLaw::None => 0.0,
+            FrictionLaw::Junctions | FrictionLaw::SingleJunction => 1.0,
+            FrictionLaw::Coulomb => 2.0,
+        };
+        Variant {
+            constants: vec![
+                ("FRICTION_LAW", law),
                 ("DAMPING_FORM", damping),
                 ("USE_FOUNDATION", flag(m.k_foundation > 0.0)),
                 ("USE_TOP_LOADS", flag(top_loads)),
@@ -86,36 +100,21 @@ impl Variant {
                     flag(m.relax_eta > 0.0 && m.prep_steps > m.ramp_steps),
                 ),
             ],
-        )];
-        match m.law {
-            FrictionLaw::Junctions | FrictionLaw::SingleJunction => {
-                phases.push((Phase::Junctions, vec![]))
-            }
-            FrictionLaw::Coulomb => phases.push((Phase::Coulomb, vec![])),
-            FrictionLaw::None => {}
         }
-        phases.push((
-            Phase::Verlet,
-            vec![("USE_FRICTION", flag(m.law != FrictionLaw::None))],
-        ));
-        Variant { phases }
     }
 
-    /// One line per pipeline: `entry(CONST=value, ...)`.
+    /// `CONST=value, ...`.
     pub fn describe(&self) -> String {
-        self.phases
+        self.constants
             .iter()
-            .map(|(p, c)| {
-                let consts: Vec<String> = c.iter().map(|(k, v)| format!("{k}={v}")).collect();
-                format!("{}({})", p.entry_point(), consts.join(","))
-            })
+            .map(|(k, v)| format!("{k}={v}"))
             .collect::<Vec<_>>()
-            .join(" -> ")
+            .join(",")
     }
 }
 
-/// Parses and validates a phase's module with naga (no adapter needed).
-pub fn validate_phase(phase: Phase) -> Result<naga::Module, String> {
+/// Parses and validates a kernel's module with naga (no adapter needed).
+pub fn validate_kernel(phase: Kernel) -> Result<naga::Module, String> {
     let src = phase.source();
     let module = naga::front::wgsl::parse_str(&src)
         .map_err(|e| format!("{}: {}", phase.entry_point(), e.emit_to_string(&src)))?;
@@ -141,8 +140,8 @@ mod tests {
 
     #[test]
     fn every_shader_parses_and_validates_with_naga() {
-        for phase in Phase::ALL {
-            validate_phase(phase).unwrap_or_else(|e| panic!("{e}"));
+        for kernel in Kernel::ALL {
+            validate_kernel(kernel).unwrap_or_else(|e| panic!("{e}"));
         }
     }
 }

@@ -1,0 +1,21 @@
+// Block state of the persistent kernel: one workgroup owns the whole
+// lattice and separates the phases of a step with barriers, so it updates
+// the state in place. lane_partial holds the junction lane sums between
+// the force and the update phases.
+
+@group(0) @binding(1) var<storage, read_write> disp: array<Disp>;
+@group(0) @binding(2) var<storage, read_write> vel: array<vec2<f32>>;
+@group(0) @binding(12) var<storage, read_write> lane_partial: array<f32>;
+
+fn load_disp(i: u32) -> Disp {
+    return disp[i];
+}
+
+fn load_vel(i: u32) -> vec2<f32> {
+    return vel[i];
+}
+
+fn store_block(i: u32, u: Disp, v: vec2<f32>) {
+    disp[i] = u;
+    vel[i] = v;
+}
