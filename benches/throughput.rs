@@ -108,7 +108,11 @@ fn main() {
             } as f64
                 / n as f64;
             let paths = if backend == Backend::Gpu {
-                vec![Some(GpuPath::OneStep), Some(GpuPath::Persistent)]
+                vec![
+                    Some(GpuPath::OneStep),
+                    Some(GpuPath::OneStepLanes),
+                    Some(GpuPath::Persistent),
+                ]
             } else {
                 vec![None]
             };

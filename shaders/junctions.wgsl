@@ -12,13 +12,24 @@ fn junction_stiffness(f_n: f32) -> f32 {
     return c.junction_stiffness_value;
 }
 
-fn junction_lane(ix: u32, lane: u32, ld: Loads) -> f32 {
+// What every junction of interface block ix needs this step.
+struct JunctionBlock {
+    ux: vec2<f32>,
+    f_n: f32,
+    threshold: f32,
+    sliding: f32,
+}
+
+fn junction_block(ix: u32) -> JunctionBlock {
     let u = load_disp(ix);
-    let v = load_vel(ix);
-    let normal = foundation_normal(u.z.x);
-    let f_n = normal / f32(c.junction_count);
-    let threshold = c.mu_s * f_n;
-    let sliding = -c.mu_d * f_n * sign(v.x);
+    let f_n = foundation_normal(u.z.x) / f32(c.junction_count);
+    return JunctionBlock(u.x, f_n, c.mu_s * f_n, -c.mu_d * f_n * sign(load_vel(ix).x));
+}
+
+fn junction_lane(ix: u32, lane: u32, jb: JunctionBlock, ld: Loads) -> f32 {
+    let f_n = jb.f_n;
+    let threshold = jb.threshold;
+    let sliding = jb.sliding;
     var total = 0.0;
     for (var j = lane; j < c.junction_count; j += JUNCTION_LANES) {
         let idx = ix * c.junction_count + j;
@@ -28,7 +39,7 @@ fn junction_lane(ix: u32, lane: u32, ld: Loads) -> f32 {
             // A lifted block (f_N = 0) keeps its junctions waiting at 0.
             state.x = max(state.x, 1u) - 1u;
             if state.x == 0u && f_n > 0.0 {
-                spring = JunctionSpring(u.x.x, u.x.y, junction_stiffness(f_n));
+                spring = JunctionSpring(jb.ux.x, jb.ux.y, junction_stiffness(f_n));
                 state.x = PINNED;
             }
         }
@@ -39,7 +50,7 @@ fn junction_lane(ix: u32, lane: u32, ld: Loads) -> f32 {
                 spring.stiffness = junction_stiffness(f_n);
             }
             let anchor = vec2<f32>(spring.anchor_hi, spring.anchor_lo);
-            f = -spring.stiffness * ds_diff(u.x, anchor);
+            f = -spring.stiffness * ds_diff(jb.ux, anchor);
             if !ld.preparing && abs(f) > threshold {
                 let count = state.y + 1u;
                 state.y = count;

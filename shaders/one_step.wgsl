@@ -1,32 +1,8 @@
-// One step n → n+1 of every block in one dispatch: the forces and friction
-// at step n, then the leapfrog update written to the other state buffer.
-// Workgroup w < nx (junction laws) is interface block w: its threads are
-// the junction lanes, thread 0 adds the lane sums in order and updates the
-// block. The other workgroups update WORKGROUP blocks each, one per thread.
-// CPU twin: src/cpu/mod.rs CpuEngine::step (force pass and update).
-
-var<workgroup> lane_sum: array<f32, JUNCTION_LANES>;
-
-// The forces of block i (not a junction block) at step n, stored; the
-// Amontons–Coulomb friction of interface blocks. Returns (force, friction).
-fn block_forces(i: u32, ld: Loads, ready: bool) -> vec3<f32> {
-    if ready {
-        var friction = 0.0;
-        if FRICTION_LAW != LAW_NONE && i < c.nx {
-            friction = contact[i].x;
-        }
-        return vec3<f32>(force[i], friction);
-    }
-    let f = bulk_force(i, ld);
-    force[i] = f;
-    var friction = 0.0;
-    if FRICTION_LAW == LAW_COULOMB && i < c.nx {
-        let cn = coulomb(i, f.x, ld);
-        contact[i] = cn;
-        friction = cn.x;
-    }
-    return vec3<f32>(f, friction);
-}
+// One step n → n+1 of every block in one dispatch, one thread per block:
+// the forces and friction at step n (an interface block's thread walks its
+// junction lanes in order), then the leapfrog update written to the other
+// state buffer. No barrier, so software adapters run it without
+// coroutines. CPU twin: src/cpu/mod.rs CpuEngine::one_step.
 
 @compute @workgroup_size(WORKGROUP)
 fn one_step(
@@ -34,46 +10,14 @@ fn one_step(
     @builtin(workgroup_id) wid: vec3<u32>,
     @builtin(num_workgroups) groups: vec3<u32>,
 ) {
-    let w = wid.x + wid.y * groups.x;
-    let i_step = step_offset;
-    let ld = loads_at(i_step);
-    let ready = batch.forces_ready != 0u && i_step == 0u;
-    let update = batch.forces_only == 0u;
-    if FRICTION_LAW == LAW_JUNCTIONS && w < c.nx {
-        let lanes = min(JUNCTION_LANES, c.junction_count);
-        if !ready && local < lanes {
-            lane_sum[local] = junction_lane(w, local, ld);
-        }
-        workgroupBarrier();
-        if local == 0u {
-            var f: vec2<f32>;
-            var friction = 0.0;
-            if ready {
-                f = force[w];
-                friction = contact[w].x;
-            } else {
-                f = bulk_force(w, ld);
-                for (var l = 0u; l < lanes; l++) {
-                    friction = friction + lane_sum[l];
-                }
-                force[w] = f;
-                contact[w] = vec2<f32>(friction, foundation_normal(load_disp(w).z.x));
-            }
-            if update {
-                verlet(w, f, friction, ld, i_step);
-            }
-        }
-        return;
-    }
-    var i = w * WORKGROUP + local;
-    if FRICTION_LAW == LAW_JUNCTIONS {
-        i = c.nx + (w - c.nx) * WORKGROUP + local;
-    }
+    let i = (wid.x + wid.y * groups.x) * WORKGROUP + local;
     if i >= c.n_blocks {
         return;
     }
+    let ld = loads_at(step_offset);
+    let ready = batch.forces_ready != 0u && step_offset == 0u;
     let ff = block_forces(i, ld, ready);
-    if update {
-        verlet(i, ff.xy, ff.z, ld, i_step);
+    if batch.forces_only == 0u {
+        verlet(i, ff.xy, ff.z, ld, step_offset);
     }
 }

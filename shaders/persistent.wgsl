@@ -29,7 +29,8 @@ fn persistent_steps(@builtin(local_invocation_index) t: u32) {
             }
             if FRICTION_LAW == LAW_JUNCTIONS {
                 for (var w = t; w < c.nx * lanes; w += PERSISTENT_THREADS) {
-                    lane_partial[w] = junction_lane(w / lanes, w % lanes, ld);
+                    let ix = w / lanes;
+                    lane_partial[w] = junction_lane(ix, w % lanes, junction_block(ix), ld);
                 }
             }
         }

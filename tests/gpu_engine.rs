@@ -18,7 +18,7 @@ fn gpu(m: &Model) -> GpuEngine {
     GpuEngine::new(m).unwrap_or_else(|e| panic!("a GPU adapter is required (lavapipe in CI): {e}"))
 }
 
-/// The engine on one kernel: every cross-check runs on both.
+/// The engine on one kernel: every cross-check runs on each.
 fn gpu_on(m: &Model, path: GpuPath) -> GpuEngine {
     let opts = GpuOptions {
         path,
@@ -28,7 +28,7 @@ fn gpu_on(m: &Model, path: GpuPath) -> GpuEngine {
         .unwrap_or_else(|e| panic!("a GPU adapter is required (lavapipe in CI): {e}"))
 }
 
-const KERNELS: [GpuPath; 2] = [GpuPath::OneStep, GpuPath::Persistent];
+const KERNELS: [GpuPath; 3] = [GpuPath::OneStep, GpuPath::OneStepLanes, GpuPath::Persistent];
 
 fn run_both(m: &Model, steps: u64, path: GpuPath) -> (Snapshot, Snapshot) {
     let mut c = cpu_engine(m, Precision::F32, 1).unwrap();
@@ -357,12 +357,12 @@ fn a_persistent_dispatch_cut_short_is_an_error() {
 }
 
 /// A run that blows up stops with the step and block where it happened, on
-/// both kernels, as the CPU does: junctions 10⁴× too stiff for the time
+/// every kernel, as the CPU does: junctions 10⁴× too stiff for the time
 /// step (forced past the stability check) blow up within a few hundred
 /// steps; the GPU must name the CPU f32 engine's step (within 5 steps) and
 /// an interface block, and stop there.
 #[test]
-fn a_blow_up_stops_the_run_at_its_step_and_block_on_both_kernels() {
+fn a_blow_up_stops_the_run_at_its_step_and_block_on_every_kernel() {
     let s = slipfront::verify::small_scene(&[
         "loading.drive.velocity=0.4",
         "friction.junctions.stiffness_coefficient=39.2e17",
@@ -371,8 +371,7 @@ fn a_blow_up_stops_the_run_at_its_step_and_block_on_both_kernels() {
     .unwrap();
     let m = Model::from_scenario(&s, true).unwrap();
     let mut c = cpu_engine(&m, Precision::F32, 1).unwrap();
-    let Err(EngineError::BlowUp { step: at, .. }) = advance_to(c.as_mut(), m.total_steps())
-    else {
+    let Err(EngineError::BlowUp { step: at, .. }) = advance_to(c.as_mut(), m.total_steps()) else {
         panic!("the CPU run must blow up");
     };
     for path in KERNELS {

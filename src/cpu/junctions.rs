@@ -71,15 +71,41 @@ pub fn junctions<T: Real, C: Coordinate<T>>(
     v: [T; 2],
     slots: JunctionSlots<'_, T, C>,
 ) -> (T, T) {
+    let jb = junction_block(c, u, v);
     let mut total = T::zero();
     for lane in 0..JUNCTION_LANES.min(c.junction_count) {
         let slots = JunctionSlots {
             spring: &mut *slots.spring,
             state: &mut *slots.state,
         };
-        total = total + junction_lane(c, p, ix, lane, u, v, slots);
+        total = total + junction_lane(c, p, ix, lane, &jb, slots);
     }
     (total, foundation_normal(c, u[1].value()))
+}
+
+/// What every junction of one interface block needs this step (twin of the
+/// WGSL `JunctionBlock`): the block's u_x, the normal force per junction,
+/// the break threshold μs·f_N and the sliding force.
+pub struct JunctionBlock<T, C> {
+    pub ux: C,
+    pub f_n: T,
+    pub threshold: T,
+    pub sliding: T,
+}
+
+/// Twin of the WGSL `junction_block`.
+pub fn junction_block<T: Real, C: Coordinate<T>>(
+    c: &Consts<T>,
+    u: [C; 2],
+    v: [T; 2],
+) -> JunctionBlock<T, C> {
+    let f_n = foundation_normal(c, u[1].value()) / T::from_f64(c.junction_count as f64);
+    JunctionBlock {
+        ux: u[0],
+        f_n,
+        threshold: c.mu_s * f_n,
+        sliding: -c.mu_d * f_n * velocity_sign(v[0]),
+    }
 }
 
 /// Twin of the WGSL `junction_lane`: advances junctions `lane`,
@@ -90,14 +116,10 @@ pub fn junction_lane<T: Real, C: Coordinate<T>>(
     p: &StepParams<T>,
     ix: usize,
     lane: usize,
-    u: [C; 2],
-    v: [T; 2],
+    jb: &JunctionBlock<T, C>,
     slots: JunctionSlots<'_, T, C>,
 ) -> T {
-    let normal = foundation_normal(c, u[1].value());
-    let f_n = normal / T::from_f64(c.junction_count as f64);
-    let threshold = c.mu_s * f_n;
-    let sliding = -c.mu_d * f_n * velocity_sign(v[0]);
+    let (f_n, threshold, sliding) = (jb.f_n, jb.threshold, jb.sliding);
     let mut total = T::zero();
     for j in (lane..c.junction_count).step_by(JUNCTION_LANES) {
         let (spring, state) = (&mut slots.spring[j], &mut slots.state[j]);
@@ -105,7 +127,7 @@ pub fn junction_lane<T: Real, C: Coordinate<T>>(
             state[0] = state[0].saturating_sub(1);
             if state[0] == 0 && f_n > T::zero() {
                 *spring = JunctionSpring {
-                    anchor: u[0],
+                    anchor: jb.ux,
                     stiffness: c.junction_stiffness(f_n),
                 };
                 state[0] = PINNED;
@@ -117,7 +139,7 @@ pub fn junction_lane<T: Real, C: Coordinate<T>>(
                 // While the normal load is applied, attachment is continuous.
                 spring.stiffness = c.junction_stiffness(f_n);
             }
-            f = -spring.stiffness * u[0].diff(spring.anchor);
+            f = -spring.stiffness * jb.ux.diff(spring.anchor);
             if !p.preparing && f.abs() > threshold {
                 let count = state[1].wrapping_add(1);
                 state[1] = count;

@@ -161,7 +161,7 @@ impl GpuContext {
     /// The pipeline of `kernel` with `constants`, compiled once per process.
     pub fn pipeline(&self, kernel: Kernel, constants: &[(&str, f64)]) -> wgpu::ComputePipeline {
         let layout = match kernel {
-            Kernel::OneStep => &self.one_step_pipeline_layout,
+            Kernel::OneStep | Kernel::OneStepLanes => &self.one_step_pipeline_layout,
             Kernel::Persistent => &self.persistent_pipeline_layout,
         };
         let key = format!("{}{constants:?}", kernel.entry_point());

@@ -45,10 +45,14 @@ pub const PERSISTENT_THREADS: u32 = 256;
 /// Which kernel steps the lattice.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
 pub enum GpuPath {
-    /// The persistent kernel up to `PERSISTENT_MAX_BLOCKS` blocks, else one step per dispatch.
+    /// Hardware: the persistent kernel up to `PERSISTENT_MAX_BLOCKS`
+    /// blocks, else one step per dispatch with parallel junction lanes.
+    /// Software adapters: one step per dispatch, one thread per block.
     Auto,
-    /// One dispatch per step.
+    /// One dispatch per step, one thread per block.
     OneStep,
+    /// One dispatch per step, a workgroup per interface block's junctions.
+    OneStepLanes,
     /// One workgroup, many steps per dispatch (any lattice: slow for large ones).
     Persistent,
 }
@@ -168,9 +172,14 @@ impl GpuEngine {
         }
         let kernel = match opts.path {
             GpuPath::OneStep => Kernel::OneStep,
+            GpuPath::OneStepLanes => Kernel::OneStepLanes,
             GpuPath::Persistent => Kernel::Persistent,
+            // Measured on lavapipe (BENCHMARKS.md): barriers cost more than
+            // dispatches there, so neither the lanes nor the persistent
+            // kernel pays.
+            GpuPath::Auto if ctx.is_software() => Kernel::OneStep,
             GpuPath::Auto if n <= PERSISTENT_MAX_BLOCKS => Kernel::Persistent,
-            GpuPath::Auto => Kernel::OneStep,
+            GpuPath::Auto => Kernel::OneStepLanes,
         };
         let persistent_threads = opts
             .persistent_threads
@@ -267,7 +276,7 @@ impl GpuEngine {
             ]
         };
         let state_groups: Vec<wgpu::BindGroup> = match kernel {
-            Kernel::OneStep => (0..2)
+            Kernel::OneStep | Kernel::OneStepLanes => (0..2)
                 .map(|from| {
                     let to = 1 - from;
                     let mut entries = common();
@@ -319,8 +328,10 @@ impl GpuEngine {
             constants.push(("PERSISTENT_THREADS", persistent_threads as f64));
         }
         let pipeline = ctx.pipeline(kernel, &constants);
-        let junction_groups = match model.law {
-            FrictionLaw::Junctions | FrictionLaw::SingleJunction => model.nx as u32,
+        let junction_groups = match (kernel, model.law) {
+            (Kernel::OneStepLanes, FrictionLaw::Junctions | FrictionLaw::SingleJunction) => {
+                model.nx as u32
+            }
             _ => 0,
         };
         let plain_blocks = n as u32 - junction_groups;
@@ -402,7 +413,7 @@ impl GpuEngine {
             });
             pass.set_pipeline(&self.pipeline);
             match self.kernel {
-                Kernel::OneStep => {
+                Kernel::OneStep | Kernel::OneStepLanes => {
                     for i in 0..steps {
                         pass.set_bind_group(0, &self.state_groups[self.current], &[]);
                         let offset = (i * self.offset_stride) as u32;
@@ -672,7 +683,7 @@ impl Engine for GpuEngine {
     fn advance(&mut self, n: u64) -> Result<(), EngineError> {
         let (prep, ramp) = (self.model.prep_steps, self.model.ramp_steps);
         let max_batch = match self.kernel {
-            Kernel::OneStep => ONE_STEP_BATCH,
+            Kernel::OneStep | Kernel::OneStepLanes => ONE_STEP_BATCH,
             Kernel::Persistent => PERSISTENT_BATCH.min(self.steps_per_dispatch * ONE_STEP_BATCH),
         };
         let mut left = n;
@@ -705,6 +716,9 @@ impl Engine for GpuEngine {
     fn describe(&self) -> String {
         let kernel = match self.kernel {
             Kernel::OneStep => "one-step kernel, 1 dispatch per step".to_string(),
+            Kernel::OneStepLanes => {
+                "one-step kernel with junction lanes, 1 dispatch per step".to_string()
+            }
             Kernel::Persistent => format!(
                 "persistent kernel, 1 dispatch per {} steps, {} threads",
                 self.steps_per_dispatch, self.persistent_threads

@@ -15,24 +15,31 @@ pub const COULOMB: &str = include_str!("../../shaders/coulomb.wgsl");
 pub const VERLET: &str = include_str!("../../shaders/verlet.wgsl");
 pub const STATE_ONE_STEP: &str = include_str!("../../shaders/state_one_step.wgsl");
 pub const STATE_PERSISTENT: &str = include_str!("../../shaders/state_persistent.wgsl");
+pub const STEP_FORCES: &str = include_str!("../../shaders/step_forces.wgsl");
 pub const ONE_STEP: &str = include_str!("../../shaders/one_step.wgsl");
+pub const ONE_STEP_LANES: &str = include_str!("../../shaders/one_step_lanes.wgsl");
 pub const PERSISTENT: &str = include_str!("../../shaders/persistent.wgsl");
 
 /// A compute kernel: its entry point (the CPU twin's name) and source.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum Kernel {
-    /// One step of any lattice per dispatch, ping-pong state buffers.
+    /// One step of any lattice per dispatch, ping-pong state buffers, one
+    /// thread per block (no barrier: the software adapters' kernel).
     OneStep,
+    /// The same with the junction lanes of each interface block in parallel
+    /// (a workgroup per interface block).
+    OneStepLanes,
     /// Many steps of a small lattice per dispatch, one workgroup.
     Persistent,
 }
 
 impl Kernel {
-    pub const ALL: [Kernel; 2] = [Kernel::OneStep, Kernel::Persistent];
+    pub const ALL: [Kernel; 3] = [Kernel::OneStep, Kernel::OneStepLanes, Kernel::Persistent];
 
     pub fn entry_point(self) -> &'static str {
         match self {
             Kernel::OneStep => "one_step",
+            Kernel::OneStepLanes => "one_step_lanes",
             Kernel::Persistent => "persistent_steps",
         }
     }
@@ -41,7 +48,13 @@ impl Kernel {
     pub fn source(self) -> String {
         let (state, entry) = match self {
             Kernel::OneStep => (STATE_ONE_STEP, ONE_STEP),
+            Kernel::OneStepLanes => (STATE_ONE_STEP, ONE_STEP_LANES),
             Kernel::Persistent => (STATE_PERSISTENT, PERSISTENT),
+        };
+        let step_forces = if self == Kernel::Persistent {
+            ""
+        } else {
+            STEP_FORCES
         };
         let prelude = super::layout::wgsl_prelude();
         [
@@ -54,6 +67,7 @@ impl Kernel {
             JUNCTIONS,
             COULOMB,
             VERLET,
+            step_forces,
             entry,
         ]
         .join("\n")

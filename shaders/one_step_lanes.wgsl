@@ -1,0 +1,60 @@
+// One step n → n+1 of every block in one dispatch, junction lanes in
+// parallel (hardware GPUs, many junctions): workgroup w < nx (junction
+// laws) is interface block w, its threads are the junction lanes and
+// thread 0 adds the lane sums in lane order and updates the block. The
+// other workgroups update WORKGROUP blocks each, one per thread. The
+// workgroup barrier makes llvmpipe run the whole shader as coroutines, so
+// software adapters take one_step (serial lanes) instead.
+// CPU twin: src/cpu/mod.rs CpuEngine::one_step (force pass and update).
+
+var<workgroup> lane_sum: array<f32, JUNCTION_LANES>;
+
+@compute @workgroup_size(WORKGROUP)
+fn one_step_lanes(
+    @builtin(local_invocation_index) local: u32,
+    @builtin(workgroup_id) wid: vec3<u32>,
+    @builtin(num_workgroups) groups: vec3<u32>,
+) {
+    let w = wid.x + wid.y * groups.x;
+    let i_step = step_offset;
+    let ld = loads_at(i_step);
+    let ready = batch.forces_ready != 0u && i_step == 0u;
+    let update = batch.forces_only == 0u;
+    if FRICTION_LAW == LAW_JUNCTIONS && w < c.nx {
+        let lanes = min(JUNCTION_LANES, c.junction_count);
+        if !ready && local < lanes {
+            lane_sum[local] = junction_lane(w, local, junction_block(w), ld);
+        }
+        workgroupBarrier();
+        if local == 0u {
+            var f: vec2<f32>;
+            var friction = 0.0;
+            if ready {
+                f = force[w];
+                friction = contact[w].x;
+            } else {
+                f = bulk_force(w, ld);
+                for (var l = 0u; l < lanes; l++) {
+                    friction = friction + lane_sum[l];
+                }
+                force[w] = f;
+                contact[w] = vec2<f32>(friction, foundation_normal(load_disp(w).z.x));
+            }
+            if update {
+                verlet(w, f, friction, ld, i_step);
+            }
+        }
+        return;
+    }
+    var i = w * WORKGROUP + local;
+    if FRICTION_LAW == LAW_JUNCTIONS {
+        i = c.nx + (w - c.nx) * WORKGROUP + local;
+    }
+    if i >= c.n_blocks {
+        return;
+    }
+    let ff = block_forces(i, ld, ready);
+    if update {
+        verlet(i, ff.xy, ff.z, ld, i_step);
+    }
+}

@@ -1,0 +1,32 @@
+// The forces of block i at the start of a step, stored in `force`, and its
+// friction: Amontons–Coulomb, or the junction lanes of an interface block
+// one after the other, in lane order (the CPU twin's order). With `ready`
+// the forces were computed already (by a snapshot's force pass): read them.
+// Returns (force, friction). CPU twin: src/cpu/mod.rs CpuEngine::force_pass.
+
+fn block_forces(i: u32, ld: Loads, ready: bool) -> vec3<f32> {
+    if ready {
+        var friction = 0.0;
+        if FRICTION_LAW != LAW_NONE && i < c.nx {
+            friction = contact[i].x;
+        }
+        return vec3<f32>(force[i], friction);
+    }
+    let f = bulk_force(i, ld);
+    force[i] = f;
+    var friction = 0.0;
+    if FRICTION_LAW == LAW_COULOMB && i < c.nx {
+        let cn = coulomb(i, f.x, ld);
+        contact[i] = cn;
+        friction = cn.x;
+    }
+    if FRICTION_LAW == LAW_JUNCTIONS && i < c.nx {
+        let lanes = min(JUNCTION_LANES, c.junction_count);
+        let jb = junction_block(i);
+        for (var l = 0u; l < lanes; l++) {
+            friction = friction + junction_lane(i, l, jb, ld);
+        }
+        contact[i] = vec2<f32>(friction, foundation_normal(load_disp(i).z.x));
+    }
+    return vec3<f32>(f, friction);
+}
