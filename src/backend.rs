@@ -11,7 +11,10 @@ pub enum Backend {
     Cpu,
     /// The wgpu engine (a hardware adapter, else lavapipe).
     Gpu,
-    /// A hardware GPU, else lavapipe, else the CPU.
+    /// A hardware GPU, else the CPU (all cores). A software adapter
+    /// (lavapipe) is never chosen: on this model it runs several times
+    /// slower than one CPU thread (BENCHMARKS.md); ask for it with
+    /// `--backend gpu`.
     Auto,
 }
 
@@ -60,8 +63,16 @@ pub fn make_engine(
             }
             Ok(Box::new(GpuEngine::new(model)?))
         }
-        Backend::Auto => match GpuEngine::new(model) {
-            Ok(e) if precision == Precision::F32 => Ok(Box::new(e)),
+        Backend::Auto => match crate::gpu::context::shared() {
+            Ok(ctx) if ctx.is_software() => {
+                eprintln!(
+                    "slipfront: only a software GPU adapter ({}); running on the CPU, \
+                     which is faster (--backend gpu to use it anyway)",
+                    ctx.info.name
+                );
+                cpu_engine(model, precision, threads)
+            }
+            Ok(_) if precision == Precision::F32 => Ok(Box::new(GpuEngine::new(model)?)),
             Ok(_) => cpu_engine(model, precision, threads),
             Err(e) => {
                 eprintln!("slipfront: no usable GPU adapter ({e}); running on the CPU");
