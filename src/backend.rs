@@ -2,7 +2,7 @@
 
 use crate::cpu::CpuEngine;
 use crate::engine::{Engine, EngineError};
-use crate::gpu::GpuEngine;
+use crate::gpu::{GpuEngine, GpuOptions};
 use crate::model::Model;
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
@@ -44,12 +44,23 @@ pub fn cpu_engine(
     })
 }
 
-/// Builds the engine for `backend`.
+/// Builds the engine for `backend` (the GPU with its default kernel choice).
 pub fn make_engine(
     model: &Model,
     backend: Backend,
     precision: Precision,
     threads: usize,
+) -> Result<Box<dyn Engine>, EngineError> {
+    make_engine_with(model, backend, precision, threads, GpuOptions::default())
+}
+
+/// Builds the engine for `backend`, the GPU one with `gpu` options.
+pub fn make_engine_with(
+    model: &Model,
+    backend: Backend,
+    precision: Precision,
+    threads: usize,
+    gpu: GpuOptions,
 ) -> Result<Box<dyn Engine>, EngineError> {
     match backend {
         Backend::Cpu => cpu_engine(model, precision, threads),
@@ -61,7 +72,7 @@ pub fn make_engine(
                         .into(),
                 ));
             }
-            Ok(Box::new(GpuEngine::new(model)?))
+            Ok(Box::new(GpuEngine::with_options(model, gpu)?))
         }
         Backend::Auto => match crate::gpu::context::shared() {
             Ok(ctx) if ctx.is_software() => {
@@ -72,7 +83,9 @@ pub fn make_engine(
                 );
                 cpu_engine(model, precision, threads)
             }
-            Ok(_) if precision == Precision::F32 => Ok(Box::new(GpuEngine::new(model)?)),
+            Ok(_) if precision == Precision::F32 => {
+                Ok(Box::new(GpuEngine::with_options(model, gpu)?))
+            }
             Ok(_) => cpu_engine(model, precision, threads),
             Err(e) => {
                 eprintln!("slipfront: no usable GPU adapter ({e}); running on the CPU");

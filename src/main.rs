@@ -25,6 +25,11 @@ enum Command {
         scenario: Option<PathBuf>,
         #[arg(long, value_enum, default_value = "auto")]
         backend: Backend,
+        /// GPU kernel: one-step (1 dispatch per step), one-step-lanes
+        /// (junction lanes in parallel), persistent (many steps per
+        /// dispatch, small lattices) or auto.
+        #[arg(long, value_enum, default_value = "auto")]
+        gpu_path: slipfront::gpu::GpuPath,
         #[arg(long, value_enum)]
         precision: Option<Precision>,
         /// Override a scenario key: --set loading.drive.velocity=1e-3
@@ -92,6 +97,7 @@ fn main() -> ExitCode {
         Command::Run {
             scenario,
             backend,
+            gpu_path,
             precision,
             set,
             t_end,
@@ -102,6 +108,7 @@ fn main() -> ExitCode {
         } => commands::run::run(commands::run::RunArgs {
             scenario,
             backend,
+            gpu_path,
             precision,
             set,
             t_end,

@@ -35,6 +35,8 @@ pub struct RunSummary {
     pub peak_drive_ratio: f64,
     pub final_drive_ratio: f64,
     pub ruptures: u64,
+    /// GPU dispatches over the run (GPU engines only).
+    pub dispatches: Option<u64>,
     pub interrupted: bool,
     pub output: Option<PathBuf>,
     /// Peak resident memory of the process (bytes), where the OS tells.
@@ -76,6 +78,13 @@ impl std::fmt::Display for RunSummary {
         writeln!(f, "  peak F/F_N         {:.4}", self.peak_drive_ratio)?;
         writeln!(f, "  final F/F_N        {:.4}", self.final_drive_ratio)?;
         writeln!(f, "  junction ruptures  {}", self.ruptures)?;
+        if let Some(d) = self.dispatches {
+            writeln!(
+                f,
+                "  GPU dispatches     {d} ({:.4} per step)",
+                d as f64 / self.steps.max(1) as f64
+            )?;
+        }
         if let Some(b) = self.peak_memory {
             writeln!(f, "  peak memory        {:.1} MiB", b as f64 / 1048576.0)?;
         }
@@ -198,6 +207,7 @@ pub fn run_scene(
     let mut ruptures = 0;
     let mut interrupted = false;
     let start_step = engine.steps_done();
+    let start_dispatches = engine.dispatches();
     while engine.steps_done() < total {
         if INTERRUPTED.load(Ordering::SeqCst) {
             interrupted = true;
@@ -281,6 +291,10 @@ pub fn run_scene(
         peak_drive_ratio: peak.max(g.drive_ratio),
         final_drive_ratio: if steps > 0 { g.drive_ratio } else { last },
         ruptures: ruptures.max(g.ruptures),
+        dispatches: engine
+            .dispatches()
+            .zip(start_dispatches)
+            .map(|(end, start)| end - start),
         interrupted,
         output: opts.output.clone(),
         peak_memory: peak_memory(),

@@ -1,4 +1,5 @@
-use slipfront::backend::{make_engine, Backend, Precision};
+use slipfront::backend::{make_engine_with, Backend, Precision};
+use slipfront::gpu::{GpuOptions, GpuPath};
 use slipfront::model::Model;
 use slipfront::runner::{run_scene, RunOptions};
 use std::path::PathBuf;
@@ -7,6 +8,7 @@ use std::process::ExitCode;
 pub struct RunArgs {
     pub scenario: Option<PathBuf>,
     pub backend: Backend,
+    pub gpu_path: GpuPath,
     pub precision: Option<Precision>,
     pub set: Vec<String>,
     pub t_end: Option<f64>,
@@ -27,7 +29,11 @@ pub fn run(a: RunArgs) -> anyhow::Result<ExitCode> {
         Backend::Cpu => Precision::F64,
         _ => Precision::F32,
     });
-    let mut engine = make_engine(&model, a.backend, precision, a.threads)?;
+    let gpu = GpuOptions {
+        path: a.gpu_path,
+        ..GpuOptions::default()
+    };
+    let mut engine = make_engine_with(&model, a.backend, precision, a.threads, gpu)?;
     eprintln!("slipfront: {name} on {}", engine.describe());
     let summary = run_scene(
         engine.as_mut(),
