@@ -73,8 +73,7 @@ pub fn stored_energy(m: &Model, s: &Snapshot, drive_origin: f64) -> StoredEnergy
         e.springs += 0.5 * k * stretch * stretch;
     });
     for ix in 0..m.nx {
-        let pen = (-s.disp[ix][1]).max(0.0);
-        e.foundation += 0.5 * m.k_foundation * pen * pen;
+        e.foundation += crate::laws::foundation_energy(m.k_foundation, s.disp[ix][1]);
     }
     if let Driver::SideSpring {
         stiffness,
@@ -82,7 +81,8 @@ pub fn stored_energy(m: &Model, s: &Snapshot, drive_origin: f64) -> StoredEnergy
         velocity,
     } = m.driver
     {
-        let stretch = velocity * s.time.max(0.0) - (s.disp[row * m.nx][0] - drive_origin);
+        let u = s.disp[row * m.nx][0];
+        let stretch = crate::laws::side_spring_stretch(velocity, s.time, u, drive_origin);
         e.drive_spring = 0.5 * stiffness * stretch * stretch;
     }
     e

@@ -1,7 +1,7 @@
 //! What every engine offers, the state it reports, and the stepping driver
 //! shared by all of them (phase change at the start of driving).
 
-use crate::cpu::JunctionSpring;
+use crate::junction::JunctionSpring;
 use crate::model::Model;
 use crate::real::{Coordinate, Real};
 
@@ -91,7 +91,7 @@ impl Snapshot {
         let ns = self.slip_steps_left.len() / nx;
         self.slip_steps_left
             .chunks(ns)
-            .map(|c| c.iter().filter(|&&r| r == crate::cpu::PINNED).count() as f64 / ns as f64)
+            .map(|c| c.iter().filter(|&&r| r == crate::junction::PINNED).count() as f64 / ns as f64)
             .collect()
     }
 

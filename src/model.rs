@@ -325,13 +325,7 @@ impl Model {
 
     /// Top-row share of a total force: edge blocks take half shares.
     pub fn top_share(&self, ix: usize) -> f64 {
-        if self.nx == 1 {
-            1.0
-        } else if ix == 0 || ix == self.nx - 1 {
-            0.5 / (self.nx - 1) as f64
-        } else {
-            1.0 / (self.nx - 1) as f64
-        }
+        crate::laws::top_share(self.nx, ix)
     }
 
     /// Lattice long-wave shear speed c_s = l√(k/(2m)).

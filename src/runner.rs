@@ -116,8 +116,8 @@ pub fn drive_force(model: &Model, snap: &Snapshot, origin: f64) -> f64 {
             row,
             velocity,
         } => {
-            let t = snap.time.max(0.0);
-            stiffness * (velocity * t - (snap.disp[row * model.nx][0] - origin))
+            let u = snap.disp[row * model.nx][0];
+            stiffness * crate::laws::side_spring_stretch(velocity, snap.time, u, origin)
         }
         Driver::TopForce { .. } => loads().top_tangential_total,
         Driver::TopVelocity { .. } => {

@@ -17,7 +17,7 @@ pub fn trigger_anchors(model: &Model, snap: &Snapshot) -> Vec<f64> {
     let mut anchors = Vec::with_capacity(snap.anchor.len());
     for ix in 0..model.nx {
         let ux = snap.disp[ix][0];
-        let f_n = model.k_foundation * (-snap.disp[ix][1]).max(0.0) / ns as f64;
+        let f_n = crate::laws::foundation_normal(model.k_foundation, snap.disp[ix][1]) / ns as f64;
         for j in 0..ns {
             let ratio = if ix < t.strip_blocks {
                 t.strip_prestress

@@ -91,10 +91,10 @@ pub fn bulk_force<T: Real, C: Coordinate<T>>(
     }
     let flags = b.flags[i];
     if flags & FLAG_INTERFACE != 0 {
-        fz = fz + c.k_foundation * (-ui[1].value()).max(T::zero());
+        fz = fz + crate::laws::foundation_normal(c.k_foundation, ui[1].value());
     }
     if flags & FLAG_TOP != 0 {
-        let share = top_share(c, ix as usize);
+        let share = crate::laws::top_share::<T>(c.nx, ix as usize);
         fz = fz - p.normal_total * share;
         fx = fx + p.top_tangential_total * share;
     }
@@ -104,21 +104,6 @@ pub fn bulk_force<T: Real, C: Coordinate<T>>(
     fx = fx - p.relax_eta * vi[0];
     fz = fz - p.relax_eta * vi[1];
     [fx, fz]
-}
-
-/// Share of a top-row total force on column `ix` (edge blocks half).
-#[inline]
-pub fn top_share<T: Real>(c: &Consts<T>, ix: usize) -> T {
-    if c.nx == 1 {
-        T::one()
-    } else {
-        let full = T::one() / T::from_f64((c.nx - 1) as f64);
-        if ix == 0 || ix == c.nx - 1 {
-            full * T::from_f64(0.5)
-        } else {
-            full
-        }
-    }
 }
 
 /// Twin of the `bulk_forces` entry point: fills `force` for the blocks

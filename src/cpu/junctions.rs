@@ -16,18 +16,7 @@ use crate::real::{Coordinate, Real};
 use crate::rng::slip_steps;
 use crate::step_params::{Consts, StepParams};
 
-/// `slip_steps_left` value of a pinned junction.
-pub const PINNED: u32 = u32::MAX;
-
-/// A junction's spring: the anchor a_ij (a coordinate, like u) and the
-/// stiffness k_j taken when it pinned. Laid out as the WGSL `JunctionSpring`
-/// (anchor hi, anchor lo, stiffness) in mixed precision.
-#[repr(C)]
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
-pub struct JunctionSpring<C, T> {
-    pub anchor: C,
-    pub stiffness: T,
-}
+pub use crate::junction::{JunctionSpring, PINNED};
 
 /// The junction arrays of one interface block (length Ns each), laid out
 /// as the GPU's `junction_spring` and `junction_state` buffers.
@@ -40,7 +29,7 @@ pub struct JunctionSlots<'a, T, C> {
 /// Normal force the foundation carries under interface block with u_z.
 #[inline]
 pub fn foundation_normal<T: Real>(c: &Consts<T>, uz: T) -> T {
-    c.k_foundation * (-uz).max(T::zero())
+    crate::laws::foundation_normal(c.k_foundation, uz)
 }
 
 /// Sign of the block velocity, 0 when it is exactly zero.

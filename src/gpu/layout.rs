@@ -189,7 +189,7 @@ pub fn wgsl_prelude() -> String {
         .collect();
     let mut s = String::from("// Generated from src/gpu/layout.rs: do not edit in the shaders.\n");
     for (name, value) in [
-        ("PINNED", crate::cpu::PINNED),
+        ("PINNED", crate::junction::PINNED),
         ("FLAG_FIX_X", FLAG_FIX_X),
         ("FLAG_FIX_Z", FLAG_FIX_Z),
         ("FLAG_TOP", FLAG_TOP),
@@ -240,7 +240,6 @@ fn split_drive_step(v_dt: f64) -> (f32, f32) {
 
 impl GpuConsts {
     pub fn new(c: &Consts<f32>, speed_limit: f32) -> Self {
-        use crate::cpu::bulk_forces::top_share;
         let (drive_step_hi, drive_step_lo) = split_drive_step(c.drive_velocity_exact * c.dt_exact);
         GpuConsts {
             nx: c.nx as u32,
@@ -262,8 +261,8 @@ impl GpuConsts {
             drive_stiffness: c.drive_stiffness,
             speed_limit,
             // Column 1 is interior whenever a full share is used (nx > 2).
-            top_share_full: top_share(c, 1),
-            top_share_edge: top_share(c, 0),
+            top_share_full: crate::laws::top_share(c.nx, 1),
+            top_share_edge: crate::laws::top_share(c.nx, 0),
             stiffness_normal_load: c.junction_stiffness_normal_load as u32,
             n_blocks: (c.nx * c.nz) as u32,
             one: 1.0,
@@ -307,9 +306,9 @@ impl GpuBatch {
     }
 }
 
-impl From<GpuJunctionSpring> for crate::cpu::JunctionSpring<DoubleSingle, f32> {
+impl From<GpuJunctionSpring> for crate::junction::JunctionSpring<DoubleSingle, f32> {
     fn from(s: GpuJunctionSpring) -> Self {
-        crate::cpu::JunctionSpring {
+        crate::junction::JunctionSpring {
             anchor: DoubleSingle {
                 hi: s.anchor_hi,
                 lo: s.anchor_lo,
@@ -319,8 +318,8 @@ impl From<GpuJunctionSpring> for crate::cpu::JunctionSpring<DoubleSingle, f32> {
     }
 }
 
-impl From<crate::cpu::JunctionSpring<DoubleSingle, f32>> for GpuJunctionSpring {
-    fn from(s: crate::cpu::JunctionSpring<DoubleSingle, f32>) -> Self {
+impl From<crate::junction::JunctionSpring<DoubleSingle, f32>> for GpuJunctionSpring {
+    fn from(s: crate::junction::JunctionSpring<DoubleSingle, f32>) -> Self {
         GpuJunctionSpring {
             anchor_hi: s.anchor.hi,
             anchor_lo: s.anchor.lo,

@@ -229,7 +229,7 @@ impl GpuEngine {
             ),
             junction_state: storage(
                 "junction_state",
-                bytemuck::cast_slice(&vec![[crate::cpu::PINNED, 0u32]; nj]),
+                bytemuck::cast_slice(&vec![[crate::junction::PINNED, 0u32]; nj]),
             ),
             slide: storage("slide", bytemuck::cast_slice(&vec![[0i32; 2]; model.nx])),
             status: storage("status", bytemuck::bytes_of(&GpuStatus::zeroed())),
@@ -578,7 +578,7 @@ impl GpuEngine {
         let vel: Vec<[f32; 2]> = cast_prefix(&raw[1], n);
         let force: Vec<[f32; 2]> = cast_prefix(&raw[2], n);
         let contact: Vec<[f32; 2]> = cast_prefix(&raw[3], m.nx);
-        let spring: Vec<crate::cpu::JunctionSpring<DoubleSingle, f32>> =
+        let spring: Vec<crate::junction::JunctionSpring<DoubleSingle, f32>> =
             cast_prefix::<GpuJunctionSpring>(&raw[4], nj)
                 .into_iter()
                 .map(Into::into)

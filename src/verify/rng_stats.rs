@@ -24,7 +24,8 @@ fn engine_draw_cases(factory: EngineFactory<'_>) -> Result<Vec<CaseResult>, Veri
     // steps have re-pinned, and may have broken again, and are left out).
     let slipping: Vec<u32> = (0..count)
         .filter(|&j| {
-            snap.slip_steps_left[j as usize] != crate::cpu::PINNED && snap.ruptures[j as usize] == 1
+            snap.slip_steps_left[j as usize] != crate::junction::PINNED
+                && snap.ruptures[j as usize] == 1
         })
         .collect();
     // The step each junction will re-pin at: now plus its steps left.

@@ -1,0 +1,15 @@
+//! The state of one micro-junction, shared by every engine and by the
+//! snapshot: its spring and the value of a pinned junction's countdown.
+
+/// `slip_steps_left` value of a pinned junction.
+pub const PINNED: u32 = u32::MAX;
+
+/// A junction's spring: the anchor a_ij (a coordinate, like u) and the
+/// stiffness k_j taken when it pinned. Laid out as the WGSL `JunctionSpring`
+/// (anchor hi, anchor lo, stiffness) in mixed precision.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct JunctionSpring<C, T> {
+    pub anchor: C,
+    pub stiffness: T,
+}
