@@ -14,6 +14,8 @@
 
 pub mod context;
 pub mod layout;
+pub mod options;
+mod readback;
 pub mod shaders;
 
 use crate::engine::{blow_up, Engine, EngineError, Snapshot};
@@ -25,55 +27,13 @@ use crate::step_params::Consts;
 use bytemuck::Zeroable;
 use context::GpuContext;
 use layout::{GpuBatch, GpuConsts, GpuJunctionSpring, GpuStatus, WORKGROUP};
+use options::*;
+pub use options::{GpuOptions, GpuPath, PERSISTENT_MAX_BLOCKS, PERSISTENT_THREADS};
+use readback::{cast_prefix, read_buffers};
 use shaders::{Kernel, Variant};
 use std::collections::VecDeque;
 use std::sync::mpsc;
 use wgpu::util::DeviceExt;
-
-/// Steps of one batch of the persistent kernel (one dispatch). The drive
-/// target arithmetic in the kernels needs it ≤ 4096.
-const PERSISTENT_BATCH: u64 = 4096;
-/// Dispatches of the one-step kernel per batch (one submit).
-const ONE_STEP_BATCH: u64 = 1024;
-/// Batches queued on the device at most.
-const IN_FLIGHT: usize = 2;
-/// Lattices up to this many blocks take the persistent kernel by default.
-pub const PERSISTENT_MAX_BLOCKS: usize = 8192;
-/// Threads of the persistent kernel's workgroup by default.
-pub const PERSISTENT_THREADS: u32 = 256;
-
-/// Which kernel steps the lattice.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
-pub enum GpuPath {
-    /// Hardware: the persistent kernel up to `PERSISTENT_MAX_BLOCKS`
-    /// blocks, else one step per dispatch with parallel junction lanes.
-    /// Software adapters: one step per dispatch, one thread per block.
-    Auto,
-    /// One dispatch per step, one thread per block.
-    OneStep,
-    /// One dispatch per step, a workgroup per interface block's junctions.
-    OneStepLanes,
-    /// One workgroup, many steps per dispatch (any lattice: slow for large ones).
-    Persistent,
-}
-
-#[derive(Debug, Clone, Copy)]
-pub struct GpuOptions {
-    pub path: GpuPath,
-    pub persistent_threads: u32,
-    /// Steps per persistent dispatch instead of the adapter's safe default.
-    pub steps_per_dispatch: Option<u64>,
-}
-
-impl Default for GpuOptions {
-    fn default() -> Self {
-        GpuOptions {
-            path: GpuPath::Auto,
-            persistent_threads: PERSISTENT_THREADS,
-            steps_per_dispatch: None,
-        }
-    }
-}
 
 struct Buffers {
     /// Two copies of u and v: the one-step kernel reads one, writes the other.
@@ -170,17 +130,7 @@ impl GpuEngine {
                 )));
             }
         }
-        let kernel = match opts.path {
-            GpuPath::OneStep => Kernel::OneStep,
-            GpuPath::OneStepLanes => Kernel::OneStepLanes,
-            GpuPath::Persistent => Kernel::Persistent,
-            // Measured on lavapipe (BENCHMARKS.md): barriers cost more than
-            // dispatches there, so neither the lanes nor the persistent
-            // kernel pays.
-            GpuPath::Auto if ctx.is_software() => Kernel::OneStep,
-            GpuPath::Auto if n <= PERSISTENT_MAX_BLOCKS => Kernel::Persistent,
-            GpuPath::Auto => Kernel::OneStepLanes,
-        };
+        let kernel = choose_kernel(opts.path, n, ctx.is_software());
         let persistent_threads = opts
             .persistent_threads
             .min(ctx.limits.max_compute_invocations_per_workgroup)
@@ -591,84 +541,11 @@ impl GpuEngine {
     }
 }
 
-/// Copies `buffers` into one staging buffer with one submit and one wait,
-/// and returns each buffer's bytes.
-fn read_buffers(ctx: &GpuContext, buffers: &[&wgpu::Buffer]) -> Result<Vec<Vec<u8>>, EngineError> {
-    let total: u64 = buffers.iter().map(|b| b.size()).sum();
-    let staging = ctx.device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("readback"),
-        size: total,
-        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-        mapped_at_creation: false,
-    });
-    let mut encoder = ctx
-        .device
-        .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
-    let mut offset = 0;
-    for b in buffers {
-        encoder.copy_buffer_to_buffer(b, 0, &staging, offset, b.size());
-        offset += b.size();
-    }
-    ctx.queue.submit([encoder.finish()]);
-    let slice = staging.slice(..);
-    let (tx, rx) = mpsc::channel();
-    slice.map_async(wgpu::MapMode::Read, move |r| {
-        let _ = tx.send(r);
-    });
-    ctx.device
-        .poll(wgpu::PollType::wait_indefinitely())
-        .map_err(|e| EngineError::Gpu(format!("device lost while reading back: {e}")))?;
-    rx.recv()
-        .map_err(|e| EngineError::Gpu(format!("readback: {e}")))?
-        .map_err(|e| EngineError::Gpu(format!("readback: {e}")))?;
-    let data = slice
-        .get_mapped_range()
-        .map_err(|e| EngineError::Gpu(format!("readback: {e}")))?
-        .to_vec();
-    staging.unmap();
-    ctx.check()?;
-    let mut out = Vec::with_capacity(buffers.len());
-    let mut at = 0usize;
-    for b in buffers {
-        let size = b.size() as usize;
-        out.push(data[at..at + size].to_vec());
-        at += size;
-    }
-    Ok(out)
-}
-
-/// Steps per dispatch of the persistent kernel. Hardware runs a whole batch
-/// in one dispatch. llvmpipe (lavapipe) silently ends a shader's loops after
-/// 65535 iterations per invocation in all, so there a dispatch runs at most
-/// half that many loop iterations, counted here per step for the busiest
-/// invocation: its blocks (8 bonds each) in both phases, its junction
-/// lanes (each with its junctions), one lane sum and the step loop.
-fn persistent_steps_per_dispatch(model: &Model, threads: u32, software: bool) -> u64 {
-    if !software {
-        return PERSISTENT_BATCH;
-    }
-    let t = threads as usize;
-    let (lanes, ns) = match (model.law, model.junctions) {
-        (FrictionLaw::Junctions | FrictionLaw::SingleJunction, Some(j)) => {
-            (crate::cpu::junctions::JUNCTION_LANES.min(j.count), j.count)
-        }
-        _ => (0, 0),
-    };
-    let blocks = model.n_blocks().div_ceil(t);
-    let items = (model.nx * lanes).div_ceil(t);
-    let per_step = 3 + blocks * 10 + items * (1 + ns.div_ceil(lanes.max(1))) + lanes;
-    (32_768 / per_step as u64).clamp(1, PERSISTENT_BATCH)
-}
-
 fn whole(binding: u32, buffer: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {
     wgpu::BindGroupEntry {
         binding,
         resource: buffer.as_entire_binding(),
     }
-}
-
-fn cast_prefix<T: bytemuck::Pod>(bytes: &[u8], len: usize) -> Vec<T> {
-    bytemuck::cast_slice::<u8, T>(bytes)[..len].to_vec()
 }
 
 impl Engine for GpuEngine {
