@@ -68,7 +68,7 @@ macro_rules! gpu_struct {
 }
 
 gpu_struct! {
-    /// The run constants (uniform `c`).
+    /// The run constants (`c`, a read-only storage binding).
     pub struct GpuConsts as "Consts" {
         pub nx: u32,
         pub nz: u32,
@@ -408,7 +408,7 @@ mod tests {
             GpuJunctionSpring::fields(),
         );
         check("Status", size_of::<GpuStatus>(), GpuStatus::fields());
-        // The uniform block is a whole number of 16-byte rows.
+        // A whole number of 16-byte rows (fit for a uniform block too).
         assert_eq!(size_of::<GpuConsts>() % 16, 0);
     }
 

@@ -192,7 +192,7 @@ impl GpuEngine {
         let consts_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("consts"),
             contents: bytemuck::bytes_of(&gpu_consts),
-            usage: wgpu::BufferUsages::UNIFORM,
+            usage: wgpu::BufferUsages::STORAGE,
         });
         // The step offsets 0..ONE_STEP_BATCH, one per dynamic-offset stride.
         let offset_stride = (ctx.limits.min_storage_buffer_offset_alignment as u64).max(4);
