@@ -2,10 +2,11 @@
 // force laws every phase uses, and the loads of a step. The structs and
 // constants come from src/gpu/layout.rs (prepended as a prelude).
 
-// A storage binding, not a uniform: lavapipe inlines uniform contents into
-// the shader and compiled (and kept) a new variant at every submit that
-// switched state bind groups, leaking ~2.7 MB a submit.
-@group(0) @binding(0) var<storage, read> c: Consts;
+// A uniform block, bound once per submit: lavapipe inlines its contents
+// (constant folding). Switching the bound group between dispatches made it
+// compile and keep a variant per submit (2.7 MB each), so the one-step
+// kernel keeps one group and picks its state copy from the step parity.
+@group(0) @binding(0) var<uniform> c: Consts;
 // Force on each block from everything but friction, at the state the step
 // starts from.
 @group(0) @binding(5) var<storage, read_write> force: array<vec2<f32>>;

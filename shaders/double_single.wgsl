@@ -3,7 +3,7 @@
 // of u are kept. CPU twins: src/real.rs DoubleSingle::ds_add and ds_diff,
 // the same operations in the same order.
 //
-// c.one is a runtime 1.0 from the constants buffer. Multiplying the partial
+// c.one is a runtime 1.0 from the uniform block. Multiplying the partial
 // sums by it is exact but opaque to the compiler, so no driver can
 // reassociate (s - hi) - s to -hi and cancel the error terms (gpuweb #2076).
 

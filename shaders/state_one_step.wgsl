@@ -1,20 +1,37 @@
-// Block state of the one-step kernel: read step n from one buffer pair,
-// write step n+1 to the other (ping-pong), so no block waits for another.
+// Block state of the one-step kernel: two copies of u and v; step n reads
+// one and writes step n+1 to the other (ping-pong), so no block waits for
+// another. Which copy holds step n follows from the batch's starting copy
+// and the step offset (one bind group for all dispatches, see common.wgsl).
 
-@group(0) @binding(1) var<storage, read> disp_in: array<Disp>;
-@group(0) @binding(2) var<storage, read> vel_in: array<vec2<f32>>;
-@group(0) @binding(3) var<storage, read_write> disp_out: array<Disp>;
-@group(0) @binding(4) var<storage, read_write> vel_out: array<vec2<f32>>;
+@group(0) @binding(1) var<storage, read_write> disp_a: array<Disp>;
+@group(0) @binding(2) var<storage, read_write> vel_a: array<vec2<f32>>;
+@group(0) @binding(3) var<storage, read_write> disp_b: array<Disp>;
+@group(0) @binding(4) var<storage, read_write> vel_b: array<vec2<f32>>;
+
+fn reads_b() -> bool {
+    return ((batch.parity + step_offset) & 1u) == 1u;
+}
 
 fn load_disp(i: u32) -> Disp {
-    return disp_in[i];
+    if reads_b() {
+        return disp_b[i];
+    }
+    return disp_a[i];
 }
 
 fn load_vel(i: u32) -> vec2<f32> {
-    return vel_in[i];
+    if reads_b() {
+        return vel_b[i];
+    }
+    return vel_a[i];
 }
 
 fn store_block(i: u32, u: Disp, v: vec2<f32>) {
-    disp_out[i] = u;
-    vel_out[i] = v;
+    if reads_b() {
+        disp_a[i] = u;
+        vel_a[i] = v;
+    } else {
+        disp_b[i] = u;
+        vel_b[i] = v;
+    }
 }

@@ -38,7 +38,7 @@ pub fn shared() -> Result<GpuContext, EngineError> {
 }
 
 /// Storage bindings the one-step kernel uses (the most of the two).
-const STORAGE_BINDINGS: u32 = 14;
+const STORAGE_BINDINGS: u32 = 13;
 
 /// Lists the adapters with Vulkan/Metal/DX12 support, hardware first.
 pub fn adapters() -> Vec<wgpu::Adapter> {
@@ -106,7 +106,7 @@ impl GpuContext {
         // Bindings 5..=11 (shaders/common.wgsl): force, flags (read only),
         // contact, junction spring and state, slide, status.
         let common = |mut v: Vec<wgpu::BindGroupLayoutEntry>| {
-            v.push(entry(0, read, false));
+            v.push(entry(0, wgpu::BufferBindingType::Uniform, false));
             v.extend((5..=11).map(|b| entry(b, if b == 6 { read } else { write }, false)));
             v
         };
@@ -119,8 +119,8 @@ impl GpuContext {
         let one_step_layout = layout(
             "one step state",
             common(vec![
-                entry(1, read, false),
-                entry(2, read, false),
+                entry(1, write, false),
+                entry(2, write, false),
                 entry(3, write, false),
                 entry(4, write, false),
             ]),

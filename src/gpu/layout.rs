@@ -68,7 +68,7 @@ macro_rules! gpu_struct {
 }
 
 gpu_struct! {
-    /// The run constants (`c`, a read-only storage binding).
+    /// The run constants (uniform `c`).
     pub struct GpuConsts as "Consts" {
         pub nx: u32,
         pub nz: u32,
@@ -133,7 +133,8 @@ gpu_struct! {
         pub forces_only: u32,
         /// Steps per dispatch of the persistent kernel.
         pub steps_per_dispatch: u32,
-        pub _pad: u32,
+        /// The state copy (0 or 1) the one-step kernel reads at the first step.
+        pub parity: u32,
     }
 }
 
@@ -301,7 +302,7 @@ impl GpuBatch {
             forces_ready: 0,
             forces_only: 0,
             steps_per_dispatch: steps,
-            _pad: 0,
+            parity: 0,
         }
     }
 }
@@ -408,7 +409,7 @@ mod tests {
             GpuJunctionSpring::fields(),
         );
         check("Status", size_of::<GpuStatus>(), GpuStatus::fields());
-        // A whole number of 16-byte rows (fit for a uniform block too).
+        // The uniform block is a whole number of 16-byte rows.
         assert_eq!(size_of::<GpuConsts>() % 16, 0);
     }
 

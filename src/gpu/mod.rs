@@ -66,7 +66,7 @@ pub struct GpuEngine {
     buffers: Buffers,
     kernel: Kernel,
     pipeline: wgpu::ComputePipeline,
-    /// One step: [reads copy 0, reads copy 1]; persistent: [copy 0].
+    /// One group: both state copies (one step) or copy 0 (persistent).
     state_groups: Vec<wgpu::BindGroup>,
     batch_group: wgpu::BindGroup,
     batch_buffer: wgpu::Buffer,
@@ -192,7 +192,7 @@ impl GpuEngine {
         let consts_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("consts"),
             contents: bytemuck::bytes_of(&gpu_consts),
-            usage: wgpu::BufferUsages::STORAGE,
+            usage: wgpu::BufferUsages::UNIFORM,
         });
         // The step offsets 0..ONE_STEP_BATCH, one per dynamic-offset stride.
         let offset_stride = (ctx.limits.min_storage_buffer_offset_alignment as u64).max(4);
@@ -226,23 +226,20 @@ impl GpuEngine {
             ]
         };
         let state_groups: Vec<wgpu::BindGroup> = match kernel {
-            Kernel::OneStep | Kernel::OneStepLanes => (0..2)
-                .map(|from| {
-                    let to = 1 - from;
-                    let mut entries = common();
-                    entries.extend([
-                        whole(1, &b.disp[from]),
-                        whole(2, &b.vel[from]),
-                        whole(3, &b.disp[to]),
-                        whole(4, &b.vel[to]),
-                    ]);
-                    device.create_bind_group(&wgpu::BindGroupDescriptor {
-                        label: Some("one step state"),
-                        layout: &ctx.one_step_layout,
-                        entries: &entries,
-                    })
-                })
-                .collect(),
+            Kernel::OneStep | Kernel::OneStepLanes => {
+                let mut entries = common();
+                entries.extend([
+                    whole(1, &b.disp[0]),
+                    whole(2, &b.vel[0]),
+                    whole(3, &b.disp[1]),
+                    whole(4, &b.vel[1]),
+                ]);
+                vec![device.create_bind_group(&wgpu::BindGroupDescriptor {
+                    label: Some("one step state"),
+                    layout: &ctx.one_step_layout,
+                    entries: &entries,
+                })]
+            }
             Kernel::Persistent => {
                 let mut entries = common();
                 entries.extend([
@@ -347,6 +344,7 @@ impl GpuEngine {
         batch.forces_ready = self.forces_ready as u32;
         batch.forces_only = forces_only as u32;
         batch.steps_per_dispatch = self.steps_per_dispatch as u32;
+        batch.parity = self.current as u32;
         self.ctx
             .queue
             .write_buffer(&self.batch_buffer, 0, bytemuck::bytes_of(&batch));
@@ -364,8 +362,8 @@ impl GpuEngine {
             pass.set_pipeline(&self.pipeline);
             match self.kernel {
                 Kernel::OneStep | Kernel::OneStepLanes => {
+                    pass.set_bind_group(0, &self.state_groups[0], &[]);
                     for i in 0..steps {
-                        pass.set_bind_group(0, &self.state_groups[self.current], &[]);
                         let offset = (i * self.offset_stride) as u32;
                         pass.set_bind_group(1, &self.batch_group, &[offset]);
                         pass.dispatch_workgroups(self.groups.0, self.groups.1, 1);
