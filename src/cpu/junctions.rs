@@ -156,23 +156,29 @@ mod tests {
     use crate::scenario::{Scenario, DEFAULT_SCENARIO};
     use crate::step_params::step_params;
 
+    type Springs = Vec<JunctionSpring<f64, f64>>;
+
+    /// The Table S1 model and one interface block's junctions, all pinned
+    /// at 0 with k_j = 1e5 N/m.
+    fn pinned_block() -> (crate::Model, Consts<f64>, Springs, Vec<[u32; 2]>) {
+        let s = Scenario::parse(DEFAULT_SCENARIO, "test", &[]).unwrap();
+        let m = crate::Model::from_scenario(&s, false).unwrap();
+        let c = Consts::<f64>::new(&m);
+        let spring = JunctionSpring {
+            anchor: 0.0,
+            stiffness: 1.0e5,
+        };
+        let ns = c.junction_count;
+        (m, c, vec![spring; ns], vec![[PINNED, 0u32]; ns])
+    }
+
     /// Junctions that break just before step 2³² re-pin after their drawn
     /// slip time: the countdown does not see the global step, which used to
     /// be cast to u32 (re-pin steps past 2³² saturated or wrapped).
     #[test]
     fn junctions_broken_near_step_2_pow_32_re_pin_after_their_slip_time() {
-        let s = Scenario::parse(DEFAULT_SCENARIO, "test", &[]).unwrap();
-        let m = crate::Model::from_scenario(&s, false).unwrap();
-        let c = Consts::<f64>::new(&m);
+        let (_, c, mut spring, mut state) = pinned_block();
         let ns = c.junction_count;
-        let mut spring = vec![
-            JunctionSpring {
-                anchor: 0.0,
-                stiffness: 1.0e5
-            };
-            ns
-        ];
-        let mut state = vec![[PINNED, 0u32]; ns];
         // Compressed and stretched far past μs·f_N: every junction breaks.
         let u = [1.0e-3, -1.0e-6];
         let start = (1u64 << 32) - 3;
@@ -207,18 +213,8 @@ mod tests {
     /// force again.
     #[test]
     fn junctions_wait_while_the_block_is_lifted_and_re_pin_when_pressed_back() {
-        let s = Scenario::parse(DEFAULT_SCENARIO, "test", &[]).unwrap();
-        let m = crate::Model::from_scenario(&s, false).unwrap();
-        let c = Consts::<f64>::new(&m);
+        let (m, c, mut spring, mut state) = pinned_block();
         let ns = c.junction_count;
-        let mut spring = vec![
-            JunctionSpring {
-                anchor: 0.0,
-                stiffness: 1.0e5
-            };
-            ns
-        ];
-        let mut state = vec![[PINNED, 0u32]; ns];
         let step0 = m.prep_steps + 10;
         let pressed = -1.0e-6;
         let run = |step: u64,
