@@ -198,6 +198,16 @@ pub trait Engine {
     fn snapshot(&mut self) -> Result<Snapshot, EngineError>;
     /// Backend, adapter and precision, for logs and metadata.
     fn describe(&self) -> String;
+    /// Moves the engine to step `step` with displacements `disp` and
+    /// velocities `vel` (the leapfrog's v(n−½)), junction and slide arrays
+    /// unchanged, and recomputes the forces of that state: the end of a
+    /// quasi-static jump. Only in the driving phase.
+    fn set_kinematics(
+        &mut self,
+        step: u64,
+        disp: &[[f64; 2]],
+        vel: &[[f64; 2]],
+    ) -> Result<(), EngineError>;
     /// GPU dispatches issued so far (None: not a GPU engine).
     fn dispatches(&self) -> Option<u64> {
         None

@@ -16,6 +16,7 @@ pub mod observables;
 pub mod output;
 pub mod plot;
 pub mod precursors;
+pub mod quasistatic;
 pub mod real;
 pub mod rng;
 pub mod runner;

@@ -2,7 +2,9 @@
 //! streams snapshots to the output sink, shows progress, and stops cleanly
 //! on Ctrl-C or a blow-up.
 
+use crate::cpu::CpuEngine;
 use crate::engine::{advance_to, Engine, EngineError, Snapshot};
+use crate::quasistatic::{FastForward, FastForwardSettings, FastForwardStats, Jump};
 use crate::model::{Driver, Model};
 use crate::output::{GlobalSample, McapSink};
 use crate::scenario::Scenario;
@@ -31,12 +33,15 @@ pub struct RunSummary {
     pub steps: u64,
     pub simulated_time: f64,
     pub wall_seconds: f64,
+    /// Integrated (not skipped) block-steps per wall second.
     pub block_steps_per_second: f64,
     pub peak_drive_ratio: f64,
     pub final_drive_ratio: f64,
     pub ruptures: u64,
     /// GPU dispatches over the run (GPU engines only).
     pub dispatches: Option<u64>,
+    /// Quasi-static fast-forward totals (when it was on).
+    pub fast_forward: Option<FastForwardStats>,
     pub interrupted: bool,
     pub output: Option<PathBuf>,
     /// Peak resident memory of the process (bytes), where the OS tells.
@@ -83,6 +88,22 @@ impl std::fmt::Display for RunSummary {
                 f,
                 "  GPU dispatches     {d} ({:.4} per step)",
                 d as f64 / self.steps.max(1) as f64
+            )?;
+        }
+        if let Some(ff) = &self.fast_forward {
+            writeln!(
+                f,
+                "  fast-forward       {} jumps skipped {:.6} s ({:.1}% of the steps), \
+                 dropped {:.3e} J of ring-down; {} factorisations, {} CG iterations, {:.2} s solving, \
+                 path error {:.1e}",
+                ff.jumps,
+                ff.skipped_time,
+                100.0 * ff.skipped_steps as f64 / (self.steps.max(1)) as f64,
+                ff.dropped_energy,
+                ff.factorisations,
+                ff.cg_iterations,
+                ff.solver_seconds,
+                ff.max_path_error
             )?;
         }
         if let Some(b) = self.peak_memory {
@@ -169,6 +190,184 @@ fn next_multiple(step: u64, every: u64) -> u64 {
         .map_or(u64::MAX, |n| (n + 1) * every)
 }
 
+/// The output side of a run: cadences, the sink, and what the summary
+/// reports (peak and last F/F_N, ruptures).
+struct Outputs {
+    model: Model,
+    sink: Option<McapSink>,
+    every_global: u64,
+    every_interface: u64,
+    every_bulk: u64,
+    /// Interface output speeds up to `fast_interval` while any interface
+    /// block slips faster than `fast_slip_speed` (decided at each sample).
+    every_fast: u64,
+    fast_slip_speed: f64,
+    fast: bool,
+    origin: f64,
+    peak: f64,
+    last: f64,
+    ruptures: u64,
+}
+
+impl Outputs {
+    fn new(model: &Model, scenario: &Scenario, sink: Option<McapSink>) -> Self {
+        let o = &scenario.output;
+        Outputs {
+            model: model.clone(),
+            sink,
+            every_global: interval_steps(model, o.global_interval),
+            every_interface: interval_steps(model, o.interface_interval),
+            every_bulk: interval_steps(model, o.bulk_interval),
+            every_fast: interval_steps(model, o.fast_interval),
+            fast_slip_speed: o.fast_slip_speed,
+            fast: false,
+            origin: 0.0,
+            peak: 0.0,
+            last: 0.0,
+            ruptures: 0,
+        }
+    }
+
+    /// The first step after `s` at which some channel is due (u64::MAX:
+    /// none, or nothing is written).
+    fn next_due(&self, s: u64) -> u64 {
+        let prep = self.model.prep_steps;
+        if s < prep || self.sink.is_none() {
+            return u64::MAX;
+        }
+        let d = s - prep;
+        next_multiple(d, self.every_global)
+            .min(next_multiple(d, self.every_interface))
+            .min(next_multiple(d, self.every_bulk))
+            .min(if self.fast {
+                next_multiple(d, self.every_fast)
+            } else {
+                u64::MAX
+            })
+            .saturating_add(prep)
+    }
+
+    /// Writes the channels due at the snapshot's step.
+    fn emit(&mut self, snap: &Snapshot) -> Result<(), RunError> {
+        let model = &self.model;
+        let d = snap.step - model.prep_steps;
+        let g = global_sample(model, snap, self.origin);
+        self.peak = self.peak.max(g.drive_ratio);
+        self.last = g.drive_ratio;
+        self.ruptures = g.ruptures;
+        let max_slip_speed = (0..model.nx)
+            .map(|ix| snap.vel[ix][0].abs())
+            .fold(0.0, f64::max);
+        self.fast = self.every_fast > 0 && max_slip_speed > self.fast_slip_speed;
+        if let Some(sink) = self.sink.as_mut() {
+            if self.every_global > 0 && d.is_multiple_of(self.every_global) {
+                sink.write_global(&g)?;
+            }
+            let fast_due = self.fast && self.every_fast > 0 && d.is_multiple_of(self.every_fast);
+            if fast_due || (self.every_interface > 0 && d.is_multiple_of(self.every_interface)) {
+                sink.write_interface(model, snap)?;
+            }
+            if self.every_bulk > 0 && d.is_multiple_of(self.every_bulk) {
+                sink.write_bulk(model, snap)?;
+            }
+        }
+        Ok(())
+    }
+
+    fn finish(&mut self, fast_forward: Option<&FastForwardStats>) -> Result<(), RunError> {
+        if let Some(sink) = self.sink.take() {
+            sink.finish(fast_forward)?;
+        }
+        Ok(())
+    }
+}
+
+/// Performs a planned quasi-static jump: writes the output samples due on
+/// the path (exact: the path is the equilibrium), books the energy, records
+/// it, and moves the engine to the jump's end.
+fn perform_jump(
+    engine: &mut dyn Engine,
+    outputs: &mut Outputs,
+    ff: &mut FastForward,
+    dynamic: &Snapshot,
+    jump: &mut Jump,
+) -> Result<(), RunError> {
+    let model = engine.model().clone();
+    let (s0, s1) = (jump.record.start_step, jump.record.end_step);
+    let w = jump.w.clone();
+    let mut evaluator = CpuEngine::<f64>::with_junctions(&model, &jump.start, outputs.origin)?;
+    let mut eval = |step: u64, disp: &[[f64; 2]]| -> Result<Snapshot, EngineError> {
+        evaluator.set_kinematics(step, disp, &w)?;
+        evaluator.snapshot()
+    };
+    let start = eval(s0, &jump.start.disp)?;
+    let end = eval(s1, &jump.end_disp)?;
+    let mut s = s0;
+    loop {
+        s = outputs.next_due(s);
+        if s > s1 || s == u64::MAX {
+            break;
+        }
+        let snap = if s == s1 {
+            end.clone()
+        } else {
+            eval(s, &jump.disp_at(s))?
+        };
+        outputs.emit(&snap)?;
+    }
+    let origin = outputs.origin;
+    let (dropped, work_in, damping) = jump_energy(&model, dynamic, &start, &end, origin);
+    jump.record.dropped_energy = dropped;
+    jump.record.work_in = work_in;
+    jump.record.damping = damping;
+    if let Some(sink) = outputs.sink.as_mut() {
+        sink.write_fast_forward(&jump.record)?;
+    }
+    engine.set_kinematics(s1, &jump.end_disp, &w)?;
+    ff.book(&model, &jump.record, jump.path_error);
+    Ok(())
+}
+
+/// The energy of a jump (J): what the relaxation of the quiet state to its
+/// equilibrium drops (its ring-down, booked as dissipated), and the work in
+/// and dashpot loss along the linear path (trapezoid rule, exact for the
+/// path's linear forces and constant velocities).
+pub fn jump_energy(
+    model: &Model,
+    dynamic: &Snapshot,
+    start: &Snapshot,
+    end: &Snapshot,
+    origin: f64,
+) -> (f64, f64, f64) {
+    use crate::energy::{step_power, stored_energy};
+    // Relaxation at fixed time: junction forces (linear in u_x) and the top
+    // loads (constant) do work; the side spring's far end does not move.
+    let mut relax_work = 0.0;
+    for ix in 0..model.nx {
+        let du = start.disp[ix][0] - dynamic.disp[ix][0];
+        relax_work += 0.5 * (dynamic.friction[ix] + start.friction[ix]) * du;
+    }
+    let loads = step_params(&Consts::<f64>::new(model), dynamic.step);
+    for ix in 0..model.nx {
+        let i = (model.nz - 1) * model.nx + ix;
+        let share = model.top_share(ix);
+        relax_work += share
+            * (loads.top_tangential_total * (start.disp[i][0] - dynamic.disp[i][0])
+                - loads.normal_total * (start.disp[i][1] - dynamic.disp[i][1]));
+    }
+    let dropped = stored_energy(model, dynamic, origin).total()
+        - stored_energy(model, start, origin).total()
+        + relax_work;
+    let (pa, pb) = (
+        step_power(model, start, start, origin),
+        step_power(model, end, end, origin),
+    );
+    let span = end.time - start.time;
+    let work_in = 0.5 * span * (pa.drive + pa.top_loads + pa.friction + pb.drive + pb.top_loads + pb.friction);
+    let damping = 0.5 * span * (pa.damping + pb.damping);
+    (dropped, work_in, damping)
+}
+
 /// Runs `engine` over its whole scene.
 pub fn run_scene(
     engine: &mut dyn Engine,
@@ -180,17 +379,16 @@ pub fn run_scene(
     });
     let model = engine.model().clone();
     let total = model.total_steps();
-    let mut sink = match &opts.output {
+    let sink = match &opts.output {
         Some(p) => Some(McapSink::create(p, &model, scenario, &engine.describe())?),
         None => None,
     };
-    let every_global = interval_steps(&model, scenario.output.global_interval);
-    let every_interface = interval_steps(&model, scenario.output.interface_interval);
-    let every_bulk = interval_steps(&model, scenario.output.bulk_interval);
-    // Interface output speeds up to `fast_interval` while any interface block
-    // slips faster than `fast_slip_speed` (decided at each read-back).
-    let every_fast = interval_steps(&model, scenario.output.fast_interval);
-    let mut fast = false;
+    let mut outputs = Outputs::new(&model, scenario, sink);
+    let mut ff = scenario
+        .time
+        .fast_forward
+        .then(|| FastForward::new(FastForwardSettings::from_scenario(scenario)));
+    let every_check = ff.as_ref().map_or(0, |f| f.check_steps(&model));
     let bar = if opts.progress {
         let b = ProgressBar::new(total);
         b.set_style(
@@ -202,99 +400,85 @@ pub fn run_scene(
         ProgressBar::hidden()
     };
     let started = Instant::now();
-    let mut origin = 0.0;
-    let (mut peak, mut last) = (0.0f64, 0.0f64);
-    let mut ruptures = 0;
     let mut interrupted = false;
     let start_step = engine.steps_done();
     let start_dispatches = engine.dispatches();
-    while engine.steps_done() < total {
-        if INTERRUPTED.load(Ordering::SeqCst) {
-            interrupted = true;
-            break;
-        }
-        let s = engine.steps_done();
-        let mut target = (s + MAX_CHUNK).min(total);
-        if s < model.prep_steps {
-            target = target.min(model.prep_steps);
-        }
-        // Without an output file nothing is read back until the end.
-        let out_step = if s >= model.prep_steps && sink.is_some() {
-            next_multiple(s - model.prep_steps, every_global)
-                .min(next_multiple(s - model.prep_steps, every_interface))
-                .min(next_multiple(s - model.prep_steps, every_bulk))
-                .min(if fast {
-                    next_multiple(s - model.prep_steps, every_fast)
-                } else {
-                    u64::MAX
-                })
-                .saturating_add(model.prep_steps)
-        } else {
-            u64::MAX
-        };
-        target = target.min(out_step);
-        if let Err(e) = advance_to(engine, target) {
-            if let Some(sink) = sink.take() {
-                sink.finish()?;
+    let result = (|| -> Result<(), RunError> {
+        while engine.steps_done() < total {
+            if INTERRUPTED.load(Ordering::SeqCst) {
+                interrupted = true;
+                break;
             }
-            bar.abandon();
-            return Err(e.into());
-        }
-        let s = engine.steps_done();
-        bar.set_position(s - start_step);
-        bar.set_message(format!("{:.6} s", model.time_of_step(s)));
-        if s == model.prep_steps {
+            let s = engine.steps_done();
+            let mut target = (s + MAX_CHUNK).min(total);
+            if s < model.prep_steps {
+                target = target.min(model.prep_steps);
+            }
+            // Without an output file nothing is read back until the end.
+            let out_step = outputs.next_due(s);
+            let check_step = if s >= model.prep_steps && every_check > 0 {
+                next_multiple(s - model.prep_steps, every_check) + model.prep_steps
+            } else {
+                u64::MAX
+            };
+            target = target.min(out_step).min(check_step);
+            advance_to(engine, target)?;
+            let s = engine.steps_done();
+            bar.set_position(s - start_step);
+            bar.set_message(format!("{:.6} s", model.time_of_step(s)));
+            if s == model.prep_steps {
+                let snap = engine.snapshot()?;
+                if let Driver::SideSpring { row, .. } = model.driver {
+                    outputs.origin = snap.disp[row * model.nx][0];
+                }
+            }
+            if s != out_step && s != check_step {
+                continue;
+            }
             let snap = engine.snapshot()?;
-            if let Driver::SideSpring { row, .. } = model.driver {
-                origin = snap.disp[row * model.nx][0];
+            if s == out_step {
+                outputs.emit(&snap)?;
             }
-        }
-        if s == out_step {
-            let snap = engine.snapshot()?;
-            let d = s - model.prep_steps;
-            let g = global_sample(&model, &snap, origin);
-            peak = peak.max(g.drive_ratio);
-            last = g.drive_ratio;
-            ruptures = g.ruptures;
-            let max_slip_speed = (0..model.nx)
-                .map(|ix| snap.vel[ix][0].abs())
-                .fold(0.0, f64::max);
-            fast = every_fast > 0 && max_slip_speed > scenario.output.fast_slip_speed;
-            if let Some(sink) = sink.as_mut() {
-                if every_global > 0 && d.is_multiple_of(every_global) {
-                    sink.write_global(&g)?;
-                }
-                let fast_due = fast && every_fast > 0 && d.is_multiple_of(every_fast);
-                if fast_due || (every_interface > 0 && d.is_multiple_of(every_interface)) {
-                    sink.write_interface(&model, &snap)?;
-                }
-                if every_bulk > 0 && d.is_multiple_of(every_bulk) {
-                    sink.write_bulk(&model, &snap)?;
+            if let Some(ff) = ff.as_mut().filter(|_| s == check_step && s < total) {
+                if ff.observe(&model, &snap) {
+                    let planned = ff
+                        .plan(&model, &snap, outputs.origin, total)
+                        .map_err(|e| EngineError::Gpu(e.to_string()))?;
+                    if let Some(mut jump) = planned {
+                        perform_jump(engine, &mut outputs, ff, &snap, &mut jump)?;
+                        bar.set_position(engine.steps_done() - start_step);
+                    }
                 }
             }
         }
+        Ok(())
+    })();
+    if let Err(e) = result {
+        outputs.finish(ff.as_ref().map(|f| &f.stats))?;
+        bar.abandon();
+        return Err(e);
     }
     bar.finish_and_clear();
-    if let Some(sink) = sink {
-        sink.finish()?;
-    }
+    outputs.finish(ff.as_ref().map(|f| &f.stats))?;
     let final_snap = engine.snapshot()?;
-    let g = global_sample(&model, &final_snap, origin);
+    let g = global_sample(&model, &final_snap, outputs.origin);
     let wall = started.elapsed().as_secs_f64();
     let steps = engine.steps_done() - start_step;
+    let integrated = steps - ff.as_ref().map_or(0, |f| f.stats.skipped_steps);
     Ok(RunSummary {
         backend: engine.describe(),
         steps,
         simulated_time: model.time_of_step(engine.steps_done()).max(0.0),
         wall_seconds: wall,
-        block_steps_per_second: steps as f64 * model.n_blocks() as f64 / wall.max(1e-9),
-        peak_drive_ratio: peak.max(g.drive_ratio),
-        final_drive_ratio: if steps > 0 { g.drive_ratio } else { last },
-        ruptures: ruptures.max(g.ruptures),
+        block_steps_per_second: integrated as f64 * model.n_blocks() as f64 / wall.max(1e-9),
+        peak_drive_ratio: outputs.peak.max(g.drive_ratio),
+        final_drive_ratio: if steps > 0 { g.drive_ratio } else { outputs.last },
+        ruptures: outputs.ruptures.max(g.ruptures),
         dispatches: engine
             .dispatches()
             .zip(start_dispatches)
             .map(|(end, start)| end - start),
+        fast_forward: ff.map(|f| f.stats),
         interrupted,
         output: opts.output.clone(),
         peak_memory: peak_memory(),

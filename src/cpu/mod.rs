@@ -252,6 +252,42 @@ impl<T: Real, C: Coordinate<T>> CpuEngine<T, C> {
         }
     }
 
+    /// An engine holding `base`'s junction and slide arrays, for
+    /// evaluating the full state (forces, friction, normal forces) of
+    /// driving-phase states with `set_kinematics` and `snapshot`: how the
+    /// quasi-static path's output samples are made, in this engine's
+    /// arithmetic.
+    pub fn with_junctions(
+        model: &Model,
+        base: &Snapshot,
+        drive_origin: f64,
+    ) -> Result<Self, EngineError> {
+        let mut e = Self::new(model, 1)?;
+        e.drive_origin = C::from_f64(drive_origin);
+        for (s, (a, k)) in e
+            .junction_spring
+            .iter_mut()
+            .zip(base.anchor.iter().zip(&base.junction_stiffness))
+        {
+            *s = JunctionSpring {
+                anchor: C::from_f64(*a),
+                stiffness: T::from_f64(*k),
+            };
+        }
+        for (s, (left, count)) in e
+            .junction_state
+            .iter_mut()
+            .zip(base.slip_steps_left.iter().zip(&base.ruptures))
+        {
+            *s = [*left, *count];
+        }
+        for (s, (d, n)) in e.slide.iter_mut().zip(base.slide_dir.iter().zip(&base.slips)) {
+            *s = [*d, *n as i32];
+        }
+        e.step = model.prep_steps.max(base.step);
+        Ok(e)
+    }
+
     fn snapshot_now(&self) -> Snapshot {
         Snapshot::from_buffers(
             &self.model,
@@ -285,6 +321,27 @@ impl<T: Real, C: Coordinate<T>> Engine for CpuEngine<T, C> {
 
     fn snapshot(&mut self) -> Result<Snapshot, EngineError> {
         Ok(self.snapshot_now())
+    }
+
+    fn set_kinematics(
+        &mut self,
+        step: u64,
+        disp: &[[f64; 2]],
+        vel: &[[f64; 2]],
+    ) -> Result<(), EngineError> {
+        assert!(
+            step >= self.model.prep_steps && self.step >= self.model.prep_steps,
+            "set_kinematics is for the driving phase"
+        );
+        for (d, u) in self.disp.iter_mut().zip(disp) {
+            *d = [C::from_f64(u[0]), C::from_f64(u[1])];
+        }
+        for (d, v) in self.vel.iter_mut().zip(vel) {
+            *d = [T::from_f64(v[0]), T::from_f64(v[1])];
+        }
+        self.step = step;
+        self.force_pass();
+        Ok(())
     }
 
     fn describe(&self) -> String {

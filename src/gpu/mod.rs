@@ -588,6 +588,31 @@ impl Engine for GpuEngine {
         self.read_state()
     }
 
+    fn set_kinematics(
+        &mut self,
+        step: u64,
+        disp: &[[f64; 2]],
+        vel: &[[f64; 2]],
+    ) -> Result<(), EngineError> {
+        assert!(
+            step >= self.model.prep_steps && self.step >= self.model.prep_steps,
+            "set_kinematics is for the driving phase"
+        );
+        self.drain()?;
+        let disp: Vec<[DoubleSingle; 2]> = disp
+            .iter()
+            .map(|u| u.map(DoubleSingle::from_f64))
+            .collect();
+        let vel: Vec<[f32; 2]> = vel.iter().map(|v| v.map(|x| x as f32)).collect();
+        let b = &self.buffers;
+        let queue = &self.ctx.queue;
+        queue.write_buffer(&b.disp[self.current], 0, bytemuck::cast_slice(&disp));
+        queue.write_buffer(&b.vel[self.current], 0, bytemuck::cast_slice(&vel));
+        self.step = step;
+        self.forces_ready = false;
+        Ok(())
+    }
+
     fn describe(&self) -> String {
         let kernel = match self.kernel {
             Kernel::OneStep => "one-step kernel, 1 dispatch per step".to_string(),

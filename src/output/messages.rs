@@ -71,6 +71,39 @@ pub struct Bulk {
     pub vz: Vec<f32>,
 }
 
+/// `/fast_forward`: one quasi-static jump. Block and junction are −1 when
+/// no rupture sets the end (a contact change, or the end of the run).
+#[derive(Clone, PartialEq, Message)]
+pub struct FastForwardJump {
+    #[prost(double, tag = "1")]
+    pub start_time: f64,
+    #[prost(double, tag = "2")]
+    pub end_time: f64,
+    #[prost(uint64, tag = "3")]
+    pub start_step: u64,
+    #[prost(uint64, tag = "4")]
+    pub end_step: u64,
+    #[prost(double, tag = "5")]
+    pub drive_start: f64,
+    #[prost(double, tag = "6")]
+    pub drive_end: f64,
+    #[prost(double, tag = "7")]
+    pub predicted_change: f64,
+    #[prost(int32, tag = "8")]
+    pub block: i32,
+    #[prost(int32, tag = "9")]
+    pub junction: i32,
+    /// J
+    #[prost(double, tag = "10")]
+    pub dropped_energy: f64,
+    /// J
+    #[prost(double, tag = "11")]
+    pub work_in: f64,
+    /// J
+    #[prost(double, tag = "12")]
+    pub damping: f64,
+}
+
 fn field(name: &str, number: i32, ty: Type, repeated: bool) -> FieldDescriptorProto {
     FieldDescriptorProto {
         name: Some(name.into()),
@@ -94,9 +127,9 @@ fn message(name: &str, fields: Vec<FieldDescriptorProto>) -> DescriptorProto {
     }
 }
 
-/// The serialized FileDescriptorSet of `slipfront.proto` (all three messages).
+/// The serialized FileDescriptorSet of `slipfront.proto` (all four messages).
 pub fn descriptor_set() -> Vec<u8> {
-    use Type::{Double, Float, Uint32, Uint64};
+    use Type::{Double, Float, Int32, Uint32, Uint64};
     let global = message(
         "Global",
         vec![
@@ -135,11 +168,28 @@ pub fn descriptor_set() -> Vec<u8> {
             field("vz", 8, Float, true),
         ],
     );
+    let fast_forward = message(
+        "FastForwardJump",
+        vec![
+            field("start_time", 1, Double, false),
+            field("end_time", 2, Double, false),
+            field("start_step", 3, Uint64, false),
+            field("end_step", 4, Uint64, false),
+            field("drive_start", 5, Double, false),
+            field("drive_end", 6, Double, false),
+            field("predicted_change", 7, Double, false),
+            field("block", 8, Int32, false),
+            field("junction", 9, Int32, false),
+            field("dropped_energy", 10, Double, false),
+            field("work_in", 11, Double, false),
+            field("damping", 12, Double, false),
+        ],
+    );
     FileDescriptorSet {
         file: vec![FileDescriptorProto {
             name: Some("slipfront.proto".into()),
             package: Some("slipfront".into()),
-            message_type: vec![global, interface, bulk],
+            message_type: vec![global, interface, bulk, fast_forward],
             syntax: Some("proto3".into()),
             ..Default::default()
         }],
@@ -161,7 +211,7 @@ mod tests {
             .iter()
             .map(|m| m.name().to_string())
             .collect();
-        assert_eq!(names, ["Global", "Interface", "Bulk"]);
+        assert_eq!(names, ["Global", "Interface", "Bulk", "FastForwardJump"]);
         // A message encoded by the derive decodes field by field as described:
         // tag 3 of Interface is a packed repeated double.
         let m = Interface {

@@ -53,6 +53,7 @@ pub struct McapSink {
     global: u16,
     interface: u16,
     bulk: u16,
+    fast_forward: u16,
     sequence: u32,
     last_flush: Instant,
     slip_origin: Option<Vec<f64>>,
@@ -113,11 +114,14 @@ impl McapSink {
         let global = writer.add_channel(g, "/global", "protobuf", &none)?;
         let interface = writer.add_channel(i, "/interface", "protobuf", &none)?;
         let bulk = writer.add_channel(b, "/bulk", "protobuf", &none)?;
+        let f = writer.add_schema("slipfront.FastForwardJump", "protobuf", &descriptor)?;
+        let fast_forward = writer.add_channel(f, "/fast_forward", "protobuf", &none)?;
         Ok(McapSink {
             writer,
             global,
             interface,
             bulk,
+            fast_forward,
             sequence: 0,
             last_flush: Instant::now(),
             slip_origin: None,
@@ -193,7 +197,45 @@ impl McapSink {
         self.write(self.bulk, snap.time, &msg.encode_to_vec())
     }
 
-    pub fn finish(mut self) -> Result<(), OutputError> {
+    pub fn write_fast_forward(
+        &mut self,
+        r: &crate::quasistatic::JumpRecord,
+    ) -> Result<(), OutputError> {
+        let index = |v: Option<usize>| v.map_or(-1, |v| v as i32);
+        let msg = messages::FastForwardJump {
+            start_time: r.start_time,
+            end_time: r.end_time,
+            start_step: r.start_step,
+            end_step: r.end_step,
+            drive_start: r.drive_start,
+            drive_end: r.drive_end,
+            predicted_change: r.predicted_change,
+            block: index(r.block),
+            junction: index(r.junction),
+            dropped_energy: r.dropped_energy,
+            work_in: r.work_in,
+            damping: r.damping,
+        };
+        self.write(self.fast_forward, r.end_time, &msg.encode_to_vec())
+    }
+
+    /// Closes the file; a fast-forwarded run adds its totals as the
+    /// `slipfront_fast_forward` metadata record.
+    pub fn finish(
+        mut self,
+        fast_forward: Option<&crate::quasistatic::FastForwardStats>,
+    ) -> Result<(), OutputError> {
+        if let Some(f) = fast_forward {
+            let mut meta = BTreeMap::new();
+            meta.insert("jumps".into(), f.jumps.to_string());
+            meta.insert("skipped_steps".into(), f.skipped_steps.to_string());
+            meta.insert("skipped_time".into(), format!("{:e}", f.skipped_time));
+            meta.insert("dropped_energy".into(), format!("{:e}", f.dropped_energy));
+            self.writer.write_metadata(&mcap::records::Metadata {
+                name: "slipfront_fast_forward".into(),
+                metadata: meta,
+            })?;
+        }
         self.writer.finish()?;
         Ok(())
     }

@@ -2,7 +2,7 @@
 //! Reads record by record, so a file cut short by a killed run yields
 //! everything up to its last complete chunk.
 
-use super::messages::{Bulk, Global, Interface};
+use super::messages::{Bulk, FastForwardJump, Global, Interface};
 use super::OutputError;
 use crate::analysis::InterfaceSeries;
 use mcap::records::Record;
@@ -18,6 +18,10 @@ pub struct RunFile {
     pub global: Vec<Global>,
     pub interface: Vec<Interface>,
     pub bulk: Vec<Bulk>,
+    /// Quasi-static jumps (fast-forwarded runs).
+    pub fast_forward: Vec<FastForwardJump>,
+    /// Totals of the fast-forward (`slipfront_fast_forward` metadata).
+    pub fast_forward_totals: BTreeMap<String, String>,
     /// The file ended before its summary (the run was killed).
     pub truncated: bool,
 }
@@ -52,6 +56,9 @@ impl RunFile {
                     topics.insert(c.id, c.topic);
                 }
                 Record::Metadata(m) if m.name == "slipfront" => run.metadata = m.metadata,
+                Record::Metadata(m) if m.name == "slipfront_fast_forward" => {
+                    run.fast_forward_totals = m.metadata
+                }
                 Record::Attachment { header, data, .. } if header.name == "scenario.toml" => {
                     run.scenario = Some(String::from_utf8_lossy(&data).into_owned())
                 }
@@ -64,6 +71,9 @@ impl RunFile {
                             .interface
                             .push(Interface::decode(&data[..]).map_err(bad)?),
                         Some("/bulk") => run.bulk.push(Bulk::decode(&data[..]).map_err(bad)?),
+                        Some("/fast_forward") => run
+                            .fast_forward
+                            .push(FastForwardJump::decode(&data[..]).map_err(bad)?),
                         _ => {}
                     }
                 }

@@ -35,6 +35,72 @@ pub struct Scenario {
     /// Optional initial displacement pulse (wave tests).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub pulse: Option<Pulse>,
+    /// Thresholds of the quasi-static fast-forward (`time.fast_forward`);
+    /// defaults when absent.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub fast_forward: Option<FastForward>,
+}
+
+/// `[fast_forward]`: when a scene counts as quiet and how close to the
+/// next rupture a jump lands. Every key has a default.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct FastForward {
+    /// Kinetic energy below which the slider is at rest, as a fraction of
+    /// the elastic energy of one junction at its threshold.
+    #[serde(default = "FastForward::default_quiet_energy")]
+    pub quiet_energy: f64,
+    /// Time (s) the scene must stay quiet before a jump.
+    #[serde(default = "FastForward::default_quiet_time")]
+    pub quiet_time: f64,
+    /// Simulated time (s) left to full dynamics before the predicted
+    /// rupture.
+    #[serde(default = "FastForward::default_lead_time")]
+    pub lead_time: f64,
+    /// Cadence (s) of the quiet checks.
+    #[serde(default = "FastForward::default_check_interval")]
+    pub check_interval: f64,
+    /// Linear solver: "direct" (banded Cholesky, reused as the CG
+    /// preconditioner) or "cg" (Jacobi-preconditioned CG).
+    #[serde(default = "FastForward::default_solver")]
+    pub solver: FastForwardSolver,
+}
+
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum FastForwardSolver {
+    Direct,
+    Cg,
+}
+
+impl FastForward {
+    fn default_quiet_energy() -> f64 {
+        1.0e-3
+    }
+    fn default_quiet_time() -> f64 {
+        2.0e-4
+    }
+    fn default_lead_time() -> f64 {
+        5.0e-4
+    }
+    fn default_check_interval() -> f64 {
+        2.0e-5
+    }
+    fn default_solver() -> FastForwardSolver {
+        FastForwardSolver::Direct
+    }
+}
+
+impl Default for FastForward {
+    fn default() -> Self {
+        FastForward {
+            quiet_energy: Self::default_quiet_energy(),
+            quiet_time: Self::default_quiet_time(),
+            lead_time: Self::default_lead_time(),
+            check_interval: Self::default_check_interval(),
+            solver: Self::default_solver(),
+        }
+    }
 }
 
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
@@ -233,6 +299,9 @@ pub struct Time {
     pub end: f64,
     /// Seed of the counter-based junction RNG.
     pub seed: u32,
+    /// Skip the stick phases on the quasi-static path (`[fast_forward]`).
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub fast_forward: bool,
 }
 
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]

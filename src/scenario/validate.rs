@@ -168,6 +168,20 @@ pub fn validate(s: &Scenario, text: &str, overridden: &[&str]) -> Vec<String> {
     }
     // Bounded above by an exact f64 step time, in Model.
     c.at_least("time.end", t.end, 0.0);
+    if let Some(f) = &s.fast_forward {
+        c.positive("fast_forward.quiet_energy", f.quiet_energy);
+        c.at_least("fast_forward.quiet_time", f.quiet_time, 0.0);
+        c.positive("fast_forward.lead_time", f.lead_time);
+        c.positive("fast_forward.check_interval", f.check_interval);
+    }
+    if t.fast_forward && !matches!(s.friction.law, FrictionLaw::Junctions | FrictionLaw::SingleJunction)
+    {
+        c.problems.push(format!(
+            "time.fast_forward = true needs friction.law = \"junctions\" or \"single_junction\" \
+             (got \"{}\": the quasi-static path of other laws is not built)",
+            law_name(s.friction.law)
+        ));
+    }
     let o = &s.output;
     c.at_least("output.global_interval", o.global_interval, 0.0);
     c.at_least("output.interface_interval", o.interface_interval, 0.0);

@@ -1,0 +1,393 @@
+//! Quasi-static fast-forward through the stick phases of a driven run.
+//!
+//! A side-driven slider spends almost all of its time at rest while the
+//! drive loads it; integrating those phases at dt = T/50 is most of a run's
+//! cost. When the scene is quiet (every junction pinned, kinetic energy a
+//! small fraction of one junction's elastic energy at threshold, held for a
+//! minimum time), the slider follows its equilibrium, which moves linearly
+//! with the drive: u(t) = u(t₀) + w·(t − t₀) with K·w = ḟ. The first
+//! junction to reach μs·f_N on that path is found exactly
+//! ([`threshold::first_change`]); the run jumps there less a lead time,
+//! sets the equilibrium displacement and the velocity field w, and resumes
+//! full dynamics, which then perform the rupture. What the jump drops (the
+//! residual ring-down of the quiet phase) is booked as dissipated.
+//!
+//! Isolated junction ruptures during loading end a jump like any other:
+//! dynamics take over until the scene is quiet again (measured and argued
+//! in `results/fast_forward.md`).
+
+pub mod band;
+pub mod cg;
+pub mod equilibrium;
+pub mod tangent;
+pub mod threshold;
+
+use crate::engine::Snapshot;
+use crate::junction::PINNED;
+use crate::model::{Driver, Model};
+use equilibrium::{drive_response, settle, QuasiStaticError, Solver, SolverKind};
+use tangent::Tangent;
+use threshold::{first_change, threshold_margin, PathEnd};
+
+/// Settings of the fast-forward (scenario `[fast_forward]` with defaults).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FastForwardSettings {
+    /// Kinetic energy below which the slider counts as at rest, as a
+    /// fraction of the elastic energy of one junction at its threshold.
+    pub quiet_energy: f64,
+    /// How long (s) the scene must stay quiet before a jump.
+    pub quiet_time: f64,
+    /// Simulated time (s) left to full dynamics before the predicted
+    /// rupture.
+    pub lead_time: f64,
+    /// Cadence (s) of the quiet checks.
+    pub check_interval: f64,
+    pub solver: SolverKind,
+}
+
+impl FastForwardSettings {
+    /// The scenario's `[fast_forward]` keys, or their defaults.
+    pub fn from_scenario(s: &crate::scenario::Scenario) -> Self {
+        let f = s.fast_forward.clone().unwrap_or_default();
+        FastForwardSettings {
+            quiet_energy: f.quiet_energy,
+            quiet_time: f.quiet_time,
+            lead_time: f.lead_time,
+            check_interval: f.check_interval,
+            solver: match f.solver {
+                crate::scenario::FastForwardSolver::Direct => SolverKind::Direct,
+                crate::scenario::FastForwardSolver::Cg => SolverKind::Cg,
+            },
+        }
+    }
+}
+
+/// One jump, as the `/fast_forward` channel records it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct JumpRecord {
+    pub start_step: u64,
+    pub end_step: u64,
+    pub start_time: f64,
+    pub end_time: f64,
+    /// Drive position at both ends: side spring's far end V·t (m), top
+    /// force (N), or prescribed top-row displacement (m).
+    pub drive_start: f64,
+    pub drive_end: f64,
+    /// Predicted time of the change that ends the path (s).
+    pub predicted_change: f64,
+    /// Interface block and junction whose rupture sets the end (None: a
+    /// contact change, or nothing before the end of the run).
+    pub block: Option<usize>,
+    pub junction: Option<usize>,
+    /// Energy (J) of the quiet state's ring-down, dropped by the jump and
+    /// booked as dissipated (≥ 0 up to round-off).
+    pub dropped_energy: f64,
+    /// Work (J) of the drive, top loads and junction forces along the path.
+    pub work_in: f64,
+    /// Dashpot dissipation (J) along the path (the velocity field w).
+    pub damping: f64,
+}
+
+/// Running totals, for the run summary and the metadata.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct FastForwardStats {
+    pub jumps: u64,
+    pub skipped_steps: u64,
+    pub skipped_time: f64,
+    pub dropped_energy: f64,
+    pub factorisations: u64,
+    pub cg_iterations: u64,
+    pub solver_seconds: f64,
+    /// Largest quadratic-path error of any jump (see [`Jump::path_error`]).
+    pub max_path_error: f64,
+}
+
+/// A planned jump: the equilibrium at its start and end, the velocity
+/// field in between, and the tangent that settles states on the path.
+pub struct Jump {
+    pub start: Snapshot,
+    /// The settled equilibrium at the middle step of the jump.
+    pub mid_disp: Vec<[f64; 2]>,
+    pub end_disp: Vec<[f64; 2]>,
+    pub w: Vec<[f64; 2]>,
+    pub record: JumpRecord,
+    /// Largest distance of the quadratic path from the settled equilibria
+    /// at its quarter points, relative to the largest displacement of the
+    /// jump.
+    pub path_error: f64,
+}
+
+impl Jump {
+    /// The equilibrium at a step of the jump: the quadratic through the
+    /// settled start, middle and end. The path bends with the bonds'
+    /// geometric nonlinearity (a straight line between the ends is off by
+    /// ~3e-4 of the load change in the middle); the quadratic's error is
+    /// measured at the quarter points (`path_error`).
+    pub fn disp_at(&self, step: u64) -> Vec<[f64; 2]> {
+        let r = &self.record;
+        let mid = r.start_step + (r.end_step - r.start_step) / 2;
+        quadratic(
+            [r.start_step, mid, r.end_step],
+            [&self.start.disp, &self.mid_disp, &self.end_disp],
+            step,
+        )
+    }
+}
+
+/// Lagrange quadratic through three (step, displacement field) nodes.
+fn quadratic(steps: [u64; 3], nodes: [&[[f64; 2]]; 3], step: u64) -> Vec<[f64; 2]> {
+    let x = steps.map(|s| s as f64);
+    let t = step as f64;
+    let l = [
+        (t - x[1]) * (t - x[2]) / ((x[0] - x[1]) * (x[0] - x[2])),
+        (t - x[0]) * (t - x[2]) / ((x[1] - x[0]) * (x[1] - x[2])),
+        (t - x[0]) * (t - x[1]) / ((x[2] - x[0]) * (x[2] - x[1])),
+    ];
+    (0..nodes[0].len())
+        .map(|i| {
+            let c = |k: usize| l[0] * nodes[0][i][k] + l[1] * nodes[1][i][k] + l[2] * nodes[2][i][k];
+            [c(0), c(1)]
+        })
+        .collect()
+}
+
+/// Elastic energy (J) of a mean junction at its threshold: the scale of
+/// the quiet criterion.
+pub fn junction_energy_scale(model: &Model, snap: &Snapshot) -> f64 {
+    let pinned: Vec<f64> = snap
+        .slip_steps_left
+        .iter()
+        .zip(&snap.junction_stiffness)
+        .filter(|(s, _)| **s == PINNED)
+        .map(|(_, k)| *k)
+        .collect();
+    if pinned.is_empty() {
+        return 0.0;
+    }
+    let k = pinned.iter().sum::<f64>() / pinned.len() as f64;
+    let ns = snap.slip_steps_left.len() as f64 / model.nx as f64;
+    let f = model.mu_s * model.normal_force / (model.nx as f64 * ns);
+    0.5 * f * f / k
+}
+
+/// Largest force left on a block at a settled equilibrium, relative to one
+/// block's share of the normal load.
+const SETTLE_TOLERANCE: f64 = 1e-12;
+
+/// The fast-forward of one run: quiet detector, solver and totals.
+pub struct FastForward {
+    pub settings: FastForwardSettings,
+    quiet_since: Option<u64>,
+    solver: Solver,
+    pub stats: FastForwardStats,
+}
+
+impl FastForward {
+    pub fn new(settings: FastForwardSettings) -> Self {
+        FastForward {
+            settings,
+            quiet_since: None,
+            solver: Solver::new(settings.solver),
+            stats: FastForwardStats::default(),
+        }
+    }
+
+    /// Steps between quiet checks.
+    pub fn check_steps(&self, model: &Model) -> u64 {
+        ((self.settings.check_interval / model.dt).round() as u64).max(1)
+    }
+
+    /// Feeds the detector a snapshot of the driving phase; true when the
+    /// scene has been quiet for the hold time.
+    pub fn observe(&mut self, model: &Model, snap: &Snapshot) -> bool {
+        let all_pinned = snap.slip_steps_left.iter().all(|&s| s == PINNED)
+            && !snap.slip_steps_left.is_empty();
+        let scale = junction_energy_scale(model, snap);
+        let quiet =
+            all_pinned && snap.kinetic_energy(model.mass) < self.settings.quiet_energy * scale;
+        if !quiet {
+            self.quiet_since = None;
+            return false;
+        }
+        let since = *self.quiet_since.get_or_insert(snap.step);
+        (snap.step - since) as f64 * model.dt >= self.settings.quiet_time
+    }
+
+    /// Plans the jump from the quiet state `snap` (None when the next
+    /// change is too close for a jump to pay). `last_step` bounds the jump
+    /// (the end of the run).
+    pub fn plan(
+        &mut self,
+        model: &Model,
+        snap: &Snapshot,
+        drive_origin: f64,
+        last_step: u64,
+    ) -> Result<Option<Jump>, QuasiStaticError> {
+        let started = std::time::Instant::now();
+        let result = self.plan_inner(model, snap, drive_origin, last_step);
+        self.stats.solver_seconds += started.elapsed().as_secs_f64();
+        self.stats.factorisations = self.solver.factorisations;
+        self.stats.cg_iterations = self.solver.cg_iterations;
+        // Whatever happens, the next jump waits for a new quiet period.
+        self.quiet_since = None;
+        result
+    }
+
+    fn plan_inner(
+        &mut self,
+        model: &Model,
+        snap: &Snapshot,
+        drive_origin: f64,
+        last_step: u64,
+    ) -> Result<Option<Jump>, QuasiStaticError> {
+        let lead = (self.settings.lead_time / model.dt).ceil() as u64;
+        let s0 = snap.step;
+        if s0 + 2 * lead >= last_step {
+            return Ok(None);
+        }
+        let tolerance = SETTLE_TOLERANCE;
+        let k = Tangent::at(model, snap);
+        let w = drive_response(model, &k, &mut self.solver)?;
+        let mut start = snap.clone();
+        settle(
+            model,
+            snap,
+            &mut start.disp,
+            &w,
+            s0,
+            drive_origin,
+            &k,
+            &mut self.solver,
+            tolerance,
+        )?;
+        let (tau, end) = first_change(model, snap, &start.disp, &w);
+        let change_step = if tau.is_finite() {
+            s0.saturating_add((tau / model.dt).floor() as u64)
+        } else {
+            u64::MAX
+        };
+        let mut target = change_step.saturating_sub(lead).min(last_step);
+        if target < s0 + lead {
+            return Ok(None);
+        }
+        // Settle at the target; the bonds' nonlinearity may move the
+        // crossing a little: back off until every junction holds with room.
+        let mut end_disp;
+        loop {
+            end_disp = advance_path(model, &start.disp, &w, target - s0);
+            settle(
+                model,
+                snap,
+                &mut end_disp,
+                &w,
+                target,
+                drive_origin,
+                &k,
+                &mut self.solver,
+                tolerance,
+            )?;
+            if threshold_margin(model, snap, &end_disp) > 0.0 || target <= s0 + lead {
+                break;
+            }
+            target = s0 + (target - s0) / 2;
+        }
+        if threshold_margin(model, snap, &end_disp) <= 0.0 {
+            return Ok(None);
+        }
+        let mut settled_at = |step: u64, guess: Vec<[f64; 2]>| {
+            let mut d = guess;
+            settle(
+                model,
+                snap,
+                &mut d,
+                &w,
+                step,
+                drive_origin,
+                &k,
+                &mut self.solver,
+                tolerance,
+            )
+            .map(|_| d)
+        };
+        let mid = s0 + (target - s0) / 2;
+        let mid_disp = settled_at(mid, advance_path(model, &start.disp, &w, mid - s0))?;
+        let mut path_error = 0.0f64;
+        let scale = start
+            .disp
+            .iter()
+            .zip(&end_disp)
+            .map(|(a, b)| (b[0] - a[0]).abs().max((b[1] - a[1]).abs()))
+            .fold(0.0, f64::max)
+            .max(1e-300);
+        for q in [s0 + (target - s0) / 4, s0 + 3 * (target - s0) / 4] {
+            if q == s0 || q == mid || q == target {
+                continue;
+            }
+            let guess = quadratic([s0, mid, target], [&start.disp, &mid_disp, &end_disp], q);
+            let settled = settled_at(q, guess.clone())?;
+            for (a, b) in guess.iter().zip(&settled) {
+                path_error = path_error.max((a[0] - b[0]).abs().max((a[1] - b[1]).abs()) / scale);
+            }
+        }
+        start.vel = w.clone();
+        start.vel_half = w.clone();
+        let (block, junction) = match end {
+            PathEnd::Rupture { ix, junction } => (Some(ix), Some(junction)),
+            PathEnd::Contact { ix } => (Some(ix), None),
+            PathEnd::Never => (None, None),
+        };
+        let record = JumpRecord {
+            start_step: s0,
+            end_step: target,
+            start_time: model.time_of_step(s0),
+            end_time: model.time_of_step(target),
+            drive_start: drive_position(model, &start.disp, s0),
+            drive_end: drive_position(model, &end_disp, target),
+            predicted_change: model.time_of_step(s0) + tau,
+            block,
+            junction,
+            dropped_energy: 0.0,
+            work_in: 0.0,
+            damping: 0.0,
+        };
+        Ok(Some(Jump {
+            start,
+            mid_disp,
+            end_disp,
+            w,
+            record,
+            path_error,
+        }))
+    }
+
+    /// Books a completed jump.
+    pub fn book(&mut self, model: &Model, record: &JumpRecord, path_error: f64) {
+        self.stats.jumps += 1;
+        self.stats.max_path_error = self.stats.max_path_error.max(path_error);
+        self.stats.skipped_steps += record.end_step - record.start_step;
+        self.stats.skipped_time = self.stats.skipped_steps as f64 * model.dt;
+        self.stats.dropped_energy += record.dropped_energy;
+    }
+}
+
+/// u + w·(steps·dt), held components included (the prescribed top row
+/// moves at V).
+fn advance_path(model: &Model, disp: &[[f64; 2]], w: &[[f64; 2]], steps: u64) -> Vec<[f64; 2]> {
+    let t = steps as f64 * model.dt;
+    disp.iter()
+        .zip(w)
+        .map(|(u, w)| [u[0] + w[0] * t, u[1] + w[1] * t])
+        .collect()
+}
+
+/// Where the drive is at a step: V·t for the side spring, the top force,
+/// or the prescribed top row's displacement.
+pub fn drive_position(model: &Model, disp: &[[f64; 2]], step: u64) -> f64 {
+    let t = model.time_of_step(step).max(0.0);
+    match model.driver {
+        Driver::None => 0.0,
+        Driver::SideSpring { velocity, .. } => velocity * t,
+        Driver::TopForce { rate } => rate * t,
+        Driver::TopVelocity { .. } => disp[(model.nz - 1) * model.nx][0],
+    }
+}
