@@ -60,6 +60,7 @@ fn run_case(scenario: &std::path::Path, t_end: f64, base: &[String], case: &Case
         e.as_mut(),
         &s,
         &RunOptions {
+            fast_forward: None,
             output: Some(out.clone()),
             progress: false,
         },

@@ -1,7 +1,9 @@
 //! Prints the `/global` series of a run file as CSV (time, step, drive
 //! ratio, kinetic energy, ruptures, pinned fraction), for quick looks.
 fn main() {
-    let path = std::env::args().nth(1).expect("usage: dump_global RUN.mcap");
+    let path = std::env::args()
+        .nth(1)
+        .expect("usage: dump_global RUN.mcap");
     let run = slipfront::output::reader::RunFile::read(std::path::Path::new(&path))
         .unwrap_or_else(|e| panic!("{e}"));
     println!("time,step,drive_ratio,kinetic_energy,ruptures,pinned_fraction");

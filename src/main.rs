@@ -38,6 +38,10 @@ enum Command {
         /// Simulated time after the normal-load phase (s); overrides time.end.
         #[arg(long)]
         t_end: Option<f64>,
+        /// Quasi-static fast-forward through the stick phases: on or off
+        /// (overrides time.fast_forward).
+        #[arg(long, value_name = "on|off", value_parser = parse_on_off)]
+        fast_forward: Option<bool>,
         /// MCAP output file.
         #[arg(short = 'o', long)]
         output: Option<PathBuf>,
@@ -101,6 +105,7 @@ fn main() -> ExitCode {
             precision,
             set,
             t_end,
+            fast_forward,
             output,
             threads,
             allow_unstable,
@@ -112,6 +117,7 @@ fn main() -> ExitCode {
             precision,
             set,
             t_end,
+            fast_forward,
             output,
             threads,
             allow_unstable,
@@ -165,5 +171,13 @@ fn restore_default_sigpipe() {
     // SAFETY: called first thing in main, before any thread or I/O exists.
     unsafe {
         libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
+}
+
+fn parse_on_off(s: &str) -> Result<bool, String> {
+    match s {
+        "on" | "true" => Ok(true),
+        "off" | "false" => Ok(false),
+        _ => Err(format!("`{s}`: expected on or off")),
     }
 }

@@ -4,9 +4,9 @@
 
 use crate::cpu::CpuEngine;
 use crate::engine::{advance_to, Engine, EngineError, Snapshot};
-use crate::quasistatic::{FastForward, FastForwardSettings, FastForwardStats, Jump};
 use crate::model::{Driver, Model};
 use crate::output::{GlobalSample, McapSink};
+use crate::quasistatic::{FastForward, FastForwardSettings, FastForwardStats, Jump};
 use crate::scenario::Scenario;
 use crate::step_params::{step_params, Consts};
 use indicatif::{ProgressBar, ProgressStyle};
@@ -24,6 +24,9 @@ const MAX_CHUNK: u64 = 20_000;
 pub struct RunOptions {
     pub output: Option<PathBuf>,
     pub progress: bool,
+    /// Fast-forward settings that replace the scenario's (and switch it on
+    /// whatever `time.fast_forward` says).
+    pub fast_forward: Option<FastForwardSettings>,
 }
 
 /// What a finished (or interrupted) run reports.
@@ -317,6 +320,8 @@ fn perform_jump(
     }
     let origin = outputs.origin;
     let (dropped, work_in, damping) = jump_energy(&model, dynamic, &start, &end, origin);
+    jump.record.stored_change = crate::energy::stored_energy(&model, &end, origin).total()
+        - crate::energy::stored_energy(&model, &start, origin).total();
     jump.record.dropped_energy = dropped;
     jump.record.work_in = work_in;
     jump.record.damping = damping;
@@ -363,7 +368,9 @@ pub fn jump_energy(
         step_power(model, end, end, origin),
     );
     let span = end.time - start.time;
-    let work_in = 0.5 * span * (pa.drive + pa.top_loads + pa.friction + pb.drive + pb.top_loads + pb.friction);
+    let work_in = 0.5
+        * span
+        * (pa.drive + pa.top_loads + pa.friction + pb.drive + pb.top_loads + pb.friction);
     let damping = 0.5 * span * (pa.damping + pb.damping);
     (dropped, work_in, damping)
 }
@@ -384,10 +391,15 @@ pub fn run_scene(
         None => None,
     };
     let mut outputs = Outputs::new(&model, scenario, sink);
-    let mut ff = scenario
-        .time
+    let mut ff = opts
         .fast_forward
-        .then(|| FastForward::new(FastForwardSettings::from_scenario(scenario)));
+        .or_else(|| {
+            scenario
+                .time
+                .fast_forward
+                .then(|| FastForwardSettings::from_scenario(scenario))
+        })
+        .map(FastForward::new);
     let every_check = ff.as_ref().map_or(0, |f| f.check_steps(&model));
     let bar = if opts.progress {
         let b = ProgressBar::new(total);
@@ -472,7 +484,11 @@ pub fn run_scene(
         wall_seconds: wall,
         block_steps_per_second: integrated as f64 * model.n_blocks() as f64 / wall.max(1e-9),
         peak_drive_ratio: outputs.peak.max(g.drive_ratio),
-        final_drive_ratio: if steps > 0 { g.drive_ratio } else { outputs.last },
+        final_drive_ratio: if steps > 0 {
+            g.drive_ratio
+        } else {
+            outputs.last
+        },
         ruptures: outputs.ruptures.max(g.ruptures),
         dispatches: engine
             .dispatches()

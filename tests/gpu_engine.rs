@@ -247,6 +247,7 @@ fn coulomb_stick_slip_transitions_are_counted_as_ruptures_on_both_engines() {
     let s = Scenario::parse(DEFAULT_SCENARIO, "coulomb", &set).unwrap();
     let m = Model::from_scenario(&s, false).unwrap();
     let opts = RunOptions {
+        fast_forward: None,
         output: None,
         progress: false,
     };

@@ -152,6 +152,7 @@ fn a_top_force_run_reports_the_applied_ramp_as_its_drive_force() {
         std::env::temp_dir().join(format!("slipfront_top_force_{}.mcap", std::process::id()));
     let mut e = cpu_engine(&m, Precision::F64, 1).unwrap();
     let opts = RunOptions {
+        fast_forward: None,
         output: Some(path.clone()),
         progress: false,
     };

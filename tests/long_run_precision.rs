@@ -38,6 +38,7 @@ fn outcome(label: &str, backend: Backend, precision: Precision, velocity: f64) -
         label.replace(' ', "_")
     ));
     let opts = RunOptions {
+        fast_forward: None,
         output: Some(path.clone()),
         progress: false,
     };

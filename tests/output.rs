@@ -33,6 +33,7 @@ fn every_channel_reads_back_as_the_engine_state() {
         engine.as_mut(),
         &scenario,
         &RunOptions {
+            fast_forward: None,
             output: Some(path.clone()),
             progress: false,
         },
@@ -95,6 +96,7 @@ fn a_file_cut_short_is_still_readable() {
     let path = dir.join("run.mcap");
     let mut engine = cpu_engine(&model, Precision::F64, 1).unwrap();
     let opts = RunOptions {
+        fast_forward: None,
         output: Some(path.clone()),
         progress: false,
     };

@@ -12,6 +12,7 @@ pub struct RunArgs {
     pub precision: Option<Precision>,
     pub set: Vec<String>,
     pub t_end: Option<f64>,
+    pub fast_forward: Option<bool>,
     pub output: Option<PathBuf>,
     pub threads: usize,
     pub allow_unstable: bool,
@@ -22,6 +23,9 @@ pub fn run(a: RunArgs) -> anyhow::Result<ExitCode> {
     let mut set = a.set.clone();
     if let Some(t) = a.t_end {
         set.push(format!("time.end={t:e}"));
+    }
+    if let Some(on) = a.fast_forward {
+        set.push(format!("time.fast_forward={on}"));
     }
     let (scenario, name) = super::load_scenario(a.scenario.as_deref(), &set)?;
     let model = Model::from_scenario(&scenario, a.allow_unstable)?;
@@ -39,6 +43,7 @@ pub fn run(a: RunArgs) -> anyhow::Result<ExitCode> {
         engine.as_mut(),
         &scenario,
         &RunOptions {
+            fast_forward: None,
             output: a.output.clone(),
             progress: !a.quiet,
         },

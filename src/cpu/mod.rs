@@ -281,7 +281,11 @@ impl<T: Real, C: Coordinate<T>> CpuEngine<T, C> {
         {
             *s = [*left, *count];
         }
-        for (s, (d, n)) in e.slide.iter_mut().zip(base.slide_dir.iter().zip(&base.slips)) {
+        for (s, (d, n)) in e
+            .slide
+            .iter_mut()
+            .zip(base.slide_dir.iter().zip(&base.slips))
+        {
             *s = [*d, *n as i32];
         }
         e.step = model.prep_steps.max(base.step);

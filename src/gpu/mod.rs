@@ -599,10 +599,8 @@ impl Engine for GpuEngine {
             "set_kinematics is for the driving phase"
         );
         self.drain()?;
-        let disp: Vec<[DoubleSingle; 2]> = disp
-            .iter()
-            .map(|u| u.map(DoubleSingle::from_f64))
-            .collect();
+        let disp: Vec<[DoubleSingle; 2]> =
+            disp.iter().map(|u| u.map(DoubleSingle::from_f64)).collect();
         let vel: Vec<[f32; 2]> = vel.iter().map(|v| v.map(|x| x as f32)).collect();
         let b = &self.buffers;
         let queue = &self.ctx.queue;

@@ -102,6 +102,9 @@ pub struct FastForwardJump {
     /// J
     #[prost(double, tag = "12")]
     pub damping: f64,
+    /// J
+    #[prost(double, tag = "13")]
+    pub stored_change: f64,
 }
 
 fn field(name: &str, number: i32, ty: Type, repeated: bool) -> FieldDescriptorProto {
@@ -183,6 +186,7 @@ pub fn descriptor_set() -> Vec<u8> {
             field("dropped_energy", 10, Double, false),
             field("work_in", 11, Double, false),
             field("damping", 12, Double, false),
+            field("stored_change", 13, Double, false),
         ],
     );
     FileDescriptorSet {

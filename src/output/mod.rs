@@ -215,6 +215,7 @@ impl McapSink {
             dropped_energy: r.dropped_energy,
             work_in: r.work_in,
             damping: r.damping,
+            stored_change: r.stored_change,
         };
         self.write(self.fast_forward, r.end_time, &msg.encode_to_vec())
     }

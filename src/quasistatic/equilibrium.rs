@@ -226,7 +226,9 @@ pub fn drive_response(
 }
 
 fn per_block(d: &super::tangent::Dofs, x: &[f64], n: usize) -> Vec<[f64; 2]> {
-    (0..n).map(|i| [x[d.index(i, 0)], x[d.index(i, 1)]]).collect()
+    (0..n)
+        .map(|i| [x[d.index(i, 0)], x[d.index(i, 1)]])
+        .collect()
 }
 
 /// Largest force any free block carries at a residual, relative to the

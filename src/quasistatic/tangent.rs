@@ -41,11 +41,7 @@ impl Dofs {
     #[inline]
     pub fn index(&self, i: usize, c: usize) -> usize {
         let (ix, iz) = (i % self.nx, i / self.nx);
-        let k = if self.z_fastest {
-            ix * self.nz + iz
-        } else {
-            i
-        };
+        let k = if self.z_fastest { ix * self.nz + iz } else { i };
         2 * k + c
     }
 
@@ -93,7 +89,10 @@ impl Tangent {
         let mut bonds = Vec::with_capacity(4 * nx * nz);
         for iz in 0..nz as i64 {
             for ix in 0..nx as i64 {
-                for b in STENCIL.iter().filter(|b| b.dz > 0 || (b.dz == 0 && b.dx > 0)) {
+                for b in STENCIL
+                    .iter()
+                    .filter(|b| b.dz > 0 || (b.dz == 0 && b.dx > 0))
+                {
                     let (jx, jz) = (ix + b.dx as i64, iz + b.dz as i64);
                     if jx < 0 || jx >= nx as i64 || jz >= nz as i64 {
                         continue;
@@ -263,7 +262,11 @@ mod tests {
         k.apply(&x, &mut y1, &mut s);
         k.band().mul(&x, &mut y2);
         let scale = y1.iter().map(|v| v.abs()).fold(0.0, f64::max);
-        let err = y1.iter().zip(&y2).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+        let err = y1
+            .iter()
+            .zip(&y2)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max);
         assert!(err <= 1e-12 * scale, "{err} of {scale}");
         let diag = k.diagonal();
         let band = k.band();
@@ -316,7 +319,11 @@ mod tests {
             let (fp, fm) = (force(rp), force(rm));
             for a in 0..2 {
                 let fd = (fp[a] - fm[a]) / (2.0 * h);
-                assert!((fd - t[a][b]).abs() < 1e-5 * k, "{a}{b}: {fd} vs {}", t[a][b]);
+                assert!(
+                    (fd - t[a][b]).abs() < 1e-5 * k,
+                    "{a}{b}: {fd} vs {}",
+                    t[a][b]
+                );
             }
         }
     }

@@ -174,7 +174,11 @@ pub fn validate(s: &Scenario, text: &str, overridden: &[&str]) -> Vec<String> {
         c.positive("fast_forward.lead_time", f.lead_time);
         c.positive("fast_forward.check_interval", f.check_interval);
     }
-    if t.fast_forward && !matches!(s.friction.law, FrictionLaw::Junctions | FrictionLaw::SingleJunction)
+    if t.fast_forward
+        && !matches!(
+            s.friction.law,
+            FrictionLaw::Junctions | FrictionLaw::SingleJunction
+        )
     {
         c.problems.push(format!(
             "time.fast_forward = true needs friction.law = \"junctions\" or \"single_junction\" \
