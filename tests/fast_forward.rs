@@ -153,3 +153,67 @@ fn a_drive_response_too_small_is_flagged() {
     assert!(relative(small, t_full) > 0.005, "{small} vs {t_full}");
     assert!(relative(large, t_full) < 0.005, "{large} vs {t_full}");
 }
+
+/// The quasi-static path against the dynamics it replaces: from a settled
+/// equilibrium moving with w, 1 ms of full dynamics stays on the settled
+/// equilibrium 1 ms later (the path is what the slider does), and both are
+/// force-free to round-off. A zero velocity field instead (the slider
+/// started at rest) departs from it: the control.
+#[test]
+fn dynamics_from_the_quasi_static_state_follow_the_path() {
+    use slipfront::advance_to;
+    use slipfront::quasistatic::equilibrium::{
+        drive_response, residual, residual_ratio, settle, Solver, SolverKind,
+    };
+    use slipfront::quasistatic::tangent::Tangent;
+    let scenario = scene();
+    let m = Model::from_scenario(&scenario, false).unwrap();
+    let mut e = cpu_engine(&m, Precision::F64, 1).unwrap();
+    advance_to(e.as_mut(), m.prep_steps + 2000).unwrap();
+    let snap = e.snapshot().unwrap();
+    let origin = {
+        let mut probe = cpu_engine(&m, Precision::F64, 1).unwrap();
+        advance_to(probe.as_mut(), m.prep_steps).unwrap();
+        probe.snapshot().unwrap().disp[2 * m.nx][0]
+    };
+    let k = Tangent::at(&m, &snap);
+    let mut solver = Solver::new(SolverKind::Direct);
+    let w = drive_response(&m, &k, &mut solver).unwrap();
+    let settled = |step: u64, guess: &[[f64; 2]], solver: &mut Solver| {
+        let mut d = guess.to_vec();
+        settle(&m, &snap, &mut d, &w, step, origin, &k, solver, 1e-12).unwrap();
+        let r = residual(&m, &snap, &d, &w, step, origin, &k);
+        assert!(residual_ratio(&m, &r) < 1e-9, "{}", residual_ratio(&m, &r));
+        d
+    };
+    let s0 = snap.step;
+    let start = settled(s0, &snap.disp, &mut solver);
+    let n = (1e-3 / m.dt) as u64;
+    let end = settled(s0 + n, &start, &mut solver);
+    // How far the drive moves the slider in 1 ms, and how far dynamics
+    // started on the path end from the path.
+    let moved = start
+        .iter()
+        .zip(&end)
+        .map(|(a, b)| (b[0] - a[0]).abs())
+        .fold(0.0, f64::max);
+    let off = |vel: &[[f64; 2]]| {
+        let mut d = cpu_engine(&m, Precision::F64, 1).unwrap();
+        advance_to(d.as_mut(), s0).unwrap();
+        d.set_kinematics(s0, &start, vel).unwrap();
+        advance_to(d.as_mut(), s0 + n).unwrap();
+        let s = d.snapshot().unwrap();
+        s.disp
+            .iter()
+            .zip(&end)
+            .map(|(a, b)| (a[0] - b[0]).abs())
+            .fold(0.0, f64::max)
+    };
+    let on_path = off(&w);
+    let at_rest = off(&vec![[0.0; 2]; m.n_blocks()]);
+    eprintln!(
+        "moved {moved:.3e} m; off the path: with w {on_path:.3e} m, from rest {at_rest:.3e} m"
+    );
+    assert!(on_path < 1e-3 * moved, "{on_path} of {moved}");
+    assert!(at_rest > 10.0 * on_path, "{at_rest} vs {on_path}");
+}

@@ -130,19 +130,18 @@ impl BandCholesky {
         for i in 0..self.n {
             let first = i.saturating_sub(b);
             let row = i * w + b - i;
-            let mut s = x[i];
-            for k in first..i {
-                s -= self.l[row + k] * x[k];
-            }
-            x[i] = s / self.l[i * w + b];
+            let l = &self.l[row + first..row + i];
+            let s: f64 = l.iter().zip(&x[first..i]).map(|(a, b)| a * b).sum();
+            x[i] = (x[i] - s) / self.l[i * w + b];
         }
         for i in (0..self.n).rev() {
             x[i] /= self.l[i * w + b];
             let xi = x[i];
             let first = i.saturating_sub(b);
             let row = i * w + b - i;
-            for k in first..i {
-                x[k] -= self.l[row + k] * xi;
+            let l = &self.l[row + first..row + i];
+            for (xk, l) in x[first..i].iter_mut().zip(l) {
+                *xk -= l * xi;
             }
         }
     }

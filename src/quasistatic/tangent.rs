@@ -211,17 +211,16 @@ impl Tangent {
         let d = self.dofs;
         let mut a = BandMatrix::zeros(d.len(), d.half_bandwidth());
         for &(i, j, m) in &self.bonds {
-            for p in 0..2 {
-                for q in 0..2 {
+            for (p, row) in m.iter().enumerate() {
+                for (q, &v) in row.iter().enumerate() {
                     let (ip, iq) = (d.index(i, p), d.index(i, q));
                     let (jp, jq) = (d.index(j, p), d.index(j, q));
                     // Each unordered pair once: the band stores A[r][c] for r ≥ c.
                     if p <= q {
-                        let v = m[p][q];
                         a.add(ip, iq, v);
                         a.add(jp, jq, v);
                     }
-                    a.add(ip, jq, -m[p][q]);
+                    a.add(ip, jq, -v);
                 }
             }
         }

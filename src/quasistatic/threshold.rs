@@ -81,13 +81,13 @@ pub fn threshold_margin(model: &Model, snap: &Snapshot, disp: &[[f64; 2]]) -> f6
     let ns = snap.slip_steps_left.len() / model.nx.max(1);
     let per_junction = model.mu_s * model.k_foundation / ns.max(1) as f64;
     let mut margin = f64::INFINITY;
-    for ix in 0..model.nx {
-        let theta = per_junction * (-disp[ix][1]).max(0.0);
+    for (ix, u) in disp.iter().enumerate().take(model.nx) {
+        let theta = per_junction * (-u[1]).max(0.0);
         for j in ix * ns..(ix + 1) * ns {
             if snap.slip_steps_left[j] != PINNED {
                 continue;
             }
-            let f = snap.junction_stiffness[j] * (disp[ix][0] - snap.anchor[j]);
+            let f = snap.junction_stiffness[j] * (u[0] - snap.anchor[j]);
             let m = if theta > 0.0 {
                 (theta - f.abs()) / theta
             } else if f == 0.0 {

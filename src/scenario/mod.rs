@@ -78,10 +78,10 @@ impl FastForward {
         1.0e-3
     }
     fn default_quiet_time() -> f64 {
-        2.0e-4
+        1.0e-4
     }
     fn default_lead_time() -> f64 {
-        5.0e-4
+        1.0e-4
     }
     fn default_check_interval() -> f64 {
         2.0e-5
