@@ -175,3 +175,35 @@ fn ranges_come_from_what_the_run_can_represent() {
     let e = parse_err(DEFAULT_SCENARIO, &["damping.ratio=-1"]);
     assert!(e.contains("a finite value >= 0"), "{e}");
 }
+
+#[test]
+fn fast_forward_keys_are_checked_and_need_junctions() {
+    let e = parse_err(
+        DEFAULT_SCENARIO,
+        &["time.fast_forward=true", "fast_forward.lead_time=-1e-3"],
+    );
+    assert!(e.contains("fast_forward.lead_time = -0.001"), "{e}");
+    let e = parse_err(DEFAULT_SCENARIO, &["fast_forward.quiet_enrgy=1e-3"]);
+    assert!(e.contains("quiet_enrgy"), "{e}");
+    let e = parse_err(
+        DEFAULT_SCENARIO,
+        &["time.fast_forward=true", "friction.law=\"coulomb\""],
+    );
+    assert!(
+        e.contains("time.fast_forward = true needs friction.law"),
+        "{e}"
+    );
+    // Defaults apply to missing keys; the switch round-trips.
+    let s = Scenario::parse(
+        DEFAULT_SCENARIO,
+        "ff",
+        &[
+            "time.fast_forward=true".into(),
+            "fast_forward.quiet_time=5e-4".into(),
+        ],
+    )
+    .unwrap();
+    let f = s.fast_forward.clone().unwrap();
+    assert_eq!((f.quiet_time, f.lead_time), (5e-4, 1e-4));
+    assert_eq!(Scenario::parse(&s.to_toml(), "again", &[]).unwrap(), s);
+}
