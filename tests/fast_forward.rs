@@ -217,3 +217,57 @@ fn dynamics_from_the_quasi_static_state_follow_the_path() {
     assert!(on_path < 1e-3 * moved, "{on_path} of {moved}");
     assert!(at_rest > 10.0 * on_path, "{at_rest} vs {on_path}");
 }
+
+/// The other drivers: a top force ramped at a constant rate and a top row
+/// moved at V give linear loads too (the prescribed row is held at V in
+/// the solve). On the small scene the first rupture of full dynamics is
+/// found within 0.5% (in practice at the same output sample).
+#[test]
+fn top_force_and_top_velocity_drives_fast_forward_to_the_first_rupture() {
+    let drive_start = DEFAULT_SCENARIO.find("[loading.drive]").unwrap();
+    let drive_end = drive_start + DEFAULT_SCENARIO[drive_start..].find("\n[").unwrap() + 1;
+    for block in [
+        "[loading.drive]\nmode = \"top_force\"\nforce_rate = 16000.0\n",
+        "[loading.drive]\nmode = \"top_velocity\"\nvelocity = 4.0e-3\n",
+    ] {
+        let text = format!(
+            "{}{block}{}",
+            &DEFAULT_SCENARIO[..drive_start],
+            &DEFAULT_SCENARIO[drive_end..]
+        );
+        let set: Vec<String> = slipfront::verify::SMALL_SCENE
+            .iter()
+            .chain(&[
+                "time.end=0.036",
+                "output.global_interval=1e-5",
+                "output.interface_interval=0",
+                "output.bulk_interval=0",
+                "output.fast_interval=0",
+            ])
+            .map(|s| s.to_string())
+            .collect();
+        let scenario = Scenario::parse(&text, "drive test", &set).unwrap();
+        let model = Model::from_scenario(&scenario, false).unwrap();
+        let dir = std::env::temp_dir().join(format!("slipfront-ff-drive-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let first = |ff: Option<FastForwardSettings>, name: &str| {
+            let path = dir.join(name);
+            let mut engine = cpu_engine(&model, Precision::F64, 1).unwrap();
+            let opts = RunOptions {
+                fast_forward: ff,
+                output: Some(path.clone()),
+                progress: false,
+            };
+            let summary = run_scene(engine.as_mut(), &scenario, &opts).unwrap();
+            (first_rupture(&RunFile::read(&path).unwrap()), summary)
+        };
+        let ((t_full, r_full), _) = first(None, "full.mcap");
+        let settings = FastForwardSettings::from_scenario(&scenario);
+        let ((t_ff, r_ff), summary) = first(Some(settings), "ff.mcap");
+        let stats = summary.fast_forward.unwrap();
+        eprintln!("{block}: full {t_full:.7} s {r_full:.6}, fast-forward {t_ff:.7} s {r_ff:.6}, {stats:?}");
+        assert!(stats.skipped_time > 0.01, "{stats:?}");
+        assert!(relative(t_ff, t_full) < 0.005, "{t_ff} vs {t_full}");
+        assert!(relative(r_ff, r_full) < 0.005, "{r_ff} vs {r_full}");
+    }
+}
