@@ -208,6 +208,11 @@ pub trait Engine {
         disp: &[[f64; 2]],
         vel: &[[f64; 2]],
     ) -> Result<(), EngineError>;
+    /// Replaces the junction arrays (anchors, stiffnesses, slip countdowns,
+    /// rupture counts) by those of `snap`: the junction events of a
+    /// quasi-static jump. Forces are recomputed by the next
+    /// `set_kinematics` or step.
+    fn set_junctions(&mut self, snap: &Snapshot) -> Result<(), EngineError>;
     /// GPU dispatches issued so far (None: not a GPU engine).
     fn dispatches(&self) -> Option<u64> {
         None

@@ -296,16 +296,22 @@ fn perform_jump(
     jump: &mut Jump,
 ) -> Result<(), RunError> {
     let model = engine.model().clone();
-    let (s0, s1) = (jump.record.start_step, jump.record.end_step);
-    let w = jump.w.clone();
-    let mut evaluator = CpuEngine::<f64>::with_junctions(&model, &jump.start, outputs.origin)?;
-    let mut eval = |step: u64, disp: &[[f64; 2]]| -> Result<Snapshot, EngineError> {
-        evaluator.set_kinematics(step, disp, &w)?;
-        evaluator.snapshot()
+    let origin = outputs.origin;
+    let path = &jump.path;
+    let s1 = path.end_step;
+    // One evaluator per stretch (its junction arrays), and one for the end.
+    let mut evaluators = path
+        .segments
+        .iter()
+        .map(|seg| CpuEngine::<f64>::with_junctions(&model, &seg.base, origin))
+        .collect::<Result<Vec<_>, _>>()?;
+    let mut end_evaluator = CpuEngine::<f64>::with_junctions(&model, &path.end, origin)?;
+    let eval = |e: &mut CpuEngine<f64>, step: u64, disp: &[[f64; 2]], w: &[[f64; 2]]| {
+        e.set_kinematics(step, disp, w)?;
+        e.snapshot()
     };
-    let start = eval(s0, &jump.start.disp)?;
-    let end = eval(s1, &jump.end_disp)?;
-    let mut s = s0;
+    let end = eval(&mut end_evaluator, s1, &path.end.disp, &path.end_w)?;
+    let mut s = jump.record.start_step;
     loop {
         s = outputs.next_due(s);
         if s > s1 || s == u64::MAX {
@@ -314,55 +320,87 @@ fn perform_jump(
         let snap = if s == s1 {
             end.clone()
         } else {
-            eval(s, &jump.disp_at(s))?
+            let k = path
+                .segments
+                .iter()
+                .position(|seg| seg.start_step <= s && s < seg.end_step)
+                .expect("the stretches cover the jump");
+            let seg = &path.segments[k];
+            eval(&mut evaluators[k], s, &seg.disp_at(s), &seg.w)?
         };
         outputs.emit(&snap)?;
     }
-    let origin = outputs.origin;
-    let (dropped, work_in, damping) = jump_energy(&model, dynamic, &start, &end, origin);
-    jump.record.stored_change = crate::energy::stored_energy(&model, &end, origin).total()
-        - crate::energy::stored_energy(&model, &start, origin).total();
-    jump.record.dropped_energy = dropped;
-    jump.record.work_in = work_in;
-    jump.record.damping = damping;
+    // The energy: relaxations (the quiet state's ring-down, and the
+    // slider's settling after each junction event) are dropped and booked
+    // as dissipated; along each stretch, work in and dashpot loss.
+    let mut record = jump.record.clone();
+    let mut before = dynamic.clone();
+    let mut before_new_law = dynamic.clone();
+    for (k, seg) in path.segments.iter().enumerate() {
+        let e = &mut evaluators[k];
+        let start = eval(e, seg.start_step, &seg.base.disp, &seg.w)?;
+        if k > 0 {
+            before_new_law = eval(e, seg.start_step, &before.disp, &seg.w)?;
+        }
+        record.dropped_energy += relaxation_drop(&model, &before, &before_new_law, &start, origin);
+        let end_of_stretch = eval(e, seg.end_step, &seg.end_disp, &seg.w)?;
+        let (work_in, damping) = path_work(&model, &start, &end_of_stretch, origin);
+        record.work_in += work_in;
+        record.damping += damping;
+        record.stored_change += crate::energy::stored_energy(&model, &end_of_stretch, origin)
+            .total()
+            - crate::energy::stored_energy(&model, &start, origin).total();
+        before = end_of_stretch;
+    }
+    if before.step == s1 && before.disp != end.disp {
+        // The path ended at an event: its settling is dropped too.
+        let before_new_law = eval(&mut end_evaluator, s1, &before.disp, &path.end_w)?;
+        record.dropped_energy += relaxation_drop(&model, &before, &before_new_law, &end, origin);
+    }
+    jump.record = record;
     if let Some(sink) = outputs.sink.as_mut() {
         sink.write_fast_forward(&jump.record)?;
     }
-    engine.set_kinematics(s1, &jump.end_disp, &w)?;
-    ff.book(&model, &jump.record, jump.path_error);
+    engine.set_junctions(&path.end)?;
+    engine.set_kinematics(s1, &path.end.disp, &path.end_w)?;
+    ff.book(&model, &jump.record, path.path_error);
     Ok(())
 }
 
-/// The energy of a jump (J): what the relaxation of the quiet state to its
-/// equilibrium drops (its ring-down, booked as dissipated), and the work in
-/// and dashpot loss along the linear path (trapezoid rule, exact for the
-/// path's linear forces and constant velocities).
-pub fn jump_energy(
+/// Energy (J) a relaxation at fixed time drops: from `before` to the
+/// equilibrium `after` under the junction law after it (`before_new_law`:
+/// that law's forces at `before`'s displacement). Stored energy lost, plus
+/// the work the junction forces (linear in u_x along the relaxation) and
+/// the top loads (constant) do; the side spring's far end does not move.
+pub fn relaxation_drop(
     model: &Model,
-    dynamic: &Snapshot,
-    start: &Snapshot,
-    end: &Snapshot,
+    before: &Snapshot,
+    before_new_law: &Snapshot,
+    after: &Snapshot,
     origin: f64,
-) -> (f64, f64, f64) {
-    use crate::energy::{step_power, stored_energy};
-    // Relaxation at fixed time: junction forces (linear in u_x) and the top
-    // loads (constant) do work; the side spring's far end does not move.
-    let mut relax_work = 0.0;
+) -> f64 {
+    use crate::energy::stored_energy;
+    let mut work = 0.0;
     for ix in 0..model.nx {
-        let du = start.disp[ix][0] - dynamic.disp[ix][0];
-        relax_work += 0.5 * (dynamic.friction[ix] + start.friction[ix]) * du;
+        let du = after.disp[ix][0] - before.disp[ix][0];
+        work += 0.5 * (before_new_law.friction[ix] + after.friction[ix]) * du;
     }
-    let loads = step_params(&Consts::<f64>::new(model), dynamic.step);
+    let loads = step_params(&Consts::<f64>::new(model), before.step);
     for ix in 0..model.nx {
         let i = (model.nz - 1) * model.nx + ix;
         let share = model.top_share(ix);
-        relax_work += share
-            * (loads.top_tangential_total * (start.disp[i][0] - dynamic.disp[i][0])
-                - loads.normal_total * (start.disp[i][1] - dynamic.disp[i][1]));
+        work += share
+            * (loads.top_tangential_total * (after.disp[i][0] - before.disp[i][0])
+                - loads.normal_total * (after.disp[i][1] - before.disp[i][1]));
     }
-    let dropped = stored_energy(model, dynamic, origin).total()
-        - stored_energy(model, start, origin).total()
-        + relax_work;
+    stored_energy(model, before, origin).total() - stored_energy(model, after, origin).total()
+        + work
+}
+
+/// Work in and dashpot loss (J) along a stretch of the quasi-static path
+/// (trapezoid rule: exact for its linear forces and constant velocities).
+pub fn path_work(model: &Model, start: &Snapshot, end: &Snapshot, origin: f64) -> (f64, f64) {
+    use crate::energy::step_power;
     let (pa, pb) = (
         step_power(model, start, start, origin),
         step_power(model, end, end, origin),
@@ -371,8 +409,7 @@ pub fn jump_energy(
     let work_in = 0.5
         * span
         * (pa.drive + pa.top_loads + pa.friction + pb.drive + pb.top_loads + pb.friction);
-    let damping = 0.5 * span * (pa.damping + pb.damping);
-    (dropped, work_in, damping)
+    (work_in, 0.5 * span * (pa.damping + pb.damping))
 }
 
 /// Runs `engine` over its whole scene.

@@ -116,8 +116,13 @@ fn fast_forward_finds_the_first_event_of_full_dynamics() {
     // The jump's energy ledger: ring-down dropped ≥ 0 and small; along the
     // path the stored energy changes by the work in less the damping.
     assert_eq!(ff.fast_forward.len() as u64, stats.jumps);
+    // The scale: one junction's elastic energy at threshold, ~8e-8 J. Jumps
+    // that start while a junction slips (after the first event) may drop a
+    // little less than nothing: the sliding force's sign follows the
+    // velocity, which the relaxation changes, so its work is not the
+    // trapezoid's; 1% of the scale bounds it.
     for j in &ff.fast_forward {
-        assert!(j.dropped_energy > -1e-12, "{j:?}");
+        assert!(j.dropped_energy > -1e-9, "{j:?}");
         assert!(j.dropped_energy < 1e-8, "{j:?}");
         let closure = j.stored_change - (j.work_in - j.damping);
         assert!(

@@ -264,23 +264,7 @@ impl<T: Real, C: Coordinate<T>> CpuEngine<T, C> {
     ) -> Result<Self, EngineError> {
         let mut e = Self::new(model, 1)?;
         e.drive_origin = C::from_f64(drive_origin);
-        for (s, (a, k)) in e
-            .junction_spring
-            .iter_mut()
-            .zip(base.anchor.iter().zip(&base.junction_stiffness))
-        {
-            *s = JunctionSpring {
-                anchor: C::from_f64(*a),
-                stiffness: T::from_f64(*k),
-            };
-        }
-        for (s, (left, count)) in e
-            .junction_state
-            .iter_mut()
-            .zip(base.slip_steps_left.iter().zip(&base.ruptures))
-        {
-            *s = [*left, *count];
-        }
+        e.load_junctions(base);
         for (s, (d, n)) in e
             .slide
             .iter_mut()
@@ -290,6 +274,27 @@ impl<T: Real, C: Coordinate<T>> CpuEngine<T, C> {
         }
         e.step = model.prep_steps.max(base.step);
         Ok(e)
+    }
+
+    /// Junction arrays from a snapshot.
+    fn load_junctions(&mut self, base: &Snapshot) {
+        for (s, (a, k)) in self
+            .junction_spring
+            .iter_mut()
+            .zip(base.anchor.iter().zip(&base.junction_stiffness))
+        {
+            *s = JunctionSpring {
+                anchor: C::from_f64(*a),
+                stiffness: T::from_f64(*k),
+            };
+        }
+        for (s, (left, count)) in self
+            .junction_state
+            .iter_mut()
+            .zip(base.slip_steps_left.iter().zip(&base.ruptures))
+        {
+            *s = [*left, *count];
+        }
     }
 
     fn snapshot_now(&self) -> Snapshot {
@@ -345,6 +350,11 @@ impl<T: Real, C: Coordinate<T>> Engine for CpuEngine<T, C> {
         }
         self.step = step;
         self.force_pass();
+        Ok(())
+    }
+
+    fn set_junctions(&mut self, snap: &Snapshot) -> Result<(), EngineError> {
+        self.load_junctions(snap);
         Ok(())
     }
 

@@ -611,6 +611,37 @@ impl Engine for GpuEngine {
         Ok(())
     }
 
+    fn set_junctions(&mut self, snap: &Snapshot) -> Result<(), EngineError> {
+        self.drain()?;
+        let spring: Vec<GpuJunctionSpring> = snap
+            .anchor
+            .iter()
+            .zip(&snap.junction_stiffness)
+            .map(|(a, k)| GpuJunctionSpring {
+                anchor_hi: DoubleSingle::from_f64(*a).hi,
+                anchor_lo: DoubleSingle::from_f64(*a).lo,
+                stiffness: *k as f32,
+            })
+            .collect();
+        let state: Vec<[u32; 2]> = snap
+            .slip_steps_left
+            .iter()
+            .zip(&snap.ruptures)
+            .map(|(l, r)| [*l, *r])
+            .collect();
+        if !spring.is_empty() {
+            let b = &self.buffers;
+            self.ctx
+                .queue
+                .write_buffer(&b.junction_spring, 0, bytemuck::cast_slice(&spring));
+            self.ctx
+                .queue
+                .write_buffer(&b.junction_state, 0, bytemuck::cast_slice(&state));
+        }
+        self.forces_ready = false;
+        Ok(())
+    }
+
     fn describe(&self) -> String {
         let kernel = match self.kernel {
             Kernel::OneStep => "one-step kernel, 1 dispatch per step".to_string(),

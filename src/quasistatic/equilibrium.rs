@@ -135,7 +135,8 @@ impl Solver {
 
 /// Forces on every block at a state (DOF-indexed, 0 on held degrees of
 /// freedom): bulk springs, dashpots at velocity `vel`, foundation, loads of
-/// step `step`, and the pinned junctions' forces.
+/// step `step`, and the junctions' forces (pinned: their springs; slipping:
+/// μd·f_N against `vel`).
 pub fn residual(
     model: &Model,
     snap: &Snapshot,
@@ -164,9 +165,18 @@ pub fn residual(
     }
     let ns = snap.slip_steps_left.len() / model.nx.max(1);
     for ix in 0..model.nx {
+        // Slipping junctions pull at μd·f_N against the block's motion
+        // (the quasi-static velocity), as in the junction kernel.
+        let f_n = crate::laws::foundation_normal(model.k_foundation, disp[ix][1]) / ns as f64;
+        let sliding = -model.mu_d * f_n * crate::cpu::junctions::velocity_sign(vel[ix][0]);
         let friction: f64 = (ix * ns..(ix + 1) * ns)
-            .filter(|&j| snap.slip_steps_left[j] == PINNED)
-            .map(|j| -snap.junction_stiffness[j] * (disp[ix][0] - snap.anchor[j]))
+            .map(|j| {
+                if snap.slip_steps_left[j] == PINNED {
+                    -snap.junction_stiffness[j] * (disp[ix][0] - snap.anchor[j])
+                } else {
+                    sliding
+                }
+            })
             .sum();
         r[d.index(ix, 0)] += friction;
     }

@@ -19,15 +19,17 @@
 pub mod band;
 pub mod cg;
 pub mod equilibrium;
+pub mod path;
 pub mod tangent;
 pub mod threshold;
 
 use crate::engine::Snapshot;
 use crate::junction::PINNED;
 use crate::model::{Driver, Model};
-use equilibrium::{drive_response, settle, QuasiStaticError, Solver, SolverKind};
+use equilibrium::{QuasiStaticError, Solver, SolverKind};
+use path::{Path, PathContext};
 use tangent::Tangent;
-use threshold::{first_change, threshold_margin, PathEnd};
+use threshold::PathEnd;
 
 /// Settings of the fast-forward (scenario `[fast_forward]` with defaults).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -50,6 +52,10 @@ pub struct FastForwardSettings {
     /// jump lands on the linear prediction u₀ + w·Δt from the quiet state
     /// as it is: the negative control of the accuracy tests.
     pub settle_ends: bool,
+    /// Isolated junction ruptures (and the re-pins after them) done on the
+    /// quasi-static path (true), or left to full dynamics, each ending a
+    /// jump.
+    pub quasi_static_ruptures: bool,
 }
 
 impl FastForwardSettings {
@@ -67,6 +73,7 @@ impl FastForwardSettings {
             },
             response_scale: 1.0,
             settle_ends: true,
+            quasi_static_ruptures: f.quasi_static_ruptures,
         }
     }
 }
@@ -88,6 +95,9 @@ pub struct JumpRecord {
     /// contact change, or nothing before the end of the run).
     pub block: Option<usize>,
     pub junction: Option<usize>,
+    /// Isolated junction ruptures and re-pins done on the path.
+    pub ruptures: u64,
+    pub repins: u64,
     /// Energy (J) of the quiet state's ring-down, dropped by the jump and
     /// booked as dissipated (≥ 0 up to round-off).
     pub dropped_energy: f64,
@@ -110,44 +120,20 @@ pub struct FastForwardStats {
     pub factorisations: u64,
     pub cg_iterations: u64,
     pub solver_seconds: f64,
-    /// Largest quadratic-path error of any jump (see [`Jump::path_error`]).
+    /// Largest quadratic-path error of any jump (see [`Path::path_error`]).
     pub max_path_error: f64,
+    /// Isolated junction ruptures done on quasi-static paths.
+    pub path_ruptures: u64,
 }
 
-/// A planned jump: the equilibrium at its start and end, the velocity
-/// field in between, and the tangent that settles states on the path.
+/// A planned jump: the quasi-static path and its record.
 pub struct Jump {
-    pub start: Snapshot,
-    /// The settled equilibrium at the middle step of the jump.
-    pub mid_disp: Vec<[f64; 2]>,
-    pub end_disp: Vec<[f64; 2]>,
-    pub w: Vec<[f64; 2]>,
+    pub path: Path,
     pub record: JumpRecord,
-    /// Largest distance of the quadratic path from the settled equilibria
-    /// at its quarter points, relative to the largest displacement of the
-    /// jump.
-    pub path_error: f64,
-}
-
-impl Jump {
-    /// The equilibrium at a step of the jump: the quadratic through the
-    /// settled start, middle and end. The path bends with the bonds'
-    /// geometric nonlinearity (a straight line between the ends is off by
-    /// ~3e-4 of the load change in the middle); the quadratic's error is
-    /// measured at the quarter points (`path_error`).
-    pub fn disp_at(&self, step: u64) -> Vec<[f64; 2]> {
-        let r = &self.record;
-        let mid = r.start_step + (r.end_step - r.start_step) / 2;
-        quadratic(
-            [r.start_step, mid, r.end_step],
-            [&self.start.disp, &self.mid_disp, &self.end_disp],
-            step,
-        )
-    }
 }
 
 /// Lagrange quadratic through three (step, displacement field) nodes.
-fn quadratic(steps: [u64; 3], nodes: [&[[f64; 2]]; 3], step: u64) -> Vec<[f64; 2]> {
+pub(crate) fn quadratic(steps: [u64; 3], nodes: [&[[f64; 2]]; 3], step: u64) -> Vec<[f64; 2]> {
     let x = steps.map(|s| s as f64);
     let t = step as f64;
     let l = [
@@ -185,12 +171,14 @@ pub fn junction_energy_scale(model: &Model, snap: &Snapshot) -> f64 {
 
 /// Largest force left on a block at a settled equilibrium, relative to one
 /// block's share of the normal load.
-const SETTLE_TOLERANCE: f64 = 1e-12;
+pub(crate) const SETTLE_TOLERANCE: f64 = 1e-12;
 
 /// The fast-forward of one run: quiet detector, solver and totals.
 pub struct FastForward {
     pub settings: FastForwardSettings,
     quiet_since: Option<u64>,
+    /// Rupture count at the last check.
+    last_ruptures: Option<u64>,
     solver: Solver,
     pub stats: FastForwardStats,
 }
@@ -200,6 +188,7 @@ impl FastForward {
         FastForward {
             settings,
             quiet_since: None,
+            last_ruptures: None,
             solver: Solver::new(settings.solver),
             stats: FastForwardStats::default(),
         }
@@ -214,9 +203,16 @@ impl FastForward {
     /// junction has held for the hold time (the kinetic-energy part of the
     /// criterion needs the quasi-static velocity field: [`Self::plan`]).
     pub fn observe(&mut self, model: &Model, snap: &Snapshot) -> bool {
-        let all_pinned =
-            snap.slip_steps_left.iter().all(|&s| s == PINNED) && !snap.slip_steps_left.is_empty();
-        if !all_pinned {
+        // With ruptures on the path, slipping junctions may remain (they
+        // slip on at μd·f_N); without, every junction must hold.
+        let ruptures = snap.total_ruptures();
+        let calm = if self.settings.quasi_static_ruptures {
+            self.last_ruptures == Some(ruptures)
+        } else {
+            snap.slip_steps_left.iter().all(|&s| s == PINNED)
+        } && !snap.slip_steps_left.is_empty();
+        self.last_ruptures = Some(ruptures);
+        if !calm {
             self.quiet_since = None;
             return false;
         }
@@ -256,11 +252,17 @@ impl FastForward {
         if s0 + 2 * lead >= last_step {
             return Ok(None);
         }
+        let cx = PathContext {
+            model,
+            drive_origin,
+            lead,
+            last_step,
+            response_scale: self.settings.response_scale,
+            settle_ends: self.settings.settle_ends,
+            events: self.settings.quasi_static_ruptures,
+        };
         let k = Tangent::at(model, snap);
-        let mut w = drive_response(model, &k, &mut self.solver)?;
-        for v in &mut w {
-            *v = v.map(|x| x * self.settings.response_scale);
-        }
+        let w = cx.response(&mut self.solver, &k)?;
         // Quiet: the kinetic energy of the departure from the quasi-static
         // motion (v − w; the creep itself grows with the drive speed) is a
         // small fraction of one junction's elastic energy at threshold.
@@ -275,122 +277,48 @@ impl FastForward {
         if ring_down >= self.settings.quiet_energy * junction_energy_scale(model, snap) {
             return Ok(None);
         }
-        let settle_ends = self.settings.settle_ends;
-        let solver = &mut self.solver;
-        // The equilibrium at `step` from a guess (left as it is without
-        // `settle_ends`: the negative control).
-        let mut settled_at = |step: u64, guess: Vec<[f64; 2]>| {
-            let mut d = guess;
-            if settle_ends {
-                settle(
-                    model,
-                    snap,
-                    &mut d,
-                    &w,
-                    step,
-                    drive_origin,
-                    &k,
-                    solver,
-                    SETTLE_TOLERANCE,
-                )?;
-            }
-            Ok::<_, QuasiStaticError>(d)
-        };
         let mut start = snap.clone();
-        start.disp = settled_at(s0, snap.disp.clone())?;
-        let (tau, end) = first_change(model, snap, &start.disp, &w);
-        let change_step = if tau.is_finite() {
-            s0.saturating_add((tau / model.dt).floor() as u64)
-        } else {
-            u64::MAX
-        };
-        let mut target = change_step.saturating_sub(lead).min(last_step);
-        if target < s0 + lead {
-            return Ok(None);
-        }
-        // Settle at the target; the bonds' nonlinearity may move the
-        // crossing a little: back off until every junction holds with room.
-        let mut end_disp;
-        loop {
-            end_disp = settled_at(target, advance_path(model, &start.disp, &w, target - s0))?;
-            if threshold_margin(model, snap, &end_disp) > 0.0 || target <= s0 + lead {
-                break;
-            }
-            target = s0 + (target - s0) / 2;
-        }
-        if threshold_margin(model, snap, &end_disp) <= 0.0 {
-            return Ok(None);
-        }
-        let mid = s0 + (target - s0) / 2;
-        let mid_disp = settled_at(mid, advance_path(model, &start.disp, &w, mid - s0))?;
-        let mut path_error = 0.0f64;
-        let scale = start
-            .disp
-            .iter()
-            .zip(&end_disp)
-            .map(|(a, b)| (b[0] - a[0]).abs().max((b[1] - a[1]).abs()))
-            .fold(0.0, f64::max)
-            .max(1e-300);
-        for q in [s0 + (target - s0) / 4, s0 + 3 * (target - s0) / 4] {
-            if q == s0 || q == mid || q == target {
-                continue;
-            }
-            let guess = quadratic([s0, mid, target], [&start.disp, &mid_disp, &end_disp], q);
-            let settled = settled_at(q, guess.clone())?;
-            for (a, b) in guess.iter().zip(&settled) {
-                path_error = path_error.max((a[0] - b[0]).abs().max((a[1] - b[1]).abs()) / scale);
-            }
-        }
+        start.disp = cx.settled(&mut self.solver, snap, &k, &w, s0, snap.disp.clone())?;
         start.vel = w.clone();
         start.vel_half = w.clone();
-        let (block, junction) = match end {
+        let Some(path) = path::build(&cx, &mut self.solver, start, k, w)? else {
+            return Ok(None);
+        };
+        let first = &path.segments[0];
+        let (block, junction) = match path.stop {
             PathEnd::Rupture { ix, junction } => (Some(ix), Some(junction)),
             PathEnd::Contact { ix } => (Some(ix), None),
             PathEnd::Never => (None, None),
         };
         let record = JumpRecord {
             start_step: s0,
-            end_step: target,
+            end_step: path.end_step,
             start_time: model.time_of_step(s0),
-            end_time: model.time_of_step(target),
-            drive_start: drive_position(model, &start.disp, s0),
-            drive_end: drive_position(model, &end_disp, target),
-            predicted_change: model.time_of_step(s0) + tau,
+            end_time: model.time_of_step(path.end_step),
+            drive_start: drive_position(model, &first.base.disp, s0),
+            drive_end: drive_position(model, &path.end.disp, path.end_step),
+            predicted_change: path.stop_time,
             block,
             junction,
+            ruptures: path.ruptures,
+            repins: path.repins,
             dropped_energy: 0.0,
             work_in: 0.0,
             damping: 0.0,
             stored_change: 0.0,
         };
-        Ok(Some(Jump {
-            start,
-            mid_disp,
-            end_disp,
-            w,
-            record,
-            path_error,
-        }))
+        Ok(Some(Jump { path, record }))
     }
 
     /// Books a completed jump.
     pub fn book(&mut self, model: &Model, record: &JumpRecord, path_error: f64) {
         self.stats.jumps += 1;
+        self.stats.path_ruptures += record.ruptures;
         self.stats.max_path_error = self.stats.max_path_error.max(path_error);
         self.stats.skipped_steps += record.end_step - record.start_step;
         self.stats.skipped_time = self.stats.skipped_steps as f64 * model.dt;
         self.stats.dropped_energy += record.dropped_energy;
     }
-}
-
-/// u + w·(steps·dt), held components included (the prescribed top row
-/// moves at V).
-fn advance_path(model: &Model, disp: &[[f64; 2]], w: &[[f64; 2]], steps: u64) -> Vec<[f64; 2]> {
-    let t = steps as f64 * model.dt;
-    disp.iter()
-        .zip(w)
-        .map(|(u, w)| [u[0] + w[0] * t, u[1] + w[1] * t])
-        .collect()
 }
 
 /// Where the drive is at a step: V·t for the side spring, the top force,

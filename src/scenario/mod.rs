@@ -64,6 +64,10 @@ pub struct FastForward {
     /// preconditioner) or "cg" (Jacobi-preconditioned CG).
     #[serde(default = "FastForward::default_solver")]
     pub solver: FastForwardSolver,
+    /// Isolated junction ruptures during loading (and the re-pins after
+    /// them) on the quasi-static path (true), or left to full dynamics.
+    #[serde(default = "FastForward::default_quasi_static_ruptures")]
+    pub quasi_static_ruptures: bool,
 }
 
 #[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Eq)]
@@ -89,6 +93,9 @@ impl FastForward {
     fn default_solver() -> FastForwardSolver {
         FastForwardSolver::Direct
     }
+    fn default_quasi_static_ruptures() -> bool {
+        true
+    }
 }
 
 impl Default for FastForward {
@@ -99,6 +106,7 @@ impl Default for FastForward {
             lead_time: Self::default_lead_time(),
             check_interval: Self::default_check_interval(),
             solver: Self::default_solver(),
+            quasi_static_ruptures: Self::default_quasi_static_ruptures(),
         }
     }
 }
