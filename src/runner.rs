@@ -335,13 +335,12 @@ fn perform_jump(
     // as dissipated; along each stretch, work in and dashpot loss.
     let mut record = jump.record.clone();
     let mut before = dynamic.clone();
-    let mut before_new_law = dynamic.clone();
     for (k, seg) in path.segments.iter().enumerate() {
         let e = &mut evaluators[k];
         let start = eval(e, seg.start_step, &seg.base.disp, &seg.w)?;
-        if k > 0 {
-            before_new_law = eval(e, seg.start_step, &before.disp, &seg.w)?;
-        }
+        // The relaxation's force law: the stretch's junction arrays, and
+        // slipping junctions pulling against the quasi-static velocity.
+        let before_new_law = eval(e, seg.start_step, &before.disp, &seg.w)?;
         record.dropped_energy += relaxation_drop(&model, &before, &before_new_law, &start, origin);
         let end_of_stretch = eval(e, seg.end_step, &seg.end_disp, &seg.w)?;
         let (work_in, damping) = path_work(&model, &start, &end_of_stretch, origin);

@@ -276,3 +276,33 @@ fn top_force_and_top_velocity_drives_fast_forward_to_the_first_rupture() {
         assert!(relative(r_ff, r_full) < 0.005, "{r_ff} vs {r_full}");
     }
 }
+
+/// Isolated junction events on the quasi-static path
+/// (`quasi_static_ruptures`, off by default): after the first event the
+/// jumps carry junction ruptures and re-pins, the first rupture is still
+/// that of full dynamics, and every jump's ledger closes along its path.
+#[test]
+fn junction_events_on_the_path_keep_the_ledger() {
+    let settings = FastForwardSettings {
+        quasi_static_ruptures: true,
+        ..FastForwardSettings::from_scenario(&scene())
+    };
+    let (summary, ff) = run("events", Some(settings));
+    let stats = summary.fast_forward.unwrap();
+    eprintln!("{stats:?}");
+    assert!(stats.path_ruptures > 0, "{stats:?}");
+    let (t_full, r_full) = reference().first;
+    let (t_ff, r_ff) = first_rupture(&ff);
+    assert!(relative(t_ff, t_full) < 0.005, "{t_ff} vs {t_full}");
+    assert!(relative(r_ff, r_full) < 0.005, "{r_ff} vs {r_full}");
+    assert!(ff.fast_forward.iter().any(|j| j.ruptures > 0));
+    for j in &ff.fast_forward {
+        let closure = j.stored_change - (j.work_in - j.damping);
+        assert!(
+            closure.abs() < 1e-3 * j.work_in.abs(),
+            "{closure} of {}: {j:?}",
+            j.work_in
+        );
+        assert!(j.dropped_energy > -1e-9, "{j:?}");
+    }
+}

@@ -105,6 +105,11 @@ pub struct FastForwardJump {
     /// J
     #[prost(double, tag = "13")]
     pub stored_change: f64,
+    /// Isolated junction ruptures and re-pins done on the path.
+    #[prost(uint64, tag = "14")]
+    pub ruptures: u64,
+    #[prost(uint64, tag = "15")]
+    pub repins: u64,
 }
 
 fn field(name: &str, number: i32, ty: Type, repeated: bool) -> FieldDescriptorProto {
@@ -187,6 +192,8 @@ pub fn descriptor_set() -> Vec<u8> {
             field("work_in", 11, Double, false),
             field("damping", 12, Double, false),
             field("stored_change", 13, Double, false),
+            field("ruptures", 14, Uint64, false),
+            field("repins", 15, Uint64, false),
         ],
     );
     FileDescriptorSet {

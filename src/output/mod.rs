@@ -216,6 +216,8 @@ impl McapSink {
             work_in: r.work_in,
             damping: r.damping,
             stored_change: r.stored_change,
+            ruptures: r.ruptures,
+            repins: r.repins,
         };
         self.write(self.fast_forward, r.end_time, &msg.encode_to_vec())
     }

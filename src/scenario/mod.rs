@@ -65,7 +65,9 @@ pub struct FastForward {
     #[serde(default = "FastForward::default_solver")]
     pub solver: FastForwardSolver,
     /// Isolated junction ruptures during loading (and the re-pins after
-    /// them) on the quasi-static path (true), or left to full dynamics.
+    /// them) on the quasi-static path (true), or left to full dynamics
+    /// (false, the default: the quasi-static events miss the slow events
+    /// after a large one, results/fast_forward.md).
     #[serde(default = "FastForward::default_quasi_static_ruptures")]
     pub quasi_static_ruptures: bool,
 }
@@ -94,7 +96,7 @@ impl FastForward {
         FastForwardSolver::Direct
     }
     fn default_quasi_static_ruptures() -> bool {
-        true
+        false
     }
 }
 
