@@ -90,18 +90,12 @@ impl Solver {
                 Ok(())
             }
             SolverKind::Direct => {
-                if let Some(f) = &self.factor {
+                // CG preconditioned by the factor of an earlier tangent
+                // (exact or off by a few junction stiffnesses); refactorise
+                // when it stalls.
+                if self.factor.is_some() {
                     let guess = x.to_vec();
-                    let r = cg::solve(
-                        k,
-                        b,
-                        x,
-                        &Preconditioner::Factor(f),
-                        LINEAR_TOLERANCE,
-                        REFACTOR_AFTER,
-                    );
-                    self.cg_iterations += r.iterations as u64;
-                    if r.converged {
+                    if self.refine(k, b, x).converged {
                         return Ok(());
                     }
                     x.copy_from_slice(&guess);
@@ -109,17 +103,7 @@ impl Solver {
                 let f = k.band().cholesky().map_err(QuasiStaticError::Singular)?;
                 self.factorisations += 1;
                 self.factor = Some(f);
-                let f = self.factor.as_ref().expect("just set");
-                // One CG pass refines the direct solution to the tolerance.
-                let r = cg::solve(
-                    k,
-                    b,
-                    x,
-                    &Preconditioner::Factor(f),
-                    LINEAR_TOLERANCE,
-                    REFACTOR_AFTER,
-                );
-                self.cg_iterations += r.iterations as u64;
+                let r = self.refine(k, b, x);
                 if r.converged {
                     Ok(())
                 } else {
@@ -130,6 +114,21 @@ impl Solver {
                 }
             }
         }
+    }
+
+    /// Up to `REFACTOR_AFTER` CG iterations preconditioned by the factor.
+    fn refine(&mut self, k: &Tangent, b: &[f64], x: &mut [f64]) -> cg::CgReport {
+        let f = self.factor.as_ref().expect("a factor");
+        let r = cg::solve(
+            k,
+            b,
+            x,
+            &Preconditioner::Factor(f),
+            LINEAR_TOLERANCE,
+            REFACTOR_AFTER,
+        );
+        self.cg_iterations += r.iterations as u64;
+        r
     }
 }
 
