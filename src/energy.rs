@@ -9,7 +9,7 @@
 //! dashpots and the relaxation damping.
 
 use crate::engine::Snapshot;
-use crate::lattice::STENCIL;
+use crate::lattice::for_each_bond;
 use crate::model::{Driver, Model};
 use crate::scenario::DampingForm;
 
@@ -25,37 +25,6 @@ pub struct StoredEnergy {
 impl StoredEnergy {
     pub fn total(&self) -> f64 {
         self.kinetic + self.springs + self.foundation + self.drive_spring
-    }
-}
-
-/// Bonds counted once: the stencil directions pointing "forward".
-fn forward_bonds() -> impl Iterator<Item = &'static crate::lattice::Bond> {
-    STENCIL
-        .iter()
-        .filter(|b| b.dz > 0 || (b.dz == 0 && b.dx > 0))
-}
-
-/// Visits every bond once with (i, j, rest length, stiffness).
-fn for_each_bond(m: &Model, mut f: impl FnMut(usize, usize, [f64; 2], f64, f64)) {
-    for iz in 0..m.nz as i64 {
-        for ix in 0..m.nx as i64 {
-            for b in forward_bonds() {
-                let (jx, jz) = (ix + b.dx as i64, iz + b.dz as i64);
-                if jx < 0 || jx >= m.nx as i64 || jz >= m.nz as i64 {
-                    continue;
-                }
-                let i = (iz * m.nx as i64 + ix) as usize;
-                let j = (jz * m.nx as i64 + jx) as usize;
-                let r0 = [b.dx as f64 * m.spacing, b.dz as f64 * m.spacing];
-                f(
-                    i,
-                    j,
-                    r0,
-                    b.length_factor * m.spacing,
-                    b.stiffness_factor * m.k,
-                );
-            }
-        }
     }
 }
 

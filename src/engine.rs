@@ -228,6 +228,16 @@ pub fn advance_to(engine: &mut dyn Engine, target: u64) -> Result<(), EngineErro
     Ok(())
 }
 
+/// `set_kinematics` moves an engine within the driving phase only (the
+/// normal-load phase's loads and the driver origin are set by stepping).
+pub fn assert_driving_phase(model: &Model, current: u64, target: u64) {
+    assert!(
+        current >= model.prep_steps && target >= model.prep_steps,
+        "set_kinematics is for the driving phase (steps {current} → {target}, driving from {})",
+        model.prep_steps
+    );
+}
+
 /// Builds the blow-up error for block `i` of a state.
 pub fn blow_up(model: &Model, step: u64, i: usize, u: [f64; 2], v: [f64; 2]) -> EngineError {
     EngineError::BlowUp {

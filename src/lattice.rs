@@ -84,6 +84,37 @@ pub const STENCIL: [Bond; 8] = {
     ]
 };
 
+/// Bonds counted once: the stencil directions pointing "forward".
+pub fn forward_bonds() -> impl Iterator<Item = &'static Bond> {
+    STENCIL
+        .iter()
+        .filter(|b| b.dz > 0 || (b.dz == 0 && b.dx > 0))
+}
+
+/// Visits every bond once with (i, j, rest length, stiffness).
+pub fn for_each_bond(m: &Model, mut f: impl FnMut(usize, usize, [f64; 2], f64, f64)) {
+    for iz in 0..m.nz as i64 {
+        for ix in 0..m.nx as i64 {
+            for b in forward_bonds() {
+                let (jx, jz) = (ix + b.dx as i64, iz + b.dz as i64);
+                if jx < 0 || jx >= m.nx as i64 || jz >= m.nz as i64 {
+                    continue;
+                }
+                let i = (iz * m.nx as i64 + ix) as usize;
+                let j = (jz * m.nx as i64 + jx) as usize;
+                let r0 = [b.dx as f64 * m.spacing, b.dz as f64 * m.spacing];
+                f(
+                    i,
+                    j,
+                    r0,
+                    b.length_factor * m.spacing,
+                    b.stiffness_factor * m.k,
+                );
+            }
+        }
+    }
+}
+
 /// Per-block flags, index `iz * nx + ix`.
 pub fn block_flags(model: &Model) -> Vec<u32> {
     let (nx, nz) = (model.nx, model.nz);

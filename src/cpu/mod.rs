@@ -338,10 +338,7 @@ impl<T: Real, C: Coordinate<T>> Engine for CpuEngine<T, C> {
         disp: &[[f64; 2]],
         vel: &[[f64; 2]],
     ) -> Result<(), EngineError> {
-        assert!(
-            step >= self.model.prep_steps && self.step >= self.model.prep_steps,
-            "set_kinematics is for the driving phase"
-        );
+        crate::engine::assert_driving_phase(&self.model, self.step, step);
         for (d, u) in self.disp.iter_mut().zip(disp) {
             *d = [C::from_f64(u[0]), C::from_f64(u[1])];
         }

@@ -484,15 +484,7 @@ impl GpuEngine {
         }
         if self.model.trigger.is_some() {
             let anchors = crate::trigger::trigger_anchors(&self.model, &snap);
-            let spring: Vec<GpuJunctionSpring> = anchors
-                .iter()
-                .zip(&snap.junction_stiffness)
-                .map(|(a, k)| GpuJunctionSpring {
-                    anchor_hi: DoubleSingle::from_f64(*a).hi,
-                    anchor_lo: DoubleSingle::from_f64(*a).lo,
-                    stiffness: *k as f32,
-                })
-                .collect();
+            let spring = gpu_junction_springs(&anchors, &snap.junction_stiffness);
             self.ctx.queue.write_buffer(
                 &self.buffers.junction_spring,
                 0,
@@ -537,6 +529,23 @@ impl GpuEngine {
             m, self.step, &disp, &vel, &force, &contact, &spring, &state, &slide,
         ))
     }
+}
+
+/// The `junction_spring` buffer's records: double-single anchors, f32
+/// stiffnesses.
+fn gpu_junction_springs(anchors: &[f64], stiffness: &[f64]) -> Vec<GpuJunctionSpring> {
+    anchors
+        .iter()
+        .zip(stiffness)
+        .map(|(a, k)| {
+            let a = DoubleSingle::from_f64(*a);
+            GpuJunctionSpring {
+                anchor_hi: a.hi,
+                anchor_lo: a.lo,
+                stiffness: *k as f32,
+            }
+        })
+        .collect()
 }
 
 fn whole(binding: u32, buffer: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {
@@ -594,10 +603,7 @@ impl Engine for GpuEngine {
         disp: &[[f64; 2]],
         vel: &[[f64; 2]],
     ) -> Result<(), EngineError> {
-        assert!(
-            step >= self.model.prep_steps && self.step >= self.model.prep_steps,
-            "set_kinematics is for the driving phase"
-        );
+        crate::engine::assert_driving_phase(&self.model, self.step, step);
         self.drain()?;
         let disp: Vec<[DoubleSingle; 2]> =
             disp.iter().map(|u| u.map(DoubleSingle::from_f64)).collect();
@@ -613,16 +619,7 @@ impl Engine for GpuEngine {
 
     fn set_junctions(&mut self, snap: &Snapshot) -> Result<(), EngineError> {
         self.drain()?;
-        let spring: Vec<GpuJunctionSpring> = snap
-            .anchor
-            .iter()
-            .zip(&snap.junction_stiffness)
-            .map(|(a, k)| GpuJunctionSpring {
-                anchor_hi: DoubleSingle::from_f64(*a).hi,
-                anchor_lo: DoubleSingle::from_f64(*a).lo,
-                stiffness: *k as f32,
-            })
-            .collect();
+        let spring = gpu_junction_springs(&snap.anchor, &snap.junction_stiffness);
         let state: Vec<[u32; 2]> = snap
             .slip_steps_left
             .iter()

@@ -8,7 +8,7 @@
 use super::band::BandMatrix;
 use crate::engine::Snapshot;
 use crate::junction::PINNED;
-use crate::lattice::{block_flags, FLAG_FIX_X, FLAG_FIX_Z, FLAG_PRESCRIBED_X, STENCIL};
+use crate::lattice::{block_flags, for_each_bond, FLAG_FIX_X, FLAG_FIX_Z, FLAG_PRESCRIBED_X};
 use crate::model::{Driver, Model};
 
 /// Numbering of the 2·n degrees of freedom: the shorter lattice side runs
@@ -87,27 +87,13 @@ impl Tangent {
         let (nx, nz) = (model.nx, model.nz);
         let dofs = Dofs::new(nx, nz);
         let mut bonds = Vec::with_capacity(4 * nx * nz);
-        for iz in 0..nz as i64 {
-            for ix in 0..nx as i64 {
-                for b in STENCIL
-                    .iter()
-                    .filter(|b| b.dz > 0 || (b.dz == 0 && b.dx > 0))
-                {
-                    let (jx, jz) = (ix + b.dx as i64, iz + b.dz as i64);
-                    if jx < 0 || jx >= nx as i64 || jz >= nz as i64 {
-                        continue;
-                    }
-                    let i = (iz * nx as i64 + ix) as usize;
-                    let j = (jz * nx as i64 + jx) as usize;
-                    let r = [
-                        b.dx as f64 * model.spacing + snap.disp[j][0] - snap.disp[i][0],
-                        b.dz as f64 * model.spacing + snap.disp[j][1] - snap.disp[i][1],
-                    ];
-                    let k = b.stiffness_factor * model.k;
-                    bonds.push((i, j, bond_tangent(k, b.length_factor * model.spacing, r)));
-                }
-            }
-        }
+        for_each_bond(model, |i, j, r0, rest, k| {
+            let r = [
+                r0[0] + snap.disp[j][0] - snap.disp[i][0],
+                r0[1] + snap.disp[j][1] - snap.disp[i][1],
+            ];
+            bonds.push((i, j, bond_tangent(k, rest, r)));
+        });
         let mut supports = vec![[0.0; 2]; nx * nz];
         let ns = snap.slip_steps_left.len() / nx.max(1);
         for (ix, support) in supports.iter_mut().enumerate().take(nx) {
@@ -240,6 +226,7 @@ impl Tangent {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::lattice::STENCIL;
     use crate::scenario::Scenario;
 
     fn table_s1() -> (Model, Snapshot) {
