@@ -89,12 +89,40 @@ pub fn bulk_force<T: Real, C: Coordinate<T>>(
             fz = fz + c.eta * dv[1];
         }
     }
-    let flags = b.flags[i];
+    external_loads(
+        c,
+        p,
+        drive_target,
+        b.flags[i],
+        ix as usize,
+        ui,
+        vi,
+        [fx, fz],
+    )
+}
+
+/// Adds to the bond forces `f` of a block at column `ix` the loads that do
+/// not come from bonds: foundation, top load, side spring and the
+/// normal-load phase's absolute damping (in this order, which the fast
+/// engine keeps too).
+#[inline]
+#[allow(clippy::too_many_arguments)]
+pub fn external_loads<T: Real, C: Coordinate<T>>(
+    c: &Consts<T>,
+    p: &StepParams<T>,
+    drive_target: C,
+    flags: u32,
+    ix: usize,
+    ui: [C; 2],
+    vi: [T; 2],
+    f: [T; 2],
+) -> [T; 2] {
+    let [mut fx, mut fz] = f;
     if flags & FLAG_INTERFACE != 0 {
         fz = fz + crate::laws::foundation_normal(c.k_foundation, ui[1].value());
     }
     if flags & FLAG_TOP != 0 {
-        let share = crate::laws::top_share::<T>(c.nx, ix as usize);
+        let share = crate::laws::top_share::<T>(c.nx, ix);
         fz = fz - p.normal_total * share;
         fx = fx + p.top_tangential_total * share;
     }

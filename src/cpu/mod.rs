@@ -6,9 +6,11 @@
 pub mod bulk_forces;
 pub mod coulomb;
 pub mod junctions;
+pub mod sweep;
 pub mod verlet;
 
 pub use junctions::{JunctionSpring, PINNED};
+pub use sweep::SweepEngine;
 
 use crate::engine::{blow_up, Engine, EngineError, Snapshot};
 use crate::lattice::{block_flags, initial_displacement};

@@ -1,0 +1,325 @@
+//! One step over a band of rows, as a single pass over memory: each row is
+//! advanced (leapfrog) just before the bonds that need it, then its forces
+//! are gathered, then — on the interface row — its friction. A band reads
+//! the step's start state (`Shared::now`) and writes only its own rows of
+//! the next state, so bands run on any threads with the same bits; the row
+//! below and above a band are advanced again into scratch (a halo) instead
+//! of waiting for the band that owns them.
+
+use super::rows::{gather_row, horizontal_bonds, upward_bonds, BondRow, ForwardBonds};
+use super::rows::{RowView, UpwardBonds};
+use super::Kinematics;
+use crate::cpu::bulk_forces::external_loads;
+use crate::cpu::{coulomb, junctions, verlet, JunctionSpring};
+use crate::real::{Coordinate, Real};
+use crate::scenario::FrictionLaw;
+use crate::step_params::{Consts, StepParams};
+use std::ops::Range;
+
+/// How rows reach the next state.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Advance {
+    /// One leapfrog step from the start state's forces and friction.
+    Leapfrog,
+    /// Unchanged: the forces of the start state itself.
+    Copy,
+}
+
+/// What every band reads.
+pub struct Shared<'a, T: Real, C: Coordinate<T>> {
+    pub c: &'a Consts<T>,
+    pub bonds: &'a ForwardBonds<T>,
+    pub flags: &'a [u32],
+    pub law: FrictionLaw,
+    /// Loads of the step being taken (the leapfrog's).
+    pub before: &'a StepParams<T>,
+    /// Loads at the new state (the forces').
+    pub after: &'a StepParams<T>,
+    /// Where the side spring's far end is at the new state.
+    pub drive_target: C,
+    pub speed_limit: T,
+    pub now: &'a Kinematics<T, C>,
+    pub now_force: [&'a [T]; 2],
+    /// (friction, normal) per interface block at the start state.
+    pub now_contact: &'a [[T; 2]],
+    pub advance: Advance,
+    /// False: only advance the rows (forces follow in a second pass, at the
+    /// step where driving starts).
+    pub forces: bool,
+}
+
+/// The interface arrays, owned by the band holding row 0.
+pub struct Interface<'a, T, C> {
+    pub contact: &'a mut [[T; 2]],
+    pub spring: &'a mut [JunctionSpring<C, T>],
+    pub state: &'a mut [[u32; 2]],
+    pub slide: &'a mut [[i32; 2]],
+}
+
+/// A band's rows of the next state.
+pub struct Band<'a, T, C> {
+    pub rows: Range<usize>,
+    pub ux: &'a mut [C],
+    pub uz: &'a mut [C],
+    pub vx: &'a mut [T],
+    pub vz: &'a mut [T],
+    pub fx: &'a mut [T],
+    pub fz: &'a mut [T],
+    pub interface: Option<Interface<'a, T, C>>,
+}
+
+/// A band's working rows, kept between steps.
+pub struct Scratch<T, C> {
+    below: Kinematics<T, C>,
+    above: Kinematics<T, C>,
+    horizontal: BondRow<T>,
+    up: UpwardBonds<T>,
+    down: UpwardBonds<T>,
+}
+
+impl<T: Real, C: Coordinate<T>> Scratch<T, C> {
+    pub fn new(nx: usize) -> Self {
+        Scratch {
+            below: Kinematics::new(nx),
+            above: Kinematics::new(nx),
+            horizontal: BondRow::new(nx),
+            up: UpwardBonds::new(nx),
+            down: UpwardBonds::new(nx),
+        }
+    }
+}
+
+fn view<'a, T, C>(
+    ux: &'a [C],
+    uz: &'a [C],
+    vx: &'a [T],
+    vz: &'a [T],
+    r: Range<usize>,
+) -> RowView<'a, T, C> {
+    RowView {
+        ux: &ux[r.clone()],
+        uz: &uz[r.clone()],
+        vx: &vx[r.clone()],
+        vz: &vz[r],
+    }
+}
+
+/// Advances row `z` of the start state into the given row slices; returns
+/// the column of the first block that blew up.
+#[allow(clippy::too_many_arguments)]
+fn advance_row<T: Real, C: Coordinate<T>>(
+    s: &Shared<'_, T, C>,
+    z: usize,
+    ux: &mut [C],
+    uz: &mut [C],
+    vx: &mut [T],
+    vz: &mut [T],
+) -> Option<usize> {
+    let nx = s.c.nx;
+    let first = z * nx;
+    let now = s.now;
+    if s.advance == Advance::Copy {
+        ux.copy_from_slice(&now.ux[first..first + nx]);
+        uz.copy_from_slice(&now.uz[first..first + nx]);
+        vx.copy_from_slice(&now.vx[first..first + nx]);
+        vz.copy_from_slice(&now.vz[first..first + nx]);
+        return None;
+    }
+    let has_friction = z == 0 && s.law != FrictionLaw::None;
+    let mut bad = None;
+    for ix in 0..nx {
+        let i = first + ix;
+        let mut u = [now.ux[i], now.uz[i]];
+        let mut v = [now.vx[i], now.vz[i]];
+        let friction = if has_friction {
+            s.now_contact[ix][0]
+        } else {
+            T::zero()
+        };
+        let force = [s.now_force[0][i], s.now_force[1][i]];
+        let ok = verlet::verlet(
+            s.c,
+            s.before,
+            s.flags[i],
+            force,
+            friction,
+            &mut u,
+            &mut v,
+            s.speed_limit,
+        );
+        if !ok && bad.is_none() {
+            bad = Some(ix);
+        }
+        [ux[ix], uz[ix]] = u;
+        [vx[ix], vz[ix]] = v;
+    }
+    bad
+}
+
+/// Friction and normal force of the interface row (twin arithmetic of the
+/// reference engine's friction pass), from the row's new state and bulk
+/// forces.
+fn interface_row<T: Real, C: Coordinate<T>>(
+    s: &Shared<'_, T, C>,
+    row: RowView<'_, T, C>,
+    fx: &[T],
+    out: &mut Interface<'_, T, C>,
+) {
+    let c = s.c;
+    match s.law {
+        FrictionLaw::None => {}
+        FrictionLaw::Coulomb => {
+            for ix in 0..c.nx {
+                let (f, n) = coulomb::coulomb(
+                    c,
+                    s.after,
+                    [row.ux[ix], row.uz[ix]],
+                    [row.vx[ix], row.vz[ix]],
+                    fx[ix],
+                    &mut out.slide[ix],
+                );
+                out.contact[ix] = [f, n];
+            }
+        }
+        FrictionLaw::Junctions | FrictionLaw::SingleJunction => {
+            let ns = c.junction_count;
+            for (ix, ((contact, spring), state)) in out
+                .contact
+                .iter_mut()
+                .zip(out.spring.chunks_mut(ns))
+                .zip(out.state.chunks_mut(ns))
+                .enumerate()
+            {
+                let slots = junctions::JunctionSlots { spring, state };
+                let u = [row.ux[ix], row.uz[ix]];
+                let v = [row.vx[ix], row.vz[ix]];
+                let (f, p_n) = junctions::junctions(c, s.after, ix, u, v, slots);
+                *contact = [f, p_n];
+            }
+        }
+    }
+}
+
+/// Takes one step over `band`; returns the index of the first block of the
+/// band that blew up.
+pub fn sweep_band<T: Real, C: Coordinate<T>>(
+    s: &Shared<'_, T, C>,
+    band: Band<'_, T, C>,
+    scratch: &mut Scratch<T, C>,
+) -> Option<usize> {
+    let (nx, nz) = (s.c.nx, s.c.nz);
+    let Band {
+        rows,
+        ux,
+        uz,
+        vx,
+        vz,
+        fx,
+        fz,
+        mut interface,
+    } = band;
+    let (a, b) = (rows.start, rows.end);
+    let own = |z: usize| (z - a) * nx..(z - a + 1) * nx;
+    let mut bad = None;
+    let mut advance_own = |z: usize, ux: &mut [C], uz: &mut [C], vx: &mut [T], vz: &mut [T]| {
+        let r = own(z);
+        let row_bad = advance_row(
+            s,
+            z,
+            &mut ux[r.clone()],
+            &mut uz[r.clone()],
+            &mut vx[r.clone()],
+            &mut vz[r],
+        );
+        if bad.is_none() {
+            bad = row_bad.map(|ix| z * nx + ix);
+        }
+    };
+    if !s.forces {
+        for z in a..b {
+            advance_own(z, ux, uz, vx, vz);
+        }
+        return bad;
+    }
+    let Scratch {
+        below,
+        above,
+        horizontal,
+        up,
+        down,
+    } = scratch;
+    // Halo rows (a blow-up there is reported by the band owning them).
+    if a > 0 {
+        advance_row(
+            s,
+            a - 1,
+            &mut below.ux,
+            &mut below.uz,
+            &mut below.vx,
+            &mut below.vz,
+        );
+    }
+    if b < nz {
+        advance_row(
+            s,
+            b,
+            &mut above.ux,
+            &mut above.uz,
+            &mut above.vx,
+            &mut above.vz,
+        );
+    }
+    advance_own(a, ux, uz, vx, vz);
+    if a > 0 {
+        let first = view(ux, uz, vx, vz, own(a));
+        upward_bonds(
+            s.bonds,
+            s.c.eta,
+            s.c.bond_damping,
+            below.view(),
+            first,
+            down,
+        );
+    } else {
+        down.clear();
+    }
+    let drive_target = s.drive_target;
+    for z in a..b {
+        if z + 1 < b {
+            advance_own(z + 1, ux, uz, vx, vz);
+        }
+        let row = view(ux, uz, vx, vz, own(z));
+        horizontal_bonds(s.bonds, s.c.eta, s.c.bond_damping, row, horizontal);
+        if z + 1 < b {
+            let next = view(ux, uz, vx, vz, own(z + 1));
+            upward_bonds(s.bonds, s.c.eta, s.c.bond_damping, row, next, up);
+        } else if z + 1 < nz {
+            upward_bonds(s.bonds, s.c.eta, s.c.bond_damping, row, above.view(), up);
+        } else {
+            up.clear();
+        }
+        let r = own(z);
+        let (fx_row, fz_row) = (&mut fx[r.clone()], &mut fz[r]);
+        gather_row(horizontal, up, down, fx_row, fz_row);
+        for ix in 0..nx {
+            let i = z * nx + ix;
+            [fx_row[ix], fz_row[ix]] = external_loads(
+                s.c,
+                s.after,
+                drive_target,
+                s.flags[i],
+                ix,
+                [row.ux[ix], row.uz[ix]],
+                [row.vx[ix], row.vz[ix]],
+                [fx_row[ix], fz_row[ix]],
+            );
+        }
+        if z == 0 {
+            if let Some(out) = interface.as_mut() {
+                interface_row(s, row, fx_row, out);
+            }
+        }
+        std::mem::swap(up, down);
+    }
+    bad
+}

@@ -1,0 +1,402 @@
+//! The fast CPU engine ("sweep"): the reference engine's arithmetic, bit
+//! for bit, in a structure built for the CPU — structure-of-arrays state,
+//! each bond computed once (`rows`), and one pass over memory per step that
+//! advances a row, then computes the bonds and forces that need it, then
+//! the interface row's friction (`chunk`). The state is double-buffered
+//! (read step n, write step n + 1), so bands of rows run on several threads
+//! with one fork-join per step and the same bits as one thread.
+//!
+//! This engine departs in structure from the WGSL kernels; `CpuEngine` (the
+//! kernels' twin) stays the reference, and the tests hold this engine to it
+//! bit for bit (`tests/sweep_engine.rs`).
+
+mod chunk;
+mod rows;
+
+use super::bulk_forces::bond_consts;
+use super::{JunctionSpring, PINNED};
+use crate::engine::{blow_up, Engine, EngineError, Snapshot};
+use crate::lattice::{block_flags, initial_displacement};
+use crate::model::{Driver, Model};
+use crate::real::{Coordinate, Real};
+use crate::step_params::{step_params, Consts};
+use chunk::{Advance, Band, Interface, Scratch, Shared};
+use rayon::prelude::*;
+use rows::{ForwardBonds, RowView};
+
+/// Lattices with fewer blocks than this run on one thread unless asked for
+/// more explicitly: measured in BENCHMARKS.md ("CPU engine: sweep").
+pub const PARALLEL_MIN_BLOCKS: usize = 4096;
+
+/// Displacements and velocities of a set of blocks, as separate arrays.
+#[derive(Debug, Clone)]
+pub struct Kinematics<T, C> {
+    pub ux: Vec<C>,
+    pub uz: Vec<C>,
+    pub vx: Vec<T>,
+    pub vz: Vec<T>,
+}
+
+impl<T: Real, C: Coordinate<T>> Kinematics<T, C> {
+    pub fn new(n: usize) -> Self {
+        Kinematics {
+            ux: vec![C::default(); n],
+            uz: vec![C::default(); n],
+            vx: vec![T::zero(); n],
+            vz: vec![T::zero(); n],
+        }
+    }
+
+    fn view(&self) -> RowView<'_, T, C> {
+        RowView {
+            ux: &self.ux,
+            uz: &self.uz,
+            vx: &self.vx,
+            vz: &self.vz,
+        }
+    }
+}
+
+/// One instant: kinematics, bulk forces and the interface's (friction,
+/// normal force).
+#[derive(Debug, Clone)]
+struct State<T, C> {
+    kin: Kinematics<T, C>,
+    fx: Vec<T>,
+    fz: Vec<T>,
+    contact: Vec<[T; 2]>,
+}
+
+impl<T: Real, C: Coordinate<T>> State<T, C> {
+    fn new(n: usize, nx: usize) -> Self {
+        State {
+            kin: Kinematics::new(n),
+            fx: vec![T::zero(); n],
+            fz: vec![T::zero(); n],
+            contact: vec![[T::zero(); 2]; nx],
+        }
+    }
+}
+
+/// The sweep engine over one model, in `T` with coordinates `C` (as
+/// `CpuEngine`).
+pub struct SweepEngine<T: Real, C: Coordinate<T> = <T as Real>::Coord> {
+    model: Model,
+    consts: Consts<T>,
+    bonds: ForwardBonds<T>,
+    speed_limit: T,
+    flags: Vec<u32>,
+    now: State<T, C>,
+    next: State<T, C>,
+    junction_spring: Vec<JunctionSpring<C, T>>,
+    junction_state: Vec<[u32; 2]>,
+    slide: Vec<[i32; 2]>,
+    drive_origin: C,
+    step: u64,
+    /// Row ranges of the bands, bottom (interface) first.
+    bands: Vec<std::ops::Range<usize>>,
+    scratch: Vec<Scratch<T, C>>,
+    pool: Option<rayon::ThreadPool>,
+}
+
+impl<T: Real, C: Coordinate<T>> SweepEngine<T, C> {
+    /// `threads`: 1 for one thread, 0 for all cores when the lattice has at
+    /// least `PARALLEL_MIN_BLOCKS` blocks (one otherwise); n > 1 for n
+    /// bands whatever the size. The results are the same bits for any
+    /// count.
+    pub fn new(model: &Model, threads: usize) -> Result<Self, EngineError> {
+        let consts = Consts::<T>::new(model);
+        let (n, nx, nz) = (model.n_blocks(), model.nx, model.nz);
+        let threads = match threads {
+            0 if n >= PARALLEL_MIN_BLOCKS => {
+                std::thread::available_parallelism().map_or(1, |n| n.get())
+            }
+            0 => 1,
+            t => t,
+        }
+        .min(nz);
+        let pool = if threads > 1 {
+            Some(
+                rayon::ThreadPoolBuilder::new()
+                    .num_threads(threads)
+                    .build()
+                    .map_err(|e| EngineError::Gpu(format!("thread pool: {e}")))?,
+            )
+        } else {
+            None
+        };
+        let bands = band_rows(nz, threads);
+        let mut now = State::new(n, nx);
+        for (i, u) in initial_displacement(model).into_iter().enumerate() {
+            now.kin.ux[i] = C::from_f64(u[0]);
+            now.kin.uz[i] = C::from_f64(u[1]);
+        }
+        let nj = model.n_junctions();
+        let mut engine = SweepEngine {
+            consts,
+            bonds: ForwardBonds::from_stencil(&bond_consts(&consts)),
+            speed_limit: T::from_f64(model.pressure_wave_speed()),
+            flags: block_flags(model),
+            next: now.clone(),
+            now,
+            junction_spring: vec![JunctionSpring::default(); nj],
+            junction_state: vec![[PINNED, 0]; nj],
+            slide: vec![[0; 2]; nx],
+            drive_origin: C::default(),
+            step: 0,
+            scratch: bands.iter().map(|_| Scratch::new(nx)).collect(),
+            bands,
+            pool,
+            model: model.clone(),
+        };
+        if model.prep_steps == 0 {
+            engine.begin_driving();
+        }
+        engine.sweep(Advance::Copy, true);
+        Ok(engine)
+    }
+
+    pub fn threads(&self) -> usize {
+        self.bands.len()
+    }
+
+    /// One pass over all bands into `next`, then `next` becomes `now`.
+    /// Returns the index of the first block that blew up.
+    fn sweep(&mut self, advance: Advance, forces: bool) -> Option<usize> {
+        let c = &self.consts;
+        let before = step_params(c, self.step);
+        let after_step = if advance == Advance::Leapfrog {
+            self.step + 1
+        } else {
+            self.step
+        };
+        let after = step_params(c, after_step);
+        let shared = Shared {
+            c,
+            bonds: &self.bonds,
+            flags: &self.flags,
+            law: self.model.law,
+            before: &before,
+            after: &after,
+            drive_target: C::from_f64(self.drive_origin.as_f64() + after.drive_offset),
+            speed_limit: self.speed_limit,
+            now: &self.now.kin,
+            now_force: [&self.now.fx, &self.now.fz],
+            now_contact: &self.now.contact,
+            advance,
+            forces,
+        };
+        let bands = split_bands(
+            &self.bands,
+            c.nx,
+            &mut self.next,
+            Interface {
+                contact: &mut [],
+                spring: &mut self.junction_spring,
+                state: &mut self.junction_state,
+                slide: &mut self.slide,
+            },
+        );
+        let bad = match &self.pool {
+            Some(pool) => pool.install(|| {
+                bands
+                    .into_par_iter()
+                    .zip(self.scratch.par_iter_mut())
+                    .filter_map(|(band, scratch)| chunk::sweep_band(&shared, band, scratch))
+                    .min()
+            }),
+            None => bands
+                .into_iter()
+                .zip(self.scratch.iter_mut())
+                .filter_map(|(band, scratch)| chunk::sweep_band(&shared, band, scratch))
+                .min(),
+        };
+        std::mem::swap(&mut self.now, &mut self.next);
+        bad
+    }
+
+    /// One leapfrog step, then the forces, friction and junction states of
+    /// the new state (as `CpuEngine::one_step`).
+    fn one_step(&mut self) -> Result<(), EngineError> {
+        let starts_driving = self.step + 1 == self.model.prep_steps;
+        let bad = self.sweep(Advance::Leapfrog, !starts_driving);
+        self.step += 1;
+        if let Some(i) = bad {
+            let k = &self.now.kin;
+            let u = [k.ux[i].as_f64(), k.uz[i].as_f64()];
+            let v = [k.vx[i].as_f64(), k.vz[i].as_f64()];
+            return Err(blow_up(&self.model, self.step, i, u, v));
+        }
+        if starts_driving {
+            self.begin_driving();
+            self.sweep(Advance::Copy, true);
+        }
+        Ok(())
+    }
+
+    /// As `CpuEngine::begin_driving`: the driver origin and the trigger's
+    /// junction forces, from the displacements where driving starts.
+    fn begin_driving(&mut self) {
+        if let Driver::SideSpring { row, .. } = self.model.driver {
+            self.drive_origin = self.now.kin.ux[row * self.model.nx];
+        }
+        if self.model.trigger.is_some() {
+            let snap = self.snapshot_now();
+            let anchors = crate::trigger::trigger_anchors(&self.model, &snap);
+            for (spring, a) in self.junction_spring.iter_mut().zip(anchors) {
+                spring.anchor = C::from_f64(a);
+            }
+        }
+    }
+
+    fn snapshot_now(&self) -> Snapshot {
+        let k = &self.now.kin;
+        let disp: Vec<[C; 2]> = k.ux.iter().zip(&k.uz).map(|(x, z)| [*x, *z]).collect();
+        let vel: Vec<[T; 2]> = k.vx.iter().zip(&k.vz).map(|(x, z)| [*x, *z]).collect();
+        let force: Vec<[T; 2]> = self
+            .now
+            .fx
+            .iter()
+            .zip(&self.now.fz)
+            .map(|(x, z)| [*x, *z])
+            .collect();
+        Snapshot::from_buffers(
+            &self.model,
+            self.step,
+            &disp,
+            &vel,
+            &force,
+            &self.now.contact,
+            &self.junction_spring,
+            &self.junction_state,
+            &self.slide,
+        )
+    }
+}
+
+/// `threads` bands of consecutive rows, as even as the rows allow.
+fn band_rows(nz: usize, threads: usize) -> Vec<std::ops::Range<usize>> {
+    let threads = threads.clamp(1, nz.max(1));
+    (0..threads)
+        .map(|t| t * nz / threads..(t + 1) * nz / threads)
+        .collect()
+}
+
+/// Splits the next state into the bands' rows; the first band (row 0) gets
+/// the interface arrays.
+fn split_bands<'a, T: Real, C: Coordinate<T>>(
+    bands: &[std::ops::Range<usize>],
+    nx: usize,
+    next: &'a mut State<T, C>,
+    interface: Interface<'a, T, C>,
+) -> Vec<Band<'a, T, C>> {
+    let State {
+        kin,
+        fx,
+        fz,
+        contact,
+    } = next;
+    let (mut ux, mut uz) = (&mut kin.ux[..], &mut kin.uz[..]);
+    let (mut vx, mut vz) = (&mut kin.vx[..], &mut kin.vz[..]);
+    let (mut fx, mut fz) = (&mut fx[..], &mut fz[..]);
+    let mut interface = Some(Interface {
+        contact,
+        ..interface
+    });
+    let mut out = Vec::with_capacity(bands.len());
+    for rows in bands {
+        let len = rows.len() * nx;
+        let (a, rest) = std::mem::take(&mut ux).split_at_mut(len);
+        ux = rest;
+        let (b, rest) = std::mem::take(&mut uz).split_at_mut(len);
+        uz = rest;
+        let (c, rest) = std::mem::take(&mut vx).split_at_mut(len);
+        vx = rest;
+        let (d, rest) = std::mem::take(&mut vz).split_at_mut(len);
+        vz = rest;
+        let (e, rest) = std::mem::take(&mut fx).split_at_mut(len);
+        fx = rest;
+        let (f, rest) = std::mem::take(&mut fz).split_at_mut(len);
+        fz = rest;
+        out.push(Band {
+            rows: rows.clone(),
+            ux: a,
+            uz: b,
+            vx: c,
+            vz: d,
+            fx: e,
+            fz: f,
+            interface: interface.take(),
+        });
+    }
+    out
+}
+
+impl<T: Real, C: Coordinate<T>> Engine for SweepEngine<T, C> {
+    fn model(&self) -> &Model {
+        &self.model
+    }
+
+    fn steps_done(&self) -> u64 {
+        self.step
+    }
+
+    fn advance(&mut self, n: u64) -> Result<(), EngineError> {
+        for _ in 0..n {
+            self.one_step()?;
+        }
+        Ok(())
+    }
+
+    fn snapshot(&mut self) -> Result<Snapshot, EngineError> {
+        Ok(self.snapshot_now())
+    }
+
+    fn set_kinematics(
+        &mut self,
+        step: u64,
+        disp: &[[f64; 2]],
+        vel: &[[f64; 2]],
+    ) -> Result<(), EngineError> {
+        crate::engine::assert_driving_phase(&self.model, self.step, step);
+        let k = &mut self.now.kin;
+        for (i, (u, v)) in disp.iter().zip(vel).enumerate() {
+            k.ux[i] = C::from_f64(u[0]);
+            k.uz[i] = C::from_f64(u[1]);
+            k.vx[i] = T::from_f64(v[0]);
+            k.vz[i] = T::from_f64(v[1]);
+        }
+        self.step = step;
+        self.sweep(Advance::Copy, true);
+        Ok(())
+    }
+
+    fn set_junctions(&mut self, snap: &Snapshot) -> Result<(), EngineError> {
+        for (s, (a, k)) in self
+            .junction_spring
+            .iter_mut()
+            .zip(snap.anchor.iter().zip(&snap.junction_stiffness))
+        {
+            *s = JunctionSpring {
+                anchor: C::from_f64(*a),
+                stiffness: T::from_f64(*k),
+            };
+        }
+        for (s, (left, count)) in self
+            .junction_state
+            .iter_mut()
+            .zip(snap.slip_steps_left.iter().zip(&snap.ruptures))
+        {
+            *s = [*left, *count];
+        }
+        Ok(())
+    }
+
+    fn describe(&self) -> String {
+        format!(
+            "cpu {} sweep ({} thread(s))",
+            super::precision_name::<T, C>(),
+            self.threads()
+        )
+    }
+}

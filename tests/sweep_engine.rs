@@ -1,0 +1,171 @@
+//! The sweep engine (the fast CPU path) against the reference engine
+//! (`CpuEngine`, the WGSL kernels' twin): the same bits, snapshot for
+//! snapshot, in every precision, for any thread count, through the
+//! normal-load phase, the start of driving and ruptures; for every friction
+//! law, damping form, driver and the trigger. A perturbed reference run is
+//! the negative control: the comparison must see a one-ulp change.
+
+use slipfront::cpu::{CpuEngine, SweepEngine};
+use slipfront::real::{Coordinate, DoubleSingle, Real};
+use slipfront::scenario::{Scenario, DEFAULT_SCENARIO};
+use slipfront::{advance_to, Engine, Model, Snapshot};
+
+/// The Table S1 scene shortened: brief normal-load phase, hard driving so
+/// that junctions rupture within a few hundred steps.
+const QUICK: &[&str] = &[
+    "geometry.nx=33",
+    "geometry.nz=9",
+    "geometry.length=0.08",
+    "geometry.height=0.02",
+    "loading.normal.ramp_time=1e-5",
+    "loading.normal.relax_time=1e-5",
+];
+
+fn model_from(text: &str, extra: &[&str]) -> Model {
+    let set: Vec<String> = QUICK.iter().chain(extra).map(|s| s.to_string()).collect();
+    let s = Scenario::parse(text, "sweep test", &set).unwrap();
+    Model::from_scenario(&s, false).unwrap()
+}
+
+/// The default scene (side spring) driven hard.
+fn model(extra: &[&str]) -> Model {
+    let mut set = vec!["loading.drive.velocity=2.0"];
+    set.extend(extra);
+    model_from(DEFAULT_SCENARIO, &set)
+}
+
+/// Steps both engines to the same checkpoints and asserts equal snapshots;
+/// returns the last one.
+fn same_bits<T: Real, C: Coordinate<T>>(m: &Model, threads: usize, steps: u64) -> Snapshot {
+    let mut reference = CpuEngine::<T, C>::new(m, 1).unwrap();
+    let mut sweep = SweepEngine::<T, C>::new(m, threads).unwrap();
+    assert_eq!(sweep.threads(), threads.max(1));
+    assert_eq!(
+        reference.snapshot().unwrap(),
+        sweep.snapshot().unwrap(),
+        "at step 0"
+    );
+    let end = m.prep_steps + steps;
+    let checkpoints = [
+        m.prep_steps - 1,
+        m.prep_steps,
+        m.prep_steps + 1,
+        end / 2 + 1,
+        end,
+    ];
+    let mut last = None;
+    for at in checkpoints {
+        advance_to(&mut reference, at).unwrap();
+        advance_to(&mut sweep, at).unwrap();
+        let (a, b) = (reference.snapshot().unwrap(), sweep.snapshot().unwrap());
+        if a != b {
+            panic!("{}", first_difference(&a, &b));
+        }
+        last = Some(a);
+    }
+    last.unwrap()
+}
+
+fn first_difference(a: &Snapshot, b: &Snapshot) -> String {
+    let pairs: [(&str, Vec<f64>, Vec<f64>); 5] = [
+        ("disp", a.disp.concat(), b.disp.concat()),
+        ("vel_half", a.vel_half.concat(), b.vel_half.concat()),
+        ("force", a.force.concat(), b.force.concat()),
+        ("friction", a.friction.clone(), b.friction.clone()),
+        ("anchor", a.anchor.clone(), b.anchor.clone()),
+    ];
+    for (name, x, y) in pairs {
+        if let Some(i) = (0..x.len()).find(|&i| x[i].to_bits() != y[i].to_bits()) {
+            return format!("step {}: {name}[{i}] {} != {}", a.step, x[i], y[i]);
+        }
+    }
+    format!("step {}: junction or slide states differ", a.step)
+}
+
+#[test]
+fn f64_sweep_is_bitwise_the_reference_on_one_two_and_three_threads() {
+    let m = model(&[]);
+    for threads in [1, 2, 3] {
+        let last = same_bits::<f64, f64>(&m, threads, 600);
+        assert!(
+            last.total_ruptures() > 0,
+            "the comparison must cover ruptures"
+        );
+    }
+}
+
+#[test]
+fn mixed_and_plain_f32_sweeps_are_bitwise_the_reference() {
+    let m = model(&[]);
+    for threads in [1, 2] {
+        let last = same_bits::<f32, DoubleSingle>(&m, threads, 600);
+        assert!(last.total_ruptures() > 0);
+        same_bits::<f32, f32>(&m, threads, 300);
+    }
+}
+
+#[test]
+fn coulomb_law_and_bond_damping_sweeps_are_bitwise_the_reference() {
+    let m = model(&["friction.law=coulomb", "loading.drive.velocity=0.4"]);
+    let last = same_bits::<f64, f64>(&m, 2, 800);
+    assert!(last.slips.iter().any(|&s| s > 0), "blocks must slide");
+    let m = model(&["damping.form=bond"]);
+    same_bits::<f64, f64>(&m, 2, 400);
+    same_bits::<f32, DoubleSingle>(&m, 1, 400);
+}
+
+#[test]
+fn top_drives_and_the_trigger_sweeps_are_bitwise_the_reference() {
+    let drive_start = DEFAULT_SCENARIO.find("[loading.drive]").unwrap();
+    let drive_end = drive_start + DEFAULT_SCENARIO[drive_start..].find("\n[").unwrap() + 1;
+    for block in [
+        "[loading.drive]\nmode = \"top_force\"\nforce_rate = 1.6e6\n",
+        "[loading.drive]\nmode = \"top_velocity\"\nvelocity = 0.4\n",
+    ] {
+        let text = format!(
+            "{}{block}{}",
+            &DEFAULT_SCENARIO[..drive_start],
+            &DEFAULT_SCENARIO[drive_end..]
+        );
+        same_bits::<f64, f64>(&model_from(&text, &[]), 2, 400);
+    }
+    let triggered = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/scenarios/triggered_front.toml"
+    ))
+    .unwrap();
+    let m = model_from(&triggered, &[]);
+    assert!(m.trigger.is_some());
+    same_bits::<f64, f64>(&m, 2, 300);
+}
+
+/// Negative control: the comparison flags a reference run whose driving
+/// speed differs by one part in 1e12.
+#[test]
+fn the_comparison_sees_a_perturbed_run() {
+    let m = model(&[]);
+    let mut p = model(&[]);
+    if let slipfront::model::Driver::SideSpring { velocity, .. } = &mut p.driver {
+        *velocity *= 1.0 + 1e-12;
+    }
+    let mut reference = CpuEngine::<f64>::new(&p, 1).unwrap();
+    let mut sweep = SweepEngine::<f64>::new(&m, 1).unwrap();
+    let end = m.prep_steps + 200;
+    advance_to(&mut reference, end).unwrap();
+    advance_to(&mut sweep, end).unwrap();
+    assert_ne!(reference.snapshot().unwrap(), sweep.snapshot().unwrap());
+}
+
+/// A blow-up stops the sweep engine at the reference's step and block.
+#[test]
+fn blow_up_is_reported_at_the_reference_step_and_block() {
+    let set = ["time.dt_fraction=0.2"];
+    let sets: Vec<String> = QUICK.iter().chain(&set).map(|s| s.to_string()).collect();
+    let s = Scenario::parse(DEFAULT_SCENARIO, "unstable", &sets).unwrap();
+    let m = Model::from_scenario(&s, true).unwrap();
+    let err = |e: &mut dyn Engine| advance_to(e, m.total_steps()).unwrap_err().to_string();
+    let a = err(&mut CpuEngine::<f64>::new(&m, 1).unwrap());
+    let b = err(&mut SweepEngine::<f64>::new(&m, 2).unwrap());
+    assert!(a.contains("blew up at step"), "{a}");
+    assert_eq!(a, b);
+}
