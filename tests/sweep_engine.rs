@@ -38,13 +38,17 @@ fn model(extra: &[&str]) -> Model {
 /// returns the last one.
 fn same_bits<T: Real, C: Coordinate<T>>(m: &Model, threads: usize, steps: u64) -> Snapshot {
     let mut reference = CpuEngine::<T, C>::new(m, 1).unwrap();
-    let mut sweep = SweepEngine::<T, C>::new(m, threads).unwrap();
-    assert_eq!(sweep.threads(), threads.max(1));
-    assert_eq!(
-        reference.snapshot().unwrap(),
-        sweep.snapshot().unwrap(),
-        "at step 0"
-    );
+    // The detected instruction set (AVX2 here) and the baseline.
+    let mut sweeps = [
+        SweepEngine::<T, C>::new(m, threads).unwrap(),
+        SweepEngine::<T, C>::new(m, threads).unwrap(),
+    ];
+    sweeps[1].use_baseline_isa();
+    let at_start = reference.snapshot().unwrap();
+    for sweep in &mut sweeps {
+        assert_eq!(sweep.threads(), threads.max(1));
+        assert_eq!(at_start, sweep.snapshot().unwrap(), "at step 0");
+    }
     let end = m.prep_steps + steps;
     let checkpoints = [
         m.prep_steps - 1,
@@ -56,10 +60,13 @@ fn same_bits<T: Real, C: Coordinate<T>>(m: &Model, threads: usize, steps: u64) -
     let mut last = None;
     for at in checkpoints {
         advance_to(&mut reference, at).unwrap();
-        advance_to(&mut sweep, at).unwrap();
-        let (a, b) = (reference.snapshot().unwrap(), sweep.snapshot().unwrap());
-        if a != b {
-            panic!("{}", first_difference(&a, &b));
+        let a = reference.snapshot().unwrap();
+        for sweep in &mut sweeps {
+            advance_to(sweep, at).unwrap();
+            let b = sweep.snapshot().unwrap();
+            if a != b {
+                panic!("{:?}: {}", sweep.isa(), first_difference(&a, &b));
+            }
         }
         last = Some(a);
     }

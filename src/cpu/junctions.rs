@@ -108,46 +108,62 @@ pub fn junction_lane<T: Real, C: Coordinate<T>>(
     jb: &JunctionBlock<T, C>,
     slots: JunctionSlots<'_, T, C>,
 ) -> T {
-    let (f_n, threshold, sliding) = (jb.f_n, jb.threshold, jb.sliding);
     let mut total = T::zero();
     for j in (lane..c.junction_count).step_by(JUNCTION_LANES) {
-        let (spring, state) = (&mut slots.spring[j], &mut slots.state[j]);
-        if state[0] != PINNED {
-            state[0] = state[0].saturating_sub(1);
-            if state[0] == 0 && f_n > T::zero() {
-                *spring = JunctionSpring {
-                    anchor: jb.ux,
-                    stiffness: c.junction_stiffness(f_n),
-                };
-                state[0] = PINNED;
-            }
-        }
-        let mut f = sliding;
-        if state[0] == PINNED {
-            if p.preparing {
-                // While the normal load is applied, attachment is continuous.
-                spring.stiffness = c.junction_stiffness(f_n);
-            }
-            f = -spring.stiffness * jb.ux.diff(spring.anchor);
-            if !p.preparing && f.abs() > threshold {
-                let count = state[1].wrapping_add(1);
-                state[1] = count;
-                let n = slip_steps(
-                    c.seed,
-                    ix as u32,
-                    j as u32,
-                    count,
-                    c.slip_mean_steps,
-                    c.slip_std_steps,
-                );
-                // PINNED − 1 at most: a countdown never reads as pinned.
-                state[0] = n.min(PINNED - 1);
-                f = sliding;
-            }
-        }
-        total = total + f;
+        total = total + junction(c, p, ix, j, jb, &mut slots.spring[j], &mut slots.state[j]);
     }
     total
+}
+
+/// One junction `j` of block `ix` advanced by one step; returns its force
+/// on the block along x. Every junction is independent of the others (its
+/// slip time is drawn from its own key), so the sweep engine calls this in
+/// any order and gets the same bits.
+#[inline(always)]
+pub fn junction<T: Real, C: Coordinate<T>>(
+    c: &Consts<T>,
+    p: &StepParams<T>,
+    ix: usize,
+    j: usize,
+    jb: &JunctionBlock<T, C>,
+    spring: &mut JunctionSpring<C, T>,
+    state: &mut [u32; 2],
+) -> T {
+    let (f_n, threshold, sliding) = (jb.f_n, jb.threshold, jb.sliding);
+    if state[0] != PINNED {
+        state[0] = state[0].saturating_sub(1);
+        if state[0] == 0 && f_n > T::zero() {
+            *spring = JunctionSpring {
+                anchor: jb.ux,
+                stiffness: c.junction_stiffness(f_n),
+            };
+            state[0] = PINNED;
+        }
+    }
+    let mut f = sliding;
+    if state[0] == PINNED {
+        if p.preparing {
+            // While the normal load is applied, attachment is continuous.
+            spring.stiffness = c.junction_stiffness(f_n);
+        }
+        f = -spring.stiffness * jb.ux.diff(spring.anchor);
+        if !p.preparing && f.abs() > threshold {
+            let count = state[1].wrapping_add(1);
+            state[1] = count;
+            let n = slip_steps(
+                c.seed,
+                ix as u32,
+                j as u32,
+                count,
+                c.slip_mean_steps,
+                c.slip_std_steps,
+            );
+            // PINNED − 1 at most: a countdown never reads as pinned.
+            state[0] = n.min(PINNED - 1);
+            f = sliding;
+        }
+    }
+    f
 }
 
 #[cfg(test)]

@@ -6,11 +6,12 @@
 //! below and above a band are advanced again into scratch (a halo) instead
 //! of waiting for the band that owns them.
 
+use super::interface::{interface_row, JunctionScratch};
 use super::rows::{gather_row, horizontal_bonds, upward_bonds, BondRow, ForwardBonds};
 use super::rows::{RowView, UpwardBonds};
 use super::Kinematics;
 use crate::cpu::bulk_forces::external_loads;
-use crate::cpu::{coulomb, junctions, verlet, JunctionSpring};
+use crate::cpu::{verlet, JunctionSpring};
 use crate::real::{Coordinate, Real};
 use crate::scenario::FrictionLaw;
 use crate::step_params::{Consts, StepParams};
@@ -75,6 +76,7 @@ pub struct Scratch<T, C> {
     horizontal: BondRow<T>,
     up: UpwardBonds<T>,
     down: UpwardBonds<T>,
+    junctions: JunctionScratch<T>,
 }
 
 impl<T: Real, C: Coordinate<T>> Scratch<T, C> {
@@ -85,6 +87,7 @@ impl<T: Real, C: Coordinate<T>> Scratch<T, C> {
             horizontal: BondRow::new(nx),
             up: UpwardBonds::new(nx),
             down: UpwardBonds::new(nx),
+            junctions: JunctionScratch::default(),
         }
     }
 }
@@ -106,7 +109,7 @@ fn view<'a, T, C>(
 
 /// Advances row `z` of the start state into the given row slices; returns
 /// the column of the first block that blew up.
-#[allow(clippy::too_many_arguments)]
+#[inline(always)]
 fn advance_row<T: Real, C: Coordinate<T>>(
     s: &Shared<'_, T, C>,
     z: usize,
@@ -156,53 +159,56 @@ fn advance_row<T: Real, C: Coordinate<T>>(
     bad
 }
 
-/// Friction and normal force of the interface row (twin arithmetic of the
-/// reference engine's friction pass), from the row's new state and bulk
-/// forces.
-fn interface_row<T: Real, C: Coordinate<T>>(
-    s: &Shared<'_, T, C>,
-    row: RowView<'_, T, C>,
-    fx: &[T],
-    out: &mut Interface<'_, T, C>,
-) {
-    let c = s.c;
-    match s.law {
-        FrictionLaw::None => {}
-        FrictionLaw::Coulomb => {
-            for ix in 0..c.nx {
-                let (f, n) = coulomb::coulomb(
-                    c,
-                    s.after,
-                    [row.ux[ix], row.uz[ix]],
-                    [row.vx[ix], row.vz[ix]],
-                    fx[ix],
-                    &mut out.slide[ix],
-                );
-                out.contact[ix] = [f, n];
-            }
+/// The instruction set the band sweep is compiled for.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Isa {
+    /// The build's baseline (SSE2 on x86-64).
+    Baseline,
+    /// 256-bit vectors (x86-64 with AVX2), chosen at run time.
+    Avx2,
+}
+
+impl Isa {
+    /// The widest this CPU runs. The results are the same bits either way:
+    /// no operation is fused or reordered, only done several at a time.
+    pub fn detect() -> Isa {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            return Isa::Avx2;
         }
-        FrictionLaw::Junctions | FrictionLaw::SingleJunction => {
-            let ns = c.junction_count;
-            for (ix, ((contact, spring), state)) in out
-                .contact
-                .iter_mut()
-                .zip(out.spring.chunks_mut(ns))
-                .zip(out.state.chunks_mut(ns))
-                .enumerate()
-            {
-                let slots = junctions::JunctionSlots { spring, state };
-                let u = [row.ux[ix], row.uz[ix]];
-                let v = [row.vx[ix], row.vz[ix]];
-                let (f, p_n) = junctions::junctions(c, s.after, ix, u, v, slots);
-                *contact = [f, p_n];
-            }
-        }
+        Isa::Baseline
     }
 }
 
-/// Takes one step over `band`; returns the index of the first block of the
-/// band that blew up.
+/// Takes one step over `band` with the instruction set `isa` (which must
+/// have come from `Isa::detect`); returns the index of the first block of
+/// the band that blew up.
 pub fn sweep_band<T: Real, C: Coordinate<T>>(
+    isa: Isa,
+    s: &Shared<'_, T, C>,
+    band: Band<'_, T, C>,
+    scratch: &mut Scratch<T, C>,
+) -> Option<usize> {
+    match isa {
+        #[cfg(target_arch = "x86_64")]
+        // SAFETY: `Isa::Avx2` only comes from `Isa::detect` on a CPU with AVX2.
+        Isa::Avx2 => unsafe { sweep_band_avx2(s, band, scratch) },
+        _ => sweep_band_body(s, band, scratch),
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn sweep_band_avx2<T: Real, C: Coordinate<T>>(
+    s: &Shared<'_, T, C>,
+    band: Band<'_, T, C>,
+    scratch: &mut Scratch<T, C>,
+) -> Option<usize> {
+    sweep_band_body(s, band, scratch)
+}
+
+#[inline(always)]
+fn sweep_band_body<T: Real, C: Coordinate<T>>(
     s: &Shared<'_, T, C>,
     band: Band<'_, T, C>,
     scratch: &mut Scratch<T, C>,
@@ -247,6 +253,7 @@ pub fn sweep_band<T: Real, C: Coordinate<T>>(
         horizontal,
         up,
         down,
+        junctions,
     } = scratch;
     // Halo rows (a blow-up there is reported by the band owning them).
     if a > 0 {
@@ -316,7 +323,7 @@ pub fn sweep_band<T: Real, C: Coordinate<T>>(
         }
         if z == 0 {
             if let Some(out) = interface.as_mut() {
-                interface_row(s, row, fx_row, out);
+                interface_row(s, row, fx_row, out, junctions);
             }
         }
         std::mem::swap(up, down);

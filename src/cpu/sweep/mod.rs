@@ -11,6 +11,7 @@
 //! bit for bit (`tests/sweep_engine.rs`).
 
 mod chunk;
+mod interface;
 mod rows;
 
 use super::bulk_forces::bond_consts;
@@ -20,6 +21,7 @@ use crate::lattice::{block_flags, initial_displacement};
 use crate::model::{Driver, Model};
 use crate::real::{Coordinate, Real};
 use crate::step_params::{step_params, Consts};
+pub use chunk::Isa;
 use chunk::{Advance, Band, Interface, Scratch, Shared};
 use rayon::prelude::*;
 use rows::{ForwardBonds, RowView};
@@ -97,6 +99,7 @@ pub struct SweepEngine<T: Real, C: Coordinate<T> = <T as Real>::Coord> {
     bands: Vec<std::ops::Range<usize>>,
     scratch: Vec<Scratch<T, C>>,
     pool: Option<rayon::ThreadPool>,
+    isa: Isa,
 }
 
 impl<T: Real, C: Coordinate<T>> SweepEngine<T, C> {
@@ -147,6 +150,7 @@ impl<T: Real, C: Coordinate<T>> SweepEngine<T, C> {
             scratch: bands.iter().map(|_| Scratch::new(nx)).collect(),
             bands,
             pool,
+            isa: Isa::detect(),
             model: model.clone(),
         };
         if model.prep_steps == 0 {
@@ -158,6 +162,17 @@ impl<T: Real, C: Coordinate<T>> SweepEngine<T, C> {
 
     pub fn threads(&self) -> usize {
         self.bands.len()
+    }
+
+    /// The instruction set of the band sweep (detected at construction).
+    pub fn isa(&self) -> Isa {
+        self.isa
+    }
+
+    /// Runs on the baseline instruction set instead of the detected one:
+    /// for the tests that hold both to the reference's bits.
+    pub fn use_baseline_isa(&mut self) {
+        self.isa = Isa::Baseline;
     }
 
     /// One pass over all bands into `next`, then `next` becomes `now`.
@@ -186,6 +201,7 @@ impl<T: Real, C: Coordinate<T>> SweepEngine<T, C> {
             advance,
             forces,
         };
+        let isa = self.isa;
         let bands = split_bands(
             &self.bands,
             c.nx,
@@ -202,13 +218,13 @@ impl<T: Real, C: Coordinate<T>> SweepEngine<T, C> {
                 bands
                     .into_par_iter()
                     .zip(self.scratch.par_iter_mut())
-                    .filter_map(|(band, scratch)| chunk::sweep_band(&shared, band, scratch))
+                    .filter_map(|(band, scratch)| chunk::sweep_band(isa, &shared, band, scratch))
                     .min()
             }),
             None => bands
                 .into_iter()
                 .zip(self.scratch.iter_mut())
-                .filter_map(|(band, scratch)| chunk::sweep_band(&shared, band, scratch))
+                .filter_map(|(band, scratch)| chunk::sweep_band(isa, &shared, band, scratch))
                 .min(),
         };
         std::mem::swap(&mut self.now, &mut self.next);

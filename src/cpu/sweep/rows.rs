@@ -127,8 +127,7 @@ impl<T: Real> ForwardBonds<T> {
 }
 
 /// Forces of bonds `near[k] → far[k]` on their near ends, into `out` at
-/// `at..at + n` (n = near's length). Written as one straight loop over
-/// equal-length slices so that it vectorises (sqrt and divide included).
+/// `at..at + n` (n = near's length).
 #[inline(always)]
 fn bond_span<T: Real, C: Coordinate<T>, const BOND_DAMPING: bool>(
     b: &BondConsts<T>,
@@ -139,43 +138,69 @@ fn bond_span<T: Real, C: Coordinate<T>, const BOND_DAMPING: bool>(
     at: usize,
 ) {
     let n = near.ux.len();
-    let (uxi, uzi, vxi, vzi) = (near.ux, &near.uz[..n], &near.vx[..n], &near.vz[..n]);
-    let (uxj, uzj, vxj, vzj) = (&far.ux[..n], &far.uz[..n], &far.vx[..n], &far.vz[..n]);
-    let sx = &mut out.spring_x[at..at + n];
-    let sz = &mut out.spring_z[at..at + n];
-    let dx = &mut out.damper_x[at..at + n];
-    let dz = &mut out.damper_z[at..at + n];
+    bond_kernel::<T, C, BOND_DAMPING>(
+        b,
+        eta,
+        [near.ux, near.uz, far.ux, far.uz],
+        [near.vx, near.vz, far.vx, far.vz],
+        &mut out.spring_x[at..at + n],
+        &mut out.spring_z[at..at + n],
+        &mut out.damper_x[at..at + n],
+        &mut out.damper_z[at..at + n],
+    );
+}
+
+/// The bond loop proper: one straight loop over equal-length slices, in a
+/// function of its own so that the compiler knows the outputs alias
+/// nothing and vectorises it (sqrt and divides included). Inlined into the
+/// band sweep so that it takes that function's instruction set.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+fn bond_kernel<T: Real, C: Coordinate<T>, const BOND_DAMPING: bool>(
+    b: &BondConsts<T>,
+    eta: T,
+    u: [&[C]; 4],
+    v: [&[T]; 4],
+    sx: &mut [T],
+    sz: &mut [T],
+    dx: &mut [T],
+    dz: &mut [T],
+) {
+    let n = sx.len();
+    let (sz, dx, dz) = (&mut sz[..n], &mut dx[..n], &mut dz[..n]);
+    let (uxi, uzi, uxj, uzj) = (&u[0][..n], &u[1][..n], &u[2][..n], &u[3][..n]);
+    let (vxi, vzi, vxj, vzj) = (&v[0][..n], &v[1][..n], &v[2][..n], &v[3][..n]);
     let two = T::one() + T::one();
-    for k in 0..n {
+    let (r00, r01, rest, k) = (b.r0[0], b.r0[1], b.rest, b.k);
+    for i in 0..n {
         // The reference's `bulk_force`, operation for operation.
-        let du0 = uxj[k].diff(uxi[k]);
-        let du1 = uzj[k].diff(uzi[k]);
-        let r0 = b.r0[0] + du0;
-        let r1 = b.r0[1] + du1;
+        let du0 = uxj[i].diff(uxi[i]);
+        let du1 = uzj[i].diff(uzi[i]);
+        let r0 = r00 + du0;
+        let r1 = r01 + du1;
         let len = (r0 * r0 + r1 * r1).sqrt();
-        let stretch =
-            (two * (b.r0[0] * du0 + b.r0[1] * du1) + (du0 * du0 + du1 * du1)) / (len + b.rest);
+        let stretch = (two * (r00 * du0 + r01 * du1) + (du0 * du0 + du1 * du1)) / (len + rest);
         let inv_len = T::one() / len;
         let n0 = r0 * inv_len;
         let n1 = r1 * inv_len;
-        let spring = b.k * stretch;
-        sx[k] = spring * n0;
-        sz[k] = spring * n1;
-        let dv0 = vxj[k] - vxi[k];
-        let dv1 = vzj[k] - vzi[k];
+        let spring = k * stretch;
+        sx[i] = spring * n0;
+        sz[i] = spring * n1;
+        let dv0 = vxj[i] - vxi[i];
+        let dv1 = vzj[i] - vzi[i];
         if BOND_DAMPING {
             let along = eta * (dv0 * n0 + dv1 * n1);
-            dx[k] = along * n0;
-            dz[k] = along * n1;
+            dx[i] = along * n0;
+            dz[i] = along * n1;
         } else {
-            dx[k] = eta * dv0;
-            dz[k] = eta * dv1;
+            dx[i] = eta * dv0;
+            dz[i] = eta * dv1;
         }
     }
 }
 
 /// `bond_span` with the damping form chosen once per span.
-#[inline]
+#[inline(always)]
 fn bonds<T: Real, C: Coordinate<T>>(
     b: &BondConsts<T>,
     eta: T,
@@ -193,6 +218,7 @@ fn bonds<T: Real, C: Coordinate<T>>(
 }
 
 /// Horizontal bonds of a row: column ix to ix + 1.
+#[inline(always)]
 pub fn horizontal_bonds<T: Real, C: Coordinate<T>>(
     fb: &ForwardBonds<T>,
     eta: T,
@@ -208,6 +234,7 @@ pub fn horizontal_bonds<T: Real, C: Coordinate<T>>(
 }
 
 /// Bonds from `row` to the row `above` it.
+#[inline(always)]
 pub fn upward_bonds<T: Real, C: Coordinate<T>>(
     fb: &ForwardBonds<T>,
     eta: T,
@@ -254,6 +281,7 @@ pub fn upward_bonds<T: Real, C: Coordinate<T>>(
 /// Sum of the bond forces on each block of a row, in the order of
 /// `lattice::STENCIL`: (1,0), (−1,0), (0,1), (0,−1), (1,1), (−1,1), (1,−1),
 /// (−1,−1); `up` are this row's upward bonds, `down` the row below's.
+#[inline(always)]
 pub fn gather_row<T: Real>(
     horizontal: &BondRow<T>,
     up: &UpwardBonds<T>,
@@ -304,7 +332,7 @@ pub fn gather_row<T: Real>(
 /// One force component of `gather_row`. `rows` in the order: horizontal
 /// (spring, damper), up vertical, down vertical, up diagonal, up
 /// anti-diagonal, down anti-diagonal, down diagonal.
-#[inline]
+#[inline(always)]
 fn gather_component<T: Real>(rows: [&Vec<T>; 14], out: &mut [T]) {
     let n = out.len();
     fn at<T>(r: &[T], shift: usize, n: usize) -> &[T] {

@@ -1,0 +1,146 @@
+//! The interface row's friction in the sweep engine: the reference
+//! engine's junction pass with a vectorised path for the common case, a
+//! block whose junctions are all pinned and under threshold. Such a block's
+//! junction forces are one straight loop; any other block (a junction
+//! slipping, one crossing its threshold, the normal-load phase) runs the
+//! reference's `junctions::junction` on each junction in turn. Lane sums and the final
+//! sums follow the reference's order (`junctions::JUNCTION_LANES`), the
+//! final sums for all blocks of the row at once so that the 64 dependent
+//! additions of one block overlap with the other blocks'.
+
+use super::chunk::{Interface, Shared};
+use super::rows::RowView;
+use crate::cpu::junctions::{self, JunctionBlock, JUNCTION_LANES};
+use crate::cpu::{coulomb, JunctionSpring, PINNED};
+use crate::real::{Coordinate, Real};
+use crate::scenario::FrictionLaw;
+
+/// Working arrays of the junction pass, kept between steps.
+#[derive(Debug, Clone, Default)]
+pub struct JunctionScratch<T> {
+    /// Forces of one block's junctions.
+    force: Vec<T>,
+    /// Lane sums, block-major: `lanes[ix * JUNCTION_LANES + lane]`.
+    lanes: Vec<T>,
+    total: Vec<T>,
+}
+
+/// Friction and normal force of the interface row from the row's new state
+/// and bulk forces `fx`.
+#[inline(always)]
+pub fn interface_row<T: Real, C: Coordinate<T>>(
+    s: &Shared<'_, T, C>,
+    row: RowView<'_, T, C>,
+    fx: &[T],
+    out: &mut Interface<'_, T, C>,
+    scratch: &mut JunctionScratch<T>,
+) {
+    let c = s.c;
+    match s.law {
+        FrictionLaw::None => {}
+        FrictionLaw::Coulomb => {
+            for ix in 0..c.nx {
+                let (f, n) = coulomb::coulomb(
+                    c,
+                    s.after,
+                    [row.ux[ix], row.uz[ix]],
+                    [row.vx[ix], row.vz[ix]],
+                    fx[ix],
+                    &mut out.slide[ix],
+                );
+                out.contact[ix] = [f, n];
+            }
+        }
+        FrictionLaw::Junctions | FrictionLaw::SingleJunction => {
+            junction_row(s, row, out, scratch);
+        }
+    }
+}
+
+#[inline(always)]
+fn junction_row<T: Real, C: Coordinate<T>>(
+    s: &Shared<'_, T, C>,
+    row: RowView<'_, T, C>,
+    out: &mut Interface<'_, T, C>,
+    scratch: &mut JunctionScratch<T>,
+) {
+    let c = s.c;
+    let (nx, ns) = (c.nx, c.junction_count);
+    let lanes_used = JUNCTION_LANES.min(ns);
+    scratch.force.resize(ns, T::zero());
+    scratch.lanes.resize(nx * JUNCTION_LANES, T::zero());
+    scratch.total.resize(nx, T::zero());
+    let JunctionScratch {
+        force,
+        lanes,
+        total,
+    } = scratch;
+    for ix in 0..nx {
+        let u = [row.ux[ix], row.uz[ix]];
+        let jb = junctions::junction_block(c, u, [row.vx[ix], row.vz[ix]]);
+        let spring = &mut out.spring[ix * ns..(ix + 1) * ns];
+        let state = &mut out.state[ix * ns..(ix + 1) * ns];
+        let lane_sums = &mut lanes[ix * JUNCTION_LANES..ix * JUNCTION_LANES + lanes_used];
+        let quiet = !s.after.preparing && pinned_forces(&jb, spring, state, force);
+        if !quiet {
+            for (j, ((f, spring), state)) in force.iter_mut().zip(spring).zip(state).enumerate() {
+                *f = junctions::junction(c, s.after, ix, j, &jb, spring, state);
+            }
+        }
+        sum_lanes(force, lane_sums);
+    }
+    // The reference's final sum, lane by lane, every block at once.
+    total.fill(T::zero());
+    for lane in 0..lanes_used {
+        for (ix, t) in total.iter_mut().enumerate() {
+            *t = *t + lanes[ix * JUNCTION_LANES + lane];
+        }
+    }
+    for ix in 0..nx {
+        let normal = junctions::foundation_normal(c, row.uz[ix].value());
+        out.contact[ix] = [total[ix], normal];
+    }
+}
+
+/// The forces of a block's junctions if every one is pinned and none
+/// exceeds the threshold (then nothing changes state: true); false leaves
+/// the block to the reference pass.
+#[inline(always)]
+fn pinned_forces<T: Real, C: Coordinate<T>>(
+    jb: &JunctionBlock<T, C>,
+    spring: &[JunctionSpring<C, T>],
+    state: &[[u32; 2]],
+    force: &mut [T],
+) -> bool {
+    let n = force.len();
+    let (spring, state) = (&spring[..n], &state[..n]);
+    let mut all_pinned = true;
+    for s in state {
+        all_pinned &= s[0] == PINNED;
+    }
+    if !all_pinned {
+        return false;
+    }
+    let mut over = false;
+    for (f, s) in force.iter_mut().zip(spring) {
+        // As the reference: f = −k_j (u_x − anchor).
+        *f = -s.stiffness * jb.ux.diff(s.anchor);
+        over |= f.abs() > jb.threshold;
+    }
+    !over
+}
+
+/// Lane sums of one block's junction forces in the reference's order:
+/// lane l holds 0 + f_l + f_(l+LANES) + ...
+#[inline(always)]
+fn sum_lanes<T: Real>(force: &[T], lane_sums: &mut [T]) {
+    let lanes = lane_sums.len();
+    for (sum, f) in lane_sums.iter_mut().zip(&force[..lanes]) {
+        *sum = T::zero() + *f;
+    }
+    for chunk in force[lanes..].chunks(lanes) {
+        for (sum, f) in lane_sums.iter_mut().zip(chunk) {
+            *sum = *sum + *f;
+        }
+    }
+}
