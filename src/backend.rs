@@ -1,14 +1,18 @@
 //! Choosing and building an engine: backend and precision.
 
-use crate::cpu::CpuEngine;
+use crate::cpu::{CpuEngine, SweepEngine};
 use crate::engine::{Engine, EngineError};
 use crate::gpu::{GpuEngine, GpuOptions};
 use crate::model::Model;
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
 pub enum Backend {
-    /// The CPU reference engine.
+    /// The CPU engine (the sweep engine: each bond once, vectorised,
+    /// bitwise the reference engine's results).
     Cpu,
+    /// The CPU reference engine, the WGSL kernels' twin, phase by phase
+    /// (about 3× slower than `cpu`, the same bits): for cross-checks.
+    CpuReference,
     /// The wgpu engine (a hardware adapter, else lavapipe).
     Gpu,
     /// A hardware GPU, else the CPU (all cores). A software adapter
@@ -31,8 +35,22 @@ pub enum Precision {
     F32Plain,
 }
 
-/// Builds the CPU engine in the requested precision.
+/// Builds the CPU engine (the sweep engine) in the requested precision.
 pub fn cpu_engine(
+    model: &Model,
+    precision: Precision,
+    threads: usize,
+) -> Result<Box<dyn Engine>, EngineError> {
+    Ok(match precision {
+        Precision::F64 => Box::new(SweepEngine::<f64>::new(model, threads)?),
+        Precision::F32 => Box::new(SweepEngine::<f32>::new(model, threads)?),
+        Precision::F32Plain => Box::new(SweepEngine::<f32, f32>::new(model, threads)?),
+    })
+}
+
+/// Builds the CPU reference engine (the kernels' twin) in the requested
+/// precision.
+pub fn cpu_reference_engine(
     model: &Model,
     precision: Precision,
     threads: usize,
@@ -64,6 +82,7 @@ pub fn make_engine_with(
 ) -> Result<Box<dyn Engine>, EngineError> {
     match backend {
         Backend::Cpu => cpu_engine(model, precision, threads),
+        Backend::CpuReference => cpu_reference_engine(model, precision, threads),
         Backend::Gpu => {
             if precision != Precision::F32 {
                 return Err(EngineError::Gpu(

@@ -30,7 +30,7 @@ pub fn run(a: RunArgs) -> anyhow::Result<ExitCode> {
     let (scenario, name) = super::load_scenario(a.scenario.as_deref(), &set)?;
     let model = Model::from_scenario(&scenario, a.allow_unstable)?;
     let precision = a.precision.unwrap_or(match a.backend {
-        Backend::Cpu => Precision::F64,
+        Backend::Cpu | Backend::CpuReference => Precision::F64,
         _ => Precision::F32,
     });
     let gpu = GpuOptions {

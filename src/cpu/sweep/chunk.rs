@@ -159,6 +159,35 @@ fn advance_row<T: Real, C: Coordinate<T>>(
     bad
 }
 
+/// Advances row `z` of a band starting at row `a` in place; notes the
+/// first block that blew up in `bad`.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+fn advance_own<T: Real, C: Coordinate<T>>(
+    s: &Shared<'_, T, C>,
+    a: usize,
+    z: usize,
+    ux: &mut [C],
+    uz: &mut [C],
+    vx: &mut [T],
+    vz: &mut [T],
+    bad: &mut Option<usize>,
+) {
+    let nx = s.c.nx;
+    let r = (z - a) * nx..(z - a + 1) * nx;
+    let row_bad = advance_row(
+        s,
+        z,
+        &mut ux[r.clone()],
+        &mut uz[r.clone()],
+        &mut vx[r.clone()],
+        &mut vz[r],
+    );
+    if bad.is_none() {
+        *bad = row_bad.map(|ix| z * nx + ix);
+    }
+}
+
 /// The instruction set the band sweep is compiled for.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Isa {
@@ -227,23 +256,9 @@ fn sweep_band_body<T: Real, C: Coordinate<T>>(
     let (a, b) = (rows.start, rows.end);
     let own = |z: usize| (z - a) * nx..(z - a + 1) * nx;
     let mut bad = None;
-    let mut advance_own = |z: usize, ux: &mut [C], uz: &mut [C], vx: &mut [T], vz: &mut [T]| {
-        let r = own(z);
-        let row_bad = advance_row(
-            s,
-            z,
-            &mut ux[r.clone()],
-            &mut uz[r.clone()],
-            &mut vx[r.clone()],
-            &mut vz[r],
-        );
-        if bad.is_none() {
-            bad = row_bad.map(|ix| z * nx + ix);
-        }
-    };
     if !s.forces {
         for z in a..b {
-            advance_own(z, ux, uz, vx, vz);
+            advance_own(s, a, z, ux, uz, vx, vz, &mut bad);
         }
         return bad;
     }
@@ -276,7 +291,7 @@ fn sweep_band_body<T: Real, C: Coordinate<T>>(
             &mut above.vz,
         );
     }
-    advance_own(a, ux, uz, vx, vz);
+    advance_own(s, a, a, ux, uz, vx, vz, &mut bad);
     if a > 0 {
         let first = view(ux, uz, vx, vz, own(a));
         upward_bonds(
@@ -293,7 +308,7 @@ fn sweep_band_body<T: Real, C: Coordinate<T>>(
     let drive_target = s.drive_target;
     for z in a..b {
         if z + 1 < b {
-            advance_own(z + 1, ux, uz, vx, vz);
+            advance_own(s, a, z + 1, ux, uz, vx, vz, &mut bad);
         }
         let row = view(ux, uz, vx, vz, own(z));
         horizontal_bonds(s.bonds, s.c.eta, s.c.bond_damping, row, horizontal);

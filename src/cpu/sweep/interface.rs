@@ -39,16 +39,16 @@ pub fn interface_row<T: Real, C: Coordinate<T>>(
     match s.law {
         FrictionLaw::None => {}
         FrictionLaw::Coulomb => {
-            for ix in 0..c.nx {
+            for (ix, (contact, slide)) in out.contact.iter_mut().zip(&mut *out.slide).enumerate() {
                 let (f, n) = coulomb::coulomb(
                     c,
                     s.after,
                     [row.ux[ix], row.uz[ix]],
                     [row.vx[ix], row.vz[ix]],
                     fx[ix],
-                    &mut out.slide[ix],
+                    slide,
                 );
-                out.contact[ix] = [f, n];
+                *contact = [f, n];
             }
         }
         FrictionLaw::Junctions | FrictionLaw::SingleJunction => {
@@ -96,9 +96,8 @@ fn junction_row<T: Real, C: Coordinate<T>>(
             *t = *t + lanes[ix * JUNCTION_LANES + lane];
         }
     }
-    for ix in 0..nx {
-        let normal = junctions::foundation_normal(c, row.uz[ix].value());
-        out.contact[ix] = [total[ix], normal];
+    for ((contact, friction), uz) in out.contact.iter_mut().zip(&*total).zip(row.uz) {
+        *contact = [*friction, junctions::foundation_normal(c, uz.value())];
     }
 }
 
