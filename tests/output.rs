@@ -42,7 +42,7 @@ fn every_channel_reads_back_as_the_engine_state() {
     let run = RunFile::read(&path).unwrap();
     assert!(!run.truncated);
     assert_eq!(run.metadata["nx"], "57");
-    assert_eq!(run.metadata["backend"], "cpu f64 (1 thread(s))");
+    assert_eq!(run.metadata["backend"], "cpu f64 (1 thread(s), sweep)");
     let attached = Scenario::parse(run.scenario.as_deref().unwrap(), "attachment", &[]).unwrap();
     assert_eq!(attached, scenario);
     assert_eq!(

@@ -359,7 +359,7 @@ impl<T: Real, C: Coordinate<T>> Engine for CpuEngine<T, C> {
 
     fn describe(&self) -> String {
         format!(
-            "cpu {} ({} thread(s))",
+            "cpu-reference {} ({} thread(s))",
             precision_name::<T, C>(),
             self.threads()
         )

@@ -410,7 +410,7 @@ impl<T: Real, C: Coordinate<T>> Engine for SweepEngine<T, C> {
 
     fn describe(&self) -> String {
         format!(
-            "cpu {} sweep ({} thread(s))",
+            "cpu {} ({} thread(s), sweep)",
             super::precision_name::<T, C>(),
             self.threads()
         )
