@@ -65,7 +65,11 @@ fn same_bits<T: Real, C: Coordinate<T>>(m: &Model, threads: usize, steps: u64) -
             advance_to(sweep, at).unwrap();
             let b = sweep.snapshot().unwrap();
             if a != b {
-                panic!("{:?}: {}", sweep.isa(), first_difference(&a, &b));
+                panic!(
+                    "{:?}, {threads} threads: {}",
+                    sweep.isa(),
+                    first_difference(&a, &b)
+                );
             }
         }
         last = Some(a);

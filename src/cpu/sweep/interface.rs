@@ -42,7 +42,7 @@ pub fn interface_row<T: Real, C: Coordinate<T>>(
             for (ix, (contact, slide)) in out.contact.iter_mut().zip(&mut *out.slide).enumerate() {
                 let (f, n) = coulomb::coulomb(
                     c,
-                    s.after,
+                    &s.after,
                     [row.ux[ix], row.uz[ix]],
                     [row.vx[ix], row.vz[ix]],
                     fx[ix],
@@ -84,7 +84,7 @@ fn junction_row<T: Real, C: Coordinate<T>>(
         let quiet = !s.after.preparing && pinned_forces(&jb, spring, state, force);
         if !quiet {
             for (j, ((f, spring), state)) in force.iter_mut().zip(spring).zip(state).enumerate() {
-                *f = junctions::junction(c, s.after, ix, j, &jb, spring, state);
+                *f = junctions::junction(c, &s.after, ix, j, &jb, spring, state);
             }
         }
         sum_lanes(force, lane_sums);

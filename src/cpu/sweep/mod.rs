@@ -12,6 +12,7 @@
 
 mod chunk;
 mod interface;
+mod persistent;
 mod rows;
 
 use super::bulk_forces::bond_consts;
@@ -20,10 +21,9 @@ use crate::engine::{blow_up, Engine, EngineError, Snapshot};
 use crate::lattice::{block_flags, initial_displacement};
 use crate::model::{Driver, Model};
 use crate::real::{Coordinate, Real};
-use crate::step_params::{step_params, Consts};
+use crate::step_params::Consts;
 pub use chunk::Isa;
-use chunk::{Advance, Band, Interface, Scratch, Shared};
-use rayon::prelude::*;
+use chunk::{Advance, Band, Fixed, Interface, Scratch, Shared, StateView};
 use rows::{ForwardBonds, RowView};
 
 /// Lattices with fewer blocks than this run on one thread unless asked for
@@ -70,6 +70,14 @@ struct State<T, C> {
 }
 
 impl<T: Real, C: Coordinate<T>> State<T, C> {
+    fn view(&self) -> StateView<'_, T, C> {
+        StateView {
+            kin: self.kin.view(),
+            force: [&self.fx, &self.fz],
+            contact: &self.contact,
+        }
+    }
+
     fn new(n: usize, nx: usize) -> Self {
         State {
             kin: Kinematics::new(n),
@@ -84,10 +92,7 @@ impl<T: Real, C: Coordinate<T>> State<T, C> {
 /// `CpuEngine`).
 pub struct SweepEngine<T: Real, C: Coordinate<T> = <T as Real>::Coord> {
     model: Model,
-    consts: Consts<T>,
-    bonds: ForwardBonds<T>,
-    speed_limit: T,
-    flags: Vec<u32>,
+    fixed: Fixed<T>,
     now: State<T, C>,
     next: State<T, C>,
     junction_spring: Vec<JunctionSpring<C, T>>,
@@ -136,10 +141,13 @@ impl<T: Real, C: Coordinate<T>> SweepEngine<T, C> {
         }
         let nj = model.n_junctions();
         let mut engine = SweepEngine {
-            consts,
-            bonds: ForwardBonds::from_stencil(&bond_consts(&consts)),
-            speed_limit: T::from_f64(model.pressure_wave_speed()),
-            flags: block_flags(model),
+            fixed: Fixed {
+                consts,
+                bonds: ForwardBonds::from_stencil(&bond_consts(&consts)),
+                flags: block_flags(model),
+                law: model.law,
+                speed_limit: T::from_f64(model.pressure_wave_speed()),
+            },
             next: now.clone(),
             now,
             junction_spring: vec![JunctionSpring::default(); nj],
@@ -175,36 +183,22 @@ impl<T: Real, C: Coordinate<T>> SweepEngine<T, C> {
         self.isa = Isa::Baseline;
     }
 
-    /// One pass over all bands into `next`, then `next` becomes `now`.
-    /// Returns the index of the first block that blew up.
+    /// One pass over all bands into `next` on the calling thread, then
+    /// `next` becomes `now`. Returns the index of the first block that blew
+    /// up.
     fn sweep(&mut self, advance: Advance, forces: bool) -> Option<usize> {
-        let c = &self.consts;
-        let before = step_params(c, self.step);
-        let after_step = if advance == Advance::Leapfrog {
-            self.step + 1
-        } else {
-            self.step
-        };
-        let after = step_params(c, after_step);
-        let shared = Shared {
-            c,
-            bonds: &self.bonds,
-            flags: &self.flags,
-            law: self.model.law,
-            before: &before,
-            after: &after,
-            drive_target: C::from_f64(self.drive_origin.as_f64() + after.drive_offset),
-            speed_limit: self.speed_limit,
-            now: &self.now.kin,
-            now_force: [&self.now.fx, &self.now.fz],
-            now_contact: &self.now.contact,
+        let shared = Shared::new(
+            &self.fixed,
+            self.drive_origin,
+            self.step,
+            self.now.view(),
             advance,
             forces,
-        };
+        );
         let isa = self.isa;
         let bands = split_bands(
             &self.bands,
-            c.nx,
+            self.fixed.consts.nx,
             &mut self.next,
             Interface {
                 contact: &mut [],
@@ -213,41 +207,87 @@ impl<T: Real, C: Coordinate<T>> SweepEngine<T, C> {
                 slide: &mut self.slide,
             },
         );
-        let bad = match &self.pool {
-            Some(pool) => pool.install(|| {
-                bands
-                    .into_par_iter()
-                    .zip(self.scratch.par_iter_mut())
-                    .filter_map(|(band, scratch)| chunk::sweep_band(isa, &shared, band, scratch))
-                    .min()
-            }),
-            None => bands
-                .into_iter()
-                .zip(self.scratch.iter_mut())
-                .filter_map(|(band, scratch)| chunk::sweep_band(isa, &shared, band, scratch))
-                .min(),
-        };
+        let bad = bands
+            .into_iter()
+            .zip(self.scratch.iter_mut())
+            .filter_map(|(band, scratch)| chunk::sweep_band(isa, &shared, band, scratch))
+            .min();
         std::mem::swap(&mut self.now, &mut self.next);
         bad
     }
 
-    /// One leapfrog step, then the forces, friction and junction states of
-    /// the new state (as `CpuEngine::one_step`).
-    fn one_step(&mut self) -> Result<(), EngineError> {
-        let starts_driving = self.step + 1 == self.model.prep_steps;
-        let bad = self.sweep(Advance::Leapfrog, !starts_driving);
-        self.step += 1;
-        if let Some(i) = bad {
-            let k = &self.now.kin;
-            let u = [k.ux[i].as_f64(), k.uz[i].as_f64()];
-            let v = [k.vx[i].as_f64(), k.vz[i].as_f64()];
-            return Err(blow_up(&self.model, self.step, i, u, v));
+    /// Up to `n` leapfrog steps within one loading phase, each band on its
+    /// own thread of the pool with one barrier per step; stops after the
+    /// step where a block blew up, and returns that block.
+    fn advance_bands(&mut self, n: u64) -> Option<usize> {
+        let Some(pool) = &self.pool else {
+            for _ in 0..n {
+                let bad = self.sweep(Advance::Leapfrog, true);
+                self.step += 1;
+                if bad.is_some() {
+                    return bad;
+                }
+            }
+            return None;
+        };
+        let run = persistent::Run {
+            fixed: &self.fixed,
+            drive_origin: self.drive_origin,
+            first_step: self.step,
+            steps: n,
+            bands: &self.bands,
+            isa: self.isa,
+        };
+        let interface = (
+            &mut self.junction_spring[..],
+            &mut self.junction_state[..],
+            &mut self.slide[..],
+        );
+        let (done, bad) = run.go(
+            pool,
+            [&mut self.now, &mut self.next],
+            &mut self.scratch,
+            interface,
+        );
+        // Odd step counts leave the newest state in `next`.
+        if done % 2 == 1 {
+            std::mem::swap(&mut self.now, &mut self.next);
         }
-        if starts_driving {
-            self.begin_driving();
-            self.sweep(Advance::Copy, true);
+        self.step += done;
+        bad
+    }
+
+    /// `n` leapfrog steps, each ending with the forces, friction and
+    /// junction states of its new state (as `CpuEngine::one_step`); the
+    /// step where driving starts runs on its own, with the driver origin
+    /// and trigger set between its leapfrog and its forces.
+    fn steps(&mut self, n: u64) -> Result<(), EngineError> {
+        let end = self.step + n;
+        let prep = self.model.prep_steps;
+        while self.step < end {
+            if self.step + 1 == prep {
+                let bad = self.sweep(Advance::Leapfrog, false);
+                self.step += 1;
+                self.stop_if_blown_up(bad)?;
+                self.begin_driving();
+                self.sweep(Advance::Copy, true);
+                continue;
+            }
+            // Up to the state before that step, or to the end.
+            let until = if self.step + 1 < prep { prep - 1 } else { end };
+            let bad = self.advance_bands(until.min(end) - self.step);
+            self.stop_if_blown_up(bad)?;
         }
         Ok(())
+    }
+
+    /// The blow-up error for block `bad` of the current state, if any.
+    fn stop_if_blown_up(&self, bad: Option<usize>) -> Result<(), EngineError> {
+        let Some(i) = bad else { return Ok(()) };
+        let k = &self.now.kin;
+        let u = [k.ux[i].as_f64(), k.uz[i].as_f64()];
+        let v = [k.vx[i].as_f64(), k.vz[i].as_f64()];
+        Err(blow_up(&self.model, self.step, i, u, v))
     }
 
     /// As `CpuEngine::begin_driving`: the driver origin and the trigger's
@@ -358,10 +398,7 @@ impl<T: Real, C: Coordinate<T>> Engine for SweepEngine<T, C> {
     }
 
     fn advance(&mut self, n: u64) -> Result<(), EngineError> {
-        for _ in 0..n {
-            self.one_step()?;
-        }
-        Ok(())
+        self.steps(n)
     }
 
     fn snapshot(&mut self) -> Result<Snapshot, EngineError> {
