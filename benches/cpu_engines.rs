@@ -1,6 +1,7 @@
-//! The sweep engine against the reference engine (`CpuEngine`, today's
-//! gather loop, kept for the tests) on the same scene in one process,
-//! interleaved, so that the machine's noise cancels in their ratio.
+//! The sweep engine against the reference engine (`CpuEngine`, the
+//! original gather loop, kept for the tests), and the sweep engine on two
+//! threads against one, on the same scene in one process, interleaved, so
+//! that the machine's noise cancels in their ratio.
 //! `cargo bench --bench cpu_engines [-- FILTER]`; prints a Markdown table
 //! (recorded in BENCHMARKS.md, "CPU engine: sweep").
 //!
@@ -43,28 +44,42 @@ fn rate(engine: &mut dyn Engine, steps: u64) -> f64 {
     steps as f64 / t0.elapsed().as_secs_f64()
 }
 
-/// Median block-steps/s of the reference and the sweep engine (with
-/// `threads`), measured in alternation `rounds` times.
-fn compare<T: Real, C: Coordinate<T>>(m: &Model, threads: usize, seconds: f64) -> (f64, f64) {
-    let mut reference = CpuEngine::<T, C>::new(m, 1).expect("reference");
-    let mut sweep = SweepEngine::<T, C>::new(m, threads).expect("sweep");
-    // Past the normal-load phase, into driving.
-    advance_to(&mut reference, m.prep_steps + 1000).expect("warm-up");
-    advance_to(&mut sweep, m.prep_steps + 1000).expect("warm-up");
-    // Size a round to ~seconds/6 of the reference.
-    let probe = rate(&mut reference, 8);
+/// Median block-steps/s of engines `a` and `b` on `m`, measured in
+/// alternation three times after both have stepped into driving.
+fn compare(m: &Model, mut a: Box<dyn Engine>, mut b: Box<dyn Engine>, seconds: f64) -> (f64, f64) {
+    advance_to(a.as_mut(), m.prep_steps + 1000).expect("warm-up");
+    advance_to(b.as_mut(), m.prep_steps + 1000).expect("warm-up");
+    // Size a round to ~seconds/6 of the slower engine, a.
+    let probe = rate(a.as_mut(), 8);
     let steps = ((probe * seconds / 6.0) as u64).max(4);
-    let rounds = 3;
-    let (mut a, mut b) = (Vec::new(), Vec::new());
-    for _ in 0..rounds {
-        a.push(rate(&mut reference, steps));
-        b.push(rate(&mut sweep, steps));
+    let (mut ra, mut rb) = (Vec::new(), Vec::new());
+    for _ in 0..3 {
+        ra.push(rate(a.as_mut(), steps));
+        rb.push(rate(b.as_mut(), steps));
     }
     let median = |v: &mut Vec<f64>| {
         v.sort_by(f64::total_cmp);
         v[v.len() / 2] * m.n_blocks() as f64
     };
-    (median(&mut a), median(&mut b))
+    (median(&mut ra), median(&mut rb))
+}
+
+fn reference<T: Real, C: Coordinate<T>>(m: &Model) -> Box<dyn Engine> {
+    Box::new(CpuEngine::<T, C>::new(m, 1).expect("reference"))
+}
+
+fn sweep<T: Real, C: Coordinate<T>>(m: &Model, threads: usize) -> Box<dyn Engine> {
+    Box::new(SweepEngine::<T, C>::new(m, threads).expect("sweep"))
+}
+
+/// The reference and the sweep engine, or (`threads_vs_one`) the sweep
+/// engine on two threads against itself on one.
+fn pair<T: Real, C: Coordinate<T>>(m: &Model, threads_vs_one: bool, s: f64) -> (f64, f64) {
+    if threads_vs_one {
+        compare(m, sweep::<T, C>(m, 1), sweep::<T, C>(m, 2), s)
+    } else {
+        compare(m, reference::<T, C>(m), sweep::<T, C>(m, 1), s)
+    }
 }
 
 fn main() {
@@ -76,26 +91,32 @@ fn main() {
         .ok()
         .and_then(|s| s.parse().ok())
         .unwrap_or(2.0);
-    println!(
-        "| lattice | phase | precision | sweep threads | reference block-steps/s | \
-         sweep block-steps/s | sweep / reference |"
-    );
-    println!("| --- | --- | --- | ---: | ---: | ---: | ---: |");
-    for (nx, nz, driven) in [(57u32, 31u32, false), (57, 31, true), (1024, 256, true)] {
+    println!("| lattice | phase | precision | engine a | engine b | a block-steps/s | b block-steps/s | b / a |");
+    println!("| --- | --- | --- | --- | --- | ---: | ---: | ---: |");
+    let mut scenes = vec![(57u32, 31u32, false), (57, 31, true), (1024, 256, true)];
+    if std::env::var("SLIPFRONT_BENCH_SCALING").is_ok() {
+        scenes.extend([(256, 128, true), (1024, 256, false)]);
+    }
+    for (nx, nz, driven) in scenes {
         let phase = if driven { "driven" } else { "stick" };
         let m = scene(nx, nz, driven);
         for precision in ["f64", "f32"] {
-            for threads in [1usize, 2] {
-                let name = format!("{nx}x{nz} {phase} {precision} {threads}");
+            for threads_vs_one in [false, true] {
+                let (a_name, b_name) = if threads_vs_one {
+                    ("sweep, 1 thread", "sweep, 2 threads")
+                } else {
+                    ("reference, 1 thread", "sweep, 1 thread")
+                };
+                let name = format!("{nx}x{nz} {phase} {precision} {b_name}");
                 if !filter.iter().all(|f| name.contains(f.as_str())) {
                     continue;
                 }
                 let (a, b) = match precision {
-                    "f64" => compare::<f64, f64>(&m, threads, seconds),
-                    _ => compare::<f32, DoubleSingle>(&m, threads, seconds),
+                    "f64" => pair::<f64, f64>(&m, threads_vs_one, seconds),
+                    _ => pair::<f32, DoubleSingle>(&m, threads_vs_one, seconds),
                 };
                 println!(
-                    "| {nx}×{nz} | {phase} | {precision} | {threads} | {a:.3e} | {b:.3e} | {:.2} |",
+                    "| {nx}×{nz} | {phase} | {precision} | {a_name} | {b_name} | {a:.3e} | {b:.3e} | {:.2} |",
                     b / a
                 );
             }

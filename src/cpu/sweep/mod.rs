@@ -243,12 +243,16 @@ impl<T: Real, C: Coordinate<T>> SweepEngine<T, C> {
             &mut self.junction_state[..],
             &mut self.slide[..],
         );
-        let (done, bad) = run.go(
+        let (done, bad, busy) = run.go(
             pool,
             [&mut self.now, &mut self.next],
             &mut self.scratch,
             interface,
         );
+        // Calls of a few steps measure little but noise.
+        if done >= 16 {
+            self.bands = persistent::rebalance(&self.bands, &busy);
+        }
         // Odd step counts leave the newest state in `next`.
         if done % 2 == 1 {
             std::mem::swap(&mut self.now, &mut self.next);

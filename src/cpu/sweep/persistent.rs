@@ -95,11 +95,7 @@ impl<T: Real, C: Coordinate<T>> RawState<T, C> {
     unsafe fn band<'b>(
         &self,
         rows: Range<usize>,
-        interface: Option<(
-            &'b mut [JunctionSpring<C, T>],
-            &'b mut [[u32; 2]],
-            &'b mut [[i32; 2]],
-        )>,
+        interface: Option<InterfaceArrays<'b, T, C>>,
     ) -> Band<'b, T, C> {
         use std::slice::from_raw_parts_mut as slice;
         let (first, len) = (rows.start * self.nx, rows.len() * self.nx);
@@ -160,15 +156,15 @@ impl SpinBarrier {
 impl<T: Real, C: Coordinate<T>> Run<'_, T, C> {
     /// Steps `buffers[0]` (the current state) on the pool's threads, one
     /// band each. Returns the steps taken (the newest state is in
-    /// `buffers[steps % 2]`) and the first block that blew up in the last
-    /// of them.
+    /// `buffers[steps % 2]`), the first block that blew up in the last of
+    /// them, and each band's working time (s, barrier waits excluded).
     pub fn go(
         &self,
         pool: &rayon::ThreadPool,
         buffers: [&mut State<T, C>; 2],
         scratch: &mut [Scratch<T, C>],
         interface: InterfaceArrays<'_, T, C>,
-    ) -> (u64, Option<usize>) {
+    ) -> (u64, Option<usize>, Vec<f64>) {
         assert_eq!(pool.current_num_threads(), self.bands.len());
         let [a, b] = buffers;
         let raw = [RawState::of(a), RawState::of(b)];
@@ -179,11 +175,14 @@ impl<T: Real, C: Coordinate<T>> Run<'_, T, C> {
         // Step · blocks + block of the earliest blow-up (u64::MAX: none).
         let blown = AtomicU64::new(u64::MAX);
         let done = AtomicU64::new(self.steps);
+        let busy: Vec<AtomicU64> = self.bands.iter().map(|_| AtomicU64::new(0)).collect();
         pool.broadcast(|ctx| {
             let t = ctx.index();
+            let mut working = std::time::Duration::ZERO;
             let mut scratch = scratch[t].lock().expect("scratch");
             let mut interface = (t == 0).then(|| interface.lock().expect("interface"));
             for k in 0..self.steps {
+                let started = std::time::Instant::now();
                 let (now, next) = (&raw[(k % 2) as usize], &raw[1 - (k % 2) as usize]);
                 // SAFETY: in step k, buffer k mod 2 is only read and each
                 // thread writes only its band's rows of the other (the
@@ -208,6 +207,10 @@ impl<T: Real, C: Coordinate<T>> Run<'_, T, C> {
                 if let Some(i) = bad {
                     blown.fetch_min(k * blocks + i as u64, Ordering::AcqRel);
                 }
+                working += started.elapsed();
+                if k + 1 == self.steps {
+                    busy[t].store(working.as_nanos() as u64, Ordering::Relaxed);
+                }
                 barrier.wait();
                 // Every thread sees this step's blow-ups (a later step's
                 // have a larger key), so all stop after the same step.
@@ -216,12 +219,71 @@ impl<T: Real, C: Coordinate<T>> Run<'_, T, C> {
                     if t == 0 {
                         done.store(k + 1, Ordering::Relaxed);
                     }
+                    busy[t].store(working.as_nanos() as u64, Ordering::Relaxed);
                     return;
                 }
             }
         });
         let first = blown.load(Ordering::Acquire);
         let bad = (first != u64::MAX).then(|| (first % blocks) as usize);
-        (done.load(Ordering::Relaxed), bad)
+        let busy = busy
+            .iter()
+            .map(|b| b.load(Ordering::Relaxed) as f64 * 1e-9)
+            .collect();
+        (done.load(Ordering::Relaxed), bad, busy)
+    }
+}
+
+/// New band boundaries for `nz` rows from the bands' rows and working
+/// times: each band gets rows in proportion to its measured rows per
+/// second (the interface band also carries the junctions), moved halfway
+/// there to damp noise. Bands keep at least one row. Any split gives the
+/// same bits, so this only changes the speed.
+pub fn rebalance(bands: &[Range<usize>], busy: &[f64]) -> Vec<Range<usize>> {
+    let nz = bands.last().map_or(0, |b| b.end);
+    let rates: Vec<f64> = bands
+        .iter()
+        .zip(busy)
+        .map(|(b, &t)| b.len() as f64 / t.max(1e-9))
+        .collect();
+    let total: f64 = rates.iter().sum();
+    if !(total.is_finite() && total > 0.0) || bands.len() < 2 {
+        return bands.to_vec();
+    }
+    let mut out = Vec::with_capacity(bands.len());
+    let mut start = 0usize;
+    let mut target = 0.0;
+    for (i, (b, rate)) in bands.iter().zip(&rates).enumerate() {
+        let left = bands.len() - i - 1;
+        target += 0.5 * (b.len() as f64 + nz as f64 * rate / total);
+        let end = if left == 0 {
+            nz
+        } else {
+            (target.round() as usize).clamp(start + 1, nz - left)
+        };
+        out.push(start..end);
+        start = end;
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::rebalance;
+
+    #[test]
+    fn rebalance_moves_rows_away_from_the_slow_band_and_keeps_every_row() {
+        // Band 0 took twice as long per row: it should shrink, halfway.
+        let bands = rebalance(&[0..100, 100..200], &[2.0, 1.0]);
+        assert_eq!(bands, vec![0..83, 83..200]);
+        // Balanced bands stay; one-row bands survive.
+        assert_eq!(
+            rebalance(&[0..50, 50..100], &[1.0, 1.0]),
+            vec![0..50, 50..100]
+        );
+        assert_eq!(
+            rebalance(&[0..1, 1..3, 3..4], &[100.0, 1.0, 1.0]),
+            vec![0..1, 1..3, 3..4]
+        );
     }
 }
