@@ -36,9 +36,16 @@ pub fn verlet<T: Real, C: Coordinate<T>>(
     v[1] = vz;
     u[0] = u[0].add(c.dt * vx);
     u[1] = u[1].add(c.dt * vz);
+    sane(*u, *v, speed_limit)
+}
+
+/// False for a blown-up block: a non-finite displacement or a speed above
+/// `speed_limit`.
+#[inline]
+pub fn sane<T: Real, C: Coordinate<T>>(u: [C; 2], v: [T; 2], speed_limit: T) -> bool {
     // NaN fails every comparison, so this also catches non-finite values.
-    vx.abs() <= speed_limit
-        && vz.abs() <= speed_limit
+    v[0].abs() <= speed_limit
+        && v[1].abs() <= speed_limit
         && u[0].value().is_finite()
         && u[1].value().is_finite()
 }

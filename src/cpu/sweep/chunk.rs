@@ -183,34 +183,41 @@ fn advance_row<T: Real, C: Coordinate<T>>(
         return None;
     }
     let has_friction = z == 0 && s.law != FrictionLaw::None;
-    let mut bad = None;
+    let row = first..first + nx;
+    // Straight slices of one length, and the blow-up check folded into one
+    // flag, so that the loop vectorises; the rare bad row is searched after.
+    let (now_ux, now_uz) = (&now.ux[row.clone()], &now.uz[row.clone()]);
+    let (now_vx, now_vz) = (&now.vx[row.clone()], &now.vz[row.clone()]);
+    let (fx, fz) = (&s.now_force[0][row.clone()], &s.now_force[1][row.clone()]);
+    let flags = &s.flags[row];
+    let (ux, uz, vx, vz) = (&mut ux[..nx], &mut uz[..nx], &mut vx[..nx], &mut vz[..nx]);
+    let contact = &s.now_contact[..if has_friction { nx } else { 0 }];
+    let mut all_ok = true;
     for ix in 0..nx {
-        let i = first + ix;
-        let mut u = [now.ux[i], now.uz[i]];
-        let mut v = [now.vx[i], now.vz[i]];
+        let mut u = [now_ux[ix], now_uz[ix]];
+        let mut v = [now_vx[ix], now_vz[ix]];
         let friction = if has_friction {
-            s.now_contact[ix][0]
+            contact[ix][0]
         } else {
             T::zero()
         };
-        let force = [s.now_force[0][i], s.now_force[1][i]];
-        let ok = verlet::verlet(
+        all_ok &= verlet::verlet(
             s.c,
             &s.before,
-            s.flags[i],
-            force,
+            flags[ix],
+            [fx[ix], fz[ix]],
             friction,
             &mut u,
             &mut v,
             s.speed_limit,
         );
-        if !ok && bad.is_none() {
-            bad = Some(ix);
-        }
         [ux[ix], uz[ix]] = u;
         [vx[ix], vz[ix]] = v;
     }
-    bad
+    if all_ok {
+        return None;
+    }
+    (0..nx).find(|&ix| !verlet::sane([ux[ix], uz[ix]], [vx[ix], vz[ix]], s.speed_limit))
 }
 
 /// Advances row `z` of a band starting at row `a` in place; notes the
