@@ -166,6 +166,26 @@ pub fn junction<T: Real, C: Coordinate<T>>(
     f
 }
 
+/// The junction arrays (anchor, stiffness; slip steps left, rupture
+/// count) of a snapshot, in an engine's number types.
+pub fn load_junctions<T: Real, C: Coordinate<T>>(
+    snap: &crate::engine::Snapshot,
+    spring: &mut [JunctionSpring<C, T>],
+    state: &mut [[u32; 2]],
+) {
+    let anchors = snap.anchor.iter().zip(&snap.junction_stiffness);
+    for (s, (a, k)) in spring.iter_mut().zip(anchors) {
+        *s = JunctionSpring {
+            anchor: C::from_f64(*a),
+            stiffness: T::from_f64(*k),
+        };
+    }
+    let states = snap.slip_steps_left.iter().zip(&snap.ruptures);
+    for (s, (left, count)) in state.iter_mut().zip(states) {
+        *s = [*left, *count];
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -280,23 +280,7 @@ impl<T: Real, C: Coordinate<T>> CpuEngine<T, C> {
 
     /// Junction arrays from a snapshot.
     fn load_junctions(&mut self, base: &Snapshot) {
-        for (s, (a, k)) in self
-            .junction_spring
-            .iter_mut()
-            .zip(base.anchor.iter().zip(&base.junction_stiffness))
-        {
-            *s = JunctionSpring {
-                anchor: C::from_f64(*a),
-                stiffness: T::from_f64(*k),
-            };
-        }
-        for (s, (left, count)) in self
-            .junction_state
-            .iter_mut()
-            .zip(base.slip_steps_left.iter().zip(&base.ruptures))
-        {
-            *s = [*left, *count];
-        }
+        junctions::load_junctions(base, &mut self.junction_spring, &mut self.junction_state);
     }
 
     fn snapshot_now(&self) -> Snapshot {

@@ -8,8 +8,8 @@
 //! final sums for all blocks of the row at once so that the 64 dependent
 //! additions of one block overlap with the other blocks'.
 
-use super::chunk::{Interface, Shared};
 use super::rows::RowView;
+use super::step::{Interface, Shared};
 use crate::cpu::junctions::{self, JunctionBlock, JUNCTION_LANES};
 use crate::cpu::{coulomb, JunctionSpring, PINNED};
 use crate::real::{Coordinate, Real};

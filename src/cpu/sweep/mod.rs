@@ -14,6 +14,7 @@ mod chunk;
 mod interface;
 mod persistent;
 mod rows;
+mod step;
 
 use super::bulk_forces::bond_consts;
 use super::{JunctionSpring, PINNED};
@@ -23,8 +24,9 @@ use crate::model::{Driver, Model};
 use crate::real::{Coordinate, Real};
 use crate::step_params::Consts;
 pub use chunk::Isa;
-use chunk::{Advance, Band, Fixed, Interface, Scratch, Shared, StateView};
+use chunk::{Band, Scratch};
 use rows::{ForwardBonds, RowView};
+use step::{Advance, Fixed, Interface, Shared, StateView};
 
 /// Lattices with fewer blocks than this run on one thread unless asked for
 /// more explicitly: measured in BENCHMARKS.md ("CPU engine: sweep").
@@ -429,23 +431,7 @@ impl<T: Real, C: Coordinate<T>> Engine for SweepEngine<T, C> {
     }
 
     fn set_junctions(&mut self, snap: &Snapshot) -> Result<(), EngineError> {
-        for (s, (a, k)) in self
-            .junction_spring
-            .iter_mut()
-            .zip(snap.anchor.iter().zip(&snap.junction_stiffness))
-        {
-            *s = JunctionSpring {
-                anchor: C::from_f64(*a),
-                stiffness: T::from_f64(*k),
-            };
-        }
-        for (s, (left, count)) in self
-            .junction_state
-            .iter_mut()
-            .zip(snap.slip_steps_left.iter().zip(&snap.ruptures))
-        {
-            *s = [*left, *count];
-        }
+        super::junctions::load_junctions(snap, &mut self.junction_spring, &mut self.junction_state);
         Ok(())
     }
 

@@ -6,8 +6,9 @@
 //! read while written (the barrier orders one step's writes before the
 //! next step's reads).
 
-use super::chunk::{self, Advance, Band, Fixed, Interface, Isa, Scratch, Shared, StateView};
+use super::chunk::{self, Band, Isa, Scratch};
 use super::rows::RowView;
+use super::step::{Advance, Fixed, Interface, Shared, StateView};
 use super::State;
 use crate::cpu::JunctionSpring;
 use crate::real::{Coordinate, Real};
