@@ -23,6 +23,8 @@ pub struct JunctionScratch<T> {
     /// Lane sums, block-major: `lanes[ix * JUNCTION_LANES + lane]`.
     lanes: Vec<T>,
     total: Vec<T>,
+    /// Junctions of one block left to the reference's `junction`.
+    rare: Vec<bool>,
 }
 
 /// Friction and normal force of the interface row from the row's new state
@@ -70,10 +72,12 @@ fn junction_row<T: Real, C: Coordinate<T>>(
     scratch.force.resize(ns, T::zero());
     scratch.lanes.resize(nx * JUNCTION_LANES, T::zero());
     scratch.total.resize(nx, T::zero());
+    scratch.rare.resize(ns, false);
     let JunctionScratch {
         force,
         lanes,
         total,
+        rare,
     } = scratch;
     for ix in 0..nx {
         let u = [row.ux[ix], row.uz[ix]];
@@ -81,9 +85,17 @@ fn junction_row<T: Real, C: Coordinate<T>>(
         let spring = &mut out.spring[ix * ns..(ix + 1) * ns];
         let state = &mut out.state[ix * ns..(ix + 1) * ns];
         let lane_sums = &mut lanes[ix * JUNCTION_LANES..ix * JUNCTION_LANES + lanes_used];
-        let quiet = !s.after.preparing && pinned_forces(&jb, spring, state, force);
-        if !quiet {
+        if s.after.preparing {
+            // Every pinned junction's stiffness follows the load: the
+            // reference's path for all.
             for (j, ((f, spring), state)) in force.iter_mut().zip(spring).zip(state).enumerate() {
+                *f = junctions::junction(c, &s.after, ix, j, &jb, spring, state);
+            }
+        } else if !pinned_forces(&jb, spring, state, force)
+            && common_junctions(&jb, spring, state, force, rare)
+        {
+            let each = force.iter_mut().zip(spring).zip(state).zip(&*rare);
+            for (j, (((f, spring), state), _)) in each.enumerate().filter(|(_, x)| *x.1) {
                 *f = junctions::junction(c, &s.after, ix, j, &jb, spring, state);
             }
         }
@@ -127,6 +139,41 @@ fn pinned_forces<T: Real, C: Coordinate<T>>(
         over |= f.abs() > jb.threshold;
     }
     !over
+}
+
+/// The junctions of a block in the common cases, vectorised: pinned under
+/// threshold (force −k_j (u_x − anchor), no change) and slipping with
+/// steps left after this one (countdown, sliding force). Marks in `rare`
+/// the others — a pinned junction over threshold breaks, a countdown that
+/// ends re-pins or waits — and leaves them untouched for the reference's
+/// `junction`; returns whether there are any.
+#[inline(always)]
+fn common_junctions<T: Real, C: Coordinate<T>>(
+    jb: &JunctionBlock<T, C>,
+    spring: &[JunctionSpring<C, T>],
+    state: &mut [[u32; 2]],
+    force: &mut [T],
+    rare: &mut [bool],
+) -> bool {
+    let n = force.len();
+    let (spring, state, rare) = (&spring[..n], &mut state[..n], &mut rare[..n]);
+    let mut any = false;
+    for j in 0..n {
+        let left = state[j][0];
+        let pinned = left == PINNED;
+        let held = -spring[j].stiffness * jb.ux.diff(spring[j].anchor);
+        let next_left = left.saturating_sub(1);
+        let is_rare = if pinned {
+            held.abs() > jb.threshold
+        } else {
+            next_left == 0
+        };
+        rare[j] = is_rare;
+        any |= is_rare;
+        force[j] = if pinned { held } else { jb.sliding };
+        state[j][0] = if pinned || is_rare { left } else { next_left };
+    }
+    any
 }
 
 /// Lane sums of one block's junction forces in the reference's order:
