@@ -26,7 +26,7 @@ use crate::step_params::Consts;
 pub use chunk::Isa;
 use chunk::{Band, Scratch};
 use rows::{ForwardBonds, RowView};
-use step::{Advance, Fixed, Interface, Shared, StateView};
+use step::{Advance, Fixed, Interface, InterfaceArrays, Shared, StateView};
 
 /// Lattices with fewer blocks than this run on one thread unless asked for
 /// more explicitly: measured in BENCHMARKS.md ("CPU engine: sweep").
@@ -202,12 +202,11 @@ impl<T: Real, C: Coordinate<T>> SweepEngine<T, C> {
             &self.bands,
             self.fixed.consts.nx,
             &mut self.next,
-            Interface {
-                contact: &mut [],
-                spring: &mut self.junction_spring,
-                state: &mut self.junction_state,
-                slide: &mut self.slide,
-            },
+            (
+                &mut self.junction_spring,
+                &mut self.junction_state,
+                &mut self.slide,
+            ),
         );
         let bad = bands
             .into_iter()
@@ -350,7 +349,7 @@ fn split_bands<'a, T: Real, C: Coordinate<T>>(
     bands: &[std::ops::Range<usize>],
     nx: usize,
     next: &'a mut State<T, C>,
-    interface: Interface<'a, T, C>,
+    arrays: InterfaceArrays<'a, T, C>,
 ) -> Vec<Band<'a, T, C>> {
     let State {
         kin,
@@ -361,10 +360,7 @@ fn split_bands<'a, T: Real, C: Coordinate<T>>(
     let (mut ux, mut uz) = (&mut kin.ux[..], &mut kin.uz[..]);
     let (mut vx, mut vz) = (&mut kin.vx[..], &mut kin.vz[..]);
     let (mut fx, mut fz) = (&mut fx[..], &mut fz[..]);
-    let mut interface = Some(Interface {
-        contact,
-        ..interface
-    });
+    let mut interface = Some(Interface::new(contact, arrays));
     let mut out = Vec::with_capacity(bands.len());
     for rows in bands {
         let len = rows.len() * nx;

@@ -8,9 +8,8 @@
 
 use super::chunk::{self, Band, Isa, Scratch};
 use super::rows::RowView;
-use super::step::{Advance, Fixed, Interface, Shared, StateView};
+use super::step::{Advance, Fixed, Interface, InterfaceArrays, Shared, StateView};
 use super::State;
-use crate::cpu::JunctionSpring;
 use crate::real::{Coordinate, Real};
 use std::ops::Range;
 use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
@@ -25,13 +24,6 @@ pub struct Run<'a, T: Real, C> {
     pub bands: &'a [Range<usize>],
     pub isa: Isa,
 }
-
-/// The interface arrays the band holding row 0 updates in place.
-pub type InterfaceArrays<'a, T, C> = (
-    &'a mut [JunctionSpring<C, T>],
-    &'a mut [[u32; 2]],
-    &'a mut [[i32; 2]],
-);
 
 /// A state buffer's arrays as raw pointers, so that threads can hold
 /// disjoint row ranges of it between barriers.
@@ -107,12 +99,7 @@ impl<T: Real, C: Coordinate<T>> RawState<T, C> {
             vz: slice(self.vz.add(first), len),
             fx: slice(self.fx.add(first), len),
             fz: slice(self.fz.add(first), len),
-            interface: interface.map(|(spring, state, slide)| Interface {
-                contact: slice(self.contact, self.nx),
-                spring,
-                state,
-                slide,
-            }),
+            interface: interface.map(|arrays| Interface::new(slice(self.contact, self.nx), arrays)),
             rows,
         }
     }
