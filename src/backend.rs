@@ -35,6 +35,21 @@ pub enum Precision {
     F32Plain,
 }
 
+impl Precision {
+    /// The precision of a saved state (`EngineState::precision`).
+    pub fn of_state(name: &str) -> Option<Precision> {
+        use crate::cpu::precision_name;
+        use crate::real::DoubleSingle;
+        [
+            (precision_name::<f64, f64>(), Precision::F64),
+            (precision_name::<f32, DoubleSingle>(), Precision::F32),
+            (precision_name::<f32, f32>(), Precision::F32Plain),
+        ]
+        .into_iter()
+        .find_map(|(n, p)| (n == name).then_some(p))
+    }
+}
+
 /// Builds the CPU engine (the sweep engine) in the requested precision.
 pub fn cpu_engine(
     model: &Model,

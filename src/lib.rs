@@ -3,6 +3,7 @@
 
 pub mod analysis;
 pub mod backend;
+pub mod checkpoint;
 pub mod compare;
 pub mod cpu;
 pub mod energy;

@@ -54,6 +54,15 @@ enum Command {
         /// No progress bar.
         #[arg(long)]
         quiet: bool,
+        /// Continue RUN.mcap from its checkpoint (RUN.mcap.ckpt), in the
+        /// same file unless -o names another; --t-end extends a finished run.
+        #[arg(long, value_name = "RUN.mcap", conflicts_with = "from")]
+        resume: Option<PathBuf>,
+        /// Start from a saved state (a checkpoint, or a run file with one
+        /// beside it): the scenario given (or the checkpoint's) with --set
+        /// changes the saved state allows.
+        #[arg(long, value_name = "CHECKPOINT")]
+        from: Option<PathBuf>,
     },
     /// Derived quantities, stability limit, memory and terms, without running.
     Check {
@@ -110,6 +119,8 @@ fn main() -> ExitCode {
             threads,
             allow_unstable,
             quiet,
+            resume,
+            from,
         } => commands::run::run(commands::run::RunArgs {
             scenario,
             backend,
@@ -122,6 +133,8 @@ fn main() -> ExitCode {
             threads,
             allow_unstable,
             quiet,
+            resume,
+            from,
         }),
         Command::Check {
             scenario,

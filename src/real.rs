@@ -66,6 +66,17 @@ pub trait Coordinate<T: Real>:
     fn diff(self, other: Self) -> T;
     /// The value rounded to `T`.
     fn value(self) -> T;
+    /// The coordinate as two f64 whose sum is its exact value: (v, 0) for
+    /// a single number, (hi, lo) for a double-single pair. What checkpoints
+    /// store, so that a pair comes back bit for bit.
+    fn parts(self) -> [f64; 2] {
+        [self.as_f64(), 0.0]
+    }
+    /// The coordinate from `parts`: the same bits when they came from this
+    /// type, else the nearest coordinate to their sum.
+    fn from_parts(parts: [f64; 2]) -> Self {
+        Self::from_f64(parts[0] + parts[1])
+    }
 }
 
 impl Coordinate<f64> for f64 {
@@ -183,6 +194,17 @@ impl Coordinate<f32> for DoubleSingle {
     fn value(self) -> f32 {
         self.hi
     }
+    fn parts(self) -> [f64; 2] {
+        [self.hi as f64, self.lo as f64]
+    }
+    fn from_parts(parts: [f64; 2]) -> Self {
+        let (hi, lo) = (parts[0] as f32, parts[1] as f32);
+        if hi as f64 == parts[0] && lo as f64 == parts[1] {
+            DoubleSingle { hi, lo }
+        } else {
+            Self::from_f64(parts[0] + parts[1])
+        }
+    }
 }
 
 #[cfg(test)]
@@ -225,6 +247,14 @@ mod tests {
         assert!(
             (got - expected).abs() <= expected * 1e-6,
             "{got} {expected}"
+        );
+        // Checkpoint parts give the pair back bit for bit, and an f64
+        // coordinate's parts give the nearest pair.
+        assert_eq!(DoubleSingle::from_parts(a.parts()), a);
+        assert_eq!(f64::from_parts(a.parts()), a.as_f64());
+        assert_eq!(
+            DoubleSingle::from_parts(0.1f64.parts()),
+            DoubleSingle::from_f64(0.1)
         );
         assert_eq!(DoubleSingle::from_f64(0.3).as_f64(), {
             let hi = 0.3f32;

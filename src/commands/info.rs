@@ -9,8 +9,34 @@ pub fn info(path: &Path, quiet_gap: f64) -> anyhow::Result<ExitCode> {
     if run.truncated {
         println!("            (cut short: no summary; everything before the cut is read)");
     }
+    let width = run
+        .metadata
+        .keys()
+        .map(String::len)
+        .max()
+        .unwrap_or(0)
+        .max(11)
+        + 1;
     for (k, v) in &run.metadata {
-        println!("{k:<12}{v}");
+        println!("{k:<width$}{v}");
+    }
+    if !run.history.is_empty() {
+        println!("history");
+        for line in &run.history {
+            println!("  {line}");
+        }
+    }
+    let checkpoint = slipfront::checkpoint::path_for(path);
+    if let Ok(c) = slipfront::checkpoint::Checkpoint::read(&checkpoint) {
+        println!(
+            "checkpoint  {} at step {} (t = {:.6e} s), by {}; continue with slipfront run \
+             --resume {}",
+            checkpoint.display(),
+            c.header.step,
+            c.header.time,
+            c.header.backend,
+            path.display()
+        );
     }
     let span = |t: &[f64]| match (t.first(), t.last()) {
         (Some(a), Some(b)) => format!("{a:.6e} .. {b:.6e} s"),

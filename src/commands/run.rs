@@ -1,8 +1,12 @@
 use slipfront::backend::{make_engine_with, Backend, Precision};
+use slipfront::checkpoint::{branch, path_for, Checkpoint};
+use slipfront::engine::Engine;
 use slipfront::gpu::{GpuOptions, GpuPath};
 use slipfront::model::Model;
-use slipfront::runner::{run_scene, RunOptions};
-use std::path::PathBuf;
+use slipfront::output::fnv1a;
+use slipfront::runner::{run_scene, RunOptions, StartFrom};
+use slipfront::scenario::Scenario;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 pub struct RunArgs {
@@ -17,37 +21,270 @@ pub struct RunArgs {
     pub threads: usize,
     pub allow_unstable: bool,
     pub quiet: bool,
+    /// Continue this run file from its checkpoint.
+    pub resume: Option<PathBuf>,
+    /// Branch from this checkpoint (or run file).
+    pub from: Option<PathBuf>,
+}
+
+impl RunArgs {
+    /// `--set` items with `--t-end` and `--fast-forward` folded in.
+    fn overrides(&self) -> Vec<String> {
+        let mut set = self.set.clone();
+        if let Some(t) = self.t_end {
+            set.push(format!("time.end={t:e}"));
+        }
+        if let Some(on) = self.fast_forward {
+            set.push(format!("time.fast_forward={on}"));
+        }
+        set
+    }
+
+    fn engine(&self, model: &Model, precision: Precision) -> anyhow::Result<Box<dyn Engine>> {
+        let gpu = GpuOptions {
+            path: self.gpu_path,
+            ..GpuOptions::default()
+        };
+        Ok(make_engine_with(
+            model,
+            self.backend,
+            precision,
+            self.threads,
+            gpu,
+        )?)
+    }
 }
 
 pub fn run(a: RunArgs) -> anyhow::Result<ExitCode> {
-    let mut set = a.set.clone();
-    if let Some(t) = a.t_end {
-        set.push(format!("time.end={t:e}"));
+    if a.resume.is_some() {
+        return resume(a);
     }
-    if let Some(on) = a.fast_forward {
-        set.push(format!("time.fast_forward={on}"));
+    if a.from.is_some() {
+        return branch_run(a);
     }
-    let (scenario, name) = super::load_scenario(a.scenario.as_deref(), &set)?;
+    let (scenario, name) = super::load_scenario(a.scenario.as_deref(), &a.overrides())?;
     let model = Model::from_scenario(&scenario, a.allow_unstable)?;
     let precision = a.precision.unwrap_or(match a.backend {
         Backend::Cpu | Backend::CpuReference => Precision::F64,
         _ => Precision::F32,
     });
-    let gpu = GpuOptions {
-        path: a.gpu_path,
-        ..GpuOptions::default()
-    };
-    let mut engine = make_engine_with(&model, a.backend, precision, a.threads, gpu)?;
+    let mut engine = a.engine(&model, precision)?;
     eprintln!("slipfront: {name} on {}", engine.describe());
+    let history = vec![format!(
+        "started: scenario `{}` ({name}, hash {:016x}) on {}",
+        scenario.name,
+        fnv1a(scenario.to_toml().as_bytes()),
+        engine.describe()
+    )];
+    finish(&a, engine.as_mut(), &scenario, history, None)
+}
+
+/// Runs to the end and prints the summary.
+fn finish(
+    a: &RunArgs,
+    engine: &mut dyn Engine,
+    scenario: &Scenario,
+    history: Vec<String>,
+    start: Option<StartFrom>,
+) -> anyhow::Result<ExitCode> {
     let summary = run_scene(
-        engine.as_mut(),
-        &scenario,
+        engine,
+        scenario,
         &RunOptions {
-            fast_forward: None,
             output: a.output.clone(),
             progress: !a.quiet,
+            history,
+            start,
+            ..RunOptions::default()
         },
     )?;
     println!("{summary}");
     Ok(ExitCode::SUCCESS)
+}
+
+/// The checkpoint named by `path`: a checkpoint file, or a run file with
+/// one beside it.
+fn checkpoint_of(path: &Path) -> PathBuf {
+    let beside = path_for(path);
+    if beside.exists() || !path.exists() {
+        beside
+    } else {
+        path.to_path_buf()
+    }
+}
+
+fn precision_of(ckpt: &Checkpoint, asked: Option<Precision>) -> anyhow::Result<Precision> {
+    match asked {
+        Some(p) => Ok(p),
+        None => Precision::of_state(&ckpt.header.precision).ok_or_else(|| {
+            anyhow::anyhow!(
+                "the checkpoint's precision `{}` is unknown; choose one with --precision",
+                ckpt.header.precision
+            )
+        }),
+    }
+}
+
+/// "…; precision changed A → B" when the engine computes in another
+/// precision than the one that saved the state.
+fn precision_note(ckpt: &Checkpoint, engine: &mut dyn Engine) -> anyhow::Result<String> {
+    let now = engine.save_state()?.precision;
+    Ok(if now == ckpt.header.precision {
+        String::new()
+    } else {
+        format!(
+            "; precision changed {} → {now} (the state was rounded once)",
+            ckpt.header.precision
+        )
+    })
+}
+
+/// `--resume RUN.mcap`: the same run, continued from its newest good
+/// checkpoint into the same file (or `-o`), to its end or a new `--t-end`.
+fn resume(mut a: RunArgs) -> anyhow::Result<ExitCode> {
+    let file = a.resume.clone().expect("resume");
+    if a.scenario.is_some() || !a.set.is_empty() || a.fast_forward.is_some() {
+        anyhow::bail!(
+            "--resume continues a run as it was (only --t-end may move its end); to change \
+             the scenario, branch: slipfront run [SCENARIO] --from {} --set KEY=VALUE -o NEW.mcap",
+            path_for(&file).display()
+        );
+    }
+    let ckpt_path = checkpoint_of(&file);
+    let (ckpt, used, passed_over) = Checkpoint::newest(&ckpt_path).map_err(|why| {
+        anyhow::anyhow!(
+            "cannot resume `{}`: {why}\n  (a run writes its first checkpoint when driving \
+             starts, then every output.checkpoint_interval seconds of wall time)",
+            file.display()
+        )
+    })?;
+    if let Some(why) = passed_over {
+        eprintln!(
+            "slipfront: passing over {why}; resuming from the previous checkpoint `{}`",
+            used.display()
+        );
+    }
+    let scenario = Scenario::parse(
+        &ckpt.header.scenario,
+        "the checkpoint's scenario",
+        &a.overrides(),
+    )?;
+    // The run passed the stability check when it started (or was let
+    // through it on purpose).
+    let model = Model::from_scenario(&scenario, true)?;
+    let step = ckpt.header.step;
+    if model.total_steps() < step {
+        anyhow::bail!(
+            "--t-end {:e} s is before the checkpoint (t = {:.6e} s)",
+            scenario.time.end,
+            ckpt.header.time
+        );
+    }
+    if model.total_steps() == step && a.t_end.is_none() {
+        anyhow::bail!(
+            "`{}` already reached its end (t = {:.6e} s); extend it with --t-end SECONDS",
+            file.display(),
+            ckpt.header.time
+        );
+    }
+    let precision = precision_of(&ckpt, a.precision)?;
+    let mut engine = a.engine(&model, precision)?;
+    engine.load_state(&ckpt.engine)?;
+    let note = precision_note(&ckpt, engine.as_mut())?;
+    let mut history = ckpt.header.history.clone();
+    history.push(format!(
+        "resumed at step {step} (t = {:.6e} s) from `{}`, saved by {}; continued on {}{note}",
+        ckpt.header.time,
+        used.display(),
+        ckpt.header.backend,
+        engine.describe()
+    ));
+    eprintln!(
+        "slipfront: resuming `{}` at t = {:.6e} s on {}{note}",
+        file.display(),
+        ckpt.header.time,
+        engine.describe()
+    );
+    if a.output.is_none() {
+        a.output = Some(file.clone());
+    }
+    let start = StartFrom {
+        runner: ckpt.header.runner.clone(),
+        parent_output: Some(file),
+    };
+    finish(&a, engine.as_mut(), &scenario, history, Some(start))
+}
+
+/// `--from CHECKPOINT`: a new run from a saved state, with the scenario's
+/// changes where the saved state allows them.
+fn branch_run(a: RunArgs) -> anyhow::Result<ExitCode> {
+    let from = a.from.clone().expect("from");
+    let ckpt_path = checkpoint_of(&from);
+    let ckpt = Checkpoint::read(&ckpt_path)
+        .map_err(|e| anyhow::anyhow!("cannot branch from `{}`: {e}", ckpt_path.display()))?;
+    let parent = Scenario::parse(&ckpt.header.scenario, "the checkpoint's scenario", &[])?;
+    let parent_model = Model::from_scenario(&parent, true)?;
+    let (child, name) = match &a.scenario {
+        Some(p) => super::load_scenario(Some(p), &a.overrides())?,
+        None => (
+            Scenario::parse(
+                &ckpt.header.scenario,
+                "the checkpoint's scenario",
+                &a.overrides(),
+            )?,
+            format!("the scenario of {}", ckpt_path.display()),
+        ),
+    };
+    let child_model = Model::from_scenario(&child, a.allow_unstable)?;
+    let step = ckpt.header.step;
+    let changes =
+        branch::check(&parent, &parent_model, &child, &child_model, step).map_err(|refusals| {
+            anyhow::anyhow!(
+                "cannot branch {name} from `{}` (step {step}):\n  - {}",
+                ckpt_path.display(),
+                refusals.join("\n  - ")
+            )
+        })?;
+    let mut state = ckpt.engine.clone();
+    let mut runner = ckpt.header.runner.clone();
+    branch::rebase_drive(&parent_model, &child_model, &mut state, &mut runner);
+    let precision = precision_of(&ckpt, a.precision)?;
+    let mut engine = a.engine(&child_model, precision)?;
+    engine.load_state(&state)?;
+    let note = precision_note(&ckpt, engine.as_mut())?;
+    let mut history = ckpt.header.history.clone();
+    history.push(format!(
+        "branched at step {step} (t = {:.6e} s) from `{}` with {}; on {}{note}",
+        ckpt.header.time,
+        ckpt_path.display(),
+        if changes.is_empty() {
+            "no changes".to_string()
+        } else {
+            changes.join(", ")
+        },
+        engine.describe()
+    ));
+    eprintln!("slipfront: {}", history.last().expect("a line"));
+    // The branch's file starts with the parent's records up to the branch
+    // point, when the parent's file is still there.
+    let parent_output = ckpt.header.output.clone().filter(|p| {
+        let there = p.exists();
+        if !there && a.output.is_some() {
+            eprintln!(
+                "slipfront: the parent run file `{}` is gone; the branch's file starts at the \
+                 branch point",
+                p.display()
+            );
+        }
+        there
+    });
+    if parent_output.is_none() {
+        // Its numbering starts afresh with the file.
+        runner.sequence = 0;
+    }
+    let start = StartFrom {
+        runner,
+        parent_output,
+    };
+    finish(&a, engine.as_mut(), &child, history, Some(start))
 }

@@ -12,7 +12,7 @@ pub mod verlet;
 pub use junctions::{JunctionSpring, PINNED};
 pub use sweep::SweepEngine;
 
-use crate::engine::{blow_up, Engine, EngineError, Snapshot};
+use crate::engine::{blow_up, Engine, EngineError, EngineState, Snapshot, StateArrays};
 use crate::lattice::{block_flags, initial_displacement};
 use crate::model::{Driver, Model};
 use crate::real::{Coordinate, Real};
@@ -338,6 +338,34 @@ impl<T: Real, C: Coordinate<T>> Engine for CpuEngine<T, C> {
 
     fn set_junctions(&mut self, snap: &Snapshot) -> Result<(), EngineError> {
         self.load_junctions(snap);
+        Ok(())
+    }
+
+    fn save_state(&mut self) -> Result<EngineState, EngineError> {
+        Ok(EngineState::capture(StateArrays {
+            step: self.step,
+            drive_origin: self.drive_origin,
+            disp: &self.disp,
+            vel: &self.vel,
+            force: &self.force,
+            contact: &self.contact,
+            junction_spring: &self.junction_spring,
+            junction_state: &self.junction_state,
+            slide: &self.slide,
+        }))
+    }
+
+    fn load_state(&mut self, state: &EngineState) -> Result<(), EngineError> {
+        state.check_fits(&self.model)?;
+        self.step = state.step;
+        self.drive_origin = state.drive_origin_as();
+        self.disp = state.disp_as();
+        self.vel = state.vel_as();
+        self.force = state.force_as();
+        self.contact = state.contact_as();
+        self.junction_spring = state.junction_springs_as();
+        self.junction_state = state.junction_state.clone();
+        self.slide = state.slide.clone();
         Ok(())
     }
 

@@ -18,7 +18,7 @@ pub mod options;
 mod readback;
 pub mod shaders;
 
-use crate::engine::{blow_up, Engine, EngineError, Snapshot};
+use crate::engine::{blow_up, Engine, EngineError, EngineState, Snapshot, StateArrays};
 use crate::lattice::{block_flags, initial_displacement};
 use crate::model::{Driver, Model};
 use crate::real::{Coordinate, DoubleSingle};
@@ -497,7 +497,7 @@ impl GpuEngine {
     }
 
     /// The buffers as they are (forces possibly of the previous step).
-    fn read_state(&mut self) -> Result<Snapshot, EngineError> {
+    fn read_raw(&mut self) -> Result<RawState, EngineError> {
         self.drain()?;
         let m = &self.model;
         let (n, nj) = (m.n_blocks(), m.n_junctions());
@@ -514,21 +514,45 @@ impl GpuEngine {
                 &b.slide,
             ],
         )?;
-        let disp: Vec<[DoubleSingle; 2]> = cast_prefix(&raw[0], n);
-        let vel: Vec<[f32; 2]> = cast_prefix(&raw[1], n);
-        let force: Vec<[f32; 2]> = cast_prefix(&raw[2], n);
-        let contact: Vec<[f32; 2]> = cast_prefix(&raw[3], m.nx);
-        let spring: Vec<crate::junction::JunctionSpring<DoubleSingle, f32>> =
-            cast_prefix::<GpuJunctionSpring>(&raw[4], nj)
+        Ok(RawState {
+            disp: cast_prefix(&raw[0], n),
+            vel: cast_prefix(&raw[1], n),
+            force: cast_prefix(&raw[2], n),
+            contact: cast_prefix(&raw[3], m.nx),
+            spring: cast_prefix::<GpuJunctionSpring>(&raw[4], nj)
                 .into_iter()
                 .map(Into::into)
-                .collect();
-        let state: Vec<[u32; 2]> = cast_prefix(&raw[5], nj);
-        let slide: Vec<[i32; 2]> = cast_prefix(&raw[6], m.nx);
+                .collect(),
+            state: cast_prefix(&raw[5], nj),
+            slide: cast_prefix(&raw[6], m.nx),
+        })
+    }
+
+    fn read_state(&mut self) -> Result<Snapshot, EngineError> {
+        let r = self.read_raw()?;
         Ok(Snapshot::from_buffers(
-            m, self.step, &disp, &vel, &force, &contact, &spring, &state, &slide,
+            &self.model,
+            self.step,
+            &r.disp,
+            &r.vel,
+            &r.force,
+            &r.contact,
+            &r.spring,
+            &r.state,
+            &r.slide,
         ))
     }
+}
+
+/// The state buffers read back, in the kernels' types.
+struct RawState {
+    disp: Vec<[DoubleSingle; 2]>,
+    vel: Vec<[f32; 2]>,
+    force: Vec<[f32; 2]>,
+    contact: Vec<[f32; 2]>,
+    spring: Vec<crate::junction::JunctionSpring<DoubleSingle, f32>>,
+    state: Vec<[u32; 2]>,
+    slide: Vec<[i32; 2]>,
 }
 
 /// The `junction_spring` buffer's records: double-single anchors, f32
@@ -636,6 +660,61 @@ impl Engine for GpuEngine {
                 .write_buffer(&b.junction_state, 0, bytemuck::cast_slice(&state));
         }
         self.forces_ready = false;
+        Ok(())
+    }
+
+    fn save_state(&mut self) -> Result<EngineState, EngineError> {
+        self.drain()?;
+        if !self.forces_ready {
+            self.submit_batch(1, true)?;
+        }
+        let r = self.read_raw()?;
+        Ok(EngineState::capture(StateArrays {
+            step: self.step,
+            drive_origin: self.drive_origin,
+            disp: &r.disp,
+            vel: &r.vel,
+            force: &r.force,
+            contact: &r.contact,
+            junction_spring: &r.spring,
+            junction_state: &r.state,
+            slide: &r.slide,
+        }))
+    }
+
+    fn load_state(&mut self, state: &EngineState) -> Result<(), EngineError> {
+        state.check_fits(&self.model)?;
+        self.drain()?;
+        let spring: Vec<GpuJunctionSpring> = state
+            .junction_springs_as::<f32, DoubleSingle>()
+            .into_iter()
+            .map(Into::into)
+            .collect();
+        let b = &self.buffers;
+        let queue = &self.ctx.queue;
+        let write = |buffer: &wgpu::Buffer, bytes: &[u8]| {
+            if !bytes.is_empty() {
+                queue.write_buffer(buffer, 0, bytes);
+            }
+        };
+        let disp = state.disp_as::<f32, DoubleSingle>();
+        write(&b.disp[self.current], bytemuck::cast_slice(&disp));
+        write(
+            &b.vel[self.current],
+            bytemuck::cast_slice(&state.vel_as::<f32>()),
+        );
+        write(&b.force, bytemuck::cast_slice(&state.force_as::<f32>()));
+        write(&b.contact, bytemuck::cast_slice(&state.contact_as::<f32>()));
+        write(&b.junction_spring, bytemuck::cast_slice(&spring));
+        write(
+            &b.junction_state,
+            bytemuck::cast_slice(&state.junction_state),
+        );
+        write(&b.slide, bytemuck::cast_slice(&state.slide));
+        self.step = state.step;
+        self.drive_origin = state.drive_origin_as::<f32, DoubleSingle>();
+        // The saved forces are those of the saved state.
+        self.forces_ready = true;
         Ok(())
     }
 

@@ -50,6 +50,8 @@ pub struct GlobalSample {
 
 pub struct McapSink {
     writer: mcap::Writer<BufWriter<File>>,
+    /// The same file, to sync it to disk before a checkpoint.
+    file: File,
     global: u16,
     interface: u16,
     bulk: u16,
@@ -60,16 +62,21 @@ pub struct McapSink {
 }
 
 impl McapSink {
+    /// A new run file. `history` (one line per start, resume and branch
+    /// of the run) goes to the `slipfront_history` metadata record.
     pub fn create(
         path: &Path,
         model: &Model,
         scenario: &Scenario,
         backend: &str,
+        history: &[String],
     ) -> Result<Self, OutputError> {
-        let file = File::create(path).map_err(|source| OutputError::Create {
+        let create_error = |source| OutputError::Create {
             path: path.display().to_string(),
             source,
-        })?;
+        };
+        let file = File::create(path).map_err(create_error)?;
+        let sync_handle = file.try_clone().map_err(create_error)?;
         let mut writer = mcap::WriteOptions::new()
             .compression(Some(mcap::Compression::Zstd))
             .chunk_size(Some(1 << 20))
@@ -99,6 +106,16 @@ impl McapSink {
             name: "slipfront".into(),
             metadata: meta,
         })?;
+        if !history.is_empty() {
+            writer.write_metadata(&mcap::records::Metadata {
+                name: "slipfront_history".into(),
+                metadata: history
+                    .iter()
+                    .enumerate()
+                    .map(|(k, line)| (format!("{k:04}"), line.clone()))
+                    .collect(),
+            })?;
+        }
         writer.attach(&mcap::Attachment {
             log_time: 0,
             create_time: 0,
@@ -118,6 +135,7 @@ impl McapSink {
         let fast_forward = writer.add_channel(f, "/fast_forward", "protobuf", &none)?;
         Ok(McapSink {
             writer,
+            file: sync_handle,
             global,
             interface,
             bulk,
@@ -126,6 +144,117 @@ impl McapSink {
             last_flush: Instant::now(),
             slip_origin: None,
         })
+    }
+
+    /// A run file that continues `parent` (or, with `parent` = `path`,
+    /// the same file): its first `messages` messages are copied from
+    /// `parent` into `path.partial`, which then takes `path`'s name, so a
+    /// crash before that leaves `parent` as it was. Fails when `parent` no
+    /// longer holds them all.
+    #[allow(clippy::too_many_arguments)]
+    pub fn continue_from(
+        path: &Path,
+        parent: &Path,
+        messages: u32,
+        model: &Model,
+        scenario: &Scenario,
+        backend: &str,
+        history: &[String],
+    ) -> Result<Self, OutputError> {
+        let mut partial = path.as_os_str().to_owned();
+        partial.push(".partial");
+        let partial = std::path::PathBuf::from(partial);
+        let mut sink = McapSink::create(&partial, model, scenario, backend, history)?;
+        let copied = sink.copy_messages(parent, messages)?;
+        if copied != messages {
+            let _ = std::fs::remove_file(&partial);
+            return Err(OutputError::Read {
+                path: parent.display().to_string(),
+                why: format!(
+                    "it holds {copied} of the {messages} messages written before the \
+                     checkpoint: it was damaged or replaced after it"
+                ),
+            });
+        }
+        sink.sync()?;
+        std::fs::rename(&partial, path).map_err(|source| OutputError::Create {
+            path: path.display().to_string(),
+            source,
+        })?;
+        Ok(sink)
+    }
+
+    /// Copies the messages with sequence numbers 1..=`upto` of `parent`
+    /// (record by record: a file cut short gives what it holds) and
+    /// continues the numbering after them. Returns how many it copied.
+    fn copy_messages(&mut self, parent: &Path, upto: u32) -> Result<u32, OutputError> {
+        use mcap::records::Record;
+        let fail = |why: String| OutputError::Read {
+            path: parent.display().to_string(),
+            why,
+        };
+        let bytes = std::fs::read(parent).map_err(|e| fail(e.to_string()))?;
+        if !bytes.starts_with(mcap::MAGIC) {
+            return Err(fail("not an MCAP file".into()));
+        }
+        let reader = mcap::read::ChunkFlattener::new(&bytes).map_err(|e| fail(e.to_string()))?;
+        let mut ours = std::collections::HashMap::new();
+        let mut copied = 0;
+        for record in reader {
+            let Ok(record) = record else { break };
+            match record {
+                Record::Channel(c) => {
+                    let id = match c.topic.as_str() {
+                        "/global" => self.global,
+                        "/interface" => self.interface,
+                        "/bulk" => self.bulk,
+                        "/fast_forward" => self.fast_forward,
+                        other => return Err(fail(format!("unknown channel `{other}`"))),
+                    };
+                    ours.insert(c.id, id);
+                }
+                Record::Message { header, data } if header.sequence <= upto => {
+                    let channel_id = *ours.get(&header.channel_id).ok_or_else(|| {
+                        fail(format!("message {} has no channel", header.sequence))
+                    })?;
+                    self.writer.write_to_known_channel(
+                        &mcap::records::MessageHeader {
+                            channel_id,
+                            ..header
+                        },
+                        &data,
+                    )?;
+                    copied += 1;
+                }
+                _ => {}
+            }
+        }
+        self.sequence = upto;
+        Ok(copied)
+    }
+
+    /// Everything written so far on disk: the open chunk closed, the
+    /// buffers flushed and the file synced (before a checkpoint that counts
+    /// on those messages).
+    pub fn sync(&mut self) -> Result<(), OutputError> {
+        self.writer.flush()?;
+        self.last_flush = Instant::now();
+        self.file.sync_data().map_err(|e| OutputError::Read {
+            path: "the run file".into(),
+            why: format!("cannot sync it to disk: {e}"),
+        })
+    }
+
+    /// (messages written, interface slip origin): the sink's part of a
+    /// checkpoint.
+    pub fn state(&self) -> (u32, Option<Vec<f64>>) {
+        (self.sequence, self.slip_origin.clone())
+    }
+
+    /// Continues the numbering and the slip origin of a saved run.
+    pub fn restore(&mut self, sequence: u32, slip_origin: Option<Vec<f64>>) {
+        self.sequence = sequence;
+        self.slip_origin = slip_origin;
     }
 
     fn write(&mut self, channel: u16, time: f64, data: &[u8]) -> Result<(), OutputError> {

@@ -22,6 +22,8 @@ pub struct RunFile {
     pub fast_forward: Vec<FastForwardJump>,
     /// Totals of the fast-forward (`slipfront_fast_forward` metadata).
     pub fast_forward_totals: BTreeMap<String, String>,
+    /// One line per start, resume and branch (`slipfront_history`).
+    pub history: Vec<String>,
     /// The file ended before its summary (the run was killed).
     pub truncated: bool,
 }
@@ -56,6 +58,9 @@ impl RunFile {
                     topics.insert(c.id, c.topic);
                 }
                 Record::Metadata(m) if m.name == "slipfront" => run.metadata = m.metadata,
+                Record::Metadata(m) if m.name == "slipfront_history" => {
+                    run.history = m.metadata.into_values().collect()
+                }
                 Record::Metadata(m) if m.name == "slipfront_fast_forward" => {
                     run.fast_forward_totals = m.metadata
                 }

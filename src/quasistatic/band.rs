@@ -123,6 +123,19 @@ pub struct BandCholesky {
 }
 
 impl BandCholesky {
+    /// (size, half bandwidth, entries): what a checkpoint stores.
+    pub fn parts(&self) -> (usize, usize, &[f64]) {
+        (self.n, self.half_bandwidth, &self.l)
+    }
+
+    /// A factor from `parts`; None when the entries do not fit the shape.
+    pub fn from_parts(n: usize, half_bandwidth: usize, l: Vec<f64>) -> Option<Self> {
+        (l.len() == n * (half_bandwidth + 1)).then_some(BandCholesky {
+            n,
+            half_bandwidth,
+            l,
+        })
+    }
     /// Solves A·x = r in place (x starts as r).
     pub fn solve(&self, x: &mut [f64]) {
         let b = self.half_bandwidth;

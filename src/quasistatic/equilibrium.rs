@@ -66,6 +66,18 @@ impl Solver {
         }
     }
 
+    /// The factor kept for the next solves (direct solver).
+    pub fn factor(&self) -> Option<&BandCholesky> {
+        self.factor.as_ref()
+    }
+
+    /// Puts back a kept factor and the counters (a resumed run).
+    pub fn restore(&mut self, factor: Option<BandCholesky>, factorisations: u64, cg: u64) {
+        self.factor = factor;
+        self.factorisations = factorisations;
+        self.cg_iterations = cg;
+    }
+
     /// Solves K·x = b, x holding a guess.
     pub fn solve(&mut self, k: &Tangent, b: &[f64], x: &mut [f64]) -> Result<(), QuasiStaticError> {
         self.solves += 1;

@@ -111,7 +111,7 @@ pub struct JumpRecord {
 }
 
 /// Running totals, for the run summary and the metadata.
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct FastForwardStats {
     pub jumps: u64,
     pub skipped_steps: u64,
@@ -124,6 +124,17 @@ pub struct FastForwardStats {
     pub max_path_error: f64,
     /// Isolated junction ruptures done on quasi-static paths.
     pub path_ruptures: u64,
+}
+
+/// The fast-forward's state between two checks (see [`FastForward::state`]).
+#[derive(Debug, Clone, Default, serde::Serialize, serde::Deserialize)]
+pub struct FastForwardState {
+    pub quiet_since: Option<u64>,
+    pub last_ruptures: Option<u64>,
+    pub stats: FastForwardStats,
+    /// Stored apart, as binary (`checkpoint::format`).
+    #[serde(skip)]
+    pub factor: Option<band::BandCholesky>,
 }
 
 /// A planned jump: the quasi-static path and its record.
@@ -192,6 +203,30 @@ impl FastForward {
             solver: Solver::new(settings.solver),
             stats: FastForwardStats::default(),
         }
+    }
+
+    /// What a checkpoint keeps of the fast-forward: the detector's memory,
+    /// the totals and the solver's factor (it preconditions later solves,
+    /// so a resumed run needs it to take the same path to the bit).
+    pub fn state(&self) -> FastForwardState {
+        FastForwardState {
+            quiet_since: self.quiet_since,
+            last_ruptures: self.last_ruptures,
+            stats: self.stats,
+            factor: self.solver.factor().cloned(),
+        }
+    }
+
+    /// Continues from a saved state.
+    pub fn restore(&mut self, state: &FastForwardState) {
+        self.quiet_since = state.quiet_since;
+        self.last_ruptures = state.last_ruptures;
+        self.stats = state.stats;
+        self.solver.restore(
+            state.factor.clone(),
+            state.stats.factorisations,
+            state.stats.cg_iterations,
+        );
     }
 
     /// Steps between quiet checks.

@@ -327,6 +327,16 @@ pub struct Output {
     pub fast_interval: f64,
     /// Slip speed (m/s) above which the fast cadence applies.
     pub fast_slip_speed: f64,
+    /// Wall time (s) between checkpoints beside the output file; 0 keeps
+    /// only those at the start of driving, at the end and on a signal.
+    #[serde(default = "Output::default_checkpoint_interval")]
+    pub checkpoint_interval: f64,
+}
+
+impl Output {
+    fn default_checkpoint_interval() -> f64 {
+        600.0
+    }
 }
 
 #[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Eq)]

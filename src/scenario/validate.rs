@@ -192,6 +192,7 @@ pub fn validate(s: &Scenario, text: &str, overridden: &[&str]) -> Vec<String> {
     c.at_least("output.bulk_interval", o.bulk_interval, 0.0);
     c.at_least("output.fast_interval", o.fast_interval, 0.0);
     c.at_least("output.fast_slip_speed", o.fast_slip_speed, 0.0);
+    c.at_least("output.checkpoint_interval", o.checkpoint_interval, 0.0);
     if let Some(p) = &s.pulse {
         c.range("pulse.center", p.center, 0.0, s.geometry.length);
         c.range("pulse.width", p.width, 1e-12, s.geometry.length);

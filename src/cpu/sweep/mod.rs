@@ -18,7 +18,7 @@ mod step;
 
 use super::bulk_forces::bond_consts;
 use super::{JunctionSpring, PINNED};
-use crate::engine::{blow_up, Engine, EngineError, Snapshot};
+use crate::engine::{blow_up, Engine, EngineError, EngineState, Snapshot, StateArrays};
 use crate::lattice::{block_flags, initial_displacement};
 use crate::model::{Driver, Model};
 use crate::real::{Coordinate, Real};
@@ -310,17 +310,21 @@ impl<T: Real, C: Coordinate<T>> SweepEngine<T, C> {
         }
     }
 
-    fn snapshot_now(&self) -> Snapshot {
+    /// The current state in the reference engine's array-of-pairs layout:
+    /// (displacements, velocities, forces).
+    #[allow(clippy::type_complexity)]
+    fn paired(&self) -> (Vec<[C; 2]>, Vec<[T; 2]>, Vec<[T; 2]>) {
         let k = &self.now.kin;
-        let disp: Vec<[C; 2]> = k.ux.iter().zip(&k.uz).map(|(x, z)| [*x, *z]).collect();
-        let vel: Vec<[T; 2]> = k.vx.iter().zip(&k.vz).map(|(x, z)| [*x, *z]).collect();
-        let force: Vec<[T; 2]> = self
-            .now
-            .fx
-            .iter()
-            .zip(&self.now.fz)
-            .map(|(x, z)| [*x, *z])
-            .collect();
+        let pair = |a: &[T], b: &[T]| a.iter().zip(b).map(|(x, z)| [*x, *z]).collect();
+        (
+            k.ux.iter().zip(&k.uz).map(|(x, z)| [*x, *z]).collect(),
+            pair(&k.vx, &k.vz),
+            pair(&self.now.fx, &self.now.fz),
+        )
+    }
+
+    fn snapshot_now(&self) -> Snapshot {
+        let (disp, vel, force) = self.paired();
         Snapshot::from_buffers(
             &self.model,
             self.step,
@@ -428,6 +432,42 @@ impl<T: Real, C: Coordinate<T>> Engine for SweepEngine<T, C> {
 
     fn set_junctions(&mut self, snap: &Snapshot) -> Result<(), EngineError> {
         super::junctions::load_junctions(snap, &mut self.junction_spring, &mut self.junction_state);
+        Ok(())
+    }
+
+    fn save_state(&mut self) -> Result<EngineState, EngineError> {
+        let (disp, vel, force) = self.paired();
+        Ok(EngineState::capture(StateArrays {
+            step: self.step,
+            drive_origin: self.drive_origin,
+            disp: &disp,
+            vel: &vel,
+            force: &force,
+            contact: &self.now.contact,
+            junction_spring: &self.junction_spring,
+            junction_state: &self.junction_state,
+            slide: &self.slide,
+        }))
+    }
+
+    fn load_state(&mut self, state: &EngineState) -> Result<(), EngineError> {
+        state.check_fits(&self.model)?;
+        self.step = state.step;
+        self.drive_origin = state.drive_origin_as();
+        let now = &mut self.now;
+        for (i, u) in state.disp_as::<T, C>().into_iter().enumerate() {
+            [now.kin.ux[i], now.kin.uz[i]] = u;
+        }
+        for (i, v) in state.vel_as::<T>().into_iter().enumerate() {
+            [now.kin.vx[i], now.kin.vz[i]] = v;
+        }
+        for (i, f) in state.force_as::<T>().into_iter().enumerate() {
+            [now.fx[i], now.fz[i]] = f;
+        }
+        now.contact = state.contact_as();
+        self.junction_spring = state.junction_springs_as();
+        self.junction_state = state.junction_state.clone();
+        self.slide = state.slide.clone();
         Ok(())
     }
 

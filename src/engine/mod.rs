@@ -1,6 +1,10 @@
 //! What every engine offers, the state it reports, and the stepping driver
 //! shared by all of them (phase change at the start of driving).
 
+mod state;
+
+pub use state::{EngineState, StateArrays};
+
 use crate::junction::JunctionSpring;
 use crate::model::Model;
 use crate::real::{Coordinate, Real};
@@ -181,6 +185,8 @@ pub enum EngineError {
     },
     #[error("GPU: {0}")]
     Gpu(String),
+    #[error("saved state: {0}")]
+    State(String),
 }
 
 /// A simulation engine over one model.
@@ -213,6 +219,13 @@ pub trait Engine {
     /// quasi-static jump. Forces are recomputed by the next
     /// `set_kinematics` or step.
     fn set_junctions(&mut self, snap: &Snapshot) -> Result<(), EngineError>;
+    /// The whole state, exactly (a checkpoint's content): the engine can be
+    /// rebuilt from it with [`Engine::load_state`] and steps on with the
+    /// same bits.
+    fn save_state(&mut self) -> Result<EngineState, EngineError>;
+    /// Replaces the whole state by `state` (saved by this engine or by
+    /// another: a state of another precision is rounded to this one's).
+    fn load_state(&mut self, state: &EngineState) -> Result<(), EngineError>;
     /// GPU dispatches issued so far (None: not a GPU engine).
     fn dispatches(&self) -> Option<u64> {
         None

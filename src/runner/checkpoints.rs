@@ -1,0 +1,99 @@
+//! When a run writes its checkpoint, and what goes into it.
+
+use super::outputs::Outputs;
+use super::RunError;
+use crate::checkpoint::{unix_now, Checkpoint, Header};
+use crate::engine::Engine;
+use crate::output::fnv1a;
+use crate::quasistatic::FastForward;
+use crate::scenario::Scenario;
+use std::path::PathBuf;
+use std::time::{Duration, Instant};
+
+pub(super) struct Checkpointer {
+    pub path: PathBuf,
+    /// Wall time between periodic checkpoints (None: only at the start of
+    /// driving, at the end, and on a signal).
+    interval: Option<Duration>,
+    last: Instant,
+    scenario: String,
+    /// The run file (absolute), named in the checkpoint.
+    output: Option<PathBuf>,
+    history: Vec<String>,
+    pub written: u64,
+}
+
+impl Checkpointer {
+    pub fn new(
+        path: PathBuf,
+        scenario: &Scenario,
+        output: Option<PathBuf>,
+        history: Vec<String>,
+    ) -> Self {
+        let every = scenario.output.checkpoint_interval;
+        Checkpointer {
+            path,
+            interval: (every > 0.0).then(|| Duration::from_secs_f64(every)),
+            last: Instant::now(),
+            scenario: scenario.to_toml(),
+            output: output.map(|p| std::path::absolute(&p).unwrap_or(p)),
+            history,
+            written: 0,
+        }
+    }
+
+    /// A periodic checkpoint is due.
+    pub fn due(&self) -> bool {
+        self.interval.is_some_and(|i| self.last.elapsed() >= i)
+    }
+
+    /// Syncs the run file (the checkpoint counts on its messages), then
+    /// writes the engine's and the runner's state.
+    pub fn write(
+        &mut self,
+        engine: &mut dyn Engine,
+        outputs: &mut Outputs,
+        ff: Option<&FastForward>,
+    ) -> Result<(), RunError> {
+        if let Some(sink) = outputs.sink.as_mut() {
+            sink.sync()?;
+        }
+        let model = engine.model().clone();
+        let engine_state = engine.save_state()?;
+        let mut runner = outputs.save();
+        let ff_state = ff.map(FastForward::state);
+        let solver_factor = ff_state.as_ref().and_then(|f| f.factor.clone());
+        runner.fast_forward = ff_state;
+        let header = Header {
+            slipfront_version: env!("CARGO_PKG_VERSION").into(),
+            created_unix: unix_now(),
+            scenario: self.scenario.clone(),
+            scenario_hash: format!("{:016x}", fnv1a(self.scenario.as_bytes())),
+            backend: engine.describe(),
+            precision: engine_state.precision.clone(),
+            step: engine_state.step,
+            time: model.time_of_step(engine_state.step),
+            total_steps: model.total_steps(),
+            blocks: model.n_blocks(),
+            nx: model.nx,
+            junctions: model.n_junctions(),
+            output: self.output.clone(),
+            runner,
+            solver_factor_shape: solver_factor.as_ref().map(|f| {
+                let (n, band, _) = f.parts();
+                (n, band)
+            }),
+            history: self.history.clone(),
+        };
+        Checkpoint {
+            header,
+            engine: engine_state,
+            solver_factor,
+        }
+        .write(&self.path)
+        .map_err(|e| RunError::Checkpoint(e.to_string()))?;
+        self.last = Instant::now();
+        self.written += 1;
+        Ok(())
+    }
+}

@@ -1,0 +1,341 @@
+//! Runs a scene to its end: advances the engine between output times,
+//! streams snapshots to the output sink, shows progress, and stops cleanly
+//! on Ctrl-C or a blow-up.
+
+mod checkpoints;
+mod jump;
+mod outputs;
+
+pub use jump::{path_work, relaxation_drop};
+pub use outputs::{drive_force, global_sample};
+
+use crate::checkpoint::RunnerState;
+use crate::engine::{advance_to, Engine, EngineError};
+use crate::model::Driver;
+use crate::output::McapSink;
+use crate::quasistatic::{FastForward, FastForwardSettings, FastForwardStats};
+use crate::scenario::Scenario;
+use checkpoints::Checkpointer;
+use indicatif::{ProgressBar, ProgressStyle};
+use jump::perform_jump;
+use outputs::{next_multiple, Outputs};
+use std::path::PathBuf;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Once;
+use std::time::Instant;
+
+static INTERRUPTED: AtomicBool = AtomicBool::new(false);
+static HANDLER: Once = Once::new();
+
+/// Steps between progress updates (and interrupt checks) at most.
+const MAX_CHUNK: u64 = 20_000;
+
+#[derive(Default)]
+pub struct RunOptions {
+    pub output: Option<PathBuf>,
+    pub progress: bool,
+    /// Fast-forward settings that replace the scenario's (and switch it on
+    /// whatever `time.fast_forward` says).
+    pub fast_forward: Option<FastForwardSettings>,
+    /// Continue a saved run (the engine already holds its state).
+    pub start: Option<StartFrom>,
+    /// One line per start, resume and branch of the run (metadata and
+    /// checkpoints carry it on).
+    pub history: Vec<String>,
+}
+
+/// The runner's side of a saved run, and the run file whose first
+/// `runner.sequence` messages the new output copies.
+pub struct StartFrom {
+    pub runner: RunnerState,
+    pub parent_output: Option<PathBuf>,
+}
+
+/// What a finished (or interrupted) run reports.
+#[derive(Debug, Clone)]
+pub struct RunSummary {
+    pub backend: String,
+    pub steps: u64,
+    pub simulated_time: f64,
+    pub wall_seconds: f64,
+    /// Integrated (not skipped) block-steps per wall second.
+    pub block_steps_per_second: f64,
+    pub peak_drive_ratio: f64,
+    pub final_drive_ratio: f64,
+    pub ruptures: u64,
+    /// GPU dispatches over the run (GPU engines only).
+    pub dispatches: Option<u64>,
+    /// Quasi-static fast-forward totals (when it was on).
+    pub fast_forward: Option<FastForwardStats>,
+    pub interrupted: bool,
+    pub output: Option<PathBuf>,
+    /// The last checkpoint written (runs with an output file).
+    pub checkpoint: Option<PathBuf>,
+    /// Peak resident memory of the process (bytes), where the OS tells.
+    pub peak_memory: Option<u64>,
+}
+
+/// Peak resident set size of this process (Linux: VmHWM).
+pub fn peak_memory() -> Option<u64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kb * 1024)
+}
+
+impl std::fmt::Display for RunSummary {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        writeln!(
+            f,
+            "run {}",
+            if self.interrupted {
+                "INTERRUPTED"
+            } else {
+                "complete"
+            }
+        )?;
+        writeln!(f, "  backend            {}", self.backend)?;
+        writeln!(f, "  steps              {}", self.steps)?;
+        writeln!(
+            f,
+            "  simulated time     {:.6} s after the normal-load phase",
+            self.simulated_time
+        )?;
+        writeln!(f, "  wall time          {:.2} s", self.wall_seconds)?;
+        writeln!(
+            f,
+            "  throughput         {:.3e} block-steps/s",
+            self.block_steps_per_second
+        )?;
+        writeln!(f, "  peak F/F_N         {:.4}", self.peak_drive_ratio)?;
+        writeln!(f, "  final F/F_N        {:.4}", self.final_drive_ratio)?;
+        writeln!(f, "  junction ruptures  {}", self.ruptures)?;
+        if let Some(d) = self.dispatches {
+            writeln!(
+                f,
+                "  GPU dispatches     {d} ({:.4} per step)",
+                d as f64 / self.steps.max(1) as f64
+            )?;
+        }
+        if let Some(ff) = &self.fast_forward {
+            writeln!(
+                f,
+                "  fast-forward       {} jumps skipped {:.6} s ({:.1}% of the steps), \
+                 dropped {:.3e} J of ring-down; {} factorisations, {} CG iterations, {:.2} s solving, \
+                 path error {:.1e}",
+                ff.jumps,
+                ff.skipped_time,
+                100.0 * ff.skipped_steps as f64 / (self.steps.max(1)) as f64,
+                ff.dropped_energy,
+                ff.factorisations,
+                ff.cg_iterations,
+                ff.solver_seconds,
+                ff.max_path_error
+            )?;
+        }
+        if let Some(b) = self.peak_memory {
+            writeln!(f, "  peak memory        {:.1} MiB", b as f64 / 1048576.0)?;
+        }
+        if let Some(c) = &self.checkpoint {
+            writeln!(f, "  checkpoint         {}", c.display())?;
+        }
+        match (&self.output, self.interrupted) {
+            (Some(p), true) => write!(
+                f,
+                "  output             {}\n  continue with      slipfront run --resume {}",
+                p.display(),
+                p.display()
+            ),
+            (Some(p), false) => write!(f, "  output             {}", p.display()),
+            (None, _) => write!(f, "  output             none (use -o run.mcap)"),
+        }
+    }
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum RunError {
+    #[error(transparent)]
+    Engine(#[from] EngineError),
+    #[error("output: {0}")]
+    Output(#[from] crate::output::OutputError),
+    #[error("checkpoint: {0}")]
+    Checkpoint(String),
+}
+
+/// Runs `engine` over its whole scene (from the step it is at). With an
+/// output file, checkpoints go beside it (`checkpoint::path_for`): at the
+/// start of driving, every `output.checkpoint_interval` seconds of wall
+/// time, at the end, and when SIGINT or SIGTERM stops the run.
+pub fn run_scene(
+    engine: &mut dyn Engine,
+    scenario: &Scenario,
+    opts: &RunOptions,
+) -> Result<RunSummary, RunError> {
+    HANDLER.call_once(|| {
+        let _ = ctrlc::set_handler(|| INTERRUPTED.store(true, Ordering::SeqCst));
+    });
+    let model = engine.model().clone();
+    let total = model.total_steps();
+    let describe = engine.describe();
+    let sink = match (&opts.output, &opts.start) {
+        (
+            Some(p),
+            Some(StartFrom {
+                parent_output: Some(parent),
+                runner,
+            }),
+        ) => Some(McapSink::continue_from(
+            p,
+            parent,
+            runner.sequence,
+            &model,
+            scenario,
+            &describe,
+            &opts.history,
+        )?),
+        (Some(p), _) => Some(McapSink::create(
+            p,
+            &model,
+            scenario,
+            &describe,
+            &opts.history,
+        )?),
+        (None, _) => None,
+    };
+    let mut outputs = Outputs::new(&model, scenario, sink);
+    let mut ff = opts
+        .fast_forward
+        .or_else(|| {
+            scenario
+                .time
+                .fast_forward
+                .then(|| FastForwardSettings::from_scenario(scenario))
+        })
+        .map(FastForward::new);
+    if let Some(start) = &opts.start {
+        outputs.restore(&start.runner);
+        if let (Some(ff), Some(saved)) = (ff.as_mut(), &start.runner.fast_forward) {
+            ff.restore(saved);
+        }
+    }
+    let mut checkpoints = opts.output.as_ref().map(|p| {
+        Checkpointer::new(
+            crate::checkpoint::path_for(p),
+            scenario,
+            Some(p.clone()),
+            opts.history.clone(),
+        )
+    });
+    let every_check = ff.as_ref().map_or(0, |f| f.check_steps(&model));
+    let bar = if opts.progress {
+        let b = ProgressBar::new(total);
+        b.set_style(
+            ProgressStyle::with_template("{bar:30} t = {msg} | {per_sec} | ETA {eta}")
+                .expect("valid template"),
+        );
+        b
+    } else {
+        ProgressBar::hidden()
+    };
+    let started = Instant::now();
+    let mut interrupted = false;
+    let start_step = engine.steps_done();
+    let start_dispatches = engine.dispatches();
+    let result = (|| -> Result<(), RunError> {
+        while engine.steps_done() < total {
+            let s = engine.steps_done();
+            // The loaded slider (the start of driving) is always saved:
+            // branches start there, and a killed run resumes there at least.
+            let driving_starts = s == model.prep_steps && s > start_step;
+            if let Some(c) = checkpoints.as_mut().filter(|c| c.due() || driving_starts) {
+                c.write(engine, &mut outputs, ff.as_ref())?;
+            }
+            if INTERRUPTED.load(Ordering::SeqCst) {
+                interrupted = true;
+                break;
+            }
+            let mut target = (s + MAX_CHUNK).min(total);
+            if s < model.prep_steps {
+                target = target.min(model.prep_steps);
+            }
+            // Without an output file nothing is read back until the end.
+            let out_step = outputs.next_due(s);
+            let check_step = if s >= model.prep_steps && every_check > 0 {
+                next_multiple(s - model.prep_steps, every_check) + model.prep_steps
+            } else {
+                u64::MAX
+            };
+            target = target.min(out_step).min(check_step);
+            advance_to(engine, target)?;
+            let s = engine.steps_done();
+            bar.set_position(s - start_step);
+            bar.set_message(format!("{:.6} s", model.time_of_step(s)));
+            if s == model.prep_steps {
+                let snap = engine.snapshot()?;
+                if let Driver::SideSpring { row, .. } = model.driver {
+                    outputs.origin = snap.disp[row * model.nx][0];
+                }
+            }
+            if s != out_step && s != check_step {
+                continue;
+            }
+            let snap = engine.snapshot()?;
+            if s == out_step {
+                outputs.emit(&snap)?;
+            }
+            // The detector sees every check, the last step's too, so that
+            // a run extended from its end sees the same checks as one run
+            // through; only a jump needs steps left.
+            if let Some(ff) = ff.as_mut().filter(|_| s == check_step) {
+                if ff.observe(&model, &snap) && s < total {
+                    let planned = ff
+                        .plan(&model, &snap, outputs.origin, total)
+                        .map_err(|e| EngineError::Gpu(e.to_string()))?;
+                    if let Some(mut jump) = planned {
+                        perform_jump(engine, &mut outputs, ff, &snap, &mut jump)?;
+                        bar.set_position(engine.steps_done() - start_step);
+                    }
+                }
+            }
+        }
+        if let Some(c) = checkpoints.as_mut() {
+            c.write(engine, &mut outputs, ff.as_ref())?;
+        }
+        Ok(())
+    })();
+    if let Err(e) = result {
+        outputs.finish(ff.as_ref().map(|f| &f.stats))?;
+        bar.abandon();
+        return Err(e);
+    }
+    bar.finish_and_clear();
+    outputs.finish(ff.as_ref().map(|f| &f.stats))?;
+    let final_snap = engine.snapshot()?;
+    let g = global_sample(&model, &final_snap, outputs.origin);
+    let wall = started.elapsed().as_secs_f64();
+    let steps = engine.steps_done() - start_step;
+    let integrated = steps - ff.as_ref().map_or(0, |f| f.stats.skipped_steps);
+    Ok(RunSummary {
+        backend: describe,
+        steps,
+        simulated_time: model.time_of_step(engine.steps_done()).max(0.0),
+        wall_seconds: wall,
+        block_steps_per_second: integrated as f64 * model.n_blocks() as f64 / wall.max(1e-9),
+        peak_drive_ratio: outputs.peak.max(g.drive_ratio),
+        final_drive_ratio: if steps > 0 {
+            g.drive_ratio
+        } else {
+            outputs.last
+        },
+        ruptures: outputs.ruptures.max(g.ruptures),
+        dispatches: engine
+            .dispatches()
+            .zip(start_dispatches)
+            .map(|(end, start)| end - start),
+        fast_forward: ff.map(|f| f.stats),
+        interrupted,
+        output: opts.output.clone(),
+        checkpoint: checkpoints.filter(|c| c.written > 0).map(|c| c.path),
+        peak_memory: peak_memory(),
+    })
+}

@@ -1,0 +1,197 @@
+//! The output side of a run: what each record holds (the global series
+//! of a snapshot, the drive force), the cadences, and the sink.
+
+use super::RunError;
+use crate::checkpoint::RunnerState;
+use crate::engine::Snapshot;
+use crate::model::{Driver, Model};
+use crate::output::{GlobalSample, McapSink};
+use crate::quasistatic::FastForwardStats;
+use crate::scenario::Scenario;
+use crate::step_params::{step_params, Consts};
+
+/// Tangential force (N) the scene's driver applies at the snapshot's
+/// instant: the side spring's tension; the programmed top force (ramp plus
+/// any trigger prestress); for a prescribed top-row velocity, the
+/// constraint reaction that gives the row its prescribed velocity over the
+/// next step; 0 without a driver. Friction is reported apart.
+pub fn drive_force(model: &Model, snap: &Snapshot, origin: f64) -> f64 {
+    let loads = || step_params(&Consts::<f64>::new(model), snap.step);
+    match model.driver {
+        Driver::SideSpring {
+            stiffness,
+            row,
+            velocity,
+        } => {
+            let u = snap.disp[row * model.nx][0];
+            stiffness * crate::laws::side_spring_stretch(velocity, snap.time, u, origin)
+        }
+        Driver::TopForce { .. } => loads().top_tangential_total,
+        Driver::TopVelocity { .. } => {
+            let v_next = loads().top_velocity;
+            let top = (model.nz - 1) * model.nx;
+            (top..top + model.nx)
+                .map(|i| {
+                    let friction = snap.friction.get(i).copied().unwrap_or(0.0);
+                    model.mass * (v_next - snap.vel_half[i][0]) / model.dt
+                        - snap.force[i][0]
+                        - friction
+                })
+                .sum()
+        }
+        Driver::None => 0.0,
+    }
+}
+
+/// The global series of one snapshot.
+pub fn global_sample(model: &Model, snap: &Snapshot, origin: f64) -> GlobalSample {
+    let force = drive_force(model, snap, origin);
+    let pinned = snap.pinned_fraction(model.nx);
+    GlobalSample {
+        time: snap.time,
+        step: snap.step,
+        drive_force: force,
+        drive_ratio: if model.normal_force > 0.0 {
+            force / model.normal_force
+        } else {
+            0.0
+        },
+        friction_force: snap.total_friction(),
+        pinned_fraction: pinned.iter().sum::<f64>() / pinned.len().max(1) as f64,
+        kinetic_energy: snap.kinetic_energy(model.mass),
+        ruptures: snap.total_ruptures(),
+    }
+}
+
+pub(super) fn interval_steps(model: &Model, interval: f64) -> u64 {
+    if interval > 0.0 {
+        ((interval / model.dt).round() as u64).max(1)
+    } else {
+        0
+    }
+}
+
+pub(super) fn next_multiple(step: u64, every: u64) -> u64 {
+    step.checked_div(every)
+        .map_or(u64::MAX, |n| (n + 1) * every)
+}
+
+/// The output side of a run: cadences, the sink, and what the summary
+/// reports (peak and last F/F_N, ruptures).
+pub(super) struct Outputs {
+    model: Model,
+    pub sink: Option<McapSink>,
+    every_global: u64,
+    every_interface: u64,
+    every_bulk: u64,
+    /// Interface output speeds up to `fast_interval` while any interface
+    /// block slips faster than `fast_slip_speed` (decided at each sample).
+    every_fast: u64,
+    fast_slip_speed: f64,
+    fast: bool,
+    pub origin: f64,
+    pub peak: f64,
+    pub last: f64,
+    pub ruptures: u64,
+}
+
+impl Outputs {
+    pub fn new(model: &Model, scenario: &Scenario, sink: Option<McapSink>) -> Self {
+        let o = &scenario.output;
+        Outputs {
+            model: model.clone(),
+            sink,
+            every_global: interval_steps(model, o.global_interval),
+            every_interface: interval_steps(model, o.interface_interval),
+            every_bulk: interval_steps(model, o.bulk_interval),
+            every_fast: interval_steps(model, o.fast_interval),
+            fast_slip_speed: o.fast_slip_speed,
+            fast: false,
+            origin: 0.0,
+            peak: 0.0,
+            last: 0.0,
+            ruptures: 0,
+        }
+    }
+
+    /// The first step after `s` at which some channel is due (u64::MAX:
+    /// none, or nothing is written).
+    pub fn next_due(&self, s: u64) -> u64 {
+        let prep = self.model.prep_steps;
+        if s < prep || self.sink.is_none() {
+            return u64::MAX;
+        }
+        let d = s - prep;
+        next_multiple(d, self.every_global)
+            .min(next_multiple(d, self.every_interface))
+            .min(next_multiple(d, self.every_bulk))
+            .min(if self.fast {
+                next_multiple(d, self.every_fast)
+            } else {
+                u64::MAX
+            })
+            .saturating_add(prep)
+    }
+
+    /// Writes the channels due at the snapshot's step.
+    pub fn emit(&mut self, snap: &Snapshot) -> Result<(), RunError> {
+        let model = &self.model;
+        let d = snap.step - model.prep_steps;
+        let g = global_sample(model, snap, self.origin);
+        self.peak = self.peak.max(g.drive_ratio);
+        self.last = g.drive_ratio;
+        self.ruptures = g.ruptures;
+        let max_slip_speed = (0..model.nx)
+            .map(|ix| snap.vel[ix][0].abs())
+            .fold(0.0, f64::max);
+        self.fast = self.every_fast > 0 && max_slip_speed > self.fast_slip_speed;
+        if let Some(sink) = self.sink.as_mut() {
+            if self.every_global > 0 && d.is_multiple_of(self.every_global) {
+                sink.write_global(&g)?;
+            }
+            let fast_due = self.fast && self.every_fast > 0 && d.is_multiple_of(self.every_fast);
+            if fast_due || (self.every_interface > 0 && d.is_multiple_of(self.every_interface)) {
+                sink.write_interface(model, snap)?;
+            }
+            if self.every_bulk > 0 && d.is_multiple_of(self.every_bulk) {
+                sink.write_bulk(model, snap)?;
+            }
+        }
+        Ok(())
+    }
+
+    /// The runner state's output part (the fast-forward's is added by the
+    /// caller).
+    pub fn save(&self) -> RunnerState {
+        let (sequence, slip_origin) = self.sink.as_ref().map_or((0, None), McapSink::state);
+        RunnerState {
+            origin: self.origin,
+            fast: self.fast,
+            peak: self.peak,
+            last: self.last,
+            ruptures: self.ruptures,
+            sequence,
+            slip_origin,
+            fast_forward: None,
+        }
+    }
+
+    /// Continues from a saved state.
+    pub fn restore(&mut self, r: &RunnerState) {
+        self.origin = r.origin;
+        self.fast = r.fast;
+        self.peak = r.peak;
+        self.last = r.last;
+        self.ruptures = r.ruptures;
+        if let Some(sink) = self.sink.as_mut() {
+            sink.restore(r.sequence, r.slip_origin.clone());
+        }
+    }
+
+    pub fn finish(&mut self, fast_forward: Option<&FastForwardStats>) -> Result<(), RunError> {
+        if let Some(sink) = self.sink.take() {
+            sink.finish(fast_forward)?;
+        }
+        Ok(())
+    }
+}
