@@ -63,6 +63,7 @@ fn run_case(scenario: &std::path::Path, t_end: f64, base: &[String], case: &Case
             fast_forward: None,
             output: Some(out.clone()),
             progress: false,
+            ..RunOptions::default()
         },
     )
     .expect("run");

@@ -42,6 +42,7 @@ fn run(name: &str, ff: Option<FastForwardSettings>) -> (RunSummary, RunFile) {
             fast_forward: ff,
             output: Some(path.clone()),
             progress: false,
+            ..RunOptions::default()
         },
     )
     .unwrap();
@@ -262,6 +263,7 @@ fn top_force_and_top_velocity_drives_fast_forward_to_the_first_rupture() {
                 fast_forward: ff,
                 output: Some(path.clone()),
                 progress: false,
+                ..RunOptions::default()
             };
             let summary = run_scene(engine.as_mut(), &scenario, &opts).unwrap();
             (first_rupture(&RunFile::read(&path).unwrap()), summary)

@@ -250,6 +250,7 @@ fn coulomb_stick_slip_transitions_are_counted_as_ruptures_on_both_engines() {
         fast_forward: None,
         output: None,
         progress: false,
+        ..RunOptions::default()
     };
     let mut c = cpu_engine(&m, Precision::F32, 1).unwrap();
     let summary = run_scene(c.as_mut(), &s, &opts).unwrap();
@@ -416,6 +417,7 @@ fn gpu_fast_forward_finds_the_first_rupture_of_full_dynamics() {
             fast_forward: ff,
             output: Some(path.clone()),
             progress: false,
+            ..RunOptions::default()
         };
         let summary = run_scene(engine, &scenario, &opts).unwrap();
         let run = slipfront::output::reader::RunFile::read(&path).unwrap();

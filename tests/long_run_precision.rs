@@ -41,6 +41,7 @@ fn outcome(label: &str, backend: Backend, precision: Precision, velocity: f64) -
         fast_forward: None,
         output: Some(path.clone()),
         progress: false,
+        ..RunOptions::default()
     };
     run_scene(e.as_mut(), &s, &opts).unwrap();
     let run = RunFile::read(&path).unwrap();

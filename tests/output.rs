@@ -36,6 +36,7 @@ fn every_channel_reads_back_as_the_engine_state() {
             fast_forward: None,
             output: Some(path.clone()),
             progress: false,
+            ..RunOptions::default()
         },
     )
     .unwrap();
@@ -99,6 +100,7 @@ fn a_file_cut_short_is_still_readable() {
         fast_forward: None,
         output: Some(path.clone()),
         progress: false,
+        ..RunOptions::default()
     };
     run_scene(engine.as_mut(), &scenario, &opts).unwrap();
     let whole = RunFile::read(&path).unwrap();

@@ -1,0 +1,405 @@
+//! Checkpoint, resume and branch: a run stopped (SIGKILL, SIGINT, its end)
+//! and continued gives the records of the run that never stopped, bit for
+//! bit on the CPU; damaged checkpoints are refused; branches differ from
+//! their parent only after the branch point.
+
+use slipfront::backend::{cpu_engine, cpu_reference_engine, Precision};
+use slipfront::checkpoint::{path_for, Checkpoint, CheckpointError};
+use slipfront::engine::Engine;
+use slipfront::model::Model;
+use slipfront::output::reader::RunFile;
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+use std::time::{Duration, Instant};
+
+/// The small side-driven scene, driven fast enough that junctions break
+/// from 0.6 ms on.
+const SCENE: [&str; 7] = [
+    "geometry.nx=29",
+    "geometry.nz=16",
+    "geometry.length=0.07",
+    "geometry.height=0.0375",
+    "loading.normal.ramp_time=2e-4",
+    "loading.normal.relax_time=3e-4",
+    "loading.drive.velocity=0.2",
+];
+
+fn dir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("slipfront-ckpt-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn command(args: &[&str], extra: &[String]) -> Command {
+    let mut c = Command::new(env!("CARGO_BIN_EXE_slipfront"));
+    c.args(["run", "--backend", "cpu", "--threads", "1", "--quiet"]);
+    c.args(args).args(extra);
+    c
+}
+
+fn scene_args(more: &[&str]) -> Vec<String> {
+    SCENE
+        .iter()
+        .chain(more)
+        .flat_map(|s| ["--set".to_string(), s.to_string()])
+        .collect()
+}
+
+fn run_ok(args: &[&str], extra: &[String]) -> String {
+    let out = command(args, extra).output().unwrap();
+    let text = format!(
+        "{}{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(out.status.success(), "slipfront run {args:?}: {text}");
+    text
+}
+
+fn run_fails(args: &[&str], extra: &[String]) -> String {
+    let out = command(args, extra).output().unwrap();
+    assert!(!out.status.success(), "slipfront run {args:?} should fail");
+    String::from_utf8_lossy(&out.stderr).into_owned()
+}
+
+fn s(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+/// Every record of the series a user reads: /global, /interface, /bulk and
+/// the fast-forward jumps, with their steps and values.
+fn assert_same_records(a: &RunFile, b: &RunFile) {
+    assert!(!a.global.is_empty() && !a.interface.is_empty());
+    assert_eq!(a.global.len(), b.global.len(), "/global counts");
+    assert!(a.global == b.global, "/global records differ");
+    assert_eq!(a.interface.len(), b.interface.len(), "/interface counts");
+    assert!(a.interface == b.interface, "/interface records differ");
+    assert!(a.bulk == b.bulk, "/bulk records differ");
+    assert!(
+        a.fast_forward == b.fast_forward,
+        "/fast_forward records differ"
+    );
+}
+
+/// Waits until the run has written a checkpoint after the one at the start
+/// of driving (`.prev` then exists), then kills it with `signal`.
+fn stop_midway(mut child: Child, ckpt: &Path, signal: i32) -> std::process::Output {
+    let prev = PathBuf::from(format!("{}.prev", ckpt.display()));
+    let started = Instant::now();
+    while !prev.exists() {
+        assert!(
+            child.try_wait().unwrap().is_none(),
+            "the run ended before its second checkpoint: the test would be vacuous"
+        );
+        assert!(
+            started.elapsed() < Duration::from_secs(120),
+            "no checkpoint"
+        );
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    unsafe {
+        libc::kill(child.id() as i32, signal);
+    }
+    let out = child.wait_with_output().unwrap();
+    assert!(!out.status.success() || signal == libc::SIGINT);
+    out
+}
+
+fn uninterrupted(d: &Path, precision: &str, t_end: &str) -> RunFile {
+    let whole = d.join("whole.mcap");
+    run_ok(
+        &["--precision", precision, "--t-end", t_end, "-o", s(&whole)],
+        &scene_args(&[]),
+    );
+    RunFile::read(&whole).unwrap()
+}
+
+fn killed_and_resumed(precision: &str, signal: i32) {
+    let d = dir(&format!("{precision}-{signal}"));
+    let t_end = "0.006";
+    let whole = uninterrupted(&d, precision, t_end);
+    let cut = d.join("cut.mcap");
+    let child = command(
+        &["--precision", precision, "--t-end", t_end, "-o", s(&cut)],
+        &scene_args(&["output.checkpoint_interval=0.05"]),
+    )
+    .stdout(Stdio::piped())
+    .stderr(Stdio::piped())
+    .spawn()
+    .unwrap();
+    let out = stop_midway(child, &path_for(&cut), signal);
+    let (ckpt, _, _) = Checkpoint::newest(&path_for(&cut)).unwrap();
+    let model = Model::from_scenario(
+        &slipfront::Scenario::parse(&ckpt.header.scenario, "ckpt", &[]).unwrap(),
+        false,
+    )
+    .unwrap();
+    assert!(
+        ckpt.header.step > model.prep_steps && ckpt.header.step < model.total_steps(),
+        "stopped at step {} of {}",
+        ckpt.header.step,
+        model.total_steps()
+    );
+    if signal == libc::SIGINT {
+        let text = String::from_utf8_lossy(&out.stdout);
+        assert!(
+            text.contains("INTERRUPTED") && text.contains("--resume"),
+            "{text}"
+        );
+        // An interrupted run leaves a complete, readable file.
+        assert!(!RunFile::read(&cut).unwrap().truncated);
+    }
+    let text = run_ok(&["--resume", s(&cut)], &[]);
+    assert!(text.contains("run complete"), "{text}");
+    let resumed = RunFile::read(&cut).unwrap();
+    assert!(!resumed.truncated);
+    assert_same_records(&whole, &resumed);
+    assert!(resumed
+        .history
+        .iter()
+        .any(|l| l.starts_with("resumed at step")));
+}
+
+#[test]
+fn sigkill_midway_then_resume_gives_the_uninterrupted_records_f64() {
+    killed_and_resumed("f64", libc::SIGKILL);
+}
+
+#[test]
+fn sigkill_midway_then_resume_gives_the_uninterrupted_records_f32() {
+    killed_and_resumed("f32", libc::SIGKILL);
+}
+
+#[test]
+fn sigint_checkpoints_and_the_resume_is_exact() {
+    killed_and_resumed("f64", libc::SIGINT);
+}
+
+#[test]
+fn a_finished_run_extended_equals_the_longer_run() {
+    let d = dir("extend");
+    let whole = uninterrupted(&d, "f64", "0.004");
+    let short = d.join("short.mcap");
+    run_ok(&["--t-end", "0.002", "-o", s(&short)], &scene_args(&[]));
+    // Resuming a finished run without a new end is refused, clearly.
+    let err = run_fails(&["--resume", s(&short)], &[]);
+    assert!(
+        err.contains("already reached its end") && err.contains("--t-end"),
+        "{err}"
+    );
+    run_ok(&["--resume", s(&short), "--t-end", "0.004"], &[]);
+    assert_same_records(&whole, &RunFile::read(&short).unwrap());
+    // The negative control: a run with V × (1 + 1e-6) is flagged.
+    let other = d.join("other.mcap");
+    run_ok(
+        &["--t-end", "0.004", "-o", s(&other)],
+        &scene_args(&["loading.drive.velocity=0.2000002"]),
+    );
+    let other = RunFile::read(&other).unwrap();
+    assert!(whole.global != other.global);
+}
+
+#[test]
+fn a_damaged_checkpoint_is_refused_and_the_previous_one_used() {
+    let d = dir("damaged");
+    let run = d.join("run.mcap");
+    run_ok(&["--t-end", "0.002", "-o", s(&run)], &scene_args(&[]));
+    let ckpt = path_for(&run);
+    let prev = PathBuf::from(format!("{}.prev", ckpt.display()));
+    let good = std::fs::read(&ckpt).unwrap();
+    let prev_step = Checkpoint::read(&prev).unwrap().header.step;
+    // A flipped byte, a truncation, another format version, not a
+    // checkpoint: each is refused with its reason.
+    let mut flipped = good.clone();
+    flipped[good.len() / 2] ^= 0x10;
+    std::fs::write(&ckpt, &flipped).unwrap();
+    assert!(matches!(
+        Checkpoint::read(&ckpt),
+        Err(CheckpointError::Damaged(_))
+    ));
+    std::fs::write(&ckpt, &good[..good.len() - 100]).unwrap();
+    assert!(matches!(
+        Checkpoint::read(&ckpt),
+        Err(CheckpointError::Damaged(_))
+    ));
+    let mut versioned = good.clone();
+    versioned[8] = 99;
+    std::fs::write(&ckpt, &versioned).unwrap();
+    let e = Checkpoint::read(&ckpt).unwrap_err();
+    assert!(e.to_string().contains("version 99"), "{e}");
+    std::fs::write(&ckpt, b"hello").unwrap();
+    assert!(matches!(
+        Checkpoint::read(&ckpt),
+        Err(CheckpointError::NotACheckpoint)
+    ));
+    // The resume passes over the damaged one and continues from .prev.
+    std::fs::write(&ckpt, &flipped).unwrap();
+    let text = run_ok(&["--resume", s(&run), "--t-end", "0.003"], &[]);
+    assert!(
+        text.contains("passing over") && text.contains("damaged"),
+        "{text}"
+    );
+    let resumed = RunFile::read(&run).unwrap();
+    assert!(resumed
+        .history
+        .iter()
+        .any(|l| l.contains(&format!("resumed at step {prev_step} "))));
+    // Both damaged: refused, naming both.
+    std::fs::write(path_for(&run), b"SLIPCKPT").unwrap();
+    std::fs::write(&prev, b"x").unwrap();
+    let err = run_fails(&["--resume", s(&run), "--t-end", "0.004"], &[]);
+    assert!(
+        err.contains("damaged") && err.contains("not a slipfront checkpoint"),
+        "{err}"
+    );
+}
+
+#[test]
+fn a_branch_with_a_new_velocity_differs_only_after_the_branch_point() {
+    let d = dir("branch");
+    let parent_whole = uninterrupted(&d, "f64", "0.004");
+    let parent = d.join("parent.mcap");
+    run_ok(&["--t-end", "0.002", "-o", s(&parent)], &scene_args(&[]));
+    let branch_step = Checkpoint::read(&path_for(&parent)).unwrap().header.step;
+    let child = d.join("child.mcap");
+    let text = run_ok(
+        &[
+            "--from",
+            s(&path_for(&parent)),
+            "--set",
+            "loading.drive.velocity=0.3",
+            "--t-end",
+            "0.004",
+            "-o",
+            s(&child),
+        ],
+        &[],
+    );
+    assert!(
+        text.contains("loading.drive.velocity = 0.2 → 0.3"),
+        "{text}"
+    );
+    let child = RunFile::read(&child).unwrap();
+    let (before, after): (Vec<_>, Vec<_>) =
+        child.global.iter().partition(|g| g.step <= branch_step);
+    let parent_before: Vec<_> = parent_whole
+        .global
+        .iter()
+        .filter(|g| g.step <= branch_step)
+        .collect();
+    assert!(!before.is_empty() && before == parent_before);
+    let parent_after: Vec<_> = parent_whole
+        .global
+        .iter()
+        .filter(|g| g.step > branch_step)
+        .collect();
+    assert_eq!(after.len(), parent_after.len());
+    assert!(after.last() != parent_after.last());
+    // The side spring goes on from where it was: its force right after the
+    // branch is the parent's to within the few steps of faster pulling
+    // (without the origin shift it would jump by K·0.1 m/s·2 ms, ~150 %).
+    let (a, b) = (after[0], parent_after[0]);
+    assert_eq!(a.step, b.step);
+    let jump = (a.drive_force - b.drive_force).abs();
+    assert!(
+        jump < 0.02 * b.drive_force.abs(),
+        "{} vs {}",
+        a.drive_force,
+        b.drive_force
+    );
+    assert!(child
+        .history
+        .iter()
+        .any(|l| l.starts_with("branched at step")));
+}
+
+#[test]
+fn a_branch_refuses_keys_the_saved_state_fixes() {
+    let d = dir("refuse");
+    let parent = d.join("parent.mcap");
+    run_ok(&["--t-end", "0.001", "-o", s(&parent)], &scene_args(&[]));
+    let from = path_for(&parent);
+    let err = run_fails(
+        &[
+            "--from",
+            s(&from),
+            "--set",
+            "geometry.nx=57",
+            "--set",
+            "geometry.length=0.14",
+            "--set",
+            "damping.ratio=0.5",
+        ],
+        &[],
+    );
+    for key in ["geometry.nx = 29 → 57", "geometry.length", "damping.ratio"] {
+        assert!(err.contains(key), "{key}: {err}");
+    }
+    assert!(err.contains("fixed by the saved state"), "{err}");
+    // A top force growing from the branch point would jump: refused.
+    let text = Checkpoint::read(&from).unwrap().header.scenario;
+    let mut table: toml::Table = text.parse().unwrap();
+    table["loading"]["drive"] =
+        toml::Value::Table("mode = \"top_force\"\nforce_rate = 10.0".parse().unwrap());
+    let child = d.join("top_force.toml");
+    std::fs::write(&child, toml::to_string(&table).unwrap()).unwrap();
+    let err = run_fails(&[s(&child), "--from", s(&from)], &[]);
+    assert!(err.contains("loading.drive.force_rate"), "{err}");
+    let err = run_fails(&["--resume", s(&parent), "--set", "time.seed=3"], &[]);
+    assert!(err.contains("--from"), "{err}");
+}
+
+/// The engines' own save and load: a state saved after n steps and loaded
+/// into a fresh engine steps on with the same bits, on either CPU engine,
+/// in every precision, and across the two engines.
+#[test]
+fn engine_state_round_trips_bit_for_bit() {
+    let scenario = slipfront::verify::small_scene(&["loading.drive.velocity=0.2"]).unwrap();
+    let model = Model::from_scenario(&scenario, false).unwrap();
+    let n = model.prep_steps + 2500;
+    for precision in [Precision::F64, Precision::F32, Precision::F32Plain] {
+        let mut a = cpu_engine(&model, precision, 1).unwrap();
+        a.advance(n).unwrap();
+        let saved = a.save_state().unwrap();
+        a.advance(1500).unwrap();
+        let want = a.snapshot().unwrap();
+        assert!(
+            want.total_ruptures() > 0,
+            "the stretch must break junctions"
+        );
+        for mut b in [
+            cpu_engine(&model, precision, 1).unwrap(),
+            cpu_reference_engine(&model, precision, 1).unwrap(),
+            cpu_engine(&model, precision, 2).unwrap(),
+        ] {
+            b.load_state(&saved).unwrap();
+            assert_eq!(b.save_state().unwrap(), saved, "{}", b.describe());
+            b.advance(1500).unwrap();
+            assert_eq!(
+                b.snapshot().unwrap(),
+                want,
+                "{} {precision:?}",
+                b.describe()
+            );
+        }
+        // Negative control: one velocity off by 1e-9 m/s changes the run.
+        let mut off = saved.clone();
+        off.vel[model.nx + 3][0] += 1e-9;
+        let mut c = cpu_engine(&model, precision, 1).unwrap();
+        c.load_state(&off).unwrap();
+        c.advance(1500).unwrap();
+        assert_ne!(c.snapshot().unwrap(), want, "{precision:?}");
+    }
+    // A state of another lattice is refused, naming the sizes.
+    let other =
+        slipfront::verify::small_scene(&["geometry.nx=57", "geometry.length=0.14"]).unwrap();
+    let other = Model::from_scenario(&other, false).unwrap();
+    let mut e = cpu_engine(&other, Precision::F64, 1).unwrap();
+    let saved = cpu_engine(&model, Precision::F64, 1)
+        .unwrap()
+        .save_state()
+        .unwrap();
+    let err = e.load_state(&saved).unwrap_err().to_string();
+    assert!(err.contains("another lattice"), "{err}");
+}
