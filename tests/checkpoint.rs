@@ -403,3 +403,75 @@ fn engine_state_round_trips_bit_for_bit() {
     let err = e.load_state(&saved).unwrap_err().to_string();
     assert!(err.contains("another lattice"), "{err}");
 }
+
+/// "N factorisations, M CG iterations" of a run summary.
+fn solver_totals(summary: &str) -> String {
+    let line = summary
+        .lines()
+        .find(|l| l.contains("fast-forward"))
+        .expect("a fast-forward line");
+    let at = line.find("J of ring-down; ").expect("solver totals") + 16;
+    let end = line[at..].find(" CG iterations").expect("CG") + at;
+    line[at..end].to_string()
+}
+
+/// A fast-forwarded run (Table S1 driven 10× faster: one jump, then the
+/// first event) stopped during the event and extended: the same records,
+/// the jump's included, and the same solver totals (the kept factor comes
+/// back with the checkpoint; without it the resumed run would factorise
+/// again).
+#[test]
+fn a_fast_forwarded_run_resumes_exactly() {
+    let d = dir("ff");
+    let set: Vec<String> = [
+        "loading.drive.velocity=4e-3",
+        "output.global_interval=1e-5",
+        "output.interface_interval=1e-4",
+        "output.bulk_interval=0",
+    ]
+    .iter()
+    .flat_map(|s| ["--set".to_string(), s.to_string()])
+    .collect();
+    let whole = d.join("whole.mcap");
+    let ff = ["--fast-forward", "on"];
+    let a = run_ok(
+        &[&ff[..], &["--t-end", "0.03", "-o", s(&whole)]].concat(),
+        &set,
+    );
+    let part = d.join("part.mcap");
+    run_ok(
+        &[&ff[..], &["--t-end", "0.021", "-o", s(&part)]].concat(),
+        &set,
+    );
+    let b = run_ok(&["--resume", s(&part), "--t-end", "0.03"], &[]);
+    let (whole, part) = (
+        RunFile::read(&whole).unwrap(),
+        RunFile::read(&part).unwrap(),
+    );
+    assert_eq!(whole.fast_forward.len(), 1, "the scene has one jump");
+    assert_same_records(&whole, &part);
+    assert_eq!(solver_totals(&a), solver_totals(&b));
+}
+
+#[test]
+fn a_resume_in_another_precision_says_so() {
+    let d = dir("precision");
+    let run = d.join("run.mcap");
+    run_ok(&["--t-end", "0.001", "-o", s(&run)], &scene_args(&[]));
+    let text = run_ok(
+        &[
+            "--resume",
+            s(&run),
+            "--t-end",
+            "0.0015",
+            "--precision",
+            "f32",
+        ],
+        &[],
+    );
+    assert!(text.contains("precision changed f64 → f32 mixed"), "{text}");
+    let file = RunFile::read(&run).unwrap();
+    let line = file.history.last().unwrap();
+    assert!(line.contains("precision changed f64 → f32 mixed"), "{line}");
+    assert!(file.global.last().unwrap().time > 0.0014);
+}

@@ -439,3 +439,49 @@ fn gpu_fast_forward_finds_the_first_rupture_of_full_dynamics() {
     assert!((t_ff - t_full).abs() < 0.005 * t_full, "{t_ff} vs {t_full}");
     assert!((r_ff - r_full).abs() < 0.005 * r_full, "{r_ff} vs {r_full}");
 }
+
+/// A state saved by one engine continues on another (checkpoints across
+/// engines): CPU f64 → GPU (rounded to mixed f32 once) agrees with the CPU
+/// mixed-f32 engine continuing from the same state, and GPU → CPU agrees
+/// with the GPU continuing, within the cross-check tolerance; a state the
+/// GPU loads comes back out bit for bit.
+#[test]
+fn states_cross_between_cpu_and_gpu() {
+    let m = model(SMALL);
+    let mut f64_engine = cpu_engine(&m, Precision::F64, 1).unwrap();
+    advance_to(f64_engine.as_mut(), m.prep_steps + 1500).unwrap();
+    let saved = f64_engine.save_state().unwrap();
+    for path in KERNELS {
+        let mut g = gpu_on(&m, path);
+        g.load_state(&saved).unwrap();
+        let on_gpu = g.save_state().unwrap();
+        assert_eq!(on_gpu.precision, "f32 mixed (f32+f32 coordinates)");
+        let mut again = gpu_on(&m, path);
+        again.load_state(&on_gpu).unwrap();
+        assert_eq!(again.save_state().unwrap(), on_gpu, "{path:?}");
+        let mut c = cpu_engine(&m, Precision::F32, 1).unwrap();
+        c.load_state(&saved).unwrap();
+        g.advance(1500).unwrap();
+        c.advance(1500).unwrap();
+        let (gs, cs) = (g.snapshot().unwrap(), c.snapshot().unwrap());
+        assert_eq!(gs.step, m.prep_steps + 3000);
+        let errors = compare_snapshots(&cs, &gs);
+        assert_eq!(
+            fields_over(&errors, 1e-4, 1e-5),
+            Vec::<String>::new(),
+            "CPU f64 → GPU, {path:?}: {errors:?}"
+        );
+        // GPU → CPU.
+        let from_gpu = g.save_state().unwrap();
+        let mut c = cpu_engine(&m, Precision::F32, 1).unwrap();
+        c.load_state(&from_gpu).unwrap();
+        g.advance(1000).unwrap();
+        c.advance(1000).unwrap();
+        let errors = compare_snapshots(&c.snapshot().unwrap(), &g.snapshot().unwrap());
+        assert_eq!(
+            fields_over(&errors, 1e-4, 1e-5),
+            Vec::<String>::new(),
+            "GPU → CPU, {path:?}: {errors:?}"
+        );
+    }
+}

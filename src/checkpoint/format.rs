@@ -74,7 +74,13 @@ pub fn encode(c: &Checkpoint) -> Vec<u8> {
     put_f64s(&mut out, s.junction_stiffness.iter());
     put_u32s(&mut out, s.junction_state.as_flattened().iter().copied());
     put_u32s(&mut out, s.slide.as_flattened().iter().map(|&v| v as u32));
-    let factor = c.solver_factor.as_ref().map_or(&[][..], |f| f.parts().2);
+    let factor = c
+        .header
+        .runner
+        .fast_forward
+        .as_ref()
+        .and_then(|f| f.factor.as_ref())
+        .map_or(&[][..], |f| f.parts().2);
     put_f64s(&mut out, factor.iter());
     put_u64(&mut out, 0);
     let sum = fnv1a(&out);
@@ -204,6 +210,7 @@ pub fn decode(bytes: &[u8]) -> Result<Checkpoint, CheckpointError> {
         Ok((state, factor))
     };
     let (engine, factor) = read(&mut c).map_err(damaged)?;
+    let mut header = header;
     let solver_factor = match header.solver_factor_shape {
         Some((size, band)) => Some(
             BandCholesky::from_parts(size, band, factor)
@@ -211,9 +218,8 @@ pub fn decode(bytes: &[u8]) -> Result<Checkpoint, CheckpointError> {
         ),
         None => None,
     };
-    Ok(Checkpoint {
-        header,
-        engine,
-        solver_factor,
-    })
+    if let Some(ff) = header.runner.fast_forward.as_mut() {
+        ff.factor = solver_factor;
+    }
+    Ok(Checkpoint { header, engine })
 }

@@ -8,7 +8,6 @@ pub mod branch;
 pub mod format;
 
 use crate::engine::EngineState;
-use crate::quasistatic::band::BandCholesky;
 use crate::quasistatic::FastForwardState;
 use serde::{Deserialize, Serialize};
 use std::io::Write;
@@ -68,9 +67,9 @@ pub struct Header {
 
 #[derive(Debug, Clone)]
 pub struct Checkpoint {
+    /// Holds the runner's state, the fast-forward solver's factor with it.
     pub header: Header,
     pub engine: EngineState,
-    pub solver_factor: Option<BandCholesky>,
 }
 
 #[derive(Debug, thiserror::Error)]

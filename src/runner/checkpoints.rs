@@ -61,9 +61,15 @@ impl Checkpointer {
         let model = engine.model().clone();
         let engine_state = engine.save_state()?;
         let mut runner = outputs.save();
-        let ff_state = ff.map(FastForward::state);
-        let solver_factor = ff_state.as_ref().and_then(|f| f.factor.clone());
-        runner.fast_forward = ff_state;
+        runner.fast_forward = ff.map(FastForward::state);
+        let solver_factor_shape = runner
+            .fast_forward
+            .as_ref()
+            .and_then(|f| f.factor.as_ref())
+            .map(|f| {
+                let (n, band, _) = f.parts();
+                (n, band)
+            });
         let header = Header {
             slipfront_version: env!("CARGO_PKG_VERSION").into(),
             created_unix: unix_now(),
@@ -79,16 +85,12 @@ impl Checkpointer {
             junctions: model.n_junctions(),
             output: self.output.clone(),
             runner,
-            solver_factor_shape: solver_factor.as_ref().map(|f| {
-                let (n, band, _) = f.parts();
-                (n, band)
-            }),
+            solver_factor_shape,
             history: self.history.clone(),
         };
         Checkpoint {
             header,
             engine: engine_state,
-            solver_factor,
         }
         .write(&self.path)
         .map_err(|e| RunError::Checkpoint(e.to_string()))?;

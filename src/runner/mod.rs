@@ -65,8 +65,11 @@ pub struct RunSummary {
     pub ruptures: u64,
     /// GPU dispatches over the run (GPU engines only).
     pub dispatches: Option<u64>,
-    /// Quasi-static fast-forward totals (when it was on).
+    /// Quasi-static fast-forward totals (when it was on), over the whole
+    /// run (a resumed run's include the part before the resume).
     pub fast_forward: Option<FastForwardStats>,
+    /// Steps of this invocation skipped by the fast-forward.
+    pub skipped_steps: u64,
     pub interrupted: bool,
     pub output: Option<PathBuf>,
     /// The last checkpoint written (runs with an output file).
@@ -125,7 +128,7 @@ impl std::fmt::Display for RunSummary {
                  path error {:.1e}",
                 ff.jumps,
                 ff.skipped_time,
-                100.0 * ff.skipped_steps as f64 / (self.steps.max(1)) as f64,
+                100.0 * self.skipped_steps as f64 / (self.steps.max(1)) as f64,
                 ff.dropped_energy,
                 ff.factorisations,
                 ff.cg_iterations,
@@ -241,6 +244,7 @@ pub fn run_scene(
     let mut interrupted = false;
     let start_step = engine.steps_done();
     let start_dispatches = engine.dispatches();
+    let start_skipped = ff.as_ref().map_or(0, |f| f.stats.skipped_steps);
     let result = (|| -> Result<(), RunError> {
         while engine.steps_done() < total {
             let s = engine.steps_done();
@@ -314,7 +318,9 @@ pub fn run_scene(
     let g = global_sample(&model, &final_snap, outputs.origin);
     let wall = started.elapsed().as_secs_f64();
     let steps = engine.steps_done() - start_step;
-    let integrated = steps - ff.as_ref().map_or(0, |f| f.stats.skipped_steps);
+    // The fast-forward's totals cover the whole run, resumes included.
+    let skipped = ff.as_ref().map_or(0, |f| f.stats.skipped_steps) - start_skipped;
+    let integrated = steps - skipped;
     Ok(RunSummary {
         backend: describe,
         steps,
@@ -333,6 +339,7 @@ pub fn run_scene(
             .zip(start_dispatches)
             .map(|(end, start)| end - start),
         fast_forward: ff.map(|f| f.stats),
+        skipped_steps: skipped,
         interrupted,
         output: opts.output.clone(),
         checkpoint: checkpoints.filter(|c| c.written > 0).map(|c| c.path),
