@@ -129,7 +129,7 @@ fn killed_and_resumed(precision: &str, signal: i32) {
     .spawn()
     .unwrap();
     let out = stop_midway(child, &path_for(&cut), signal);
-    let (ckpt, _, _) = Checkpoint::newest(&path_for(&cut)).unwrap();
+    let (ckpt, _, _) = Checkpoint::first_good(&Checkpoint::candidates(&cut)).unwrap();
     let model = Model::from_scenario(
         &slipfront::Scenario::parse(&ckpt.header.scenario, "ckpt", &[]).unwrap(),
         false,
@@ -204,7 +204,8 @@ fn a_finished_run_extended_equals_the_longer_run() {
 fn a_damaged_checkpoint_is_refused_and_the_previous_one_used() {
     let d = dir("damaged");
     let run = d.join("run.mcap");
-    run_ok(&["--t-end", "0.002", "-o", s(&run)], &scene_args(&[]));
+    run_ok(&["--t-end", "0.001", "-o", s(&run)], &scene_args(&[]));
+    run_ok(&["--resume", s(&run), "--t-end", "0.002"], &[]);
     let ckpt = path_for(&run);
     let prev = PathBuf::from(format!("{}.prev", ckpt.display()));
     let good = std::fs::read(&ckpt).unwrap();
@@ -245,14 +246,33 @@ fn a_damaged_checkpoint_is_refused_and_the_previous_one_used() {
         .history
         .iter()
         .any(|l| l.contains(&format!("resumed at step {prev_step} "))));
-    // Both damaged: refused, naming both.
+    // Both damaged: the loaded slider's checkpoint is the last resort.
+    let loaded = slipfront::checkpoint::loaded_path_for(&run);
+    let loaded_step = Checkpoint::read(&loaded).unwrap().header.step;
     std::fs::write(path_for(&run), b"SLIPCKPT").unwrap();
     std::fs::write(&prev, b"x").unwrap();
-    let err = run_fails(&["--resume", s(&run), "--t-end", "0.004"], &[]);
+    let text = run_ok(&["--resume", s(&run), "--t-end", "0.003"], &[]);
     assert!(
-        err.contains("damaged") && err.contains("not a slipfront checkpoint"),
-        "{err}"
+        text.contains("cut short") && text.contains("not a slipfront checkpoint"),
+        "{text}"
     );
+    let resumed = RunFile::read(&run).unwrap();
+    assert!(resumed
+        .history
+        .iter()
+        .any(|l| l.contains(&format!("resumed at step {loaded_step} "))));
+    // None good: refused, naming each.
+    std::fs::write(path_for(&run), b"SLIPCKPT").unwrap();
+    std::fs::write(&prev, b"x").unwrap();
+    std::fs::write(&loaded, &good[..50]).unwrap();
+    let err = run_fails(&["--resume", s(&run), "--t-end", "0.004"], &[]);
+    for name in [
+        ".ckpt`: damaged",
+        ".prev`: not a slipfront",
+        ".loaded.ckpt`: damaged",
+    ] {
+        assert!(err.contains(name), "{name}: {err}");
+    }
 }
 
 #[test]
@@ -474,4 +494,66 @@ fn a_resume_in_another_precision_says_so() {
     let line = file.history.last().unwrap();
     assert!(line.contains("precision changed f64 → f32 mixed"), "{line}");
     assert!(file.global.last().unwrap().time > 0.0014);
+}
+
+/// The loaded slider (saved one step before driving starts) is the common
+/// start of a study: a branch from it with another drive velocity, or with
+/// a trigger, is the fresh run of that scene, bit for bit, without its
+/// normal-load phase.
+#[test]
+fn branches_from_the_loaded_slider_equal_fresh_runs() {
+    let d = dir("loaded");
+    let trigger = [
+        "loading.trigger.shear_prestress=0.3",
+        "loading.trigger.force_width=0.1",
+        "loading.trigger.strip_length=0.005",
+        "loading.trigger.strip_prestress=0.7",
+    ];
+    let base = d.join("base.mcap");
+    run_ok(&["--t-end", "0", "-o", s(&base)], &scene_args(&trigger));
+    let loaded = slipfront::checkpoint::loaded_path_for(&base);
+    for (name, changes) in [
+        ("velocity", vec!["loading.drive.velocity=0.3"]),
+        (
+            "trigger",
+            vec![
+                "loading.trigger.force_width=0.2",
+                "loading.trigger.strip_prestress=0.9",
+            ],
+        ),
+    ] {
+        let set: Vec<String> = changes
+            .iter()
+            .flat_map(|c| ["--set".to_string(), c.to_string()])
+            .collect();
+        let fresh = d.join(format!("fresh-{name}.mcap"));
+        let scene = [&trigger[..], &changes[..]].concat();
+        run_ok(&["--t-end", "0.002", "-o", s(&fresh)], &scene_args(&scene));
+        let branch = d.join(format!("branch-{name}.mcap"));
+        let from = ["--from", s(&loaded), "--t-end", "0.002", "-o", s(&branch)];
+        run_ok(&from, &set);
+        let (a, b) = (
+            RunFile::read(&fresh).unwrap(),
+            RunFile::read(&branch).unwrap(),
+        );
+        assert_same_records(&a, &b);
+        // Negative control: the parent's own continuation differs.
+        let parent = d.join("parent.mcap");
+        run_ok(
+            &["--resume", s(&base), "--t-end", "0.002", "-o", s(&parent)],
+            &[],
+        );
+        assert!(RunFile::read(&parent).unwrap().global != a.global, "{name}");
+    }
+    // The prestress acts in the normal-load phase too: refused.
+    let err = run_fails(
+        &[
+            "--from",
+            s(&loaded),
+            "--set",
+            "loading.trigger.shear_prestress=0.4",
+        ],
+        &[],
+    );
+    assert!(err.contains("normal-load phase"), "{err}");
 }

@@ -87,7 +87,20 @@ pub fn check(
         let free = FREE
             .iter()
             .any(|f| key == *f || (f.ends_with(['.', '_']) && key.starts_with(f)));
-        if key.starts_with("loading.trigger.") || key == "loading.trigger" {
+        if key == "loading.trigger.shear_prestress" {
+            let value = |s: &Scenario| {
+                s.loading
+                    .trigger
+                    .as_ref()
+                    .map_or(0.0, |t| t.shear_prestress)
+            };
+            if value(parent) != value(child) && step > 0 {
+                refusals.push(format!(
+                    "{key} = {old} → {new}: the prestress also sets the top row's tangential \
+                     force during the normal-load phase, so the saved state depends on it"
+                ));
+            }
+        } else if key.starts_with("loading.trigger.") {
             if driving {
                 refusals.push(format!(
                     "{key} = {old} → {new}: the trigger acts when driving starts (step {prep}), \

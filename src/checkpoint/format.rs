@@ -154,8 +154,11 @@ fn pairs<T: Copy>(v: Vec<T>) -> Vec<[T; 2]> {
 
 pub fn decode(bytes: &[u8]) -> Result<Checkpoint, CheckpointError> {
     let damaged = |why: String| CheckpointError::Damaged(why);
-    if bytes.len() < 12 || &bytes[..8] != MAGIC {
+    if bytes.len() < 8 || &bytes[..8] != MAGIC {
         return Err(CheckpointError::NotACheckpoint);
+    }
+    if bytes.len() < 12 {
+        return Err(damaged(format!("it is cut short ({} bytes)", bytes.len())));
     }
     let version = u32::from_le_bytes(bytes[8..12].try_into().expect("4 bytes"));
     if version != FORMAT_VERSION {

@@ -94,6 +94,12 @@ pub fn path_for(output: &Path) -> PathBuf {
     with_suffix(output, ".ckpt")
 }
 
+/// The loaded slider's checkpoint, one step before driving starts:
+/// `RUN.mcap` → `RUN.mcap.loaded.ckpt`.
+pub fn loaded_path_for(output: &Path) -> PathBuf {
+    with_suffix(output, ".loaded.ckpt")
+}
+
 fn with_suffix(path: &Path, suffix: &str) -> PathBuf {
     let mut s = path.as_os_str().to_owned();
     s.push(suffix);
@@ -132,20 +138,37 @@ impl Checkpoint {
         format::decode(&bytes)
     }
 
-    /// The newest good checkpoint of `path`: `path` itself, else (when it
-    /// is missing or damaged) `path.prev`. Returns the checkpoint, the file
-    /// it came from, and why `path` itself was passed over.
-    pub fn newest(path: &Path) -> Result<(Checkpoint, PathBuf, Option<String>), String> {
-        let prev = with_suffix(path, ".prev");
-        let first = match Checkpoint::read(path) {
-            Ok(c) => return Ok((c, path.to_path_buf(), None)),
-            Err(e) => format!("`{}`: {e}", path.display()),
-        };
-        match Checkpoint::read(&prev) {
-            Ok(c) => Ok((c, prev, Some(first))),
-            Err(CheckpointError::Io(_)) if !prev.exists() => Err(first),
-            Err(e) => Err(format!("{first}; `{}`: {e}", prev.display())),
+    /// The first good checkpoint of `candidates` (newest first): the
+    /// checkpoint, its file, and why each candidate before it was passed
+    /// over. Missing files are passed over silently; when none is good,
+    /// every reason.
+    pub fn first_good(
+        candidates: &[PathBuf],
+    ) -> Result<(Checkpoint, PathBuf, Vec<String>), Vec<String>> {
+        let mut passed = Vec::new();
+        for path in candidates {
+            match Checkpoint::read(path) {
+                Ok(c) => return Ok((c, path.clone(), passed)),
+                Err(_) if !path.exists() => {}
+                Err(e) => passed.push(format!("`{}`: {e}", path.display())),
+            }
         }
+        if passed.is_empty() {
+            let names: Vec<String> = candidates
+                .iter()
+                .map(|p| format!("`{}`", p.display()))
+                .collect();
+            passed.push(format!("no checkpoint ({} do not exist)", names.join(", ")));
+        }
+        Err(passed)
+    }
+
+    /// Where a run's checkpoints are, newest first: `RUN.mcap.ckpt`, the
+    /// one before it, and the loaded slider's.
+    pub fn candidates(output: &Path) -> Vec<PathBuf> {
+        let ckpt = path_for(output);
+        let prev = with_suffix(&ckpt, ".prev");
+        vec![ckpt, prev, loaded_path_for(output)]
     }
 }
 

@@ -102,6 +102,15 @@ fn finish(
     Ok(ExitCode::SUCCESS)
 }
 
+/// The file starts as a checkpoint does.
+fn is_checkpoint(path: &Path) -> bool {
+    use std::io::Read;
+    let mut magic = [0u8; 8];
+    std::fs::File::open(path)
+        .and_then(|mut f| f.read_exact(&mut magic))
+        .is_ok_and(|_| &magic == slipfront::checkpoint::format::MAGIC)
+}
+
 /// The checkpoint named by `path`: a checkpoint file, or a run file with
 /// one beside it.
 fn checkpoint_of(path: &Path) -> PathBuf {
@@ -150,20 +159,35 @@ fn resume(mut a: RunArgs) -> anyhow::Result<ExitCode> {
             path_for(&file).display()
         );
     }
-    let ckpt_path = checkpoint_of(&file);
-    let (ckpt, used, passed_over) = Checkpoint::newest(&ckpt_path).map_err(|why| {
+    // The run file's checkpoints, newest first (or the one named).
+    let candidates = if path_for(&file).exists() || !is_checkpoint(&file) {
+        Checkpoint::candidates(&file)
+    } else {
+        vec![file.clone()]
+    };
+    let (ckpt, used, passed_over) = Checkpoint::first_good(&candidates).map_err(|why| {
         anyhow::anyhow!(
-            "cannot resume `{}`: {why}\n  (a run writes its first checkpoint when driving \
-             starts, then every output.checkpoint_interval seconds of wall time)",
-            file.display()
+            "cannot resume `{}`: {}\n  (a run saves the loaded slider before driving starts, \
+             then a checkpoint every output.checkpoint_interval seconds of wall time)",
+            file.display(),
+            why.join("; ")
         )
     })?;
-    if let Some(why) = passed_over {
-        eprintln!(
-            "slipfront: passing over {why}; resuming from the previous checkpoint `{}`",
-            used.display()
-        );
+    for why in passed_over {
+        eprintln!("slipfront: passing over {why}");
     }
+    if used != candidates[0] {
+        eprintln!("slipfront: resuming from `{}`", used.display());
+    }
+    // Named by its checkpoint: the run file is the one it names.
+    let file = match (is_checkpoint(&file), &ckpt.header.output) {
+        (false, _) => file,
+        (true, Some(out)) => out.clone(),
+        (true, None) => anyhow::bail!(
+            "`{}` names no run file to continue; branch from it with --from",
+            file.display()
+        ),
+    };
     let scenario = Scenario::parse(
         &ckpt.header.scenario,
         "the checkpoint's scenario",

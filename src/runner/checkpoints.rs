@@ -12,6 +12,8 @@ use std::time::{Duration, Instant};
 
 pub(super) struct Checkpointer {
     pub path: PathBuf,
+    /// The run file the checkpoints go beside.
+    pub output_path: PathBuf,
     /// Wall time between periodic checkpoints (None: only at the start of
     /// driving, at the end, and on a signal).
     interval: Option<Duration>,
@@ -24,19 +26,15 @@ pub(super) struct Checkpointer {
 }
 
 impl Checkpointer {
-    pub fn new(
-        path: PathBuf,
-        scenario: &Scenario,
-        output: Option<PathBuf>,
-        history: Vec<String>,
-    ) -> Self {
+    pub fn new(output: PathBuf, scenario: &Scenario, history: Vec<String>) -> Self {
         let every = scenario.output.checkpoint_interval;
         Checkpointer {
-            path,
+            path: crate::checkpoint::path_for(&output),
             interval: (every > 0.0).then(|| Duration::from_secs_f64(every)),
             last: Instant::now(),
             scenario: scenario.to_toml(),
-            output: output.map(|p| std::path::absolute(&p).unwrap_or(p)),
+            output: Some(std::path::absolute(&output).unwrap_or(output.clone())),
+            output_path: output,
             history,
             written: 0,
         }
@@ -47,10 +45,25 @@ impl Checkpointer {
         self.interval.is_some_and(|i| self.last.elapsed() >= i)
     }
 
-    /// Syncs the run file (the checkpoint counts on its messages), then
-    /// writes the engine's and the runner's state.
+    /// Writes the run's checkpoint.
     pub fn write(
         &mut self,
+        engine: &mut dyn Engine,
+        outputs: &mut Outputs,
+        ff: Option<&FastForward>,
+    ) -> Result<(), RunError> {
+        let path = self.path.clone();
+        self.write_to(&path, engine, outputs, ff)?;
+        self.last = Instant::now();
+        self.written += 1;
+        Ok(())
+    }
+
+    /// Syncs the run file (the checkpoint counts on its messages), then
+    /// writes the engine's and the runner's state to `path`.
+    pub fn write_to(
+        &mut self,
+        path: &std::path::Path,
         engine: &mut dyn Engine,
         outputs: &mut Outputs,
         ff: Option<&FastForward>,
@@ -92,10 +105,7 @@ impl Checkpointer {
             header,
             engine: engine_state,
         }
-        .write(&self.path)
-        .map_err(|e| RunError::Checkpoint(e.to_string()))?;
-        self.last = Instant::now();
-        self.written += 1;
-        Ok(())
+        .write(path)
+        .map_err(|e| RunError::Checkpoint(e.to_string()))
     }
 }

@@ -166,9 +166,10 @@ pub enum RunError {
 }
 
 /// Runs `engine` over its whole scene (from the step it is at). With an
-/// output file, checkpoints go beside it (`checkpoint::path_for`): at the
-/// start of driving, every `output.checkpoint_interval` seconds of wall
-/// time, at the end, and when SIGINT or SIGTERM stops the run.
+/// output file, checkpoints go beside it (`checkpoint::path_for`) every
+/// `output.checkpoint_interval` seconds of wall time, at the end, and when
+/// SIGINT or SIGTERM stops the run; the loaded slider, one step before
+/// driving starts, goes to `checkpoint::loaded_path_for`.
 pub fn run_scene(
     engine: &mut dyn Engine,
     scenario: &Scenario,
@@ -221,14 +222,10 @@ pub fn run_scene(
             ff.restore(saved);
         }
     }
-    let mut checkpoints = opts.output.as_ref().map(|p| {
-        Checkpointer::new(
-            crate::checkpoint::path_for(p),
-            scenario,
-            Some(p.clone()),
-            opts.history.clone(),
-        )
-    });
+    let mut checkpoints = opts
+        .output
+        .as_ref()
+        .map(|p| Checkpointer::new(p.clone(), scenario, opts.history.clone()));
     let every_check = ff.as_ref().map_or(0, |f| f.check_steps(&model));
     let bar = if opts.progress {
         let b = ProgressBar::new(total);
@@ -248,19 +245,27 @@ pub fn run_scene(
     let result = (|| -> Result<(), RunError> {
         while engine.steps_done() < total {
             let s = engine.steps_done();
-            // The loaded slider (the start of driving) is always saved:
-            // branches start there, and a killed run resumes there at least.
-            let driving_starts = s == model.prep_steps && s > start_step;
-            if let Some(c) = checkpoints.as_mut().filter(|c| c.due() || driving_starts) {
-                c.write(engine, &mut outputs, ff.as_ref())?;
+            if let Some(c) = checkpoints.as_mut() {
+                // The loaded slider, one step before driving starts, is
+                // always saved apart: branches with any drive or trigger
+                // start there, and a run killed early resumes there.
+                if s + 1 == model.prep_steps && s > start_step {
+                    let loaded = crate::checkpoint::loaded_path_for(&c.output_path);
+                    c.write_to(&loaded, engine, &mut outputs, ff.as_ref())?;
+                }
+                if c.due() {
+                    c.write(engine, &mut outputs, ff.as_ref())?;
+                }
             }
             if INTERRUPTED.load(Ordering::SeqCst) {
                 interrupted = true;
                 break;
             }
             let mut target = (s + MAX_CHUNK).min(total);
-            if s < model.prep_steps {
-                target = target.min(model.prep_steps);
+            for stop in [model.prep_steps.saturating_sub(1), model.prep_steps] {
+                if s < stop {
+                    target = target.min(stop);
+                }
             }
             // Without an output file nothing is read back until the end.
             let out_step = outputs.next_due(s);
