@@ -5,7 +5,6 @@
 
 use slipfront::backend::{cpu_engine, cpu_reference_engine, Precision};
 use slipfront::checkpoint::{path_for, Checkpoint, CheckpointError};
-use slipfront::engine::Engine;
 use slipfront::model::Model;
 use slipfront::output::reader::RunFile;
 use std::path::{Path, PathBuf};
