@@ -62,7 +62,6 @@ fn run_case(scenario: &std::path::Path, t_end: f64, base: &[String], case: &Case
         &RunOptions {
             fast_forward: None,
             output: Some(out.clone()),
-            progress: false,
             ..RunOptions::default()
         },
     )

@@ -21,6 +21,10 @@ pub struct InterfaceSeries {
 /// junctions are pinned.
 pub const RUPTURED_BELOW: f64 = 0.5;
 
+/// Default quiet gap between events (s): longer than a slow front takes to
+/// cross one block, far shorter than a stick-slip cycle.
+pub const DEFAULT_QUIET_GAP: f64 = 1e-3;
+
 /// One slip event.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Event {
@@ -52,6 +56,26 @@ impl Event {
             .filter_map(|(ix, t)| t.map(|t| (t, ix)))
             .min_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
         first.map_or(f64::NAN, |(_, ix)| ix as f64 * spacing)
+    }
+}
+
+/// Length (m) of interface that blocks `lo..=hi` stand for: l each, half
+/// of it for the two edge blocks (which carry half shares of the loads),
+/// so that the whole interface is L = (nx − 1)·l.
+pub fn ruptured_length(lo: usize, hi: usize, nx: usize, spacing: f64) -> f64 {
+    let edges = (lo == 0) as usize + (hi + 1 == nx) as usize;
+    ((hi - lo + 1) as f64 - 0.5 * edges as f64).max(0.0) * spacing
+}
+
+/// The ruptured blocks reach both edges, to within one block: an edge
+/// block carries half the load of the others and may re-pin before the
+/// sample that would show it broken. Where the rupture started does not
+/// matter.
+pub fn spans_interface(lo: usize, hi: usize, nx: usize) -> bool {
+    if nx < 4 {
+        lo == 0 && hi + 1 == nx
+    } else {
+        lo <= 1 && hi + 2 >= nx
     }
 }
 
@@ -125,11 +149,34 @@ impl InterfaceSeries {
             last,
             start: self.time[first],
             end: self.time[last],
-            full: lo == 0 && hi == nx - 1,
-            rupture_length: (hi - lo + 1) as f64 * self.spacing,
+            full: spans_interface(lo, hi, nx),
+            rupture_length: ruptured_length(lo, hi, nx, self.spacing),
             slip,
             rupture_time,
         }
+    }
+
+    /// Which windows of [`Self::front_speed`] the samples resolve: a
+    /// window whose two blocks first read as ruptured in the same or in
+    /// consecutive samples only bounds its speed from below, by w·l over
+    /// the time from the sample before the first to the second. Per window
+    /// of `front_speed`, in order: None when resolved, else that bound.
+    pub fn front_speed_bounds(&self, e: &Event, w: usize) -> Vec<Option<f64>> {
+        let t = &e.rupture_time;
+        let sample = |at: f64| self.time.partition_point(|&x| x < at);
+        (0..t.len().saturating_sub(w))
+            .filter_map(|ix| match (t[ix], t[ix + w]) {
+                (Some(a), Some(b)) => {
+                    let (a, b) = (a.min(b), a.max(b));
+                    let (ka, kb) = (sample(a), sample(b));
+                    Some((kb <= ka + 1).then(|| {
+                        let before = self.time[ka.saturating_sub(1)];
+                        w as f64 * self.spacing / (b - before).max(f64::MIN_POSITIVE)
+                    }))
+                }
+                _ => None,
+            })
+            .collect()
     }
 
     /// Front tip position against time: at each sample of the event, the
@@ -384,12 +431,14 @@ mod tests {
         let e = s.events_separated_by(0.0);
         assert_eq!(e.len(), 2, "{e:?}");
         assert!(!e[0].full);
-        assert!((e[0].rupture_length - 10e-3).abs() < 1e-12);
+        // Ten blocks from the trailing edge: 9.5 l (the edge block's half).
+        assert!((e[0].rupture_length - 9.5e-3).abs() < 1e-12);
         assert!((e[0].start - 20e-6).abs() < 1e-9, "{}", e[0].start);
         assert!((e[0].end - 39e-6).abs() < 1e-9, "{}", e[0].end);
         assert!(e[1].full);
         assert!((e[1].start - 100e-6).abs() <= 1.0001e-6, "{}", e[1].start);
-        assert!((e[1].rupture_length - 50e-3).abs() < 1e-12);
+        // The whole interface: L = (nx − 1)·l.
+        assert!((e[1].rupture_length - 49e-3).abs() < 1e-12);
         assert_eq!(e[1].origin(s.spacing), 0.0);
         // Mean slip of the full event: v × (300 µs − t_r(x)) averaged over x.
         let expected: f64 = (0..50)
@@ -411,9 +460,15 @@ mod tests {
         }
         let e = &s.events_separated_by(0.0)[1];
         assert!(e.full && e.rupture_time[25].is_none());
-        // Negative control: a rupture that stops short of the leading edge.
+        // The edge block itself may hold (it carries half the load).
         for p in &mut s.pinned {
             p[49] = 1.0;
+        }
+        assert!(s.events_separated_by(0.0)[1].full);
+        // Negative control: a rupture that stops two blocks short of the
+        // leading edge.
+        for p in &mut s.pinned {
+            p[48] = 1.0;
         }
         assert!(!s.events_separated_by(0.0)[1].full);
     }

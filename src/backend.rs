@@ -128,3 +128,21 @@ pub fn make_engine_with(
         },
     }
 }
+
+/// Steps per second of `engine` on its scene, measured for about `seconds`
+/// of wall time from the step it is at (after a short warm-up that also
+/// absorbs a GPU's pipeline compilation).
+pub fn measure_steps_per_second(engine: &mut dyn Engine, seconds: f64) -> Result<f64, EngineError> {
+    engine.advance(32)?;
+    let started = std::time::Instant::now();
+    let mut steps = 0u64;
+    // Growing calls, so that a GPU's per-call round trip is amortised as
+    // in a run (which advances up to 20 000 steps a call).
+    let mut chunk = 64u64;
+    while started.elapsed().as_secs_f64() < seconds {
+        engine.advance(chunk)?;
+        steps += chunk;
+        chunk = (chunk * 2).min(8192);
+    }
+    Ok(steps as f64 / started.elapsed().as_secs_f64())
+}

@@ -51,7 +51,11 @@ enum Command {
         /// Run even if dt is above the computed stability limit.
         #[arg(long)]
         allow_unstable: bool,
-        /// No progress bar.
+        /// Progress: a bar on a terminal, else a log line every 10 s (auto),
+        /// or bar, plain or none.
+        #[arg(long, value_enum, default_value = "auto")]
+        progress: slipfront::runner::ProgressMode,
+        /// No progress report (--progress none).
         #[arg(long)]
         quiet: bool,
         /// Continue RUN.mcap from its checkpoint (RUN.mcap.ckpt), in the
@@ -75,6 +79,9 @@ enum Command {
     /// Channels, counts, time span and events of a run file.
     Info {
         file: PathBuf,
+        /// Only the event table, as CSV.
+        #[arg(long)]
+        csv: bool,
         /// Ruptures less than this many seconds apart belong to one event.
         #[arg(long, default_value_t = DEFAULT_QUIET_GAP, value_parser = parse_quiet_gap)]
         quiet_gap: f64,
@@ -96,8 +103,9 @@ enum Command {
     Verify {
         #[arg(long, value_enum, default_value = "cpu")]
         backend: Backend,
-        #[arg(long, value_enum, default_value = "f64")]
-        precision: Precision,
+        /// Default: f32 (mixed) on the GPU, f64 on the CPU.
+        #[arg(long, value_enum)]
+        precision: Option<Precision>,
         #[arg(long)]
         json: bool,
     },
@@ -118,6 +126,7 @@ fn main() -> ExitCode {
             output,
             threads,
             allow_unstable,
+            progress,
             quiet,
             resume,
             from,
@@ -132,6 +141,7 @@ fn main() -> ExitCode {
             output,
             threads,
             allow_unstable,
+            progress,
             quiet,
             resume,
             from,
@@ -141,7 +151,14 @@ fn main() -> ExitCode {
             set,
             json,
         } => commands::check::check(scenario, &set, json),
-        Command::Info { file, quiet_gap } => commands::info::info(&file, quiet_gap),
+        Command::Info {
+            file,
+            csv: true,
+            quiet_gap,
+        } => commands::info::events_csv(&file, quiet_gap),
+        Command::Info {
+            file, quiet_gap, ..
+        } => commands::info::info(&file, quiet_gap),
         Command::Plot {
             file,
             out_dir,
@@ -163,9 +180,7 @@ fn main() -> ExitCode {
     }
 }
 
-/// Default quiet gap between events (s): longer than a slow front takes to
-/// cross one block, far shorter than a stick-slip cycle.
-const DEFAULT_QUIET_GAP: f64 = 1e-3;
+use slipfront::analysis::DEFAULT_QUIET_GAP;
 
 fn parse_quiet_gap(text: &str) -> Result<f64, String> {
     match text.parse::<f64>() {

@@ -94,6 +94,64 @@ pub fn spacetime_map(s: &InterfaceSeries) -> Canvas {
     c
 }
 
+/// Space–time map of the stress ratio τ/p per interface block (column),
+/// time down as in [`spacetime_map`]: dark blue at 0, through white at
+/// `mid`, to dark red at `top` and above (μs is the natural top, μd the
+/// middle).
+pub fn stress_ratio_map(rows: &[Vec<f64>], mid: f64, top: f64) -> Canvas {
+    let nx = rows.first().map_or(0, Vec::len);
+    let n = rows.len();
+    let height = n.clamp(1, MAX_ROWS);
+    let mut c = Canvas::new(nx.max(1) * PIXELS_PER_BLOCK, height);
+    let colour = |r: f64| -> [u8; 3] {
+        if !r.is_finite() {
+            return [0, 160, 0];
+        }
+        let ramp = |f: f64| (255.0 * (1.0 - f.clamp(0.0, 1.0))).round() as u8;
+        if r <= mid {
+            let g = ramp(1.0 - r.max(0.0) / mid.max(1e-300));
+            [g, g, 255]
+        } else {
+            let g = ramp((r - mid) / (top - mid).max(1e-300));
+            [255, g, g]
+        }
+    };
+    for row in 0..height.min(n) {
+        for (ix, &r) in rows[row * n / height].iter().enumerate() {
+            for k in 0..PIXELS_PER_BLOCK {
+                c.set((ix * PIXELS_PER_BLOCK + k) as i64, row as i64, colour(r));
+            }
+        }
+    }
+    c
+}
+
+/// Front tip position x_tip against the time since each event began
+/// (x from 0 to the longest event, y from 0 to the interface length): full
+/// events black, partial ones grey.
+pub fn front_tip_plot(s: &InterfaceSeries, events: &[Event]) -> Canvas {
+    let mut c = Canvas::new(PLOT_W, PLOT_H);
+    frame(&mut c);
+    let longest = events
+        .iter()
+        .map(|e| e.end - e.start)
+        .fold(0.0f64, f64::max);
+    let length = (s.nx().max(2) - 1) as f64 * s.spacing;
+    let map = mapper((0.0, longest.max(1e-300)), (0.0, length));
+    for e in events {
+        let colour = if e.full { [0, 0, 0] } else { [150, 150, 150] };
+        let tip = s.front_tip(e);
+        for pair in tip.windows(2) {
+            c.line(
+                map(pair[0].0 - e.start, pair[0].1),
+                map(pair[1].0 - e.start, pair[1].1),
+                colour,
+            );
+        }
+    }
+    c
+}
+
 const PLOT_W: usize = 800;
 const PLOT_H: usize = 400;
 const MARGIN: i64 = 40;

@@ -79,15 +79,34 @@ fn run_default_scene_briefly_writes_an_mcap_file() {
     );
     for name in [
         "run_spacetime.png",
+        "run_stress_ratio.png",
+        "run_front_tip.png",
         "run_loading.png",
         "run_front_speed.png",
         "run_precursors.png",
     ] {
         assert!(dir.join(name).exists(), "{name}");
     }
-    let out = slipfront(&["plot", file.to_str().unwrap(), "--event", "99"]);
+    // An event that is not there is refused before any picture is drawn.
+    let other = dir.join("other");
+    let out = slipfront(&[
+        "plot",
+        file.to_str().unwrap(),
+        "--event",
+        "99",
+        "-o",
+        other.to_str().unwrap(),
+    ]);
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("--event 99"));
+    assert!(!other.join("run_spacetime.png").exists());
+    // The event table as CSV: a header naming the columns with units.
+    let out = slipfront(&["info", "--csv", file.to_str().unwrap()]);
+    let csv = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success() && csv.starts_with("event,start_s,end_s,kind,rupture_length_m"),
+        "{csv}"
+    );
     let out = slipfront(&["info", "no_such.mcap"]);
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("no_such.mcap"));
@@ -149,4 +168,19 @@ fn a_closed_stdout_pipe_is_not_a_panic() {
     let out = child.wait_with_output().unwrap();
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(!err.contains("panicked"), "{err}");
+}
+
+#[test]
+fn check_estimates_the_wall_time_and_fails_when_unstable() {
+    let out = slipfront(&["check", "--set", "time.end=0.01"]);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{text}");
+    assert!(
+        text.contains("wall time") && text.contains("steps/s") && text.contains("cpu f64"),
+        "{text}"
+    );
+    let out = slipfront(&["check", "--set", "time.dt=1e-5"]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&out.stdout).contains("UNSTABLE"));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("stability limit"));
 }

@@ -41,7 +41,6 @@ fn run(name: &str, ff: Option<FastForwardSettings>) -> (RunSummary, RunFile) {
         &RunOptions {
             fast_forward: ff,
             output: Some(path.clone()),
-            progress: false,
             ..RunOptions::default()
         },
     )
@@ -262,7 +261,6 @@ fn top_force_and_top_velocity_drives_fast_forward_to_the_first_rupture() {
             let opts = RunOptions {
                 fast_forward: ff,
                 output: Some(path.clone()),
-                progress: false,
                 ..RunOptions::default()
             };
             let summary = run_scene(engine.as_mut(), &scenario, &opts).unwrap();

@@ -249,7 +249,6 @@ fn coulomb_stick_slip_transitions_are_counted_as_ruptures_on_both_engines() {
     let opts = RunOptions {
         fast_forward: None,
         output: None,
-        progress: false,
         ..RunOptions::default()
     };
     let mut c = cpu_engine(&m, Precision::F32, 1).unwrap();
@@ -416,7 +415,6 @@ fn gpu_fast_forward_finds_the_first_rupture_of_full_dynamics() {
         let opts = RunOptions {
             fast_forward: ff,
             output: Some(path.clone()),
-            progress: false,
             ..RunOptions::default()
         };
         let summary = run_scene(engine, &scenario, &opts).unwrap();

@@ -154,7 +154,6 @@ fn a_top_force_run_reports_the_applied_ramp_as_its_drive_force() {
     let opts = RunOptions {
         fast_forward: None,
         output: Some(path.clone()),
-        progress: false,
         ..RunOptions::default()
     };
     run_scene(e.as_mut(), &s, &opts).unwrap();

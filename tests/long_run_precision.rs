@@ -40,7 +40,6 @@ fn outcome(label: &str, backend: Backend, precision: Precision, velocity: f64) -
     let opts = RunOptions {
         fast_forward: None,
         output: Some(path.clone()),
-        progress: false,
         ..RunOptions::default()
     };
     run_scene(e.as_mut(), &s, &opts).unwrap();

@@ -35,7 +35,6 @@ fn every_channel_reads_back_as_the_engine_state() {
         &RunOptions {
             fast_forward: None,
             output: Some(path.clone()),
-            progress: false,
             ..RunOptions::default()
         },
     )
@@ -99,7 +98,6 @@ fn a_file_cut_short_is_still_readable() {
     let opts = RunOptions {
         fast_forward: None,
         output: Some(path.clone()),
-        progress: false,
         ..RunOptions::default()
     };
     run_scene(engine.as_mut(), &scenario, &opts).unwrap();

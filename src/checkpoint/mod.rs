@@ -32,6 +32,12 @@ pub struct RunnerState {
     /// from it).
     pub slip_origin: Option<Vec<f64>>,
     pub fast_forward: Option<FastForwardState>,
+    /// Slip events seen so far and the last sample with a ruptured block
+    /// (progress report only).
+    #[serde(default)]
+    pub events: u64,
+    #[serde(default)]
+    pub last_slip: Option<f64>,
 }
 
 /// The checkpoint's JSON header.

@@ -1,11 +1,61 @@
+use slipfront::backend::{make_engine, measure_steps_per_second, Backend, Precision};
 use slipfront::model::Model;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
+/// Wall time spent measuring each engine.
+const MEASURE_SECONDS: f64 = 0.4;
+
+/// One engine's measured speed on the scene and the run's wall time at it.
+struct Estimate {
+    engine: String,
+    steps_per_second: f64,
+    wall_seconds: f64,
+}
+
+/// Measures every engine this machine can run the scene on (the CPU in f64
+/// and mixed f32, with the threads `run` would use; the GPU in mixed f32
+/// when an adapter is found), at the start of the scene: the speed of quiet
+/// loading (events cost more, fast-forward skips some).
+fn estimates(m: &Model) -> Vec<Estimate> {
+    let mut engines: Vec<(Backend, Precision)> = vec![
+        (Backend::Cpu, Precision::F64),
+        (Backend::Cpu, Precision::F32),
+    ];
+    if slipfront::gpu::context::shared().is_ok() {
+        engines.push((Backend::Gpu, Precision::F32));
+    }
+    engines
+        .into_iter()
+        .filter_map(|(backend, precision)| {
+            let mut e = make_engine(m, backend, precision, 0).ok()?;
+            let rate = measure_steps_per_second(e.as_mut(), MEASURE_SECONDS).ok()?;
+            Some(Estimate {
+                engine: e.describe(),
+                steps_per_second: rate,
+                wall_seconds: m.total_steps() as f64 / rate,
+            })
+        })
+        .collect()
+}
+
+/// 95 s, 3.2 min, 1.5 h.
+fn duration(seconds: f64) -> String {
+    match seconds {
+        s if s < 120.0 => format!("{s:.0} s"),
+        s if s < 7200.0 => format!("{:.1} min", s / 60.0),
+        s => format!("{:.1} h", s / 3600.0),
+    }
+}
+
+/// Prints the scene's derived quantities; exits 1 when dt is above the
+/// stability limit.
 pub fn check(scenario: Option<PathBuf>, set: &[String], json: bool) -> anyhow::Result<ExitCode> {
     let (s, name) = super::load_scenario(scenario.as_deref(), set)?;
     let m = Model::from_scenario(&s, true)?;
     let lim = m.stability_limit();
+    let stable = m.dt <= lim.min();
+    let estimates = if stable { estimates(&m) } else { Vec::new() };
     let report = serde_json::json!({
         "scenario": name,
         "blocks": [m.nx, m.nz],
@@ -27,7 +77,7 @@ pub fn check(scenario: Option<PathBuf>, set: &[String], json: bool) -> anyhow::R
             "relaxation": lim.relaxation,
             "binding": lim.min(),
         },
-        "stable": m.dt <= lim.min(),
+        "stable": stable,
         "wave_speed_m_per_s": {
             "p": m.pressure_wave_speed(),
             "s": m.shear_wave_speed(),
@@ -40,6 +90,12 @@ pub fn check(scenario: Option<PathBuf>, set: &[String], json: bool) -> anyhow::R
         },
         "memory_bytes": { "f32": m.memory_bytes(4, 8), "f64": m.memory_bytes(8, 8) },
         "terms": m.terms(),
+        "estimates": estimates.iter().map(|e| serde_json::json!({
+            "engine": e.engine,
+            "steps_per_second": e.steps_per_second,
+            "block_steps_per_second": e.steps_per_second * m.n_blocks() as f64,
+            "wall_seconds": e.wall_seconds,
+        })).collect::<Vec<_>>(),
     });
     if json {
         println!("{}", serde_json::to_string_pretty(&report)?);
@@ -76,7 +132,7 @@ pub fn check(scenario: Option<PathBuf>, set: &[String], json: bool) -> anyhow::R
             lim.bulk,
             lim.interface,
             lim.relaxation,
-            if m.dt <= lim.min() { "stable" } else { "UNSTABLE" }
+            if stable { "stable" } else { "UNSTABLE" }
         );
         println!(
             "wave speeds     c_p = {:.1} m/s, c_s = {:.1} m/s, c_R = {:.1} m/s",
@@ -96,6 +152,32 @@ pub fn check(scenario: Option<PathBuf>, set: &[String], json: bool) -> anyhow::R
             m.memory_bytes(8, 8) as f64 / 1048576.0
         );
         println!("terms           {}", m.terms().join(", "));
+        for (k, e) in estimates.iter().enumerate() {
+            println!(
+                "{:<16}{} for the {} steps at {:.2e} steps/s ({:.2e} block-steps/s) on {}",
+                if k == 0 { "wall time" } else { "" },
+                duration(e.wall_seconds),
+                m.total_steps(),
+                e.steps_per_second,
+                e.steps_per_second * m.n_blocks() as f64,
+                e.engine
+            );
+        }
+        if !estimates.is_empty() {
+            println!(
+                "                (measured here over {MEASURE_SECONDS} s of quiet loading: events \
+                 run slower, --fast-forward skips quiet stretches)"
+            );
+        }
     }
-    Ok(ExitCode::SUCCESS)
+    Ok(if stable {
+        ExitCode::SUCCESS
+    } else {
+        eprintln!(
+            "error: time.dt = {:.4e} s is above the stability limit {:.4e} s",
+            m.dt,
+            lim.min()
+        );
+        ExitCode::from(1)
+    })
 }

@@ -1,3 +1,4 @@
+use slipfront::analysis::Event;
 use slipfront::output::reader::RunFile;
 use slipfront::precursors::PrecursorSequence;
 use std::path::Path;
@@ -18,7 +19,7 @@ pub fn info(path: &Path, quiet_gap: f64) -> anyhow::Result<ExitCode> {
         .max(11)
         + 1;
     for (k, v) in &run.metadata {
-        println!("{k:<width$}{v}");
+        println!("{k:<width$}{v}{}", unit(k));
     }
     if !run.history.is_empty() {
         println!("history");
@@ -60,33 +61,22 @@ pub fn info(path: &Path, quiet_gap: f64) -> anyhow::Result<ExitCode> {
     println!("  #    start (s)     end (s)       kind     length (m)  from (m)    slip (m)    F/F_N   front           v_front (m/s) min..max");
     let mut pairs = Vec::new();
     for (n, e) in events.iter().enumerate() {
-        let speeds: Vec<(f64, f64)> = series.front_speed(e, 3);
-        let finite: Vec<f64> = speeds
-            .iter()
-            .map(|p| p.1)
-            .filter(|v| v.is_finite())
-            .collect();
-        let (lo, hi) = finite
-            .iter()
-            .fold((f64::MAX, f64::MIN), |a, &v| (a.0.min(v), a.1.max(v)));
+        let row = EventRow::new(&series, e, ratio_at(e.start));
         // Same windows, so the pairs line up one to one.
-        let slip = series.slip_speed_behind_tip(e, 3);
+        let speeds = series.front_speed(e, FRONT_WINDOW);
+        let slip = series.slip_speed_behind_tip(e, FRONT_WINDOW);
         pairs.extend(speeds.iter().zip(&slip).map(|(f, s)| (f.1, s.1)));
         println!(
             "  {n:<4} {:<13.6e} {:<13.6e} {:<8} {:<11.4e} {:<11.4e} {:<11.4e} {:<7.4} {:<15} {}",
             e.start,
             e.end,
-            if e.full { "full" } else { "partial" },
+            row.kind,
             e.rupture_length,
-            e.origin(series.spacing),
+            row.origin,
             e.slip,
-            ratio_at(e.start),
-            format!("{:?}", series.front_kind(e, 3)),
-            if finite.is_empty() {
-                "-".to_string()
-            } else {
-                format!("{lo:.3e}..{hi:.3e}")
-            }
+            row.drive_ratio,
+            row.front,
+            row.speed_range()
         );
     }
     print_precursors(
@@ -107,6 +97,91 @@ pub fn info(path: &Path, quiet_gap: f64) -> anyhow::Result<ExitCode> {
         }
     }
     Ok(ExitCode::SUCCESS)
+}
+
+/// Blocks per front-speed window.
+const FRONT_WINDOW: usize = 3;
+
+/// One event as `info` reports it.
+struct EventRow {
+    kind: &'static str,
+    origin: f64,
+    drive_ratio: f64,
+    front: String,
+    /// Slowest and fastest resolved front speed (m/s).
+    speeds: Option<(f64, f64)>,
+    /// The largest lower bound of the windows the samples do not resolve
+    /// (the front crossed them between two samples).
+    bound: Option<f64>,
+}
+
+impl EventRow {
+    fn new(series: &slipfront::analysis::InterfaceSeries, e: &Event, drive_ratio: f64) -> Self {
+        let speeds = series.front_speed(e, FRONT_WINDOW);
+        let bounds = series.front_speed_bounds(e, FRONT_WINDOW);
+        let resolved = speeds.iter().zip(&bounds).filter(|(_, b)| b.is_none());
+        EventRow {
+            kind: if e.full { "full" } else { "partial" },
+            origin: e.origin(series.spacing),
+            drive_ratio,
+            front: format!("{:?}", series.front_kind(e, FRONT_WINDOW)),
+            speeds: resolved.fold(None, |a, (&(_, v), _)| match a {
+                None => Some((v, v)),
+                Some((lo, hi)) => Some((f64::min(lo, v), f64::max(hi, v))),
+            }),
+            bound: bounds.iter().flatten().copied().reduce(f64::max),
+        }
+    }
+
+    /// "1.2e2..3.4e3", "1.2e2..3.4e3, ≥4.3e3 unresolved" or "≥4.3e3".
+    fn speed_range(&self) -> String {
+        let bound = self.bound.map(|b| format!("≥{b:.3e} unresolved"));
+        match (self.speeds, bound) {
+            (Some((lo, hi)), Some(b)) => format!("{lo:.3e}..{hi:.3e}, {b}"),
+            (Some((lo, hi)), None) => format!("{lo:.3e}..{hi:.3e}"),
+            (None, Some(b)) => b,
+            (None, None) => "-".into(),
+        }
+    }
+}
+
+/// The event table as CSV (one row per event).
+pub fn events_csv(path: &Path, quiet_gap: f64) -> anyhow::Result<ExitCode> {
+    let run = RunFile::read(path)?;
+    let series = run.interface_series();
+    println!(
+        "event,start_s,end_s,kind,rupture_length_m,origin_m,mean_slip_m,drive_ratio,front,\
+         v_front_min_m_per_s,v_front_max_m_per_s,v_front_unresolved_at_least_m_per_s"
+    );
+    for (n, e) in series.events_separated_by(quiet_gap).iter().enumerate() {
+        let row = EventRow::new(&series, e, run.drive_ratio_at(e.start));
+        let (lo, hi) = row.speeds.map_or((String::new(), String::new()), |(a, b)| {
+            (format!("{a:e}"), format!("{b:e}"))
+        });
+        println!(
+            "{n},{:e},{:e},{},{:e},{:e},{:e},{},{},{lo},{hi},{}",
+            e.start,
+            e.end,
+            row.kind,
+            e.rupture_length,
+            row.origin,
+            e.slip,
+            row.drive_ratio,
+            row.front,
+            row.bound.map_or(String::new(), |b| format!("{b:e}"))
+        );
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+/// The unit of a metadata value.
+fn unit(key: &str) -> &'static str {
+    match key {
+        "dt" => " s",
+        "spacing" => " m",
+        "normal_force" => " N",
+        _ => "",
+    }
 }
 
 /// The precursors before the first full event and whether they grow.

@@ -1,5 +1,8 @@
 use slipfront::output::reader::RunFile;
-use slipfront::plot::{front_speed_plot, loading_curve, precursor_plot, spacetime_map};
+use slipfront::plot::{
+    front_speed_plot, front_tip_plot, loading_curve, precursor_plot, spacetime_map,
+    stress_ratio_map,
+};
 use slipfront::precursors::PrecursorSequence;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -27,9 +30,45 @@ pub fn plot(
         ratio.get(k).copied().unwrap_or(f64::NAN)
     };
     let precursors = PrecursorSequence::from_events(&events, series.spacing, |e| ratio_at(e.start));
+    if let Some(n) = event.filter(|&n| n >= events.len()) {
+        anyhow::bail!(
+            "--event {n}: the run has {} events{}",
+            events.len(),
+            if events.is_empty() {
+                String::new()
+            } else {
+                format!(" (0 to {})", events.len() - 1)
+            }
+        );
+    }
     let length = (series.nx().max(2) - 1) as f64 * series.spacing;
+    // τ/p per block and sample; the colour scale from the scenario's μd
+    // (white) to μs (red).
+    let ratio_rows: Vec<Vec<f64>> = run
+        .interface
+        .iter()
+        .map(|m| {
+            m.shear_stress
+                .iter()
+                .zip(&m.normal_stress)
+                .map(|(t, p)| t / p)
+                .collect()
+        })
+        .collect();
+    let (mu_s, mu_d) = run
+        .scenario
+        .as_deref()
+        .and_then(|t| slipfront::Scenario::parse(t, "run", &[]).ok())
+        .map_or((0.6, 0.4), |s| {
+            (
+                s.friction.static_coefficient,
+                s.friction.dynamic_coefficient,
+            )
+        });
     for (name, canvas) in [
         ("spacetime", spacetime_map(&series)),
+        ("stress_ratio", stress_ratio_map(&ratio_rows, mu_d, mu_s)),
+        ("front_tip", front_tip_plot(&series, &events)),
         ("loading", loading_curve(&time, &ratio, &events)),
         ("front_speed", front_speed_plot(&series, &events)),
         (

@@ -4,7 +4,7 @@ use slipfront::engine::Engine;
 use slipfront::gpu::{GpuOptions, GpuPath};
 use slipfront::model::Model;
 use slipfront::output::fnv1a;
-use slipfront::runner::{run_scene, RunOptions, StartFrom};
+use slipfront::runner::{run_scene, ProgressMode, RunOptions, StartFrom};
 use slipfront::scenario::Scenario;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -20,6 +20,7 @@ pub struct RunArgs {
     pub output: Option<PathBuf>,
     pub threads: usize,
     pub allow_unstable: bool,
+    pub progress: ProgressMode,
     pub quiet: bool,
     /// Continue this run file from its checkpoint.
     pub resume: Option<PathBuf>,
@@ -87,19 +88,32 @@ fn finish(
     history: Vec<String>,
     start: Option<StartFrom>,
 ) -> anyhow::Result<ExitCode> {
+    if a.output.is_none() {
+        eprintln!("slipfront: no output file: nothing of this run is kept (-o run.mcap keeps it)");
+    }
     let summary = run_scene(
         engine,
         scenario,
         &RunOptions {
             output: a.output.clone(),
-            progress: !a.quiet,
+            progress: if a.quiet {
+                ProgressMode::None
+            } else {
+                a.progress
+            },
             history,
             start,
             ..RunOptions::default()
         },
     )?;
     println!("{summary}");
-    Ok(ExitCode::SUCCESS)
+    // 128 + SIGINT, as shells report a run stopped by Ctrl-C; the file is
+    // closed and a checkpoint written by now.
+    Ok(if summary.interrupted {
+        ExitCode::from(130)
+    } else {
+        ExitCode::SUCCESS
+    })
 }
 
 /// The file starts as a checkpoint does.

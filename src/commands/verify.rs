@@ -2,7 +2,19 @@ use slipfront::backend::{make_engine, Backend, Precision};
 use slipfront::verify::run_all_reporting;
 use std::process::ExitCode;
 
-pub fn verify(backend: Backend, precision: Precision, json: bool) -> anyhow::Result<ExitCode> {
+pub fn verify(
+    backend: Backend,
+    precision: Option<Precision>,
+    json: bool,
+) -> anyhow::Result<ExitCode> {
+    // The GPU computes in mixed f32 only; the CPU defaults to f64.
+    let precision = precision.unwrap_or(match backend {
+        Backend::Gpu => Precision::F32,
+        _ => Precision::F64,
+    });
+    let probe = slipfront::Model::from_scenario(&slipfront::verify::bare_scene("probe"), true)?;
+    let engine = make_engine(&probe, backend, precision, 0)?.describe();
+    eprintln!("verify: on {engine}");
     let factory = |m: &slipfront::Model| make_engine(m, backend, precision, 0);
     let results = run_all_reporting(&factory, &mut |group, seconds| {
         eprintln!("verify: {group} done in {seconds:.1} s")
@@ -10,17 +22,31 @@ pub fn verify(backend: Backend, precision: Precision, json: bool) -> anyhow::Res
     if json {
         println!("{}", serde_json::to_string_pretty(&results)?);
     } else {
+        let name = results
+            .iter()
+            .map(|r| r.name.chars().count())
+            .max()
+            .unwrap_or(4);
+        let unit = results
+            .iter()
+            .map(|r| r.unit.chars().count())
+            .max()
+            .unwrap_or(4);
+        let need = results
+            .iter()
+            .map(|r| r.requirement().chars().count())
+            .max()
+            .unwrap_or(8);
         println!(
-            "{:<44} {:>14} {:>14} {:>11} {:>6}  result",
-            "case", "measured", "expected", "tolerance", "unit"
+            "{:<name$}  {:>14}  {:<need$}  {:<unit$}  result",
+            "case", "measured", "required", "unit"
         );
         for r in &results {
             println!(
-                "{:<44} {:>14.6e} {:>14.6e} {:>11.3e} {:>6}  {}",
+                "{:<name$}  {:>14.6e}  {:<need$}  {:<unit$}  {}",
                 r.name,
                 r.measured,
-                r.expected,
-                r.tolerance,
+                r.requirement(),
                 r.unit,
                 if r.pass { "pass" } else { "FAIL" }
             );

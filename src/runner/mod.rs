@@ -5,9 +5,11 @@
 mod checkpoints;
 mod jump;
 mod outputs;
+mod progress;
 
 pub use jump::{path_work, relaxation_drop};
 pub use outputs::{drive_force, global_sample};
+pub use progress::ProgressMode;
 
 use crate::checkpoint::RunnerState;
 use crate::engine::{advance_to, Engine, EngineError};
@@ -16,9 +18,9 @@ use crate::output::McapSink;
 use crate::quasistatic::{FastForward, FastForwardSettings, FastForwardStats};
 use crate::scenario::Scenario;
 use checkpoints::Checkpointer;
-use indicatif::{ProgressBar, ProgressStyle};
 use jump::perform_jump;
 use outputs::{next_multiple, Outputs};
+use progress::Reporter;
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Once;
@@ -33,7 +35,7 @@ const MAX_CHUNK: u64 = 20_000;
 #[derive(Default)]
 pub struct RunOptions {
     pub output: Option<PathBuf>,
-    pub progress: bool,
+    pub progress: ProgressMode,
     /// Fast-forward settings that replace the scenario's (and switch it on
     /// whatever `time.fast_forward` says).
     pub fast_forward: Option<FastForwardSettings>,
@@ -227,21 +229,12 @@ pub fn run_scene(
         .as_ref()
         .map(|p| Checkpointer::new(p.clone(), scenario, opts.history.clone()));
     let every_check = ff.as_ref().map_or(0, |f| f.check_steps(&model));
-    let bar = if opts.progress {
-        let b = ProgressBar::new(total);
-        b.set_style(
-            ProgressStyle::with_template("{bar:30} t = {msg} | {per_sec} | ETA {eta}")
-                .expect("valid template"),
-        );
-        b
-    } else {
-        ProgressBar::hidden()
-    };
     let started = Instant::now();
     let mut interrupted = false;
     let start_step = engine.steps_done();
     let start_dispatches = engine.dispatches();
     let start_skipped = ff.as_ref().map_or(0, |f| f.stats.skipped_steps);
+    let mut progress = Reporter::new(opts.progress, &model, start_step);
     let result = (|| -> Result<(), RunError> {
         while engine.steps_done() < total {
             let s = engine.steps_done();
@@ -277,8 +270,7 @@ pub fn run_scene(
             target = target.min(out_step).min(check_step);
             advance_to(engine, target)?;
             let s = engine.steps_done();
-            bar.set_position(s - start_step);
-            bar.set_message(format!("{:.6} s", model.time_of_step(s)));
+            progress.update(s, outputs.events());
             if s == model.prep_steps {
                 let snap = engine.snapshot()?;
                 if let Driver::SideSpring { row, .. } = model.driver {
@@ -302,7 +294,7 @@ pub fn run_scene(
                         .map_err(|e| EngineError::Gpu(e.to_string()))?;
                     if let Some(mut jump) = planned {
                         perform_jump(engine, &mut outputs, ff, &snap, &mut jump)?;
-                        bar.set_position(engine.steps_done() - start_step);
+                        progress.update(engine.steps_done(), outputs.events());
                     }
                 }
             }
@@ -314,10 +306,10 @@ pub fn run_scene(
     })();
     if let Err(e) = result {
         outputs.finish(ff.as_ref().map(|f| &f.stats))?;
-        bar.abandon();
+        progress.abandon();
         return Err(e);
     }
-    bar.finish_and_clear();
+    progress.finish();
     outputs.finish(ff.as_ref().map(|f| &f.stats))?;
     let final_snap = engine.snapshot()?;
     let g = global_sample(&model, &final_snap, outputs.origin);

@@ -93,6 +93,10 @@ pub(super) struct Outputs {
     pub peak: f64,
     pub last: f64,
     pub ruptures: u64,
+    /// Slip events seen in the output samples so far, and the time of the
+    /// last sample with a ruptured block (for the progress report).
+    events: u64,
+    last_slip: Option<f64>,
 }
 
 impl Outputs {
@@ -111,6 +115,8 @@ impl Outputs {
             peak: 0.0,
             last: 0.0,
             ruptures: 0,
+            events: 0,
+            last_slip: None,
         }
     }
 
@@ -145,6 +151,17 @@ impl Outputs {
             .map(|ix| snap.vel[ix][0].abs())
             .fold(0.0, f64::max);
         self.fast = self.every_fast > 0 && max_slip_speed > self.fast_slip_speed;
+        let ruptured = snap
+            .pinned_fraction(model.nx)
+            .iter()
+            .any(|&p| p < crate::analysis::RUPTURED_BELOW);
+        if ruptured {
+            let gap = crate::analysis::DEFAULT_QUIET_GAP;
+            if self.last_slip.is_none_or(|t| snap.time - t >= gap) {
+                self.events += 1;
+            }
+            self.last_slip = Some(snap.time);
+        }
         if let Some(sink) = self.sink.as_mut() {
             if self.every_global > 0 && d.is_multiple_of(self.every_global) {
                 sink.write_global(&g)?;
@@ -160,6 +177,12 @@ impl Outputs {
         Ok(())
     }
 
+    /// Slip events so far (as `info` counts them, from the samples
+    /// written); None without an output file.
+    pub fn events(&self) -> Option<u64> {
+        self.sink.as_ref().map(|_| self.events)
+    }
+
     /// The runner state's output part (the fast-forward's is added by the
     /// caller).
     pub fn save(&self) -> RunnerState {
@@ -173,6 +196,8 @@ impl Outputs {
             sequence,
             slip_origin,
             fast_forward: None,
+            events: self.events,
+            last_slip: self.last_slip,
         }
     }
 
@@ -183,6 +208,8 @@ impl Outputs {
         self.peak = r.peak;
         self.last = r.last;
         self.ruptures = r.ruptures;
+        self.events = r.events;
+        self.last_slip = r.last_slip;
         if let Some(sink) = self.sink.as_mut() {
             sink.restore(r.sequence, r.slip_origin.clone());
         }

@@ -16,6 +16,16 @@ use crate::model::Model;
 use crate::scenario::Scenario;
 use serde::Serialize;
 
+/// How a case compares its measurement.
+#[derive(Debug, Clone, Copy, Serialize, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum Comparison {
+    /// |measured − expected| ≤ tolerance.
+    Within,
+    /// measured ≤ expected (a bound).
+    AtMost,
+}
+
 /// One validation result.
 #[derive(Debug, Clone, Serialize, PartialEq)]
 pub struct CaseResult {
@@ -25,6 +35,7 @@ pub struct CaseResult {
     /// Allowed |measured − expected| (absolute, in `unit`).
     pub tolerance: f64,
     pub unit: String,
+    pub comparison: Comparison,
     pub pass: bool,
 }
 
@@ -36,6 +47,7 @@ impl CaseResult {
             expected,
             tolerance,
             unit: unit.to_string(),
+            comparison: Comparison::Within,
             pass: measured.is_finite() && (measured - expected).abs() <= tolerance,
         }
     }
@@ -48,7 +60,18 @@ impl CaseResult {
             expected: bound,
             tolerance: 0.0,
             unit: unit.to_string(),
+            comparison: Comparison::AtMost,
             pass: measured.is_finite() && measured <= bound,
+        }
+    }
+}
+
+impl CaseResult {
+    /// "≤ 1.000e0" or "2.000e3 ± 1.000e1": what the measurement must meet.
+    pub fn requirement(&self) -> String {
+        match self.comparison {
+            Comparison::AtMost => format!("≤ {:.4e}", self.expected),
+            Comparison::Within => format!("{:.4e} ± {:.2e}", self.expected, self.tolerance),
         }
     }
 }
@@ -58,12 +81,7 @@ pub fn failures(results: &[CaseResult]) -> Vec<String> {
     results
         .iter()
         .filter(|r| !r.pass)
-        .map(|r| {
-            format!(
-                "{}: {} vs {} ± {}",
-                r.name, r.measured, r.expected, r.tolerance
-            )
-        })
+        .map(|r| format!("{}: {} vs {}", r.name, r.measured, r.requirement()))
         .collect()
 }
 
