@@ -179,6 +179,21 @@ impl InterfaceSeries {
             .collect()
     }
 
+    /// The front speeds of `e` the samples resolve (m/s), and the largest
+    /// lower bound of the windows they do not (see
+    /// [`Self::front_speed_bounds`]).
+    pub fn resolved_front_speeds(&self, e: &Event, w: usize) -> (Vec<f64>, Option<f64>) {
+        let bounds = self.front_speed_bounds(e, w);
+        let speeds = self
+            .front_speed(e, w)
+            .iter()
+            .zip(&bounds)
+            .filter(|(_, b)| b.is_none())
+            .map(|(p, _)| p.1)
+            .collect();
+        (speeds, bounds.iter().flatten().copied().reduce(f64::max))
+    }
+
     /// Front tip position against time: at each sample of the event, the
     /// farthest ruptured block from the trailing edge, (t, x_tip).
     pub fn front_tip(&self, e: &Event) -> Vec<(f64, f64)> {

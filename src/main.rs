@@ -99,6 +99,14 @@ enum Command {
         #[arg(long, default_value_t = DEFAULT_QUIET_GAP, value_parser = parse_quiet_gap)]
         quiet_gap: f64,
     },
+    /// Run a parameter sweep (or `sweep collect DIR` to merge shard tables).
+    #[command(args_conflicts_with_subcommands = true)]
+    Sweep {
+        #[command(subcommand)]
+        action: Option<SweepAction>,
+        #[command(flatten)]
+        run: SweepRun,
+    },
     /// Run the validation cases and compare measured against expected.
     Verify {
         #[arg(long, value_enum, default_value = "cpu")]
@@ -109,6 +117,53 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+}
+
+#[derive(Subcommand)]
+enum SweepAction {
+    /// Merge the shard tables of a sweep folder into its summary.csv.
+    Collect { dir: PathBuf },
+}
+
+#[derive(clap::Args)]
+struct SweepRun {
+    /// The sweep file (TOML: base, axes, combine, seeds, set).
+    file: Option<PathBuf>,
+    /// Folder for summary.csv and the runs (default: NAME_sweep beside the file).
+    #[arg(short = 'o', long)]
+    out_dir: Option<PathBuf>,
+    /// List the points, the steps and the memory, and run nothing.
+    #[arg(long)]
+    dry_run: bool,
+    #[arg(long, value_enum, default_value = "cpu")]
+    backend: Backend,
+    #[arg(long, value_enum, default_value = "f64")]
+    precision: Precision,
+    /// Scenes run at once, one thread each (0: one per core).
+    #[arg(long, default_value_t = 0)]
+    threads: usize,
+    /// Run every N-th point from I (a job-array task's share): I/N.
+    #[arg(long)]
+    shard: Option<slipfront::sweep::Shard>,
+    /// Which runs keep their MCAP file: all, none or first:N.
+    #[arg(long, default_value = "none")]
+    mcap: slipfront::sweep::KeepMcap,
+    /// Write DIR/sweep.sbatch, a Slurm job array of shards, and run nothing.
+    #[arg(long)]
+    slurm: bool,
+    #[arg(long, requires = "slurm")]
+    partition: Option<String>,
+    /// Time limit per array task (sbatch --time).
+    #[arg(long, requires = "slurm")]
+    time: Option<String>,
+    /// Array tasks (default: one per point).
+    #[arg(long, requires = "slurm")]
+    array_size: Option<usize>,
+    #[arg(long, requires = "slurm", default_value_t = 1)]
+    cpus_per_task: usize,
+    /// No line per finished point.
+    #[arg(long)]
+    quiet: bool,
 }
 
 fn main() -> ExitCode {
@@ -170,6 +225,31 @@ fn main() -> ExitCode {
             precision,
             json,
         } => commands::verify::verify(backend, precision, json),
+        Command::Sweep {
+            action: Some(SweepAction::Collect { dir }),
+            ..
+        } => commands::sweep::collect_tables(&dir),
+        Command::Sweep { action: None, run } => match run.file {
+            None => Err(anyhow::anyhow!(
+                "sweep: give a sweep file (slipfront sweep SWEEP.toml) or `sweep collect DIR`"
+            )),
+            Some(file) => commands::sweep::sweep(commands::sweep::SweepArgs {
+                file,
+                out_dir: run.out_dir,
+                dry_run: run.dry_run,
+                backend: run.backend,
+                precision: run.precision,
+                threads: run.threads,
+                shard: run.shard,
+                mcap: run.mcap,
+                slurm: run.slurm,
+                partition: run.partition,
+                time: run.time,
+                array_size: run.array_size,
+                cpus_per_task: run.cpus_per_task,
+                quiet: run.quiet,
+            }),
+        },
     };
     match result {
         Ok(code) => code,

@@ -117,19 +117,17 @@ struct EventRow {
 
 impl EventRow {
     fn new(series: &slipfront::analysis::InterfaceSeries, e: &Event, drive_ratio: f64) -> Self {
-        let speeds = series.front_speed(e, FRONT_WINDOW);
-        let bounds = series.front_speed_bounds(e, FRONT_WINDOW);
-        let resolved = speeds.iter().zip(&bounds).filter(|(_, b)| b.is_none());
+        let (speeds, bound) = series.resolved_front_speeds(e, FRONT_WINDOW);
         EventRow {
             kind: if e.full { "full" } else { "partial" },
             origin: e.origin(series.spacing),
             drive_ratio,
             front: format!("{:?}", series.front_kind(e, FRONT_WINDOW)),
-            speeds: resolved.fold(None, |a, (&(_, v), _)| match a {
+            speeds: speeds.iter().fold(None, |a, &v| match a {
                 None => Some((v, v)),
                 Some((lo, hi)) => Some((f64::min(lo, v), f64::max(hi, v))),
             }),
-            bound: bounds.iter().flatten().copied().reduce(f64::max),
+            bound,
         }
     }
 

@@ -2,6 +2,7 @@ pub mod check;
 pub mod info;
 pub mod plot;
 pub mod run;
+pub mod sweep;
 pub mod verify;
 
 use slipfront::scenario::{Scenario, DEFAULT_SCENARIO, DEFAULT_SCENARIO_NAME};

@@ -29,6 +29,11 @@ use std::time::Instant;
 static INTERRUPTED: AtomicBool = AtomicBool::new(false);
 static HANDLER: Once = Once::new();
 
+/// A SIGINT or SIGTERM has asked the runs of this process to stop.
+pub fn interrupted() -> bool {
+    INTERRUPTED.load(Ordering::SeqCst)
+}
+
 /// Steps between progress updates (and interrupt checks) at most.
 const MAX_CHUNK: u64 = 20_000;
 

@@ -1,0 +1,165 @@
+use slipfront::backend::{Backend, Precision};
+use slipfront::model::Model;
+use slipfront::sweep::slurm::{script, SlurmOptions};
+use slipfront::sweep::{collect, run_sweep, KeepMcap, Shard, Sweep, SweepOptions};
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+pub struct SweepArgs {
+    pub file: PathBuf,
+    pub out_dir: Option<PathBuf>,
+    pub dry_run: bool,
+    pub backend: Backend,
+    pub precision: Precision,
+    pub threads: usize,
+    pub shard: Option<Shard>,
+    pub mcap: KeepMcap,
+    pub slurm: bool,
+    pub partition: Option<String>,
+    pub time: Option<String>,
+    pub array_size: Option<usize>,
+    pub cpus_per_task: usize,
+    pub quiet: bool,
+}
+
+/// `NAME.toml` → `NAME_sweep` beside it.
+fn default_dir(file: &Path) -> PathBuf {
+    let stem = file
+        .file_stem()
+        .map_or("sweep".into(), |s| s.to_string_lossy().into_owned());
+    file.with_file_name(format!("{stem}_sweep"))
+}
+
+fn load(file: &Path) -> anyhow::Result<Sweep> {
+    Sweep::load(file).map_err(|problems| {
+        anyhow::anyhow!(
+            "invalid sweep `{}`:\n  - {}",
+            file.display(),
+            problems.join("\n  - ")
+        )
+    })
+}
+
+pub fn sweep(a: SweepArgs) -> anyhow::Result<ExitCode> {
+    let sweep = load(&a.file)?;
+    let dir = a.out_dir.clone().unwrap_or_else(|| default_dir(&a.file));
+    if a.dry_run {
+        return dry_run(&sweep, a.shard);
+    }
+    if a.slurm {
+        let tasks = a
+            .array_size
+            .unwrap_or(sweep.points.len())
+            .clamp(1, sweep.points.len().max(1));
+        let absolute = |p: &Path| std::path::absolute(p).unwrap_or(p.to_path_buf());
+        std::fs::create_dir_all(&dir)?;
+        let text = script(
+            &absolute(&std::env::current_exe()?),
+            &absolute(&a.file),
+            &absolute(&dir),
+            &SlurmOptions {
+                tasks,
+                partition: a.partition.as_deref(),
+                time: a.time.as_deref(),
+                cpus_per_task: a.cpus_per_task,
+            },
+        );
+        let path = dir.join("sweep.sbatch");
+        std::fs::write(&path, text)?;
+        println!("{}", path.display());
+        eprintln!(
+            "slipfront: {} points in {tasks} array tasks; submit with `sbatch {}`, then \
+             `slipfront sweep collect {}`",
+            sweep.points.len(),
+            path.display(),
+            dir.display()
+        );
+        return Ok(ExitCode::SUCCESS);
+    }
+    let report = run_sweep(
+        &sweep,
+        &SweepOptions {
+            out_dir: dir,
+            backend: a.backend,
+            precision: a.precision,
+            threads: a.threads,
+            shard: a.shard,
+            keep_mcap: a.mcap,
+            progress: !a.quiet,
+        },
+    )
+    .map_err(|e| anyhow::anyhow!(e))?;
+    println!(
+        "sweep {}: {} points{}, {} run now ({} not ok), {} already done, {:.1} s\n  table {}",
+        if report.interrupted {
+            "INTERRUPTED"
+        } else {
+            "complete"
+        },
+        report.points,
+        a.shard.map_or(String::new(), |s| format!(
+            " (shard {}/{})",
+            s.index, s.count
+        )),
+        report.ran,
+        report.not_ok,
+        report.skipped,
+        report.wall_seconds,
+        report.table.display()
+    );
+    Ok(if report.interrupted {
+        ExitCode::from(130)
+    } else {
+        ExitCode::SUCCESS
+    })
+}
+
+fn dry_run(sweep: &Sweep, shard: Option<Shard>) -> anyhow::Result<ExitCode> {
+    let mut steps = 0u64;
+    let mut memory = 0usize;
+    let mine: Vec<_> = sweep
+        .points
+        .iter()
+        .filter(|p| shard.is_none_or(|s| p.index % s.count == s.index))
+        .collect();
+    for p in &mine {
+        let m = Model::from_scenario(&p.scenario, false)?;
+        steps += m.total_steps();
+        memory = memory.max(m.memory_bytes(8, 8));
+        println!(
+            "point {:<5} {} ({} × {} blocks, {} steps)",
+            p.index,
+            p.label(),
+            m.nx,
+            m.nz,
+            m.total_steps()
+        );
+    }
+    println!(
+        "{} points{}, {steps} steps in all, at most {:.2} MiB per scene (f64)",
+        mine.len(),
+        shard.map_or(String::new(), |s| format!(
+            " of {} (shard {}/{})",
+            sweep.points.len(),
+            s.index,
+            s.count
+        )),
+        memory as f64 / 1048576.0
+    );
+    Ok(ExitCode::SUCCESS)
+}
+
+pub fn collect_tables(dir: &Path) -> anyhow::Result<ExitCode> {
+    let (path, rows, missing) = collect(dir).map_err(|e| anyhow::anyhow!(e))?;
+    println!("{}: {rows} rows", path.display());
+    if missing.is_empty() {
+        Ok(ExitCode::SUCCESS)
+    } else {
+        eprintln!(
+            "slipfront: {} points have no row yet: {:?}",
+            missing.len(),
+            missing
+        );
+        Ok(ExitCode::from(1))
+    }
+}

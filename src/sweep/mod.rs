@@ -1,0 +1,351 @@
+//! Parameter sweeps: many runs from one sweep file, one CPU scene per
+//! thread, each run's outcomes a row of `summary.csv`; crash-safe and
+//! resumable (finished rows are synced as they come and skipped on a
+//! rerun), and split into shards for Slurm job arrays (`slurm`), whose
+//! tables `collect` merges.
+
+pub mod outcomes;
+pub mod plan;
+pub mod slurm;
+pub mod table;
+
+pub use plan::{Point, Sweep, SweepFile};
+
+use crate::backend::{make_engine, Backend, Precision};
+use crate::engine::EngineError;
+use crate::model::Model;
+use crate::output::reader::RunFile;
+use crate::runner::{run_scene, RunError, RunOptions};
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::sync::Mutex;
+use std::time::Instant;
+
+/// Which runs keep their MCAP file (`DIR/runs/point-NNNNN.mcap`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum KeepMcap {
+    All,
+    None,
+    /// The first n points.
+    First(usize),
+}
+
+impl std::str::FromStr for KeepMcap {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "all" => Ok(KeepMcap::All),
+            "none" => Ok(KeepMcap::None),
+            _ => s
+                .strip_prefix("first:")
+                .and_then(|n| n.parse().ok())
+                .map(KeepMcap::First)
+                .ok_or_else(|| format!("--mcap {s}: expected all, none or first:N")),
+        }
+    }
+}
+
+/// `I/N`: this process runs the points whose index is I modulo N.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Shard {
+    pub index: usize,
+    pub count: usize,
+}
+
+impl std::str::FromStr for Shard {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        let bad = || format!("--shard {s}: expected I/N with 0 ≤ I < N");
+        let (i, n) = s.split_once('/').ok_or_else(bad)?;
+        let (index, count) = (
+            i.trim().parse().map_err(|_| bad())?,
+            n.trim().parse().map_err(|_| bad())?,
+        );
+        if count == 0 || index >= count {
+            return Err(bad());
+        }
+        Ok(Shard { index, count })
+    }
+}
+
+pub struct SweepOptions {
+    pub out_dir: PathBuf,
+    pub backend: Backend,
+    pub precision: Precision,
+    /// Scenes run at once (0: one per core); each scene runs on one thread.
+    pub threads: usize,
+    pub shard: Option<Shard>,
+    pub keep_mcap: KeepMcap,
+    /// A line per finished point on stderr.
+    pub progress: bool,
+}
+
+/// What a sweep invocation did.
+#[derive(Debug)]
+pub struct SweepReport {
+    pub points: usize,
+    /// Points of this shard already in the table (skipped).
+    pub skipped: usize,
+    pub ran: usize,
+    /// Runs that did not end with status ok (blew up, failed).
+    pub not_ok: usize,
+    pub interrupted: bool,
+    pub table: PathBuf,
+    pub wall_seconds: f64,
+}
+
+/// The table this invocation writes.
+pub fn table_path(dir: &Path, shard: Option<Shard>) -> PathBuf {
+    match shard {
+        Some(s) => dir.join(format!("summary.shard-{}-of-{}.csv", s.index, s.count)),
+        None => dir.join("summary.csv"),
+    }
+}
+
+/// Runs one point: its row (status ok, blew_up or failed with the message).
+fn run_point(p: &Point, opts: &SweepOptions, header_len: usize) -> Option<Vec<String>> {
+    let runs = opts.out_dir.join("runs");
+    let keep = match opts.keep_mcap {
+        KeepMcap::All => true,
+        KeepMcap::None => false,
+        KeepMcap::First(n) => p.index < n,
+    };
+    let name = format!("{}point-{:05}.mcap", if keep { "" } else { "." }, p.index);
+    let mcap = runs.join(name);
+    let started = Instant::now();
+    let mut row = vec![p.index.to_string(), p.id(), p.seed.to_string()];
+    row.extend(p.values.iter().map(|(_, v)| match v {
+        toml::Value::String(s) => s.clone(),
+        other => other.to_string(),
+    }));
+    let result = (|| -> Result<_, RunError> {
+        let model = Model::from_scenario(&p.scenario, false)
+            .map_err(|e| RunError::Engine(EngineError::State(e.to_string())))?;
+        let mut engine = make_engine(&model, opts.backend, opts.precision, 1)?;
+        let summary = run_scene(
+            engine.as_mut(),
+            &p.scenario,
+            &RunOptions {
+                output: Some(mcap.clone()),
+                ..RunOptions::default()
+            },
+        )?;
+        Ok(summary)
+    })();
+    let wall = started.elapsed().as_secs_f64();
+    let outcome_fields = crate::sweep::table::OUTCOMES.len() - 5;
+    let blank = |n: usize| vec![String::new(); n];
+    match result {
+        Ok(s) if s.interrupted => return None,
+        Ok(s) => match RunFile::read(&mcap) {
+            Ok(run) => {
+                row.extend(["ok".to_string(), String::new()]);
+                row.extend(outcomes::analyse(&run));
+                row.extend([
+                    format!("{:e}", s.peak_drive_ratio),
+                    s.steps.to_string(),
+                    format!("{wall:.3}"),
+                ]);
+            }
+            Err(e) => {
+                row.extend(["failed".to_string(), e.to_string()]);
+                row.extend(blank(outcome_fields + 2));
+                row.push(format!("{wall:.3}"));
+            }
+        },
+        Err(e) => {
+            let status = match e {
+                RunError::Engine(EngineError::BlowUp { .. }) => "blew_up",
+                _ => "failed",
+            };
+            row.extend([status.to_string(), e.to_string()]);
+            row.extend(blank(outcome_fields + 2));
+            row.push(format!("{wall:.3}"));
+        }
+    }
+    if !keep {
+        for f in [
+            mcap.clone(),
+            crate::checkpoint::path_for(&mcap),
+            PathBuf::from(format!(
+                "{}.prev",
+                crate::checkpoint::path_for(&mcap).display()
+            )),
+            crate::checkpoint::loaded_path_for(&mcap),
+        ] {
+            let _ = std::fs::remove_file(f);
+        }
+    }
+    debug_assert_eq!(row.len(), header_len);
+    Some(row)
+}
+
+/// h:mm:ss.
+fn clock(seconds: f64) -> String {
+    let s = seconds.max(0.0).round() as u64;
+    format!("{}:{:02}:{:02}", s / 3600, s / 60 % 60, s % 60)
+}
+
+/// Runs the sweep's points (this shard's), skipping those already in the
+/// table.
+pub fn run_sweep(sweep: &Sweep, opts: &SweepOptions) -> Result<SweepReport, String> {
+    let started = Instant::now();
+    let dir = &opts.out_dir;
+    std::fs::create_dir_all(dir.join("runs"))
+        .map_err(|e| format!("cannot create `{}`: {e}", dir.display()))?;
+    write_manifest(dir, sweep)?;
+    let header = table::header(&sweep.axis_keys);
+    let path = table_path(dir, opts.shard);
+    let done = table::read_rows(&path, &header)?.unwrap_or_default();
+    for p in &sweep.points {
+        if let Some(row) = done.get(&p.index).filter(|r| r[1] != p.id()) {
+            return Err(format!(
+                "`{}` holds a row for point {} of another sweep (id {}, this sweep's is {}); \
+                 use another output folder",
+                path.display(),
+                p.index,
+                row[1],
+                p.id()
+            ));
+        }
+    }
+    let mine: Vec<&Point> = sweep
+        .points
+        .iter()
+        .filter(|p| opts.shard.is_none_or(|s| p.index % s.count == s.index))
+        .collect();
+    let todo: Vec<&Point> = mine
+        .iter()
+        .copied()
+        .filter(|p| !done.contains_key(&p.index))
+        .collect();
+    let skipped = mine.len() - todo.len();
+    let appender = Mutex::new(table::Appender::open(&path, &header)?);
+    let threads = match (opts.backend, opts.threads) {
+        // One GPU engine at a time: they share the device.
+        (Backend::Gpu, _) => 1,
+        (_, 0) => std::thread::available_parallelism().map_or(1, |n| n.get()),
+        (_, t) => t,
+    };
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .map_err(|e| format!("thread pool: {e}"))?;
+    let state = Mutex::new((0usize, 0usize, false, None::<String>));
+    pool.install(|| {
+        use rayon::prelude::*;
+        todo.par_iter().for_each(|p| {
+            if state.lock().expect("state").2 || crate::runner::interrupted() {
+                return;
+            }
+            let point_started = Instant::now();
+            let Some(row) = run_point(p, opts, header.len()) else {
+                state.lock().expect("state").2 = true;
+                return;
+            };
+            let ok = row[3 + sweep.axis_keys.len()] == "ok";
+            let written = appender.lock().expect("table").append(&row);
+            let mut s = state.lock().expect("state");
+            if let Err(e) = written {
+                s.3 = Some(e);
+                s.2 = true;
+                return;
+            }
+            s.0 += 1;
+            s.1 += (!ok) as usize;
+            if opts.progress {
+                let elapsed = started.elapsed().as_secs_f64();
+                let eta = elapsed / s.0 as f64 * (todo.len() - s.0) as f64;
+                eprintln!(
+                    "sweep: {}/{} run (point {}: {} in {:.1} s; {}) | ETA {}",
+                    s.0,
+                    todo.len(),
+                    p.index,
+                    row[3 + sweep.axis_keys.len()],
+                    point_started.elapsed().as_secs_f64(),
+                    p.label(),
+                    clock(eta)
+                );
+            }
+        })
+    });
+    let (ran, not_ok, stopped, error) = state.into_inner().expect("state");
+    if let Some(e) = error {
+        return Err(e);
+    }
+    let interrupted = stopped || crate::runner::interrupted();
+    if opts.shard.is_none() && !interrupted {
+        // The whole table in point order.
+        let rows = table::read_rows(&path, &header)?.unwrap_or_default();
+        table::write_sorted(&path, &header, &rows)?;
+    }
+    Ok(SweepReport {
+        points: sweep.points.len(),
+        skipped,
+        ran,
+        not_ok,
+        interrupted,
+        table: path,
+        wall_seconds: started.elapsed().as_secs_f64(),
+    })
+}
+
+/// `DIR/sweep.json`: the points and axes, for `collect`.
+fn write_manifest(dir: &Path, sweep: &Sweep) -> Result<(), String> {
+    let manifest = serde_json::json!({
+        "points": sweep.points.len(),
+        "axes": sweep.axis_keys,
+        "ids": sweep.points.iter().map(Point::id).collect::<Vec<_>>(),
+    });
+    let path = dir.join("sweep.json");
+    std::fs::write(
+        &path,
+        serde_json::to_string_pretty(&manifest).expect("json"),
+    )
+    .map_err(|e| format!("`{}`: {e}", path.display()))
+}
+
+/// Merges the shard tables of `dir` into `dir/summary.csv` (point order);
+/// returns its path, the rows, and the points no shard has finished.
+pub fn collect(dir: &Path) -> Result<(PathBuf, usize, Vec<usize>), String> {
+    let manifest_path = dir.join("sweep.json");
+    let manifest: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(&manifest_path)
+            .map_err(|e| format!("`{}`: {e} (not a sweep folder?)", manifest_path.display()))?,
+    )
+    .map_err(|e| format!("`{}`: {e}", manifest_path.display()))?;
+    let axes: Vec<String> = manifest["axes"]
+        .as_array()
+        .map(|a| {
+            a.iter()
+                .filter_map(|v| v.as_str().map(String::from))
+                .collect()
+        })
+        .unwrap_or_default();
+    let points = manifest["points"].as_u64().unwrap_or(0) as usize;
+    let header = table::header(&axes);
+    let mut rows = BTreeMap::new();
+    let mut shards: Vec<PathBuf> = std::fs::read_dir(dir)
+        .map_err(|e| format!("`{}`: {e}", dir.display()))?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| {
+            p.file_name()
+                .and_then(|n| n.to_str())
+                .is_some_and(|n| n.starts_with("summary.shard-") && n.ends_with(".csv"))
+        })
+        .collect();
+    shards.sort();
+    if shards.is_empty() {
+        return Err(format!(
+            "no shard tables (summary.shard-*.csv) in `{}`",
+            dir.display()
+        ));
+    }
+    for s in &shards {
+        rows.extend(table::read_rows(s, &header)?.unwrap_or_default());
+    }
+    let path = dir.join("summary.csv");
+    table::write_sorted(&path, &header, &rows)?;
+    let missing = (0..points).filter(|p| !rows.contains_key(p)).collect();
+    Ok((path, rows.len(), missing))
+}
