@@ -251,6 +251,7 @@ impl Sweep {
                 let scenario = match Scenario::parse(&base_text, &base_name, &set) {
                     Ok(s) => s,
                     Err(e) => {
+                        let e = e.to_string().replace('\n', "\n    ");
                         problems.push(format!("point {index} ({}): {e}", label()));
                         continue;
                     }

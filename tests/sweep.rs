@@ -1,0 +1,274 @@
+//! Sweeps: every point validated and run, one row each; a killed sweep
+//! rerun finishes with the table of one that never stopped; shards (local
+//! and as a real Slurm job array) collect into the same table.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
+
+fn dir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("slipfront-sweep-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// Eight points of the small side-driven scene (junctions break from
+/// 0.6 ms): two μs, two spring stiffnesses (a log range), two seeds.
+fn sweep_file(d: &Path, extra_axis: &str) -> PathBuf {
+    let base = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/tromborg2014_stick_slip.toml");
+    let text = format!(
+        r#"base = "{}"
+seeds = 2
+
+[set]
+"geometry.nx" = 29
+"geometry.nz" = 16
+"geometry.length" = 0.07
+"geometry.height" = 0.0375
+"loading.normal.ramp_time" = 2e-4
+"loading.normal.relax_time" = 3e-4
+"loading.drive.velocity" = 0.2
+"time.end" = 0.0025
+
+[axes]
+"friction.static_coefficient" = [0.35, 0.4]
+"loading.drive.stiffness" = {{ from = 2e6, to = 8e6, count = 2, scale = "log" }}
+{extra_axis}
+"#,
+        base.display()
+    );
+    let path = d.join("sweep.toml");
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+fn slipfront(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_slipfront"))
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+fn ok(args: &[&str]) -> String {
+    let out = slipfront(args);
+    let text = format!(
+        "{}{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(out.status.success(), "slipfront {args:?}: {text}");
+    text
+}
+
+fn s(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+/// The table without its wall-time column (the only one that may differ).
+fn table(path: &Path) -> Vec<Vec<String>> {
+    let text = std::fs::read_to_string(path).unwrap();
+    let mut rows: Vec<Vec<String>> = text.lines().map(slipfront::sweep::table::split).collect();
+    let wall = rows[0].iter().position(|h| h == "wall_s").unwrap();
+    for r in &mut rows {
+        r.remove(wall);
+    }
+    rows
+}
+
+fn column<'a>(rows: &'a [Vec<String>], name: &str) -> Vec<&'a str> {
+    let k = rows[0].iter().position(|h| h == name).unwrap();
+    rows[1..].iter().map(|r| r[k].as_str()).collect()
+}
+
+#[test]
+fn a_sweep_runs_every_point_once_and_a_killed_one_finishes_the_same() {
+    let d = dir("local");
+    let file = sweep_file(&d, "");
+    let text = ok(&["sweep", s(&file), "--dry-run"]);
+    assert!(text.contains("8 points"), "{text}");
+    let whole = d.join("whole");
+    let text = ok(&["sweep", s(&file), "-o", s(&whole), "--quiet"]);
+    assert!(text.contains("8 run now (0 not ok)"), "{text}");
+    let rows = table(&whole.join("summary.csv"));
+    assert_eq!(rows.len(), 9);
+    assert_eq!(
+        column(&rows, "point"),
+        ["0", "1", "2", "3", "4", "5", "6", "7"]
+    );
+    assert!(column(&rows, "status").iter().all(|s| *s == "ok"));
+    // Every point breaks the interface: a first full event, an F/F_N.
+    assert!(column(&rows, "first_full_time_s")
+        .iter()
+        .all(|t| !t.is_empty()));
+    // The axes are as written, the log range's ends exact.
+    assert_eq!(
+        column(&rows, "loading.drive.stiffness")[..2],
+        ["2000000.0"; 2]
+    );
+    // Stiffer springs load faster: the first event comes earlier.
+    let t: Vec<f64> = column(&rows, "first_full_time_s")
+        .iter()
+        .map(|v| v.parse().unwrap())
+        .collect();
+    assert!(t[2] < t[0] && t[6] < t[4], "{t:?}");
+    // A rerun skips every finished point.
+    let text = ok(&["sweep", s(&file), "-o", s(&whole), "--quiet"]);
+    assert!(
+        text.contains("0 run now") && text.contains("8 already done"),
+        "{text}"
+    );
+
+    // Killed after two rows, rerun: the table of the sweep that never
+    // stopped.
+    let cut = d.join("cut");
+    let mut child = Command::new(env!("CARGO_BIN_EXE_slipfront"))
+        .args([
+            "sweep",
+            s(&file),
+            "-o",
+            s(&cut),
+            "--threads",
+            "1",
+            "--quiet",
+        ])
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    let summary = cut.join("summary.csv");
+    let started = Instant::now();
+    loop {
+        let rows = std::fs::read_to_string(&summary).map_or(0, |t| t.lines().count());
+        if rows >= 3 {
+            break;
+        }
+        assert!(child.try_wait().unwrap().is_none(), "the sweep ended first");
+        assert!(started.elapsed() < Duration::from_secs(120));
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    child.kill().unwrap();
+    child.wait().unwrap();
+    let partial = std::fs::read_to_string(&summary).unwrap().lines().count() - 1;
+    assert!((2..8).contains(&partial), "{partial} rows");
+    let text = ok(&["sweep", s(&file), "-o", s(&cut), "--quiet"]);
+    assert!(text.contains(&format!("{partial} already done")), "{text}");
+    assert_eq!(table(&summary), rows);
+}
+
+#[test]
+fn shards_collect_into_the_local_table_and_bad_points_are_named() {
+    let d = dir("shards");
+    let file = sweep_file(&d, "");
+    let local = d.join("local");
+    ok(&["sweep", s(&file), "-o", s(&local), "--quiet"]);
+    let sharded = d.join("sharded");
+    for shard in ["0/3", "1/3", "2/3"] {
+        ok(&[
+            "sweep",
+            s(&file),
+            "-o",
+            s(&sharded),
+            "--shard",
+            shard,
+            "--quiet",
+        ]);
+    }
+    ok(&["sweep", "collect", s(&sharded)]);
+    assert_eq!(
+        table(&sharded.join("summary.csv")),
+        table(&local.join("summary.csv"))
+    );
+    // A point that fails validation is named, and nothing runs.
+    let bad = sweep_file(&d, "\"material.density\" = [1200.0, -1.0]");
+    let out = slipfront(&["sweep", s(&bad), "-o", s(&d.join("bad"))]);
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("point 2 (")
+            && err.contains("material.density=-1.0")
+            && err.contains("material.density = -1"),
+        "{err}"
+    );
+    assert!(!d.join("bad").join("summary.csv").exists());
+}
+
+/// The Slurm test: a real one-node cluster (`../shared/slurm`), the sweep
+/// submitted as a 3-task job array, collected, equal to the local table.
+/// Skips with its reason outside CI when no cluster can be started; fails
+/// under CI=true.
+#[test]
+fn a_slurm_job_array_gives_the_local_table() {
+    let ci = std::env::var("CI").is_ok_and(|v| v == "true");
+    let start = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/slurm/start-local.sh");
+    let started = start.exists()
+        && Command::new("bash")
+            .arg(&start)
+            .output()
+            .is_ok_and(|o| o.status.success());
+    if !started {
+        assert!(
+            !ci,
+            "CI=true: no Slurm cluster could be started with {}",
+            start.display()
+        );
+        eprintln!(
+            "skipped: no Slurm cluster ({} missing or failed)",
+            start.display()
+        );
+        return;
+    }
+    let d = dir("slurm");
+    let file = sweep_file(&d, "");
+    let array = d.join("array");
+    let text = ok(&[
+        "sweep",
+        s(&file),
+        "-o",
+        s(&array),
+        "--slurm",
+        "--array-size",
+        "3",
+    ]);
+    let script = array.join("sweep.sbatch");
+    assert!(text.contains("sweep.sbatch"), "{text}");
+    let out = Command::new("sbatch").arg(&script).output().unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let job = String::from_utf8_lossy(&out.stdout)
+        .split_whitespace()
+        .last()
+        .unwrap()
+        .to_string();
+    let t0 = Instant::now();
+    loop {
+        let q = Command::new("squeue")
+            .args(["-h", "-j", &job])
+            .output()
+            .unwrap();
+        if String::from_utf8_lossy(&q.stdout).trim().is_empty() {
+            break;
+        }
+        assert!(
+            t0.elapsed() < Duration::from_secs(300),
+            "job {job} still queued"
+        );
+        std::thread::sleep(Duration::from_millis(500));
+    }
+    let text = ok(&["sweep", "collect", s(&array)]);
+    assert!(text.contains("8 rows"), "{text}");
+    for task in 0..3 {
+        assert!(array
+            .join(format!("summary.shard-{task}-of-3.csv"))
+            .exists());
+    }
+    let local = d.join("local");
+    ok(&["sweep", s(&file), "-o", s(&local), "--quiet"]);
+    assert_eq!(
+        table(&array.join("summary.csv")),
+        table(&local.join("summary.csv"))
+    );
+}
