@@ -164,6 +164,10 @@ struct SweepRun {
     /// No line per finished point.
     #[arg(long)]
     quiet: bool,
+    /// Run every point's normal-load phase itself, even where points share
+    /// it (the results are the same bits either way).
+    #[arg(long)]
+    no_shared_loading: bool,
 }
 
 fn main() -> ExitCode {
@@ -248,6 +252,7 @@ fn main() -> ExitCode {
                 array_size: run.array_size,
                 cpus_per_task: run.cpus_per_task,
                 quiet: run.quiet,
+                no_shared_loading: run.no_shared_loading,
             }),
         },
     };

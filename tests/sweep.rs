@@ -179,6 +179,25 @@ fn shards_collect_into_the_local_table_and_bad_points_are_named() {
         table(&sharded.join("summary.csv")),
         table(&local.join("summary.csv"))
     );
+    // The points share one normal-load phase (they differ in μs, the
+    // drive and the seed): run once, and each point started from it gives
+    // the bits of running its own.
+    let own = d.join("own");
+    let text = ok(&[
+        "sweep",
+        s(&file),
+        "-o",
+        s(&own),
+        "--quiet",
+        "--no-shared-loading",
+    ]);
+    assert!(text.contains("0 shared normal-load phases"), "{text}");
+    let text = ok(&["sweep", s(&file), "-o", s(&d.join("again")), "--quiet"]);
+    assert!(text.contains("1 shared normal-load phases"), "{text}");
+    assert_eq!(
+        table(&own.join("summary.csv")),
+        table(&local.join("summary.csv"))
+    );
     // A point that fails validation is named, and nothing runs.
     let bad = sweep_file(&d, "\"material.density\" = [1200.0, -1.0]");
     let out = slipfront(&["sweep", s(&bad), "-o", s(&d.join("bad"))]);

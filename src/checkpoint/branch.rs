@@ -25,6 +25,42 @@ const FREE: &[&str] = &[
     "loading.drive.",
 ];
 
+/// Keys that nothing before the start of driving reads (junctions cannot
+/// break, the drive is off, the trigger's strips and spread act when
+/// driving starts): scenes that differ only in these have the same
+/// normal-load phase, bit for bit. Not the junction stiffness (pinned
+/// junctions follow it while the load is applied) nor the trigger's
+/// prestress (it loads the top row from the start).
+const LOADING_FREE: &[&str] = &[
+    "name",
+    "output.",
+    "fast_forward.",
+    "time.end",
+    "time.seed",
+    "time.fast_forward",
+    "friction.static_coefficient",
+    "friction.dynamic_coefficient",
+    "friction.junctions.slip_time_",
+    "loading.drive.",
+    "loading.trigger.force_width",
+    "loading.trigger.strip_length",
+    "loading.trigger.strip_prestress",
+];
+
+fn listed(key: &str, list: &[&str]) -> bool {
+    list.iter()
+        .any(|f| key == *f || (f.ends_with(['.', '_']) && key.starts_with(f)))
+}
+
+/// `a` and `b` have the same normal-load phase: a state saved one step
+/// before `a` starts driving continues as `b` exactly as `b` itself would
+/// (what lets a sweep load the slider once for many points).
+pub fn same_loading(a: &Scenario, b: &Scenario) -> bool {
+    changed_keys(a, b)
+        .iter()
+        .all(|(key, _, _)| listed(key, LOADING_FREE))
+}
+
 /// Every leaf of a scenario as `dotted.key → value`.
 fn leaves(s: &Scenario) -> BTreeMap<String, String> {
     fn walk(prefix: &str, v: &toml::Value, out: &mut BTreeMap<String, String>) {
@@ -84,9 +120,7 @@ pub fn check(
     let mut changed = Vec::new();
     for (key, old, new) in changed_keys(parent, child) {
         changed.push(format!("{key} = {old} → {new}"));
-        let free = FREE
-            .iter()
-            .any(|f| key == *f || (f.ends_with(['.', '_']) && key.starts_with(f)));
+        let free = listed(&key, FREE);
         if key == "loading.trigger.shear_prestress" {
             let value = |s: &Scenario| {
                 s.loading

@@ -20,6 +20,7 @@ pub struct SweepArgs {
     pub array_size: Option<usize>,
     pub cpus_per_task: usize,
     pub quiet: bool,
+    pub no_shared_loading: bool,
 }
 
 /// `NAME.toml` → `NAME_sweep` beside it.
@@ -86,11 +87,13 @@ pub fn sweep(a: SweepArgs) -> anyhow::Result<ExitCode> {
             shard: a.shard,
             keep_mcap: a.mcap,
             progress: !a.quiet,
+            share_loading: !a.no_shared_loading,
         },
     )
     .map_err(|e| anyhow::anyhow!(e))?;
     println!(
-        "sweep {}: {} points{}, {} run now ({} not ok), {} already done, {:.1} s\n  table {}",
+        "sweep {}: {} points{}, {} run now ({} not ok), {} already done, {:.1} s, \
+         {} shared normal-load phases\n  table {}",
         if report.interrupted {
             "INTERRUPTED"
         } else {
@@ -105,6 +108,7 @@ pub fn sweep(a: SweepArgs) -> anyhow::Result<ExitCode> {
         report.not_ok,
         report.skipped,
         report.wall_seconds,
+        report.shared_loadings,
         report.table.display()
     );
     Ok(if report.interrupted {

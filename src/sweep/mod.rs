@@ -12,10 +12,12 @@ pub mod table;
 pub use plan::{Point, Sweep, SweepFile};
 
 use crate::backend::{make_engine, Backend, Precision};
+use crate::checkpoint::RunnerState;
 use crate::engine::EngineError;
+use crate::engine::EngineState;
 use crate::model::Model;
 use crate::output::reader::RunFile;
-use crate::runner::{run_scene, RunError, RunOptions};
+use crate::runner::{run_scene, RunError, RunOptions, StartFrom};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
@@ -78,6 +80,9 @@ pub struct SweepOptions {
     pub keep_mcap: KeepMcap,
     /// A line per finished point on stderr.
     pub progress: bool,
+    /// Run the normal-load phase once for the points that share it
+    /// (`checkpoint::branch::same_loading`) and start each from that state.
+    pub share_loading: bool,
 }
 
 /// What a sweep invocation did.
@@ -92,6 +97,64 @@ pub struct SweepReport {
     pub interrupted: bool,
     pub table: PathBuf,
     pub wall_seconds: f64,
+    /// Normal-load phases this invocation's points share (0: none shared).
+    pub shared_loadings: usize,
+}
+
+/// Points with one normal-load phase, and their loaded state (one step
+/// before driving starts), made once by whichever point needs it first.
+struct Loading<'a> {
+    leader: &'a Point,
+    state: std::sync::OnceLock<Result<EngineState, String>>,
+}
+
+impl Loading<'_> {
+    fn state(&self, opts: &SweepOptions) -> Result<&EngineState, String> {
+        self.state
+            .get_or_init(|| {
+                let model = Model::from_scenario(&self.leader.scenario, false)
+                    .map_err(|e| e.to_string())?;
+                let mut e = make_engine(&model, opts.backend, opts.precision, 1)
+                    .map_err(|e| e.to_string())?;
+                e.advance(model.prep_steps - 1).map_err(|e| e.to_string())?;
+                e.save_state().map_err(|e| e.to_string())
+            })
+            .as_ref()
+            .map_err(Clone::clone)
+    }
+}
+
+/// Groups `todo` by normal-load phase; only groups of two or more and
+/// scenes with a normal-load phase gain anything.
+fn loading_groups<'a>(todo: &[&'a Point]) -> (Vec<Loading<'a>>, Vec<Option<usize>>) {
+    let mut groups: Vec<Loading> = Vec::new();
+    let mut members: Vec<Vec<usize>> = Vec::new();
+    let mut of = vec![None; todo.len()];
+    for (k, p) in todo.iter().enumerate() {
+        let prep = Model::from_scenario(&p.scenario, false).map_or(0, |m| m.prep_steps);
+        if prep < 2 {
+            continue;
+        }
+        let g = groups
+            .iter()
+            .position(|g| crate::checkpoint::branch::same_loading(&g.leader.scenario, &p.scenario))
+            .unwrap_or_else(|| {
+                groups.push(Loading {
+                    leader: p,
+                    state: std::sync::OnceLock::new(),
+                });
+                members.push(Vec::new());
+                groups.len() - 1
+            });
+        members[g].push(k);
+        of[k] = Some(g);
+    }
+    for m in members.iter().filter(|m| m.len() < 2) {
+        for &k in m {
+            of[k] = None;
+        }
+    }
+    (groups, of)
 }
 
 /// The table this invocation writes.
@@ -102,8 +165,14 @@ pub fn table_path(dir: &Path, shard: Option<Shard>) -> PathBuf {
     }
 }
 
-/// Runs one point: its row (status ok, blew_up or failed with the message).
-fn run_point(p: &Point, opts: &SweepOptions, header_len: usize) -> Option<Vec<String>> {
+/// Runs one point (from `loaded`, the shared loaded slider, when given):
+/// its row (status ok, blew_up or failed with the message).
+fn run_point(
+    p: &Point,
+    opts: &SweepOptions,
+    header_len: usize,
+    loaded: Option<&Loading>,
+) -> Option<Vec<String>> {
     let runs = opts.out_dir.join("runs");
     let keep = match opts.keep_mcap {
         KeepMcap::All => true,
@@ -122,11 +191,25 @@ fn run_point(p: &Point, opts: &SweepOptions, header_len: usize) -> Option<Vec<St
         let model = Model::from_scenario(&p.scenario, false)
             .map_err(|e| RunError::Engine(EngineError::State(e.to_string())))?;
         let mut engine = make_engine(&model, opts.backend, opts.precision, 1)?;
+        let start = match loaded {
+            Some(l) => {
+                let state = l
+                    .state(opts)
+                    .map_err(|e| RunError::Engine(EngineError::State(e)))?;
+                engine.load_state(state)?;
+                Some(StartFrom {
+                    runner: RunnerState::default(),
+                    parent_output: None,
+                })
+            }
+            None => None,
+        };
         let summary = run_scene(
             engine.as_mut(),
             &p.scenario,
             &RunOptions {
                 output: Some(mcap.clone()),
+                start,
                 ..RunOptions::default()
             },
         )?;
@@ -141,9 +224,11 @@ fn run_point(p: &Point, opts: &SweepOptions, header_len: usize) -> Option<Vec<St
             Ok(run) => {
                 row.extend(["ok".to_string(), String::new()]);
                 row.extend(outcomes::analyse(&run));
+                // The scene's steps (a shared normal-load phase counts).
+                let steps = Model::from_scenario(&p.scenario, false).map_or(0, |m| m.total_steps());
                 row.extend([
                     format!("{:e}", s.peak_drive_ratio),
-                    s.steps.to_string(),
+                    steps.to_string(),
                     format!("{wall:.3}"),
                 ]);
             }
@@ -220,6 +305,16 @@ pub fn run_sweep(sweep: &Sweep, opts: &SweepOptions) -> Result<SweepReport, Stri
         .filter(|p| !done.contains_key(&p.index))
         .collect();
     let skipped = mine.len() - todo.len();
+    let (groups, group_of) = if opts.share_loading {
+        loading_groups(&todo)
+    } else {
+        (Vec::new(), vec![None; todo.len()])
+    };
+    let shared_loadings = group_of
+        .iter()
+        .flatten()
+        .collect::<std::collections::BTreeSet<_>>()
+        .len();
     let appender = Mutex::new(table::Appender::open(&path, &header)?);
     let threads = match (opts.backend, opts.threads) {
         // One GPU engine at a time: they share the device.
@@ -234,12 +329,13 @@ pub fn run_sweep(sweep: &Sweep, opts: &SweepOptions) -> Result<SweepReport, Stri
     let state = Mutex::new((0usize, 0usize, false, None::<String>));
     pool.install(|| {
         use rayon::prelude::*;
-        todo.par_iter().for_each(|p| {
+        todo.par_iter().enumerate().for_each(|(k, p)| {
             if state.lock().expect("state").2 || crate::runner::interrupted() {
                 return;
             }
             let point_started = Instant::now();
-            let Some(row) = run_point(p, opts, header.len()) else {
+            let loaded = group_of[k].map(|g| &groups[g]);
+            let Some(row) = run_point(p, opts, header.len(), loaded) else {
                 state.lock().expect("state").2 = true;
                 return;
             };
@@ -287,6 +383,7 @@ pub fn run_sweep(sweep: &Sweep, opts: &SweepOptions) -> Result<SweepReport, Stri
         interrupted,
         table: path,
         wall_seconds: started.elapsed().as_secs_f64(),
+        shared_loadings,
     })
 }
 
