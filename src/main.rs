@@ -123,6 +123,21 @@ enum Command {
 enum SweepAction {
     /// Merge the shard tables of a sweep folder into its summary.csv.
     Collect { dir: PathBuf },
+    /// An outcome against a swept key, coloured by another (PNG and medians).
+    Plot {
+        dir: PathBuf,
+        /// Column for x (a swept key).
+        #[arg(long)]
+        x: String,
+        /// Column for y (an outcome).
+        #[arg(long)]
+        y: String,
+        /// Column whose values get one colour each.
+        #[arg(long)]
+        color: Option<String>,
+        #[arg(long)]
+        log_y: bool,
+    },
 }
 
 #[derive(clap::Args)]
@@ -233,6 +248,17 @@ fn main() -> ExitCode {
             action: Some(SweepAction::Collect { dir }),
             ..
         } => commands::sweep::collect_tables(&dir),
+        Command::Sweep {
+            action:
+                Some(SweepAction::Plot {
+                    dir,
+                    x,
+                    y,
+                    color,
+                    log_y,
+                }),
+            ..
+        } => commands::sweep::plot(&dir, &x, &y, color.as_deref(), log_y),
         Command::Sweep { action: None, run } => match run.file {
             None => Err(anyhow::anyhow!(
                 "sweep: give a sweep file (slipfront sweep SWEEP.toml) or `sweep collect DIR`"

@@ -152,6 +152,51 @@ pub fn front_tip_plot(s: &InterfaceSeries, events: &[Event]) -> Canvas {
     c
 }
 
+/// Scatter of (x, y, group): one colour per group (in order of first
+/// appearance), axes from the data, y on a log scale when `log_y`.
+pub fn scatter(points: &[(f64, f64, usize)], log_y: bool) -> Canvas {
+    const PALETTE: [[u8; 3]; 6] = [
+        [0, 0, 0],
+        [200, 0, 0],
+        [0, 90, 200],
+        [0, 150, 0],
+        [180, 100, 0],
+        [130, 0, 160],
+    ];
+    let mut c = Canvas::new(PLOT_W, PLOT_H);
+    frame(&mut c);
+    let y = |v: f64| if log_y { v.log10() } else { v };
+    let finite: Vec<(f64, f64, usize)> = points
+        .iter()
+        .map(|&(a, b, g)| (a, y(b), g))
+        .filter(|p| p.0.is_finite() && p.1.is_finite())
+        .collect();
+    if finite.is_empty() {
+        return c;
+    }
+    let range = |f: &dyn Fn(&(f64, f64, usize)) -> f64| {
+        let (lo, hi) = finite
+            .iter()
+            .map(f)
+            .fold((f64::MAX, f64::MIN), |a, v| (a.0.min(v), a.1.max(v)));
+        let pad = 0.05 * (hi - lo).max(1e-12 * hi.abs().max(1.0));
+        (lo - pad, hi + pad)
+    };
+    let map = mapper(range(&|p| p.0), range(&|p| p.1));
+    for &(a, b, g) in &finite {
+        let (px, py) = map(a, b);
+        let colour = PALETTE[g % PALETTE.len()];
+        for dx in -3..=3 {
+            for dy in -3..=3 {
+                if dx * dx + dy * dy <= 9 {
+                    c.set(px + dx, py + dy, colour);
+                }
+            }
+        }
+    }
+    c
+}
+
 const PLOT_W: usize = 800;
 const PLOT_H: usize = 400;
 const MARGIN: i64 = 40;

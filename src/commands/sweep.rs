@@ -167,3 +167,90 @@ pub fn collect_tables(dir: &Path) -> anyhow::Result<ExitCode> {
         Ok(ExitCode::from(1))
     }
 }
+
+/// `sweep plot DIR --x KEY --y OUTCOME [--color KEY]`: the outcome against
+/// a swept key, one colour per value of another, as a PNG beside the
+/// table, with the legend and the per-(x, colour) medians printed.
+pub fn plot(
+    dir: &Path,
+    x: &str,
+    y: &str,
+    color: Option<&str>,
+    log_y: bool,
+) -> anyhow::Result<ExitCode> {
+    use slipfront::sweep::table::split;
+    let path = dir.join("summary.csv");
+    let text = std::fs::read_to_string(&path).map_err(|e| {
+        anyhow::anyhow!("`{}`: {e} (run or collect the sweep first)", path.display())
+    })?;
+    let mut lines = text.lines();
+    let header = split(lines.next().unwrap_or_default());
+    let col = |name: &str| {
+        header.iter().position(|h| h == name).ok_or_else(|| {
+            anyhow::anyhow!(
+                "`{name}` is not a column of {}: {}",
+                path.display(),
+                header.join(", ")
+            )
+        })
+    };
+    let (cx, cy, status) = (col(x)?, col(y)?, col("status")?);
+    let cc = color.map(col).transpose()?;
+    let mut groups: Vec<String> = Vec::new();
+    let mut points = Vec::new();
+    for row in lines
+        .map(split)
+        .filter(|r| r.len() == header.len() && r[status] == "ok")
+    {
+        let (Ok(a), Ok(b)) = (row[cx].parse::<f64>(), row[cy].parse::<f64>()) else {
+            continue;
+        };
+        let g = cc.map_or(String::new(), |c| row[c].clone());
+        let k = groups.iter().position(|x| *x == g).unwrap_or_else(|| {
+            groups.push(g);
+            groups.len() - 1
+        });
+        points.push((a, b, k));
+    }
+    if points.is_empty() {
+        anyhow::bail!("no ok rows with numbers in `{x}` and `{y}`");
+    }
+    let file = dir.join(format!("plot_{}_vs_{}.png", y, x).replace(['/', ' '], "_"));
+    slipfront::plot::scatter(&points, log_y).save(&file)?;
+    println!("{}", file.display());
+    const COLOURS: [&str; 6] = ["black", "red", "blue", "green", "orange", "purple"];
+    println!(
+        "{x:<24} {:<16} {y} (median of {} rows)",
+        color.unwrap_or(""),
+        points.len()
+    );
+    let mut xs: Vec<f64> = points.iter().map(|p| p.0).collect();
+    xs.sort_by(f64::total_cmp);
+    xs.dedup();
+    for xv in xs {
+        for (k, g) in groups.iter().enumerate() {
+            let mut v: Vec<f64> = points
+                .iter()
+                .filter(|p| p.0 == xv && p.2 == k)
+                .map(|p| p.1)
+                .collect();
+            if v.is_empty() {
+                continue;
+            }
+            v.sort_by(f64::total_cmp);
+            let median = if v.len() % 2 == 1 {
+                v[v.len() / 2]
+            } else {
+                0.5 * (v[v.len() / 2 - 1] + v[v.len() / 2])
+            };
+            println!(
+                "{xv:<24} {:<16} {median:.4e} (n = {}, {} .. {})",
+                format!("{g} ({})", COLOURS[k % COLOURS.len()]),
+                v.len(),
+                format_args!("{:.3e}", v[0]),
+                format_args!("{:.3e}", v[v.len() - 1])
+            );
+        }
+    }
+    Ok(ExitCode::SUCCESS)
+}

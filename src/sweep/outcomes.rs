@@ -49,6 +49,7 @@ pub fn analyse(run: &RunFile) -> Vec<String> {
                 .map(|p| p.length)
                 .reduce(f64::max),
         ),
+        number(events.iter().map(|e| e.rupture_length).reduce(f64::max)),
         number(mean(&speeds)),
         number(speeds.iter().copied().reduce(f64::max)),
     ];

@@ -137,7 +137,10 @@ fn axis_values(key: &str, axis: &Axis) -> Result<Vec<toml::Value>, String> {
                         // The ends exactly as written.
                         (_, 0) => r.from,
                         (_, i) if i + 1 == r.count => r.to,
-                        (Scale::Linear, _) => r.from + f * (r.to - r.from),
+                        // 13 significant digits: 0.3, not 0.30000000000000004.
+                        (Scale::Linear, _) => format!("{:.12e}", r.from + f * (r.to - r.from))
+                            .parse()
+                            .expect("a number"),
                         (Scale::Log, _) => (r.from.ln() + f * (r.to.ln() - r.from.ln())).exp(),
                     })
                 })

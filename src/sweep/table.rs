@@ -10,7 +10,7 @@ use std::path::{Path, PathBuf};
 pub const LEAD: [&str; 3] = ["point", "id", "seed"];
 
 /// Outcome columns after the axes.
-pub const OUTCOMES: [&str; 19] = [
+pub const OUTCOMES: [&str; 20] = [
     "status",
     "message",
     "first_full_time_s",
@@ -20,6 +20,7 @@ pub const OUTCOMES: [&str; 19] = [
     "precursors",
     "precursor_lengths_m",
     "precursor_max_length_m",
+    "rupture_length_max_m",
     "front_speed_mean_m_per_s",
     "front_speed_max_m_per_s",
     "fronts_fast",
