@@ -184,3 +184,51 @@ fn check_estimates_the_wall_time_and_fails_when_unstable() {
     assert!(String::from_utf8_lossy(&out.stdout).contains("UNSTABLE"));
     assert!(String::from_utf8_lossy(&out.stderr).contains("stability limit"));
 }
+
+/// On a big lattice a step takes milliseconds: a signal must still stop
+/// the run within a second or so (chunks of steps are sized by wall time,
+/// not a fixed step count), exiting 130 with its file closed.
+#[test]
+fn sigint_stops_a_big_lattice_promptly() {
+    let dir = std::env::temp_dir().join(format!("slipfront-cli-big-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("big.mcap");
+    let mut child = Command::new(env!("CARGO_BIN_EXE_slipfront"))
+        .args(["run", "--backend", "cpu", "--threads", "1", "--quiet"])
+        .args(["--set", "geometry.nx=300", "--set", "geometry.nz=300"])
+        .args([
+            "--set",
+            "geometry.length=0.14",
+            "--set",
+            "geometry.height=0.14",
+        ])
+        .args(["-o", file.to_str().unwrap()])
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(std::time::Duration::from_millis(1500));
+    assert!(child.try_wait().unwrap().is_none());
+    let sent = std::time::Instant::now();
+    unsafe {
+        libc::kill(child.id() as i32, libc::SIGINT);
+    }
+    let status = loop {
+        if let Some(s) = child.try_wait().unwrap() {
+            break s;
+        }
+        if sent.elapsed() > std::time::Duration::from_secs(20) {
+            child.kill().unwrap();
+            panic!("the run ignored SIGINT for 20 s");
+        }
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    };
+    assert_eq!(status.code(), Some(130));
+    assert!(
+        sent.elapsed() < std::time::Duration::from_secs(5),
+        "{:?} to stop",
+        sent.elapsed()
+    );
+    let run = slipfront::output::reader::RunFile::read(&file).unwrap();
+    assert!(!run.truncated);
+}

@@ -37,6 +37,11 @@ pub fn interrupted() -> bool {
 /// Steps between progress updates (and interrupt checks) at most.
 const MAX_CHUNK: u64 = 20_000;
 
+/// Wall time a chunk of steps should take at most, so that a signal, a due
+/// checkpoint and the progress report wait no longer than this on any
+/// lattice.
+const CHUNK_SECONDS: f64 = 0.25;
+
 #[derive(Default)]
 pub struct RunOptions {
     pub output: Option<PathBuf>,
@@ -240,6 +245,9 @@ pub fn run_scene(
     let start_dispatches = engine.dispatches();
     let start_skipped = ff.as_ref().map_or(0, |f| f.stats.skipped_steps);
     let mut progress = Reporter::new(opts.progress, &model, start_step);
+    // Steps per chunk: grows while chunks are quick, shrinks on big
+    // lattices.
+    let mut chunk: u64 = 64;
     let result = (|| -> Result<(), RunError> {
         while engine.steps_done() < total {
             let s = engine.steps_done();
@@ -259,7 +267,7 @@ pub fn run_scene(
                 interrupted = true;
                 break;
             }
-            let mut target = (s + MAX_CHUNK).min(total);
+            let mut target = (s + chunk).min(total);
             for stop in [model.prep_steps.saturating_sub(1), model.prep_steps] {
                 if s < stop {
                     target = target.min(stop);
@@ -273,8 +281,17 @@ pub fn run_scene(
                 u64::MAX
             };
             target = target.min(out_step).min(check_step);
+            let chunk_started = Instant::now();
             advance_to(engine, target)?;
+            let s_before = s;
             let s = engine.steps_done();
+            // The next chunk from this one's speed (whole chunks only: a
+            // cut-short one says little).
+            let took = chunk_started.elapsed().as_secs_f64();
+            if s - s_before == chunk {
+                let fit = (chunk as f64 * CHUNK_SECONDS / took.max(1e-9)) as u64;
+                chunk = fit.clamp(1, MAX_CHUNK).min(chunk.saturating_mul(2));
+            }
             progress.update(s, outputs.events());
             if s == model.prep_steps {
                 let snap = engine.snapshot()?;
