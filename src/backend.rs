@@ -38,7 +38,7 @@ pub enum Precision {
 impl Precision {
     /// The precision of a saved state (`EngineState::precision`).
     pub fn of_state(name: &str) -> Option<Precision> {
-        use crate::cpu::precision_name;
+        use crate::real::precision_name;
         use crate::real::DoubleSingle;
         [
             (precision_name::<f64, f64>(), Precision::F64),

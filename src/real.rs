@@ -207,6 +207,19 @@ impl Coordinate<f32> for DoubleSingle {
     }
 }
 
+/// "f64", "f32 mixed (double-single displacements)" or "f32 plain".
+pub fn precision_name<T: Real, C: Coordinate<T>>() -> String {
+    if T::NAME == C::NAME {
+        if T::NAME == "f64" {
+            "f64".into()
+        } else {
+            format!("{} plain", T::NAME)
+        }
+    } else {
+        format!("{} mixed ({} coordinates)", T::NAME, C::NAME)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -51,7 +51,7 @@ pub struct Header {
     pub scenario_hash: String,
     /// The engine that wrote it (`Engine::describe`).
     pub backend: String,
-    /// Its precision (`cpu::precision_name`).
+    /// Its precision (`real::precision_name`).
     pub precision: String,
     pub step: u64,
     /// Time since driving started (s).

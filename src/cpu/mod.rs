@@ -15,7 +15,7 @@ pub use sweep::SweepEngine;
 use crate::engine::{blow_up, Engine, EngineError, EngineState, Snapshot, StateArrays};
 use crate::lattice::{block_flags, initial_displacement};
 use crate::model::{Driver, Model};
-use crate::real::{Coordinate, Real};
+use crate::real::{precision_name, Coordinate, Real};
 use crate::scenario::FrictionLaw;
 use crate::step_params::{step_params, Consts};
 use bulk_forces::{bond_consts, Blocks, BondConsts};
@@ -375,18 +375,5 @@ impl<T: Real, C: Coordinate<T>> Engine for CpuEngine<T, C> {
             precision_name::<T, C>(),
             self.threads()
         )
-    }
-}
-
-/// "f64", "f32 mixed (double-single displacements)" or "f32 plain".
-pub fn precision_name<T: Real, C: Coordinate<T>>() -> String {
-    if T::NAME == C::NAME {
-        if T::NAME == "f64" {
-            "f64".into()
-        } else {
-            format!("{} plain", T::NAME)
-        }
-    } else {
-        format!("{} mixed ({} coordinates)", T::NAME, C::NAME)
     }
 }

@@ -11,7 +11,7 @@ use crate::real::{Coordinate, Real};
 
 #[derive(Debug, Clone, PartialEq)]
 pub struct EngineState {
-    /// The saving engine's precision, as `cpu::precision_name` writes it.
+    /// The saving engine's precision, as `real::precision_name` writes it.
     pub precision: String,
     /// Global step count of the state.
     pub step: u64,
@@ -55,7 +55,7 @@ fn reals<T: Real>(v: &[[T; 2]]) -> Vec<[f64; 2]> {
 impl EngineState {
     pub fn capture<T: Real, C: Coordinate<T>>(a: StateArrays<'_, T, C>) -> EngineState {
         EngineState {
-            precision: crate::cpu::precision_name::<T, C>(),
+            precision: crate::real::precision_name::<T, C>(),
             step: a.step,
             drive_origin: a.drive_origin.parts(),
             disp: a.disp.iter().map(|u| u.map(C::parts)).collect(),

@@ -474,7 +474,7 @@ impl<T: Real, C: Coordinate<T>> Engine for SweepEngine<T, C> {
     fn describe(&self) -> String {
         format!(
             "cpu {} ({} thread(s), sweep)",
-            super::precision_name::<T, C>(),
+            crate::real::precision_name::<T, C>(),
             self.threads()
         )
     }
