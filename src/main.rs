@@ -67,6 +67,9 @@ enum Command {
         /// changes the saved state allows.
         #[arg(long, value_name = "CHECKPOINT")]
         from: Option<PathBuf>,
+        /// Replace the output file if it exists.
+        #[arg(long)]
+        force: bool,
     },
     /// Derived quantities, stability limit, memory and terms, without running.
     Check {
@@ -204,6 +207,7 @@ fn main() -> ExitCode {
             quiet,
             resume,
             from,
+            force,
         } => commands::run::run(commands::run::RunArgs {
             scenario,
             backend,
@@ -219,6 +223,7 @@ fn main() -> ExitCode {
             quiet,
             resume,
             from,
+            force,
         }),
         Command::Check {
             scenario,

@@ -537,7 +537,7 @@ fn branches_from_the_loaded_slider_equal_fresh_runs() {
         );
         assert_same_records(&a, &b);
         // Negative control: the parent's own continuation differs.
-        let parent = d.join("parent.mcap");
+        let parent = d.join(format!("parent-{name}.mcap"));
         run_ok(
             &["--resume", s(&base), "--t-end", "0.002", "-o", s(&parent)],
             &[],

@@ -232,3 +232,116 @@ fn sigint_stops_a_big_lattice_promptly() {
     let run = slipfront::output::reader::RunFile::read(&file).unwrap();
     assert!(!run.truncated);
 }
+
+/// Output files: an existing one is kept unless --force (which also
+/// removes the old run's checkpoints), an input is never overwritten,
+/// absurd thread counts are refused, foreign MCAP files are named as such,
+/// and terminal escapes in a run's metadata are not sent to the terminal.
+#[test]
+fn outputs_inputs_and_foreign_files_are_guarded() {
+    let dir = std::env::temp_dir().join(format!("slipfront-cli-guard-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("run.mcap");
+    let f = file.to_str().unwrap();
+    let short = [
+        "run",
+        "--backend",
+        "cpu",
+        "--t-end",
+        "1e-5",
+        "--quiet",
+        "-o",
+        f,
+    ];
+    let out = slipfront(&short);
+    assert!(out.status.success());
+    let out = slipfront(&short);
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("exists") && err.contains("--force") && err.contains("--resume"),
+        "{err}"
+    );
+    let stale = dir.join("run.mcap.ckpt");
+    assert!(stale.exists());
+    std::fs::write(&stale, b"an old run's checkpoint").unwrap();
+    let out = slipfront(&[
+        "run",
+        "--backend",
+        "cpu",
+        "--t-end",
+        "0",
+        "--quiet",
+        "-o",
+        f,
+        "--force",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(slipfront::checkpoint::Checkpoint::read(&stale).is_ok());
+    // The old checkpoint did not survive as the new run's previous one.
+    assert!(!dir.join("run.mcap.ckpt.prev").exists());
+    // The scenario itself as the output: refused, even with --force.
+    let scenario = dir.join("s.toml");
+    std::fs::write(&scenario, slipfront::scenario::DEFAULT_SCENARIO).unwrap();
+    let s = scenario.to_str().unwrap();
+    let out = slipfront(&["run", s, "--backend", "cpu", "-o", s, "--force"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("input of this run"));
+    assert_eq!(
+        std::fs::read_to_string(&scenario).unwrap(),
+        slipfront::scenario::DEFAULT_SCENARIO
+    );
+    let out = slipfront(&[
+        "run",
+        "--backend",
+        "cpu",
+        "--threads",
+        "100000",
+        "--t-end",
+        "0",
+    ]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--threads 100000"));
+    // An MCAP file that slipfront did not write.
+    let foreign = dir.join("foreign.mcap");
+    {
+        let mut w = mcap::Writer::new(std::io::BufWriter::new(
+            std::fs::File::create(&foreign).unwrap(),
+        ))
+        .unwrap();
+        w.finish().unwrap();
+    }
+    let out = slipfront(&["info", foreign.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("not a slipfront run file"));
+    // A scenario name with an escape sequence is shown escaped.
+    let evil = dir.join("evil.mcap");
+    let out = slipfront(&[
+        "run",
+        "--backend",
+        "cpu",
+        "--t-end",
+        "1e-5",
+        "--quiet",
+        "--set",
+        "name=x\u{1b}[2Jy",
+        "-o",
+        evil.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let out = slipfront(&["info", evil.to_str().unwrap()]);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        !text.contains('\u{1b}') && text.contains("x\\u{1b}[2Jy"),
+        "{text}"
+    );
+}

@@ -19,12 +19,12 @@ pub fn info(path: &Path, quiet_gap: f64) -> anyhow::Result<ExitCode> {
         .max(11)
         + 1;
     for (k, v) in &run.metadata {
-        println!("{k:<width$}{v}{}", unit(k));
+        println!("{:<width$}{}{}", printable(k), printable(v), unit(k));
     }
     if !run.history.is_empty() {
         println!("history");
         for line in &run.history {
-            println!("  {line}");
+            println!("  {}", printable(line));
         }
     }
     let checkpoint = slipfront::checkpoint::path_for(path);
@@ -170,6 +170,20 @@ pub fn events_csv(path: &Path, quiet_gap: f64) -> anyhow::Result<ExitCode> {
         );
     }
     Ok(ExitCode::SUCCESS)
+}
+
+/// `text` with control characters (terminal escape sequences among them)
+/// shown as escapes instead of sent to the terminal.
+fn printable(text: &str) -> String {
+    text.chars()
+        .flat_map(|c| {
+            if c.is_control() {
+                c.escape_default().collect::<Vec<_>>()
+            } else {
+                vec![c]
+            }
+        })
+        .collect()
 }
 
 /// The unit of a metadata value.

@@ -26,9 +26,50 @@ pub struct RunArgs {
     pub resume: Option<PathBuf>,
     /// Branch from this checkpoint (or run file).
     pub from: Option<PathBuf>,
+    /// Replace an existing output file.
+    pub force: bool,
+}
+
+/// The same file (both exist and resolve to one path).
+fn same_file(a: &Path, b: &Path) -> bool {
+    match (a.canonicalize(), b.canonicalize()) {
+        (Ok(x), Ok(y)) => x == y,
+        _ => false,
+    }
 }
 
 impl RunArgs {
+    /// A new run's output: never one of its inputs; an existing file only
+    /// with --force; a previous run's checkpoints beside it removed, so a
+    /// later --resume cannot take one of them for this run's.
+    fn claim_output(&self, inputs: &[&Path]) -> anyhow::Result<()> {
+        let Some(out) = &self.output else {
+            return Ok(());
+        };
+        if let Some(input) = inputs.iter().find(|i| same_file(out, i)) {
+            anyhow::bail!(
+                "-o {}: that is an input of this run ({}); choose another output file",
+                out.display(),
+                input.display()
+            );
+        }
+        if out.exists() && !self.force {
+            anyhow::bail!(
+                "`{}` exists: continue it with `slipfront run --resume {}`, or replace it \
+                 with --force",
+                out.display(),
+                out.display()
+            );
+        }
+        for stale in Checkpoint::candidates(out) {
+            let _ = std::fs::remove_file(&stale);
+        }
+        let mut prev = path_for(out).into_os_string();
+        prev.push(".prev");
+        let _ = std::fs::remove_file(PathBuf::from(prev));
+        Ok(())
+    }
+
     /// `--set` items with `--t-end` and `--fast-forward` folded in.
     fn overrides(&self) -> Vec<String> {
         let mut set = self.set.clone();
@@ -42,6 +83,15 @@ impl RunArgs {
     }
 
     fn engine(&self, model: &Model, precision: Precision) -> anyhow::Result<Box<dyn Engine>> {
+        let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+        if self.threads > 4 * cores {
+            anyhow::bail!(
+                "--threads {}: at most {} on this machine (4 × its {cores} cores; 0 takes \
+                 them all)",
+                self.threads,
+                4 * cores
+            );
+        }
         let gpu = GpuOptions {
             path: self.gpu_path,
             ..GpuOptions::default()
@@ -65,6 +115,7 @@ pub fn run(a: RunArgs) -> anyhow::Result<ExitCode> {
     }
     let (scenario, name) = super::load_scenario(a.scenario.as_deref(), &a.overrides())?;
     let model = Model::from_scenario(&scenario, a.allow_unstable)?;
+    a.claim_output(&a.scenario.iter().map(PathBuf::as_path).collect::<Vec<_>>())?;
     let precision = a.precision.unwrap_or(match a.backend {
         Backend::Cpu | Backend::CpuReference => Precision::F64,
         _ => Precision::F32,
@@ -243,8 +294,10 @@ fn resume(mut a: RunArgs) -> anyhow::Result<ExitCode> {
         ckpt.header.time,
         engine.describe()
     );
-    if a.output.is_none() {
-        a.output = Some(file.clone());
+    match &a.output {
+        None => a.output = Some(file.clone()),
+        Some(out) if !same_file(out, &file) => a.claim_output(&[&file, &used])?,
+        Some(_) => {}
     }
     let start = StartFrom {
         runner: ckpt.header.runner.clone(),
@@ -274,6 +327,10 @@ fn branch_run(a: RunArgs) -> anyhow::Result<ExitCode> {
         ),
     };
     let child_model = Model::from_scenario(&child, a.allow_unstable)?;
+    let mut inputs = vec![ckpt_path.as_path()];
+    inputs.extend(a.scenario.as_deref());
+    inputs.extend(ckpt.header.output.as_deref());
+    a.claim_output(&inputs)?;
     let step = ckpt.header.step;
     let changes =
         branch::check(&parent, &parent_model, &child, &child_model, step).map_err(|refusals| {

@@ -42,9 +42,12 @@ const STORAGE_BINDINGS: u32 = 13;
 
 /// Lists the adapters with Vulkan/Metal/DX12 support, hardware first.
 pub fn adapters() -> Vec<wgpu::Adapter> {
-    let instance =
-        wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
-    let mut list = pollster::block_on(instance.enumerate_adapters(wgpu::Backends::all()));
+    // Without GL: its adapters are never used here, and starting EGL makes
+    // Mesa warn about XDG_RUNTIME_DIR on every headless run.
+    let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
+    desc.backends = wgpu::Backends::PRIMARY;
+    let instance = wgpu::Instance::new(desc.with_env());
+    let mut list = pollster::block_on(instance.enumerate_adapters(wgpu::Backends::PRIMARY));
     list.retain(|a| a.get_info().backend != wgpu::Backend::Gl);
     let rank = |a: &wgpu::Adapter| match a.get_info().device_type {
         wgpu::DeviceType::DiscreteGpu => 0,

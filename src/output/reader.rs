@@ -45,6 +45,7 @@ impl RunFile {
         let mut run = RunFile::default();
         let mut topics: HashMap<u16, String> = HashMap::new();
         let mut saw_footer = false;
+        let mut saw_slipfront = false;
         for record in reader {
             let record = match record {
                 Ok(r) => r,
@@ -57,7 +58,10 @@ impl RunFile {
                 Record::Channel(c) => {
                     topics.insert(c.id, c.topic);
                 }
-                Record::Metadata(m) if m.name == "slipfront" => run.metadata = m.metadata,
+                Record::Metadata(m) if m.name == "slipfront" => {
+                    saw_slipfront = true;
+                    run.metadata = m.metadata
+                }
                 Record::Metadata(m) if m.name == "slipfront_history" => {
                     run.history = m.metadata.into_values().collect()
                 }
@@ -87,6 +91,13 @@ impl RunFile {
             }
         }
         run.truncated |= !saw_footer;
+        if !saw_slipfront {
+            return Err(fail(
+                "not a slipfront run file (an MCAP file without the `slipfront` metadata \
+                 record)"
+                    .into(),
+            ));
+        }
         Ok(run)
     }
 
