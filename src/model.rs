@@ -115,12 +115,19 @@ pub struct StabilityLimit {
     pub interface: f64,
     /// Relaxation phase (extra absolute damping).
     pub relaxation: f64,
+    /// The block the side spring pulls (its stiffness on top of the
+    /// lattice's, and the interface's when it is in row 0); infinite
+    /// without a side spring.
+    pub driven: f64,
 }
 
 impl StabilityLimit {
     /// The binding limit.
     pub fn min(&self) -> f64 {
-        self.bulk.min(self.interface).min(self.relaxation)
+        self.bulk
+            .min(self.interface)
+            .min(self.relaxation)
+            .min(self.driven)
     }
 }
 
@@ -290,6 +297,7 @@ impl Model {
                     "interface block with foundation and junctions",
                 ),
                 (lim.relaxation, "normal-load relaxation damping"),
+                (lim.driven, "the block the side spring pulls"),
             ]
             .into_iter()
             .fold((f64::INFINITY, ""), |a, b| if b.0 < a.0 { b } else { a });
@@ -415,6 +423,13 @@ impl Model {
             bulk: bound(lattice, dashpots),
             interface: bound(interface_k, dashpots),
             relaxation: bound(interface_k.max(lattice), dashpots + self.relax_eta),
+            driven: match self.driver {
+                Driver::SideSpring { stiffness, row, .. } => {
+                    let base = if row == 0 { interface_k } else { lattice };
+                    bound(base + stiffness, dashpots)
+                }
+                _ => f64::INFINITY,
+            },
         }
     }
 

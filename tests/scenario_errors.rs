@@ -106,10 +106,24 @@ fn time_step_above_stability_limit_is_refused_with_the_limit() {
 
 #[test]
 fn every_shipped_scenario_is_valid() {
-    for entry in std::fs::read_dir(concat!(env!("CARGO_MANIFEST_DIR"), "/scenarios")).unwrap() {
+    let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/scenarios");
+    let mut scenes = 0;
+    for entry in std::fs::read_dir(dir).unwrap() {
         let path = entry.unwrap().path();
+        if path.extension().is_none_or(|e| e != "toml") {
+            continue;
+        }
         let s = Scenario::load(&path, &[]).unwrap_or_else(|e| panic!("{e}"));
         Model::from_scenario(&s, false).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        scenes += 1;
+    }
+    assert!(scenes >= 3);
+    // Sweep files: every point of each valid.
+    for entry in std::fs::read_dir(format!("{dir}/sweeps")).unwrap() {
+        let path = entry.unwrap().path();
+        let sweep = slipfront::sweep::Sweep::load(&path)
+            .unwrap_or_else(|p| panic!("{}: {}", path.display(), p.join("; ")));
+        assert!(!sweep.points.is_empty());
     }
 }
 

@@ -100,6 +100,32 @@ fn empirical_stability_limit_with_stiff_junctions_matches_the_bound() {
     assert!((1.0..1.6).contains(&ratio), "ratio {ratio}");
 }
 
+#[test]
+fn empirical_stability_limit_of_a_stiff_side_spring_matches_the_bound() {
+    // K = 1e10 N/m, ~120× the lattice's 6k: the pulled block sets the
+    // limit (check used to call this scene stable, and it blew up).
+    let s = small(&[
+        "loading.drive.stiffness=1e10",
+        "loading.normal.relax_time=0",
+        "time.end=2e-3",
+    ]);
+    let m = Model::from_scenario(&s, true).unwrap();
+    let lim = m.stability_limit();
+    assert_eq!(lim.min(), lim.driven);
+    assert!(matches!(
+        Model::from_scenario(&s, false),
+        Err(ModelError::Unstable { which, .. }) if which.contains("side spring")
+    ));
+    let steps = m.prep_steps + 4000;
+    let analytic = lim.driven;
+    let found = largest_stable_dt(&s, 0.5 * analytic, 4.0 * analytic, steps);
+    let ratio = found / analytic;
+    println!(
+        "stiff side spring: empirical {found:.4e} s, analytic {analytic:.4e} s, ratio {ratio:.3}"
+    );
+    assert!((1.0..1.6).contains(&ratio), "ratio {ratio}");
+}
+
 /// Runs a stress scene: it must be refused with the stability limit, run
 /// stably, or stop with the blow-up error; never produce NaN silently.
 fn stress(name: &str, extra: &[&str]) {

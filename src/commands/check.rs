@@ -75,6 +75,7 @@ pub fn check(scenario: Option<PathBuf>, set: &[String], json: bool) -> anyhow::R
             "bulk": lim.bulk,
             "interface": lim.interface,
             "relaxation": lim.relaxation,
+            "driven_block": if lim.driven.is_finite() { serde_json::json!(lim.driven) } else { serde_json::Value::Null },
             "binding": lim.min(),
         },
         "stable": stable,
@@ -126,12 +127,17 @@ pub fn check(scenario: Option<PathBuf>, set: &[String], json: bool) -> anyhow::R
             m.period / m.dt
         );
         println!(
-            "stability       dt <= {:.4e} s (bulk undamped {:.4e}, bulk {:.4e}, interface {:.4e}, relaxation {:.4e}): {}",
+            "stability       dt <= {:.4e} s (bulk undamped {:.4e}, bulk {:.4e}, interface {:.4e}, relaxation {:.4e}{}): {}",
             lim.min(),
             lim.bulk_undamped,
             lim.bulk,
             lim.interface,
             lim.relaxation,
+            if lim.driven.is_finite() {
+                format!(", side-spring block {:.4e}", lim.driven)
+            } else {
+                String::new()
+            },
             if stable { "stable" } else { "UNSTABLE" }
         );
         println!(
