@@ -11,17 +11,9 @@ use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
-/// The small side-driven scene, driven fast enough that junctions break
-/// from 0.6 ms on.
-const SCENE: [&str; 7] = [
-    "geometry.nx=29",
-    "geometry.nz=16",
-    "geometry.length=0.07",
-    "geometry.height=0.0375",
-    "loading.normal.ramp_time=2e-4",
-    "loading.normal.relax_time=3e-4",
-    "loading.drive.velocity=0.2",
-];
+/// The small side-driven scene (`verify::SMALL_SCENE`), driven fast
+/// enough that junctions break from 0.6 ms on.
+const DRIVE: &str = "loading.drive.velocity=0.2";
 
 fn dir(name: &str) -> PathBuf {
     let d = std::env::temp_dir().join(format!("slipfront-ckpt-{}-{name}", std::process::id()));
@@ -38,8 +30,9 @@ fn command(args: &[&str], extra: &[String]) -> Command {
 }
 
 fn scene_args(more: &[&str]) -> Vec<String> {
-    SCENE
+    slipfront::verify::SMALL_SCENE
         .iter()
+        .chain(&[DRIVE])
         .chain(more)
         .flat_map(|s| ["--set".to_string(), s.to_string()])
         .collect()

@@ -61,12 +61,10 @@ impl RunArgs {
                 out.display()
             );
         }
+        // The run's checkpoint, the one before it, the loaded slider's.
         for stale in Checkpoint::candidates(out) {
             let _ = std::fs::remove_file(&stale);
         }
-        let mut prev = path_for(out).into_os_string();
-        prev.push(".prev");
-        let _ = std::fs::remove_file(PathBuf::from(prev));
         Ok(())
     }
 

@@ -20,7 +20,7 @@ pub(super) struct Checkpointer {
     last: Instant,
     scenario: String,
     /// The run file (absolute), named in the checkpoint.
-    output: Option<PathBuf>,
+    output: PathBuf,
     history: Vec<String>,
     pub written: u64,
 }
@@ -33,7 +33,7 @@ impl Checkpointer {
             interval: (every > 0.0).then(|| Duration::from_secs_f64(every)),
             last: Instant::now(),
             scenario: scenario.to_toml(),
-            output: Some(std::path::absolute(&output).unwrap_or(output.clone())),
+            output: std::path::absolute(&output).unwrap_or(output.clone()),
             output_path: output,
             history,
             written: 0,
@@ -96,7 +96,7 @@ impl Checkpointer {
             blocks: model.n_blocks(),
             nx: model.nx,
             junctions: model.n_junctions(),
-            output: self.output.clone(),
+            output: Some(self.output.clone()),
             runner,
             solver_factor_shape,
             history: self.history.clone(),

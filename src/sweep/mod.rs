@@ -213,51 +213,43 @@ fn run_point(
                 ..RunOptions::default()
             },
         )?;
-        Ok(summary)
+        // The scene's steps (a shared normal-load phase counts).
+        Ok((summary, model.total_steps()))
     })();
-    let wall = started.elapsed().as_secs_f64();
-    let outcome_fields = crate::sweep::table::OUTCOMES.len() - 5;
-    let blank = |n: usize| vec![String::new(); n];
+    let wall = format!("{:.3}", started.elapsed().as_secs_f64());
+    // A run without outcomes: its status and message, blank outcomes, and
+    // the wall time in the last column.
+    let without_outcomes = |row: &mut Vec<String>, status: &str, message: String| {
+        row.extend([status.to_string(), message]);
+        row.resize(header_len - 1, String::new());
+        row.push(wall.clone());
+    };
     match result {
-        Ok(s) if s.interrupted => return None,
-        Ok(s) => match RunFile::read(&mcap) {
+        Ok((s, _)) if s.interrupted => return None,
+        Ok((s, steps)) => match RunFile::read(&mcap) {
             Ok(run) => {
                 row.extend(["ok".to_string(), String::new()]);
                 row.extend(outcomes::analyse(&run));
-                // The scene's steps (a shared normal-load phase counts).
-                let steps = Model::from_scenario(&p.scenario, false).map_or(0, |m| m.total_steps());
                 row.extend([
                     format!("{:e}", s.peak_drive_ratio),
                     steps.to_string(),
-                    format!("{wall:.3}"),
+                    wall.clone(),
                 ]);
             }
-            Err(e) => {
-                row.extend(["failed".to_string(), e.to_string()]);
-                row.extend(blank(outcome_fields + 2));
-                row.push(format!("{wall:.3}"));
-            }
+            Err(e) => without_outcomes(&mut row, "failed", e.to_string()),
         },
         Err(e) => {
             let status = match e {
                 RunError::Engine(EngineError::BlowUp { .. }) => "blew_up",
                 _ => "failed",
             };
-            row.extend([status.to_string(), e.to_string()]);
-            row.extend(blank(outcome_fields + 2));
-            row.push(format!("{wall:.3}"));
+            without_outcomes(&mut row, status, e.to_string());
         }
     }
     if !keep {
-        for f in [
-            mcap.clone(),
-            crate::checkpoint::path_for(&mcap),
-            PathBuf::from(format!(
-                "{}.prev",
-                crate::checkpoint::path_for(&mcap).display()
-            )),
-            crate::checkpoint::loaded_path_for(&mcap),
-        ] {
+        let mut files = crate::checkpoint::Checkpoint::candidates(&mcap);
+        files.push(mcap.clone());
+        for f in files {
             let _ = std::fs::remove_file(f);
         }
     }
