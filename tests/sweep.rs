@@ -291,3 +291,42 @@ fn a_slurm_job_array_gives_the_local_table() {
         table(&local.join("summary.csv"))
     );
 }
+
+/// Nonsense in the new options and files is refused, naming the field.
+#[test]
+fn bad_sweep_input_is_refused_with_the_field_named() {
+    let d = dir("bad");
+    let file = sweep_file(&d, "");
+    let f = s(&file);
+    for (args, expect) in [
+        (vec!["sweep", f, "--shard", "3/2"], "--shard 3/2"),
+        (vec!["sweep", f, "--mcap", "some"], "--mcap some"),
+        (
+            vec!["run", "--set", "output.checkpoint_interval=-1"],
+            "output.checkpoint_interval",
+        ),
+    ] {
+        let out = slipfront(&args);
+        assert_eq!(out.status.code(), Some(2), "{args:?}");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains(expect), "{args:?}: {err}");
+    }
+    let bad = d.join("bad.toml");
+    for (text, expect) in [
+        ("colour = 1\n[axes]\n\"time.seed\" = [1]\n", "unknown field `colour`"),
+        (
+            "[axes]\n\"loading.drive.velocity\" = { from = 0.0, to = 1.0, count = 3, scale = \"log\" }\n",
+            "axes.\"loading.drive.velocity\": a log range needs from > 0",
+        ),
+        (
+            "combine = \"zip\"\n[axes]\n\"time.seed\" = [1, 2]\n\"time.end\" = [0.1]\n",
+            "combine = \"zip\" needs axes of one length",
+        ),
+    ] {
+        std::fs::write(&bad, text).unwrap();
+        let out = slipfront(&["sweep", s(&bad), "--dry-run"]);
+        assert_eq!(out.status.code(), Some(2), "{text}");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains(expect), "{text}: {err}");
+    }
+}
