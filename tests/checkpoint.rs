@@ -74,12 +74,15 @@ fn assert_same_records(a: &RunFile, b: &RunFile) {
     );
 }
 
-/// Waits until the run has written a checkpoint after the one at the start
-/// of driving (`.prev` then exists), then kills it with `signal`.
+/// Waits until the run has written a second checkpoint in the driving
+/// phase (`.prev` exists and the newest is past the normal-load phase: a
+/// loaded machine may checkpoint during that phase too), then kills it
+/// with `signal`.
 fn stop_midway(mut child: Child, ckpt: &Path, signal: i32) -> std::process::Output {
     let prev = PathBuf::from(format!("{}.prev", ckpt.display()));
+    let driving = |c: &Checkpoint| c.header.time > 0.0;
     let started = Instant::now();
-    while !prev.exists() {
+    while !(prev.exists() && Checkpoint::read(ckpt).is_ok_and(|c| driving(&c))) {
         assert!(
             child.try_wait().unwrap().is_none(),
             "the run ended before its second checkpoint: the test would be vacuous"
