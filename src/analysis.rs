@@ -270,6 +270,29 @@ impl InterfaceSeries {
     }
 }
 
+/// Blocks per front-speed window, for `info` and the figures alike.
+pub const FRONT_WINDOW: usize = 3;
+
+impl InterfaceSeries {
+    /// (front speed, slip speed behind the tip) over every window of every
+    /// event, the crossings [`slip_front_relation`] fits.
+    pub fn slip_front_pairs(&self, events: &[Event], w: usize) -> Vec<(f64, f64)> {
+        events
+            .iter()
+            .flat_map(|e| {
+                // Same windows, so the pairs line up one to one.
+                let speeds = self.front_speed(e, w);
+                let slip = self.slip_speed_behind_tip(e, w);
+                speeds
+                    .iter()
+                    .zip(&slip)
+                    .map(|(f, s)| (f.1, s.1))
+                    .collect::<Vec<_>>()
+            })
+            .collect()
+    }
+}
+
 /// Front speeds above this count as fast (m/s).
 pub const FAST_FRONT: f64 = 100.0;
 /// Front speeds below this count as slow (m/s).
@@ -321,6 +344,8 @@ pub struct SlipFrontRelation {
     pub exponent: f64,
     /// Correlation of ln v_slip with ln v_front.
     pub correlation: f64,
+    /// c of the least-squares line v_slip = c·v_front^exponent.
+    pub prefactor: f64,
     pub points: usize,
 }
 
@@ -347,6 +372,7 @@ pub fn slip_front_relation(pairs: &[(f64, f64)]) -> Option<SlipFrontRelation> {
         alpha,
         exponent: cov / vf.max(1e-300),
         correlation: cov / (vf * vs).sqrt().max(1e-300),
+        prefactor: (ms - mf * cov / vf.max(1e-300)).exp(),
         points: p.len(),
     })
 }

@@ -89,15 +89,33 @@ enum Command {
         #[arg(long, default_value_t = DEFAULT_QUIET_GAP, value_parser = parse_quiet_gap)]
         quiet_gap: f64,
     },
-    /// Write PNGs of a run: space–time map, loading curve, front speed.
+    /// Figures of a run (PNG or SVG): space–time maps of the pinned
+    /// fraction, τ/p and slip speed, the loading curve, front speed and
+    /// tip, precursors, slip histories and profiles, slip against front
+    /// speed.
     Plot {
         file: PathBuf,
-        /// Folder for the PNGs (default: beside the run file).
+        /// Folder for the figures (default: beside the run file).
         #[arg(short = 'o', long)]
         out_dir: Option<PathBuf>,
-        /// Also write the space–time map of event N alone (see `info`).
+        /// Figures to draw, comma-separated (default: all).
+        #[arg(long, value_enum, value_delimiter = ',')]
+        kind: Vec<commands::plot::PlotKind>,
+        /// Also draw event N alone (maps and front speed; numbers as in `info`).
         #[arg(long)]
         event: Option<usize>,
+        /// Positions (mm) for the slip history, comma-separated (default:
+        /// five spread from edge to edge).
+        #[arg(long, value_delimiter = ',', allow_negative_numbers = true)]
+        at: Vec<f64>,
+        #[arg(long, value_enum, default_value = "png")]
+        format: slipfront::plot::Format,
+        /// Size in pixels at 100 dpi, WIDTHxHEIGHT.
+        #[arg(long, default_value = "900x600", value_parser = slipfront::plot::FigureOptions::parse_size)]
+        size: (u32, u32),
+        /// Density: scales pixels, fonts and lines together (300 for print).
+        #[arg(long, default_value_t = 100)]
+        dpi: u32,
         /// Ruptures less than this many seconds apart belong to one event.
         #[arg(long, default_value_t = DEFAULT_QUIET_GAP, value_parser = parse_quiet_gap)]
         quiet_gap: f64,
@@ -241,9 +259,27 @@ fn main() -> ExitCode {
         Command::Plot {
             file,
             out_dir,
+            kind,
             event,
+            at,
+            format,
+            size,
+            dpi,
             quiet_gap,
-        } => commands::plot::plot(&file, out_dir, event, quiet_gap),
+        } => commands::plot::plot(commands::plot::PlotArgs {
+            file,
+            out_dir,
+            kinds: kind,
+            event,
+            at,
+            options: slipfront::plot::FigureOptions {
+                format,
+                width: size.0,
+                height: size.1,
+                dpi,
+            },
+            quiet_gap,
+        }),
         Command::Verify {
             backend,
             precision,

@@ -1,4 +1,5 @@
-use slipfront::analysis::Event;
+use super::printable;
+use slipfront::analysis::{Event, FRONT_WINDOW};
 use slipfront::output::reader::RunFile;
 use slipfront::precursors::PrecursorSequence;
 use std::path::Path;
@@ -59,13 +60,8 @@ pub fn info(path: &Path, quiet_gap: f64) -> anyhow::Result<ExitCode> {
     );
     let ratio_at = |t: f64| run.drive_ratio_at(t);
     println!("  #    start (s)     end (s)       kind     length (m)  from (m)    slip (m)    F/F_N   front           v_front (m/s) min..max");
-    let mut pairs = Vec::new();
     for (n, e) in events.iter().enumerate() {
         let row = EventRow::new(&series, e, ratio_at(e.start));
-        // Same windows, so the pairs line up one to one.
-        let speeds = series.front_speed(e, FRONT_WINDOW);
-        let slip = series.slip_speed_behind_tip(e, FRONT_WINDOW);
-        pairs.extend(speeds.iter().zip(&slip).map(|(f, s)| (f.1, s.1)));
         println!(
             "  {n:<4} {:<13.6e} {:<13.6e} {:<8} {:<11.4e} {:<11.4e} {:<11.4e} {:<7.4} {:<15} {}",
             e.start,
@@ -83,6 +79,7 @@ pub fn info(path: &Path, quiet_gap: f64) -> anyhow::Result<ExitCode> {
         &PrecursorSequence::from_events(&events, series.spacing, |e| ratio_at(e.start)),
         series.spacing,
     );
+    let pairs = series.slip_front_pairs(&events, FRONT_WINDOW);
     if let Some(fit) = slipfront::analysis::slip_front_relation(&pairs) {
         println!(
             "slip speed vs front speed: v_slip = {:.3e} v_front; fitted v_slip ∝ v_front^{:.2} (1: proportional), log-log correlation {:.3}, {} crossings",
@@ -98,9 +95,6 @@ pub fn info(path: &Path, quiet_gap: f64) -> anyhow::Result<ExitCode> {
     }
     Ok(ExitCode::SUCCESS)
 }
-
-/// Blocks per front-speed window.
-const FRONT_WINDOW: usize = 3;
 
 /// One event as `info` reports it.
 struct EventRow {
@@ -170,20 +164,6 @@ pub fn events_csv(path: &Path, quiet_gap: f64) -> anyhow::Result<ExitCode> {
         );
     }
     Ok(ExitCode::SUCCESS)
-}
-
-/// `text` with control characters (terminal escape sequences among them)
-/// shown as escapes instead of sent to the terminal.
-fn printable(text: &str) -> String {
-    text.chars()
-        .flat_map(|c| {
-            if c.is_control() {
-                c.escape_default().collect::<Vec<_>>()
-            } else {
-                vec![c]
-            }
-        })
-        .collect()
 }
 
 /// The unit of a metadata value.

@@ -18,3 +18,17 @@ pub fn load_scenario(path: Option<&Path>, set: &[String]) -> anyhow::Result<(Sce
         ),
     })
 }
+
+/// `text` with control characters (terminal escape sequences among them)
+/// shown as escapes instead of sent to the terminal.
+pub fn printable(text: &str) -> String {
+    text.chars()
+        .flat_map(|c| {
+            if c.is_control() {
+                c.escape_default().collect::<Vec<_>>()
+            } else {
+                vec![c]
+            }
+        })
+        .collect()
+}

@@ -216,7 +216,21 @@ pub fn plot(
         anyhow::bail!("no ok rows with numbers in `{x}` and `{y}`");
     }
     let file = dir.join(format!("plot_{}_vs_{}.png", y, x).replace(['/', ' '], "_"));
-    slipfront::plot::scatter(&points, log_y).save(&file)?;
+    let title = format!("{y} against {x}");
+    slipfront::plot::write(
+        &slipfront::plot::scatter::Scatter {
+            points: &points,
+            groups: &groups,
+            group_label: color.unwrap_or(""),
+            x_label: x,
+            y_label: y,
+            log_y,
+            title: &title,
+        },
+        &file,
+        &slipfront::plot::FigureOptions::default(),
+        &dir.display().to_string(),
+    )?;
     println!("{}", file.display());
     const COLOURS: [&str; 6] = ["black", "red", "blue", "green", "orange", "purple"];
     println!(

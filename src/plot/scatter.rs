@@ -1,0 +1,219 @@
+//! Plots of tables: an outcome against a swept key (sweeps), and error
+//! against run time (the work–precision benchmark).
+
+use super::colour::legend_line;
+use super::colour::PALETTE;
+use super::figure::{extent, log_tick, tick, Drawn, Figure, Style};
+use plotters::coord::Shift;
+use plotters::prelude::*;
+
+/// Points (x, y, group) with one colour per group and a legend.
+pub struct Scatter<'a> {
+    pub points: &'a [(f64, f64, usize)],
+    pub groups: &'a [String],
+    /// Column the groups come from, for the legend.
+    pub group_label: &'a str,
+    pub x_label: &'a str,
+    pub y_label: &'a str,
+    pub log_y: bool,
+    pub title: &'a str,
+}
+
+impl Scatter<'_> {
+    fn padded(lo: f64, hi: f64) -> (f64, f64) {
+        let pad = 0.05 * (hi - lo).max(1e-12 * hi.abs().max(1.0));
+        (lo - pad, hi + pad)
+    }
+}
+
+impl Figure for Scatter<'_> {
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>, style: &Style) -> Drawn
+    where
+        DB::ErrorType: 'static,
+    {
+        let pts: Vec<(f64, f64, usize)> = self
+            .points
+            .iter()
+            .copied()
+            .filter(|p| p.0.is_finite() && p.1.is_finite() && (!self.log_y || p.1 > 0.0))
+            .collect();
+        anyhow::ensure!(!pts.is_empty(), "no finite points to plot");
+        let (x0, x1) = extent(pts.iter().map(|p| p.0)).expect("non-empty");
+        let (x0, x1) = Self::padded(x0, x1);
+        let (y0, y1) = extent(pts.iter().map(|p| p.1)).expect("non-empty");
+        let mut builder = ChartBuilder::on(root);
+        builder
+            .caption(style.title(self.title), style.title_font())
+            .margin(style.px(14.0))
+            .x_label_area_size(style.px(48.0))
+            .y_label_area_size(style.px(80.0));
+        let r = style.px(3.5) as i32;
+        let xspan = x1 - x0;
+        macro_rules! finish {
+            ($chart:expr, $yfmt:expr) => {{
+                let mut chart = $chart;
+                chart
+                    .configure_mesh()
+                    .light_line_style(RGBColor(240, 240, 240))
+                    .bold_line_style(RGBColor(220, 220, 220))
+                    .x_desc(self.x_label)
+                    .y_desc(self.y_label)
+                    .x_label_formatter(&|v| tick(*v, xspan))
+                    .y_label_formatter($yfmt)
+                    .label_style(style.tick_font())
+                    .axis_desc_style(style.label_font())
+                    .draw()?;
+                for (g, name) in self.groups.iter().enumerate() {
+                    let colour = PALETTE[g % PALETTE.len()];
+                    let series = chart.draw_series(
+                        pts.iter()
+                            .filter(|p| p.2 == g)
+                            .map(|p| Circle::new((p.0, p.1), r, colour.mix(0.75).filled())),
+                    )?;
+                    if self.groups.len() > 1 || !name.is_empty() {
+                        series
+                            .label(format!("{} = {name}", self.group_label))
+                            .legend(move |(x, y)| Circle::new((x + 9, y), r, colour.filled()));
+                    }
+                }
+                if self.groups.len() > 1 || self.groups.iter().any(|g| !g.is_empty()) {
+                    chart
+                        .configure_series_labels()
+                        .label_font(style.tick_font())
+                        .background_style(WHITE.mix(0.85))
+                        .border_style(BLACK)
+                        .draw()?;
+                }
+            }};
+        }
+        if self.log_y {
+            let (a, b) = (
+                10f64.powf(y0.log10().floor()),
+                10f64
+                    .powf(y1.log10().ceil())
+                    .max(10f64.powf(y0.log10().floor() + 1.0)),
+            );
+            finish!(
+                builder.build_cartesian_2d(x0..x1, (a..b).log_scale())?,
+                &|v: &f64| log_tick(*v)
+            );
+        } else {
+            let (a, b) = Self::padded(y0, y1);
+            let span = b - a;
+            finish!(builder.build_cartesian_2d(x0..x1, a..b)?, &|v: &f64| tick(
+                *v, span
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// One measured point of the work–precision benchmark.
+#[derive(Debug, Clone, PartialEq)]
+pub struct WorkPoint {
+    pub observable: String,
+    pub engine: String,
+    /// Time step as a fraction of the oscillation period.
+    pub fraction: f64,
+    pub seconds: f64,
+    pub error: f64,
+}
+
+/// One log–log panel per observable: error against run time, one line per
+/// engine, points labelled with their time step.
+pub struct WorkPrecision<'a> {
+    pub points: &'a [WorkPoint],
+}
+
+impl Figure for WorkPrecision<'_> {
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>, style: &Style) -> Drawn
+    where
+        DB::ErrorType: 'static,
+    {
+        let mut observables: Vec<&str> = Vec::new();
+        let mut engines: Vec<&str> = Vec::new();
+        for p in self.points.iter().filter(|p| p.error > 0.0) {
+            if !observables.contains(&p.observable.as_str()) {
+                observables.push(&p.observable);
+            }
+            if !engines.contains(&p.engine.as_str()) {
+                engines.push(&p.engine);
+            }
+        }
+        anyhow::ensure!(!observables.is_empty(), "no point with a positive error");
+        let root = root.titled(
+            &style.title("Work–precision: error against run time"),
+            style.title_font(),
+        )?;
+        let panels = root.split_evenly((1, observables.len()));
+        for (panel, obs) in panels.iter().zip(&observables) {
+            let pts: Vec<&WorkPoint> = self
+                .points
+                .iter()
+                .filter(|p| p.observable == *obs && p.error > 0.0 && p.seconds > 0.0)
+                .collect();
+            let decade = |(lo, hi): (f64, f64)| {
+                (
+                    10f64.powf(lo.log10().floor()),
+                    10f64
+                        .powf(hi.log10().ceil())
+                        .max(10f64.powf(lo.log10().floor() + 1.0)),
+                )
+            };
+            let xr = decade(extent(pts.iter().map(|p| p.seconds)).unwrap_or((0.1, 1.0)));
+            let yr = decade(extent(pts.iter().map(|p| p.error)).unwrap_or((1e-6, 1.0)));
+            let mut chart = ChartBuilder::on(panel)
+                .caption(*obs, style.label_font())
+                .margin(style.px(10.0))
+                .margin_right(style.px(30.0))
+                .x_label_area_size(style.px(44.0))
+                .y_label_area_size(style.px(64.0))
+                .build_cartesian_2d((xr.0..xr.1).log_scale(), (yr.0..yr.1).log_scale())?;
+            chart
+                .configure_mesh()
+                .light_line_style(RGBColor(240, 240, 240))
+                .bold_line_style(RGBColor(220, 220, 220))
+                .x_desc("run time (s)")
+                .y_desc("relative error")
+                .x_label_formatter(&|v| log_tick(*v))
+                .y_label_formatter(&|v| log_tick(*v))
+                .label_style(style.tick_font())
+                .axis_desc_style(style.label_font())
+                .draw()?;
+            for (k, engine) in engines.iter().enumerate() {
+                let colour = PALETTE[k % PALETTE.len()];
+                let mut line: Vec<(f64, f64)> = pts
+                    .iter()
+                    .filter(|p| p.engine == *engine)
+                    .map(|p| (p.seconds, p.error))
+                    .collect();
+                line.sort_by(|a, b| a.0.total_cmp(&b.0));
+                chart
+                    .draw_series(LineSeries::new(
+                        line.clone(),
+                        colour.stroke_width(style.px(1.5)),
+                    ))?
+                    .label(*engine)
+                    .legend(legend_line(colour, style));
+                chart.draw_series(
+                    line.iter()
+                        .map(|&p| Circle::new(p, style.px(3.0) as i32, colour.filled())),
+                )?;
+                chart.draw_series(pts.iter().filter(|p| p.engine == *engine).map(|p| {
+                    Text::new(
+                        format!("T/{:.0}", 1.0 / p.fraction),
+                        (p.seconds * 1.08, p.error * 1.15),
+                        style.font(9.5).color(&colour),
+                    )
+                }))?;
+            }
+            chart
+                .configure_series_labels()
+                .label_font(style.tick_font())
+                .background_style(WHITE.mix(0.85))
+                .border_style(BLACK)
+                .draw()?;
+        }
+        Ok(())
+    }
+}
