@@ -4,8 +4,9 @@
 //!   b. the single-block Amontons–Coulomb trajectory against the exact solution,
 //!   c. the first full sliding event of a side-driven 29 × 16 lattice (time
 //!      and loading-curve peak) against an f64 run at T/800.
-//! Prints a Markdown table and writes an SVG log-log plot (error against run
-//! time) to the path given by SLIPFRONT_PLOT (default work_precision.svg).
+//! Prints a Markdown table and writes log-log plots (error against run time;
+//! SVG or PNG by extension) to the path given by SLIPFRONT_PLOT (default
+//! work_precision.svg). SLIPFRONT_REPLOT=CSV redraws them from saved data.
 
 use slipfront::backend::{make_engine, Backend, Precision};
 use slipfront::observables::{first_full_sliding, FirstEvent};
@@ -29,13 +30,7 @@ fn first_event(engine: &mut dyn Engine) -> Result<FirstEvent, String> {
         .ok_or_else(|| "no full sliding event".to_string())
 }
 
-struct Point {
-    observable: &'static str,
-    engine: String,
-    fraction: f64,
-    seconds: f64,
-    error: f64,
-}
+use slipfront::plot::scatter::{WorkPoint as Point, WorkPrecision};
 
 /// Points from a CSV written by an earlier run (observable,engine,fraction,seconds,error).
 fn read_csv(path: &str) -> Vec<Point> {
@@ -54,7 +49,8 @@ fn read_csv(path: &str) -> Vec<Point> {
                 observable: observables
                     .iter()
                     .find(|o| o.starts_with(f[0]))
-                    .expect("observable"),
+                    .expect("observable")
+                    .to_string(),
                 engine: f[1].to_string(),
                 fraction: f[2].parse().unwrap(),
                 seconds: f[3].parse().unwrap(),
@@ -66,8 +62,23 @@ fn read_csv(path: &str) -> Vec<Point> {
 
 fn write_outputs(points: &[Point]) {
     let path = std::env::var("SLIPFRONT_PLOT").unwrap_or("work_precision.svg".into());
-    std::fs::write(&path, svg(points)).expect("write plot");
-    let csv_path = path.replace(".svg", ".csv");
+    let options = slipfront::plot::FigureOptions {
+        format: slipfront::plot::Format::from_path(std::path::Path::new(&path)).expect("format"),
+        width: 1350,
+        height: 480,
+        dpi: 100,
+    };
+    slipfront::plot::write(
+        &WorkPrecision { points },
+        std::path::Path::new(&path),
+        &options,
+        "cargo bench --bench work_precision",
+    )
+    .expect("write plot");
+    let csv_path = std::path::Path::new(&path)
+        .with_extension("csv")
+        .display()
+        .to_string();
     let mut csv = String::from("observable,engine,fraction,seconds,error\n");
     for p in points {
         csv += &format!(
@@ -121,7 +132,7 @@ fn main() {
                     Ok(error) => {
                         println!("| {observable} | {label} | T/{:.0} | {seconds:.3} | {error:.3e} {unit} |", 1.0 / f);
                         points.push(Point {
-                            observable,
+                            observable: observable.to_string(),
                             engine: label.clone(),
                             fraction: f,
                             seconds,
@@ -175,81 +186,4 @@ fn main() {
         }
     }
     write_outputs(&points);
-}
-
-/// Three log-log panels (one per observable): error against run time.
-fn svg(points: &[Point]) -> String {
-    let mut observables: Vec<&str> = Vec::new();
-    for p in points {
-        if !observables.contains(&p.observable) {
-            observables.push(p.observable);
-        }
-    }
-    let engines: Vec<String> = {
-        let mut v: Vec<String> = points.iter().map(|p| p.engine.clone()).collect();
-        v.sort();
-        v.dedup();
-        v
-    };
-    let colours = ["#1f77b4", "#d62728", "#2ca02c", "#9467bd"];
-    let (w, h, pad) = (420.0, 320.0, 55.0);
-    let mut out = format!(
-        "<svg xmlns='http://www.w3.org/2000/svg' width='{}' height='{}' font-family='sans-serif' font-size='11'>\n",
-        w * observables.len() as f64,
-        h + 30.0
-    );
-    for (k, obs) in observables.iter().enumerate() {
-        let pts: Vec<&Point> = points
-            .iter()
-            .filter(|p| p.observable == *obs && p.error > 0.0)
-            .collect();
-        if pts.is_empty() {
-            continue;
-        }
-        let lx = |v: f64| v.max(1e-6).log10();
-        let (x0, x1) = pts.iter().fold((f64::MAX, f64::MIN), |a, p| {
-            (a.0.min(lx(p.seconds)), a.1.max(lx(p.seconds)))
-        });
-        let (y0, y1) = pts.iter().fold((f64::MAX, f64::MIN), |a, p| {
-            (a.0.min(lx(p.error)), a.1.max(lx(p.error)))
-        });
-        let (x0, x1, y0, y1) = (x0.floor(), x1.ceil(), y0.floor(), y1.ceil());
-        let ox = k as f64 * w;
-        let px = |v: f64| ox + pad + (lx(v) - x0) / (x1 - x0).max(1e-9) * (w - 1.5 * pad);
-        let py = |v: f64| h - pad + 20.0 - (lx(v) - y0) / (y1 - y0).max(1e-9) * (h - 1.5 * pad);
-        out += &format!(
-            "<rect x='{}' y='{}' width='{}' height='{}' fill='none' stroke='black'/>\n<text x='{}' y='14'>{}</text>\n",
-            ox + pad, 20.0 + 0.5 * pad, w - 1.5 * pad, h - 1.5 * pad, ox + pad, obs
-        );
-        out += &format!(
-            "<text x='{}' y='{}'>run time (s), 10^{x0:.0} … 10^{x1:.0}</text>\n",
-            ox + pad,
-            h + 15.0
-        );
-        out += &format!("<text x='{}' y='{}' transform='rotate(-90 {} {})'>error, 10^{y0:.0} … 10^{y1:.0}</text>\n", ox + 15.0, h - pad, ox + 15.0, h - pad);
-        for (e, engine) in engines.iter().enumerate() {
-            let series: Vec<&&Point> = pts.iter().filter(|p| &p.engine == engine).collect();
-            let colour = colours[e % colours.len()];
-            let path: Vec<String> = series
-                .iter()
-                .map(|p| format!("{:.1},{:.1}", px(p.seconds), py(p.error)))
-                .collect();
-            out += &format!(
-                "<polyline points='{}' fill='none' stroke='{colour}'/>\n",
-                path.join(" ")
-            );
-            for p in &series {
-                out += &format!(
-                    "<circle cx='{:.1}' cy='{:.1}' r='3' fill='{colour}'/><text x='{:.1}' y='{:.1}' fill='{colour}'>T/{:.0}</text>\n",
-                    px(p.seconds), py(p.error), px(p.seconds) + 4.0, py(p.error) - 4.0, 1.0 / p.fraction
-                );
-            }
-            out += &format!(
-                "<text x='{}' y='{}' fill='{colour}'>{engine}</text>\n",
-                ox + w - 2.0 * pad,
-                40.0 + 14.0 * e as f64 + 0.5 * pad
-            );
-        }
-    }
-    out + "</svg>\n"
 }

@@ -141,6 +141,7 @@ impl Figure for WorkPrecision<'_> {
             }
         }
         anyhow::ensure!(!observables.is_empty(), "no point with a positive error");
+        let root = root.margin(style.px(6.0), 0, 0, 0);
         let root = root.titled(
             &style.title("Work–precision: error against run time"),
             style.title_font(),
@@ -182,12 +183,12 @@ impl Figure for WorkPrecision<'_> {
                 .draw()?;
             for (k, engine) in engines.iter().enumerate() {
                 let colour = PALETTE[k % PALETTE.len()];
-                let mut line: Vec<(f64, f64)> = pts
-                    .iter()
-                    .filter(|p| p.engine == *engine)
-                    .map(|p| (p.seconds, p.error))
-                    .collect();
-                line.sort_by(|a, b| a.0.total_cmp(&b.0));
+                // In order of time step, coarsest first.
+                let mut of_engine: Vec<&&WorkPoint> =
+                    pts.iter().filter(|p| p.engine == *engine).collect();
+                of_engine.sort_by(|a, b| b.fraction.total_cmp(&a.fraction));
+                let line: Vec<(f64, f64)> =
+                    of_engine.iter().map(|p| (p.seconds, p.error)).collect();
                 chart
                     .draw_series(LineSeries::new(
                         line.clone(),
