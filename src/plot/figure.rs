@@ -316,6 +316,38 @@ pub fn log_tick(v: f64) -> String {
     }
 }
 
+/// A line of many more points than the figure has pixel columns, reduced to
+/// what can be seen: per column, the first, lowest, highest and last point
+/// in order. The drawn envelope is unchanged; an SVG stays small.
+pub fn decimate(points: &[(f64, f64)], columns: usize) -> Vec<(f64, f64)> {
+    if points.len() <= 4 * columns.max(1) {
+        return points.to_vec();
+    }
+    let (x0, x1) = (points[0].0, points[points.len() - 1].0);
+    let width = (x1 - x0) / columns as f64;
+    let column = |x: f64| (((x - x0) / width) as usize).min(columns - 1);
+    let mut out = Vec::with_capacity(4 * columns);
+    let mut start = 0;
+    while start < points.len() {
+        let c = column(points[start].0);
+        let mut end = start + 1;
+        while end < points.len() && column(points[end].0) == c {
+            end += 1;
+        }
+        let bucket = &points[start..end];
+        let lo = (0..bucket.len()).min_by(|&a, &b| bucket[a].1.total_cmp(&bucket[b].1));
+        let hi = (0..bucket.len()).max_by(|&a, &b| bucket[a].1.total_cmp(&bucket[b].1));
+        let mut keep = vec![0, bucket.len() - 1];
+        keep.extend(lo);
+        keep.extend(hi);
+        keep.sort_unstable();
+        keep.dedup();
+        out.extend(keep.into_iter().map(|k| bucket[k]));
+        start = end;
+    }
+    out
+}
+
 /// Lower and upper end of `values` (finite ones), or None.
 pub fn extent(values: impl IntoIterator<Item = f64>) -> Option<(f64, f64)> {
     values
@@ -340,6 +372,20 @@ mod tests {
         assert_eq!(tick(-0.0000001, 1.0), "0");
         assert_eq!(log_tick(1000.0), "1000");
         assert_eq!(log_tick(1e-5), "1e-5");
+    }
+
+    #[test]
+    fn decimation_keeps_the_envelope() {
+        let line: Vec<(f64, f64)> = (0..10_000)
+            .map(|k| (k as f64, if k == 5_003 { 7.0 } else { (k % 7) as f64 }))
+            .collect();
+        let d = decimate(&line, 100);
+        assert!(d.len() <= 400, "{}", d.len());
+        assert!(d.contains(&(5_003.0, 7.0)), "a spike survives");
+        assert_eq!(d.first(), line.first());
+        assert_eq!(d.last(), line.last());
+        assert!(d.windows(2).all(|p| p[0].0 < p[1].0));
+        assert_eq!(decimate(&line[..50], 100), line[..50].to_vec());
     }
 
     #[test]

@@ -4,7 +4,7 @@
 
 use super::colour::legend_line;
 use super::colour::PALETTE;
-use super::figure::{extent, tick, Drawn, Figure, Style};
+use super::figure::{decimate, extent, tick, Drawn, Figure, Style};
 use crate::analysis::Event;
 use plotters::coord::Shift;
 use plotters::prelude::*;
@@ -94,7 +94,15 @@ impl Figure for LoadingCurve<'_> {
         }
         chart
             .draw_series(LineSeries::new(
-                self.time.iter().zip(self.ratio).map(|(&t, &r)| (t * f, r)),
+                decimate(
+                    &self
+                        .time
+                        .iter()
+                        .zip(self.ratio)
+                        .map(|(&t, &r)| (t * f, r))
+                        .collect::<Vec<_>>(),
+                    root.dim_in_pixel().0 as usize,
+                ),
                 PALETTE[0].stroke_width(style.px(1.5)),
             ))?
             .label("F/F_N")

@@ -13,8 +13,8 @@ pub mod scatter;
 pub mod slip;
 
 pub use figure::{
-    extent, log_tick, render, tick, write, Drawn, Figure, FigureOptions, Format, Style, DPI_RANGE,
-    SIZE_RANGE,
+    decimate, extent, log_tick, render, tick, write, Drawn, Figure, FigureOptions, Format, Style,
+    DPI_RANGE, SIZE_RANGE,
 };
 
 #[cfg(test)]

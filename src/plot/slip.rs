@@ -3,7 +3,7 @@
 
 use super::colour::legend_line;
 use super::colour::{colour_bar, viridis, ColourScale, Ramp, BAR_WIDTH, PALETTE};
-use super::figure::{extent, tick, Drawn, Figure, Style};
+use super::figure::{decimate, extent, tick, Drawn, Figure, Style};
 use super::loading::time_unit;
 use crate::analysis::{Event, InterfaceSeries};
 use plotters::coord::Shift;
@@ -94,10 +94,14 @@ impl Figure for SlipHistory<'_> {
             let colour = PALETTE[k % PALETTE.len()];
             chart
                 .draw_series(LineSeries::new(
-                    s.time
-                        .iter()
-                        .zip(&s.slip)
-                        .map(|(&t, row)| (t * f, row[ix] * ys)),
+                    decimate(
+                        &s.time
+                            .iter()
+                            .zip(&s.slip)
+                            .map(|(&t, row)| (t * f, row[ix] * ys))
+                            .collect::<Vec<_>>(),
+                        root.dim_in_pixel().0 as usize,
+                    ),
                     colour.stroke_width(style.px(1.5)),
                 ))?
                 .label(format!("x = {:.1} mm", ix as f64 * s.spacing * 1e3))
