@@ -12,6 +12,7 @@ pub mod gpu;
 pub mod junction;
 pub mod lattice;
 pub mod laws;
+pub mod memory;
 pub mod model;
 pub mod observables;
 pub mod output;

@@ -70,6 +70,10 @@ enum Command {
         /// Replace the output file if it exists.
         #[arg(long)]
         force: bool,
+        /// Start even if the engine needs more memory than the machine has
+        /// available now.
+        #[arg(long)]
+        no_memory_check: bool,
     },
     /// Derived quantities, stability limit, memory and terms, without running.
     Check {
@@ -226,6 +230,7 @@ fn main() -> ExitCode {
             resume,
             from,
             force,
+            no_memory_check,
         } => commands::run::run(commands::run::RunArgs {
             scenario,
             backend,
@@ -242,6 +247,7 @@ fn main() -> ExitCode {
             resume,
             from,
             force,
+            no_memory_check,
         }),
         Command::Check {
             scenario,

@@ -28,6 +28,8 @@ pub struct RunArgs {
     pub from: Option<PathBuf>,
     /// Replace an existing output file.
     pub force: bool,
+    /// Skip the comparison of the engine's memory with the machine's.
+    pub no_memory_check: bool,
 }
 
 /// The same file (both exist and resolve to one path).
@@ -89,6 +91,20 @@ impl RunArgs {
                 self.threads,
                 4 * cores
             );
+        }
+        if !self.no_memory_check {
+            let (real, coord) = match precision {
+                Precision::F64 => (8, 8),
+                Precision::F32 => (4, 8),
+                Precision::F32Plain => (4, 4),
+            };
+            slipfront::memory::check(
+                model.memory_bytes(real, coord) as u64,
+                slipfront::memory::available_bytes(),
+                &format!("a {} × {} lattice in {precision:?}", model.nx, model.nz),
+                "pass --no-memory-check to try anyway",
+            )
+            .map_err(anyhow::Error::msg)?;
         }
         let gpu = GpuOptions {
             path: self.gpu_path,

@@ -7,6 +7,7 @@
 
 pub mod messages;
 pub mod reader;
+pub mod scan;
 
 use prost::Message;
 
@@ -193,15 +194,9 @@ impl McapSink {
             path: parent.display().to_string(),
             why,
         };
-        let bytes = std::fs::read(parent).map_err(|e| fail(e.to_string()))?;
-        if !bytes.starts_with(mcap::MAGIC) {
-            return Err(fail("not an MCAP file".into()));
-        }
-        let reader = mcap::read::ChunkFlattener::new(&bytes).map_err(|e| fail(e.to_string()))?;
         let mut ours = std::collections::HashMap::new();
         let mut copied = 0;
-        for record in reader {
-            let Ok(record) = record else { break };
+        scan::scan(parent, fail, |record| {
             match record {
                 Record::Channel(c) => {
                     let id = match c.topic.as_str() {
@@ -228,7 +223,8 @@ impl McapSink {
                 }
                 _ => {}
             }
-        }
+            Ok(scan::Flow::Continue)
+        })?;
         self.sequence = upto;
         Ok(copied)
     }

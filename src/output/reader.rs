@@ -3,6 +3,7 @@
 //! everything up to its last complete chunk.
 
 use super::messages::{Bulk, FastForwardJump, Global, Interface};
+use super::scan::{scan, Ending, Flow};
 use super::OutputError;
 use crate::analysis::InterfaceSeries;
 use mcap::records::Record;
@@ -28,32 +29,43 @@ pub struct RunFile {
     pub truncated: bool,
 }
 
+const GIB: f64 = (1u64 << 30) as f64;
+
+/// How many bytes of decoded messages a read may hold: SLIPFRONT_READ_MEMORY
+/// if set, else half the memory available now (the analysis copies the
+/// interface rows once more).
+pub fn memory_budget() -> u64 {
+    if let Some(v) = std::env::var("SLIPFRONT_READ_MEMORY")
+        .ok()
+        .and_then(|v| v.trim().parse::<f64>().ok())
+        .filter(|v| *v > 0.0)
+    {
+        return v as u64;
+    }
+    crate::memory::available_bytes().map_or(8 << 30, |b| b / 2)
+}
+
 impl RunFile {
     pub fn read(path: &Path) -> Result<RunFile, OutputError> {
+        RunFile::read_within(path, memory_budget())
+    }
+
+    /// Reads `path` record by record from disk ([`super::scan`]), stopping
+    /// with an error once the decoded messages would pass `budget` bytes.
+    pub fn read_within(path: &Path, budget: u64) -> Result<RunFile, OutputError> {
         let fail = |why: String| OutputError::Read {
             path: path.display().to_string(),
             why,
         };
-        let bytes = std::fs::read(path).map_err(|e| fail(e.to_string()))?;
-        if !bytes.starts_with(mcap::MAGIC) {
-            return Err(fail(format!(
-                "not an MCAP file ({} bytes, no MCAP magic at the start)",
-                bytes.len()
-            )));
+        let size = std::fs::metadata(path).map_err(|e| fail(e.to_string()))?;
+        if !size.is_file() {
+            return Err(fail("not a regular file".into()));
         }
-        let reader = mcap::read::ChunkFlattener::new(&bytes).map_err(|e| fail(e.to_string()))?;
         let mut run = RunFile::default();
         let mut topics: HashMap<u16, String> = HashMap::new();
-        let mut saw_footer = false;
         let mut saw_slipfront = false;
-        for record in reader {
-            let record = match record {
-                Ok(r) => r,
-                Err(_) => {
-                    run.truncated = true;
-                    break;
-                }
-            };
+        let mut decoded: u64 = 0;
+        let ending = scan(path, fail, |record| {
             match record {
                 Record::Channel(c) => {
                     topics.insert(c.id, c.topic);
@@ -74,6 +86,18 @@ impl RunFile {
                 Record::Message { header, data } => {
                     let bad =
                         |e: prost::DecodeError| fail(format!("message {}: {e}", header.sequence));
+                    // Decoded, a message takes about as many bytes as it
+                    // has on disk, plus its vectors' headers.
+                    decoded += data.len() as u64 + 128;
+                    if decoded > budget {
+                        return Err(fail(format!(
+                            "its messages need more than {:.2} GiB of memory once decoded, \
+                             the most this machine can give now ({} bytes on disk); set \
+                             SLIPFRONT_READ_MEMORY=BYTES to allow more",
+                            budget as f64 / GIB,
+                            size.len()
+                        )));
+                    }
                     match topics.get(&header.channel_id).map(String::as_str) {
                         Some("/global") => run.global.push(Global::decode(&data[..]).map_err(bad)?),
                         Some("/interface") => run
@@ -86,10 +110,11 @@ impl RunFile {
                         _ => {}
                     }
                 }
-                Record::Footer(_) => saw_footer = true,
                 _ => {}
             }
-        }
+            Ok(Flow::Continue)
+        })?;
+        let saw_footer = ending == Ending::Complete;
         run.truncated |= !saw_footer;
         if !saw_slipfront {
             return Err(fail(
