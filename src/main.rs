@@ -124,6 +124,17 @@ enum Command {
         #[arg(long, default_value_t = DEFAULT_QUIET_GAP, value_parser = parse_quiet_gap)]
         quiet_gap: f64,
     },
+    /// Rewrite a run file cut short (a killed run) with its summary, so any
+    /// MCAP reader opens it; in place (the cut file kept as RUN.mcap.cut)
+    /// unless -o names another file.
+    Recover {
+        file: PathBuf,
+        #[arg(short = 'o', long)]
+        output: Option<PathBuf>,
+        /// Replace an existing output (or .cut) file.
+        #[arg(long)]
+        force: bool,
+    },
     /// Run a parameter sweep (or `sweep collect DIR` to merge shard tables).
     #[command(args_conflicts_with_subcommands = true)]
     Sweep {
@@ -286,6 +297,11 @@ fn main() -> ExitCode {
             },
             quiet_gap,
         }),
+        Command::Recover {
+            file,
+            output,
+            force,
+        } => commands::recover::recover(&file, output, force),
         Command::Verify {
             backend,
             precision,

@@ -132,3 +132,62 @@ fn a_lattice_larger_than_the_machine_is_refused_before_allocating() {
         "{err}"
     );
 }
+
+#[test]
+fn a_cut_short_file_is_recovered_whole() {
+    let d = dir("recover");
+    let run = d.join("run.mcap");
+    small_run(&run);
+    let bytes = std::fs::read(&run).unwrap();
+    // As a kill leaves it: the chunks written, then the file ends inside
+    // the records that follow them (message indexes), without summary or
+    // footer.
+    let cut = d.join("cut.mcap");
+    let after_chunks = first_record(&bytes, 0x07) + 5;
+    std::fs::write(&cut, &bytes[..after_chunks]).unwrap();
+    let before = slipfront::output::reader::RunFile::read(&cut).unwrap();
+    assert!(before.truncated && !before.interface.is_empty());
+    // A reader that needs the summary finds none (negative control).
+    assert!(mcap::Summary::read(&std::fs::read(&cut).unwrap())
+        .unwrap_or(None)
+        .is_none());
+    let out = slipfront(&["recover", s(&cut)], &[]);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(
+        text.contains("ended before its summary") && text.contains("messages kept"),
+        "{text}"
+    );
+    assert!(d.join("cut.mcap.cut").exists());
+    let after = slipfront::output::reader::RunFile::read(&cut).unwrap();
+    assert!(!after.truncated);
+    assert_eq!(after.global, before.global);
+    assert_eq!(after.interface, before.interface);
+    assert_eq!(after.metadata, before.metadata);
+    assert_eq!(after.scenario, before.scenario);
+    let summary = mcap::Summary::read(&std::fs::read(&cut).unwrap())
+        .unwrap()
+        .expect("a summary");
+    let counted: u64 = summary
+        .stats
+        .expect("statistics")
+        .channel_message_counts
+        .values()
+        .sum();
+    assert_eq!(
+        counted as usize,
+        before.global.len() + before.interface.len() + before.bulk.len()
+    );
+    // A complete file is left alone; a second recovery would overwrite
+    // the kept .cut copy, so it is refused.
+    let out = slipfront(&["recover", s(&run)], &[]);
+    assert!(String::from_utf8_lossy(&out.stdout).contains("nothing to do"));
+    std::fs::write(&cut, &bytes[..bytes.len() / 2]).unwrap();
+    let out = slipfront(&["recover", s(&cut)], &[]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("cut.mcap.cut"));
+}

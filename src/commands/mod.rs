@@ -1,6 +1,7 @@
 pub mod check;
 pub mod info;
 pub mod plot;
+pub mod recover;
 pub mod run;
 pub mod sweep;
 pub mod verify;

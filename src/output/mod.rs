@@ -7,6 +7,7 @@
 
 pub mod messages;
 pub mod reader;
+pub mod recover;
 pub mod scan;
 
 use prost::Message;
