@@ -191,3 +191,106 @@ fn a_cut_short_file_is_recovered_whole() {
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("cut.mcap.cut"));
 }
+
+/// A slipfront-looking run file written by hand: `interface` rows and
+/// `global` times as given.
+fn crafted(at: &Path, rows: &[Vec<f64>], global_times: &[f64]) {
+    use prost::Message;
+    use slipfront::output::messages::{Global, Interface};
+    let file = std::io::BufWriter::new(std::fs::File::create(at).unwrap());
+    let mut w = mcap::WriteOptions::new().create(file).unwrap();
+    let meta = [
+        ("nx".to_string(), "4".to_string()),
+        ("spacing".to_string(), "1e-3".to_string()),
+    ]
+    .into_iter()
+    .collect();
+    w.write_metadata(&mcap::records::Metadata {
+        name: "slipfront".into(),
+        metadata: meta,
+    })
+    .unwrap();
+    let none = Default::default();
+    let g = w.add_channel(0, "/global", "protobuf", &none).unwrap();
+    let i = w.add_channel(0, "/interface", "protobuf", &none).unwrap();
+    let mut seq = 0;
+    let mut put = |w: &mut mcap::Writer<_>, channel, t: f64, data: Vec<u8>| {
+        seq += 1;
+        w.write_to_known_channel(
+            &mcap::records::MessageHeader {
+                channel_id: channel,
+                sequence: seq,
+                log_time: (t.max(0.0) * 1e9) as u64,
+                publish_time: (t.max(0.0) * 1e9) as u64,
+            },
+            &data,
+        )
+        .unwrap();
+    };
+    for (k, &t) in global_times.iter().enumerate() {
+        let m = Global {
+            time: t,
+            step: k as u64,
+            ..Default::default()
+        };
+        put(&mut w, g, t, m.encode_to_vec());
+    }
+    for (k, row) in rows.iter().enumerate() {
+        let m = Interface {
+            time: k as f64 * 1e-6,
+            step: k as u64,
+            shear_stress: row.clone(),
+            normal_stress: row.clone(),
+            pinned_fraction: row.clone(),
+            slip: row.clone(),
+            slip_speed: row.clone(),
+        };
+        put(&mut w, i, k as f64 * 1e-6, m.encode_to_vec());
+    }
+    w.finish().unwrap();
+}
+
+#[test]
+fn ragged_rows_and_time_running_backwards_are_damage_not_a_panic_or_a_hang() {
+    let d = dir("crafted");
+    let good = d.join("good.mcap");
+    crafted(&good, &[vec![1.0; 4], vec![1.0; 4]], &[0.0, 1e-5, 2e-5]);
+    let ragged = d.join("ragged.mcap");
+    crafted(&ragged, &[vec![1.0; 4], vec![1.0; 7]], &[0.0, 1e-5]);
+    let backwards = d.join("backwards.mcap");
+    crafted(&backwards, &[vec![1.0; 4]], &[0.0, 1e-5, 5e-6, 3e-5]);
+    // Negative control: the consistent file reads.
+    let out = slipfront(&["info", s(&good)], &[]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    for (file, expect) in [
+        (
+            &ragged,
+            "/interface message 1 (t = 1e-6 s) has rows of lengths [7, 7, 7, 7, 7]",
+        ),
+        (
+            &backwards,
+            "/global message 2 is at t = 5e-6 s, after one at 1e-5 s",
+        ),
+    ] {
+        for cmd in ["info", "plot"] {
+            let started = std::time::Instant::now();
+            let out = slipfront(&[cmd, s(file)], &[]);
+            let err = String::from_utf8_lossy(&out.stderr);
+            assert_eq!(
+                out.status.code(),
+                Some(2),
+                "{cmd} {}: {err}",
+                file.display()
+            );
+            assert!(
+                err.contains(expect) && err.contains("damaged"),
+                "{cmd}: {err}"
+            );
+            assert!(started.elapsed().as_secs() < 20);
+        }
+    }
+}

@@ -124,23 +124,6 @@ impl RunData {
             "{}: no /interface messages, nothing to plot (was output.interface_interval set?)",
             path.display()
         );
-        let nx = run.interface[0].pinned_fraction.len();
-        for (k, m) in run.interface.iter().enumerate() {
-            let lengths = [
-                m.pinned_fraction.len(),
-                m.shear_stress.len(),
-                m.normal_stress.len(),
-                m.slip.len(),
-                m.slip_speed.len(),
-            ];
-            anyhow::ensure!(
-                nx > 0 && lengths.iter().all(|&l| l == nx),
-                "{}: /interface message {k} (t = {:e} s) has rows of lengths {lengths:?}, \
-                 expected {nx} each: the file is damaged",
-                path.display(),
-                m.time
-            );
-        }
         let series = run.interface_series();
         let events = series.events_separated_by(quiet_gap);
         let precursors = PrecursorSequence::from_events(&events, series.spacing, |e| {

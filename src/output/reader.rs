@@ -123,7 +123,50 @@ impl RunFile {
                     .into(),
             ));
         }
+        run.check_consistent().map_err(fail)?;
         Ok(run)
+    }
+
+    /// Every /interface row as long as the interface, and no channel's
+    /// time going backwards: what the analysis relies on. A file that
+    /// breaks either is damaged.
+    fn check_consistent(&self) -> Result<(), String> {
+        let nx = self
+            .metadata
+            .get("nx")
+            .and_then(|v| v.parse::<usize>().ok())
+            .or_else(|| self.interface.first().map(|m| m.pinned_fraction.len()));
+        for (k, m) in self.interface.iter().enumerate() {
+            let lengths = [
+                m.shear_stress.len(),
+                m.normal_stress.len(),
+                m.pinned_fraction.len(),
+                m.slip.len(),
+                m.slip_speed.len(),
+            ];
+            if let Some(nx) = nx.filter(|&nx| lengths.iter().any(|&l| l != nx)) {
+                return Err(format!(
+                    "damaged: /interface message {k} (t = {:e} s) has rows of lengths \
+                     {lengths:?}, the interface has {nx} blocks",
+                    m.time
+                ));
+            }
+        }
+        let backwards = |name: &str, times: &mut dyn Iterator<Item = f64>| {
+            let mut last = f64::NEG_INFINITY;
+            for (k, t) in times.enumerate() {
+                if !t.is_finite() || t < last {
+                    return Err(format!(
+                        "damaged: {name} message {k} is at t = {t:e} s, after one at {last:e} s"
+                    ));
+                }
+                last = t;
+            }
+            Ok(())
+        };
+        backwards("/global", &mut self.global.iter().map(|m| m.time))?;
+        backwards("/interface", &mut self.interface.iter().map(|m| m.time))?;
+        backwards("/bulk", &mut self.bulk.iter().map(|m| m.time))
     }
 
     /// F/F_N of the global sample nearest to time `t` (NaN without one).
