@@ -163,6 +163,21 @@ impl Model {
         } else {
             g.length
         };
+        // A single row or column is one spacing thick: its length (height)
+        // must say so, or the block mass would come from a size the
+        // lattice does not have.
+        for (count, size, name, other) in [
+            (nx, g.length, "geometry.length", "nx"),
+            (nz, g.height, "geometry.height", "nz"),
+        ] {
+            if count == 1 && (nx > 1 || nz > 1) && (size - spacing).abs() > 1e-9 * spacing {
+                return Err(ModelError::Invalid(format!(
+                    "{name} = {size} m with {other} = 1: a single row or column of blocks is one \
+                     spacing thick (allowed: {name} = {spacing} m, the spacing of the other \
+                     direction)"
+                )));
+            }
+        }
         let total_mass = s.material.density * g.length * g.height * g.width;
         let mass = total_mass / (nx * nz) as f64;
         let k = 0.75 * g.width * s.material.youngs_modulus;
@@ -173,6 +188,40 @@ impl Model {
             (None, Some(f)) => f * period,
             (None, None) => return Err(ModelError::Invalid("no time step".into())),
         };
+        // Each input is in range on its own; their products can still leave
+        // f64 (geometry.width = 1e308 gives an infinite k and mass, so a
+        // NaN period and dt).
+        for (name, value, from) in [
+            ("lattice spacing", spacing, "geometry.length / (nx − 1)"),
+            (
+                "block mass",
+                mass,
+                "material.density × length × height × width / (nx·nz)",
+            ),
+            (
+                "spring stiffness k",
+                k,
+                "0.75 × geometry.width × material.youngs_modulus",
+            ),
+            ("oscillation period", period, "2π √(m/k)"),
+            (
+                "time step dt",
+                dt,
+                "time.dt, or time.dt_fraction × the period",
+            ),
+        ] {
+            if !(value.is_finite() && value > 0.0) {
+                return Err(ModelError::Invalid(format!(
+                    "derived {name} = {value:e} (from {from}) is not a finite positive number: \
+                     the inputs are too large or too small together"
+                )));
+            }
+        }
+        if !(eta.is_finite() && eta >= 0.0) {
+            return Err(ModelError::Invalid(format!(
+                "derived damping coefficient η = {eta:e} (damping.ratio × √(k m)) is not finite"
+            )));
+        }
         let steps = |t: f64| (t / dt).round() as u64;
         let ramp_steps = steps(s.loading.normal.ramp_time);
         let prep_steps = ramp_steps + steps(s.loading.normal.relax_time);
@@ -262,7 +311,7 @@ impl Model {
         if drive_speed.abs() >= c_p {
             return Err(ModelError::Invalid(format!(
                 "loading.drive.velocity = {drive_speed} m/s is out of range (allowed: below \
-                 the lattice P-wave speed, |V| < {c_p:.1} m/s)"
+                 the lattice P-wave speed, |V| < {c_p:.4e} m/s)"
             )));
         }
         // What the run can represent: a slip time within the 32-bit slip
@@ -278,6 +327,13 @@ impl Model {
                     model.dt
                 )));
             }
+        }
+        if s.time.end > 0.0 && model.drive_steps == 0 {
+            return Err(ModelError::Invalid(format!(
+                "time.end = {:e} s is shorter than one time step dt = {:.4e} s: the run would \
+                 end before it starts (allowed: time.end >= dt/2)",
+                s.time.end, model.dt
+            )));
         }
         if model.total_steps() as f64 >= 2f64.powi(53) {
             return Err(ModelError::Invalid(format!(

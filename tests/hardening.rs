@@ -294,3 +294,29 @@ fn ragged_rows_and_time_running_backwards_are_damage_not_a_panic_or_a_hang() {
         }
     }
 }
+
+#[test]
+fn inputs_whose_products_leave_f64_or_the_lattice_are_refused() {
+    for (set, expect) in [
+        ("geometry.width=1e308", "derived block mass = inf"),
+        ("material.density=1e308", "|V| < 5.9580e-150 m/s"),
+        ("geometry.nx=1", "geometry.length = 0.14 m with nx = 1"),
+        ("geometry.nz=1", "geometry.height = 0.075 m with nz = 1"),
+        ("time.end=1e-9", "shorter than one time step"),
+    ] {
+        let out = slipfront(&["check", "--set", set], &[]);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{set}: {err}");
+        assert!(err.contains(expect), "{set}: {err}");
+    }
+    // Negative control: a consistent chain, one block high, is accepted.
+    let out = slipfront(
+        &["check", "tests/fuzz/corpus/scenario/single_junction_chain.toml"],
+        &[],
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
