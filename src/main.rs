@@ -223,6 +223,7 @@ struct SweepRun {
 
 fn main() -> ExitCode {
     restore_default_sigpipe();
+    private_runtime_dir();
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Run {
@@ -362,6 +363,26 @@ fn parse_quiet_gap(text: &str) -> Result<f64, String> {
         _ => Err(format!(
             "--quiet-gap = {text}: expected a time in seconds, 0 or more"
         )),
+    }
+}
+
+/// Mesa's Vulkan drivers print "XDG_RUNTIME_DIR is invalid or not set" (twice)
+/// whenever an adapter is probed without one, as on CI machines and under
+/// Slurm; a private directory for this process keeps that noise out of
+/// every run's output.
+fn private_runtime_dir() {
+    #[cfg(unix)]
+    if std::env::var_os("XDG_RUNTIME_DIR").is_none() {
+        use std::os::unix::fs::PermissionsExt;
+        // SAFETY: libc::getuid has no preconditions.
+        let uid = unsafe { libc::getuid() };
+        let dir = std::env::temp_dir().join(format!("slipfront-runtime-{uid}"));
+        let ok = std::fs::create_dir_all(&dir).is_ok()
+            && std::fs::set_permissions(&dir, std::fs::Permissions::from_mode(0o700)).is_ok();
+        if ok {
+            // SAFETY: called first thing in main, before any thread exists.
+            unsafe { std::env::set_var("XDG_RUNTIME_DIR", &dir) };
+        }
     }
 }
 

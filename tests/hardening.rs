@@ -311,7 +311,10 @@ fn inputs_whose_products_leave_f64_or_the_lattice_are_refused() {
     }
     // Negative control: a consistent chain, one block high, is accepted.
     let out = slipfront(
-        &["check", "tests/fuzz/corpus/scenario/single_junction_chain.toml"],
+        &[
+            "check",
+            "tests/fuzz/corpus/scenario/single_junction_chain.toml",
+        ],
         &[],
     );
     assert!(
@@ -319,4 +322,17 @@ fn inputs_whose_products_leave_f64_or_the_lattice_are_refused() {
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
+}
+
+#[test]
+fn probing_the_gpu_without_a_runtime_dir_prints_no_mesa_warning() {
+    let out = Command::new(env!("CARGO_BIN_EXE_slipfront"))
+        .args(["check", "scenarios/triggered_front.toml"])
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .env_remove("XDG_RUNTIME_DIR")
+        .output()
+        .unwrap();
+    assert!(out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!err.contains("XDG_RUNTIME_DIR"), "{err}");
 }
