@@ -36,7 +36,7 @@ enum Command {
         #[arg(long = "set", value_name = "KEY=VALUE")]
         set: Vec<String>,
         /// Simulated time after the normal-load phase (s); overrides time.end.
-        #[arg(long)]
+        #[arg(long, value_parser = parse_t_end)]
         t_end: Option<f64>,
         /// Quasi-static fast-forward through the stick phases: on or off
         /// (overrides time.fast_forward).
@@ -356,6 +356,16 @@ fn main() -> ExitCode {
 }
 
 use slipfront::analysis::DEFAULT_QUIET_GAP;
+
+fn parse_t_end(text: &str) -> Result<f64, String> {
+    match text.trim().parse::<f64>() {
+        Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
+        _ => Err(format!(
+            "--t-end = {}: expected a time in seconds, finite and above 0",
+            text.chars().take(40).collect::<String>()
+        )),
+    }
+}
 
 fn parse_quiet_gap(text: &str) -> Result<f64, String> {
     match text.parse::<f64>() {

@@ -222,6 +222,21 @@ impl Model {
                 "derived damping coefficient η = {eta:e} (damping.ratio × √(k m)) is not finite"
             )));
         }
+        // Step counts exact in f64 (and far from u64's end): a longer time
+        // would wrap or lose steps.
+        for (name, t) in [
+            ("time.end", s.time.end),
+            ("loading.normal.ramp_time", s.loading.normal.ramp_time),
+            ("loading.normal.relax_time", s.loading.normal.relax_time),
+        ] {
+            if t / dt >= 2f64.powi(52) {
+                return Err(ModelError::Invalid(format!(
+                    "{name} = {t:e} s is out of range (allowed: below {:.4e} s, 2^52 steps of dt \
+                     = {dt:.4e} s, so that every step time is exact)",
+                    2f64.powi(52) * dt
+                )));
+            }
+        }
         let steps = |t: f64| (t / dt).round() as u64;
         let ramp_steps = steps(s.loading.normal.ramp_time);
         let prep_steps = ramp_steps + steps(s.loading.normal.relax_time);

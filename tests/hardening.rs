@@ -336,3 +336,34 @@ fn probing_the_gpu_without_a_runtime_dir_prints_no_mesa_warning() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(!err.contains("XDG_RUNTIME_DIR"), "{err}");
 }
+
+#[test]
+fn hostile_files_and_times_get_bounded_clear_errors() {
+    let d = dir("files");
+    let big = d.join("big.toml");
+    std::fs::write(&big, vec![b'a'; 2 << 20]).unwrap();
+    let long = d.join("long.toml");
+    std::fs::write(&long, vec![b'a'; 900_000]).unwrap();
+    for (args, expect, most) in [
+        (vec!["check", "/dev/zero"], "not a regular file", 400),
+        (vec!["check", s(&big)], "more than a scenario can be", 400),
+        (vec!["check", s(&long)], "TOML parse error", 1000),
+        (
+            vec!["run", "--t-end", "nan"],
+            "--t-end = nan: expected a time",
+            400,
+        ),
+        (
+            vec!["check", "--set", "time.end=1e300"],
+            "time.end = 1e300 s is out of range",
+            400,
+        ),
+    ] {
+        let out = slipfront(&args, &[]);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {err}");
+        assert!(err.contains(expect), "{args:?}: {err}");
+        assert!(err.len() < most, "{args:?}: {} bytes of stderr", err.len());
+        assert!(!err.contains("--set time.end"), "{args:?}: {err}");
+    }
+}

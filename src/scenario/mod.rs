@@ -367,6 +367,9 @@ pub struct ScenarioError {
     pub problems: Vec<String>,
 }
 
+/// The largest scenario file read (bytes); the shipped ones are ~3 KB.
+pub const MAX_SCENARIO_BYTES: u64 = 1 << 20;
+
 impl Scenario {
     /// The built-in default scene.
     pub fn default_scene() -> Scenario {
@@ -377,10 +380,27 @@ impl Scenario {
     /// Reads a scenario file, applies `--set` overrides and validates it.
     pub fn load(path: &Path, overrides: &[String]) -> Result<Scenario, ScenarioError> {
         let name = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|e| ScenarioError {
+        let fail = |why: String| ScenarioError {
             source_name: name.clone(),
-            problems: vec![format!("cannot read scenario file `{name}`: {e}")],
-        })?;
+            problems: vec![format!("cannot read scenario file `{name}`: {why}")],
+        };
+        // A regular file of bounded size, checked before reading: not a
+        // device (/dev/zero) or a multi-gigabyte file.
+        let meta = std::fs::metadata(path).map_err(|e| fail(e.to_string()))?;
+        if !meta.is_file() {
+            return Err(fail("not a regular file".into()));
+        }
+        if meta.len() > MAX_SCENARIO_BYTES {
+            return Err(fail(format!(
+                "{} bytes, more than a scenario can be ({MAX_SCENARIO_BYTES} bytes)",
+                meta.len()
+            )));
+        }
+        let mut text = String::new();
+        use std::io::Read;
+        std::fs::File::open(path)
+            .and_then(|f| f.take(MAX_SCENARIO_BYTES + 1).read_to_string(&mut text))
+            .map_err(|e| fail(e.to_string()))?;
         Scenario::parse(&text, &name, overrides)
     }
 
@@ -439,6 +459,19 @@ impl Scenario {
 }
 
 fn describe_toml_error(e: &toml::de::Error) -> String {
-    // toml's Display already carries "line N, column M" and a snippet.
-    e.to_string().trim_end().replace('\n', "\n    ")
+    // toml's Display already carries "line N, column M" and a snippet; a
+    // snippet of a very long line is cut, so an error stays readable.
+    const WIDTH: usize = 160;
+    e.to_string()
+        .trim_end()
+        .lines()
+        .map(|l| {
+            if l.chars().count() > WIDTH {
+                format!("{}…", l.chars().take(WIDTH).collect::<String>())
+            } else {
+                l.to_string()
+            }
+        })
+        .collect::<Vec<_>>()
+        .join("\n    ")
 }
