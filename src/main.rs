@@ -359,9 +359,10 @@ use slipfront::analysis::DEFAULT_QUIET_GAP;
 
 fn parse_t_end(text: &str) -> Result<f64, String> {
     match text.trim().parse::<f64>() {
-        Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
+        // 0: the normal-load phase only (a loaded slider to branch from).
+        Ok(v) if v.is_finite() && v >= 0.0 => Ok(v),
         _ => Err(format!(
-            "--t-end = {}: expected a time in seconds, finite and above 0",
+            "--t-end = {}: expected a time in seconds, finite, 0 or more",
             text.chars().take(40).collect::<String>()
         )),
     }

@@ -367,3 +367,45 @@ fn hostile_files_and_times_get_bounded_clear_errors() {
         assert!(!err.contains("--set time.end"), "{args:?}: {err}");
     }
 }
+
+#[test]
+fn two_runs_cannot_write_one_file() {
+    let d = dir("lock");
+    let out = d.join("run.mcap");
+    let sets: Vec<String> = slipfront::verify::SMALL_SCENE
+        .iter()
+        .flat_map(|s| ["--set".to_string(), s.to_string()])
+        .collect();
+    let start = |force: bool| {
+        let mut c = Command::new(env!("CARGO_BIN_EXE_slipfront"));
+        c.args(["run", "--backend", "cpu", "--threads", "1", "--quiet"])
+            .args(["--t-end", "0.2", "-o", s(&out)])
+            .args(&sets);
+        if force {
+            c.arg("--force");
+        }
+        c
+    };
+    let mut first = start(false).spawn().unwrap();
+    // Until the first run has its file.
+    let t0 = std::time::Instant::now();
+    while !out.exists() && t0.elapsed().as_secs() < 30 {
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    std::thread::sleep(std::time::Duration::from_millis(300));
+    let second = start(true).output().unwrap();
+    let err = String::from_utf8_lossy(&second.stderr);
+    let still_running = first.try_wait().unwrap().is_none();
+    assert_eq!(second.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("another slipfront run is writing this file"),
+        "{err}"
+    );
+    assert!(
+        still_running,
+        "the first run ended before the test could race it"
+    );
+    assert!(first.wait().unwrap().success());
+    let run = slipfront::output::reader::RunFile::read(&out).unwrap();
+    assert!(!run.truncated && run.global.last().unwrap().time > 0.19);
+}

@@ -63,6 +63,34 @@ pub struct McapSink {
     slip_origin: Option<Vec<f64>>,
 }
 
+/// Opens `path` for writing as the only writer: created if missing, locked
+/// (flock, held while the file is open) and only then emptied, so that a
+/// second run aimed at the same file is refused instead of both writing it.
+fn open_locked(path: &Path) -> Result<File, OutputError> {
+    let create_error = |source| OutputError::Create {
+        path: path.display().to_string(),
+        source,
+    };
+    let file = std::fs::OpenOptions::new()
+        .write(true)
+        .create(true)
+        .truncate(false)
+        .open(path)
+        .map_err(create_error)?;
+    #[cfg(unix)]
+    {
+        use std::os::unix::io::AsRawFd;
+        // SAFETY: flock on a descriptor this function owns.
+        if unsafe { libc::flock(file.as_raw_fd(), libc::LOCK_EX | libc::LOCK_NB) } != 0 {
+            return Err(create_error(std::io::Error::other(
+                "another slipfront run is writing this file",
+            )));
+        }
+    }
+    file.set_len(0).map_err(create_error)?;
+    Ok(file)
+}
+
 impl McapSink {
     /// A new run file. `history` (one line per start, resume and branch
     /// of the run) goes to the `slipfront_history` metadata record.
@@ -77,7 +105,7 @@ impl McapSink {
             path: path.display().to_string(),
             source,
         };
-        let file = File::create(path).map_err(create_error)?;
+        let file = open_locked(path)?;
         let sync_handle = file.try_clone().map_err(create_error)?;
         let mut writer = mcap::WriteOptions::new()
             .compression(Some(mcap::Compression::Zstd))
