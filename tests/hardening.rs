@@ -409,3 +409,33 @@ fn two_runs_cannot_write_one_file() {
     let run = slipfront::output::reader::RunFile::read(&out).unwrap();
     assert!(!run.truncated && run.global.last().unwrap().time > 0.19);
 }
+
+#[test]
+fn sigterm_closes_the_file_and_exits_143() {
+    let d = dir("term");
+    let out = d.join("run.mcap");
+    let sets: Vec<String> = slipfront::verify::SMALL_SCENE
+        .iter()
+        .flat_map(|s| ["--set".to_string(), s.to_string()])
+        .collect();
+    let mut child = Command::new(env!("CARGO_BIN_EXE_slipfront"))
+        .args(["run", "--backend", "cpu", "--threads", "1", "--quiet"])
+        .args(["--t-end", "5", "-o", s(&out)])
+        .args(&sets)
+        .spawn()
+        .unwrap();
+    std::thread::sleep(std::time::Duration::from_millis(1500));
+    // SAFETY: a signal to the child this test started.
+    unsafe { libc::kill(child.id() as i32, libc::SIGTERM) };
+    let t0 = std::time::Instant::now();
+    let status = child.wait().unwrap();
+    assert_eq!(status.code(), Some(143));
+    assert!(
+        t0.elapsed().as_secs_f64() < 5.0,
+        "stopped after {:?}",
+        t0.elapsed()
+    );
+    let run = slipfront::output::reader::RunFile::read(&out).unwrap();
+    assert!(!run.truncated, "the file was closed with its summary");
+    assert!(!run.global.is_empty());
+}

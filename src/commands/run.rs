@@ -172,10 +172,10 @@ fn finish(
         },
     )?;
     println!("{summary}");
-    // 128 + SIGINT, as shells report a run stopped by Ctrl-C; the file is
-    // closed and a checkpoint written by now.
+    // 128 + the signal (130 for Ctrl-C, 143 for SIGTERM), as shells report
+    // it; the file is closed and a checkpoint written by now.
     Ok(if summary.interrupted {
-        ExitCode::from(130)
+        ExitCode::from(128 + slipfront::runner::stopping_signal().unwrap_or(2) as u8)
     } else {
         ExitCode::SUCCESS
     })

@@ -22,16 +22,46 @@ use jump::perform_jump;
 use outputs::{next_multiple, Outputs};
 use progress::Reporter;
 use std::path::PathBuf;
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::{AtomicI32, Ordering};
 use std::sync::Once;
 use std::time::Instant;
 
-static INTERRUPTED: AtomicBool = AtomicBool::new(false);
+/// The signal that asked the runs of this process to stop (0: none).
+static SIGNAL: AtomicI32 = AtomicI32::new(0);
 static HANDLER: Once = Once::new();
 
-/// A SIGINT or SIGTERM has asked the runs of this process to stop.
+/// A SIGINT, SIGTERM or SIGHUP has asked the runs of this process to stop.
 pub fn interrupted() -> bool {
-    INTERRUPTED.load(Ordering::SeqCst)
+    SIGNAL.load(Ordering::SeqCst) != 0
+}
+
+/// The signal that stopped the run, if one did (its number; the exit
+/// status is 128 + it, as shells report).
+pub fn stopping_signal() -> Option<i32> {
+    Some(SIGNAL.load(Ordering::SeqCst)).filter(|&s| s != 0)
+}
+
+#[cfg(unix)]
+extern "C" fn on_signal(signal: libc::c_int) {
+    // Only an atomic store: async-signal-safe.
+    SIGNAL.store(signal, Ordering::SeqCst);
+}
+
+/// Stop requests are noted (the run ends at its next chunk, closing its
+/// file and writing a checkpoint), not acted on at once.
+fn catch_stop_signals() {
+    #[cfg(unix)]
+    for signal in [libc::SIGINT, libc::SIGTERM, libc::SIGHUP] {
+        // SAFETY: the handler only stores to an atomic.
+        unsafe {
+            libc::signal(
+                signal,
+                on_signal as extern "C" fn(libc::c_int) as libc::sighandler_t,
+            );
+        }
+    }
+    #[cfg(not(unix))]
+    let _ = ctrlc::set_handler(|| SIGNAL.store(2, Ordering::SeqCst));
 }
 
 /// Steps between progress updates (and interrupt checks) at most.
@@ -187,9 +217,7 @@ pub fn run_scene(
     scenario: &Scenario,
     opts: &RunOptions,
 ) -> Result<RunSummary, RunError> {
-    HANDLER.call_once(|| {
-        let _ = ctrlc::set_handler(|| INTERRUPTED.store(true, Ordering::SeqCst));
-    });
+    HANDLER.call_once(catch_stop_signals);
     let model = engine.model().clone();
     let total = model.total_steps();
     let describe = engine.describe();
@@ -263,7 +291,7 @@ pub fn run_scene(
                     c.write(engine, &mut outputs, ff.as_ref())?;
                 }
             }
-            if INTERRUPTED.load(Ordering::SeqCst) {
+            if self::interrupted() {
                 interrupted = true;
                 break;
             }
