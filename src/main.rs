@@ -349,13 +349,26 @@ fn main() -> ExitCode {
     match result {
         Ok(code) => code,
         Err(e) => {
-            eprintln!("error: {e:#}");
+            eprintln!("error: {}", error_text(&e));
             ExitCode::from(2)
         }
     }
 }
 
 use slipfront::analysis::DEFAULT_QUIET_GAP;
+
+/// An error and its causes, each said once: most of our messages already
+/// quote their cause, which the chain would repeat.
+fn error_text(e: &anyhow::Error) -> String {
+    let mut text = e.to_string();
+    for cause in e.chain().skip(1) {
+        let cause = cause.to_string();
+        if !text.contains(&cause) {
+            text = format!("{text}: {cause}");
+        }
+    }
+    text
+}
 
 fn parse_t_end(text: &str) -> Result<f64, String> {
     match text.trim().parse::<f64>() {

@@ -386,7 +386,10 @@ fn two_runs_cannot_write_one_file() {
         }
         c
     };
-    let mut first = start(false).spawn().unwrap();
+    let mut first = start(false)
+        .stdout(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
     // Until the first run has its file.
     let t0 = std::time::Instant::now();
     while !out.exists() && t0.elapsed().as_secs() < 30 {
@@ -422,6 +425,7 @@ fn sigterm_closes_the_file_and_exits_143() {
         .args(["run", "--backend", "cpu", "--threads", "1", "--quiet"])
         .args(["--t-end", "5", "-o", s(&out)])
         .args(&sets)
+        .stdout(std::process::Stdio::null())
         .spawn()
         .unwrap();
     std::thread::sleep(std::time::Duration::from_millis(1500));
@@ -438,4 +442,56 @@ fn sigterm_closes_the_file_and_exits_143() {
     let run = slipfront::output::reader::RunFile::read(&out).unwrap();
     assert!(!run.truncated, "the file was closed with its summary");
     assert!(!run.global.is_empty());
+}
+
+#[test]
+fn errors_name_the_path_and_say_their_cause_once() {
+    let out = slipfront(
+        &[
+            "run",
+            "--backend",
+            "cpu",
+            "--t-end",
+            "1e-4",
+            "--quiet",
+            "-o",
+            "/proc/no/x.mcap",
+        ],
+        &[],
+    );
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(err.contains("/proc/no/x.mcap"), "{err}");
+    assert_eq!(err.matches("No such file or directory").count(), 1, "{err}");
+    let run = root_file("tests/fuzz/corpus/mcap/small_run.mcap");
+    let out = slipfront(&["plot", &run, "-o", "/proc/no/dir"], &[]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("cannot create the folder `/proc/no/dir`"),
+        "{err}"
+    );
+    // More threads than rows: said, not silently dropped.
+    let d = dir("threads");
+    let o = d.join("t.mcap");
+    let mut args = vec!["run", "scenarios/triggered_front.toml", "--backend", "cpu"];
+    args.extend(["--threads", "4", "--quiet"]);
+    args.extend(["--t-end", "1e-4", "-o", s(&o)]);
+    // A chain one block high.
+    // Three rows of blocks.
+    args.extend(["--set", "geometry.nz=3", "--set", "geometry.height=0.005"]);
+    let out = slipfront(&args, &[]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("this lattice has 3 rows, so 3 threads work on it"),
+        "{err}"
+    );
+}
+
+fn root_file(rel: &str) -> String {
+    format!("{}/{rel}", env!("CARGO_MANIFEST_DIR"))
 }

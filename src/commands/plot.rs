@@ -121,7 +121,8 @@ impl RunData {
         let run = RunFile::read(path)?;
         anyhow::ensure!(
             !run.interface.is_empty(),
-            "{}: no /interface messages, nothing to plot (was output.interface_interval set?)",
+            "{}: no /interface messages, nothing to plot (the run recorded none: a run \
+             stopped before driving, time.end = 0, or output.interface_interval off)",
             path.display()
         );
         let series = run.interface_series();
@@ -236,7 +237,8 @@ pub fn plot(args: PlotArgs) -> anyhow::Result<ExitCode> {
             .map(Path::to_path_buf)
             .unwrap_or_default()
     });
-    std::fs::create_dir_all(&dir)?;
+    std::fs::create_dir_all(&dir)
+        .map_err(|e| anyhow::anyhow!("cannot create the folder `{}`: {e}", dir.display()))?;
     let stem = args
         .file
         .file_stem()

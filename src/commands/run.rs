@@ -92,6 +92,14 @@ impl RunArgs {
                 4 * cores
             );
         }
+        if matches!(self.backend, Backend::Cpu) && self.threads > model.nz {
+            // The CPU engine shares the rows out: one band of rows a thread.
+            eprintln!(
+                "slipfront: --threads {}: the CPU engine gives each thread whole rows of \
+                 blocks, and this lattice has {} rows, so {} threads work on it",
+                self.threads, model.nz, model.nz
+            );
+        }
         if !self.no_memory_check {
             let (real, coord) = match precision {
                 Precision::F64 => (8, 8),
