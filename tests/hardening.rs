@@ -492,6 +492,29 @@ fn errors_name_the_path_and_say_their_cause_once() {
     );
 }
 
+#[test]
+fn a_run_without_driving_plots_nothing_and_says_why() {
+    let d = dir("zero");
+    let run = d.join("zero.mcap");
+    let mut args = vec!["run", "--backend", "cpu", "--threads", "1", "--quiet"];
+    args.extend(["--t-end", "0", "-o", s(&run)]);
+    let sets: Vec<String> = slipfront::verify::SMALL_SCENE
+        .iter()
+        .flat_map(|s| ["--set".to_string(), s.to_string()])
+        .collect();
+    args.extend(sets.iter().map(String::as_str));
+    assert!(slipfront(&args, &[]).status.success());
+    let out = slipfront(&["plot", s(&run)], &[]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("no /interface messages, nothing to plot"),
+        "{err}"
+    );
+    assert!(!err.contains("Zero width"), "{err}");
+    assert!(!d.join("zero_spacetime.png").exists());
+}
+
 fn root_file(rel: &str) -> String {
     format!("{}/{rel}", env!("CARGO_MANIFEST_DIR"))
 }
