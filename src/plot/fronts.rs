@@ -4,7 +4,7 @@
 
 use super::colour::legend_line;
 use super::colour::PALETTE;
-use super::figure::{extent, log_tick, tick, Drawn, Figure, Style};
+use super::figure::{extent, legend, log_tick, tick, Drawn, Figure, Style};
 use crate::analysis::{slip_front_relation, Event, FrontKind, InterfaceSeries};
 use plotters::coord::Shift;
 use plotters::prelude::*;
@@ -251,13 +251,7 @@ impl Figure for FrontSpeedPlot<'_> {
                     });
             }
         }
-        chart
-            .configure_series_labels()
-            .label_font(style.font(11.0))
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK)
-            .position(SeriesLabelPosition::LowerRight)
-            .draw()?;
+        legend(&mut chart, style, SeriesLabelPosition::UpperRight)?;
         Ok(())
     }
 }
@@ -329,13 +323,7 @@ impl Figure for FrontTipPlot<'_> {
                 )))?;
             }
         }
-        chart
-            .configure_series_labels()
-            .label_font(style.tick_font())
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK)
-            .position(SeriesLabelPosition::LowerRight)
-            .draw()?;
+        legend(&mut chart, style, SeriesLabelPosition::LowerRight)?;
         Ok(())
     }
 }
@@ -424,13 +412,7 @@ impl Figure for SlipVsFrontPlot {
                 ))
                 .legend(legend_line(PALETTE[1], style));
         }
-        chart
-            .configure_series_labels()
-            .label_font(style.tick_font())
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK)
-            .position(SeriesLabelPosition::UpperLeft)
-            .draw()?;
+        legend(&mut chart, style, SeriesLabelPosition::UpperLeft)?;
         Ok(())
     }
 }

@@ -4,7 +4,7 @@
 
 use super::colour::legend_line;
 use super::colour::PALETTE;
-use super::figure::{decimate, extent, tick, Drawn, Figure, Style};
+use super::figure::{decimate, extent, legend, tick, Drawn, Figure, Style};
 use crate::analysis::Event;
 use plotters::coord::Shift;
 use plotters::prelude::*;
@@ -107,13 +107,7 @@ impl Figure for LoadingCurve<'_> {
             ))?
             .label("F/F_N")
             .legend(legend_line(PALETTE[0], style));
-        chart
-            .configure_series_labels()
-            .label_font(style.tick_font())
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK)
-            .position(SeriesLabelPosition::LowerRight)
-            .draw()?;
+        legend(&mut chart, style, SeriesLabelPosition::LowerRight)?;
         Ok(())
     }
 }

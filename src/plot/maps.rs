@@ -3,7 +3,7 @@
 //! time down, on a true time axis, with a colour bar and the front tip.
 
 use super::colour::{colour_bar, legend_line, ColourScale, Ramp, BAR_WIDTH};
-use super::figure::{tick, Drawn, Figure, Style};
+use super::figure::{legend, tick, Drawn, Figure, Style};
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
@@ -264,13 +264,7 @@ impl Figure for SpaceTimeMap<'_> {
             }
         }
         if labelled {
-            chart
-                .configure_series_labels()
-                .label_font(style.tick_font())
-                .background_style(WHITE.mix(0.85))
-                .border_style(BLACK)
-                .position(SeriesLabelPosition::LowerRight)
-                .draw()?;
+            legend(&mut chart, style, SeriesLabelPosition::LowerRight)?;
         }
         let (_, y_px) = chart.plotting_area().get_pixel_range();
         colour_bar(

@@ -2,7 +2,7 @@
 //! thesis Fig. 2.11).
 
 use super::colour::legend_line;
-use super::figure::{tick, Drawn, Figure, Style};
+use super::figure::{legend, tick, Drawn, Figure, Style};
 use crate::precursors::{Precursor, PrecursorSequence};
 use plotters::coord::Shift;
 use plotters::prelude::*;
@@ -108,13 +108,7 @@ impl Figure for PrecursorPlot<'_> {
                 .label(format!("first full event, F/F_N = {f:.4}"))
                 .legend(move |(x, y)| Cross::new((x + 9, y), 5, red.stroke_width(2)));
         }
-        chart
-            .configure_series_labels()
-            .label_font(style.tick_font())
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK)
-            .position(SeriesLabelPosition::UpperLeft)
-            .draw()?;
+        legend(&mut chart, style, SeriesLabelPosition::UpperLeft)?;
         Ok(())
     }
 }

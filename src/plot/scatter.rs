@@ -3,7 +3,7 @@
 
 use super::colour::legend_line;
 use super::colour::PALETTE;
-use super::figure::{extent, log_tick, tick, Drawn, Figure, Style};
+use super::figure::{extent, legend, log_tick, tick, Drawn, Figure, Style};
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
@@ -77,12 +77,7 @@ impl Figure for Scatter<'_> {
                     }
                 }
                 if self.groups.len() > 1 || self.groups.iter().any(|g| !g.is_empty()) {
-                    chart
-                        .configure_series_labels()
-                        .label_font(style.tick_font())
-                        .background_style(WHITE.mix(0.85))
-                        .border_style(BLACK)
-                        .draw()?;
+                    legend(&mut chart, style, SeriesLabelPosition::UpperRight)?;
                 }
             }};
         }
@@ -208,12 +203,7 @@ impl Figure for WorkPrecision<'_> {
                     )
                 }))?;
             }
-            chart
-                .configure_series_labels()
-                .label_font(style.tick_font())
-                .background_style(WHITE.mix(0.85))
-                .border_style(BLACK)
-                .draw()?;
+            legend(&mut chart, style, SeriesLabelPosition::UpperRight)?;
         }
         Ok(())
     }

@@ -3,7 +3,7 @@
 
 use super::colour::legend_line;
 use super::colour::{colour_bar, viridis, ColourScale, Ramp, BAR_WIDTH, PALETTE};
-use super::figure::{decimate, extent, tick, Drawn, Figure, Style};
+use super::figure::{decimate, extent, legend, tick, Drawn, Figure, Style};
 use super::loading::time_unit;
 use crate::analysis::{Event, InterfaceSeries};
 use plotters::coord::Shift;
@@ -107,13 +107,7 @@ impl Figure for SlipHistory<'_> {
                 .label(format!("x = {:.1} mm", ix as f64 * s.spacing * 1e3))
                 .legend(legend_line(colour, style));
         }
-        chart
-            .configure_series_labels()
-            .label_font(style.tick_font())
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK)
-            .position(SeriesLabelPosition::UpperLeft)
-            .draw()?;
+        legend(&mut chart, style, SeriesLabelPosition::UpperLeft)?;
         Ok(())
     }
 }
