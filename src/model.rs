@@ -223,17 +223,17 @@ impl Model {
             )));
         }
         // Step counts exact in f64 (and far from u64's end): a longer time
-        // would wrap or lose steps.
+        // would wrap the step count (time.end = 1e300 was a 13 409-step run).
         for (name, t) in [
             ("time.end", s.time.end),
             ("loading.normal.ramp_time", s.loading.normal.ramp_time),
             ("loading.normal.relax_time", s.loading.normal.relax_time),
         ] {
-            if t / dt >= 2f64.powi(52) {
+            if t / dt >= 2f64.powi(53) {
                 return Err(ModelError::Invalid(format!(
-                    "{name} = {t:e} s is out of range (allowed: below {:.4e} s, 2^52 steps of dt \
+                    "{name} = {t:e} s is out of range (allowed: below {:.4e} s, 2^53 steps of dt \
                      = {dt:.4e} s, so that every step time is exact)",
-                    2f64.powi(52) * dt
+                    2f64.powi(53) * dt
                 )));
             }
         }
@@ -326,7 +326,12 @@ impl Model {
         if drive_speed.abs() >= c_p {
             return Err(ModelError::Invalid(format!(
                 "loading.drive.velocity = {drive_speed} m/s is out of range (allowed: below \
-                 the lattice P-wave speed, |V| < {c_p:.4e} m/s)"
+                 the lattice P-wave speed, |V| < {} m/s)",
+                if c_p >= 0.1 {
+                    format!("{c_p:.1}")
+                } else {
+                    format!("{c_p:.4e}")
+                }
             )));
         }
         // What the run can represent: a slip time within the 32-bit slip

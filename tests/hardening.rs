@@ -518,3 +518,53 @@ fn a_run_without_driving_plots_nothing_and_says_why() {
 fn root_file(rel: &str) -> String {
     format!("{}/{rel}", env!("CARGO_MANIFEST_DIR"))
 }
+
+/// kill -9 loses at most about a second of output: while a run goes, its
+/// file on disk grows at least every second or so.
+#[test]
+fn the_run_file_on_disk_lags_the_run_by_about_a_second_at_most() {
+    let d = dir("lag");
+    let out = d.join("run.mcap");
+    // Sparse output, so that chunks do not fill within seconds: only the
+    // flush puts records on disk.
+    let sparse = [
+        "output.global_interval=1e-4",
+        "output.interface_interval=1e-4",
+        "output.fast_interval=1e-4",
+    ];
+    let sets: Vec<String> = slipfront::verify::SMALL_SCENE
+        .iter()
+        .chain(&sparse)
+        .flat_map(|s| ["--set".to_string(), s.to_string()])
+        .collect();
+    let mut child = Command::new(env!("CARGO_BIN_EXE_slipfront"))
+        .args(["run", "--backend", "cpu", "--threads", "1", "--quiet"])
+        .args(["--t-end", "5", "-o", s(&out)])
+        .args(&sets)
+        .stdout(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    let start = std::time::Instant::now();
+    let mut last_size = 0;
+    let mut growths = Vec::new();
+    while start.elapsed().as_secs_f64() < 5.0 {
+        let size = std::fs::metadata(&out).map_or(0, |m| m.len());
+        if size != last_size {
+            growths.push(start.elapsed().as_secs_f64());
+            last_size = size;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    child.kill().unwrap();
+    child.wait().unwrap();
+    // From the first chunk on (the normal-load phase writes none).
+    let gaps: Vec<f64> = growths.windows(2).map(|w| w[1] - w[0]).collect();
+    let worst = gaps.iter().copied().fold(0.0, f64::max);
+    assert!(gaps.len() >= 2, "the file grew at {growths:?}");
+    assert!(
+        worst < 1.75,
+        "the file grew at {growths:?}: a gap of {worst:.2} s"
+    );
+    let run = slipfront::output::reader::RunFile::read(&out).unwrap();
+    assert!(run.truncated && !run.global.is_empty());
+}
