@@ -6,7 +6,8 @@ override DAMPING_FORM: u32 = 1u;      // 0 none, 1 full relative velocity, 2 bon
 override USE_FOUNDATION: bool = true;
 override USE_TOP_LOADS: bool = true;
 override USE_SIDE_SPRING: bool = true;
-override USE_RELAXATION: bool = true;
+override USE_RELAXATION: bool = true;    // any absolute damping (relaxation or driving)
+override USE_PRESTRESS: bool = true;
 
 fn top_share(ix: u32) -> f32 {
     if c.nx == 1u {
@@ -59,6 +60,10 @@ fn bulk_force(i: u32, ld: Loads) -> vec2<f32> {
     if USE_FOUNDATION && (fl & FLAG_INTERFACE) != 0u {
         f.y = f.y + foundation_normal(ui.z.x);
     }
+    if USE_PRESTRESS && (fl & FLAG_INTERFACE) != 0u {
+        let total = select(ld.interface_shear_total, ld.strip_shear_total, u32(ix) < c.strip_blocks);
+        f.x = f.x + total * top_share(u32(ix));
+    }
     if USE_TOP_LOADS && (fl & FLAG_TOP) != 0u {
         let share = top_share(u32(ix));
         f.y = f.y - ld.normal_total * share;
@@ -68,7 +73,7 @@ fn bulk_force(i: u32, ld: Loads) -> vec2<f32> {
         f.x = f.x + c.drive_stiffness * ds_diff(ld.drive_target, ui.x);
     }
     if USE_RELAXATION {
-        f = vec2<f32>(f.x - ld.relax_eta * vi.x, f.y - ld.relax_eta * vi.y);
+        f = vec2<f32>(f.x - ld.absolute_eta * vi.x, f.y - ld.absolute_eta * vi.y);
     }
     return f;
 }

@@ -44,7 +44,9 @@ struct Loads {
     preparing: bool,
     normal_total: f32,
     top_tangential_total: f32,
-    relax_eta: f32,
+    absolute_eta: f32,
+    interface_shear_total: f32,
+    strip_shear_total: f32,
     top_velocity: f32,
     drive_target: vec2<f32>,
 }
@@ -60,13 +62,18 @@ fn loads_at(i: u32) -> Loads {
     ld.preparing = preparing;
     ld.normal_total = c.normal_force * ramp;
     ld.top_tangential_total = c.top_prestress_force * ramp;
-    ld.relax_eta = select(0.0, c.relax_eta, batch.relaxing != 0u);
+    ld.absolute_eta = select(0.0, c.relax_eta, batch.relaxing != 0u);
+    ld.interface_shear_total = 0.0;
+    ld.strip_shear_total = 0.0;
     ld.top_velocity = 0.0;
     ld.drive_target = vec2<f32>(batch.drive_target_hi, batch.drive_target_lo);
     if !preparing {
         let drive_time = batch.drive_time + fi * c.dt;
         ld.top_tangential_total = ld.top_tangential_total + c.top_force_rate * drive_time;
         ld.top_velocity = c.drive_velocity;
+        ld.absolute_eta = c.absolute_eta;
+        ld.interface_shear_total = c.interface_shear_force;
+        ld.strip_shear_total = c.strip_shear_force;
         // i·hi is exact (hi has 12 significant bits, i < 4096).
         ld.drive_target = ds_add(ds_add(ld.drive_target, fi * c.drive_step_hi), fi * c.drive_step_lo);
     }

@@ -4,9 +4,9 @@
 //!
 //! The system is the slider plus its driving spring. Stored: kinetic energy,
 //! bulk springs, foundation, side spring. Power in: the puller of the side
-//! spring, the normal and tangential top loads, the friction forces (all
+//! spring, the normal and tangential top loads and the interface prestress, the friction forces (all
 //! junction forces, pinned or slipping, taken as external). Dissipated: the
-//! dashpots and the relaxation damping.
+//! dashpots and the absolute damping (relaxation, or absolute viscosity).
 
 use crate::engine::Snapshot;
 use crate::lattice::for_each_bond;
@@ -108,6 +108,12 @@ pub fn step_power(m: &Model, before: &Snapshot, after: &Snapshot, drive_origin: 
         let v = vbar(i);
         p.top_loads += -m.normal_force * ramp * share * v[1] + top_tangential * share * v[0];
     }
+    if before.step >= m.prep_steps {
+        // The interface prestress is a load on the interface blocks.
+        for ix in 0..m.nx {
+            p.top_loads += m.interface_shear(ix) * vbar(ix)[0];
+        }
+    }
     for ix in 0..m.nx {
         // Friction of step n is in the snapshot after it.
         // The friction of the step before → after was evaluated at `before`.
@@ -130,11 +136,17 @@ pub fn step_power(m: &Model, before: &Snapshot, after: &Snapshot, drive_origin: 
             }
         };
     });
-    let relaxing = before.step < m.prep_steps && before.step >= m.ramp_steps;
-    if relaxing {
+    let absolute_eta = if before.step >= m.prep_steps {
+        m.absolute_eta
+    } else if before.step >= m.ramp_steps {
+        m.relax_eta
+    } else {
+        0.0
+    };
+    if absolute_eta > 0.0 {
         for i in 0..m.n_blocks() {
             let v = vbar(i);
-            p.damping += m.relax_eta * (v[0] * v[0] + v[1] * v[1]);
+            p.damping += absolute_eta * (v[0] * v[0] + v[1] * v[1]);
         }
     }
     p

@@ -21,11 +21,15 @@ pub fn foundation_energy(k_foundation: f64, uz: f64) -> f64 {
 }
 
 /// Share of a total force applied to the top row that column `ix` of `nx`
-/// carries: the edge blocks take half shares (trapezoid rule), so the
-/// shares sum to one.
+/// carries: the edge blocks take half shares (trapezoid rule: the load acts
+/// on the top surface, of which an edge block holds half a spacing), so the
+/// shares sum to one. A single row (`nz` = 1) is a chain of equal blocks
+/// each loaded as a body, as in the 1D models: equal shares 1/nx.
 #[inline]
-pub fn top_share<T: Real>(nx: usize, ix: usize) -> T {
-    if nx == 1 {
+pub fn top_share<T: Real>(nx: usize, nz: usize, ix: usize) -> T {
+    if nz == 1 {
+        T::one() / T::from_f64(nx as f64)
+    } else if nx == 1 {
         T::one()
     } else {
         let full = T::one() / T::from_f64((nx - 1) as f64);
@@ -51,10 +55,16 @@ mod tests {
     #[test]
     fn top_shares_sum_to_one_and_edges_take_half() {
         for nx in [1usize, 2, 3, 57] {
-            let sum: f64 = (0..nx).map(|ix| top_share::<f64>(nx, ix)).sum();
-            assert!((sum - 1.0).abs() < 1e-12, "nx = {nx}: {sum}");
+            for nz in [1usize, 2, 31] {
+                let sum: f64 = (0..nx).map(|ix| top_share::<f64>(nx, nz, ix)).sum();
+                assert!((sum - 1.0).abs() < 1e-12, "nx = {nx}, nz = {nz}: {sum}");
+            }
         }
-        assert_eq!(top_share::<f64>(57, 0), 0.5 * top_share::<f64>(57, 1));
+        assert_eq!(
+            top_share::<f64>(57, 31, 0),
+            0.5 * top_share::<f64>(57, 31, 1)
+        );
+        assert_eq!(top_share::<f64>(57, 1, 0), top_share::<f64>(57, 1, 1));
     }
 
     #[test]

@@ -24,6 +24,7 @@ pub mod rng;
 pub mod runner;
 pub mod scenario;
 pub mod step_params;
+pub mod studies;
 pub mod sweep;
 pub mod trigger;
 pub mod verify;

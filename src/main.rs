@@ -135,6 +135,24 @@ enum Command {
         #[arg(long)]
         force: bool,
     },
+    /// Regenerate one of the thesis studies into results/ (table, figure, notes).
+    Study {
+        #[arg(value_enum)]
+        study: commands::study::StudyName,
+        /// Folder for the table, figure and notes.
+        #[arg(short = 'o', long, default_value = "results")]
+        out_dir: PathBuf,
+        /// A small grid (a few points, short chains): minutes, not hours.
+        #[arg(long)]
+        quick: bool,
+        #[arg(long, value_enum, default_value = "cpu")]
+        backend: Backend,
+        #[arg(long, value_enum, default_value = "f64")]
+        precision: Precision,
+        /// Points run at once, one thread each (0: one per core).
+        #[arg(long, default_value_t = 0)]
+        threads: usize,
+    },
     /// Run a parameter sweep (or `sweep collect DIR` to merge shard tables).
     #[command(args_conflicts_with_subcommands = true)]
     Sweep {
@@ -308,6 +326,21 @@ fn main() -> ExitCode {
             precision,
             json,
         } => commands::verify::verify(backend, precision, json),
+        Command::Study {
+            study,
+            out_dir,
+            quick,
+            backend,
+            precision,
+            threads,
+        } => commands::study::study(commands::study::StudyArgs {
+            study,
+            out_dir,
+            quick,
+            backend,
+            precision,
+            threads,
+        }),
         Command::Sweep {
             action: Some(SweepAction::Collect { dir }),
             ..

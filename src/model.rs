@@ -47,6 +47,18 @@ pub struct TriggerModel {
     pub strip_prestress: f64,
 }
 
+/// A uniform shear prestress applied as a tangential force on the
+/// interface blocks from the start of driving (`[loading.prestress]`),
+/// as ratios τ/p: column ix carries ratio·F_N·share(ix).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PrestressModel {
+    /// τ/p = μd + τ̄ (μs − μd) on every block outside the trigger.
+    pub ratio: f64,
+    /// Interface blocks with index below this carry `strip_ratio`.
+    pub strip_blocks: usize,
+    pub strip_ratio: f64,
+}
+
 /// Gaussian initial displacement pulse.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PulseModel {
@@ -92,8 +104,11 @@ pub struct Model {
     pub prep_steps: u64,
     /// Absolute-velocity damping (kg/s) during the relaxation.
     pub relax_eta: f64,
+    /// Absolute-velocity damping (kg/s) once driving starts.
+    pub absolute_eta: f64,
     pub driver: Driver,
     pub trigger: Option<TriggerModel>,
+    pub prestress: Option<PrestressModel>,
     pub top: EdgeConstraint,
     pub bottom: EdgeConstraint,
     pub pulse: Option<PulseModel>,
@@ -247,10 +262,15 @@ impl Model {
                 })?;
                 Some(JunctionModel {
                     count: j.count as usize,
-                    stiffness: j.stiffness,
+                    // The engines know two kinds: a bulk ratio is a constant.
+                    stiffness: match j.stiffness {
+                        JunctionStiffness::BulkRatio => JunctionStiffness::Constant,
+                        other => other,
+                    },
                     stiffness_value: match j.stiffness {
                         JunctionStiffness::NormalLoad => j.stiffness_coefficient,
                         JunctionStiffness::Constant => j.constant_stiffness,
+                        JunctionStiffness::BulkRatio => j.stiffness_ratio.unwrap_or(0.0) * k,
                     },
                     slip_time_mean: j.slip_time_mean,
                     slip_time_std: j.slip_time_std,
@@ -279,6 +299,15 @@ impl Model {
             strip_blocks: ((t.strip_length / spacing).round() as usize + 1).min(nx),
             strip_prestress: t.strip_prestress,
         });
+        let (mu_s, mu_d) = (
+            s.friction.static_coefficient,
+            s.friction.dynamic_coefficient,
+        );
+        let prestress = s.loading.prestress.as_ref().map(|p| PrestressModel {
+            ratio: mu_d + p.tau_bar * (mu_s - mu_d),
+            strip_blocks: (p.trigger_blocks as usize).min(nx),
+            strip_ratio: mu_d + p.trigger_tau_bar * (mu_s - mu_d),
+        });
         let model = Model {
             name: s.name.clone(),
             nx,
@@ -301,8 +330,10 @@ impl Model {
             ramp_steps,
             prep_steps,
             relax_eta: s.loading.normal.relax_damping_ratio * 2.0 * (k * mass).sqrt(),
+            absolute_eta: s.damping.absolute_ratio * (k * mass).sqrt(),
             driver,
             trigger,
+            prestress,
             top: s.boundary.top,
             bottom: s.boundary.bottom,
             pulse: s.pulse.as_ref().map(|p| PulseModel {
@@ -409,7 +440,7 @@ impl Model {
 
     /// Top-row share of a total force: edge blocks take half shares.
     pub fn top_share(&self, ix: usize) -> f64 {
-        crate::laws::top_share(self.nx, ix)
+        crate::laws::top_share(self.nx, self.nz, ix)
     }
 
     /// Lattice long-wave shear speed c_s = l√(k/(2m)).
@@ -443,6 +474,26 @@ impl Model {
         0.5 * (lo + hi) * cs
     }
 
+    /// Tangential force (N) the prestress applies to interface column `ix`
+    /// once driving starts: ratio × F_N × the column's share (0 without
+    /// `[loading.prestress]`).
+    pub fn interface_shear(&self, ix: usize) -> f64 {
+        self.prestress.map_or(0.0, |p| {
+            let ratio = if ix < p.strip_blocks {
+                p.strip_ratio
+            } else {
+                p.ratio
+            };
+            ratio * self.normal_force * self.top_share(ix)
+        })
+    }
+
+    /// True when the junctions' anchors are set when driving starts (a
+    /// trigger, or a prestress carried by junctions).
+    pub fn sets_anchors_at_drive_start(&self) -> bool {
+        self.junctions.is_some() && (self.trigger.is_some() || self.prestress.is_some())
+    }
+
     /// Young's modulus of the lattice, 4k/(3B).
     pub fn lattice_youngs_modulus(&self) -> f64 {
         4.0 * self.k / (3.0 * self.width)
@@ -461,7 +512,7 @@ impl Model {
         match self.junctions {
             None => 0.0,
             Some(j) => match j.stiffness {
-                JunctionStiffness::Constant => j.stiffness_value,
+                JunctionStiffness::Constant | JunctionStiffness::BulkRatio => j.stiffness_value,
                 JunctionStiffness::NormalLoad => {
                     (j.stiffness_value * self.junction_normal_force_bound()).sqrt()
                 }
@@ -496,8 +547,8 @@ impl Model {
         let interface_k = lattice + self.k_foundation + ns * self.junction_stiffness_bound();
         StabilityLimit {
             bulk_undamped: bound(lattice, 0.0),
-            bulk: bound(lattice, dashpots),
-            interface: bound(interface_k, dashpots),
+            bulk: bound(lattice, dashpots + self.absolute_eta),
+            interface: bound(interface_k, dashpots + self.absolute_eta),
             relaxation: bound(interface_k.max(lattice), dashpots + self.relax_eta),
             driven: match self.driver {
                 Driver::SideSpring { stiffness, row, .. } => {
@@ -554,6 +605,12 @@ impl Model {
         });
         if self.trigger.is_some() {
             t.push("trigger");
+        }
+        if self.prestress.is_some() {
+            t.push("interface_prestress");
+        }
+        if self.absolute_eta > 0.0 {
+            t.push("absolute_damping");
         }
         if self.pulse.is_some() {
             t.push("initial_pulse");

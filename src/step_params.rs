@@ -33,6 +33,13 @@ pub struct Consts<T> {
     pub inv_ramp_steps: T,
     pub prep_steps: u64,
     pub relax_eta: T,
+    /// Absolute-velocity damping once driving starts (kg/s).
+    pub absolute_eta: T,
+    /// Prestress totals (ratio × F_N) outside and inside the trigger strip;
+    /// column ix takes its top share of one of them (`Model::interface_shear`).
+    pub interface_shear_force: T,
+    pub strip_shear_force: T,
+    pub strip_blocks: usize,
     pub drive_stiffness: T,
     pub drive_velocity: T,
     pub top_force_rate: T,
@@ -83,6 +90,10 @@ impl<T: Real> Consts<T> {
             inv_ramp_steps: c(1.0 / m.ramp_steps.max(1) as f64),
             prep_steps: m.prep_steps,
             relax_eta: c(m.relax_eta),
+            absolute_eta: c(m.absolute_eta),
+            interface_shear_force: c(m.prestress.map_or(0.0, |p| p.ratio * m.normal_force)),
+            strip_shear_force: c(m.prestress.map_or(0.0, |p| p.strip_ratio * m.normal_force)),
+            strip_blocks: m.prestress.map_or(0, |p| p.strip_blocks),
             drive_stiffness: c(drive_stiffness),
             drive_velocity: c(drive_velocity),
             top_force_rate: c(top_force_rate),
@@ -115,8 +126,12 @@ pub struct StepParams<T> {
     pub normal_total: T,
     /// Total tangential force on the top row (N).
     pub top_tangential_total: T,
-    /// Absolute-velocity damping (kg/s).
-    pub relax_eta: T,
+    /// Absolute-velocity damping (kg/s): the relaxation's while relaxing,
+    /// the scene's absolute viscosity once driving.
+    pub absolute_eta: T,
+    /// Prestress totals on the interface (0 before driving starts).
+    pub interface_shear_total: T,
+    pub strip_shear_total: T,
     /// Displacement the side spring's far end has been pulled, V·t (m), in
     /// f64: engines add it to the drive origin as a coordinate.
     pub drive_offset: f64,
@@ -142,10 +157,22 @@ pub fn step_params<T: Real>(c: &Consts<T>, step: u64) -> StepParams<T> {
         preparing,
         normal_total: c.normal_force * ramp,
         top_tangential_total: c.top_prestress_force * ramp + c.top_force_rate * drive_time,
-        relax_eta: if preparing && step >= c.ramp_steps {
+        absolute_eta: if !preparing {
+            c.absolute_eta
+        } else if step >= c.ramp_steps {
             c.relax_eta
         } else {
             T::zero()
+        },
+        interface_shear_total: if preparing {
+            T::zero()
+        } else {
+            c.interface_shear_force
+        },
+        strip_shear_total: if preparing {
+            T::zero()
+        } else {
+            c.strip_shear_force
         },
         drive_offset: if preparing {
             0.0

@@ -10,10 +10,13 @@ use crate::rng::{draw_key, pcg_hash, unit_from_bits, TRIGGER_STREAM};
 /// prestress inside the trigger strip. Computed from the state when driving
 /// starts; both engines upload the result.
 pub fn trigger_anchors(model: &Model, snap: &Snapshot) -> Vec<f64> {
+    let ns = model.junctions.map_or(0, |j| j.count);
+    if model.prestress.is_some() {
+        return prestress_anchors(model, snap, ns);
+    }
     let Some(t) = model.trigger else {
         return snap.anchor.clone();
     };
-    let ns = model.junctions.map_or(0, |j| j.count);
     let mut anchors = Vec::with_capacity(snap.anchor.len());
     for ix in 0..model.nx {
         let ux = snap.disp[ix][0];
@@ -27,6 +30,23 @@ pub fn trigger_anchors(model: &Model, snap: &Snapshot) -> Vec<f64> {
             };
             let k = snap.junction_stiffness[ix * ns + j];
             anchors.push(if k > 0.0 { ux - ratio * f_n / k } else { ux });
+        }
+    }
+    anchors
+}
+
+/// Anchors that make the junctions of each interface block balance the
+/// prestress the block is loaded with (`Model::interface_shear`), shared
+/// equally: the block starts in equilibrium (up to its bulk springs), each
+/// junction at the block's τ/p of its threshold.
+fn prestress_anchors(model: &Model, snap: &Snapshot, ns: usize) -> Vec<f64> {
+    let mut anchors = Vec::with_capacity(snap.anchor.len());
+    for ix in 0..model.nx {
+        let ux = snap.disp[ix][0];
+        let per_junction = model.interface_shear(ix) / ns as f64;
+        for j in 0..ns {
+            let k = snap.junction_stiffness[ix * ns + j];
+            anchors.push(if k > 0.0 { ux - per_junction / k } else { ux });
         }
     }
     anchors

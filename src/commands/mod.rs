@@ -3,6 +3,7 @@ pub mod info;
 pub mod plot;
 pub mod recover;
 pub mod run;
+pub mod study;
 pub mod sweep;
 pub mod verify;
 

@@ -226,6 +226,7 @@ pub fn plot(
             y_label: y,
             log_y,
             title: &title,
+            connect: false,
         },
         &file,
         &slipfront::plot::FigureOptions::default(),

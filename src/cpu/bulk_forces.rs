@@ -102,8 +102,8 @@ pub fn bulk_force<T: Real, C: Coordinate<T>>(
 }
 
 /// Adds to the bond forces `f` of a block at column `ix` the loads that do
-/// not come from bonds: foundation, top load, side spring and the
-/// normal-load phase's absolute damping (in this order, which the fast
+/// not come from bonds: foundation and interface prestress, top load, side spring and the
+/// absolute damping (in this order, which the fast
 /// engine keeps too).
 #[inline]
 #[allow(clippy::too_many_arguments)]
@@ -120,17 +120,23 @@ pub fn external_loads<T: Real, C: Coordinate<T>>(
     let [mut fx, mut fz] = f;
     if flags & FLAG_INTERFACE != 0 {
         fz = fz + crate::laws::foundation_normal(c.k_foundation, ui[1].value());
+        let total = if ix < c.strip_blocks {
+            p.strip_shear_total
+        } else {
+            p.interface_shear_total
+        };
+        fx = fx + total * crate::laws::top_share::<T>(c.nx, c.nz, ix);
     }
     if flags & FLAG_TOP != 0 {
-        let share = crate::laws::top_share::<T>(c.nx, ix);
+        let share = crate::laws::top_share::<T>(c.nx, c.nz, ix);
         fz = fz - p.normal_total * share;
         fx = fx + p.top_tangential_total * share;
     }
     if flags & FLAG_DRIVEN != 0 && !p.preparing {
         fx = fx + c.drive_stiffness * drive_target.diff(ui[0]);
     }
-    fx = fx - p.relax_eta * vi[0];
-    fz = fz - p.relax_eta * vi[1];
+    fx = fx - p.absolute_eta * vi[0];
+    fz = fz - p.absolute_eta * vi[1];
     [fx, fz]
 }
 

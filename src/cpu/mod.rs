@@ -245,7 +245,7 @@ impl<T: Real, C: Coordinate<T>> CpuEngine<T, C> {
         if let Driver::SideSpring { row, .. } = self.model.driver {
             self.drive_origin = self.disp[row * self.model.nx][0];
         }
-        if self.model.trigger.is_some() {
+        if self.model.sets_anchors_at_drive_start() {
             let snap = self.snapshot_now();
             let anchors = crate::trigger::trigger_anchors(&self.model, &snap);
             for (spring, a) in self.junction_spring.iter_mut().zip(anchors) {

@@ -100,6 +100,10 @@ gpu_struct! {
         pub top_prestress_force: f32,
         pub top_force_rate: f32,
         pub relax_eta: f32,
+        pub absolute_eta: f32,
+        pub interface_shear_force: f32,
+        pub strip_shear_force: f32,
+        pub strip_blocks: u32,
         pub drive_velocity: f32,
         /// V·dt = hi + lo, hi with 12 significant bits so that i·hi is
         /// exact for the step offsets i < 4096 of a batch.
@@ -262,8 +266,8 @@ impl GpuConsts {
             drive_stiffness: c.drive_stiffness,
             speed_limit,
             // Column 1 is interior whenever a full share is used (nx > 2).
-            top_share_full: crate::laws::top_share(c.nx, 1),
-            top_share_edge: crate::laws::top_share(c.nx, 0),
+            top_share_full: crate::laws::top_share(c.nx, c.nz, 1),
+            top_share_edge: crate::laws::top_share(c.nx, c.nz, 0),
             stiffness_normal_load: c.junction_stiffness_normal_load as u32,
             n_blocks: (c.nx * c.nz) as u32,
             one: 1.0,
@@ -272,6 +276,10 @@ impl GpuConsts {
             top_prestress_force: c.top_prestress_force,
             top_force_rate: c.top_force_rate,
             relax_eta: c.relax_eta,
+            absolute_eta: c.absolute_eta,
+            interface_shear_force: c.interface_shear_force,
+            strip_shear_force: c.strip_shear_force,
+            strip_blocks: c.strip_blocks as u32,
             drive_velocity: c.drive_velocity,
             drive_step_hi,
             drive_step_lo,

@@ -482,7 +482,7 @@ impl GpuEngine {
         if let Driver::SideSpring { row, .. } = self.model.driver {
             self.drive_origin = DoubleSingle::from_f64(snap.disp[row * self.model.nx][0]);
         }
-        if self.model.trigger.is_some() {
+        if self.model.sets_anchors_at_drive_start() {
             let anchors = crate::trigger::trigger_anchors(&self.model, &snap);
             let spring = gpu_junction_springs(&anchors, &snap.junction_stiffness);
             self.ctx.queue.write_buffer(

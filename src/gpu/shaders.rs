@@ -111,8 +111,11 @@ impl Variant {
                 ),
                 (
                     "USE_RELAXATION",
-                    flag(m.relax_eta > 0.0 && m.prep_steps > m.ramp_steps),
+                    flag(
+                        (m.relax_eta > 0.0 && m.prep_steps > m.ramp_steps) || m.absolute_eta > 0.0,
+                    ),
                 ),
+                ("USE_PRESTRESS", flag(m.prestress.is_some())),
             ],
         }
     }

@@ -203,7 +203,8 @@ mod tests {
                 x_label: "prestress",
                 y_label: "speed",
                 log_y: true,
-                title: "t"
+                title: "t",
+                connect: false,
             },
             "law = b"
         );

@@ -17,6 +17,8 @@ pub struct Scatter<'a> {
     pub y_label: &'a str,
     pub log_y: bool,
     pub title: &'a str,
+    /// Join each group's points in order of x (a curve, not a cloud).
+    pub connect: bool,
 }
 
 impl Scatter<'_> {
@@ -65,6 +67,18 @@ impl Figure for Scatter<'_> {
                     .draw()?;
                 for (g, name) in self.groups.iter().enumerate() {
                     let colour = PALETTE[g % PALETTE.len()];
+                    if self.connect {
+                        let mut line: Vec<(f64, f64)> = pts
+                            .iter()
+                            .filter(|p| p.2 == g)
+                            .map(|p| (p.0, p.1))
+                            .collect();
+                        line.sort_by(|a, b| a.0.total_cmp(&b.0));
+                        chart.draw_series(LineSeries::new(
+                            line,
+                            colour.stroke_width(style.px(1.5)),
+                        ))?;
+                    }
                     let series = chart.draw_series(
                         pts.iter()
                             .filter(|p| p.2 == g)

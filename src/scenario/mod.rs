@@ -152,6 +152,15 @@ pub struct Damping {
     /// η = ratio · √(k m); Table S1 uses √0.1.
     pub ratio: f64,
     pub form: DampingForm,
+    /// A dashpot on every block's absolute velocity (against the track),
+    /// η_abs = absolute_ratio · √(k m), acting once driving starts: the
+    /// "absolute viscosity" of the 1D front literature. 0 (default): none.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub absolute_ratio: f64,
+}
+
+fn is_zero(v: &f64) -> bool {
+    *v == 0.0
 }
 
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
@@ -194,6 +203,9 @@ pub enum JunctionStiffness {
     NormalLoad,
     /// k_j = constant_stiffness.
     Constant,
+    /// k_j = stiffness_ratio · k, the interface/bulk stiffness ratio of the
+    /// 1D front literature.
+    BulkRatio,
 }
 
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
@@ -206,6 +218,9 @@ pub struct Junctions {
     pub stiffness_coefficient: f64,
     /// N/m, for `constant` stiffness.
     pub constant_stiffness: f64,
+    /// k_j / k, for `bulk_ratio` stiffness.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub stiffness_ratio: Option<f64>,
     /// ⟨t_R⟩ (s).
     pub slip_time_mean: f64,
     /// σ_R (s).
@@ -219,6 +234,21 @@ pub struct Loading {
     pub drive: Drive,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub trigger: Option<Trigger>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub prestress: Option<Prestress>,
+}
+
+/// `[loading.prestress]`: a uniform shear prestress applied as a tangential
+/// force on every interface block from the start of driving, balanced by
+/// friction, in the dimensionless form of the 1D front literature:
+/// τ̄ = (τ − μd p)/((μs − μd) p). The first `trigger_blocks` blocks from the
+/// trailing edge carry `trigger_tau_bar` (> 1: they break at once).
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Prestress {
+    pub tau_bar: f64,
+    pub trigger_tau_bar: f64,
+    pub trigger_blocks: u32,
 }
 
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]

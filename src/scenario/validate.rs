@@ -33,6 +33,8 @@ pub fn validate(s: &Scenario, text: &str, overridden: &[&str]) -> Vec<String> {
     c.positive("material.density", s.material.density);
     c.positive("material.youngs_modulus", s.material.youngs_modulus);
     c.at_least("damping.ratio", s.damping.ratio, 0.0);
+    // Bounded above by the stability limit, in Model.
+    c.at_least("damping.absolute_ratio", s.damping.absolute_ratio, 0.0);
     c.at_least(
         "foundation.stiffness_ratio",
         s.foundation.stiffness_ratio,
@@ -77,6 +79,23 @@ pub fn validate(s: &Scenario, text: &str, overridden: &[&str]) -> Vec<String> {
                     "friction.junctions.constant_stiffness",
                     j.constant_stiffness,
                 ),
+                JunctionStiffness::BulkRatio => match j.stiffness_ratio {
+                    Some(r) => c.positive("friction.junctions.stiffness_ratio", r),
+                    None => c.problems.push(
+                        "missing key friction.junctions.stiffness_ratio, required by \
+                         friction.junctions.stiffness = \"bulk_ratio\""
+                            .into(),
+                    ),
+                },
+            }
+            if j.stiffness != JunctionStiffness::BulkRatio {
+                if let Some(r) = j.stiffness_ratio {
+                    let line = c.line("friction.junctions.stiffness_ratio");
+                    c.problems.push(format!(
+                        "friction.junctions.stiffness_ratio = {r} is used only with \
+                         friction.junctions.stiffness = \"bulk_ratio\"{line}"
+                    ));
+                }
             }
             // Bounded above by the 32-bit slip countdown, in Model.
             c.at_least("friction.junctions.slip_time_mean", j.slip_time_mean, 0.0);
@@ -154,6 +173,10 @@ pub fn validate(s: &Scenario, text: &str, overridden: &[&str]) -> Vec<String> {
         }
     }
 
+    if let Some(p) = &s.loading.prestress {
+        validate_prestress(&mut c, s, p);
+    }
+
     let t = &s.time;
     match (t.dt, t.dt_fraction) {
         // Bounded above by the stability limit, in Model.
@@ -204,6 +227,48 @@ pub fn validate(s: &Scenario, text: &str, overridden: &[&str]) -> Vec<String> {
         );
     }
     c.problems
+}
+
+fn validate_prestress(c: &mut Checker<'_>, s: &Scenario, p: &super::Prestress) {
+    let f = &s.friction;
+    // Below the static threshold (τ̄ < 1), or the whole interface breaks
+    // at once; below μd p (τ̄ < 0) a front cannot run.
+    if !(p.tau_bar.is_finite() && (0.0..1.0).contains(&p.tau_bar)) {
+        let line = c.line("loading.prestress.tau_bar");
+        c.problems.push(format!(
+            "loading.prestress.tau_bar = {} is out of range (allowed: 0 <= tau_bar < 1){line}",
+            p.tau_bar
+        ));
+    }
+    c.range(
+        "loading.prestress.trigger_tau_bar",
+        p.trigger_tau_bar,
+        1.0 + 1e-9,
+        10.0,
+    );
+    c.range_u(
+        "loading.prestress.trigger_blocks",
+        p.trigger_blocks,
+        1,
+        s.geometry.nx.saturating_sub(1).max(1),
+    );
+    if f.law == FrictionLaw::None || f.static_coefficient <= f.dynamic_coefficient {
+        c.problems.push(format!(
+            "[loading.prestress] is scaled between the dynamic and static friction levels, but \
+             friction.law = \"{}\" with static_coefficient = {} and dynamic_coefficient = {} \
+             has no gap between them (allowed: a friction law with static > dynamic)",
+            law_name(f.law),
+            f.static_coefficient,
+            f.dynamic_coefficient
+        ));
+    }
+    if s.loading.trigger.is_some() {
+        c.problems.push(
+            "[loading.prestress] and [loading.trigger] both prestress the interface: give one \
+             (allowed: either table)"
+                .into(),
+        );
+    }
 }
 
 fn law_name(l: FrictionLaw) -> &'static str {

@@ -39,6 +39,7 @@ pub(super) fn dragged_block(
         stiffness: JunctionStiffness::Constant,
         stiffness_coefficient: 39.2e9,
         constant_stiffness: STIFFNESS,
+        stiffness_ratio: None,
         slip_time_mean: slip_mean,
         slip_time_std: slip_std,
     });

@@ -1,0 +1,102 @@
+//! `slipfront study NAME`: regenerates one thesis study into a folder.
+
+use anyhow::Context;
+use rayon::prelude::*;
+use slipfront::backend::{Backend, Precision};
+use slipfront::studies::front_1d;
+use std::path::PathBuf;
+use std::process::ExitCode;
+use std::time::Instant;
+
+#[derive(Debug, Clone, Copy, clap::ValueEnum)]
+pub enum StudyName {
+    /// Steady-state front speed along 1D chains (Amundsen et al. 2015).
+    #[value(name = "front-1d")]
+    Front1d,
+}
+
+pub struct StudyArgs {
+    pub study: StudyName,
+    pub out_dir: PathBuf,
+    pub quick: bool,
+    pub backend: Backend,
+    pub precision: Precision,
+    pub threads: usize,
+}
+
+pub fn study(a: StudyArgs) -> anyhow::Result<ExitCode> {
+    std::fs::create_dir_all(&a.out_dir)
+        .with_context(|| format!("creating {}", a.out_dir.display()))?;
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(a.threads)
+        .build()
+        .context("thread pool")?;
+    match a.study {
+        StudyName::Front1d => pool.install(|| front_1d_study(&a))?,
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+fn front_1d_study(a: &StudyArgs) -> anyhow::Result<()> {
+    let grid = if a.quick {
+        front_1d::Grid::quick()
+    } else {
+        front_1d::Grid::full()
+    };
+    let points = grid.points();
+    eprintln!(
+        "front-1d: {} points × lengths {:?} (+ dt/2 at {}) on {:?} {:?}",
+        points.len(),
+        grid.lengths,
+        grid.dt_check_length,
+        a.backend,
+        a.precision
+    );
+    let started = Instant::now();
+    let results = points
+        .par_iter()
+        .map(|&case| front_1d::run_point(case, &grid, a.backend, a.precision))
+        .collect::<anyhow::Result<Vec<_>>>()?;
+    let wall = started.elapsed().as_secs_f64();
+    let csv_path = a.out_dir.join("front_speed_1d.csv");
+    std::fs::write(&csv_path, front_1d::csv(&results))
+        .with_context(|| format!("writing {}", csv_path.display()))?;
+    let how = format!(
+        "slipfront study front-1d{} --backend {:?} --precision {:?}",
+        if a.quick { " --quick" } else { "" },
+        a.backend,
+        a.precision
+    )
+    .to_lowercase();
+    let mut notes = front_1d::report(&results, &grid, &how);
+    notes.push_str(&format!(
+        "Wall time {wall:.0} s on {} threads ({}).\n",
+        rayon::current_num_threads(),
+        machine()
+    ));
+    let md_path = a.out_dir.join("front_speed_1d.md");
+    std::fs::write(&md_path, notes).with_context(|| format!("writing {}", md_path.display()))?;
+    let figures = front_1d::write_figures(&results, &a.out_dir)?;
+    eprintln!(
+        "front-1d: {}, {} and {} figure(s) in {wall:.0} s",
+        csv_path.display(),
+        md_path.display(),
+        figures.len()
+    );
+    Ok(())
+}
+
+/// The CPU model and core count, for the notes.
+fn machine() -> String {
+    let cpu = std::fs::read_to_string("/proc/cpuinfo")
+        .ok()
+        .and_then(|t| {
+            t.lines()
+                .find(|l| l.starts_with("model name"))
+                .and_then(|l| l.split(':').nth(1))
+                .map(|s| s.trim().to_string())
+        })
+        .unwrap_or_else(|| "unknown CPU".into());
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    format!("{cpu}, {cores} cores")
+}
