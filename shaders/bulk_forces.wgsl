@@ -19,6 +19,15 @@ fn top_share(ix: u32) -> f32 {
     return c.top_share_full;
 }
 
+// Relative line load of column ix (CPU twin: laws::normal_profile).
+fn normal_profile(ix: u32) -> f32 {
+    if c.nx == 1u {
+        return 1.0;
+    }
+    let x = f32(ix) / f32(c.nx - 1u);
+    return 1.0 + c.normal_slope * (1.0 - (x + x));
+}
+
 fn bulk_force(i: u32, ld: Loads) -> vec2<f32> {
     let ix = i32(i % c.nx);
     let iz = i32(i / c.nx);
@@ -62,11 +71,11 @@ fn bulk_force(i: u32, ld: Loads) -> vec2<f32> {
     }
     if USE_PRESTRESS && (fl & FLAG_INTERFACE) != 0u {
         let total = select(ld.interface_shear_total, ld.strip_shear_total, u32(ix) < c.strip_blocks);
-        f.x = f.x + total * top_share(u32(ix));
+        f.x = f.x + total * (top_share(u32(ix)) * normal_profile(u32(ix)));
     }
     if USE_TOP_LOADS && (fl & FLAG_TOP) != 0u {
         let share = top_share(u32(ix));
-        f.y = f.y - ld.normal_total * share;
+        f.y = f.y - ld.normal_total * (share * normal_profile(u32(ix)));
         f.x = f.x + ld.top_tangential_total * share;
     }
     if USE_SIDE_SPRING && (fl & FLAG_DRIVEN) != 0u && !ld.preparing {

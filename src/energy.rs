@@ -106,7 +106,8 @@ pub fn step_power(m: &Model, before: &Snapshot, after: &Snapshot, drive_origin: 
         let i = (m.nz - 1) * m.nx + ix;
         let share = m.top_share(ix);
         let v = vbar(i);
-        p.top_loads += -m.normal_force * ramp * share * v[1] + top_tangential * share * v[0];
+        let normal_share = m.normal_share(ix);
+        p.top_loads += -m.normal_force * ramp * normal_share * v[1] + top_tangential * share * v[0];
     }
     if before.step >= m.prep_steps {
         // The interface prestress is a load on the interface blocks.

@@ -41,6 +41,21 @@ pub fn top_share<T: Real>(nx: usize, nz: usize, ix: usize) -> T {
     }
 }
 
+/// Relative line load of column `ix` of `nx` under a linear normal-load
+/// profile of slope `slope` = (r − 1)/(r + 1), r the trailing-to-leading
+/// ratio: 1 + slope at the trailing edge, 1 − slope at the leading edge.
+/// Linear, so its top-share-weighted sum is exactly 1 (the total load is
+/// kept).
+#[inline]
+pub fn normal_profile<T: Real>(slope: T, nx: usize, ix: usize) -> T {
+    if nx == 1 {
+        T::one()
+    } else {
+        let x = T::from_f64(ix as f64) / T::from_f64((nx - 1) as f64);
+        T::one() + slope * (T::one() - (x + x))
+    }
+}
+
 /// Stretch of the side-driving spring (m): how far its far end, pulled at
 /// `velocity` from `origin` for time `t` (≥ 0), is ahead of the driven
 /// block at `u`. Its tension is stiffness × stretch.

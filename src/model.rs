@@ -99,6 +99,9 @@ pub struct Model {
     pub junctions: Option<JunctionModel>,
     /// Total normal load F_N (N).
     pub normal_force: f64,
+    /// Slope of the linear normal-load profile, (r − 1)/(r + 1) for the
+    /// trailing-to-leading ratio r (0: uniform).
+    pub normal_slope: f64,
     pub ramp_steps: u64,
     /// Steps of the whole normal-load phase (ramp and relaxation).
     pub prep_steps: u64,
@@ -327,6 +330,10 @@ impl Model {
             mu_d: s.friction.dynamic_coefficient,
             junctions,
             normal_force: s.loading.normal.force,
+            normal_slope: {
+                let r = s.loading.normal.trailing_to_leading;
+                (r - 1.0) / (r + 1.0)
+            },
             ramp_steps,
             prep_steps,
             relax_eta: s.loading.normal.relax_damping_ratio * 2.0 * (k * mass).sqrt(),
@@ -443,6 +450,12 @@ impl Model {
         crate::laws::top_share(self.nx, self.nz, ix)
     }
 
+    /// Share of the normal load F_N that top column `ix` carries (the top
+    /// share times the normal-load profile).
+    pub fn normal_share(&self, ix: usize) -> f64 {
+        self.top_share(ix) * crate::laws::normal_profile(self.normal_slope, self.nx, ix)
+    }
+
     /// Lattice long-wave shear speed c_s = l√(k/(2m)).
     pub fn shear_wave_speed(&self) -> f64 {
         self.spacing * (self.k / (2.0 * self.mass)).sqrt()
@@ -484,7 +497,7 @@ impl Model {
             } else {
                 p.ratio
             };
-            ratio * self.normal_force * self.top_share(ix)
+            ratio * self.normal_force * self.normal_share(ix)
         })
     }
 
@@ -503,7 +516,8 @@ impl Model {
     /// stress concentration at the edges (used by the stability estimate).
     fn junction_normal_force_bound(&self) -> f64 {
         let ns = self.junctions.map_or(1, |j| j.count) as f64;
-        let per_block = self.normal_force * self.top_share(self.nx / 2);
+        let per_block =
+            self.normal_force * self.top_share(self.nx / 2) * (1.0 + self.normal_slope.abs());
         2.0 * per_block / ns
     }
 

@@ -28,6 +28,8 @@ pub struct Consts<T> {
     pub slip_std_steps: T,
     pub seed: u32,
     pub normal_force: T,
+    /// Slope of the linear normal-load profile (`laws::normal_profile`).
+    pub normal_slope: T,
     pub ramp_steps: u64,
     /// 1/ramp_steps, so the ramp is a product (exact alike on CPU and GPU).
     pub inv_ramp_steps: T,
@@ -86,6 +88,7 @@ impl<T: Real> Consts<T> {
             slip_std_steps: c(j.map_or(0.0, |j| j.slip_time_std / m.dt)),
             seed: m.seed,
             normal_force: c(m.normal_force),
+            normal_slope: c(m.normal_slope),
             ramp_steps: m.ramp_steps,
             inv_ramp_steps: c(1.0 / m.ramp_steps.max(1) as f64),
             prep_steps: m.prep_steps,

@@ -3,7 +3,7 @@
 use anyhow::Context;
 use rayon::prelude::*;
 use slipfront::backend::{Backend, Precision};
-use slipfront::studies::front_1d;
+use slipfront::studies::{coulomb_precursors, front_1d};
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Instant;
@@ -13,6 +13,9 @@ pub enum StudyName {
     /// Steady-state front speed along 1D chains (Amundsen et al. 2015).
     #[value(name = "front-1d")]
     Front1d,
+    /// Precursors with Coulomb friction under Maegawa's normal loadings
+    /// (Trømborg et al. 2011).
+    CoulombPrecursors,
 }
 
 pub struct StudyArgs {
@@ -33,6 +36,7 @@ pub fn study(a: StudyArgs) -> anyhow::Result<ExitCode> {
         .context("thread pool")?;
     match a.study {
         StudyName::Front1d => pool.install(|| front_1d_study(&a))?,
+        StudyName::CoulombPrecursors => pool.install(|| coulomb_precursors_study(&a))?,
     }
     Ok(ExitCode::SUCCESS)
 }
@@ -99,4 +103,71 @@ fn machine() -> String {
         .unwrap_or_else(|| "unknown CPU".into());
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
     format!("{cpu}, {cores} cores")
+}
+
+fn coulomb_precursors_study(a: &StudyArgs) -> anyhow::Result<()> {
+    use coulomb_precursors::{Loading, SCENARIO_PATH};
+    let scenario = std::path::Path::new(SCENARIO_PATH);
+    let base = slipfront::Scenario::load(scenario, &[])?;
+    let area = base.geometry.length * base.geometry.width;
+    let runs = a.out_dir.join("tromborg2011_runs");
+    std::fs::create_dir_all(&runs).with_context(|| format!("creating {}", runs.display()))?;
+    // The quick version stops after the first precursors.
+    let t_end = if a.quick { Some(0.06) } else { None };
+    let started = Instant::now();
+    let results = Loading::MAEGAWA
+        .par_iter()
+        .map(|&loading| {
+            let output = runs.join(format!("{}.mcap", loading.file_stem()));
+            crate::commands::run::run(crate::commands::run::RunArgs {
+                scenario: Some(scenario.to_path_buf()),
+                backend: a.backend,
+                gpu_path: slipfront::gpu::GpuPath::Auto,
+                precision: Some(a.precision),
+                set: loading.overrides(),
+                t_end,
+                fast_forward: None,
+                output: Some(output.clone()),
+                threads: 1,
+                allow_unstable: false,
+                progress: slipfront::runner::ProgressMode::None,
+                quiet: true,
+                resume: None,
+                from: None,
+                force: true,
+                no_memory_check: false,
+            })?;
+            coulomb_precursors::analyse(loading, &output)
+        })
+        .collect::<anyhow::Result<Vec<_>>>()?;
+    let wall = started.elapsed().as_secs_f64();
+    let mean = |l: &Loading| (l.trailing + l.leading) / area;
+    let how = format!(
+        "slipfront study coulomb-precursors{} --backend {:?} --precision {:?}",
+        if a.quick { " --quick" } else { "" },
+        a.backend,
+        a.precision
+    )
+    .to_lowercase();
+    let mut notes = coulomb_precursors::report(&results, &how, mean);
+    notes.push_str(&format!(
+        "\nThe three runs (MCAP, readable with `slipfront info` and `slipfront plot`) are in \
+         `{}`. Wall time {wall:.0} s for the three on {} threads ({}).\n",
+        runs.display(),
+        rayon::current_num_threads(),
+        machine()
+    ));
+    let csv_path = a.out_dir.join("tromborg2011_coulomb_precursors.csv");
+    std::fs::write(&csv_path, coulomb_precursors::csv(&results))
+        .with_context(|| format!("writing {}", csv_path.display()))?;
+    let md_path = a.out_dir.join("tromborg2011_coulomb_precursors.md");
+    std::fs::write(&md_path, notes).with_context(|| format!("writing {}", md_path.display()))?;
+    let figures = coulomb_precursors::write_figures(&results, &a.out_dir, mean)?;
+    eprintln!(
+        "coulomb-precursors: {}, {} and {} figure(s) in {wall:.0} s",
+        csv_path.display(),
+        md_path.display(),
+        figures.len()
+    );
+    Ok(())
 }

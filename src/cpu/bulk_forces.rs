@@ -125,11 +125,14 @@ pub fn external_loads<T: Real, C: Coordinate<T>>(
         } else {
             p.interface_shear_total
         };
-        fx = fx + total * crate::laws::top_share::<T>(c.nx, c.nz, ix);
+        let share = crate::laws::top_share::<T>(c.nx, c.nz, ix)
+            * crate::laws::normal_profile(c.normal_slope, c.nx, ix);
+        fx = fx + total * share;
     }
     if flags & FLAG_TOP != 0 {
         let share = crate::laws::top_share::<T>(c.nx, c.nz, ix);
-        fz = fz - p.normal_total * share;
+        let profile = crate::laws::normal_profile(c.normal_slope, c.nx, ix);
+        fz = fz - p.normal_total * (share * profile);
         fx = fx + p.top_tangential_total * share;
     }
     if flags & FLAG_DRIVEN != 0 && !p.preparing {

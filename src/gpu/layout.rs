@@ -96,6 +96,7 @@ gpu_struct! {
         /// reassociation (shaders/double_single.wgsl).
         pub one: f32,
         pub normal_force: f32,
+        pub normal_slope: f32,
         pub inv_ramp_steps: f32,
         pub top_prestress_force: f32,
         pub top_force_rate: f32,
@@ -272,6 +273,7 @@ impl GpuConsts {
             n_blocks: (c.nx * c.nz) as u32,
             one: 1.0,
             normal_force: c.normal_force,
+            normal_slope: c.normal_slope,
             inv_ramp_steps: c.inv_ramp_steps,
             top_prestress_force: c.top_prestress_force,
             top_force_rate: c.top_force_rate,

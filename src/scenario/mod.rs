@@ -256,6 +256,14 @@ pub struct Prestress {
 pub struct NormalLoad {
     /// F_N (N), spread over the top row.
     pub force: f64,
+    /// Line load at the trailing edge over that at the leading edge, the
+    /// profile linear between them and the total `force`; 1 (default):
+    /// uniform.
+    #[serde(
+        default = "NormalLoad::default_trailing_to_leading",
+        skip_serializing_if = "NormalLoad::is_uniform"
+    )]
+    pub trailing_to_leading: f64,
     /// Ramp duration (s) before driving starts; junctions cannot break.
     pub ramp_time: f64,
     /// Damped relaxation after the ramp (s).
@@ -361,6 +369,15 @@ pub struct Output {
     /// only those at the start of driving, at the end and on a signal.
     #[serde(default = "Output::default_checkpoint_interval")]
     pub checkpoint_interval: f64,
+}
+
+impl NormalLoad {
+    fn default_trailing_to_leading() -> f64 {
+        1.0
+    }
+    fn is_uniform(r: &f64) -> bool {
+        *r == 1.0
+    }
 }
 
 impl Output {

@@ -106,6 +106,14 @@ pub fn validate(s: &Scenario, text: &str, overridden: &[&str]) -> Vec<String> {
 
     let n = &s.loading.normal;
     c.at_least("loading.normal.force", n.force, 0.0);
+    // Both edges pressed: a zero or negative edge load would need a
+    // profile that pulls.
+    c.range(
+        "loading.normal.trailing_to_leading",
+        n.trailing_to_leading,
+        1e-3,
+        1e3,
+    );
     c.at_least("loading.normal.ramp_time", n.ramp_time, 0.0);
     c.at_least("loading.normal.relax_time", n.relax_time, 0.0);
     // The stability check bounds the extra damping (relaxation limit).
