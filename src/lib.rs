@@ -23,6 +23,7 @@ pub mod real;
 pub mod rng;
 pub mod runner;
 pub mod scenario;
+pub mod single_block;
 pub mod step_params;
 pub mod studies;
 pub mod sweep;

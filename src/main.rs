@@ -135,6 +135,16 @@ enum Command {
         #[arg(long)]
         force: bool,
     },
+    /// Run a single-block scene (scenarios/thogersen2014_single_block.toml
+    /// by default): one block and its junctions under a prescribed slip
+    /// history or pulled through a spring; writes a CSV time series.
+    SingleBlock {
+        scenario: Option<PathBuf>,
+        /// CSV output (time, position, velocity, friction coefficient,
+        /// pinned fraction).
+        #[arg(short = 'o', long, default_value = "single_block.csv")]
+        output: PathBuf,
+    },
     /// Regenerate one of the thesis studies into results/ (table, figure, notes).
     Study {
         #[arg(value_enum)]
@@ -326,6 +336,9 @@ fn main() -> ExitCode {
             precision,
             json,
         } => commands::verify::verify(backend, precision, json),
+        Command::SingleBlock { scenario, output } => {
+            commands::study::single_block_run(scenario.as_deref(), &output)
+        }
         Command::Study {
             study,
             out_dir,

@@ -2,6 +2,12 @@
 
 use std::process::Command;
 
+fn slipfront_cmd() -> Command {
+    let mut c = Command::new(env!("CARGO_BIN_EXE_slipfront"));
+    c.current_dir(env!("CARGO_MANIFEST_DIR"));
+    c
+}
+
 fn slipfront(args: &[&str]) -> std::process::Output {
     Command::new(env!("CARGO_BIN_EXE_slipfront"))
         .args(args)
@@ -344,4 +350,92 @@ fn outputs_inputs_and_foreign_files_are_guarded() {
         !text.contains('\u{1b}') && text.contains("x\\u{1b}[2Jy"),
         "{text}"
     );
+}
+
+#[test]
+fn study_commands_write_their_tables_and_figures() {
+    let dir = std::env::temp_dir().join(format!("slipfront-cli-study-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let out = dir.as_path();
+    for study in ["front-1d", "single-block", "coulomb-precursors"] {
+        let o = slipfront_cmd()
+            .args(["study", study, "--quick", "-o"])
+            .arg(out)
+            .output()
+            .unwrap();
+        assert!(
+            o.status.success(),
+            "{study}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+    }
+    let csv = std::fs::read_to_string(out.join("front_speed_1d.csv")).unwrap();
+    assert!(csv.starts_with("law,viscosity,alpha,stiffness_ratio,tau_bar,n_blocks,front_speed\n"));
+    assert!(
+        csv.contains(",inf,0.8,inf,"),
+        "a rigid extrapolated row:\n{csv}"
+    );
+    for f in [
+        "front_speed_1d.md",
+        "front_speed_1d_viscosity.png",
+        "thogersen2014_single_block.md",
+        "thogersen2014_friction_vs_speed.png",
+        "tromborg2011_coulomb_precursors.md",
+        "tromborg2011_coulomb_precursors.png",
+    ] {
+        assert!(out.join(f).is_file(), "{f}");
+    }
+    // Uniform loading: precursors longer than one block, growing with the load.
+    let table = std::fs::read_to_string(out.join("tromborg2011_coulomb_precursors.csv")).unwrap();
+    let uniform: Vec<(f64, f64)> = table
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').collect::<Vec<_>>())
+        .filter(|c| c[0] == "200" && c[3] == "false" && c[5].parse::<f64>().unwrap() > 3.75)
+        .map(|c| (c[4].parse().unwrap(), c[5].parse().unwrap()))
+        .collect();
+    assert!(uniform.len() >= 2, "{table}");
+    assert!(
+        uniform
+            .windows(2)
+            .all(|w| w[1].0 > w[0].0 && w[1].1 > w[0].1),
+        "{uniform:?}"
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn single_block_runs_the_built_in_scene_and_refuses_a_bad_one() {
+    let dir = std::env::temp_dir().join(format!("slipfront-cli-block-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let csv = dir.join("sb.csv");
+    let o = slipfront_cmd()
+        .args(["single-block", "-o"])
+        .arg(&csv)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let text = std::fs::read_to_string(&csv).unwrap();
+    assert!(text
+        .starts_with("time_s,position_m,velocity_m_per_s,friction_coefficient,pinned_fraction\n"));
+    assert!(text.lines().count() > 1000);
+    let bad = dir.join("bad.toml");
+    let scene = std::fs::read_to_string("scenarios/thogersen2014_single_block.toml")
+        .unwrap()
+        .replace("break_stretch = 1.0e-7", "break_stretch = -1.0e-7");
+    std::fs::write(&bad, scene).unwrap();
+    let o = slipfront_cmd()
+        .arg("single-block")
+        .arg(&bad)
+        .arg("-o")
+        .arg(&csv)
+        .output()
+        .unwrap();
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("law.break_stretch = -0.0000001") || err.contains("law.break_stretch = -1e-7"),
+        "{err}"
+    );
+    std::fs::remove_dir_all(&dir).ok();
 }

@@ -152,3 +152,84 @@ fn energy_balance_of_a_prestressed_chain_with_absolute_viscosity() {
     let without = (change - (net_in + dissipated)).abs() / w_load;
     assert!(without > 0.05, "{without}");
 }
+
+mod single_block {
+    use slipfront::single_block::law::{JunctionLaw, SlipForce, SlipTime};
+    use slipfront::single_block::{next_static_threshold, simulated_steady_friction};
+    use slipfront::studies::single_block::{laws, shape};
+
+    fn base() -> JunctionLaw {
+        JunctionLaw {
+            threshold: 0.4,
+            break_stretch: 1e-7,
+            slip_force: SlipForce::Constant { level: 0.17 },
+            slip_time: SlipTime::Gaussian {
+                mean: 2e-3,
+                std: 2e-4,
+            },
+            drag: 0.0,
+        }
+    }
+
+    #[test]
+    fn simulated_steady_friction_is_within_2_percent_of_the_renewal_formula() {
+        let mut all = laws(&base());
+        all.push(slipfront::studies::single_block::NamedLaw {
+            name: "exponential slip times",
+            law: JunctionLaw {
+                slip_time: SlipTime::Exponential { mean: 1e-3 },
+                ..base()
+            },
+        });
+        for l in &all {
+            for v in [1e-5, 1e-4, 1e-3, 1e-2] {
+                let analytic = l.law.steady_friction(v);
+                let sim = simulated_steady_friction(&l.law, v, 400, 15.0, 3);
+                let err = (sim - analytic).abs() / analytic;
+                assert!(err < 0.02, "{} at {v}: {sim} vs {analytic}", l.name);
+                // Negative control: a 10 % higher threshold in the formula
+                // is flagged wherever the pinned phase counts.
+                let wrong = JunctionLaw {
+                    threshold: 0.44,
+                    ..l.law
+                }
+                .steady_friction(v);
+                if v <= 1e-4 {
+                    assert!((sim - wrong).abs() / wrong > 0.02, "{} at {v}", l.name);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn the_three_laws_give_the_three_shapes() {
+        let speeds: Vec<f64> = (0..=20)
+            .map(|i| 10f64.powf(-6.0 + 0.25 * i as f64))
+            .collect();
+        let shapes: Vec<&str> = laws(&base())
+            .iter()
+            .map(|l| {
+                shape(
+                    &speeds
+                        .iter()
+                        .map(|&v| l.law.steady_friction(v))
+                        .collect::<Vec<_>>(),
+                )
+            })
+            .collect();
+        assert!(shapes[0].starts_with("decreasing"), "{shapes:?}");
+        assert!(shapes[1].starts_with("increasing"), "{shapes:?}");
+        assert!(shapes[2].starts_with("non-monotonic"), "{shapes:?}");
+    }
+
+    #[test]
+    fn a_more_abrupt_stop_gives_a_higher_next_static_threshold() {
+        let t = |a: f64| next_static_threshold(&base(), 400, 1, 1e-3, a, 1e-5);
+        let (gentle, abrupt) = (t(1e-2), t(1e2));
+        println!("gentle {gentle:.4}, abrupt {abrupt:.4}");
+        assert!(abrupt > gentle + 0.05, "{gentle} → {abrupt}");
+        // The yardstick: a deceleration moved by 1e-6 does not move it.
+        let nudged = t(1e2 * (1.0 + 1e-6));
+        assert!((nudged - abrupt).abs() < 0.01, "{abrupt} vs {nudged}");
+    }
+}

@@ -3,7 +3,7 @@
 use anyhow::Context;
 use rayon::prelude::*;
 use slipfront::backend::{Backend, Precision};
-use slipfront::studies::{coulomb_precursors, front_1d};
+use slipfront::studies::{coulomb_precursors, front_1d, single_block};
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Instant;
@@ -16,6 +16,9 @@ pub enum StudyName {
     /// Precursors with Coulomb friction under Maegawa's normal loadings
     /// (Trømborg et al. 2011).
     CoulombPrecursors,
+    /// One block under prescribed motion: μ(v) of three junction laws and
+    /// the next static threshold against the stop (Thøgersen et al. 2014).
+    SingleBlock,
 }
 
 pub struct StudyArgs {
@@ -37,6 +40,7 @@ pub fn study(a: StudyArgs) -> anyhow::Result<ExitCode> {
     match a.study {
         StudyName::Front1d => pool.install(|| front_1d_study(&a))?,
         StudyName::CoulombPrecursors => pool.install(|| coulomb_precursors_study(&a))?,
+        StudyName::SingleBlock => pool.install(|| single_block_study(&a))?,
     }
     Ok(ExitCode::SUCCESS)
 }
@@ -170,4 +174,96 @@ fn coulomb_precursors_study(a: &StudyArgs) -> anyhow::Result<()> {
         figures.len()
     );
     Ok(())
+}
+
+fn single_block_study(a: &StudyArgs) -> anyhow::Result<()> {
+    let scene = slipfront::single_block::SingleBlockScene::parse(
+        slipfront::single_block::SCENARIO,
+        "scenarios/thogersen2014_single_block.toml",
+    )?;
+    let started = Instant::now();
+    let laws = single_block::laws(&scene.law);
+    let (per_decade, cycles) = if a.quick { (1, 10.0) } else { (4, 40.0) };
+    let points = single_block::friction_curves(
+        &laws,
+        &single_block::speeds(per_decade),
+        scene.junctions as usize,
+        cycles,
+    );
+    let decelerations: Vec<f64> = if a.quick {
+        vec![1e-2, 1.0, 1e2]
+    } else {
+        (0..=12)
+            .map(|i| 10f64.powf(-3.0 + 0.5 * i as f64))
+            .collect()
+    };
+    let thresholds = single_block::threshold_vs_deceleration(&scene, &decelerations);
+    let wall = started.elapsed().as_secs_f64();
+    let how = format!(
+        "slipfront study single-block{}",
+        if a.quick { " --quick" } else { "" }
+    );
+    let mut notes = single_block::report(&laws, &points, &thresholds, &scene, &how);
+    notes.push_str(&format!(
+        "\nWall time {wall:.0} s on {} threads ({}); the single-block model runs on the CPU only (one \
+         block has no parallel work for a GPU).\n",
+        rayon::current_num_threads(),
+        machine()
+    ));
+    let write = |name: &str, text: String| -> anyhow::Result<()> {
+        let path = a.out_dir.join(name);
+        std::fs::write(&path, text).with_context(|| format!("writing {}", path.display()))
+    };
+    write(
+        "thogersen2014_friction_vs_speed.csv",
+        single_block::friction_csv(&laws, &points),
+    )?;
+    let mut t = String::from("deceleration_m_per_s2,static_threshold\n");
+    for (d, m) in &thresholds {
+        t.push_str(&format!("{d:.4e},{m:.6}\n"));
+    }
+    write("thogersen2014_threshold_vs_deceleration.csv", t)?;
+    write("thogersen2014_single_block.md", notes)?;
+    let figures = single_block::write_figures(&laws, &points, &thresholds, &a.out_dir)?;
+    eprintln!(
+        "single-block: notes, 2 tables and {} figure(s) in {} in {wall:.0} s",
+        figures.len(),
+        a.out_dir.display()
+    );
+    Ok(())
+}
+
+/// `slipfront single-block [SCENARIO] -o OUT.csv`.
+pub fn single_block_run(
+    scenario: Option<&std::path::Path>,
+    output: &std::path::Path,
+) -> anyhow::Result<ExitCode> {
+    use slipfront::single_block::SingleBlockScene;
+    let scene = match scenario {
+        Some(p) => SingleBlockScene::load(p)?,
+        None => SingleBlockScene::parse(
+            slipfront::single_block::SCENARIO,
+            "scenarios/thogersen2014_single_block.toml (built in)",
+        )?,
+    };
+    let mut csv =
+        String::from("time_s,position_m,velocity_m_per_s,friction_coefficient,pinned_fraction\n");
+    let mut peak: f64 = 0.0;
+    scene.run(|s| {
+        peak = peak.max(s.friction);
+        csv.push_str(&format!(
+            "{:.9e},{:.9e},{:.6e},{:.6},{:.5}\n",
+            s.time, s.position, s.velocity, s.friction, s.pinned
+        ));
+    });
+    let tmp = output.with_extension("csv.partial");
+    std::fs::write(&tmp, csv).with_context(|| format!("writing {}", tmp.display()))?;
+    std::fs::rename(&tmp, output).with_context(|| format!("writing {}", output.display()))?;
+    eprintln!(
+        "single-block `{}`: {} junctions, peak friction coefficient {peak:.4}; {}",
+        scene.name,
+        scene.junctions,
+        output.display()
+    );
+    Ok(ExitCode::SUCCESS)
 }

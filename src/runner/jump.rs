@@ -113,9 +113,7 @@ pub fn relaxation_drop(
         let i = (model.nz - 1) * model.nx + ix;
         let share = model.top_share(ix);
         work += share * loads.top_tangential_total * (after.disp[i][0] - before.disp[i][0])
-            - model.normal_share(ix)
-                * loads.normal_total
-                * (after.disp[i][1] - before.disp[i][1]);
+            - model.normal_share(ix) * loads.normal_total * (after.disp[i][1] - before.disp[i][1]);
     }
     stored_energy(model, before, origin).total() - stored_energy(model, after, origin).total()
         + work

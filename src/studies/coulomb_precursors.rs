@@ -110,7 +110,10 @@ pub fn analyse(loading: Loading, run_path: &Path) -> anyhow::Result<LoadingResul
         let next = events.get(k + 1).map_or(f64::INFINITY, |n| n.start);
         if let Some(m) = at_rest_before(next).filter(|m| m.time > e.end) {
             let what = if e.full {
-                format!("after the full event at F/F_N {:.3}", run.drive_ratio_at(e.start))
+                format!(
+                    "after the full event at F/F_N {:.3}",
+                    run.drive_ratio_at(e.start)
+                )
             } else {
                 format!(
                     "after precursor {} ({:.1} mm)",
@@ -137,7 +140,8 @@ pub fn analyse(loading: Loading, run_path: &Path) -> anyhow::Result<LoadingResul
 /// CSV of the precursors: one row per event before (and including) the
 /// first full event.
 pub fn csv(results: &[LoadingResult]) -> String {
-    let mut out = String::from("trailing_load_n,leading_load_n,event,full,drive_ratio,length_mm,origin_mm\n");
+    let mut out =
+        String::from("trailing_load_n,leading_load_n,event,full,drive_ratio,length_mm,origin_mm\n");
     for r in results {
         let mut rows: Vec<(bool, f64, f64, f64)> = r
             .sequence
@@ -249,7 +253,11 @@ pub fn write_figures(
 }
 
 /// The study's notes.
-pub fn report(results: &[LoadingResult], how: &str, mean_stress: impl Fn(&Loading) -> f64) -> String {
+pub fn report(
+    results: &[LoadingResult],
+    how: &str,
+    mean_stress: impl Fn(&Loading) -> f64,
+) -> String {
     let mut md = String::new();
     let _ = writeln!(
         md,
@@ -291,7 +299,10 @@ pub fn report(results: &[LoadingResult], how: &str, mean_stress: impl Fn(&Loadin
         );
     }
     let _ = writeln!(md, "\n## Normal stress at rest (p / mean) at the trailing edge, the middle and the leading edge\n");
-    let _ = writeln!(md, "| loading | profile | trailing | middle | leading |\n|---|---|---|---|---|");
+    let _ = writeln!(
+        md,
+        "| loading | profile | trailing | middle | leading |\n|---|---|---|---|---|"
+    );
     for r in results {
         let mean = mean_stress(&r.loading);
         for p in &r.profiles {

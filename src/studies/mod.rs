@@ -3,3 +3,4 @@
 
 pub mod coulomb_precursors;
 pub mod front_1d;
+pub mod single_block;
