@@ -143,7 +143,7 @@ impl SingleBlockScene {
         let every = (self.output_interval / self.dt).round().max(1.0) as u64;
         let mut n = 0u64;
         let mut thin = |s: Sample| {
-            if n % every == 0 {
+            if n.is_multiple_of(every) {
                 sample(s);
             }
             n += 1;
