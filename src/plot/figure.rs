@@ -307,7 +307,8 @@ pub fn tick(v: f64, span: f64) -> String {
     if v == 0.0 {
         return "0".into();
     }
-    let decimals = (-(span.abs().max(1e-300) / 5.0).log10().floor()).clamp(0.0, 9.0) as usize;
+    // Plotters puts up to ~10 ticks on an axis: resolve a tenth of it.
+    let decimals = (-(span.abs().max(1e-300) / 10.0).log10().floor()).clamp(0.0, 9.0) as usize;
     let text = format!("{v:.decimals$}");
     if text
         .trim_start_matches('-')
