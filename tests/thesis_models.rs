@@ -261,7 +261,11 @@ fn gpu_asymmetric_normal_load_matches_the_cpu_field_by_field() {
     };
     let (c, g) = (run(&m, Backend::Cpu), run(&m, Backend::Gpu));
     let errors = compare_snapshots(&c, &g);
-    assert_eq!(fields_over(&errors, 1e-4, 1e-5), Vec::<String>::new(), "{errors:?}");
+    assert_eq!(
+        fields_over(&errors, 1e-4, 1e-5),
+        Vec::<String>::new(),
+        "{errors:?}"
+    );
     // The profile is there: the trailing edge pressed harder than the
     // leading one (3× at the top, spread by the bulk at the interface;
     // uniformly loaded, the side spring's moment makes it the other way).

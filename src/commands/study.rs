@@ -61,9 +61,21 @@ fn front_1d_study(a: &StudyArgs) -> anyhow::Result<()> {
         a.precision
     );
     let started = Instant::now();
+    let done = std::sync::atomic::AtomicUsize::new(0);
     let results = points
         .par_iter()
-        .map(|&case| front_1d::run_point(case, &grid, a.backend, a.precision))
+        .map(|&case| {
+            let r = front_1d::run_point(case, &grid, a.backend, a.precision);
+            let n = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+            if n % (points.len() / 10).max(1) == 0 {
+                eprintln!(
+                    "front-1d: {n} of {} points, {:.0} s",
+                    points.len(),
+                    started.elapsed().as_secs_f64()
+                );
+            }
+            r
+        })
         .collect::<anyhow::Result<Vec<_>>>()?;
     let wall = started.elapsed().as_secs_f64();
     let csv_path = a.out_dir.join("front_speed_1d.csv");

@@ -484,16 +484,22 @@ pub fn trend_checks(results: &[PointResult]) -> Vec<TrendCheck> {
         a.viscosity == b.viscosity && a.alpha == b.alpha && a.tau_bar == b.tau_bar
     };
     let mut above = TrendCheck {
-        name: "faster than the 1D sound speed at τ̄ = 0.8",
+        name: "faster than the 1D sound speed at τ̄ = 0.8 (points, not pairs)",
         pairs: 0,
         violations: Vec::new(),
     };
     for r in results.iter().filter(|r| r.case.tau_bar == 0.8) {
         above.pairs += 1;
         if !r.extrapolated.is_some_and(|v| v > 1.0) {
-            above
-                .violations
-                .push(format!("{:?}: {:?}", r.case, r.extrapolated));
+            above.violations.push(format!(
+                "{} {} α={} k_I/k={}: {}",
+                r.case.law_name(),
+                r.case.viscosity.name(),
+                r.case.alpha,
+                stiffness_order(&r.case),
+                r.extrapolated
+                    .map_or("arrested".into(), |v| format!("{v:.4}"))
+            ));
         }
     }
     vec![
