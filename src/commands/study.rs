@@ -67,7 +67,7 @@ fn front_1d_study(a: &StudyArgs) -> anyhow::Result<()> {
         .map(|&case| {
             let r = front_1d::run_point(case, &grid, a.backend, a.precision);
             let n = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
-            if n % (points.len() / 10).max(1) == 0 {
+            if n.is_multiple_of((points.len() / 10).max(1)) {
                 eprintln!(
                     "front-1d: {n} of {} points, {:.0} s",
                     points.len(),
