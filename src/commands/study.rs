@@ -210,12 +210,22 @@ fn single_block_study(a: &StudyArgs) -> anyhow::Result<()> {
             .collect()
     };
     let thresholds = single_block::threshold_vs_deceleration(&scene, &decelerations);
+    let pulled = single_block::PulledBlock::study(&scene.law);
+    let (events, trace) = single_block::slow_slip(
+        &scene.law,
+        if a.quick { 100 } else { 400 },
+        scene.seed,
+        &pulled,
+    );
     let wall = started.elapsed().as_secs_f64();
     let how = format!(
         "slipfront study single-block{}",
         if a.quick { " --quick" } else { "" }
     );
     let mut notes = single_block::report(&laws, &points, &thresholds, &scene, &how);
+    notes.push_str(&single_block::slow_slip_report(
+        &scene.law, &pulled, &events,
+    ));
     notes.push_str(&format!(
         "\nWall time {wall:.0} s on {} threads ({}); the single-block model runs on the CPU only (one \
          block has no parallel work for a GPU).\n",
@@ -236,7 +246,8 @@ fn single_block_study(a: &StudyArgs) -> anyhow::Result<()> {
     }
     write("thogersen2014_threshold_vs_deceleration.csv", t)?;
     write("thogersen2014_single_block.md", notes)?;
-    let figures = single_block::write_figures(&laws, &points, &thresholds, &a.out_dir)?;
+    let mut figures = single_block::write_figures(&laws, &points, &thresholds, &a.out_dir)?;
+    figures.extend(single_block::write_slow_slip_figure(&trace, &a.out_dir)?);
     eprintln!(
         "single-block: notes, 2 tables and {} figure(s) in {} in {wall:.0} s",
         figures.len(),

@@ -110,7 +110,6 @@ gpu_struct! {
         /// exact for the step offsets i < 4096 of a batch.
         pub drive_step_hi: f32,
         pub drive_step_lo: f32,
-        pub _pad: u32,
     }
 }
 
@@ -285,7 +284,6 @@ impl GpuConsts {
             drive_velocity: c.drive_velocity,
             drive_step_hi,
             drive_step_lo,
-            _pad: 0,
         }
     }
 }

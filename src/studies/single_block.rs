@@ -302,3 +302,195 @@ pub fn shape(values: &[f64]) -> &'static str {
         _ => "non-monotonic (weakening, then strengthening)",
     }
 }
+
+/// One stick-slip event of the spring-pulled block.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SlipEvent {
+    pub start: f64,
+    pub duration: f64,
+    pub peak_speed: f64,
+    /// Time from the peak until the speed last exceeds a tenth of it: the
+    /// fast slip. The rest of the event is the slow tail.
+    pub fast: f64,
+    pub slip: f64,
+}
+
+/// The spring-pulled block of the study: the scenario's law, a spring a
+/// hundredth as stiff as the pinned junctions, a block period of about one
+/// millisecond, pulled at 0.1 mm/s.
+pub struct PulledBlock {
+    pub mass: f64,
+    pub stiffness: f64,
+    pub speed: f64,
+    pub duration: f64,
+    pub dt: f64,
+}
+
+impl PulledBlock {
+    pub fn study(law: &JunctionLaw) -> PulledBlock {
+        let junctions = law.threshold / law.break_stretch;
+        let mass = 1e-3;
+        PulledBlock {
+            mass,
+            stiffness: junctions / 100.0,
+            speed: 1e-4,
+            duration: 0.5,
+            // 1/100 of the period on the pinned junctions.
+            dt: 2.0 * std::f64::consts::PI * (mass / junctions).sqrt() / 100.0,
+        }
+    }
+}
+
+/// Runs the pulled block and splits its history into slip events (speed
+/// above ten times the pulling speed); returns the events and the
+/// (time, speed, friction) samples of the first complete one, padded.
+pub fn slow_slip(
+    law: &JunctionLaw,
+    count: usize,
+    seed: u32,
+    p: &PulledBlock,
+) -> (Vec<SlipEvent>, Vec<(f64, f64, f64)>) {
+    let mut j = crate::single_block::sim::Junctions::pinned(*law, count, seed);
+    let mut samples: Vec<(f64, f64, f64, f64)> = Vec::new();
+    crate::single_block::sim::pull(
+        &mut j,
+        p.mass,
+        p.stiffness,
+        p.speed,
+        p.duration,
+        p.dt,
+        |s| samples.push((s.time, s.velocity, s.friction, s.position)),
+    );
+    let moving = 10.0 * p.speed;
+    let mut events = Vec::new();
+    let mut first: Option<(usize, usize)> = None;
+    let mut i = 0;
+    while i < samples.len() {
+        if samples[i].1 > moving {
+            let a = i;
+            while i < samples.len() && samples[i].1 > moving {
+                i += 1;
+            }
+            if i == samples.len() {
+                break;
+            }
+            let ev = &samples[a..i];
+            let (k, peak) = ev
+                .iter()
+                .enumerate()
+                .map(|(k, s)| (k, s.1))
+                .fold((0, 0.0), |m, x| if x.1 > m.1 { x } else { m });
+            let last_fast = ev.iter().rposition(|s| s.1 > 0.1 * peak).unwrap_or(k);
+            events.push(SlipEvent {
+                start: ev[0].0,
+                duration: ev[ev.len() - 1].0 - ev[0].0,
+                peak_speed: peak,
+                fast: ev[last_fast].0 - ev[k].0,
+                slip: ev[ev.len() - 1].3 - ev[0].3,
+            });
+            if first.is_none() && a > 0 {
+                first = Some((a, i));
+            }
+        }
+        i += 1;
+    }
+    let trace = first.map_or(Vec::new(), |(a, b)| {
+        let pad = (b - a) / 4;
+        samples[a.saturating_sub(pad)..(b + pad).min(samples.len())]
+            .iter()
+            .map(|s| (s.0, s.1, s.2))
+            .collect()
+    });
+    (events, trace)
+}
+
+/// The slow-slip section of the notes.
+pub fn slow_slip_report(law: &JunctionLaw, p: &PulledBlock, events: &[SlipEvent]) -> String {
+    let mut md = String::new();
+    let _ = writeln!(
+        md,
+        "\n**Slow slip** (the scenario's law; the block, {} kg per newton of normal load, pulled \
+         at {:e} m/s through a spring of {:e} per metre per newton, 1/100 of the pinned junctions' \
+         stiffness; {:.1} s; an event is a stretch with speed above 10× the pulling speed, its \
+         fast part from the peak speed until the speed last exceeds a tenth of the peak, the \
+         rest its slow tail):\n",
+        p.mass, p.speed, p.stiffness, p.duration
+    );
+    let complete: Vec<&SlipEvent> = events.iter().collect();
+    if complete.is_empty() {
+        let _ = writeln!(md, "No slip event in the run.");
+        return md;
+    }
+    let _ = writeln!(md, "| event | start (s) | duration (ms) | peak speed (m/s) | fast part (ms) | slow tail (ms) | slip (µm) |\n|---|---|---|---|---|---|---|");
+    for (n, e) in complete.iter().enumerate().take(12) {
+        let _ = writeln!(
+            md,
+            "| {n} | {:.4} | {:.3} | {:.2e} | {:.3} | {:.3} | {:.2} |",
+            e.start,
+            1e3 * e.duration,
+            e.peak_speed,
+            1e3 * e.fast,
+            1e3 * (e.duration - e.fast),
+            1e6 * e.slip
+        );
+    }
+    let mut tails: Vec<f64> = complete.iter().map(|e| e.duration - e.fast).collect();
+    tails.sort_by(f64::total_cmp);
+    let median = tails[tails.len() / 2];
+    let half_period = std::f64::consts::PI * (p.mass / p.stiffness).sqrt();
+    let durations: Vec<f64> = complete.iter().map(|e| e.duration).collect();
+    let longest = durations.iter().copied().fold(0.0, f64::max);
+    let slow = median > 0.5 * law.slip_time.mean();
+    let _ = writeln!(
+        md,
+        "\n{} events; median slow tail {:.3} ms, longest event {:.3} ms, against a mean slip \
+         time ⟨t_R⟩ = {:.2} ms and half the block's period on the spring, {:.3} ms. {}",
+        complete.len(),
+        1e3 * median,
+        1e3 * longest,
+        1e3 * law.slip_time.mean(),
+        1e3 * half_period,
+        if slow {
+            "The tails last as long as the junctions take to re-pin: slow slip on the time \
+             scale of t_R."
+        } else {
+            "The events end on the block's inertial time scale, well before the junctions \
+             re-pin: no slow slip in this configuration (a spring 1/2 of the pinned junctions' \
+             stiffness gave the same). Slow slip is not yet shown by this study."
+        }
+    );
+    md
+}
+
+/// Speed and friction through the first complete slip event.
+pub fn write_slow_slip_figure(
+    trace: &[(f64, f64, f64)],
+    dir: &Path,
+) -> anyhow::Result<Vec<PathBuf>> {
+    if trace.is_empty() {
+        return Ok(Vec::new());
+    }
+    let t0 = trace[0].0;
+    let points: Vec<(f64, f64, usize)> = trace
+        .iter()
+        .filter(|s| s.1 > 0.0)
+        .map(|s| (1e3 * (s.0 - t0), s.1, 0))
+        .collect();
+    let path = dir.join("thogersen2014_slow_slip.png");
+    crate::plot::write(
+        &crate::plot::scatter::Scatter {
+            points: &points,
+            groups: &[String::new()],
+            group_label: "",
+            x_label: "time in the event (ms)",
+            y_label: "block speed (m/s)",
+            log_y: true,
+            title: "Spring-pulled block: speed through its first slip event",
+            connect: true,
+        },
+        &path,
+        &crate::plot::FigureOptions::default(),
+        "slipfront study single-block",
+    )?;
+    Ok(vec![path])
+}
