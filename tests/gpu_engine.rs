@@ -182,14 +182,14 @@ fn each_example_scenario_builds_only_the_terms_it_uses() {
         .1;
     assert_eq!(
         s1,
-        "FRICTION_LAW=1,DAMPING_FORM=1,USE_FOUNDATION=1,USE_TOP_LOADS=1,USE_SIDE_SPRING=1,USE_RELAXATION=1"
+        "FRICTION_LAW=1,DAMPING_FORM=1,USE_FOUNDATION=1,USE_TOP_LOADS=1,USE_SIDE_SPRING=1,USE_RELAXATION=1,USE_PRESTRESS=0"
     );
     // A frictionless, undamped wave test builds no friction kernel.
     let wave = slipfront::verify::bare_scene("wave");
     let v = Variant::for_model(&Model::from_scenario(&wave, false).unwrap()).describe();
     assert_eq!(
         v,
-        "FRICTION_LAW=0,DAMPING_FORM=0,USE_FOUNDATION=0,USE_TOP_LOADS=0,USE_SIDE_SPRING=0,USE_RELAXATION=0"
+        "FRICTION_LAW=0,DAMPING_FORM=0,USE_FOUNDATION=0,USE_TOP_LOADS=0,USE_SIDE_SPRING=0,USE_RELAXATION=0,USE_PRESTRESS=0"
     );
 }
 
