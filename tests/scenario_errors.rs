@@ -107,10 +107,17 @@ fn time_step_above_stability_limit_is_refused_with_the_limit() {
 #[test]
 fn every_shipped_scenario_is_valid() {
     let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/scenarios");
-    let mut scenes = 0;
+    let (mut scenes, mut single_blocks) = (0, 0);
     for entry in std::fs::read_dir(dir).unwrap() {
         let path = entry.unwrap().path();
         if path.extension().is_none_or(|e| e != "toml") {
+            continue;
+        }
+        let text = std::fs::read_to_string(&path).unwrap();
+        if slipfront::scenario::looks_like_single_block(&text) {
+            slipfront::single_block::SingleBlockScene::load(&path)
+                .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+            single_blocks += 1;
             continue;
         }
         let s = Scenario::load(&path, &[]).unwrap_or_else(|e| panic!("{e}"));
@@ -118,6 +125,7 @@ fn every_shipped_scenario_is_valid() {
         scenes += 1;
     }
     assert!(scenes >= 3);
+    assert_eq!(single_blocks, 1);
     // Sweep files: every point of each valid.
     for entry in std::fs::read_dir(format!("{dir}/sweeps")).unwrap() {
         let path = entry.unwrap().path();
@@ -220,4 +228,19 @@ fn fast_forward_keys_are_checked_and_need_junctions() {
     let f = s.fast_forward.clone().unwrap();
     assert_eq!((f.quiet_time, f.lead_time), (5e-4, 1e-4));
     assert_eq!(Scenario::parse(&s.to_toml(), "again", &[]).unwrap(), s);
+}
+
+#[test]
+fn each_scene_kind_refused_by_the_other_loader_names_the_right_command() {
+    let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/scenarios");
+    let single = std::path::PathBuf::from(format!("{dir}/thogersen2014_single_block.toml"));
+    let e = Scenario::load(&single, &[]).unwrap_err().to_string();
+    assert!(e.contains("slipfront single-block"), "{e}");
+    let lattice = std::path::PathBuf::from(format!("{dir}/tromborg2014_stick_slip.toml"));
+    let e = slipfront::single_block::SingleBlockScene::load(&lattice)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("slipfront run"), "{e}");
+    // Negative control: the lattice scene still loads as a lattice.
+    assert!(Scenario::load(&lattice, &[]).is_ok());
 }

@@ -461,6 +461,12 @@ impl Scenario {
             source_name: source_name.to_string(),
             problems,
         };
+        if looks_like_single_block(text) {
+            return Err(fail(vec![format!(
+                "this is a single-block scene (it has [law] and [motion], no [geometry]); \
+                 run it with `slipfront single-block {source_name}`"
+            )]));
+        }
         let scenario: Scenario = if overrides.is_empty() {
             toml::from_str(text).map_err(|e| fail(vec![describe_toml_error(&e)]))?
         } else {
@@ -503,6 +509,16 @@ impl Scenario {
     pub fn to_toml(&self) -> String {
         toml::to_string(self).expect("scenario serialises")
     }
+}
+
+/// True for a single-block scene file (`slipfront single-block`): top-level
+/// `[law]` and `[motion]` tables and no `[geometry]`.
+pub fn looks_like_single_block(text: &str) -> bool {
+    toml::from_str::<toml::Table>(text).is_ok_and(|t| {
+        t.get("law").is_some_and(toml::Value::is_table)
+            && t.get("motion").is_some_and(toml::Value::is_table)
+            && !t.contains_key("geometry")
+    })
 }
 
 fn describe_toml_error(e: &toml::de::Error) -> String {

@@ -55,6 +55,11 @@ pub const SCENARIO: &str = include_str!("../../scenarios/thogersen2014_single_bl
 
 impl SingleBlockScene {
     pub fn parse(text: &str, name: &str) -> anyhow::Result<SingleBlockScene> {
+        let lattice = toml::from_str::<toml::Table>(text).is_ok_and(|t| t.contains_key("geometry"));
+        anyhow::ensure!(
+            !lattice,
+            "{name} is a lattice scene (it has [geometry]); run it with `slipfront run {name}`"
+        );
         let s: SingleBlockScene = toml::from_str(text)
             .map_err(|e| anyhow::anyhow!("invalid single-block scenario {name}: {e}"))?;
         let problems = s.problems();
