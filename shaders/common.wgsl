@@ -2,11 +2,9 @@
 // force laws every phase uses, and the loads of a step. The structs and
 // constants come from src/gpu/layout.rs (prepended as a prelude).
 
-// A uniform block, bound once per submit: lavapipe inlines its contents
-// (constant folding). Switching the bound group between dispatches made it
-// compile and keep a variant per submit (2.7 MB each), so the one-step
-// kernel keeps one group and picks its state copy from the step parity.
-@group(0) @binding(0) var<uniform> c: Consts;
+// The run constants `c` and the batch `batch` of the scene a thread steps
+// are declared by the scene snippet (scene_single.wgsl or
+// scene_ensemble.wgsl), with the offsets of that scene in every buffer.
 // Force on each block from everything but friction, at the state the step
 // starts from.
 @group(0) @binding(5) var<storage, read_write> force: array<vec2<f32>>;
@@ -19,13 +17,14 @@
 @group(0) @binding(9) var<storage, read_write> junction_state: array<vec2<u32>>;
 // (sliding direction 0/±1, stick → slip count) per interface block.
 @group(0) @binding(10) var<storage, read_write> slide: array<vec2<i32>>;
-// The first blow-up, as GpuStatus (flag, step, block, ux, uz, vx, vz).
-@group(0) @binding(11) var<storage, read_write> status: array<atomic<u32>, 8>;
+// The first blow-up of each scene, as GpuStatus (flag, step, block, ux,
+// uz, vx, vz, persistent steps run): 8 words per scene.
+@group(0) @binding(11) var<storage, read_write> status: array<atomic<u32>>;
 // The step offset of this dispatch in its batch (one-step kernel: a
-// dynamic offset into a fixed table), and the batch. Storage, not uniform:
-// lavapipe specialises shaders on uniform contents and would recompile.
+// dynamic offset into a fixed table). The batch (binding 1) is storage, not
+// uniform: lavapipe specialises shaders on uniform contents and would
+// recompile.
 @group(1) @binding(0) var<storage, read> step_offset: u32;
-@group(1) @binding(1) var<storage, read> batch: Batch;
 
 // Friction laws (override FRICTION_LAW).
 const LAW_NONE: u32 = 0u;
@@ -82,12 +81,13 @@ fn loads_at(i: u32) -> Loads {
 
 // Records the first blow-up (non-finite or faster than c_p).
 fn report_blow_up(i: u32, step: u32, u: Disp, v: vec2<f32>) {
-    if atomicAdd(&status[0], 1u) == 0u {
-        atomicStore(&status[1], step);
-        atomicStore(&status[2], i);
-        atomicStore(&status[3], bitcast<u32>(u.x.x + u.x.y));
-        atomicStore(&status[4], bitcast<u32>(u.z.x + u.z.y));
-        atomicStore(&status[5], bitcast<u32>(v.x));
-        atomicStore(&status[6], bitcast<u32>(v.y));
+    let s = status_base();
+    if atomicAdd(&status[s], 1u) == 0u {
+        atomicStore(&status[s + 1u], step);
+        atomicStore(&status[s + 2u], i);
+        atomicStore(&status[s + 3u], bitcast<u32>(u.x.x + u.x.y));
+        atomicStore(&status[s + 4u], bitcast<u32>(u.z.x + u.z.y));
+        atomicStore(&status[s + 5u], bitcast<u32>(v.x));
+        atomicStore(&status[s + 6u], bitcast<u32>(v.y));
     }
 }

@@ -5,7 +5,7 @@ fn coulomb(ix: u32, other: f32, ld: Loads) -> vec2<f32> {
     let u = load_disp(ix);
     let v = load_vel(ix);
     let normal = foundation_normal(u.z.x);
-    var state = slide[ix];
+    var state = slide[interface_base() + ix];
     var dir = state.x;
     if dir != 0 && v.x * f32(dir) <= 0.0 {
         dir = 0;
@@ -24,6 +24,6 @@ fn coulomb(ix: u32, other: f32, ld: Loads) -> vec2<f32> {
     } else {
         friction = -c.mu_d * normal * f32(dir);
     }
-    slide[ix] = vec2<i32>(dir, state.y);
+    slide[interface_base() + ix] = vec2<i32>(dir, state.y);
     return vec2<f32>(friction, normal);
 }

@@ -32,7 +32,7 @@ fn junction_lane(ix: u32, lane: u32, jb: JunctionBlock, ld: Loads) -> f32 {
     let sliding = jb.sliding;
     var total = 0.0;
     for (var j = lane; j < c.junction_count; j += JUNCTION_LANES) {
-        let idx = ix * c.junction_count + j;
+        let idx = junction_base() + ix * c.junction_count + j;
         var spring = junction_spring[idx];
         var state = junction_state[idx];
         if state.x != PINNED {

@@ -1,7 +1,7 @@
 // One step n → n+1 of every block in one dispatch, one thread per block:
 // the forces and friction at step n (an interface block's thread walks its
 // junction lanes in order), then the leapfrog update written to the other
-// state buffer. No barrier, so software adapters run it without
+// state buffer. Workgroup row z is scene z of an ensemble. No barrier, so software adapters run it without
 // coroutines. CPU twin: src/cpu/mod.rs CpuEngine::one_step.
 
 @compute @workgroup_size(WORKGROUP)
@@ -10,8 +10,9 @@ fn one_step(
     @builtin(workgroup_id) wid: vec3<u32>,
     @builtin(num_workgroups) groups: vec3<u32>,
 ) {
+    enter_scene(wid.z);
     let i = (wid.x + wid.y * groups.x) * WORKGROUP + local;
-    if i >= c.n_blocks {
+    if i >= c.n_blocks || scene_stopped() {
         return;
     }
     let ld = loads_at(step_offset);

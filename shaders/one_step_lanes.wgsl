@@ -15,30 +15,34 @@ fn one_step_lanes(
     @builtin(workgroup_id) wid: vec3<u32>,
     @builtin(num_workgroups) groups: vec3<u32>,
 ) {
+    enter_scene(wid.z);
     let w = wid.x + wid.y * groups.x;
     let i_step = step_offset;
     let ld = loads_at(i_step);
     let ready = batch.forces_ready != 0u && i_step == 0u;
     let update = batch.forces_only == 0u;
-    if FRICTION_LAW == LAW_JUNCTIONS && w < c.nx {
-        let lanes = min(JUNCTION_LANES, c.junction_count);
-        if !ready && local < lanes {
-            lane_sum[local] = junction_lane(w, local, junction_block(w), ld);
-        }
-        workgroupBarrier();
+    let lanes = min(JUNCTION_LANES, c.junction_count);
+    let junction_group = FRICTION_LAW == LAW_JUNCTIONS && w < c.nx;
+    if junction_group && !ready && local < lanes {
+        lane_sum[local] = junction_lane(w, local, junction_block(w), ld);
+    }
+    // Outside the branch: every workgroup reaches it (an ensemble scene's
+    // constants are not uniform to the uniformity analysis).
+    workgroupBarrier();
+    if junction_group {
         if local == 0u {
             var f: vec2<f32>;
             var friction = 0.0;
             if ready {
-                f = force[w];
-                friction = contact[w].x;
+                f = force[block_base() + w];
+                friction = contact[interface_base() + w].x;
             } else {
                 f = bulk_force(w, ld);
                 for (var l = 0u; l < lanes; l++) {
                     friction = friction + lane_sum[l];
                 }
-                force[w] = f;
-                contact[w] = vec2<f32>(friction, foundation_normal(load_disp(w).z.x));
+                force[block_base() + w] = f;
+                contact[interface_base() + w] = vec2<f32>(friction, foundation_normal(load_disp(w).z.x));
             }
             if update {
                 verlet(w, f, friction, ld, i_step);

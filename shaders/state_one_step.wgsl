@@ -14,24 +14,24 @@ fn reads_b() -> bool {
 
 fn load_disp(i: u32) -> Disp {
     if reads_b() {
-        return disp_b[i];
+        return disp_b[block_base() + i];
     }
-    return disp_a[i];
+    return disp_a[block_base() + i];
 }
 
 fn load_vel(i: u32) -> vec2<f32> {
     if reads_b() {
-        return vel_b[i];
+        return vel_b[block_base() + i];
     }
-    return vel_a[i];
+    return vel_a[block_base() + i];
 }
 
 fn store_block(i: u32, u: Disp, v: vec2<f32>) {
     if reads_b() {
-        disp_a[i] = u;
-        vel_a[i] = v;
+        disp_a[block_base() + i] = u;
+        vel_a[block_base() + i] = v;
     } else {
-        disp_b[i] = u;
-        vel_b[i] = v;
+        disp_b[block_base() + i] = u;
+        vel_b[block_base() + i] = v;
     }
 }

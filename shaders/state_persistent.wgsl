@@ -8,14 +8,14 @@
 @group(0) @binding(12) var<storage, read_write> lane_partial: array<f32>;
 
 fn load_disp(i: u32) -> Disp {
-    return disp[i];
+    return disp[block_base() + i];
 }
 
 fn load_vel(i: u32) -> vec2<f32> {
-    return vel[i];
+    return vel[block_base() + i];
 }
 
 fn store_block(i: u32, u: Disp, v: vec2<f32>) {
-    disp[i] = u;
-    vel[i] = v;
+    disp[block_base() + i] = u;
+    vel[block_base() + i] = v;
 }

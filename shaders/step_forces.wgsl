@@ -8,16 +8,16 @@ fn block_forces(i: u32, ld: Loads, ready: bool) -> vec3<f32> {
     if ready {
         var friction = 0.0;
         if FRICTION_LAW != LAW_NONE && i < c.nx {
-            friction = contact[i].x;
+            friction = contact[interface_base() + i].x;
         }
-        return vec3<f32>(force[i], friction);
+        return vec3<f32>(force[block_base() + i], friction);
     }
     let f = bulk_force(i, ld);
-    force[i] = f;
+    force[block_base() + i] = f;
     var friction = 0.0;
     if FRICTION_LAW == LAW_COULOMB && i < c.nx {
         let cn = coulomb(i, f.x, ld);
-        contact[i] = cn;
+        contact[interface_base() + i] = cn;
         friction = cn.x;
     }
     if FRICTION_LAW == LAW_JUNCTIONS && i < c.nx {
@@ -26,7 +26,7 @@ fn block_forces(i: u32, ld: Loads, ready: bool) -> vec3<f32> {
         for (var l = 0u; l < lanes; l++) {
             friction = friction + junction_lane(i, l, jb, ld);
         }
-        contact[i] = vec2<f32>(friction, foundation_normal(load_disp(i).z.x));
+        contact[interface_base() + i] = vec2<f32>(friction, foundation_normal(load_disp(i).z.x));
     }
     return vec3<f32>(f, friction);
 }

@@ -17,13 +17,11 @@ pub struct GpuContext {
     pub limits: wgpu::Limits,
     /// The first uncaptured device error, if any (checked after submits).
     pub error: Arc<Mutex<Option<String>>>,
-    /// Group 0 of each kernel (their state bindings differ).
-    pub one_step_layout: wgpu::BindGroupLayout,
-    pub persistent_layout: wgpu::BindGroupLayout,
-    /// Group 1: the step offset (dynamic) and the batch.
+    /// Group 0 of each kernel, for one scene and for an ensemble (their
+    /// state bindings and their constants' binding differ).
+    layouts: Arc<[KernelLayout; 4]>,
+    /// Group 1: the step offset (dynamic) and the batch (or the batches).
     pub batch_layout: wgpu::BindGroupLayout,
-    one_step_pipeline_layout: wgpu::PipelineLayout,
-    persistent_pipeline_layout: wgpu::PipelineLayout,
     pipelines: Arc<Mutex<HashMap<String, wgpu::ComputePipeline>>>,
 }
 
@@ -37,8 +35,22 @@ pub fn shared() -> Result<GpuContext, EngineError> {
         .map_err(EngineError::Gpu)
 }
 
-/// Storage bindings the one-step kernel uses (the most of the two).
+/// Storage bindings the one-step kernel uses (the most of the two); an
+/// ensemble's constants take one more.
 const STORAGE_BINDINGS: u32 = 13;
+pub const ENSEMBLE_STORAGE_BINDINGS: u32 = STORAGE_BINDINGS + 1;
+
+/// Group 0's layout of one kernel family and the pipeline layout using it.
+struct KernelLayout {
+    group: wgpu::BindGroupLayout,
+    pipeline: wgpu::PipelineLayout,
+}
+
+/// Index in `GpuContext::layouts`.
+fn layout_index(kernel: Kernel, ensemble: bool) -> usize {
+    let persistent = kernel == Kernel::Persistent;
+    persistent as usize + 2 * ensemble as usize
+}
 
 /// Lists the adapters with Vulkan/Metal/DX12 support, hardware first.
 pub fn adapters() -> Vec<wgpu::Adapter> {
@@ -106,68 +118,69 @@ impl GpuContext {
             };
         let read = wgpu::BufferBindingType::Storage { read_only: true };
         let write = wgpu::BufferBindingType::Storage { read_only: false };
-        // Bindings 5..=11 (shaders/common.wgsl): force, flags (read only),
-        // contact, junction spring and state, slide, status.
-        let common = |mut v: Vec<wgpu::BindGroupLayoutEntry>| {
-            v.push(entry(0, wgpu::BufferBindingType::Uniform, false));
-            v.extend((5..=11).map(|b| entry(b, if b == 6 { read } else { write }, false)));
-            v
-        };
-        let layout = |label: &str, entries: Vec<wgpu::BindGroupLayoutEntry>| {
+        let layout = |label: &str, entries: &[wgpu::BindGroupLayoutEntry]| {
             device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
                 label: Some(label),
-                entries: &entries,
+                entries,
             })
         };
-        let one_step_layout = layout(
-            "one step state",
-            common(vec![
-                entry(1, write, false),
-                entry(2, write, false),
-                entry(3, write, false),
-                entry(4, write, false),
-            ]),
-        );
-        let persistent_layout = layout(
-            "persistent state",
-            common(vec![
-                entry(1, write, false),
-                entry(2, write, false),
-                entry(12, write, false),
-            ]),
-        );
-        let batch_layout = layout("batch", vec![entry(0, read, true), entry(1, read, false)]);
-        let pipeline_layout = |state: &wgpu::BindGroupLayout| {
-            device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+        let batch_layout = layout("batch", &[entry(0, read, true), entry(1, read, false)]);
+        let kernel_layout = |kernel: Kernel, ensemble: bool| {
+            // Binding 0: the constants (a uniform block, or one record per
+            // scene); 5..=11 (shaders/common.wgsl): force, flags (read
+            // only), contact, junction spring and state, slide, status.
+            let consts = if ensemble {
+                read
+            } else {
+                wgpu::BufferBindingType::Uniform
+            };
+            let mut v = vec![entry(0, consts, false)];
+            v.extend((5..=11).map(|b| entry(b, if b == 6 { read } else { write }, false)));
+            let state: &[u32] = match kernel {
+                Kernel::Persistent => &[1, 2, 12],
+                Kernel::OneStep | Kernel::OneStepLanes => &[1, 2, 3, 4],
+            };
+            v.extend(state.iter().map(|&b| entry(b, write, false)));
+            let group = layout(kernel.entry_point(), &v);
+            let pipeline = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
                 label: Some("slipfront"),
-                bind_group_layouts: &[Some(state), Some(&batch_layout)],
+                bind_group_layouts: &[Some(&group), Some(&batch_layout)],
                 immediate_size: 0,
-            })
+            });
+            KernelLayout { group, pipeline }
         };
-        let one_step_pipeline_layout = pipeline_layout(&one_step_layout);
-        let persistent_pipeline_layout = pipeline_layout(&persistent_layout);
+        let layouts = Arc::new([
+            kernel_layout(Kernel::OneStep, false),
+            kernel_layout(Kernel::Persistent, false),
+            kernel_layout(Kernel::OneStep, true),
+            kernel_layout(Kernel::Persistent, true),
+        ]);
         Ok(GpuContext {
             device,
             queue,
             info,
             limits,
             error,
-            one_step_layout,
-            persistent_layout,
+            layouts,
             batch_layout,
-            one_step_pipeline_layout,
-            persistent_pipeline_layout,
             pipelines: Arc::new(Mutex::new(HashMap::new())),
         })
     }
 
+    /// Group 0's layout of `kernel` (for an ensemble or one scene).
+    pub fn state_layout(&self, kernel: Kernel, ensemble: bool) -> &wgpu::BindGroupLayout {
+        &self.layouts[layout_index(kernel, ensemble)].group
+    }
+
     /// The pipeline of `kernel` with `constants`, compiled once per process.
-    pub fn pipeline(&self, kernel: Kernel, constants: &[(&str, f64)]) -> wgpu::ComputePipeline {
-        let layout = match kernel {
-            Kernel::OneStep | Kernel::OneStepLanes => &self.one_step_pipeline_layout,
-            Kernel::Persistent => &self.persistent_pipeline_layout,
-        };
-        let key = format!("{}{constants:?}", kernel.entry_point());
+    pub fn pipeline(
+        &self,
+        kernel: Kernel,
+        ensemble: bool,
+        constants: &[(&str, f64)],
+    ) -> wgpu::ComputePipeline {
+        let layout = &self.layouts[layout_index(kernel, ensemble)].pipeline;
+        let key = format!("{}{ensemble}{constants:?}", kernel.entry_point());
         let mut cache = self.pipelines.lock().expect("pipeline cache");
         cache
             .entry(key)
@@ -176,7 +189,7 @@ impl GpuContext {
                     .device
                     .create_shader_module(wgpu::ShaderModuleDescriptor {
                         label: Some(kernel.entry_point()),
-                        source: wgpu::ShaderSource::Wgsl(kernel.source().into()),
+                        source: wgpu::ShaderSource::Wgsl(kernel.source(ensemble).into()),
                     });
                 self.device
                     .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {

@@ -13,6 +13,7 @@
 //! batch or two and `advance` returns only when its steps have run.
 
 pub mod context;
+pub mod ensemble;
 pub mod layout;
 pub mod options;
 mod readback;
@@ -29,17 +30,20 @@ use context::GpuContext;
 use layout::{GpuBatch, GpuConsts, GpuJunctionSpring, GpuStatus, WORKGROUP};
 use options::*;
 pub use options::{GpuOptions, GpuPath, PERSISTENT_MAX_BLOCKS, PERSISTENT_THREADS};
-use readback::{cast_prefix, read_buffers};
+use readback::{cast_prefix, read_ranges, Range};
 use shaders::{Kernel, Variant};
 use std::collections::VecDeque;
 use std::sync::mpsc;
 use wgpu::util::DeviceExt;
 
 struct Buffers {
+    /// The run constants: a uniform block (one scene) or one record per scene.
+    consts: wgpu::Buffer,
     /// Two copies of u and v: the one-step kernel reads one, writes the other.
     disp: [wgpu::Buffer; 2],
     vel: [wgpu::Buffer; 2],
     force: wgpu::Buffer,
+    /// One lattice: shared by the scenes of an ensemble.
     flags: wgpu::Buffer,
     contact: wgpu::Buffer,
     junction_spring: wgpu::Buffer,
@@ -47,6 +51,46 @@ struct Buffers {
     slide: wgpu::Buffer,
     status: wgpu::Buffer,
     lane_partial: wgpu::Buffer,
+}
+
+/// Elements of one scene in each buffer; scene s's slice starts at s times
+/// these (scene-major, `shaders/scene_ensemble.wgsl`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Shape {
+    blocks: usize,
+    nx: usize,
+    junctions: usize,
+    lanes: usize,
+}
+
+impl Shape {
+    fn of(model: &Model) -> Shape {
+        let lanes =
+            crate::cpu::junctions::JUNCTION_LANES.min(model.junctions.map_or(0, |j| j.count));
+        Shape {
+            blocks: model.n_blocks(),
+            nx: model.nx,
+            junctions: model.n_junctions(),
+            lanes,
+        }
+    }
+}
+
+/// Bytes per element of the state buffers.
+const DISP_BYTES: usize = std::mem::size_of::<[DoubleSingle; 2]>();
+const PAIR_BYTES: usize = std::mem::size_of::<[f32; 2]>();
+const SPRING_BYTES: usize = std::mem::size_of::<GpuJunctionSpring>();
+const STATUS_BYTES: usize = std::mem::size_of::<GpuStatus>();
+
+/// One scene: its model, constants and where it stands.
+struct Scene {
+    model: Model,
+    consts: Consts<f32>,
+    drive_origin: DoubleSingle,
+    /// `force` and `contact` hold the forces of the current state.
+    forces_ready: bool,
+    /// The blow-up that stopped this scene (an ensemble's others go on).
+    failure: Option<EngineError>,
 }
 
 /// A submitted batch whose status copy is being mapped.
@@ -59,19 +103,23 @@ struct InFlight {
     persistent_steps: u32,
 }
 
+/// The GPU engine over one scene (`GpuEngine::new`), or over an ensemble of
+/// scenes of one lattice shape stepped together (`ensemble::GpuEnsemble`).
 pub struct GpuEngine {
-    model: Model,
-    consts: Consts<f32>,
+    scenes: Vec<Scene>,
+    /// Built from the ensemble kernels (per-scene constants in storage).
+    ensemble: bool,
+    shape: Shape,
     ctx: GpuContext,
     buffers: Buffers,
     kernel: Kernel,
     pipeline: wgpu::ComputePipeline,
-    /// One group: both state copies (one step) or copy 0 (persistent).
-    state_groups: Vec<wgpu::BindGroup>,
+    /// Both state copies (one step) or copy 0 (persistent).
+    state_group: wgpu::BindGroup,
     batch_group: wgpu::BindGroup,
     batch_buffer: wgpu::Buffer,
     offset_stride: u64,
-    /// Workgroups (x, y) of a one-step dispatch.
+    /// Workgroups (x, y) of a one-step dispatch of one scene.
     groups: (u32, u32),
     persistent_threads: u32,
     /// Steps per persistent dispatch (bounded on software adapters).
@@ -81,11 +129,8 @@ pub struct GpuEngine {
     variant: Variant,
     /// The copy of u and v that holds the current state.
     current: usize,
-    drive_origin: DoubleSingle,
-    /// Steps submitted.
+    /// Steps submitted (every scene is at this step).
     step: u64,
-    /// `force` and `contact` hold the forces of the current state.
-    forces_ready: bool,
     in_flight: VecDeque<InFlight>,
     spare_staging: Vec<wgpu::Buffer>,
     dispatches: u64,
@@ -112,23 +157,59 @@ impl GpuEngine {
         ctx: GpuContext,
         opts: GpuOptions,
     ) -> Result<GpuEngine, EngineError> {
-        let consts = Consts::<f32>::new(model);
-        let n = model.n_blocks();
-        let nj = model.n_junctions();
+        GpuEngine::build(std::slice::from_ref(model), ctx, opts, false)
+    }
+
+    /// The engine over `models`, which share one lattice shape and time
+    /// schedule (checked by the caller); `ensemble` selects the kernels
+    /// that address a scene's slice of each buffer.
+    fn build(
+        models: &[Model],
+        ctx: GpuContext,
+        opts: GpuOptions,
+        ensemble: bool,
+    ) -> Result<GpuEngine, EngineError> {
+        let model = &models[0];
+        let scene_count = models.len();
+        let shape = Shape::of(model);
+        let (n, nj) = (shape.blocks, shape.junctions);
         let limit = ctx.limits.max_storage_buffer_binding_size;
         let max_buffer = ctx.limits.max_buffer_size;
+        let what = if ensemble {
+            format!("{scene_count} scenes of ")
+        } else {
+            String::new()
+        };
         for (name, bytes) in [
-            ("block displacement", n as u64 * 16),
-            ("junction spring", nj as u64 * 12),
+            ("block displacement", (scene_count * n * DISP_BYTES) as u64),
+            ("junction spring", (scene_count * nj * SPRING_BYTES) as u64),
         ] {
             if bytes > limit.min(max_buffer) {
                 return Err(EngineError::Gpu(format!(
-                    "the {name} buffer needs {bytes} bytes but {} allows at most {} per \
-                     storage binding: use a smaller lattice or fewer junctions",
+                    "the {name} buffer of {what}this lattice needs {bytes} bytes but {} allows \
+                     at most {} per storage binding: use a smaller lattice, fewer junctions{}",
                     ctx.info.name,
-                    limit.min(max_buffer)
+                    limit.min(max_buffer),
+                    if ensemble { " or fewer scenes" } else { "" }
                 )));
             }
+        }
+        if ensemble
+            && ctx.limits.max_storage_buffers_per_shader_stage < context::ENSEMBLE_STORAGE_BINDINGS
+        {
+            return Err(EngineError::Gpu(format!(
+                "{} allows {} storage buffers per shader stage; an ensemble needs {}",
+                ctx.info.name,
+                ctx.limits.max_storage_buffers_per_shader_stage,
+                context::ENSEMBLE_STORAGE_BINDINGS
+            )));
+        }
+        let max_groups = ctx.limits.max_compute_workgroups_per_dimension as usize;
+        if scene_count > max_groups {
+            return Err(EngineError::Gpu(format!(
+                "{scene_count} scenes in one dispatch: {} allows at most {max_groups}",
+                ctx.info.name
+            )));
         }
         let kernel = choose_kernel(opts.path, n, ctx.is_software());
         let persistent_threads = opts
@@ -154,46 +235,60 @@ impl GpuEngine {
                     | wgpu::BufferUsages::COPY_DST,
             })
         };
-        let disp: Vec<[DoubleSingle; 2]> = initial_displacement(model)
-            .into_iter()
+        let disp: Vec<[DoubleSingle; 2]> = models
+            .iter()
+            .flat_map(initial_displacement)
             .map(|u| u.map(DoubleSingle::from_f64))
             .collect();
         let zeros2 = |len: usize| vec![[0f32; 2]; len];
-        let lanes =
-            crate::cpu::junctions::JUNCTION_LANES.min(model.junctions.map_or(0, |j| j.count));
+        let s = scene_count;
+        let gpu_consts: Vec<GpuConsts> = models
+            .iter()
+            .map(|m| GpuConsts::new(&Consts::<f32>::new(m), m.pressure_wave_speed() as f32))
+            .collect();
+        let consts_buffer = if ensemble {
+            storage("scene consts", bytemuck::cast_slice(&gpu_consts))
+        } else {
+            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("consts"),
+                contents: bytemuck::bytes_of(&gpu_consts[0]),
+                usage: wgpu::BufferUsages::UNIFORM,
+            })
+        };
         let buffers = Buffers {
+            consts: consts_buffer,
             disp: [
                 storage("disp 0", bytemuck::cast_slice(&disp)),
                 storage("disp 1", bytemuck::cast_slice(&disp)),
             ],
             vel: [
-                storage("vel 0", bytemuck::cast_slice(&zeros2(n))),
-                storage("vel 1", bytemuck::cast_slice(&zeros2(n))),
+                storage("vel 0", bytemuck::cast_slice(&zeros2(s * n))),
+                storage("vel 1", bytemuck::cast_slice(&zeros2(s * n))),
             ],
-            force: storage("force", bytemuck::cast_slice(&zeros2(n))),
+            force: storage("force", bytemuck::cast_slice(&zeros2(s * n))),
             flags: storage("flags", bytemuck::cast_slice(&block_flags(model))),
-            contact: storage("contact", bytemuck::cast_slice(&zeros2(model.nx))),
+            contact: storage("contact", bytemuck::cast_slice(&zeros2(s * shape.nx))),
             junction_spring: storage(
                 "junction_spring",
-                bytemuck::cast_slice(&vec![GpuJunctionSpring::zeroed(); nj]),
+                bytemuck::cast_slice(&vec![GpuJunctionSpring::zeroed(); s * nj]),
             ),
             junction_state: storage(
                 "junction_state",
-                bytemuck::cast_slice(&vec![[crate::junction::PINNED, 0u32]; nj]),
+                bytemuck::cast_slice(&vec![[crate::junction::PINNED, 0u32]; s * nj]),
             ),
-            slide: storage("slide", bytemuck::cast_slice(&vec![[0i32; 2]; model.nx])),
-            status: storage("status", bytemuck::bytes_of(&GpuStatus::zeroed())),
+            slide: storage(
+                "slide",
+                bytemuck::cast_slice(&vec![[0i32; 2]; s * shape.nx]),
+            ),
+            status: storage(
+                "status",
+                bytemuck::cast_slice(&vec![GpuStatus::zeroed(); s]),
+            ),
             lane_partial: storage(
                 "lane partial sums",
-                bytemuck::cast_slice(&vec![0f32; model.nx * lanes]),
+                bytemuck::cast_slice(&vec![0f32; s * shape.nx * shape.lanes]),
             ),
         };
-        let gpu_consts = GpuConsts::new(&consts, model.pressure_wave_speed() as f32);
-        let consts_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("consts"),
-            contents: bytemuck::bytes_of(&gpu_consts),
-            usage: wgpu::BufferUsages::UNIFORM,
-        });
         // The step offsets 0..ONE_STEP_BATCH, one per dynamic-offset stride.
         let offset_stride = (ctx.limits.min_storage_buffer_offset_alignment as u64).max(4);
         let mut table = vec![0u8; (offset_stride * ONE_STEP_BATCH) as usize];
@@ -208,52 +303,34 @@ impl GpuEngine {
         });
         let batch_buffer = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("batch"),
-            size: std::mem::size_of::<GpuBatch>() as u64,
+            size: (s * std::mem::size_of::<GpuBatch>()) as u64,
             usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
         let b = &buffers;
-        let common = || {
-            vec![
-                whole(0, &consts_buffer),
-                whole(5, &b.force),
-                whole(6, &b.flags),
-                whole(7, &b.contact),
-                whole(8, &b.junction_spring),
-                whole(9, &b.junction_state),
-                whole(10, &b.slide),
-                whole(11, &b.status),
-            ]
-        };
-        let state_groups: Vec<wgpu::BindGroup> = match kernel {
+        let mut entries = vec![
+            whole(0, &b.consts),
+            whole(5, &b.force),
+            whole(6, &b.flags),
+            whole(7, &b.contact),
+            whole(8, &b.junction_spring),
+            whole(9, &b.junction_state),
+            whole(10, &b.slide),
+            whole(11, &b.status),
+            whole(1, &b.disp[0]),
+            whole(2, &b.vel[0]),
+        ];
+        match kernel {
             Kernel::OneStep | Kernel::OneStepLanes => {
-                let mut entries = common();
-                entries.extend([
-                    whole(1, &b.disp[0]),
-                    whole(2, &b.vel[0]),
-                    whole(3, &b.disp[1]),
-                    whole(4, &b.vel[1]),
-                ]);
-                vec![device.create_bind_group(&wgpu::BindGroupDescriptor {
-                    label: Some("one step state"),
-                    layout: &ctx.one_step_layout,
-                    entries: &entries,
-                })]
+                entries.extend([whole(3, &b.disp[1]), whole(4, &b.vel[1])])
             }
-            Kernel::Persistent => {
-                let mut entries = common();
-                entries.extend([
-                    whole(1, &b.disp[0]),
-                    whole(2, &b.vel[0]),
-                    whole(12, &b.lane_partial),
-                ]);
-                vec![device.create_bind_group(&wgpu::BindGroupDescriptor {
-                    label: Some("persistent state"),
-                    layout: &ctx.persistent_layout,
-                    entries: &entries,
-                })]
-            }
-        };
+            Kernel::Persistent => entries.push(whole(12, &b.lane_partial)),
+        }
+        let state_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some(kernel.entry_point()),
+            layout: ctx.state_layout(kernel, ensemble),
+            entries: &entries,
+        });
         let batch_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("batch"),
             layout: &ctx.batch_layout,
@@ -274,7 +351,7 @@ impl GpuEngine {
         if kernel == Kernel::Persistent {
             constants.push(("PERSISTENT_THREADS", persistent_threads as f64));
         }
-        let pipeline = ctx.pipeline(kernel, &constants);
+        let pipeline = ctx.pipeline(kernel, ensemble, &constants);
         let junction_groups = match (kernel, model.law) {
             (Kernel::OneStepLanes, FrictionLaw::Junctions | FrictionLaw::SingleJunction) => {
                 model.nx as u32
@@ -290,14 +367,25 @@ impl GpuEngine {
             })
             .clamp(1, PERSISTENT_BATCH);
         ctx.check()?;
+        let scenes = models
+            .iter()
+            .map(|m| Scene {
+                model: m.clone(),
+                consts: Consts::<f32>::new(m),
+                drive_origin: DoubleSingle::default(),
+                forces_ready: false,
+                failure: None,
+            })
+            .collect();
         let mut engine = GpuEngine {
-            model: model.clone(),
-            consts,
+            scenes,
+            ensemble,
+            shape,
             ctx,
             buffers,
             kernel,
             pipeline,
-            state_groups,
+            state_group,
             batch_group,
             batch_buffer,
             offset_stride,
@@ -307,9 +395,7 @@ impl GpuEngine {
             persistent_steps: 0,
             variant,
             current: 0,
-            drive_origin: DoubleSingle::default(),
             step: 0,
-            forces_ready: false,
             in_flight: VecDeque::new(),
             spare_staging: Vec::new(),
             dispatches: 0,
@@ -335,38 +421,48 @@ impl GpuEngine {
     }
 
     /// Submits `steps` steps from the current one (or, with `forces_only`,
-    /// the forces of the current state), and the copy of the status.
+    /// the forces of the current state where they are not ready), and the
+    /// copy of the status.
     fn submit_batch(&mut self, steps: u64, forces_only: bool) -> Result<(), EngineError> {
         if self.in_flight.len() >= IN_FLIGHT {
             self.retire_oldest()?;
         }
-        let mut batch = GpuBatch::new(&self.consts, self.step, steps as u32, self.drive_origin);
-        batch.forces_ready = self.forces_ready as u32;
-        batch.forces_only = forces_only as u32;
-        batch.steps_per_dispatch = self.steps_per_dispatch as u32;
-        batch.parity = self.current as u32;
+        let batches: Vec<GpuBatch> = self
+            .scenes
+            .iter()
+            .map(|scene| {
+                let mut batch =
+                    GpuBatch::new(&scene.consts, self.step, steps as u32, scene.drive_origin);
+                batch.forces_ready = scene.forces_ready as u32;
+                batch.forces_only = forces_only as u32;
+                batch.steps_per_dispatch = self.steps_per_dispatch as u32;
+                batch.parity = self.current as u32;
+                batch
+            })
+            .collect();
         self.ctx
             .queue
-            .write_buffer(&self.batch_buffer, 0, bytemuck::bytes_of(&batch));
+            .write_buffer(&self.batch_buffer, 0, bytemuck::cast_slice(&batches));
         let mut encoder = self
             .ctx
             .device
             .create_command_encoder(&wgpu::CommandEncoderDescriptor {
                 label: Some("steps"),
             });
+        let scene_count = self.scenes.len() as u32;
         {
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some("steps"),
                 timestamp_writes: None,
             });
             pass.set_pipeline(&self.pipeline);
+            pass.set_bind_group(0, &self.state_group, &[]);
             match self.kernel {
                 Kernel::OneStep | Kernel::OneStepLanes => {
-                    pass.set_bind_group(0, &self.state_groups[0], &[]);
                     for i in 0..steps {
                         let offset = (i * self.offset_stride) as u32;
                         pass.set_bind_group(1, &self.batch_group, &[offset]);
-                        pass.dispatch_workgroups(self.groups.0, self.groups.1, 1);
+                        pass.dispatch_workgroups(self.groups.0, self.groups.1, scene_count);
                         if !forces_only {
                             self.current = 1 - self.current;
                         }
@@ -374,18 +470,17 @@ impl GpuEngine {
                     self.dispatches += steps;
                 }
                 Kernel::Persistent => {
-                    pass.set_bind_group(0, &self.state_groups[0], &[]);
                     for d in 0..steps.div_ceil(self.steps_per_dispatch) {
                         let offset = (d * self.offset_stride) as u32;
                         pass.set_bind_group(1, &self.batch_group, &[offset]);
-                        pass.dispatch_workgroups(1, 1, 1);
+                        pass.dispatch_workgroups(1, 1, scene_count);
                         self.dispatches += 1;
                     }
                     self.persistent_steps = self.persistent_steps.wrapping_add(steps as u32);
                 }
             }
         }
-        let status_size = std::mem::size_of::<GpuStatus>() as u64;
+        let status_size = (self.scenes.len() * STATUS_BYTES) as u64;
         let staging = self.spare_staging.pop().unwrap_or_else(|| {
             self.ctx.device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("status readback"),
@@ -407,16 +502,18 @@ impl GpuEngine {
             first_step: self.step,
             persistent_steps: self.persistent_steps,
         });
-        if forces_only {
-            self.forces_ready = true;
-        } else {
+        for scene in &mut self.scenes {
+            scene.forces_ready = forces_only;
+        }
+        if !forces_only {
             self.step += steps;
-            self.forces_ready = false;
         }
         Ok(())
     }
 
-    /// Waits for the oldest batch and fails with its blow-up, if any.
+    /// Waits for the oldest batch and records each scene's blow-up; one
+    /// scene's blow-up is this engine's error (an ensemble's scenes keep
+    /// theirs, `GpuEnsemble::failure`).
     fn retire_oldest(&mut self) -> Result<(), EngineError> {
         let Some(batch) = self.in_flight.pop_front() else {
             return Ok(());
@@ -433,35 +530,47 @@ impl GpuEngine {
             .recv()
             .map_err(|e| EngineError::Gpu(format!("status readback: {e}")))?
             .map_err(|e| EngineError::Gpu(format!("status readback: {e}")))?;
-        let status: GpuStatus = {
+        let statuses: Vec<GpuStatus> = {
             let view = batch
                 .staging
                 .slice(..)
                 .get_mapped_range()
                 .map_err(|e| EngineError::Gpu(format!("status readback: {e}")))?;
-            *bytemuck::from_bytes(&view)
+            bytemuck::cast_slice(&view).to_vec()
         };
         batch.staging.unmap();
         self.spare_staging.push(batch.staging);
         self.ctx.check()?;
-        if self.kernel == Kernel::Persistent
-            && status.flag == 0
-            && status.persistent_steps != batch.persistent_steps
-        {
-            return Err(EngineError::Gpu(format!(
-                "{} cut a persistent dispatch short ({} steps run in all, {} asked for): \
-                 use --gpu-path one-step",
-                self.ctx.info.name, status.persistent_steps, batch.persistent_steps
-            )));
+        for (scene, status) in self.scenes.iter_mut().zip(&statuses) {
+            if scene.failure.is_some() {
+                continue;
+            }
+            if self.kernel == Kernel::Persistent
+                && status.flag == 0
+                && status.persistent_steps != batch.persistent_steps
+            {
+                return Err(EngineError::Gpu(format!(
+                    "{} cut a persistent dispatch short ({} steps run in all, {} asked for): \
+                     use --gpu-path one-step",
+                    self.ctx.info.name, status.persistent_steps, batch.persistent_steps
+                )));
+            }
+            if status.flag != 0 {
+                // The update of step first + s led to step first + s + 1.
+                let step = batch.first_step + status.step as u64 + 1;
+                let u = [status.ux as f64, status.uz as f64];
+                let v = [status.vx as f64, status.vz as f64];
+                scene.failure = Some(blow_up(&scene.model, step, status.block as usize, u, v));
+            }
         }
-        if status.flag != 0 {
-            // The update of step first + s led to step first + s + 1.
-            let step = batch.first_step + status.step as u64 + 1;
-            self.in_flight.clear();
-            self.step = step;
-            let u = [status.ux as f64, status.uz as f64];
-            let v = [status.vx as f64, status.vz as f64];
-            return Err(blow_up(&self.model, step, status.block as usize, u, v));
+        if !self.ensemble {
+            if let Some(e) = self.scenes[0].failure.take() {
+                self.in_flight.clear();
+                if let EngineError::BlowUp { step, .. } = e {
+                    self.step = step;
+                }
+                return Err(e);
+            }
         }
         Ok(())
     }
@@ -475,63 +584,128 @@ impl GpuEngine {
     }
 
     /// Once, when driving starts (before the forces of that step): fixes
-    /// the driver origin and applies the trigger's initial junction forces
-    /// (host code shared with the CPU).
+    /// each scene's driver origin and applies its trigger's initial
+    /// junction forces (host code shared with the CPU).
     fn begin_driving(&mut self) -> Result<(), EngineError> {
-        let snap = self.read_state()?;
-        if let Driver::SideSpring { row, .. } = self.model.driver {
-            self.drive_origin = DoubleSingle::from_f64(snap.disp[row * self.model.nx][0]);
+        for k in 0..self.scenes.len() {
+            let snap = self.read_state(k)?;
+            let scene = &mut self.scenes[k];
+            if let Driver::SideSpring { row, .. } = scene.model.driver {
+                scene.drive_origin = DoubleSingle::from_f64(snap.disp[row * scene.model.nx][0]);
+            }
+            if scene.model.sets_anchors_at_drive_start() {
+                let anchors = crate::trigger::trigger_anchors(&scene.model, &snap);
+                let spring = gpu_junction_springs(&anchors, &snap.junction_stiffness);
+                let at = (k * self.shape.junctions * SPRING_BYTES) as u64;
+                self.ctx.queue.write_buffer(
+                    &self.buffers.junction_spring,
+                    at,
+                    bytemuck::cast_slice(&spring),
+                );
+            }
+            // The forces of this step change with the driver: recompute them.
+            scene.forces_ready = false;
         }
-        if self.model.sets_anchors_at_drive_start() {
-            let anchors = crate::trigger::trigger_anchors(&self.model, &snap);
-            let spring = gpu_junction_springs(&anchors, &snap.junction_stiffness);
-            self.ctx.queue.write_buffer(
-                &self.buffers.junction_spring,
-                0,
-                bytemuck::cast_slice(&spring),
-            );
-        }
-        // The forces of this step change with the driver: recompute them.
-        self.forces_ready = false;
         Ok(())
     }
 
-    /// The buffers as they are (forces possibly of the previous step).
-    fn read_raw(&mut self) -> Result<RawState, EngineError> {
+    /// Advances every scene `n` steps, in batches that never cross the end
+    /// of the ramp or of the normal-load phase.
+    fn advance_steps(&mut self, n: u64) -> Result<(), EngineError> {
+        let (prep, ramp) = (
+            self.scenes[0].model.prep_steps,
+            self.scenes[0].model.ramp_steps,
+        );
+        let max_batch = match self.kernel {
+            Kernel::OneStep | Kernel::OneStepLanes => ONE_STEP_BATCH,
+            Kernel::Persistent => PERSISTENT_BATCH.min(self.steps_per_dispatch * ONE_STEP_BATCH),
+        };
+        let mut left = n;
+        while left > 0 {
+            // A batch's loads are of one kind throughout.
+            let mut k = left.min(max_batch);
+            for boundary in [ramp, prep] {
+                if self.step < boundary {
+                    k = k.min(boundary - self.step);
+                }
+            }
+            self.submit_batch(k, false)?;
+            left -= k;
+            if self.step == prep {
+                self.begin_driving()?;
+            }
+        }
+        self.drain()
+    }
+
+    /// Computes the forces of the current state of the scenes whose forces
+    /// are not ready (a snapshot describes one instant).
+    fn ready_forces(&mut self) -> Result<(), EngineError> {
         self.drain()?;
-        let m = &self.model;
-        let (n, nj) = (m.n_blocks(), m.n_junctions());
+        if self.scenes.iter().any(|s| !s.forces_ready) {
+            self.submit_batch(1, true)?;
+            self.drain()?;
+        }
+        Ok(())
+    }
+
+    /// Byte range of scene `k`'s slice of a buffer with `per_scene` elements
+    /// of `bytes` each.
+    fn slice<'a>(
+        &self,
+        buffer: &'a wgpu::Buffer,
+        k: usize,
+        per_scene: usize,
+        bytes: usize,
+    ) -> Range<'a> {
+        let size = (per_scene * bytes) as u64;
+        Range {
+            buffer,
+            offset: k as u64 * size,
+            size,
+        }
+    }
+
+    /// Scene `k`'s buffers as they are (forces possibly of the previous step).
+    fn read_raw(&mut self, k: usize) -> Result<RawState, EngineError> {
+        self.drain()?;
+        let Shape {
+            blocks: n,
+            nx,
+            junctions: nj,
+            ..
+        } = self.shape;
         let b = &self.buffers;
-        let raw = read_buffers(
+        let raw = read_ranges(
             &self.ctx,
             &[
-                &b.disp[self.current],
-                &b.vel[self.current],
-                &b.force,
-                &b.contact,
-                &b.junction_spring,
-                &b.junction_state,
-                &b.slide,
+                self.slice(&b.disp[self.current], k, n, DISP_BYTES),
+                self.slice(&b.vel[self.current], k, n, PAIR_BYTES),
+                self.slice(&b.force, k, n, PAIR_BYTES),
+                self.slice(&b.contact, k, nx, PAIR_BYTES),
+                self.slice(&b.junction_spring, k, nj, SPRING_BYTES),
+                self.slice(&b.junction_state, k, nj, PAIR_BYTES),
+                self.slice(&b.slide, k, nx, PAIR_BYTES),
             ],
         )?;
         Ok(RawState {
             disp: cast_prefix(&raw[0], n),
             vel: cast_prefix(&raw[1], n),
             force: cast_prefix(&raw[2], n),
-            contact: cast_prefix(&raw[3], m.nx),
+            contact: cast_prefix(&raw[3], nx),
             spring: cast_prefix::<GpuJunctionSpring>(&raw[4], nj)
                 .into_iter()
                 .map(Into::into)
                 .collect(),
             state: cast_prefix(&raw[5], nj),
-            slide: cast_prefix(&raw[6], m.nx),
+            slide: cast_prefix(&raw[6], nx),
         })
     }
 
-    fn read_state(&mut self) -> Result<Snapshot, EngineError> {
-        let r = self.read_raw()?;
+    fn read_state(&mut self, k: usize) -> Result<Snapshot, EngineError> {
+        let r = self.read_raw(k)?;
         Ok(Snapshot::from_buffers(
-            &self.model,
+            &self.scenes[k].model,
             self.step,
             &r.disp,
             &r.vel,
@@ -541,6 +715,179 @@ impl GpuEngine {
             &r.state,
             &r.slide,
         ))
+    }
+
+    /// Writes `bytes` at element `k · per_scene` of a buffer with elements
+    /// of `element` bytes (nothing for an empty array).
+    fn write_scene(
+        &self,
+        buffer: &wgpu::Buffer,
+        k: usize,
+        per_scene: usize,
+        element: usize,
+        bytes: &[u8],
+    ) {
+        if !bytes.is_empty() {
+            let at = (k * per_scene * element) as u64;
+            self.ctx.queue.write_buffer(buffer, at, bytes);
+        }
+    }
+
+    fn snapshot_of(&mut self, k: usize) -> Result<Snapshot, EngineError> {
+        self.ready_forces()?;
+        self.read_state(k)
+    }
+
+    fn set_kinematics_of(
+        &mut self,
+        k: usize,
+        disp: &[[f64; 2]],
+        vel: &[[f64; 2]],
+    ) -> Result<(), EngineError> {
+        self.drain()?;
+        let disp: Vec<[DoubleSingle; 2]> =
+            disp.iter().map(|u| u.map(DoubleSingle::from_f64)).collect();
+        let vel: Vec<[f32; 2]> = vel.iter().map(|v| v.map(|x| x as f32)).collect();
+        let (b, n) = (&self.buffers, self.shape.blocks);
+        self.write_scene(
+            &b.disp[self.current],
+            k,
+            n,
+            DISP_BYTES,
+            bytemuck::cast_slice(&disp),
+        );
+        self.write_scene(
+            &b.vel[self.current],
+            k,
+            n,
+            PAIR_BYTES,
+            bytemuck::cast_slice(&vel),
+        );
+        self.scenes[k].forces_ready = false;
+        Ok(())
+    }
+
+    fn set_junctions_of(&mut self, k: usize, snap: &Snapshot) -> Result<(), EngineError> {
+        self.drain()?;
+        let spring = gpu_junction_springs(&snap.anchor, &snap.junction_stiffness);
+        let state: Vec<[u32; 2]> = snap
+            .slip_steps_left
+            .iter()
+            .zip(&snap.ruptures)
+            .map(|(l, r)| [*l, *r])
+            .collect();
+        let (b, nj) = (&self.buffers, self.shape.junctions);
+        self.write_scene(
+            &b.junction_spring,
+            k,
+            nj,
+            SPRING_BYTES,
+            bytemuck::cast_slice(&spring),
+        );
+        self.write_scene(
+            &b.junction_state,
+            k,
+            nj,
+            PAIR_BYTES,
+            bytemuck::cast_slice(&state),
+        );
+        self.scenes[k].forces_ready = false;
+        Ok(())
+    }
+
+    fn save_state_of(&mut self, k: usize) -> Result<EngineState, EngineError> {
+        self.ready_forces()?;
+        let r = self.read_raw(k)?;
+        Ok(EngineState::capture(StateArrays {
+            step: self.step,
+            drive_origin: self.scenes[k].drive_origin,
+            disp: &r.disp,
+            vel: &r.vel,
+            force: &r.force,
+            contact: &r.contact,
+            junction_spring: &r.spring,
+            junction_state: &r.state,
+            slide: &r.slide,
+        }))
+    }
+
+    /// Replaces scene `k`'s state (at the engine's step: an ensemble's
+    /// scenes stand at one step).
+    fn load_state_of(&mut self, k: usize, state: &EngineState) -> Result<(), EngineError> {
+        state.check_fits(&self.scenes[k].model)?;
+        self.drain()?;
+        let spring: Vec<GpuJunctionSpring> = state
+            .junction_springs_as::<f32, DoubleSingle>()
+            .into_iter()
+            .map(Into::into)
+            .collect();
+        let b = &self.buffers;
+        let Shape {
+            blocks: n,
+            nx,
+            junctions: nj,
+            ..
+        } = self.shape;
+        let disp = state.disp_as::<f32, DoubleSingle>();
+        self.write_scene(
+            &b.disp[self.current],
+            k,
+            n,
+            DISP_BYTES,
+            bytemuck::cast_slice(&disp),
+        );
+        let vel = state.vel_as::<f32>();
+        self.write_scene(
+            &b.vel[self.current],
+            k,
+            n,
+            PAIR_BYTES,
+            bytemuck::cast_slice(&vel),
+        );
+        let force = state.force_as::<f32>();
+        self.write_scene(&b.force, k, n, PAIR_BYTES, bytemuck::cast_slice(&force));
+        let contact = state.contact_as::<f32>();
+        self.write_scene(
+            &b.contact,
+            k,
+            nx,
+            PAIR_BYTES,
+            bytemuck::cast_slice(&contact),
+        );
+        self.write_scene(
+            &b.junction_spring,
+            k,
+            nj,
+            SPRING_BYTES,
+            bytemuck::cast_slice(&spring),
+        );
+        let js = bytemuck::cast_slice(&state.junction_state);
+        self.write_scene(&b.junction_state, k, nj, PAIR_BYTES, js);
+        self.write_scene(
+            &b.slide,
+            k,
+            nx,
+            PAIR_BYTES,
+            bytemuck::cast_slice(&state.slide),
+        );
+        let scene = &mut self.scenes[k];
+        scene.drive_origin = state.drive_origin_as::<f32, DoubleSingle>();
+        // The saved forces are those of the saved state.
+        scene.forces_ready = true;
+        Ok(())
+    }
+
+    fn kernel_description(&self) -> String {
+        match self.kernel {
+            Kernel::OneStep => "one-step kernel, 1 dispatch per step".to_string(),
+            Kernel::OneStepLanes => {
+                "one-step kernel with junction lanes, 1 dispatch per step".to_string()
+            }
+            Kernel::Persistent => format!(
+                "persistent kernel, 1 dispatch per {} steps, {} threads",
+                self.steps_per_dispatch, self.persistent_threads
+            ),
+        }
     }
 }
 
@@ -581,7 +928,7 @@ fn whole(binding: u32, buffer: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {
 
 impl Engine for GpuEngine {
     fn model(&self) -> &Model {
-        &self.model
+        &self.scenes[0].model
     }
 
     fn steps_done(&self) -> u64 {
@@ -589,36 +936,11 @@ impl Engine for GpuEngine {
     }
 
     fn advance(&mut self, n: u64) -> Result<(), EngineError> {
-        let (prep, ramp) = (self.model.prep_steps, self.model.ramp_steps);
-        let max_batch = match self.kernel {
-            Kernel::OneStep | Kernel::OneStepLanes => ONE_STEP_BATCH,
-            Kernel::Persistent => PERSISTENT_BATCH.min(self.steps_per_dispatch * ONE_STEP_BATCH),
-        };
-        let mut left = n;
-        while left > 0 {
-            // A batch never crosses the end of the ramp or of the
-            // normal-load phase: its loads are of one kind throughout.
-            let mut k = left.min(max_batch);
-            for boundary in [ramp, prep] {
-                if self.step < boundary {
-                    k = k.min(boundary - self.step);
-                }
-            }
-            self.submit_batch(k, false)?;
-            left -= k;
-            if self.step == prep {
-                self.begin_driving()?;
-            }
-        }
-        self.drain()
+        self.advance_steps(n)
     }
 
     fn snapshot(&mut self) -> Result<Snapshot, EngineError> {
-        self.drain()?;
-        if !self.forces_ready {
-            self.submit_batch(1, true)?;
-        }
-        self.read_state()
+        self.snapshot_of(0)
     }
 
     fn set_kinematics(
@@ -627,110 +949,30 @@ impl Engine for GpuEngine {
         disp: &[[f64; 2]],
         vel: &[[f64; 2]],
     ) -> Result<(), EngineError> {
-        crate::engine::assert_driving_phase(&self.model, self.step, step);
-        self.drain()?;
-        let disp: Vec<[DoubleSingle; 2]> =
-            disp.iter().map(|u| u.map(DoubleSingle::from_f64)).collect();
-        let vel: Vec<[f32; 2]> = vel.iter().map(|v| v.map(|x| x as f32)).collect();
-        let b = &self.buffers;
-        let queue = &self.ctx.queue;
-        queue.write_buffer(&b.disp[self.current], 0, bytemuck::cast_slice(&disp));
-        queue.write_buffer(&b.vel[self.current], 0, bytemuck::cast_slice(&vel));
+        crate::engine::assert_driving_phase(&self.scenes[0].model, self.step, step);
+        self.set_kinematics_of(0, disp, vel)?;
         self.step = step;
-        self.forces_ready = false;
         Ok(())
     }
 
     fn set_junctions(&mut self, snap: &Snapshot) -> Result<(), EngineError> {
-        self.drain()?;
-        let spring = gpu_junction_springs(&snap.anchor, &snap.junction_stiffness);
-        let state: Vec<[u32; 2]> = snap
-            .slip_steps_left
-            .iter()
-            .zip(&snap.ruptures)
-            .map(|(l, r)| [*l, *r])
-            .collect();
-        if !spring.is_empty() {
-            let b = &self.buffers;
-            self.ctx
-                .queue
-                .write_buffer(&b.junction_spring, 0, bytemuck::cast_slice(&spring));
-            self.ctx
-                .queue
-                .write_buffer(&b.junction_state, 0, bytemuck::cast_slice(&state));
-        }
-        self.forces_ready = false;
-        Ok(())
+        self.set_junctions_of(0, snap)
     }
 
     fn save_state(&mut self) -> Result<EngineState, EngineError> {
-        self.drain()?;
-        if !self.forces_ready {
-            self.submit_batch(1, true)?;
-        }
-        let r = self.read_raw()?;
-        Ok(EngineState::capture(StateArrays {
-            step: self.step,
-            drive_origin: self.drive_origin,
-            disp: &r.disp,
-            vel: &r.vel,
-            force: &r.force,
-            contact: &r.contact,
-            junction_spring: &r.spring,
-            junction_state: &r.state,
-            slide: &r.slide,
-        }))
+        self.save_state_of(0)
     }
 
     fn load_state(&mut self, state: &EngineState) -> Result<(), EngineError> {
-        state.check_fits(&self.model)?;
-        self.drain()?;
-        let spring: Vec<GpuJunctionSpring> = state
-            .junction_springs_as::<f32, DoubleSingle>()
-            .into_iter()
-            .map(Into::into)
-            .collect();
-        let b = &self.buffers;
-        let queue = &self.ctx.queue;
-        let write = |buffer: &wgpu::Buffer, bytes: &[u8]| {
-            if !bytes.is_empty() {
-                queue.write_buffer(buffer, 0, bytes);
-            }
-        };
-        let disp = state.disp_as::<f32, DoubleSingle>();
-        write(&b.disp[self.current], bytemuck::cast_slice(&disp));
-        write(
-            &b.vel[self.current],
-            bytemuck::cast_slice(&state.vel_as::<f32>()),
-        );
-        write(&b.force, bytemuck::cast_slice(&state.force_as::<f32>()));
-        write(&b.contact, bytemuck::cast_slice(&state.contact_as::<f32>()));
-        write(&b.junction_spring, bytemuck::cast_slice(&spring));
-        write(
-            &b.junction_state,
-            bytemuck::cast_slice(&state.junction_state),
-        );
-        write(&b.slide, bytemuck::cast_slice(&state.slide));
+        self.load_state_of(0, state)?;
         self.step = state.step;
-        self.drive_origin = state.drive_origin_as::<f32, DoubleSingle>();
-        // The saved forces are those of the saved state.
-        self.forces_ready = true;
         Ok(())
     }
 
     fn describe(&self) -> String {
-        let kernel = match self.kernel {
-            Kernel::OneStep => "one-step kernel, 1 dispatch per step".to_string(),
-            Kernel::OneStepLanes => {
-                "one-step kernel with junction lanes, 1 dispatch per step".to_string()
-            }
-            Kernel::Persistent => format!(
-                "persistent kernel, 1 dispatch per {} steps, {} threads",
-                self.steps_per_dispatch, self.persistent_threads
-            ),
-        };
         format!(
-            "gpu f32 mixed (f32+f32 coordinates), {kernel}, on {}",
+            "gpu f32 mixed (f32+f32 coordinates), {}, on {}",
+            self.kernel_description(),
             self.ctx.describe()
         )
     }

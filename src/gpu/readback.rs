@@ -4,13 +4,20 @@ use super::context::GpuContext;
 use crate::engine::EngineError;
 use std::sync::mpsc;
 
-/// Copies `buffers` into one staging buffer with one submit and one wait,
-/// and returns each buffer's bytes.
-pub fn read_buffers(
-    ctx: &GpuContext,
-    buffers: &[&wgpu::Buffer],
-) -> Result<Vec<Vec<u8>>, EngineError> {
-    let total: u64 = buffers.iter().map(|b| b.size()).sum();
+/// A byte range of a device buffer.
+pub struct Range<'a> {
+    pub buffer: &'a wgpu::Buffer,
+    pub offset: u64,
+    pub size: u64,
+}
+
+/// Copies `ranges` into one staging buffer with one submit and one wait,
+/// and returns each range's bytes.
+pub fn read_ranges(ctx: &GpuContext, ranges: &[Range]) -> Result<Vec<Vec<u8>>, EngineError> {
+    let total: u64 = ranges.iter().map(|r| r.size).sum();
+    if total == 0 {
+        return Ok(vec![Vec::new(); ranges.len()]);
+    }
     let staging = ctx.device.create_buffer(&wgpu::BufferDescriptor {
         label: Some("readback"),
         size: total,
@@ -20,10 +27,12 @@ pub fn read_buffers(
     let mut encoder = ctx
         .device
         .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
-    let mut offset = 0;
-    for b in buffers {
-        encoder.copy_buffer_to_buffer(b, 0, &staging, offset, b.size());
-        offset += b.size();
+    let mut at = 0;
+    for r in ranges {
+        if r.size > 0 {
+            encoder.copy_buffer_to_buffer(r.buffer, r.offset, &staging, at, r.size);
+        }
+        at += r.size;
     }
     ctx.queue.submit([encoder.finish()]);
     let slice = staging.slice(..);
@@ -43,10 +52,10 @@ pub fn read_buffers(
         .to_vec();
     staging.unmap();
     ctx.check()?;
-    let mut out = Vec::with_capacity(buffers.len());
+    let mut out = Vec::with_capacity(ranges.len());
     let mut at = 0usize;
-    for b in buffers {
-        let size = b.size() as usize;
+    for r in ranges {
+        let size = r.size as usize;
         out.push(data[at..at + size].to_vec());
         at += size;
     }

@@ -1,12 +1,15 @@
 //! WGSL sources, composed per kernel (the generated prelude of
-//! `layout.rs`, the shared snippets, the state bindings of the kernel and
-//! its entry file), and the variant a scene needs: which kernel runs and
-//! its override constants.
+//! `layout.rs`, the shared snippets, the scene snippet (one scene, or an
+//! ensemble of scenes), the state bindings of the kernel and its entry
+//! file), and the variant a scene needs: which kernel runs and its
+//! override constants.
 
 use crate::model::{Driver, Model};
 use crate::scenario::{DampingForm, FrictionLaw};
 
 pub const COMMON: &str = include_str!("../../shaders/common.wgsl");
+pub const SCENE_SINGLE: &str = include_str!("../../shaders/scene_single.wgsl");
+pub const SCENE_ENSEMBLE: &str = include_str!("../../shaders/scene_ensemble.wgsl");
 pub const DOUBLE_SINGLE: &str = include_str!("../../shaders/double_single.wgsl");
 pub const RNG: &str = include_str!("../../shaders/rng.wgsl");
 pub const BULK_FORCES: &str = include_str!("../../shaders/bulk_forces.wgsl");
@@ -44,8 +47,9 @@ impl Kernel {
         }
     }
 
-    /// The full WGSL module of this kernel.
-    pub fn source(self) -> String {
+    /// The full WGSL module of this kernel, for one scene or an ensemble
+    /// (many scenes of one lattice shape per dispatch).
+    pub fn source(self, ensemble: bool) -> String {
         let (state, entry) = match self {
             Kernel::OneStep => (STATE_ONE_STEP, ONE_STEP),
             Kernel::OneStepLanes => (STATE_ONE_STEP, ONE_STEP_LANES),
@@ -60,6 +64,11 @@ impl Kernel {
         [
             prelude.as_str(),
             COMMON,
+            if ensemble {
+                SCENE_ENSEMBLE
+            } else {
+                SCENE_SINGLE
+            },
             state,
             DOUBLE_SINGLE,
             RNG,
@@ -131,8 +140,8 @@ impl Variant {
 }
 
 /// Parses and validates a kernel's module with naga (no adapter needed).
-pub fn validate_kernel(phase: Kernel) -> Result<naga::Module, String> {
-    let src = phase.source();
+pub fn validate_kernel(phase: Kernel, ensemble: bool) -> Result<naga::Module, String> {
+    let src = phase.source(ensemble);
     let module = naga::front::wgsl::parse_str(&src)
         .map_err(|e| format!("{}: {}", phase.entry_point(), e.emit_to_string(&src)))?;
     naga::valid::Validator::new(
@@ -158,7 +167,9 @@ mod tests {
     #[test]
     fn every_shader_parses_and_validates_with_naga() {
         for kernel in Kernel::ALL {
-            validate_kernel(kernel).unwrap_or_else(|e| panic!("{e}"));
+            for ensemble in [false, true] {
+                validate_kernel(kernel, ensemble).unwrap_or_else(|e| panic!("{e}"));
+            }
         }
     }
 }

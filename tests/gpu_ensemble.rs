@@ -1,0 +1,187 @@
+//! GPU ensembles (many scenes per dispatch) against the same scenes run one
+//! at a time on the GPU engine, on whatever adapter is present (lavapipe in
+//! CI). These tests fail, never skip, when no adapter exists.
+
+use slipfront::compare::{compare_snapshots, fields_over};
+use slipfront::gpu::ensemble::{incompatibility, GpuEnsemble};
+use slipfront::gpu::{GpuEngine, GpuOptions, GpuPath};
+use slipfront::scenario::{Scenario, DEFAULT_SCENARIO};
+use slipfront::{advance_to, Engine, EngineError, Model, Snapshot};
+
+fn model(extra: &[&str]) -> Model {
+    let mut set: Vec<String> = slipfront::verify::SMALL_SCENE
+        .iter()
+        .map(|s| s.to_string())
+        .collect();
+    // Fast driving and short slip times: junctions break, re-pin and break
+    // again within a few thousand steps of driving.
+    set.push("loading.drive.velocity=0.4".into());
+    set.push("friction.junctions.slip_time_mean=2e-4".into());
+    set.push("friction.junctions.slip_time_std=2e-5".into());
+    set.extend(extra.iter().map(|s| s.to_string()));
+    let s = Scenario::parse(DEFAULT_SCENARIO, "test", &set).unwrap();
+    Model::from_scenario(&s, true).unwrap()
+}
+
+fn options(path: GpuPath) -> GpuOptions {
+    GpuOptions {
+        path,
+        ..GpuOptions::default()
+    }
+}
+
+fn solo(m: &Model, path: GpuPath, steps: u64) -> Result<Snapshot, EngineError> {
+    let mut g = GpuEngine::with_options(m, options(path))
+        .unwrap_or_else(|e| panic!("a GPU adapter is required (lavapipe in CI): {e}"));
+    advance_to(&mut g, steps)?;
+    g.snapshot()
+}
+
+fn ensemble(models: &[Model], path: GpuPath) -> GpuEnsemble {
+    GpuEnsemble::new(models, options(path))
+        .unwrap_or_else(|e| panic!("a GPU adapter is required (lavapipe in CI): {e}"))
+}
+
+/// Three scenes that differ in a load, a friction coefficient and the seed.
+fn three_scenes() -> Vec<Model> {
+    vec![
+        model(&[]),
+        model(&["friction.static_coefficient=0.404"]),
+        model(&["time.seed=7", "loading.normal.force=1800"]),
+    ]
+}
+
+/// The solo run's result and the ensemble's: the same bits on the one-step
+/// kernels; on the persistent kernel the same to f32 round-off (a driver
+/// may constant-fold the solo run's uniform constants, not an ensemble's
+/// per-scene records: lavapipe does) and the same rupture count.
+fn same_run(path: GpuPath, ensemble: &Snapshot, alone: &Snapshot) -> Result<(), String> {
+    if ensemble == alone {
+        return Ok(());
+    }
+    if path != GpuPath::Persistent {
+        return Err("not bit for bit".into());
+    }
+    let errors = compare_snapshots(ensemble, alone);
+    let over = fields_over(&errors, 1e-4, 1e-5);
+    let ruptures = (ensemble.total_ruptures(), alone.total_ruptures());
+    if over.is_empty() && ruptures.0 == ruptures.1 {
+        Ok(())
+    } else {
+        Err(format!("fields {over:?}, ruptures {ruptures:?}"))
+    }
+}
+
+/// Each scene of an ensemble ends where it ends run alone, on every
+/// kernel, through the normal-load phase and into stick-slip; its result
+/// does not depend on the other scenes (bit for bit); and a scene compared
+/// with another's solo run is flagged (the comparison is not vacuous).
+#[test]
+fn each_scene_of_an_ensemble_matches_its_solo_run() {
+    let models = three_scenes();
+    let steps = models[0].prep_steps + 3000;
+    for path in [GpuPath::OneStep, GpuPath::OneStepLanes, GpuPath::Persistent] {
+        let mut e = ensemble(&models, path);
+        e.advance(steps).unwrap();
+        assert_eq!(e.steps_done(), steps);
+        let runs: Vec<Snapshot> = (0..models.len()).map(|k| e.snapshot(k).unwrap()).collect();
+        for (k, m) in models.iter().enumerate() {
+            assert!(e.failure(k).is_none());
+            let alone = solo(m, path, steps).unwrap();
+            assert!(
+                alone.total_ruptures() > 50,
+                "{path:?} scene {k}: the window must hold ruptures ({})",
+                alone.total_ruptures()
+            );
+            same_run(path, &runs[k], &alone).unwrap_or_else(|e| panic!("{path:?} scene {k}: {e}"));
+        }
+        // The last scene alone in an ensemble: the same bits.
+        let mut one = ensemble(&models[2..], path);
+        one.advance(steps).unwrap();
+        assert!(one.snapshot(0).unwrap() == runs[2], "{path:?}");
+        // Negative control: scene 1 (μs 1% higher) is not scene 0.
+        let other = solo(&models[0], path, steps).unwrap();
+        assert!(same_run(path, &runs[1], &other).is_err(), "{path:?}");
+    }
+}
+
+/// A state saved from one scene and loaded into another at the same step
+/// makes that scene continue exactly as the first.
+#[test]
+fn a_scene_state_moves_between_slots_of_an_ensemble() {
+    let models = vec![model(&[]), model(&[])];
+    let mut e = ensemble(&models, GpuPath::OneStep);
+    let start = models[0].prep_steps + 500;
+    e.advance(start).unwrap();
+    // Disturb slot 1, then give it slot 0's state back.
+    let mut moved = e.save_state(0).unwrap();
+    let mut disturbed = moved.clone();
+    disturbed.vel[40][0] += 1e-3;
+    e.load_state(1, &disturbed).unwrap();
+    e.advance(200).unwrap();
+    assert!(e.snapshot(0).unwrap() != e.snapshot(1).unwrap());
+    moved = e.save_state(0).unwrap();
+    e.load_state(1, &moved).unwrap();
+    e.advance(800).unwrap();
+    assert!(e.snapshot(0).unwrap() == e.snapshot(1).unwrap());
+    // A state of another step cannot join.
+    let old = GpuEngine::new(&models[0]).unwrap().save_state().unwrap();
+    let err = e.load_state(1, &old).unwrap_err().to_string();
+    assert!(err.contains("cannot join an ensemble"), "{err}");
+}
+
+/// A scene that blows up stops alone, with its step and block; the others
+/// go on and still match their solo runs.
+#[test]
+fn a_blow_up_stops_only_its_scene() {
+    let stable = model(&["time.end=1e-3"]);
+    let unstable = model(&[
+        "time.end=1e-3",
+        "friction.junctions.stiffness_coefficient=39.2e17",
+    ]);
+    let models = vec![stable.clone(), unstable.clone(), stable.clone()];
+    let end = stable.total_steps();
+    for path in [GpuPath::OneStep, GpuPath::Persistent] {
+        let Err(EngineError::BlowUp { step: alone_at, .. }) = solo(&unstable, path, end) else {
+            panic!("{path:?}: the unstable scene must blow up alone");
+        };
+        let mut e = ensemble(&models, path);
+        e.advance(end).unwrap();
+        let Some(EngineError::BlowUp { step, iz, .. }) = e.failure(1) else {
+            panic!("{path:?}: scene 1 must have blown up");
+        };
+        assert_eq!(*step, alone_at, "{path:?}");
+        assert!(*iz <= 1, "{path:?}");
+        let text = e.failure(1).unwrap().to_string();
+        assert!(text.contains("blew up at step"), "{text}");
+        let alone = solo(&stable, path, end).unwrap();
+        for k in [0, 2] {
+            assert!(e.failure(k).is_none());
+            same_run(path, &e.snapshot(k).unwrap(), &alone)
+                .unwrap_or_else(|e| panic!("{path:?} scene {k}: {e}"));
+        }
+    }
+}
+
+#[test]
+fn scenes_of_different_shapes_cannot_share_an_ensemble() {
+    let a = model(&[]);
+    let b = model(&["geometry.nx=30", "geometry.length=0.0725"]);
+    let why = incompatibility(&[a.clone(), b.clone()]).unwrap();
+    assert!(
+        why.contains("scene 1") && why.contains("lattice size"),
+        "{why}"
+    );
+    let Err(err) = GpuEnsemble::new(&[a.clone(), b], GpuOptions::default()) else {
+        panic!("must refuse");
+    };
+    assert!(
+        err.to_string().contains("cannot share one ensemble"),
+        "{err}"
+    );
+    let c = model(&["loading.normal.ramp_time=3e-4"]);
+    let why = incompatibility(&[a.clone(), c]).unwrap();
+    assert!(why.contains("normal-load phase"), "{why}");
+    // Negative control: scenes that differ in run constants only are fine.
+    assert_eq!(incompatibility(&three_scenes()), None);
+}
