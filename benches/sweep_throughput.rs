@@ -53,6 +53,7 @@ fn in_process(dir: &Path, sweep: &Sweep, threads: usize, share: bool) -> f64 {
             keep_mcap: KeepMcap::None,
             progress: false,
             share_loading: share,
+            ensemble: 1,
         },
     )
     .unwrap();

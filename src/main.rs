@@ -247,6 +247,10 @@ struct SweepRun {
     /// it (the results are the same bits either way).
     #[arg(long)]
     no_shared_loading: bool,
+    /// GPU backend: scenes stepped together in one dispatch at most (points
+    /// of one lattice shape and time schedule); 1 runs them one at a time.
+    #[arg(long, default_value_t = slipfront::sweep::DEFAULT_ENSEMBLE)]
+    ensemble: usize,
 }
 
 fn main() -> ExitCode {
@@ -389,6 +393,7 @@ fn main() -> ExitCode {
                 cpus_per_task: run.cpus_per_task,
                 quiet: run.quiet,
                 no_shared_loading: run.no_shared_loading,
+                ensemble: run.ensemble,
             }),
         },
     };

@@ -330,3 +330,65 @@ fn bad_sweep_input_is_refused_with_the_field_named() {
         assert!(err.contains(expect), "{text}: {err}");
     }
 }
+
+/// On the GPU, points of one lattice run as one ensemble (one dispatch
+/// for all) and give the table of the same points run one at a time; a
+/// point that cannot join (its own lattice) runs alone.
+#[test]
+fn a_gpu_ensemble_sweep_gives_the_table_of_points_run_one_at_a_time() {
+    let d = dir("ensemble");
+    let file = sweep_file(&d, "\"loading.normal.force\" = [1800.0, 1920.0]");
+    let together = d.join("together");
+    let text = ok(&[
+        "sweep",
+        s(&file),
+        "-o",
+        s(&together),
+        "--backend",
+        "gpu",
+        "--ensemble",
+        "8",
+    ]);
+    assert!(text.contains("16 run now (0 not ok)"), "{text}");
+    assert!(text.contains("ensembles of 8, 8"), "{text}");
+    let apart = d.join("apart");
+    let text = ok(&[
+        "sweep",
+        s(&file),
+        "-o",
+        s(&apart),
+        "--backend",
+        "gpu",
+        "--ensemble",
+        "1",
+        "--quiet",
+    ]);
+    assert!(text.contains("16 run now (0 not ok)"), "{text}");
+    let (a, b) = (
+        table(&together.join("summary.csv")),
+        table(&apart.join("summary.csv")),
+    );
+    let software = slipfront::gpu::context::shared()
+        .unwrap_or_else(|e| panic!("a GPU adapter is required (lavapipe in CI): {e}"))
+        .is_software();
+    if software {
+        // The one-step kernel: an ensemble's scenes are bit for bit their
+        // solo runs.
+        assert_eq!(a, b);
+    } else {
+        // Persistent kernel: the same to round-off, so the same events.
+        for name in ["status", "events", "full_events", "precursors"] {
+            assert_eq!(column(&a, name), column(&b, name), "{name}");
+        }
+    }
+    // Negative control: the table tells the two normal loads apart.
+    let force = column(&a, "loading.normal.force");
+    let first = column(&a, "first_full_time_s");
+    let of = |f: &str| -> Vec<&str> {
+        (0..16)
+            .filter(|&k| force[k] == f)
+            .map(|k| first[k])
+            .collect()
+    };
+    assert_ne!(of("1800.0"), of("1920.0"));
+}

@@ -21,6 +21,7 @@ pub struct SweepArgs {
     pub cpus_per_task: usize,
     pub quiet: bool,
     pub no_shared_loading: bool,
+    pub ensemble: usize,
 }
 
 /// `NAME.toml` → `NAME_sweep` beside it.
@@ -88,12 +89,13 @@ pub fn sweep(a: SweepArgs) -> anyhow::Result<ExitCode> {
             keep_mcap: a.mcap,
             progress: !a.quiet,
             share_loading: !a.no_shared_loading,
+            ensemble: a.ensemble,
         },
     )
     .map_err(|e| anyhow::anyhow!(e))?;
     println!(
         "sweep {}: {} points{}, {} run now ({} not ok), {} already done, {:.1} s, \
-         {} shared normal-load phases\n  table {}",
+         {} shared normal-load phases{}\n  table {}",
         if report.interrupted {
             "INTERRUPTED"
         } else {
@@ -109,6 +111,12 @@ pub fn sweep(a: SweepArgs) -> anyhow::Result<ExitCode> {
         report.skipped,
         report.wall_seconds,
         report.shared_loadings,
+        if report.ensembles.is_empty() {
+            String::new()
+        } else {
+            let sizes: Vec<String> = report.ensembles.iter().map(|n| n.to_string()).collect();
+            format!(", GPU ensembles of {}", sizes.join(", "))
+        },
         report.table.display()
     );
     Ok(if report.interrupted {

@@ -105,6 +105,32 @@ impl GpuEnsemble {
         self.engine.save_state_of(scene)
     }
 
+    /// Starts every scene from its state in `states` (one per scene, all of
+    /// one step: the end of a shared normal-load phase); the ensemble moves
+    /// to that step.
+    pub fn start_from(&mut self, states: &[&EngineState]) -> Result<(), EngineError> {
+        if states.len() != self.len() {
+            return Err(EngineError::State(format!(
+                "{} states for an ensemble of {} scenes",
+                states.len(),
+                self.len()
+            )));
+        }
+        let step = states[0].step;
+        if let Some(s) = states.iter().find(|s| s.step != step) {
+            return Err(EngineError::State(format!(
+                "the scenes of an ensemble start at one step, not at {step} and {}",
+                s.step
+            )));
+        }
+        self.engine.drain()?;
+        self.engine.step = step;
+        for (k, state) in states.iter().enumerate() {
+            self.engine.load_state_of(k, state)?;
+        }
+        Ok(())
+    }
+
     /// Replaces one scene's state by `state`, which must be of the step
     /// the ensemble stands at.
     pub fn load_state(&mut self, scene: usize, state: &EngineState) -> Result<(), EngineError> {

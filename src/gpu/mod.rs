@@ -15,6 +15,7 @@
 pub mod context;
 pub mod ensemble;
 pub mod layout;
+pub mod lockstep;
 pub mod options;
 mod readback;
 pub mod shaders;

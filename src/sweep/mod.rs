@@ -1,9 +1,11 @@
 //! Parameter sweeps: many runs from one sweep file, one CPU scene per
-//! thread, each run's outcomes a row of `summary.csv`; crash-safe and
+//! thread or many GPU scenes per dispatch (`ensembles`), each run's
+//! outcomes a row of `summary.csv`; crash-safe and
 //! resumable (finished rows are synced as they come and skipped on a
 //! rerun), and split into shards for Slurm job arrays (`slurm`), whose
 //! tables `collect` merges.
 
+mod ensembles;
 pub mod outcomes;
 pub mod plan;
 pub mod slurm;
@@ -13,8 +15,8 @@ pub use plan::{Point, Sweep, SweepFile};
 
 use crate::backend::{make_engine, Backend, Precision};
 use crate::checkpoint::RunnerState;
-use crate::engine::EngineError;
-use crate::engine::EngineState;
+use crate::engine::{Engine, EngineError, EngineState};
+use crate::gpu::lockstep::LockstepScene;
 use crate::model::Model;
 use crate::output::reader::RunFile;
 use crate::runner::{run_scene, RunError, RunOptions, StartFrom};
@@ -83,7 +85,14 @@ pub struct SweepOptions {
     /// Run the normal-load phase once for the points that share it
     /// (`checkpoint::branch::same_loading`) and start each from that state.
     pub share_loading: bool,
+    /// GPU backend: scenes stepped together in one dispatch at most (1: one
+    /// point at a time).
+    pub ensemble: usize,
 }
+
+/// Scenes per GPU ensemble by default: enough to fill a software adapter's
+/// threads and a hardware GPU's multiprocessors with small lattices.
+pub const DEFAULT_ENSEMBLE: usize = 64;
 
 /// What a sweep invocation did.
 #[derive(Debug)]
@@ -99,6 +108,8 @@ pub struct SweepReport {
     pub wall_seconds: f64,
     /// Normal-load phases this invocation's points share (0: none shared).
     pub shared_loadings: usize,
+    /// Points per GPU ensemble run (empty: none).
+    pub ensembles: Vec<usize>,
 }
 
 /// Points with one normal-load phase, and their loaded state (one step
@@ -165,13 +176,25 @@ pub fn table_path(dir: &Path, shard: Option<Shard>) -> PathBuf {
     }
 }
 
-/// Runs one point (from `loaded`, the shared loaded slider, when given):
-/// its row (status ok, blew_up or failed with the message).
+/// Where a point's engine comes from.
+enum EngineSource<'a> {
+    /// Its own, built for it (from the shared loaded slider when given).
+    Own(Option<&'a Loading<'a>>),
+    /// A scene of a GPU ensemble, standing at the point's start (the end of
+    /// its normal-load phase when `loaded`).
+    Ensemble {
+        engine: Box<LockstepScene>,
+        loaded: bool,
+    },
+}
+
+/// Runs one point: its row (status ok, blew_up or failed with the
+/// message), or None if the run was interrupted.
 fn run_point(
     p: &Point,
     opts: &SweepOptions,
     header_len: usize,
-    loaded: Option<&Loading>,
+    source: EngineSource,
 ) -> Option<Vec<String>> {
     let runs = opts.out_dir.join("runs");
     let keep = match opts.keep_mcap {
@@ -190,20 +213,23 @@ fn run_point(
     let result = (|| -> Result<_, RunError> {
         let model = Model::from_scenario(&p.scenario, false)
             .map_err(|e| RunError::Engine(EngineError::State(e.to_string())))?;
-        let mut engine = make_engine(&model, opts.backend, opts.precision, 1)?;
-        let start = match loaded {
-            Some(l) => {
-                let state = l
-                    .state(opts)
-                    .map_err(|e| RunError::Engine(EngineError::State(e)))?;
-                engine.load_state(state)?;
-                Some(StartFrom {
-                    runner: RunnerState::default(),
-                    parent_output: None,
-                })
+        let (mut engine, loaded): (Box<dyn Engine>, bool) = match source {
+            EngineSource::Own(loaded) => {
+                let mut engine = make_engine(&model, opts.backend, opts.precision, 1)?;
+                if let Some(l) = loaded {
+                    let state = l
+                        .state(opts)
+                        .map_err(|e| RunError::Engine(EngineError::State(e)))?;
+                    engine.load_state(state)?;
+                }
+                (engine, loaded.is_some())
             }
-            None => None,
+            EngineSource::Ensemble { engine, loaded } => (engine, loaded),
         };
+        let start = loaded.then(|| StartFrom {
+            runner: RunnerState::default(),
+            parent_output: None,
+        });
         let summary = run_scene(
             engine.as_mut(),
             &p.scenario,
@@ -263,6 +289,67 @@ fn clock(seconds: f64) -> String {
     format!("{}:{:02}:{:02}", s / 3600, s / 60 % 60, s % 60)
 }
 
+/// Finished points so far, and whether the sweep must stop.
+#[derive(Default)]
+struct Tally {
+    ran: usize,
+    not_ok: usize,
+    stopped: bool,
+    error: Option<String>,
+}
+
+/// Appends each finished point's row to the table and reports progress;
+/// shared by the threads that run points.
+struct Recorder {
+    appender: Mutex<table::Appender>,
+    state: Mutex<Tally>,
+    started: Instant,
+    points: usize,
+    /// Column of the status in a row.
+    status_column: usize,
+    progress: bool,
+}
+
+impl Recorder {
+    /// True once a point was interrupted, a row could not be written or
+    /// the process was asked to stop.
+    fn stopped(&self) -> bool {
+        self.state.lock().expect("state").stopped || crate::runner::interrupted()
+    }
+
+    /// Records point `p`'s row (None: interrupted, the sweep stops).
+    fn record(&self, p: &Point, row: Option<Vec<String>>, point_started: Instant) {
+        let Some(row) = row else {
+            self.state.lock().expect("state").stopped = true;
+            return;
+        };
+        let ok = row[self.status_column] == "ok";
+        let written = self.appender.lock().expect("table").append(&row);
+        let mut s = self.state.lock().expect("state");
+        if let Err(e) = written {
+            s.error = Some(e);
+            s.stopped = true;
+            return;
+        }
+        s.ran += 1;
+        s.not_ok += (!ok) as usize;
+        if self.progress {
+            let elapsed = self.started.elapsed().as_secs_f64();
+            let eta = elapsed / s.ran as f64 * (self.points - s.ran) as f64;
+            eprintln!(
+                "sweep: {}/{} run (point {}: {} in {:.1} s; {}) | ETA {}",
+                s.ran,
+                self.points,
+                p.index,
+                row[self.status_column],
+                point_started.elapsed().as_secs_f64(),
+                p.label(),
+                clock(eta)
+            );
+        }
+    }
+}
+
 /// Runs the sweep's points (this shard's), skipping those already in the
 /// table.
 pub fn run_sweep(sweep: &Sweep, opts: &SweepOptions) -> Result<SweepReport, String> {
@@ -307,7 +394,45 @@ pub fn run_sweep(sweep: &Sweep, opts: &SweepOptions) -> Result<SweepReport, Stri
         .flatten()
         .collect::<std::collections::BTreeSet<_>>()
         .len();
-    let appender = Mutex::new(table::Appender::open(&path, &header)?);
+    let recorder = Recorder {
+        appender: Mutex::new(table::Appender::open(&path, &header)?),
+        state: Mutex::new(Tally::default()),
+        started,
+        points: todo.len(),
+        status_column: 3 + sweep.axis_keys.len(),
+        progress: opts.progress,
+    };
+    // GPU ensembles first (each its own dispatches), then the points left
+    // to run alone.
+    let mut alone: Vec<usize> = (0..todo.len()).collect();
+    let mut ensemble_sizes = Vec::new();
+    // (Another precision than the GPU's: each point fails alone, saying so.)
+    if opts.backend == Backend::Gpu && opts.precision == Precision::F32 && opts.ensemble > 1 {
+        let plan = ensembles::plan(&todo, &group_of, opts.ensemble);
+        alone = plan.alone;
+        for members in &plan.ensembles {
+            if recorder.stopped() {
+                break;
+            }
+            let run = ensembles::Run {
+                todo: &todo,
+                loadings: &groups,
+                group_of: &group_of,
+                opts,
+                header_len: header.len(),
+                recorder: &recorder,
+            };
+            match run.run(members) {
+                Ok(()) => ensemble_sizes.push(members.len()),
+                Err(why) => {
+                    if opts.progress {
+                        eprintln!("sweep: {why}; running those points one at a time");
+                    }
+                    alone.extend(members);
+                }
+            }
+        }
+    }
     let threads = match (opts.backend, opts.threads) {
         // One GPU engine at a time: they share the device.
         (Backend::Gpu, _) => 1,
@@ -318,46 +443,25 @@ pub fn run_sweep(sweep: &Sweep, opts: &SweepOptions) -> Result<SweepReport, Stri
         .num_threads(threads)
         .build()
         .map_err(|e| format!("thread pool: {e}"))?;
-    let state = Mutex::new((0usize, 0usize, false, None::<String>));
     pool.install(|| {
         use rayon::prelude::*;
-        todo.par_iter().enumerate().for_each(|(k, p)| {
-            if state.lock().expect("state").2 || crate::runner::interrupted() {
+        alone.par_iter().for_each(|&k| {
+            if recorder.stopped() {
                 return;
             }
+            let p = todo[k];
             let point_started = Instant::now();
             let loaded = group_of[k].map(|g| &groups[g]);
-            let Some(row) = run_point(p, opts, header.len(), loaded) else {
-                state.lock().expect("state").2 = true;
-                return;
-            };
-            let ok = row[3 + sweep.axis_keys.len()] == "ok";
-            let written = appender.lock().expect("table").append(&row);
-            let mut s = state.lock().expect("state");
-            if let Err(e) = written {
-                s.3 = Some(e);
-                s.2 = true;
-                return;
-            }
-            s.0 += 1;
-            s.1 += (!ok) as usize;
-            if opts.progress {
-                let elapsed = started.elapsed().as_secs_f64();
-                let eta = elapsed / s.0 as f64 * (todo.len() - s.0) as f64;
-                eprintln!(
-                    "sweep: {}/{} run (point {}: {} in {:.1} s; {}) | ETA {}",
-                    s.0,
-                    todo.len(),
-                    p.index,
-                    row[3 + sweep.axis_keys.len()],
-                    point_started.elapsed().as_secs_f64(),
-                    p.label(),
-                    clock(eta)
-                );
-            }
+            let row = run_point(p, opts, header.len(), EngineSource::Own(loaded));
+            recorder.record(p, row, point_started);
         })
     });
-    let (ran, not_ok, stopped, error) = state.into_inner().expect("state");
+    let Tally {
+        ran,
+        not_ok,
+        stopped,
+        error,
+    } = recorder.state.into_inner().expect("state");
     if let Some(e) = error {
         return Err(e);
     }
@@ -376,6 +480,7 @@ pub fn run_sweep(sweep: &Sweep, opts: &SweepOptions) -> Result<SweepReport, Stri
         table: path,
         wall_seconds: started.elapsed().as_secs_f64(),
         shared_loadings,
+        ensembles: ensemble_sizes,
     })
 }
 

@@ -1,0 +1,123 @@
+//! Sweep points on the GPU as ensembles: points of one lattice shape and
+//! time schedule are stepped together, one dispatch for all, each on its
+//! own thread running the ordinary runner (`gpu::lockstep`).
+
+use super::{run_point, EngineSource, Loading, Point, Recorder, SweepOptions};
+use crate::engine::EngineState;
+use crate::gpu::ensemble::{incompatibility, GpuEnsemble};
+use crate::gpu::lockstep::Lockstep;
+use crate::gpu::GpuOptions;
+use crate::model::Model;
+use std::time::Instant;
+
+/// Which points run together (indices into the sweep's to-do list).
+pub struct Plan {
+    /// Groups of two or more points, each one ensemble.
+    pub ensembles: Vec<Vec<usize>>,
+    /// Points that run alone: fast-forward runs (a jump moves one scene
+    /// off the others' step), invalid ones, and points that match no other.
+    pub alone: Vec<usize>,
+}
+
+/// Groups `todo` greedily into ensembles of at most `max` points that
+/// share a lattice shape, compiled terms and time schedule, and that all
+/// start at step 0 or all from a shared normal-load phase.
+pub fn plan(todo: &[&Point], loading_of: &[Option<usize>], max: usize) -> Plan {
+    struct Open {
+        first: Model,
+        loaded: bool,
+        members: Vec<usize>,
+    }
+    let mut open: Vec<Open> = Vec::new();
+    let mut alone = Vec::new();
+    for (k, p) in todo.iter().enumerate() {
+        let model = match Model::from_scenario(&p.scenario, false) {
+            Ok(m) if !p.scenario.time.fast_forward => m,
+            _ => {
+                alone.push(k);
+                continue;
+            }
+        };
+        let loaded = loading_of[k].is_some();
+        let fits = |g: &Open| {
+            g.loaded == loaded
+                && g.members.len() < max
+                && incompatibility(&[g.first.clone(), model.clone()]).is_none()
+        };
+        match open.iter_mut().find(|g| fits(g)) {
+            Some(g) => g.members.push(k),
+            None => open.push(Open {
+                first: model,
+                loaded,
+                members: vec![k],
+            }),
+        }
+    }
+    let mut ensembles = Vec::new();
+    for g in open {
+        if g.members.len() >= 2 {
+            ensembles.push(g.members);
+        } else {
+            alone.extend(g.members);
+        }
+    }
+    alone.sort_unstable();
+    Plan { ensembles, alone }
+}
+
+/// What running an ensemble needs from the sweep.
+pub struct Run<'a> {
+    pub todo: &'a [&'a Point],
+    pub loadings: &'a [Loading<'a>],
+    pub group_of: &'a [Option<usize>],
+    pub opts: &'a SweepOptions,
+    pub header_len: usize,
+    pub recorder: &'a Recorder,
+}
+
+impl Run<'_> {
+    /// Runs the points `members` as one ensemble, each point's row recorded
+    /// as it finishes. Fails, before anything ran, if the ensemble cannot
+    /// be built (the caller then runs the points alone).
+    pub fn run(&self, members: &[usize]) -> Result<(), String> {
+        let models = members
+            .iter()
+            .map(|&k| Model::from_scenario(&self.todo[k].scenario, false))
+            .collect::<Result<Vec<Model>, _>>()
+            .map_err(|e| e.to_string())?;
+        let mut ensemble = GpuEnsemble::new(&models, GpuOptions::default())
+            .map_err(|e| format!("no ensemble of {} points: {e}", members.len()))?;
+        let loaded = self.group_of[members[0]].is_some();
+        if loaded {
+            let states = members
+                .iter()
+                .map(|&k| {
+                    let g = self.group_of[k].expect("members all start loaded");
+                    self.loadings[g].state(self.opts)
+                })
+                .collect::<Result<Vec<&EngineState>, String>>()?;
+            ensemble.start_from(&states).map_err(|e| e.to_string())?;
+        }
+        let engines = Lockstep::split(ensemble);
+        std::thread::scope(|s| {
+            for (engine, &k) in engines.into_iter().zip(members) {
+                s.spawn(move || {
+                    let p = self.todo[k];
+                    let started = Instant::now();
+                    // A stopped sweep drops the engine: the others go on to
+                    // their own checks.
+                    if self.recorder.stopped() {
+                        return;
+                    }
+                    let source = EngineSource::Ensemble {
+                        engine: Box::new(engine),
+                        loaded,
+                    };
+                    let row = run_point(p, self.opts, self.header_len, source);
+                    self.recorder.record(p, row, started);
+                });
+            }
+        });
+        Ok(())
+    }
+}
