@@ -7,6 +7,14 @@
 //! first and last so drift on a noisy machine shows.
 //!
 //!     cargo bench --bench sweep_throughput [-- THREADS]
+//!
+//! With `gpu [SEEDS]`: the GPU engine, the same points (SEEDS seeds per
+//! prestress, 8 by default) as one in-process sweep whose points run as
+//! ensembles (one dispatch for all) against the same sweep with
+//! `--ensemble 1` (one point at a time on the GPU engine), each with and
+//! without the shared normal-load phase; the ensemble passes first and last.
+//!
+//!     cargo bench --bench sweep_throughput -- gpu [SEEDS]
 
 use slipfront::backend::{Backend, Precision};
 use slipfront::sweep::{run_sweep, KeepMcap, Sweep, SweepOptions};
@@ -39,46 +47,133 @@ fn separate_processes(dir: &Path) -> f64 {
 }
 
 fn in_process(dir: &Path, sweep: &Sweep, threads: usize, share: bool) -> f64 {
-    let out = dir.join(format!("sweep-{threads}-{share}"));
+    sweep_on(dir, sweep, Backend::Cpu, threads, share, 1)
+}
+
+fn sweep_on(
+    dir: &Path,
+    sweep: &Sweep,
+    backend: Backend,
+    threads: usize,
+    share: bool,
+    ensemble: usize,
+) -> f64 {
+    let out = dir.join(format!("sweep-{backend:?}-{threads}-{share}-{ensemble}"));
     let _ = std::fs::remove_dir_all(&out);
     let started = Instant::now();
     let report = run_sweep(
         sweep,
         &SweepOptions {
             out_dir: out,
-            backend: Backend::Cpu,
-            precision: Precision::F64,
+            backend,
+            precision: match backend {
+                Backend::Gpu => Precision::F32,
+                _ => Precision::F64,
+            },
             threads,
             shard: None,
             keep_mcap: KeepMcap::None,
             progress: false,
             share_loading: share,
-            ensemble: 1,
+            ensemble,
         },
     )
     .unwrap();
-    assert_eq!(report.ran, 64);
+    assert_eq!(report.ran, sweep.points.len());
     assert_eq!(report.not_ok, 0);
     started.elapsed().as_secs_f64()
 }
 
-fn main() {
-    let threads: usize = std::env::args()
-        .filter_map(|a| a.parse().ok())
-        .next()
-        .unwrap_or(2);
-    let dir = std::env::temp_dir().join(format!("slipfront-sweep-bench-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+/// The bench's sweep: 8 prestresses × `seeds` seeds of the triggered scene.
+fn bench_sweep(dir: &Path, seeds: u32) -> Sweep {
     let base = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/triggered_front.toml");
     let text = format!(
-        "base = \"{}\"\nseeds = {SEEDS}\n[set]\n\"output.bulk_interval\" = 0.0\n[axes]\n\
+        "base = \"{}\"\nseeds = {seeds}\n[set]\n\"output.bulk_interval\" = 0.0\n[axes]\n\
          \"loading.trigger.shear_prestress\" = {:?}\n",
         base.display(),
         PRESTRESS
     );
     let file = dir.join("bench.toml");
     std::fs::write(&file, text).unwrap();
-    let sweep = Sweep::load(&file).unwrap();
+    Sweep::load(&file).unwrap()
+}
+
+/// GPU ensembles against the same points one at a time on the GPU engine.
+fn gpu_bench(dir: &Path, seeds: u32) {
+    let sweep = bench_sweep(dir, seeds);
+    let n = sweep.points.len();
+    let model = slipfront::Model::from_scenario(&sweep.points[0].scenario, false).unwrap();
+    let block_steps = n as f64 * model.total_steps() as f64 * model.n_blocks() as f64;
+    let ensemble_first = sweep_on(dir, &sweep, Backend::Gpu, 1, true, n);
+    let alone_shared = sweep_on(dir, &sweep, Backend::Gpu, 1, true, 1);
+    let ensemble_own = sweep_on(dir, &sweep, Backend::Gpu, 1, false, n);
+    let alone_own = sweep_on(dir, &sweep, Backend::Gpu, 1, false, 1);
+    let ensemble_last = sweep_on(dir, &sweep, Backend::Gpu, 1, true, n);
+    let adapter = slipfront::gpu::context::shared().unwrap().describe();
+    println!(
+        "{n} points of {} ({} x {} blocks, {} steps each) on {adapter}",
+        model.name,
+        model.nx,
+        model.nz,
+        model.total_steps()
+    );
+    println!("| configuration | wall (s) | scenes/hour | block-steps/s | vs one at a time |");
+    println!("| --- | --- | --- | --- | --- |");
+    for (name, wall, against) in [
+        (
+            "ensemble of all points, shared loading (first pass)",
+            ensemble_first,
+            alone_shared,
+        ),
+        (
+            "ensemble of all points, shared loading (last pass)",
+            ensemble_last,
+            alone_shared,
+        ),
+        (
+            "one point at a time, shared loading",
+            alone_shared,
+            alone_shared,
+        ),
+        (
+            "ensemble of all points, each its own loading",
+            ensemble_own,
+            alone_own,
+        ),
+        (
+            "one point at a time, each its own loading",
+            alone_own,
+            alone_own,
+        ),
+    ] {
+        println!(
+            "| {name} | {wall:.1} | {:.0} | {:.2e} | {:.2}× |",
+            n as f64 * 3600.0 / wall,
+            block_steps / wall,
+            against / wall
+        );
+    }
+}
+
+fn main() {
+    let args: Vec<String> = std::env::args().collect();
+    let dir = std::env::temp_dir().join(format!("slipfront-sweep-bench-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    if let Some(at) = args.iter().position(|a| a == "gpu") {
+        let seeds = args
+            .get(at + 1)
+            .and_then(|s| s.parse().ok())
+            .unwrap_or(SEEDS);
+        gpu_bench(&dir, seeds);
+        let _ = std::fs::remove_dir_all(&dir);
+        return;
+    }
+    let threads: usize = args
+        .iter()
+        .filter_map(|a| a.parse().ok())
+        .next()
+        .unwrap_or(2);
+    let sweep = bench_sweep(&dir, SEEDS);
     let model = slipfront::Model::from_scenario(&sweep.points[0].scenario, false).unwrap();
     let block_steps = 64.0 * model.total_steps() as f64 * model.n_blocks() as f64;
     let first = separate_processes(&dir);
