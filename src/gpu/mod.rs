@@ -177,7 +177,7 @@ impl GpuEngine {
         let limit = ctx.limits.max_storage_buffer_binding_size;
         let max_buffer = ctx.limits.max_buffer_size;
         let what = if ensemble {
-            format!("{scene_count} scenes of ")
+            format!(" of {scene_count} scenes")
         } else {
             String::new()
         };
@@ -187,11 +187,15 @@ impl GpuEngine {
         ] {
             if bytes > limit.min(max_buffer) {
                 return Err(EngineError::Gpu(format!(
-                    "the {name} buffer of {what}this lattice needs {bytes} bytes but {} allows \
-                     at most {} per storage binding: use a smaller lattice, fewer junctions{}",
+                    "the {name} buffer{what} needs {bytes} bytes but {} allows at most {} per \
+                     storage binding: use a smaller lattice{}",
                     ctx.info.name,
                     limit.min(max_buffer),
-                    if ensemble { " or fewer scenes" } else { "" }
+                    if ensemble {
+                        ", fewer junctions or fewer scenes"
+                    } else {
+                        " or fewer junctions"
+                    }
                 )));
             }
         }

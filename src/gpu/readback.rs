@@ -62,6 +62,8 @@ pub fn read_ranges(ctx: &GpuContext, ranges: &[Range]) -> Result<Vec<Vec<u8>>, E
     Ok(out)
 }
 
+/// The first `len` elements of type `T` in `bytes`, whatever the bytes'
+/// alignment (an empty read-back is not aligned at all).
 pub fn cast_prefix<T: bytemuck::Pod>(bytes: &[u8], len: usize) -> Vec<T> {
-    bytemuck::cast_slice::<u8, T>(bytes)[..len].to_vec()
+    bytemuck::pod_collect_to_vec(&bytes[..len * std::mem::size_of::<T>()])
 }
