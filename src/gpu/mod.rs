@@ -11,6 +11,11 @@
 //! status is copied to a staging buffer and mapped asynchronously; at most
 //! `IN_FLIGHT` batches are queued, so a blow-up stops the run within a
 //! batch or two and `advance` returns only when its steps have run.
+//!
+//! The same engine steps an ensemble (`ensemble`): many scenes of one
+//! lattice shape in one dispatch, each with its own constants, batch and
+//! slice of every buffer (`scene_state`); `lockstep` hands its scenes to
+//! separate runners.
 
 pub mod context;
 pub mod ensemble;
@@ -18,9 +23,10 @@ pub mod layout;
 pub mod lockstep;
 pub mod options;
 mod readback;
+mod scene_state;
 pub mod shaders;
 
-use crate::engine::{blow_up, Engine, EngineError, EngineState, Snapshot, StateArrays};
+use crate::engine::{blow_up, Engine, EngineError, EngineState, Snapshot};
 use crate::lattice::{block_flags, initial_displacement};
 use crate::model::{Driver, Model};
 use crate::real::{Coordinate, DoubleSingle};
@@ -31,7 +37,8 @@ use context::GpuContext;
 use layout::{GpuBatch, GpuConsts, GpuJunctionSpring, GpuStatus, WORKGROUP};
 use options::*;
 pub use options::{GpuOptions, GpuPath, PERSISTENT_MAX_BLOCKS, PERSISTENT_THREADS};
-use readback::{cast_prefix, read_ranges, Range};
+
+use scene_state::gpu_junction_springs;
 use shaders::{Kernel, Variant};
 use std::collections::VecDeque;
 use std::sync::mpsc;
@@ -654,234 +661,6 @@ impl GpuEngine {
         Ok(())
     }
 
-    /// Byte range of scene `k`'s slice of a buffer with `per_scene` elements
-    /// of `bytes` each.
-    fn slice<'a>(
-        &self,
-        buffer: &'a wgpu::Buffer,
-        k: usize,
-        per_scene: usize,
-        bytes: usize,
-    ) -> Range<'a> {
-        let size = (per_scene * bytes) as u64;
-        Range {
-            buffer,
-            offset: k as u64 * size,
-            size,
-        }
-    }
-
-    /// Scene `k`'s buffers as they are (forces possibly of the previous step).
-    fn read_raw(&mut self, k: usize) -> Result<RawState, EngineError> {
-        self.drain()?;
-        let Shape {
-            blocks: n,
-            nx,
-            junctions: nj,
-            ..
-        } = self.shape;
-        let b = &self.buffers;
-        let raw = read_ranges(
-            &self.ctx,
-            &[
-                self.slice(&b.disp[self.current], k, n, DISP_BYTES),
-                self.slice(&b.vel[self.current], k, n, PAIR_BYTES),
-                self.slice(&b.force, k, n, PAIR_BYTES),
-                self.slice(&b.contact, k, nx, PAIR_BYTES),
-                self.slice(&b.junction_spring, k, nj, SPRING_BYTES),
-                self.slice(&b.junction_state, k, nj, PAIR_BYTES),
-                self.slice(&b.slide, k, nx, PAIR_BYTES),
-            ],
-        )?;
-        Ok(RawState {
-            disp: cast_prefix(&raw[0], n),
-            vel: cast_prefix(&raw[1], n),
-            force: cast_prefix(&raw[2], n),
-            contact: cast_prefix(&raw[3], nx),
-            spring: cast_prefix::<GpuJunctionSpring>(&raw[4], nj)
-                .into_iter()
-                .map(Into::into)
-                .collect(),
-            state: cast_prefix(&raw[5], nj),
-            slide: cast_prefix(&raw[6], nx),
-        })
-    }
-
-    fn read_state(&mut self, k: usize) -> Result<Snapshot, EngineError> {
-        let r = self.read_raw(k)?;
-        Ok(Snapshot::from_buffers(
-            &self.scenes[k].model,
-            self.step,
-            &r.disp,
-            &r.vel,
-            &r.force,
-            &r.contact,
-            &r.spring,
-            &r.state,
-            &r.slide,
-        ))
-    }
-
-    /// Writes `bytes` at element `k · per_scene` of a buffer with elements
-    /// of `element` bytes (nothing for an empty array).
-    fn write_scene(
-        &self,
-        buffer: &wgpu::Buffer,
-        k: usize,
-        per_scene: usize,
-        element: usize,
-        bytes: &[u8],
-    ) {
-        if !bytes.is_empty() {
-            let at = (k * per_scene * element) as u64;
-            self.ctx.queue.write_buffer(buffer, at, bytes);
-        }
-    }
-
-    fn snapshot_of(&mut self, k: usize) -> Result<Snapshot, EngineError> {
-        self.ready_forces()?;
-        self.read_state(k)
-    }
-
-    fn set_kinematics_of(
-        &mut self,
-        k: usize,
-        disp: &[[f64; 2]],
-        vel: &[[f64; 2]],
-    ) -> Result<(), EngineError> {
-        self.drain()?;
-        let disp: Vec<[DoubleSingle; 2]> =
-            disp.iter().map(|u| u.map(DoubleSingle::from_f64)).collect();
-        let vel: Vec<[f32; 2]> = vel.iter().map(|v| v.map(|x| x as f32)).collect();
-        let (b, n) = (&self.buffers, self.shape.blocks);
-        self.write_scene(
-            &b.disp[self.current],
-            k,
-            n,
-            DISP_BYTES,
-            bytemuck::cast_slice(&disp),
-        );
-        self.write_scene(
-            &b.vel[self.current],
-            k,
-            n,
-            PAIR_BYTES,
-            bytemuck::cast_slice(&vel),
-        );
-        self.scenes[k].forces_ready = false;
-        Ok(())
-    }
-
-    fn set_junctions_of(&mut self, k: usize, snap: &Snapshot) -> Result<(), EngineError> {
-        self.drain()?;
-        let spring = gpu_junction_springs(&snap.anchor, &snap.junction_stiffness);
-        let state: Vec<[u32; 2]> = snap
-            .slip_steps_left
-            .iter()
-            .zip(&snap.ruptures)
-            .map(|(l, r)| [*l, *r])
-            .collect();
-        let (b, nj) = (&self.buffers, self.shape.junctions);
-        self.write_scene(
-            &b.junction_spring,
-            k,
-            nj,
-            SPRING_BYTES,
-            bytemuck::cast_slice(&spring),
-        );
-        self.write_scene(
-            &b.junction_state,
-            k,
-            nj,
-            PAIR_BYTES,
-            bytemuck::cast_slice(&state),
-        );
-        self.scenes[k].forces_ready = false;
-        Ok(())
-    }
-
-    fn save_state_of(&mut self, k: usize) -> Result<EngineState, EngineError> {
-        self.ready_forces()?;
-        let r = self.read_raw(k)?;
-        Ok(EngineState::capture(StateArrays {
-            step: self.step,
-            drive_origin: self.scenes[k].drive_origin,
-            disp: &r.disp,
-            vel: &r.vel,
-            force: &r.force,
-            contact: &r.contact,
-            junction_spring: &r.spring,
-            junction_state: &r.state,
-            slide: &r.slide,
-        }))
-    }
-
-    /// Replaces scene `k`'s state (at the engine's step: an ensemble's
-    /// scenes stand at one step).
-    fn load_state_of(&mut self, k: usize, state: &EngineState) -> Result<(), EngineError> {
-        state.check_fits(&self.scenes[k].model)?;
-        self.drain()?;
-        let spring: Vec<GpuJunctionSpring> = state
-            .junction_springs_as::<f32, DoubleSingle>()
-            .into_iter()
-            .map(Into::into)
-            .collect();
-        let b = &self.buffers;
-        let Shape {
-            blocks: n,
-            nx,
-            junctions: nj,
-            ..
-        } = self.shape;
-        let disp = state.disp_as::<f32, DoubleSingle>();
-        self.write_scene(
-            &b.disp[self.current],
-            k,
-            n,
-            DISP_BYTES,
-            bytemuck::cast_slice(&disp),
-        );
-        let vel = state.vel_as::<f32>();
-        self.write_scene(
-            &b.vel[self.current],
-            k,
-            n,
-            PAIR_BYTES,
-            bytemuck::cast_slice(&vel),
-        );
-        let force = state.force_as::<f32>();
-        self.write_scene(&b.force, k, n, PAIR_BYTES, bytemuck::cast_slice(&force));
-        let contact = state.contact_as::<f32>();
-        self.write_scene(
-            &b.contact,
-            k,
-            nx,
-            PAIR_BYTES,
-            bytemuck::cast_slice(&contact),
-        );
-        self.write_scene(
-            &b.junction_spring,
-            k,
-            nj,
-            SPRING_BYTES,
-            bytemuck::cast_slice(&spring),
-        );
-        let js = bytemuck::cast_slice(&state.junction_state);
-        self.write_scene(&b.junction_state, k, nj, PAIR_BYTES, js);
-        self.write_scene(
-            &b.slide,
-            k,
-            nx,
-            PAIR_BYTES,
-            bytemuck::cast_slice(&state.slide),
-        );
-        let scene = &mut self.scenes[k];
-        scene.drive_origin = state.drive_origin_as::<f32, DoubleSingle>();
-        // The saved forces are those of the saved state.
-        scene.forces_ready = true;
-        Ok(())
-    }
-
     fn kernel_description(&self) -> String {
         match self.kernel {
             Kernel::OneStep => "one-step kernel, 1 dispatch per step".to_string(),
@@ -894,34 +673,6 @@ impl GpuEngine {
             ),
         }
     }
-}
-
-/// The state buffers read back, in the kernels' types.
-struct RawState {
-    disp: Vec<[DoubleSingle; 2]>,
-    vel: Vec<[f32; 2]>,
-    force: Vec<[f32; 2]>,
-    contact: Vec<[f32; 2]>,
-    spring: Vec<crate::junction::JunctionSpring<DoubleSingle, f32>>,
-    state: Vec<[u32; 2]>,
-    slide: Vec<[i32; 2]>,
-}
-
-/// The `junction_spring` buffer's records: double-single anchors, f32
-/// stiffnesses.
-fn gpu_junction_springs(anchors: &[f64], stiffness: &[f64]) -> Vec<GpuJunctionSpring> {
-    anchors
-        .iter()
-        .zip(stiffness)
-        .map(|(a, k)| {
-            let a = DoubleSingle::from_f64(*a);
-            GpuJunctionSpring {
-                anchor_hi: a.hi,
-                anchor_lo: a.lo,
-                stiffness: *k as f32,
-            }
-        })
-        .collect()
 }
 
 fn whole(binding: u32, buffer: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {
