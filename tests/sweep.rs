@@ -346,6 +346,8 @@ fn a_gpu_ensemble_sweep_gives_the_table_of_points_run_one_at_a_time() {
         s(&together),
         "--backend",
         "gpu",
+        "--precision",
+        "f32",
         "--ensemble",
         "8",
     ]);
@@ -359,6 +361,8 @@ fn a_gpu_ensemble_sweep_gives_the_table_of_points_run_one_at_a_time() {
         s(&apart),
         "--backend",
         "gpu",
+        "--precision",
+        "f32",
         "--ensemble",
         "1",
         "--quiet",
