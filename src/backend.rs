@@ -22,6 +22,17 @@ pub enum Backend {
     Auto,
 }
 
+impl Backend {
+    /// The precision when none is asked: the GPU's mixed f32 wherever a
+    /// GPU may run (`gpu`, `auto`), f64 on the CPU.
+    pub fn default_precision(self) -> Precision {
+        match self {
+            Backend::Cpu | Backend::CpuReference => Precision::F64,
+            Backend::Gpu | Backend::Auto => Precision::F32,
+        }
+    }
+}
+
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
 pub enum Precision {
     /// f64 throughout (CPU only).
@@ -33,6 +44,23 @@ pub enum Precision {
     /// u and changes long runs. Kept as the negative control of the
     /// precision tests.
     F32Plain,
+}
+
+/// Refuses a precision the backend cannot compute in (the GPU computes in
+/// mixed f32 only), naming the flag to change.
+pub fn check_precision(backend: Backend, precision: Precision) -> Result<(), String> {
+    if backend == Backend::Gpu && precision != Precision::F32 {
+        return Err(format!(
+            "--precision {}: the GPU engine computes in mixed f32: use --precision f32 (or \
+             --backend cpu for f64 and f32-plain)",
+            match precision {
+                Precision::F64 => "f64",
+                Precision::F32 => "f32",
+                Precision::F32Plain => "f32-plain",
+            }
+        ));
+    }
+    Ok(())
 }
 
 impl Precision {
@@ -99,13 +127,7 @@ pub fn make_engine_with(
         Backend::Cpu => cpu_engine(model, precision, threads),
         Backend::CpuReference => cpu_reference_engine(model, precision, threads),
         Backend::Gpu => {
-            if precision != Precision::F32 {
-                return Err(EngineError::Gpu(
-                    "the GPU engine computes in mixed f32: use --precision f32 (or --backend cpu \
-                     for f64 and f32-plain)"
-                        .into(),
-                ));
-            }
+            check_precision(backend, precision).map_err(EngineError::Gpu)?;
             Ok(Box::new(GpuEngine::with_options(model, gpu)?))
         }
         Backend::Auto => match crate::gpu::context::shared() {

@@ -157,8 +157,9 @@ enum Command {
         quick: bool,
         #[arg(long, value_enum, default_value = "cpu")]
         backend: Backend,
-        #[arg(long, value_enum, default_value = "f64")]
-        precision: Precision,
+        /// Default: f32 (mixed) on the GPU, f64 on the CPU.
+        #[arg(long, value_enum)]
+        precision: Option<Precision>,
         /// Points run at once, one thread each (0: one per core).
         #[arg(long, default_value_t = 0)]
         threads: usize,
@@ -216,8 +217,9 @@ struct SweepRun {
     dry_run: bool,
     #[arg(long, value_enum, default_value = "cpu")]
     backend: Backend,
-    #[arg(long, value_enum, default_value = "f64")]
-    precision: Precision,
+    /// Default: f32 (mixed) on the GPU, f64 on the CPU.
+    #[arg(long, value_enum)]
+    precision: Option<Precision>,
     /// Scenes run at once, one thread each (0: one per core).
     #[arg(long, default_value_t = 0)]
     threads: usize,
@@ -355,7 +357,7 @@ fn main() -> ExitCode {
             out_dir,
             quick,
             backend,
-            precision,
+            precision: precision.unwrap_or(backend.default_precision()),
             threads,
         }),
         Command::Sweep {

@@ -302,6 +302,10 @@ fn bad_sweep_input_is_refused_with_the_field_named() {
         (vec!["sweep", f, "--shard", "3/2"], "--shard 3/2"),
         (vec!["sweep", f, "--mcap", "some"], "--mcap some"),
         (
+            vec!["sweep", f, "--backend", "gpu", "--precision", "f64"],
+            "--precision f64: the GPU engine computes in mixed f32",
+        ),
+        (
             vec!["run", "--set", "output.checkpoint_interval=-1"],
             "output.checkpoint_interval",
         ),
@@ -339,6 +343,7 @@ fn a_gpu_ensemble_sweep_gives_the_table_of_points_run_one_at_a_time() {
     let d = dir("ensemble");
     let file = sweep_file(&d, "\"loading.normal.force\" = [1800.0, 1920.0]");
     let together = d.join("together");
+    // No --precision: a GPU sweep defaults to the GPU's mixed f32.
     let text = ok(&[
         "sweep",
         s(&file),
@@ -346,8 +351,6 @@ fn a_gpu_ensemble_sweep_gives_the_table_of_points_run_one_at_a_time() {
         s(&together),
         "--backend",
         "gpu",
-        "--precision",
-        "f32",
         "--ensemble",
         "8",
     ]);

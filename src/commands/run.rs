@@ -138,10 +138,7 @@ pub fn run(a: RunArgs) -> anyhow::Result<ExitCode> {
     let (scenario, name) = super::load_scenario(a.scenario.as_deref(), &a.overrides())?;
     let model = Model::from_scenario(&scenario, a.allow_unstable)?;
     a.claim_output(&a.scenario.iter().map(PathBuf::as_path).collect::<Vec<_>>())?;
-    let precision = a.precision.unwrap_or(match a.backend {
-        Backend::Cpu | Backend::CpuReference => Precision::F64,
-        _ => Precision::F32,
-    });
+    let precision = a.precision.unwrap_or(a.backend.default_precision());
     let mut engine = a.engine(&model, precision)?;
     eprintln!("slipfront: {name} on {}", engine.describe());
     let history = vec![format!(

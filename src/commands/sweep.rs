@@ -10,7 +10,7 @@ pub struct SweepArgs {
     pub out_dir: Option<PathBuf>,
     pub dry_run: bool,
     pub backend: Backend,
-    pub precision: Precision,
+    pub precision: Option<Precision>,
     pub threads: usize,
     pub shard: Option<Shard>,
     pub mcap: KeepMcap,
@@ -83,7 +83,7 @@ pub fn sweep(a: SweepArgs) -> anyhow::Result<ExitCode> {
         &SweepOptions {
             out_dir: dir,
             backend: a.backend,
-            precision: a.precision,
+            precision: a.precision.unwrap_or(a.backend.default_precision()),
             threads: a.threads,
             shard: a.shard,
             keep_mcap: a.mcap,

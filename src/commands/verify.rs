@@ -8,10 +8,7 @@ pub fn verify(
     json: bool,
 ) -> anyhow::Result<ExitCode> {
     // The GPU computes in mixed f32 only; the CPU defaults to f64.
-    let precision = precision.unwrap_or(match backend {
-        Backend::Gpu => Precision::F32,
-        _ => Precision::F64,
-    });
+    let precision = precision.unwrap_or(backend.default_precision());
     let probe = slipfront::Model::from_scenario(&slipfront::verify::bare_scene("probe"), true)?;
     let engine = make_engine(&probe, backend, precision, 0)?.describe();
     eprintln!("verify: on {engine}");

@@ -30,7 +30,13 @@ static SHARED: OnceLock<Result<GpuContext, String>> = OnceLock::new();
 /// The process-wide context, opened on first use.
 pub fn shared() -> Result<GpuContext, EngineError> {
     SHARED
-        .get_or_init(|| GpuContext::open().map_err(|e| e.to_string()))
+        .get_or_init(|| {
+            // Keep the bare message: `EngineError::Gpu` adds its own prefix.
+            GpuContext::open().map_err(|e| match e {
+                EngineError::Gpu(why) => why,
+                other => other.to_string(),
+            })
+        })
         .clone()
         .map_err(EngineError::Gpu)
 }

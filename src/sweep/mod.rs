@@ -354,6 +354,7 @@ impl Recorder {
 /// table.
 pub fn run_sweep(sweep: &Sweep, opts: &SweepOptions) -> Result<SweepReport, String> {
     let started = Instant::now();
+    crate::backend::check_precision(opts.backend, opts.precision)?;
     let dir = &opts.out_dir;
     std::fs::create_dir_all(dir.join("runs"))
         .map_err(|e| format!("cannot create `{}`: {e}", dir.display()))?;
