@@ -167,8 +167,8 @@ fn coulomb_precursors_study(a: &StudyArgs) -> anyhow::Result<()> {
     .to_lowercase();
     let mut notes = coulomb_precursors::report(&results, &how, mean);
     notes.push_str(&format!(
-        "\nThe three runs (MCAP, readable with `slipfront info` and `slipfront plot`) are in \
-         `{}`. Wall time {wall:.0} s for the three on {} threads ({}).\n",
+        "\nThe study writes the three runs (MCAP, readable with `slipfront info` and \
+         `slipfront plot`) to `{}`; run files are not kept in the repository. Wall time {wall:.0} s for the three on {} threads ({}).\n",
         runs.display(),
         rayon::current_num_threads(),
         machine()
