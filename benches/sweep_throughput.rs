@@ -13,10 +13,12 @@
 //! ensembles (one dispatch for all) against the same sweep with
 //! `--ensemble 1` (one point at a time on the GPU engine), each with and
 //! without the shared normal-load phase; the ensemble passes first and last.
+//! `shared-only` leaves out the pair without sharing (three passes, not five:
+//! the 64-point lavapipe run takes over half an hour).
 //!
-//!     cargo bench --bench sweep_throughput -- gpu [SEEDS]
+//!     cargo bench --bench sweep_throughput -- gpu [SEEDS] [shared-only]
 
-use slipfront::backend::{Backend, Precision};
+use slipfront::backend::Backend;
 use slipfront::sweep::{run_sweep, KeepMcap, Sweep, SweepOptions};
 use std::path::Path;
 use std::process::Command;
@@ -66,10 +68,7 @@ fn sweep_on(
         &SweepOptions {
             out_dir: out,
             backend,
-            precision: match backend {
-                Backend::Gpu => Precision::F32,
-                _ => Precision::F64,
-            },
+            precision: backend.default_precision(),
             threads,
             shard: None,
             keep_mcap: KeepMcap::None,
@@ -99,15 +98,21 @@ fn bench_sweep(dir: &Path, seeds: u32) -> Sweep {
 }
 
 /// GPU ensembles against the same points one at a time on the GPU engine.
-fn gpu_bench(dir: &Path, seeds: u32) {
+fn gpu_bench(dir: &Path, seeds: u32, with_own_loading: bool) {
     let sweep = bench_sweep(dir, seeds);
     let n = sweep.points.len();
     let model = slipfront::Model::from_scenario(&sweep.points[0].scenario, false).unwrap();
     let block_steps = n as f64 * model.total_steps() as f64 * model.n_blocks() as f64;
     let ensemble_first = sweep_on(dir, &sweep, Backend::Gpu, 1, true, n);
     let alone_shared = sweep_on(dir, &sweep, Backend::Gpu, 1, true, 1);
-    let ensemble_own = sweep_on(dir, &sweep, Backend::Gpu, 1, false, n);
-    let alone_own = sweep_on(dir, &sweep, Backend::Gpu, 1, false, 1);
+    let (ensemble_own, alone_own) = if with_own_loading {
+        (
+            sweep_on(dir, &sweep, Backend::Gpu, 1, false, n),
+            sweep_on(dir, &sweep, Backend::Gpu, 1, false, 1),
+        )
+    } else {
+        (f64::NAN, f64::NAN)
+    };
     let ensemble_last = sweep_on(dir, &sweep, Backend::Gpu, 1, true, n);
     let adapter = slipfront::gpu::context::shared().unwrap().describe();
     println!(
@@ -146,6 +151,9 @@ fn gpu_bench(dir: &Path, seeds: u32) {
             alone_own,
         ),
     ] {
+        if wall.is_nan() {
+            continue;
+        }
         println!(
             "| {name} | {wall:.1} | {:.0} | {:.2e} | {:.2}× |",
             n as f64 * 3600.0 / wall,
@@ -164,7 +172,7 @@ fn main() {
             .get(at + 1)
             .and_then(|s| s.parse().ok())
             .unwrap_or(SEEDS);
-        gpu_bench(&dir, seeds);
+        gpu_bench(&dir, seeds, !args.iter().any(|a| a == "shared-only"));
         let _ = std::fs::remove_dir_all(&dir);
         return;
     }
@@ -196,6 +204,9 @@ fn main() {
         ("in-process sweep, each point its own loading", own),
         ("in-process sweep, shared normal-load phases", shared),
     ] {
+        if wall.is_nan() {
+            continue;
+        }
         println!(
             "| {name} | {wall:.1} | {:.0} | {:.2e} | {:.2}× |",
             64.0 * 3600.0 / wall,

@@ -26,6 +26,67 @@ impl Scatter<'_> {
         let pad = 0.05 * (hi - lo).max(1e-12 * hi.abs().max(1.0));
         (lo - pad, hi + pad)
     }
+
+    /// The plot corner where the legend hides the fewest data: points, and
+    /// for connected curves the points along each segment, counted in a
+    /// legend-sized box (fractions of the plot area) in each corner.
+    fn emptiest_corner(
+        &self,
+        pts: &[(f64, f64, usize)],
+        (x0, x1): (f64, f64),
+        y_fraction: impl Fn(f64) -> f64,
+    ) -> SeriesLabelPosition {
+        let mut marks: Vec<(f64, f64)> = pts
+            .iter()
+            .map(|p| ((p.0 - x0) / (x1 - x0), y_fraction(p.1)))
+            .collect();
+        if self.connect {
+            for g in 0..self.groups.len() {
+                let mut line: Vec<(f64, f64)> = marks_of(pts, g, (x0, x1), &y_fraction).collect();
+                line.sort_by(|a, b| a.0.total_cmp(&b.0));
+                for w in line.windows(2) {
+                    marks.extend((1..8).map(|k| {
+                        let t = k as f64 / 8.0;
+                        (
+                            w[0].0 + t * (w[1].0 - w[0].0),
+                            w[0].1 + t * (w[1].1 - w[0].1),
+                        )
+                    }));
+                }
+            }
+        }
+        let (w, h) = (0.45, (0.06 * self.groups.len() as f64 + 0.04).min(0.95));
+        let corners = [
+            (SeriesLabelPosition::UpperRight, 1.0 - w, 1.0 - h),
+            (SeriesLabelPosition::UpperLeft, 0.0, 1.0 - h),
+            (SeriesLabelPosition::LowerRight, 1.0 - w, 0.0),
+            (SeriesLabelPosition::LowerLeft, 0.0, 0.0),
+        ];
+        let hidden = |&(_, x, y): &(SeriesLabelPosition, f64, f64)| {
+            marks
+                .iter()
+                .filter(|m| m.0 >= x && m.0 <= x + w && m.1 >= y && m.1 <= y + h)
+                .count()
+        };
+        // The first of the emptiest, so ties keep the upper right.
+        let fewest = corners.iter().map(hidden).min().unwrap_or(0);
+        corners
+            .into_iter()
+            .find(|c| hidden(c) == fewest)
+            .map_or(SeriesLabelPosition::UpperRight, |c| c.0)
+    }
+}
+
+/// Group `g`'s points as fractions of the plot area.
+fn marks_of<'a>(
+    pts: &'a [(f64, f64, usize)],
+    g: usize,
+    (x0, x1): (f64, f64),
+    y_fraction: &'a impl Fn(f64) -> f64,
+) -> impl Iterator<Item = (f64, f64)> + 'a {
+    pts.iter()
+        .filter(move |p| p.2 == g)
+        .map(move |p| ((p.0 - x0) / (x1 - x0), y_fraction(p.1)))
 }
 
 impl Figure for Scatter<'_> {
@@ -52,7 +113,7 @@ impl Figure for Scatter<'_> {
         let r = style.px(3.5) as i32;
         let xspan = x1 - x0;
         macro_rules! finish {
-            ($chart:expr, $yfmt:expr) => {{
+            ($chart:expr, $yfmt:expr, $corner:expr) => {{
                 let mut chart = $chart;
                 chart
                     .configure_mesh()
@@ -91,7 +152,7 @@ impl Figure for Scatter<'_> {
                     }
                 }
                 if self.groups.len() > 1 || self.groups.iter().any(|g| !g.is_empty()) {
-                    legend(&mut chart, style, SeriesLabelPosition::UpperRight)?;
+                    legend(&mut chart, style, $corner)?;
                 }
             }};
         }
@@ -102,16 +163,22 @@ impl Figure for Scatter<'_> {
                     .powf(y1.log10().ceil())
                     .max(10f64.powf(y0.log10().floor() + 1.0)),
             );
+            let (la, lb) = (a.log10(), b.log10());
+            let corner = self.emptiest_corner(&pts, (x0, x1), |y| (y.log10() - la) / (lb - la));
             finish!(
                 builder.build_cartesian_2d(x0..x1, (a..b).log_scale())?,
-                &|v: &f64| log_tick(*v)
+                &|v: &f64| log_tick(*v),
+                corner
             );
         } else {
             let (a, b) = Self::padded(y0, y1);
             let span = b - a;
-            finish!(builder.build_cartesian_2d(x0..x1, a..b)?, &|v: &f64| tick(
-                *v, span
-            ));
+            let corner = self.emptiest_corner(&pts, (x0, x1), |y| (y - a) / span);
+            finish!(
+                builder.build_cartesian_2d(x0..x1, a..b)?,
+                &|v: &f64| tick(*v, span),
+                corner
+            );
         }
         Ok(())
     }
@@ -220,5 +287,50 @@ impl Figure for WorkPrecision<'_> {
             legend(&mut chart, style, SeriesLabelPosition::UpperRight)?;
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn scatter<'a>(points: &'a [(f64, f64, usize)], groups: &'a [String]) -> Scatter<'a> {
+        Scatter {
+            points,
+            groups,
+            group_label: "g",
+            x_label: "x",
+            y_label: "y",
+            log_y: false,
+            title: "t",
+            connect: true,
+        }
+    }
+
+    #[test]
+    fn the_legend_goes_where_the_curves_are_not() {
+        let groups = vec!["a".to_string(), "b".to_string()];
+        // Rising curves fill the upper right: the legend moves to the upper left.
+        let rising: Vec<(f64, f64, usize)> = (0..10)
+            .flat_map(|i| {
+                let x = i as f64 / 9.0;
+                [(x, x * x, 0), (x, x.powi(3), 1)]
+            })
+            .collect();
+        let s = scatter(&rising, &groups);
+        let corner = s.emptiest_corner(&rising, (0.0, 1.0), |y| y);
+        assert!(
+            matches!(corner, SeriesLabelPosition::UpperLeft),
+            "{corner:?}"
+        );
+        // Falling curves leave the upper right free (the default).
+        let falling: Vec<(f64, f64, usize)> =
+            rising.iter().map(|&(x, y, g)| (x, 1.0 - y, g)).collect();
+        let s = scatter(&falling, &groups);
+        let corner = s.emptiest_corner(&falling, (0.0, 1.0), |y| y);
+        assert!(
+            matches!(corner, SeriesLabelPosition::UpperRight),
+            "{corner:?}"
+        );
     }
 }

@@ -559,12 +559,12 @@ pub fn write_figures(
     let figures: [(&str, &str, &str, Box<Selector>); 2] = [
         (
             "front_speed_1d_viscosity.png",
-            "viscosity, α",
+            "α",
             "1D steady-state front speed, rigid (Coulomb) interface",
             Box::new(|c: &FrontCase| {
                 c.stiffness_ratio
                     .is_none()
-                    .then(|| format!("{} {}", c.viscosity.name(), c.alpha))
+                    .then(|| format!("{} ({} viscosity)", c.alpha, c.viscosity.name()))
             }),
         ),
         (
