@@ -356,6 +356,12 @@ fn a_gpu_ensemble_sweep_gives_the_table_of_points_run_one_at_a_time() {
     ]);
     assert!(text.contains("16 run now (0 not ok)"), "{text}");
     assert!(text.contains("ensembles of 8, 8"), "{text}");
+    // The two normal-load phases run as one ensemble too; the table below
+    // equals the one whose loadings ran alone.
+    assert!(
+        text.contains("2 shared normal-load phases run as GPU ensembles"),
+        "{text}"
+    );
     let apart = d.join("apart");
     let text = ok(&[
         "sweep",

@@ -65,6 +65,58 @@ pub fn plan(todo: &[&Point], loading_of: &[Option<usize>], max: usize) -> Plan {
     Plan { ensembles, alone }
 }
 
+/// Runs the shared normal-load phases themselves as ensembles (groups of
+/// at most `max` compatible leaders, one dispatch for all) and stores each
+/// loaded state where the points will look for it. A loading that cannot
+/// join one, or whose scene blew up, is left to be made alone on first
+/// use, with its own error. Returns the loadings made here.
+pub fn prepare_loadings(loadings: &[Loading], max: usize) -> usize {
+    let mut models: Vec<(usize, Model)> = loadings
+        .iter()
+        .enumerate()
+        .filter_map(|(g, l)| {
+            Model::from_scenario(&l.leader.scenario, false)
+                .ok()
+                .map(|m| (g, m))
+        })
+        .collect();
+    let mut made = 0;
+    while !models.is_empty() {
+        let mut batch = vec![models.remove(0)];
+        let first = batch[0].1.clone();
+        let mut k = 0;
+        while k < models.len() && batch.len() < max {
+            if incompatibility(&[first.clone(), models[k].1.clone()]).is_none() {
+                batch.push(models.remove(k));
+            } else {
+                k += 1;
+            }
+        }
+        if batch.len() < 2 {
+            continue;
+        }
+        let scenes: Vec<Model> = batch.iter().map(|(_, m)| m.clone()).collect();
+        let Ok(mut ensemble) = GpuEnsemble::new(&scenes, GpuOptions::default()) else {
+            continue;
+        };
+        // As `Loading::state`: one step before driving starts.
+        if ensemble.advance(first.prep_steps - 1).is_err() {
+            continue;
+        }
+        for (scene, &(g, _)) in batch.iter().enumerate() {
+            if ensemble.failure(scene).is_some() {
+                continue;
+            }
+            if let Ok(state) = ensemble.save_state(scene) {
+                if loadings[g].state.set(Ok(state)).is_ok() {
+                    made += 1;
+                }
+            }
+        }
+    }
+    made
+}
+
 /// What running an ensemble needs from the sweep.
 pub struct Run<'a> {
     pub todo: &'a [&'a Point],

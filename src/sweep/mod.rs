@@ -411,6 +411,10 @@ pub fn run_sweep(sweep: &Sweep, opts: &SweepOptions) -> Result<SweepReport, Stri
     if opts.backend == Backend::Gpu && opts.precision == Precision::F32 && opts.ensemble > 1 {
         let plan = ensembles::plan(&todo, &group_of, opts.ensemble);
         alone = plan.alone;
+        let made = ensembles::prepare_loadings(&groups, opts.ensemble);
+        if opts.progress && made > 0 {
+            eprintln!("sweep: {made} shared normal-load phases run as GPU ensembles");
+        }
         for members in &plan.ensembles {
             if recorder.stopped() {
                 break;
