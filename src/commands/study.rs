@@ -217,6 +217,13 @@ fn single_block_study(a: &StudyArgs) -> anyhow::Result<()> {
         scene.seed,
         &pulled,
     );
+    let search_duration = if a.quick { 0.05 } else { 0.25 };
+    let search = single_block::slow_slip_search(
+        &scene.law,
+        if a.quick { 100 } else { 400 },
+        scene.seed,
+        search_duration,
+    );
     let wall = started.elapsed().as_secs_f64();
     let how = format!(
         "slipfront study single-block{}",
@@ -225,6 +232,10 @@ fn single_block_study(a: &StudyArgs) -> anyhow::Result<()> {
     let mut notes = single_block::report(&laws, &points, &thresholds, &scene, &how);
     notes.push_str(&single_block::slow_slip_report(
         &scene.law, &pulled, &events,
+    ));
+    notes.push_str(&single_block::slow_slip_search_report(
+        &search,
+        search_duration,
     ));
     notes.push_str(&format!(
         "\nWall time {wall:.0} s on {} threads ({}); the single-block model runs on the CPU only (one \

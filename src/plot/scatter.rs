@@ -27,15 +27,15 @@ impl Scatter<'_> {
         (lo - pad, hi + pad)
     }
 
-    /// The plot corner where the legend hides the fewest data: points, and
+    /// The plot corner where the legend hides the fewest data (points, and
     /// for connected curves the points along each segment, counted in a
-    /// legend-sized box (fractions of the plot area) in each corner.
+    /// legend-sized box in each corner), and how many it hides there.
     fn emptiest_corner(
         &self,
         pts: &[(f64, f64, usize)],
         (x0, x1): (f64, f64),
         y_fraction: impl Fn(f64) -> f64,
-    ) -> SeriesLabelPosition {
+    ) -> (SeriesLabelPosition, usize) {
         let mut marks: Vec<(f64, f64)> = pts
             .iter()
             .map(|p| ((p.0 - x0) / (x1 - x0), y_fraction(p.1)))
@@ -55,7 +55,7 @@ impl Scatter<'_> {
                 }
             }
         }
-        let (w, h) = (0.45, (0.06 * self.groups.len() as f64 + 0.04).min(0.95));
+        let (w, h) = self.legend_size();
         let corners = [
             (SeriesLabelPosition::UpperRight, 1.0 - w, 1.0 - h),
             (SeriesLabelPosition::UpperLeft, 0.0, 1.0 - h),
@@ -70,10 +70,37 @@ impl Scatter<'_> {
         };
         // The first of the emptiest, so ties keep the upper right.
         let fewest = corners.iter().map(hidden).min().unwrap_or(0);
-        corners
+        let corner = corners
             .into_iter()
             .find(|c| hidden(c) == fewest)
-            .map_or(SeriesLabelPosition::UpperRight, |c| c.0)
+            .map_or(SeriesLabelPosition::UpperRight, |c| c.0);
+        (corner, fewest)
+    }
+
+    /// The legend's size as fractions of a default figure's plot area:
+    /// about 7 px a character of label plus the marker, 22 px a row.
+    fn legend_size(&self) -> (f64, f64) {
+        let chars = self
+            .groups
+            .iter()
+            .map(|g| g.chars().count() + self.group_label.chars().count() + 3)
+            .max()
+            .unwrap_or(0);
+        (
+            ((7.0 * chars as f64 + 40.0) / 790.0).min(0.95),
+            ((22.0 * self.groups.len() as f64 + 16.0) / 470.0).min(0.9),
+        )
+    }
+
+    /// The y range's upper end raised (as a fraction `f` of the plot
+    /// height mapping `lo..hi`) so that a legend `h` high fits above the
+    /// data when every corner would hide some.
+    fn headroom(&self, hidden: usize, lo: f64, hi: f64) -> f64 {
+        if hidden == 0 {
+            return hi;
+        }
+        // 3 % more for the legend's margin.
+        lo + (hi - lo) / (0.97 - self.legend_size().1)
     }
 }
 
@@ -164,7 +191,12 @@ impl Figure for Scatter<'_> {
                     .max(10f64.powf(y0.log10().floor() + 1.0)),
             );
             let (la, lb) = (a.log10(), b.log10());
-            let corner = self.emptiest_corner(&pts, (x0, x1), |y| (y.log10() - la) / (lb - la));
+            let (_, hidden) =
+                self.emptiest_corner(&pts, (x0, x1), |y| (y.log10() - la) / (lb - la));
+            let lb = self.headroom(hidden, la, lb);
+            let b = 10f64.powf(lb);
+            let (corner, _) =
+                self.emptiest_corner(&pts, (x0, x1), |y| (y.log10() - la) / (lb - la));
             finish!(
                 builder.build_cartesian_2d(x0..x1, (a..b).log_scale())?,
                 &|v: &f64| log_tick(*v),
@@ -172,8 +204,10 @@ impl Figure for Scatter<'_> {
             );
         } else {
             let (a, b) = Self::padded(y0, y1);
+            let (_, hidden) = self.emptiest_corner(&pts, (x0, x1), |y| (y - a) / (b - a));
+            let b = self.headroom(hidden, a, b);
             let span = b - a;
-            let corner = self.emptiest_corner(&pts, (x0, x1), |y| (y - a) / span);
+            let (corner, _) = self.emptiest_corner(&pts, (x0, x1), |y| (y - a) / span);
             finish!(
                 builder.build_cartesian_2d(x0..x1, a..b)?,
                 &|v: &f64| tick(*v, span),
@@ -318,7 +352,8 @@ mod tests {
             })
             .collect();
         let s = scatter(&rising, &groups);
-        let corner = s.emptiest_corner(&rising, (0.0, 1.0), |y| y);
+        let (corner, hidden) = s.emptiest_corner(&rising, (0.0, 1.0), |y| y);
+        assert_eq!(hidden, 0);
         assert!(
             matches!(corner, SeriesLabelPosition::UpperLeft),
             "{corner:?}"
@@ -327,10 +362,25 @@ mod tests {
         let falling: Vec<(f64, f64, usize)> =
             rising.iter().map(|&(x, y, g)| (x, 1.0 - y, g)).collect();
         let s = scatter(&falling, &groups);
-        let corner = s.emptiest_corner(&falling, (0.0, 1.0), |y| y);
+        let (corner, _) = s.emptiest_corner(&falling, (0.0, 1.0), |y| y);
         assert!(
             matches!(corner, SeriesLabelPosition::UpperRight),
             "{corner:?}"
         );
+        // Data everywhere: no corner is free, so the y range grows until
+        // the legend fits above the data.
+        let full: Vec<(f64, f64, usize)> = (0..400)
+            .map(|i| ((i % 20) as f64 / 19.0, (i / 20) as f64 / 19.0, i % 2))
+            .collect();
+        let s = Scatter {
+            connect: false,
+            ..scatter(&full, &groups)
+        };
+        let (_, hidden) = s.emptiest_corner(&full, (0.0, 1.0), |y| y);
+        assert!(hidden > 0);
+        let top = s.headroom(hidden, 0.0, 1.0);
+        assert!(top > 1.0);
+        let (_, hidden) = s.emptiest_corner(&full, (0.0, 1.0), |y| y / top);
+        assert_eq!(hidden, 0);
     }
 }
