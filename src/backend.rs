@@ -50,14 +50,11 @@ pub enum Precision {
 /// mixed f32 only), naming the flag to change.
 pub fn check_precision(backend: Backend, precision: Precision) -> Result<(), String> {
     if backend == Backend::Gpu && precision != Precision::F32 {
+        let name = clap::ValueEnum::to_possible_value(&precision)
+            .map_or_else(String::new, |v| v.get_name().to_string());
         return Err(format!(
-            "--precision {}: the GPU engine computes in mixed f32: use --precision f32 (or \
-             --backend cpu for f64 and f32-plain)",
-            match precision {
-                Precision::F64 => "f64",
-                Precision::F32 => "f32",
-                Precision::F32Plain => "f32-plain",
-            }
+            "--precision {name}: the GPU engine computes in mixed f32: use --precision f32 (or \
+             --backend cpu for f64 and f32-plain)"
         ));
     }
     Ok(())

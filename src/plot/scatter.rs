@@ -36,13 +36,12 @@ impl Scatter<'_> {
         (x0, x1): (f64, f64),
         y_fraction: impl Fn(f64) -> f64,
     ) -> (SeriesLabelPosition, usize) {
-        let mut marks: Vec<(f64, f64)> = pts
-            .iter()
-            .map(|p| ((p.0 - x0) / (x1 - x0), y_fraction(p.1)))
-            .collect();
+        let fraction = |p: &(f64, f64, usize)| ((p.0 - x0) / (x1 - x0), y_fraction(p.1));
+        let mut marks: Vec<(f64, f64)> = pts.iter().map(fraction).collect();
         if self.connect {
             for g in 0..self.groups.len() {
-                let mut line: Vec<(f64, f64)> = marks_of(pts, g, (x0, x1), &y_fraction).collect();
+                let mut line: Vec<(f64, f64)> =
+                    pts.iter().filter(|p| p.2 == g).map(fraction).collect();
                 line.sort_by(|a, b| a.0.total_cmp(&b.0));
                 for w in line.windows(2) {
                     marks.extend((1..8).map(|k| {
@@ -92,9 +91,8 @@ impl Scatter<'_> {
         )
     }
 
-    /// The y range's upper end raised (as a fraction `f` of the plot
-    /// height mapping `lo..hi`) so that a legend `h` high fits above the
-    /// data when every corner would hide some.
+    /// The upper end of the y range `lo..hi`, raised so that the legend
+    /// fits above the data when every corner would hide some (`hidden`).
     fn headroom(&self, hidden: usize, lo: f64, hi: f64) -> f64 {
         if hidden == 0 {
             return hi;
@@ -102,18 +100,6 @@ impl Scatter<'_> {
         // 3 % more for the legend's margin.
         lo + (hi - lo) / (0.97 - self.legend_size().1)
     }
-}
-
-/// Group `g`'s points as fractions of the plot area.
-fn marks_of<'a>(
-    pts: &'a [(f64, f64, usize)],
-    g: usize,
-    (x0, x1): (f64, f64),
-    y_fraction: &'a impl Fn(f64) -> f64,
-) -> impl Iterator<Item = (f64, f64)> + 'a {
-    pts.iter()
-        .filter(move |p| p.2 == g)
-        .map(move |p| ((p.0 - x0) / (x1 - x0), y_fraction(p.1)))
 }
 
 impl Figure for Scatter<'_> {
