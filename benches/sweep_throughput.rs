@@ -16,7 +16,10 @@
 //! `shared-only` leaves out the pair without sharing (three passes, not five:
 //! the 64-point lavapipe run takes over half an hour).
 //!
-//!     cargo bench --bench sweep_throughput -- gpu [SEEDS] [shared-only]
+//! `separate` instead times the GPU sweep against separate `slipfront run
+//! --backend gpu` processes, the baseline of the CPU table.
+//!
+//!     cargo bench --bench sweep_throughput -- gpu [SEEDS] [shared-only|separate]
 
 use slipfront::backend::Backend;
 use slipfront::sweep::{run_sweep, KeepMcap, Sweep, SweepOptions};
@@ -27,15 +30,24 @@ use std::time::Instant;
 const PRESTRESS: [f64; 8] = [0.2, 0.22, 0.24, 0.26, 0.28, 0.3, 0.32, 0.34];
 const SEEDS: u32 = 8;
 
-fn separate_processes(dir: &Path) -> f64 {
+/// The points as separate `slipfront run` processes on `backend` ("cpu" or
+/// "gpu"), one after another: what a user without `sweep` would do.
+fn separate_processes(dir: &Path, backend: &str, seeds: u32) -> f64 {
     let base = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/triggered_front.toml");
     let out = dir.join("one.mcap");
     let started = Instant::now();
     for p in PRESTRESS {
-        for seed in 1..=SEEDS {
+        for seed in 1..=seeds {
             let status = Command::new(env!("CARGO_BIN_EXE_slipfront"))
-                .args(["run", base.to_str().unwrap(), "--backend", "cpu"])
-                .args(["--threads", "1", "--quiet", "-o", out.to_str().unwrap()])
+                .args(["run", base.to_str().unwrap(), "--backend", backend])
+                .args([
+                    "--threads",
+                    "1",
+                    "--quiet",
+                    "--force",
+                    "-o",
+                    out.to_str().unwrap(),
+                ])
                 .args(["--set", &format!("loading.trigger.shear_prestress={p}")])
                 .args(["--set", &format!("time.seed={seed}")])
                 .args(["--set", "output.bulk_interval=0.0"])
@@ -163,6 +175,55 @@ fn gpu_bench(dir: &Path, seeds: u32, with_own_loading: bool) {
     }
 }
 
+/// The GPU sweep (ensembles, shared loading) against the points as
+/// separate `slipfront run --backend gpu` processes one after another, the
+/// baseline the CPU table uses too; the in-process sweep first and last.
+fn gpu_separate_bench(dir: &Path, seeds: u32) {
+    let sweep = bench_sweep(dir, seeds);
+    let n = sweep.points.len();
+    let model = slipfront::Model::from_scenario(&sweep.points[0].scenario, false).unwrap();
+    let block_steps = n as f64 * model.total_steps() as f64 * model.n_blocks() as f64;
+    let ensemble_first = sweep_on(dir, &sweep, Backend::Gpu, 1, true, n);
+    let alone_shared = sweep_on(dir, &sweep, Backend::Gpu, 1, true, 1);
+    let separate = separate_processes(dir, "gpu", seeds);
+    let ensemble_last = sweep_on(dir, &sweep, Backend::Gpu, 1, true, n);
+    let adapter = slipfront::gpu::context::shared().unwrap().describe();
+    println!(
+        "{n} points of {} ({} x {} blocks, {} steps each) on {adapter}",
+        model.name,
+        model.nx,
+        model.nz,
+        model.total_steps()
+    );
+    println!("| configuration | wall (s) | scenes/hour | block-steps/s | vs separate |");
+    println!("| --- | --- | --- | --- | --- |");
+    for (name, wall) in [
+        (
+            format!("{n} separate `slipfront run --backend gpu`"),
+            separate,
+        ),
+        (
+            "in-process sweep, one point at a time, shared loading".into(),
+            alone_shared,
+        ),
+        (
+            "in-process sweep, ensembles, shared loading (first pass)".into(),
+            ensemble_first,
+        ),
+        (
+            "in-process sweep, ensembles, shared loading (last pass)".into(),
+            ensemble_last,
+        ),
+    ] {
+        println!(
+            "| {name} | {wall:.1} | {:.0} | {:.2e} | {:.2}× |",
+            n as f64 * 3600.0 / wall,
+            block_steps / wall,
+            separate / wall
+        );
+    }
+}
+
 fn main() {
     let args: Vec<String> = std::env::args().collect();
     let dir = std::env::temp_dir().join(format!("slipfront-sweep-bench-{}", std::process::id()));
@@ -172,7 +233,11 @@ fn main() {
             .get(at + 1)
             .and_then(|s| s.parse().ok())
             .unwrap_or(SEEDS);
-        gpu_bench(&dir, seeds, !args.iter().any(|a| a == "shared-only"));
+        if args.iter().any(|a| a == "separate") {
+            gpu_separate_bench(&dir, seeds);
+        } else {
+            gpu_bench(&dir, seeds, !args.iter().any(|a| a == "shared-only"));
+        }
         let _ = std::fs::remove_dir_all(&dir);
         return;
     }
@@ -184,10 +249,10 @@ fn main() {
     let sweep = bench_sweep(&dir, SEEDS);
     let model = slipfront::Model::from_scenario(&sweep.points[0].scenario, false).unwrap();
     let block_steps = 64.0 * model.total_steps() as f64 * model.n_blocks() as f64;
-    let first = separate_processes(&dir);
+    let first = separate_processes(&dir, "cpu", SEEDS);
     let own = in_process(&dir, &sweep, threads, false);
     let shared = in_process(&dir, &sweep, threads, true);
-    let last = separate_processes(&dir);
+    let last = separate_processes(&dir, "cpu", SEEDS);
     let separate = 0.5 * (first + last);
     println!(
         "64 points of {} ({} x {} blocks, {} steps each), {threads} scene thread(s)",

@@ -160,12 +160,20 @@ fn loading_groups<'a>(todo: &[&'a Point]) -> (Vec<Loading<'a>>, Vec<Option<usize
         members[g].push(k);
         of[k] = Some(g);
     }
-    for m in members.iter().filter(|m| m.len() < 2) {
+    // Only phases two or more points share are kept: a point alone makes
+    // its own loading as part of its run (making it here as well, as the
+    // GPU sweep did for every group, doubled that work).
+    let mut shared = Vec::new();
+    for (group, m) in groups.into_iter().zip(&members) {
+        let kept = (m.len() >= 2).then_some(shared.len());
         for &k in m {
-            of[k] = None;
+            of[k] = kept;
+        }
+        if kept.is_some() {
+            shared.push(group);
         }
     }
-    (groups, of)
+    (shared, of)
 }
 
 /// The table this invocation writes.
@@ -547,4 +555,41 @@ pub fn collect(dir: &Path) -> Result<(PathBuf, usize, Vec<usize>), String> {
     table::write_sorted(&path, &header, &rows)?;
     let missing = (0..points).filter(|p| !rows.contains_key(p)).collect();
     Ok((path, rows.len(), missing))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn sweep(seeds: u32) -> Sweep {
+        let text = format!(
+            "base = \"scenarios/triggered_front.toml\"\nseeds = {seeds}\n\
+             [axes]\n\"loading.trigger.shear_prestress\" = [0.2, 0.25, 0.3]\n"
+        );
+        let file: SweepFile = toml::from_str(&text).expect("sweep file");
+        Sweep::build(file, Path::new(env!("CARGO_MANIFEST_DIR"))).expect("sweep")
+    }
+
+    #[test]
+    fn only_phases_two_points_share_are_loading_groups() {
+        // The prestress changes the normal-load phase, the seed does not.
+        let shared = sweep(2);
+        let todo: Vec<&Point> = shared.points.iter().collect();
+        let (groups, of) = loading_groups(&todo);
+        assert_eq!(groups.len(), 3);
+        for (k, p) in todo.iter().enumerate() {
+            let g = of[k].expect("every point shares its loading");
+            assert!(crate::checkpoint::branch::same_loading(
+                &groups[g].leader.scenario,
+                &p.scenario
+            ));
+        }
+        // One seed per prestress: nothing is shared, so no phase is made
+        // apart from the points' own runs.
+        let alone = sweep(1);
+        let todo: Vec<&Point> = alone.points.iter().collect();
+        let (groups, of) = loading_groups(&todo);
+        assert!(groups.is_empty(), "{} groups", groups.len());
+        assert!(of.iter().all(Option::is_none));
+    }
 }
