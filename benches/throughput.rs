@@ -92,6 +92,9 @@ fn main() {
                 (Backend::Cpu, Precision::F64, 2),
                 (Backend::Cpu, Precision::F32, 1),
                 (Backend::Cpu, Precision::F32, 2),
+                // The reference engine (the kernel twins): the CPU engine
+                // issue 10's GPU/CPU ratio was first measured against.
+                (Backend::CpuReference, Precision::F32, 1),
                 // Plain f32 displacements: the cost of mixed precision.
                 (Backend::Cpu, Precision::F32Plain, 1),
                 (Backend::Cpu, Precision::F32Plain, 2),
