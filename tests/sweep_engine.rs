@@ -199,3 +199,44 @@ fn tiny_lattices_sweep_bitwise_the_reference() {
         same_bits::<f64, f64>(&m, threads, 300);
     }
 }
+
+/// The evaluators of the quasi-static path's output samples: the sweep
+/// engine's `with_junctions` gives the reference's bits for a state it is
+/// handed (junction arrays of one snapshot, kinematics of another instant),
+/// and a one-ulp change of that state is seen.
+#[test]
+fn path_evaluators_are_bitwise_the_reference() {
+    let m = model(&[]);
+    let mut run = CpuEngine::<f64>::new(&m, 1).unwrap();
+    // A base with junctions slipping, and a later instant.
+    let mut at = m.prep_steps;
+    let base = loop {
+        at += 50;
+        advance_to(&mut run, at).unwrap();
+        let snap = run.snapshot().unwrap();
+        if snap.ruptures.iter().any(|&r| r > 0) {
+            break snap;
+        }
+        assert!(at < m.prep_steps + 20_000, "no rupture");
+    };
+    advance_to(&mut run, at + 100).unwrap();
+    let later = run.snapshot().unwrap();
+    let origin = 1.5e-7;
+    let mut reference = CpuEngine::<f64>::with_junctions(&m, &base, origin).unwrap();
+    let mut sweep = SweepEngine::<f64>::with_junctions(&m, &base, origin).unwrap();
+    assert_eq!(reference.snapshot().unwrap(), sweep.snapshot().unwrap());
+    let step = later.step;
+    reference
+        .set_kinematics(step, &later.disp, &later.vel_half)
+        .unwrap();
+    sweep
+        .set_kinematics(step, &later.disp, &later.vel_half)
+        .unwrap();
+    let (a, b) = (reference.snapshot().unwrap(), sweep.snapshot().unwrap());
+    assert!(a == b, "{}", first_difference(&a, &b));
+    // Negative control: one block moved by one ulp changes its forces.
+    let mut moved = later.disp.clone();
+    moved[m.nx + 3][0] = f64::from_bits(moved[m.nx + 3][0].to_bits() + 1);
+    sweep.set_kinematics(step, &moved, &later.vel_half).unwrap();
+    assert_ne!(a, sweep.snapshot().unwrap());
+}

@@ -174,6 +174,29 @@ impl<T: Real, C: Coordinate<T>> SweepEngine<T, C> {
         self.bands.len()
     }
 
+    /// An evaluator of forces on one thread, as `CpuEngine::with_junctions`
+    /// (the same bits): `base`'s junction arrays and sliding state, for
+    /// driving-phase states given by `set_kinematics`, read by `snapshot`.
+    /// The quasi-static path's output samples are made with it.
+    pub fn with_junctions(
+        model: &Model,
+        base: &Snapshot,
+        drive_origin: f64,
+    ) -> Result<Self, EngineError> {
+        let mut e = Self::new(model, 1)?;
+        e.drive_origin = C::from_f64(drive_origin);
+        super::junctions::load_junctions(base, &mut e.junction_spring, &mut e.junction_state);
+        for (s, (d, n)) in e
+            .slide
+            .iter_mut()
+            .zip(base.slide_dir.iter().zip(&base.slips))
+        {
+            *s = [*d, *n as i32];
+        }
+        e.step = model.prep_steps.max(base.step);
+        Ok(e)
+    }
+
     /// The instruction set of the band sweep (detected at construction).
     pub fn isa(&self) -> Isa {
         self.isa
