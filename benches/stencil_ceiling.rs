@@ -12,9 +12,11 @@
 use slipfront::advance_to;
 use slipfront::backend::{make_engine, Backend, Precision};
 use slipfront::gpu::context;
-use slipfront::scenario::{Scenario, DEFAULT_SCENARIO};
-use slipfront::Model;
 use std::time::Instant;
+
+#[path = "support/bench_scene.rs"]
+mod bench_scene;
+use bench_scene::scene;
 use wgpu::util::DeviceExt;
 
 const WORKGROUP: u32 = 64;
@@ -202,18 +204,7 @@ fn cpu_rate(nx: usize, nz: usize) -> f64 {
 /// Block-steps/s of slipfront's own CPU f32 engine (one thread) on the
 /// throughput bench's scene of this size, driven so junctions rupture.
 fn model_engine_rate(nx: u32, nz: u32) -> f64 {
-    let l = 0.14 / 56.0;
-    let set = vec![
-        format!("geometry.nx={nx}"),
-        format!("geometry.nz={nz}"),
-        format!("geometry.length={}", l * (nx - 1) as f64),
-        format!("geometry.height={}", l * (nz - 1) as f64),
-        "loading.normal.ramp_time=2e-5".into(),
-        "loading.normal.relax_time=2e-5".into(),
-        "loading.drive.velocity=1.0".into(),
-    ];
-    let scenario = Scenario::parse(DEFAULT_SCENARIO, "ceiling", &set).expect("scene");
-    let model = Model::from_scenario(&scenario, false).expect("model");
+    let model = scene(nx, nz);
     let mut engine = make_engine(&model, Backend::Cpu, Precision::F32, 1).expect("cpu engine");
     advance_to(engine.as_mut(), model.prep_steps + 10).expect("prepare");
     let mut steps = 16u64;

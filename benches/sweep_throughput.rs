@@ -109,6 +109,20 @@ fn bench_sweep(dir: &Path, seeds: u32) -> Sweep {
     Sweep::load(&file).unwrap()
 }
 
+/// The title and header of a GPU table: the scene, the adapter, the columns.
+fn gpu_table_header(model: &slipfront::Model, n: usize, against: &str) {
+    let adapter = slipfront::gpu::context::shared().unwrap().describe();
+    println!(
+        "{n} points of {} ({} x {} blocks, {} steps each) on {adapter}",
+        model.name,
+        model.nx,
+        model.nz,
+        model.total_steps()
+    );
+    println!("| configuration | wall (s) | scenes/hour | block-steps/s | {against} |");
+    println!("| --- | --- | --- | --- | --- |");
+}
+
 /// GPU ensembles against the same points one at a time on the GPU engine.
 fn gpu_bench(dir: &Path, seeds: u32, with_own_loading: bool) {
     let sweep = bench_sweep(dir, seeds);
@@ -126,16 +140,7 @@ fn gpu_bench(dir: &Path, seeds: u32, with_own_loading: bool) {
         (f64::NAN, f64::NAN)
     };
     let ensemble_last = sweep_on(dir, &sweep, Backend::Gpu, 1, true, n);
-    let adapter = slipfront::gpu::context::shared().unwrap().describe();
-    println!(
-        "{n} points of {} ({} x {} blocks, {} steps each) on {adapter}",
-        model.name,
-        model.nx,
-        model.nz,
-        model.total_steps()
-    );
-    println!("| configuration | wall (s) | scenes/hour | block-steps/s | vs one at a time |");
-    println!("| --- | --- | --- | --- | --- |");
+    gpu_table_header(&model, n, "vs one at a time");
     for (name, wall, against) in [
         (
             "ensemble of all points, shared loading (first pass)",
@@ -187,16 +192,7 @@ fn gpu_separate_bench(dir: &Path, seeds: u32) {
     let alone_shared = sweep_on(dir, &sweep, Backend::Gpu, 1, true, 1);
     let separate = separate_processes(dir, "gpu", seeds);
     let ensemble_last = sweep_on(dir, &sweep, Backend::Gpu, 1, true, n);
-    let adapter = slipfront::gpu::context::shared().unwrap().describe();
-    println!(
-        "{n} points of {} ({} x {} blocks, {} steps each) on {adapter}",
-        model.name,
-        model.nx,
-        model.nz,
-        model.total_steps()
-    );
-    println!("| configuration | wall (s) | scenes/hour | block-steps/s | vs separate |");
-    println!("| --- | --- | --- | --- | --- |");
+    gpu_table_header(&model, n, "vs separate");
     for (name, wall) in [
         (
             format!("{n} separate `slipfront run --backend gpu`"),

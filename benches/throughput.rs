@@ -4,26 +4,13 @@
 
 use slipfront::backend::{make_engine, Backend, Precision};
 use slipfront::gpu::{GpuEngine, GpuOptions, GpuPath};
-use slipfront::scenario::{Scenario, DEFAULT_SCENARIO};
 use slipfront::{advance_to, Model};
 use slipfront::{Engine, EngineError};
 use std::time::Instant;
 
-fn scene(nx: u32, nz: u32) -> Model {
-    let l = 0.14 / 56.0;
-    let set = vec![
-        format!("geometry.nx={nx}"),
-        format!("geometry.nz={nz}"),
-        format!("geometry.length={}", l * (nx - 1) as f64),
-        format!("geometry.height={}", l * (nz - 1) as f64),
-        // Short normal-load phase, then driving hard so junctions rupture.
-        "loading.normal.ramp_time=2e-5".into(),
-        "loading.normal.relax_time=2e-5".into(),
-        "loading.drive.velocity=1.0".into(),
-    ];
-    let s = Scenario::parse(DEFAULT_SCENARIO, "bench", &set).expect("bench scene");
-    Model::from_scenario(&s, false).expect("bench model")
-}
+#[path = "support/bench_scene.rs"]
+mod bench_scene;
+use bench_scene::scene;
 
 fn measure(model: &Model, engine: Result<Box<dyn Engine>, EngineError>) -> Option<(f64, String)> {
     let mut engine = engine.ok()?;

@@ -186,6 +186,14 @@ pub fn load_junctions<T: Real, C: Coordinate<T>>(
     }
 }
 
+/// The Amontons–Coulomb sliding state (direction, stick → slip count) of
+/// each interface block of a snapshot.
+pub fn load_slide(snap: &crate::engine::Snapshot, slide: &mut [[i32; 2]]) {
+    for (s, (d, n)) in slide.iter_mut().zip(snap.slide_dir.iter().zip(&snap.slips)) {
+        *s = [*d, *n as i32];
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -267,13 +267,7 @@ impl<T: Real, C: Coordinate<T>> CpuEngine<T, C> {
         let mut e = Self::new(model, 1)?;
         e.drive_origin = C::from_f64(drive_origin);
         e.load_junctions(base);
-        for (s, (d, n)) in e
-            .slide
-            .iter_mut()
-            .zip(base.slide_dir.iter().zip(&base.slips))
-        {
-            *s = [*d, *n as i32];
-        }
+        junctions::load_slide(base, &mut e.slide);
         e.step = model.prep_steps.max(base.step);
         Ok(e)
     }

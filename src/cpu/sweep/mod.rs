@@ -186,13 +186,7 @@ impl<T: Real, C: Coordinate<T>> SweepEngine<T, C> {
         let mut e = Self::new(model, 1)?;
         e.drive_origin = C::from_f64(drive_origin);
         super::junctions::load_junctions(base, &mut e.junction_spring, &mut e.junction_state);
-        for (s, (d, n)) in e
-            .slide
-            .iter_mut()
-            .zip(base.slide_dir.iter().zip(&base.slips))
-        {
-            *s = [*d, *n as i32];
-        }
+        super::junctions::load_slide(base, &mut e.slide);
         e.step = model.prep_steps.max(base.step);
         Ok(e)
     }
