@@ -166,3 +166,113 @@ pub fn outcome_mismatch(reference: &RunOutcome, other: &RunOutcome, rel_tol: f64
     }
     out
 }
+
+/// Per-field errors of run file `b` against the reference `a`, channel by
+/// channel (each field over all its samples, relative to its scale), or the
+/// first place their records differ in count or step.
+pub fn compare_run_files(
+    a: &crate::output::reader::RunFile,
+    b: &crate::output::reader::RunFile,
+) -> Result<Vec<FieldError>, String> {
+    let steps = |name: &str, x: Vec<u64>, y: Vec<u64>| -> Result<(), String> {
+        if x.len() != y.len() {
+            return Err(format!("{name}: {} records against {}", y.len(), x.len()));
+        }
+        match x.iter().zip(&y).position(|(p, q)| p != q) {
+            Some(k) => Err(format!(
+                "{name}: record {k} is at step {} against {}",
+                y[k], x[k]
+            )),
+            None => Ok(()),
+        }
+    };
+    steps(
+        "/global",
+        a.global.iter().map(|g| g.step).collect(),
+        b.global.iter().map(|g| g.step).collect(),
+    )?;
+    steps(
+        "/interface",
+        a.interface.iter().map(|r| r.step).collect(),
+        b.interface.iter().map(|r| r.step).collect(),
+    )?;
+    steps(
+        "/bulk",
+        a.bulk.iter().map(|r| r.step).collect(),
+        b.bulk.iter().map(|r| r.step).collect(),
+    )?;
+    let series = |run: &crate::output::reader::RunFile,
+                  f: &dyn Fn(&crate::output::messages::Global) -> f64| {
+        run.global.iter().map(f).collect::<Vec<f64>>()
+    };
+    let rows = |run: &crate::output::reader::RunFile,
+                f: &dyn Fn(&crate::output::messages::Interface) -> &Vec<f64>| {
+        run.interface
+            .iter()
+            .flat_map(|r| f(r).clone())
+            .collect::<Vec<f64>>()
+    };
+    let bulk = |run: &crate::output::reader::RunFile,
+                f: &dyn Fn(&crate::output::messages::Bulk) -> &Vec<f32>| {
+        run.bulk
+            .iter()
+            .flat_map(|r| f(r).iter().map(|&x| x as f64))
+            .collect::<Vec<f64>>()
+    };
+    Ok(vec![
+        field(
+            "global.drive_force",
+            &series(a, &|g| g.drive_force),
+            &series(b, &|g| g.drive_force),
+        ),
+        field(
+            "global.friction_force",
+            &series(a, &|g| g.friction_force),
+            &series(b, &|g| g.friction_force),
+        ),
+        field(
+            "global.pinned_fraction",
+            &series(a, &|g| g.pinned_fraction),
+            &series(b, &|g| g.pinned_fraction),
+        ),
+        field(
+            "global.kinetic_energy",
+            &series(a, &|g| g.kinetic_energy),
+            &series(b, &|g| g.kinetic_energy),
+        ),
+        field(
+            "global.ruptures",
+            &series(a, &|g| g.ruptures as f64),
+            &series(b, &|g| g.ruptures as f64),
+        ),
+        field(
+            "interface.shear_stress",
+            &rows(a, &|r| &r.shear_stress),
+            &rows(b, &|r| &r.shear_stress),
+        ),
+        field(
+            "interface.normal_stress",
+            &rows(a, &|r| &r.normal_stress),
+            &rows(b, &|r| &r.normal_stress),
+        ),
+        field(
+            "interface.pinned_fraction",
+            &rows(a, &|r| &r.pinned_fraction),
+            &rows(b, &|r| &r.pinned_fraction),
+        ),
+        field(
+            "interface.slip",
+            &rows(a, &|r| &r.slip),
+            &rows(b, &|r| &r.slip),
+        ),
+        field(
+            "interface.slip_speed",
+            &rows(a, &|r| &r.slip_speed),
+            &rows(b, &|r| &r.slip_speed),
+        ),
+        field("bulk.ux", &bulk(a, &|r| &r.ux), &bulk(b, &|r| &r.ux)),
+        field("bulk.uz", &bulk(a, &|r| &r.uz), &bulk(b, &|r| &r.uz)),
+        field("bulk.vx", &bulk(a, &|r| &r.vx), &bulk(b, &|r| &r.vx)),
+        field("bulk.vz", &bulk(a, &|r| &r.vz), &bulk(b, &|r| &r.vz)),
+    ])
+}

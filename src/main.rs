@@ -30,6 +30,10 @@ enum Command {
         /// dispatch, small lattices) or auto.
         #[arg(long, value_enum, default_value = "auto")]
         gpu_path: slipfront::gpu::GpuPath,
+        /// Where a GPU run's output samples are made: device (only the
+        /// channels due are read back) or host (a snapshot per sample).
+        #[arg(long, value_enum, default_value = "device")]
+        gpu_output: slipfront::gpu::GpuOutput,
         #[arg(long, value_enum)]
         precision: Option<Precision>,
         /// Override a scenario key: --set loading.drive.velocity=1e-3
@@ -264,6 +268,7 @@ fn main() -> ExitCode {
             scenario,
             backend,
             gpu_path,
+            gpu_output,
             precision,
             set,
             t_end,
@@ -281,6 +286,7 @@ fn main() -> ExitCode {
             scenario,
             backend,
             gpu_path,
+            gpu_output,
             precision,
             set,
             t_end,

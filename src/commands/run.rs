@@ -1,7 +1,7 @@
 use slipfront::backend::{make_engine_with, Backend, Precision};
 use slipfront::checkpoint::{branch, path_for, Checkpoint};
 use slipfront::engine::Engine;
-use slipfront::gpu::{GpuOptions, GpuPath};
+use slipfront::gpu::{GpuOptions, GpuOutput, GpuPath};
 use slipfront::model::Model;
 use slipfront::output::fnv1a;
 use slipfront::runner::{run_scene, ProgressMode, RunOptions, StartFrom};
@@ -13,6 +13,7 @@ pub struct RunArgs {
     pub scenario: Option<PathBuf>,
     pub backend: Backend,
     pub gpu_path: GpuPath,
+    pub gpu_output: GpuOutput,
     pub precision: Option<Precision>,
     pub set: Vec<String>,
     pub t_end: Option<f64>,
@@ -116,6 +117,7 @@ impl RunArgs {
         }
         let gpu = GpuOptions {
             path: self.gpu_path,
+            output: self.gpu_output,
             ..GpuOptions::default()
         };
         Ok(make_engine_with(

@@ -139,6 +139,7 @@ fn coulomb_precursors_study(a: &StudyArgs) -> anyhow::Result<()> {
                 scenario: Some(scenario.to_path_buf()),
                 backend: a.backend,
                 gpu_path: slipfront::gpu::GpuPath::Auto,
+                gpu_output: slipfront::gpu::GpuOutput::Device,
                 precision: Some(a.precision),
                 set: loading.overrides(),
                 t_end,

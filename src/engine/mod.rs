@@ -1,8 +1,10 @@
 //! What every engine offers, the state it reports, and the stepping driver
 //! shared by all of them (phase change at the start of driving).
 
+mod sample;
 mod state;
 
+pub use sample::{record_sample, BulkField, Due, InterfaceRow, Sample, SamplePlan, SampleSums};
 pub use state::{EngineState, StateArrays};
 
 use crate::junction::JunctionSpring;
@@ -229,6 +231,20 @@ pub trait Engine {
     /// GPU dispatches issued so far (None: not a GPU engine).
     fn dispatches(&self) -> Option<u64> {
         None
+    }
+    /// Asks the engine to record the output samples `plan` makes due on
+    /// the device while it advances (the GPU engine's one-step kernels):
+    /// true if it will, and then `take_samples` hands them over after each
+    /// `advance`. Called again after anything the host emitted itself (a
+    /// quasi-static jump) to pass on the fast cadence's state.
+    fn record_samples(&mut self, _plan: &SamplePlan) -> bool {
+        false
+    }
+    /// The samples recorded on the device since the last call, in step
+    /// order (each step after the last sample the host saw, up to and
+    /// including the engine's current step).
+    fn take_samples(&mut self) -> Vec<Sample> {
+        Vec::new()
     }
 }
 

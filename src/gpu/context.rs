@@ -23,6 +23,8 @@ pub struct GpuContext {
     /// Group 1: the step offset (dynamic) and the batch (or the batches).
     pub batch_layout: wgpu::BindGroupLayout,
     pipelines: Arc<Mutex<HashMap<String, wgpu::ComputePipeline>>>,
+    /// The output kernels, compiled on first use.
+    record: Arc<OnceLock<Arc<super::recorder::RecordPipelines>>>,
 }
 
 static SHARED: OnceLock<Result<GpuContext, String>> = OnceLock::new();
@@ -170,6 +172,7 @@ impl GpuContext {
             layouts,
             batch_layout,
             pipelines: Arc::new(Mutex::new(HashMap::new())),
+            record: Arc::new(OnceLock::new()),
         })
     }
 
@@ -210,6 +213,13 @@ impl GpuContext {
                         cache: None,
                     })
             })
+            .clone()
+    }
+
+    /// The output kernels' pipelines (`shaders/record.wgsl`).
+    pub fn record_pipelines(&self) -> Arc<super::recorder::RecordPipelines> {
+        self.record
+            .get_or_init(|| Arc::new(super::recorder::RecordPipelines::new(&self.device)))
             .clone()
     }
 

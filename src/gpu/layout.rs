@@ -178,6 +178,80 @@ gpu_struct! {
     }
 }
 
+gpu_struct! {
+    /// What the output kernels (`shaders/record.wgsl`) need besides the
+    /// run constants: the fast cadence (its state is updated by the
+    /// device), the driver's blocks, and where each region of the record
+    /// buffers starts.
+    pub struct GpuRecordPlan as "RecordPlan" {
+        /// 1: the fast interface cadence is on (set by each sample).
+        pub fast: u32,
+        pub every_fast: u32,
+        pub fast_slip_speed: f32,
+        /// The block the side spring pulls (u32::MAX: none).
+        pub driven_block: u32,
+        /// 1: the top row's velocity is prescribed (its reaction is summed).
+        pub top_reaction: u32,
+        pub junctions_per_block: u32,
+        /// Workgroups of `record_sample`, and where their partial sums go
+        /// in the sums buffer.
+        pub partials: u32,
+        pub partials_offset: u32,
+        /// Word offsets of the interface rows and the bulk fields.
+        pub interface_offset: u32,
+        pub bulk_offset: u32,
+    }
+}
+
+gpu_struct! {
+    /// One sample the host asks for in a batch: the state copy holding
+    /// u(s) and v(s−½), the channels (`RECORD_*` bits) and its slots.
+    pub struct GpuRecordEntry as "RecordEntry" {
+        pub copy: u32,
+        pub channels: u32,
+        pub sums_slot: u32,
+        pub interface_slot: u32,
+        pub bulk_slot: u32,
+    }
+}
+
+gpu_struct! {
+    /// A sample's sums as the device reduced them (f32; the partial sums of
+    /// the workgroups have the same layout).
+    pub struct GpuSampleSums as "SampleSums" {
+        /// 1: the sample was due (0: a fast-cadence slot while it was off).
+        pub recorded: u32,
+        /// 1: its interface row was written.
+        pub interface_row: u32,
+        /// The fast cadence after this sample.
+        pub fast: u32,
+        pub ruptures_lo: u32,
+        pub ruptures_hi: u32,
+        /// Σ |v|² over the blocks (the host multiplies by m/2).
+        pub kinetic: f32,
+        pub friction: f32,
+        /// Σ of the interface blocks' pinned fractions.
+        pub pinned: f32,
+        pub min_pinned: f32,
+        pub max_slip_speed: f32,
+        pub top_reaction: f32,
+        pub driven_ux_hi: f32,
+        pub driven_ux_lo: f32,
+    }
+}
+
+/// `GpuRecordEntry::channels` bits.
+pub const RECORD_GLOBAL: u32 = 1;
+pub const RECORD_INTERFACE: u32 = 2;
+pub const RECORD_BULK: u32 = 4;
+/// A multiple of the fast cadence: recorded if the fast cadence is on.
+pub const RECORD_FAST: u32 = 8;
+/// Words per interface block of a row: u_x (hi, lo), friction, normal
+/// force, pinned fraction, v_x.
+pub const RECORD_INTERFACE_WORDS: u32 = 6;
+/// Words per block of a bulk field: u_x, u_z, v_x, v_z.
+pub const RECORD_BULK_WORDS: u32 = 4;
+
 /// The shared constants and structs, prepended to every shader module.
 pub fn wgsl_prelude() -> String {
     let stencil: Vec<String> = STENCIL
@@ -202,6 +276,16 @@ pub fn wgsl_prelude() -> String {
         ("FLAG_DRIVEN", FLAG_DRIVEN),
         ("FLAG_PRESCRIBED_X", FLAG_PRESCRIBED_X),
         ("WORKGROUP", WORKGROUP),
+        ("RECORD_GLOBAL", RECORD_GLOBAL),
+        ("RECORD_INTERFACE", RECORD_INTERFACE),
+        ("RECORD_BULK", RECORD_BULK),
+        ("RECORD_FAST", RECORD_FAST),
+        (
+            "RECORD_FIXED",
+            RECORD_GLOBAL | RECORD_INTERFACE | RECORD_BULK,
+        ),
+        ("RECORD_INTERFACE_WORDS", RECORD_INTERFACE_WORDS),
+        ("RECORD_BULK_WORDS", RECORD_BULK_WORDS),
         (
             "JUNCTION_LANES",
             crate::cpu::junctions::JUNCTION_LANES as u32,
@@ -227,6 +311,9 @@ pub fn wgsl_prelude() -> String {
         GpuDisp::wgsl(),
         GpuJunctionSpring::wgsl(),
         GpuStatus::wgsl(),
+        GpuRecordPlan::wgsl(),
+        GpuRecordEntry::wgsl(),
+        GpuSampleSums::wgsl(),
     ] {
         s += &decl;
     }
@@ -417,6 +504,21 @@ mod tests {
             GpuJunctionSpring::fields(),
         );
         check("Status", size_of::<GpuStatus>(), GpuStatus::fields());
+        check(
+            "RecordPlan",
+            size_of::<GpuRecordPlan>(),
+            GpuRecordPlan::fields(),
+        );
+        check(
+            "RecordEntry",
+            size_of::<GpuRecordEntry>(),
+            GpuRecordEntry::fields(),
+        );
+        check(
+            "SampleSums",
+            size_of::<GpuSampleSums>(),
+            GpuSampleSums::fields(),
+        );
         // The uniform block is a whole number of 16-byte rows.
         assert_eq!(size_of::<GpuConsts>() % 16, 0);
     }

@@ -23,10 +23,11 @@ pub mod layout;
 pub mod lockstep;
 pub mod options;
 mod readback;
+mod recorder;
 mod scene_state;
 pub mod shaders;
 
-use crate::engine::{blow_up, Engine, EngineError, EngineState, Snapshot};
+use crate::engine::{blow_up, Engine, EngineError, EngineState, Sample, SamplePlan, Snapshot};
 use crate::lattice::{block_flags, initial_displacement};
 use crate::model::{Driver, Model};
 use crate::real::{Coordinate, DoubleSingle};
@@ -36,7 +37,7 @@ use bytemuck::Zeroable;
 use context::GpuContext;
 use layout::{GpuBatch, GpuConsts, GpuJunctionSpring, GpuStatus, WORKGROUP};
 use options::*;
-pub use options::{GpuOptions, GpuPath, PERSISTENT_MAX_BLOCKS, PERSISTENT_THREADS};
+pub use options::{GpuOptions, GpuOutput, GpuPath, PERSISTENT_MAX_BLOCKS, PERSISTENT_THREADS};
 
 use scene_state::gpu_junction_springs;
 use shaders::{Kernel, Variant};
@@ -109,6 +110,11 @@ struct InFlight {
     first_step: u64,
     /// The persistent kernel's step counter once this batch has run.
     persistent_steps: u32,
+    /// The batch's output records, mapped with its status.
+    records: Option<(
+        recorder::Pending,
+        mpsc::Receiver<Result<(), wgpu::BufferAsyncError>>,
+    )>,
 }
 
 /// The GPU engine over one scene (`GpuEngine::new`), or over an ensemble of
@@ -142,9 +148,15 @@ pub struct GpuEngine {
     in_flight: VecDeque<InFlight>,
     spare_staging: Vec<wgpu::Buffer>,
     dispatches: u64,
+    /// Where output samples are made (the option).
+    output: GpuOutput,
+    /// Output samples recorded on the device (one-step kernels, one scene).
+    recorder: Option<recorder::Recorder>,
+    /// Samples read back and not yet taken.
+    samples: Vec<Sample>,
 }
 
-fn groups_for(workgroups: u32) -> (u32, u32) {
+pub(crate) fn groups_for(workgroups: u32) -> (u32, u32) {
     let groups = workgroups.max(1);
     let x = groups.min(65_535);
     (x, groups.div_ceil(x))
@@ -411,6 +423,9 @@ impl GpuEngine {
             in_flight: VecDeque::new(),
             spare_staging: Vec::new(),
             dispatches: 0,
+            output: opts.output,
+            recorder: None,
+            samples: Vec::new(),
         };
         if model.prep_steps == 0 {
             engine.begin_driving()?;
@@ -435,7 +450,12 @@ impl GpuEngine {
     /// Submits `steps` steps from the current one (or, with `forces_only`,
     /// the forces of the current state where they are not ready), and the
     /// copy of the status.
-    fn submit_batch(&mut self, steps: u64, forces_only: bool) -> Result<(), EngineError> {
+    fn submit_batch(
+        &mut self,
+        steps: u64,
+        forces_only: bool,
+        planned: Vec<recorder::Planned>,
+    ) -> Result<(), EngineError> {
         if self.in_flight.len() >= IN_FLIGHT {
             self.retire_oldest()?;
         }
@@ -471,12 +491,21 @@ impl GpuEngine {
             pass.set_bind_group(0, &self.state_group, &[]);
             match self.kernel {
                 Kernel::OneStep | Kernel::OneStepLanes => {
+                    let mut samples = planned.iter().enumerate().peekable();
                     for i in 0..steps {
                         let offset = (i * self.offset_stride) as u32;
                         pass.set_bind_group(1, &self.batch_group, &[offset]);
                         pass.dispatch_workgroups(self.groups.0, self.groups.1, scene_count);
                         if !forces_only {
                             self.current = 1 - self.current;
+                        }
+                        // The sample of step first + i, from the state this
+                        // dispatch read and the forces it computed.
+                        if let Some((k, _)) = samples.next_if(|(_, p)| p.offset == i) {
+                            let rec = self.recorder.as_ref().expect("samples need a recorder");
+                            rec.encode(&mut pass, k);
+                            pass.set_pipeline(&self.pipeline);
+                            pass.set_bind_group(0, &self.state_group, &[]);
                         }
                     }
                     self.dispatches += steps;
@@ -502,10 +531,22 @@ impl GpuEngine {
             })
         });
         encoder.copy_buffer_to_buffer(&self.buffers.status, 0, &staging, 0, status_size);
+        let pending = match self.recorder.as_mut() {
+            Some(rec) => rec.copy_out(&self.ctx.device, &mut encoder, planned),
+            None => None,
+        };
         let submission = self.ctx.queue.submit([encoder.finish()]);
-        let (tx, rx) = mpsc::channel();
-        staging.slice(..).map_async(wgpu::MapMode::Read, move |r| {
-            let _ = tx.send(r);
+        let map = |buffer: &wgpu::Buffer| {
+            let (tx, rx) = mpsc::channel();
+            buffer.slice(..).map_async(wgpu::MapMode::Read, move |r| {
+                let _ = tx.send(r);
+            });
+            rx
+        };
+        let rx = map(&staging);
+        let records = pending.map(|p| {
+            let rx = map(recorder::Recorder::staging(&p));
+            (p, rx)
         });
         self.in_flight.push_back(InFlight {
             staging,
@@ -513,6 +554,7 @@ impl GpuEngine {
             mapped: rx,
             first_step: self.step,
             persistent_steps: self.persistent_steps,
+            records,
         });
         for scene in &mut self.scenes {
             scene.forces_ready = forces_only;
@@ -553,6 +595,20 @@ impl GpuEngine {
         batch.staging.unmap();
         self.spare_staging.push(batch.staging);
         self.ctx.check()?;
+        if let Some((pending, mapped)) = batch.records {
+            mapped
+                .recv()
+                .map_err(|e| EngineError::Gpu(format!("record readback: {e}")))?
+                .map_err(|e| EngineError::Gpu(format!("record readback: {e}")))?;
+            // After a blow-up only the samples before it are kept.
+            let before = statuses
+                .first()
+                .filter(|s| s.flag != 0)
+                .map_or(u64::MAX, |s| batch.first_step + s.step as u64 + 1);
+            let rec = self.recorder.as_mut().expect("records need a recorder");
+            let samples = rec.decode(pending, before).map_err(EngineError::Gpu)?;
+            self.samples.extend(samples);
+        }
         for (scene, status) in self.scenes.iter_mut().zip(&statuses) {
             if scene.failure.is_some() {
                 continue;
@@ -641,10 +697,28 @@ impl GpuEngine {
                     k = k.min(boundary - self.step);
                 }
             }
-            self.submit_batch(k, false)?;
+            let planned = match self.recorder.as_mut() {
+                Some(rec) => {
+                    let (planned, fits) = rec.plan_batch(self.step, k, self.current);
+                    k = fits;
+                    rec.write_entries(&self.ctx.queue, &planned);
+                    planned
+                }
+                None => Vec::new(),
+            };
+            self.submit_batch(k, false, planned)?;
             left -= k;
             if self.step == prep {
                 self.begin_driving()?;
+            }
+        }
+        // The sample of the step reached, if it is one: after the forces
+        // of that step (which the next step then reads).
+        if let Some(rec) = self.recorder.as_mut() {
+            let planned = rec.plan_now(self.step, self.current);
+            if !planned.is_empty() {
+                rec.write_entries(&self.ctx.queue, &planned);
+                self.submit_batch(1, true, planned)?;
             }
         }
         self.drain()
@@ -655,10 +729,22 @@ impl GpuEngine {
     fn ready_forces(&mut self) -> Result<(), EngineError> {
         self.drain()?;
         if self.scenes.iter().any(|s| !s.forces_ready) {
-            self.submit_batch(1, true)?;
+            self.submit_batch(1, true, Vec::new())?;
             self.drain()?;
         }
         Ok(())
+    }
+
+    /// The host has the sample of `step` (or it is not one to take).
+    fn mark_sampled(&mut self, step: u64) {
+        if let Some(rec) = self.recorder.as_mut() {
+            rec.recorded_through = Some(step);
+        }
+    }
+
+    /// Whether output samples are recorded on the device.
+    pub fn records_on_device(&self) -> bool {
+        self.recorder.is_some()
     }
 
     fn kernel_description(&self) -> String {
@@ -675,7 +761,7 @@ impl GpuEngine {
     }
 }
 
-fn whole(binding: u32, buffer: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {
+pub(crate) fn whole(binding: u32, buffer: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {
     wgpu::BindGroupEntry {
         binding,
         resource: buffer.as_entire_binding(),
@@ -708,6 +794,7 @@ impl Engine for GpuEngine {
         crate::engine::assert_driving_phase(&self.scenes[0].model, self.step, step);
         self.set_kinematics_of(0, disp, vel)?;
         self.step = step;
+        self.mark_sampled(step);
         Ok(())
     }
 
@@ -722,6 +809,7 @@ impl Engine for GpuEngine {
     fn load_state(&mut self, state: &EngineState) -> Result<(), EngineError> {
         self.load_state_of(0, state)?;
         self.step = state.step;
+        self.mark_sampled(state.step);
         Ok(())
     }
 
@@ -735,5 +823,45 @@ impl Engine for GpuEngine {
 
     fn dispatches(&self) -> Option<u64> {
         Some(self.dispatches)
+    }
+
+    fn record_samples(&mut self, plan: &SamplePlan) -> bool {
+        if self.output == GpuOutput::Host
+            || self.ensemble
+            || self.kernel == Kernel::Persistent
+            || self.drain().is_err()
+        {
+            return false;
+        }
+        if let Some(rec) = self.recorder.as_mut() {
+            rec.set_plan(&self.ctx.queue, plan);
+            return true;
+        }
+        let b = &self.buffers;
+        let state = recorder::StateBuffers {
+            consts: &b.consts,
+            disp: &b.disp,
+            vel: &b.vel,
+            force: &b.force,
+            flags: &b.flags,
+            contact: &b.contact,
+            junction_state: &b.junction_state,
+            slide: &b.slide,
+        };
+        let model = &self.scenes[0].model;
+        match recorder::Recorder::new(&self.ctx, model, state, plan, self.offset_stride) {
+            Ok(mut rec) => {
+                // The host has taken the samples up to here (none before
+                // driving, and none at its first step).
+                rec.recorded_through = Some(self.step.max(model.prep_steps));
+                self.recorder = Some(rec);
+                true
+            }
+            Err(_) => false,
+        }
+    }
+
+    fn take_samples(&mut self) -> Vec<Sample> {
+        std::mem::take(&mut self.samples)
     }
 }

@@ -32,9 +32,23 @@ pub enum GpuPath {
     Persistent,
 }
 
+/// Where the output samples of a run with an output file are made.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, clap::ValueEnum)]
+pub enum GpuOutput {
+    /// On the device (`shaders/record.wgsl`): only the channels due are
+    /// read back, asynchronously with the batches (one-step kernels; the
+    /// persistent kernel and ensembles take host snapshots).
+    #[default]
+    Device,
+    /// A whole-state snapshot read back at every output step (the
+    /// reference the device records are tested against).
+    Host,
+}
+
 #[derive(Debug, Clone, Copy)]
 pub struct GpuOptions {
     pub path: GpuPath,
+    pub output: GpuOutput,
     pub persistent_threads: u32,
     /// Steps per persistent dispatch instead of the adapter's safe default.
     pub steps_per_dispatch: Option<u64>,
@@ -44,6 +58,7 @@ impl Default for GpuOptions {
     fn default() -> Self {
         GpuOptions {
             path: GpuPath::Auto,
+            output: GpuOutput::Device,
             persistent_threads: PERSISTENT_THREADS,
             steps_per_dispatch: None,
         }

@@ -22,6 +22,33 @@ pub const STEP_FORCES: &str = include_str!("../../shaders/step_forces.wgsl");
 pub const ONE_STEP: &str = include_str!("../../shaders/one_step.wgsl");
 pub const ONE_STEP_LANES: &str = include_str!("../../shaders/one_step_lanes.wgsl");
 pub const PERSISTENT: &str = include_str!("../../shaders/persistent.wgsl");
+pub const RECORD: &str = include_str!("../../shaders/record.wgsl");
+
+/// The output kernels' module (`record_small`, `record_sample`,
+/// `record_finish`): one
+/// scene, no override constants.
+pub fn record_source() -> String {
+    [super::layout::wgsl_prelude().as_str(), SCENE_SINGLE, RECORD].join("\n")
+}
+
+/// Parses and validates the output kernels' module with naga.
+pub fn validate_record() -> Result<naga::Module, String> {
+    let src = record_source();
+    let module = naga::front::wgsl::parse_str(&src)
+        .map_err(|e| format!("record: {}", e.emit_to_string(&src)))?;
+    naga::valid::Validator::new(
+        naga::valid::ValidationFlags::all(),
+        naga::valid::Capabilities::empty(),
+    )
+    .validate(&module)
+    .map_err(|e| format!("record: {}", e.emit_to_string(&src)))?;
+    for name in ["record_small", "record_sample", "record_finish"] {
+        if !module.entry_points.iter().any(|e| e.name == name) {
+            return Err(format!("record: entry point {name} missing"));
+        }
+    }
+    Ok(module)
+}
 
 /// A compute kernel: its entry point (the CPU twin's name) and source.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -171,5 +198,6 @@ mod tests {
                 validate_kernel(kernel, ensemble).unwrap_or_else(|e| panic!("{e}"));
             }
         }
+        validate_record().unwrap_or_else(|e| panic!("{e}"));
     }
 }

@@ -12,7 +12,7 @@ pub mod scan;
 
 use prost::Message;
 
-use crate::engine::Snapshot;
+use crate::engine::{BulkField, InterfaceRow};
 use crate::model::Model;
 use crate::scenario::Scenario;
 use serde::Serialize;
@@ -315,40 +315,55 @@ impl McapSink {
         self.write(self.global, g.time, &msg.encode_to_vec())
     }
 
-    pub fn write_interface(&mut self, model: &Model, snap: &Snapshot) -> Result<(), OutputError> {
+    /// Writes an interface row; slip is u_x from the first row written.
+    pub fn write_interface(
+        &mut self,
+        model: &Model,
+        step: u64,
+        time: f64,
+        row: &InterfaceRow,
+    ) -> Result<(), OutputError> {
         let area = model.spacing * model.width;
-        let ux: Vec<f64> = (0..model.nx).map(|ix| snap.disp[ix][0]).collect();
-        let origin = self.slip_origin.get_or_insert_with(|| ux.clone());
-        let slip: Vec<f64> = ux.iter().zip(origin.iter()).map(|(u, o)| u - o).collect();
-        let shear: Vec<f64> = snap.friction.iter().map(|f| -f / area).collect();
-        let normal: Vec<f64> = snap.normal.iter().map(|p| p / area).collect();
-        let speed: Vec<f64> = (0..model.nx).map(|ix| snap.vel[ix][0]).collect();
+        let origin = self.slip_origin.get_or_insert_with(|| row.ux.clone());
+        let slip: Vec<f64> = row
+            .ux
+            .iter()
+            .zip(origin.iter())
+            .map(|(u, o)| u - o)
+            .collect();
+        let shear: Vec<f64> = row.friction.iter().map(|f| -f / area).collect();
+        let normal: Vec<f64> = row.normal.iter().map(|p| p / area).collect();
         let msg = messages::Interface {
-            time: snap.time,
-            step: snap.step,
+            time,
+            step,
             shear_stress: shear,
             normal_stress: normal,
-            pinned_fraction: snap.pinned_fraction(model.nx),
+            pinned_fraction: row.pinned_fraction.clone(),
             slip,
-            slip_speed: speed,
+            slip_speed: row.slip_speed.clone(),
         };
         let data = msg.encode_to_vec();
-        self.write(self.interface, snap.time, &data)
+        self.write(self.interface, time, &data)
     }
 
-    pub fn write_bulk(&mut self, model: &Model, snap: &Snapshot) -> Result<(), OutputError> {
-        let col = |f: &dyn Fn(usize) -> f64| (0..snap.disp.len()).map(|i| f(i) as f32).collect();
+    pub fn write_bulk(
+        &mut self,
+        model: &Model,
+        step: u64,
+        time: f64,
+        field: &BulkField,
+    ) -> Result<(), OutputError> {
         let msg = messages::Bulk {
-            time: snap.time,
-            step: snap.step,
+            time,
+            step,
             nx: model.nx as u32,
             nz: model.nz as u32,
-            ux: col(&|i| snap.disp[i][0]),
-            uz: col(&|i| snap.disp[i][1]),
-            vx: col(&|i| snap.vel[i][0]),
-            vz: col(&|i| snap.vel[i][1]),
+            ux: field.ux.clone(),
+            uz: field.uz.clone(),
+            vx: field.vx.clone(),
+            vz: field.vz.clone(),
         };
-        self.write(self.bulk, snap.time, &msg.encode_to_vec())
+        self.write(self.bulk, time, &msg.encode_to_vec())
     }
 
     pub fn write_fast_forward(

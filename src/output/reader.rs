@@ -12,7 +12,7 @@ use std::collections::{BTreeMap, HashMap};
 use std::path::Path;
 
 /// A run file, decoded.
-#[derive(Debug, Default)]
+#[derive(Debug, Default, Clone)]
 pub struct RunFile {
     pub metadata: BTreeMap<String, String>,
     pub scenario: Option<String>,

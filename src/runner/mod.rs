@@ -8,7 +8,7 @@ mod outputs;
 mod progress;
 
 pub use jump::{path_work, relaxation_drop};
-pub use outputs::{drive_force, global_sample};
+pub use outputs::{drive_force, global_of, global_sample};
 pub use progress::ProgressMode;
 
 use crate::checkpoint::RunnerState;
@@ -267,6 +267,10 @@ pub fn run_scene(
         .as_ref()
         .map(|p| Checkpointer::new(p.clone(), scenario, opts.history.clone()));
     let every_check = ff.as_ref().map_or(0, |f| f.check_steps(&model));
+    // The engine records the output samples on the device where it can
+    // (then chunks do not stop at output steps and nothing else is read
+    // back for them); otherwise each output step is a snapshot.
+    let on_device = outputs.sink.is_some() && engine.record_samples(&outputs.plan());
     let started = Instant::now();
     let mut interrupted = false;
     let start_step = engine.steps_done();
@@ -302,7 +306,11 @@ pub fn run_scene(
                 }
             }
             // Without an output file nothing is read back until the end.
-            let out_step = outputs.next_due(s);
+            let out_step = if on_device {
+                u64::MAX
+            } else {
+                outputs.next_due(s)
+            };
             let check_step = if s >= model.prep_steps && every_check > 0 {
                 next_multiple(s - model.prep_steps, every_check) + model.prep_steps
             } else {
@@ -310,7 +318,19 @@ pub fn run_scene(
             };
             target = target.min(out_step).min(check_step);
             let chunk_started = Instant::now();
-            advance_to(engine, target)?;
+            let advanced = advance_to(engine, target);
+            let samples = engine.take_samples();
+            if advanced.is_ok() && engine.steps_done() == model.prep_steps {
+                let snap = engine.snapshot()?;
+                if let Driver::SideSpring { row, .. } = model.driver {
+                    outputs.origin = snap.disp[row * model.nx][0];
+                }
+            }
+            // What was recorded before a blow-up is written all the same.
+            for sample in &samples {
+                outputs.emit_sample(sample)?;
+            }
+            advanced?;
             let s_before = s;
             let s = engine.steps_done();
             // The next chunk from this one's speed (whole chunks only: a
@@ -321,12 +341,6 @@ pub fn run_scene(
                 chunk = fit.clamp(1, MAX_CHUNK).min(chunk.saturating_mul(2));
             }
             progress.update(s, outputs.events());
-            if s == model.prep_steps {
-                let snap = engine.snapshot()?;
-                if let Driver::SideSpring { row, .. } = model.driver {
-                    outputs.origin = snap.disp[row * model.nx][0];
-                }
-            }
             if s != out_step && s != check_step {
                 continue;
             }
@@ -344,6 +358,10 @@ pub fn run_scene(
                         .map_err(|e| EngineError::Gpu(e.to_string()))?;
                     if let Some(mut jump) = planned {
                         perform_jump(engine, &mut outputs, ff, &snap, &mut jump)?;
+                        if on_device {
+                            // The path's samples may have switched the fast cadence.
+                            engine.record_samples(&outputs.plan());
+                        }
                         progress.update(engine.steps_done(), outputs.events());
                     }
                 }

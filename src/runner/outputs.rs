@@ -3,64 +3,64 @@
 
 use super::RunError;
 use crate::checkpoint::RunnerState;
-use crate::engine::Snapshot;
+use crate::engine::{record_sample, Sample, SamplePlan, Snapshot};
 use crate::model::{Driver, Model};
 use crate::output::{GlobalSample, McapSink};
 use crate::quasistatic::FastForwardStats;
 use crate::scenario::Scenario;
 use crate::step_params::{step_params, Consts};
 
-/// Tangential force (N) the scene's driver applies at the snapshot's
-/// instant: the side spring's tension; the programmed top force (ramp plus
-/// any trigger prestress); for a prescribed top-row velocity, the
-/// constraint reaction that gives the row its prescribed velocity over the
-/// next step; 0 without a driver. Friction is reported apart.
-pub fn drive_force(model: &Model, snap: &Snapshot, origin: f64) -> f64 {
-    let loads = || step_params(&Consts::<f64>::new(model), snap.step);
+/// Tangential force (N) the scene's driver applies at a sample's instant:
+/// the side spring's tension; the programmed top force (ramp plus any
+/// trigger prestress); for a prescribed top-row velocity, the constraint
+/// reaction that gives the row its prescribed velocity over the next step;
+/// 0 without a driver. Friction is reported apart.
+pub fn drive_force(model: &Model, sample: &Sample, origin: f64) -> f64 {
     match model.driver {
         Driver::SideSpring {
             stiffness,
-            row,
             velocity,
+            ..
         } => {
-            let u = snap.disp[row * model.nx][0];
-            stiffness * crate::laws::side_spring_stretch(velocity, snap.time, u, origin)
+            stiffness
+                * crate::laws::side_spring_stretch(
+                    velocity,
+                    sample.time,
+                    sample.sums.driven_ux,
+                    origin,
+                )
         }
-        Driver::TopForce { .. } => loads().top_tangential_total,
-        Driver::TopVelocity { .. } => {
-            let v_next = loads().top_velocity;
-            let top = (model.nz - 1) * model.nx;
-            (top..top + model.nx)
-                .map(|i| {
-                    let friction = snap.friction.get(i).copied().unwrap_or(0.0);
-                    model.mass * (v_next - snap.vel_half[i][0]) / model.dt
-                        - snap.force[i][0]
-                        - friction
-                })
-                .sum()
+        Driver::TopForce { .. } => {
+            step_params(&Consts::<f64>::new(model), sample.step).top_tangential_total
         }
+        Driver::TopVelocity { .. } => sample.sums.top_reaction,
         Driver::None => 0.0,
     }
 }
 
-/// The global series of one snapshot.
-pub fn global_sample(model: &Model, snap: &Snapshot, origin: f64) -> GlobalSample {
-    let force = drive_force(model, snap, origin);
-    let pinned = snap.pinned_fraction(model.nx);
+/// The global series of a sample.
+pub fn global_of(model: &Model, sample: &Sample, origin: f64) -> GlobalSample {
+    let force = drive_force(model, sample, origin);
+    let sums = &sample.sums;
     GlobalSample {
-        time: snap.time,
-        step: snap.step,
+        time: sample.time,
+        step: sample.step,
         drive_force: force,
         drive_ratio: if model.normal_force > 0.0 {
             force / model.normal_force
         } else {
             0.0
         },
-        friction_force: snap.total_friction(),
-        pinned_fraction: pinned.iter().sum::<f64>() / pinned.len().max(1) as f64,
-        kinetic_energy: snap.kinetic_energy(model.mass),
-        ruptures: snap.total_ruptures(),
+        friction_force: sums.friction,
+        pinned_fraction: sums.pinned_fraction,
+        kinetic_energy: sums.kinetic_energy,
+        ruptures: sums.ruptures,
     }
+}
+
+/// The global series of one snapshot.
+pub fn global_sample(model: &Model, snap: &Snapshot, origin: f64) -> GlobalSample {
+    global_of(model, &record_sample(model, snap, false, false), origin)
 }
 
 pub(super) fn interval_steps(model: &Model, interval: f64) -> u64 {
@@ -139,39 +139,54 @@ impl Outputs {
             .saturating_add(prep)
     }
 
+    /// The cadences as the engines' sample plan, with the fast cadence's
+    /// current state.
+    pub fn plan(&self) -> SamplePlan {
+        SamplePlan {
+            prep_steps: self.model.prep_steps,
+            every_global: self.every_global,
+            every_interface: self.every_interface,
+            every_bulk: self.every_bulk,
+            every_fast: self.every_fast,
+            fast_slip_speed: self.fast_slip_speed,
+            fast: self.fast,
+        }
+    }
+
     /// Writes the channels due at the snapshot's step.
     pub fn emit(&mut self, snap: &Snapshot) -> Result<(), RunError> {
+        let due = self.plan().due(snap.step);
+        let interface = due.interface || (self.fast && due.fast);
+        let sample = record_sample(&self.model, snap, interface, due.bulk);
+        self.emit_sample(&sample)
+    }
+
+    /// Writes a sample (its channels are those due at its step) and
+    /// updates the fast cadence, the event count and the summary from it.
+    pub fn emit_sample(&mut self, sample: &Sample) -> Result<(), RunError> {
         let model = &self.model;
-        let d = snap.step - model.prep_steps;
-        let g = global_sample(model, snap, self.origin);
+        let due = self.plan().due(sample.step);
+        let g = global_of(model, sample, self.origin);
         self.peak = self.peak.max(g.drive_ratio);
         self.last = g.drive_ratio;
         self.ruptures = g.ruptures;
-        let max_slip_speed = (0..model.nx)
-            .map(|ix| snap.vel[ix][0].abs())
-            .fold(0.0, f64::max);
-        self.fast = self.every_fast > 0 && max_slip_speed > self.fast_slip_speed;
-        let ruptured = snap
-            .pinned_fraction(model.nx)
-            .iter()
-            .any(|&p| p < crate::analysis::RUPTURED_BELOW);
-        if ruptured {
+        self.fast = self.every_fast > 0 && sample.sums.max_slip_speed > self.fast_slip_speed;
+        if sample.sums.min_pinned_fraction < crate::analysis::RUPTURED_BELOW {
             let gap = crate::analysis::DEFAULT_QUIET_GAP;
-            if self.last_slip.is_none_or(|t| snap.time - t >= gap) {
+            if self.last_slip.is_none_or(|t| sample.time - t >= gap) {
                 self.events += 1;
             }
-            self.last_slip = Some(snap.time);
+            self.last_slip = Some(sample.time);
         }
         if let Some(sink) = self.sink.as_mut() {
-            if self.every_global > 0 && d.is_multiple_of(self.every_global) {
+            if due.global {
                 sink.write_global(&g)?;
             }
-            let fast_due = self.fast && self.every_fast > 0 && d.is_multiple_of(self.every_fast);
-            if fast_due || (self.every_interface > 0 && d.is_multiple_of(self.every_interface)) {
-                sink.write_interface(model, snap)?;
+            if let Some(row) = &sample.interface {
+                sink.write_interface(model, sample.step, sample.time, row)?;
             }
-            if self.every_bulk > 0 && d.is_multiple_of(self.every_bulk) {
-                sink.write_bulk(model, snap)?;
+            if let Some(field) = &sample.bulk {
+                sink.write_bulk(model, sample.step, sample.time, field)?;
             }
         }
         Ok(())
