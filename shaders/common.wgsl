@@ -39,6 +39,9 @@ fn foundation_normal(uz: f32) -> f32 {
 }
 
 // The loads of step batch.first + i (CPU twin: step_params::step_params).
+// While driving, time and drive target are those of the batch's anchor
+// (a step that is a multiple of DRIVE_ANCHOR_STEPS into driving) plus
+// batch.anchor_offset + i steps.
 struct Loads {
     preparing: bool,
     normal_total: f32,
@@ -56,7 +59,9 @@ fn loads_at(i: u32) -> Loads {
         ramp = f32(batch.first_step + i) * c.inv_ramp_steps;
     }
     let preparing = batch.preparing != 0u;
-    let fi = f32(i);
+    // Steps from the batch's anchor (< 4096): the drive's time and target at
+    // a step do not depend on where batches begin.
+    let fi = f32(batch.anchor_offset + i);
     var ld: Loads;
     ld.preparing = preparing;
     ld.normal_total = c.normal_force * ramp;
@@ -73,7 +78,7 @@ fn loads_at(i: u32) -> Loads {
         ld.absolute_eta = c.absolute_eta;
         ld.interface_shear_total = c.interface_shear_force;
         ld.strip_shear_total = c.strip_shear_force;
-        // i·hi is exact (hi has 12 significant bits, i < 4096).
+        // fi·hi is exact (hi has 12 significant bits, fi < 4096).
         ld.drive_target = ds_add(ds_add(ld.drive_target, fi * c.drive_step_hi), fi * c.drive_step_lo);
     }
     return ld;

@@ -220,11 +220,12 @@ fn run_file(s: &Scenario, output: GpuOutput, name: &str) -> RunFile {
 /// from host snapshots: every channel has the same records at the same
 /// steps (the fast cadence included) and the same values to f32 round-off,
 /// for the side-spring drive (its drive force from the driven block) and a
-/// triggered front (bulk fields, fast cadence). The side-driven runs differ
-/// by a little more than round-off (1.6e-6 of the shear stress): host
-/// snapshots end batches at every sample, and a batch's drive target is
-/// formed in f64 at its first step, so its low bits follow the batch
-/// boundaries; junction ruptures amplify that.
+/// triggered front (bulk fields, fast cadence). The state is the same bits
+/// (host snapshots end a batch at every sample, device records do not, and
+/// batches are anchored so that this changes nothing): every field read
+/// from the state is exact, and only what the device sums in f32 (friction
+/// total, kinetic energy, pinned fraction) or computes in f32 (the
+/// velocity at the instant) differs, by round-off.
 #[test]
 fn run_files_from_device_records_equal_those_from_host_snapshots() {
     let side = slipfront::verify::small_scene(&[
@@ -245,9 +246,22 @@ fn run_files_from_device_records_equal_those_from_host_snapshots() {
         );
         assert!(host.global.len() > 10 && host.interface.len() > 10 && !host.bulk.is_empty());
         let errors = compare_run_files(&host, &dev).unwrap_or_else(|e| panic!("{name}: {e}"));
+        let exact = [
+            "global.drive_force",
+            "global.ruptures",
+            "interface.shear_stress",
+            "interface.normal_stress",
+            "interface.slip",
+            "bulk.ux",
+            "bulk.uz",
+        ];
         for e in &errors {
             println!("  {:26} {:.2e} of {:.2e}", e.field, e.max_error, e.scale);
-            assert!(e.relative() < 1e-5, "{name}: {e:?}");
+            if exact.contains(&e.field) {
+                assert_eq!(e.max_error, 0.0, "{name}: {e:?}");
+            } else {
+                assert!(e.relative() < 1e-6, "{name}: {e:?}");
+            }
         }
         if name == "side" {
             assert!(host.global.iter().any(|g| g.drive_force != 0.0));

@@ -6,6 +6,12 @@ use slipfront::scenario::{Scenario, DEFAULT_SCENARIO};
 use slipfront::Model;
 
 pub fn scene(nx: u32, nz: u32) -> Model {
+    Model::from_scenario(&scenario(nx, nz, &[]), false).expect("bench model")
+}
+
+/// The scenario of `scene`, with `extra` overrides after its own.
+#[allow(dead_code)] // not every bench runs scenarios
+pub fn scenario(nx: u32, nz: u32, extra: &[&str]) -> Scenario {
     let l = 0.14 / 56.0;
     let set = vec![
         format!("geometry.nx={nx}"),
@@ -17,6 +23,9 @@ pub fn scene(nx: u32, nz: u32) -> Model {
         "loading.normal.relax_time=2e-5".into(),
         "loading.drive.velocity=1.0".into(),
     ];
-    let s = Scenario::parse(DEFAULT_SCENARIO, "bench", &set).expect("bench scene");
-    Model::from_scenario(&s, false).expect("bench model")
+    let set: Vec<String> = set
+        .into_iter()
+        .chain(extra.iter().map(|s| s.to_string()))
+        .collect();
+    Scenario::parse(DEFAULT_SCENARIO, "bench", &set).expect("bench scene")
 }

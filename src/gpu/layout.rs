@@ -139,6 +139,25 @@ gpu_struct! {
         pub steps_per_dispatch: u32,
         /// The state copy (0 or 1) the one-step kernel reads at the first step.
         pub parity: u32,
+        /// Steps from the batch's anchor to its first step: `drive_time`
+        /// and the drive target are the anchor's (0 while preparing).
+        pub anchor_offset: u32,
+    }
+}
+
+/// While driving, batches are anchored at every this many steps of
+/// driving and never cross an anchor: a step's drive time and target are
+/// then the same whatever batch it falls in, so where a run is cut into
+/// batches (output samples, snapshots, chunks sized by wall time) changes
+/// no bit. At most 4096: the kernels' `fi · hi` must stay exact.
+pub const DRIVE_ANCHOR_STEPS: u64 = 4096;
+
+/// The anchor of `step` (the step itself while preparing).
+pub fn drive_anchor(c: &Consts<f32>, step: u64) -> u64 {
+    if step < c.prep_steps {
+        step
+    } else {
+        c.prep_steps + (step - c.prep_steps) / DRIVE_ANCHOR_STEPS * DRIVE_ANCHOR_STEPS
     }
 }
 
@@ -380,7 +399,9 @@ impl GpuBatch {
     /// drive target origin + V·t formed in f64 and split into a pair.
     pub fn new(c: &Consts<f32>, first: u64, steps: u32, drive_origin: DoubleSingle) -> Self {
         let p = crate::step_params::step_params(c, first);
-        let target = DoubleSingle::from_f64(drive_origin.as_f64() + p.drive_offset);
+        let anchor = drive_anchor(c, first);
+        let at_anchor = crate::step_params::step_params(c, anchor);
+        let target = DoubleSingle::from_f64(drive_origin.as_f64() + at_anchor.drive_offset);
         GpuBatch {
             first_step: first as u32,
             steps,
@@ -390,7 +411,7 @@ impl GpuBatch {
             drive_time: if p.preparing {
                 0.0
             } else {
-                ((first - c.prep_steps) as f64 * c.dt_exact) as f32
+                ((anchor - c.prep_steps) as f64 * c.dt_exact) as f32
             },
             drive_target_hi: target.hi,
             drive_target_lo: target.lo,
@@ -398,6 +419,7 @@ impl GpuBatch {
             forces_only: 0,
             steps_per_dispatch: steps,
             parity: 0,
+            anchor_offset: (first - anchor) as u32,
         }
     }
 }
@@ -446,14 +468,16 @@ mod tests {
         let origin = DoubleSingle::from_f64(1.234_567e-5);
         for first in [m.prep_steps + 100_000_000, m.prep_steps + (1 << 32) + 7] {
             let b = GpuBatch::new(&c, first, 4096, origin);
-            for i in [0u32, 1, 4095] {
+            let last = (DRIVE_ANCHOR_STEPS - 1) as u32 - b.anchor_offset;
+            for i in [0u32, 1, last] {
                 // The kernel's arithmetic (shaders/common.wgsl loads_at).
+                let fi = (b.anchor_offset + i) as f32;
                 let target = DoubleSingle {
                     hi: b.drive_target_hi,
                     lo: b.drive_target_lo,
                 }
-                .ds_add(i as f32 * gc.drive_step_hi)
-                .ds_add(i as f32 * gc.drive_step_lo);
+                .ds_add(fi * gc.drive_step_hi)
+                .ds_add(fi * gc.drive_step_lo);
                 let t = m.time_of_step(first + i as u64);
                 let exact = origin.as_f64() + 4.0e-4 * t;
                 let got = target.as_f64();

@@ -690,8 +690,14 @@ impl GpuEngine {
         };
         let mut left = n;
         while left > 0 {
-            // A batch's loads are of one kind throughout.
+            // A batch's loads are of one kind throughout, and while driving
+            // it does not cross an anchor of the drive (layout::drive_anchor).
             let mut k = left.min(max_batch);
+            if self.step >= prep {
+                let consts = &self.scenes[0].consts;
+                let next = layout::drive_anchor(consts, self.step) + layout::DRIVE_ANCHOR_STEPS;
+                k = k.min(next - self.step);
+            }
             for boundary in [ramp, prep] {
                 if self.step < boundary {
                     k = k.min(boundary - self.step);

@@ -13,7 +13,7 @@ pub mod table;
 
 pub use plan::{Point, Sweep, SweepFile};
 
-use crate::backend::{make_engine, Backend, Precision};
+use crate::backend::{make_engine, make_engine_with, Backend, Precision};
 use crate::checkpoint::RunnerState;
 use crate::engine::{Engine, EngineError, EngineState};
 use crate::gpu::lockstep::LockstepScene;
@@ -223,7 +223,14 @@ fn run_point(
             .map_err(|e| RunError::Engine(EngineError::State(e.to_string())))?;
         let (mut engine, loaded): (Box<dyn Engine>, bool) = match source {
             EngineSource::Own(loaded) => {
-                let mut engine = make_engine(&model, opts.backend, opts.precision, 1)?;
+                // A GPU point alone makes its samples as an ensemble's
+                // scenes do (host snapshots), so the table does not depend
+                // on --ensemble.
+                let gpu = crate::gpu::GpuOptions {
+                    output: crate::gpu::GpuOutput::Host,
+                    ..Default::default()
+                };
+                let mut engine = make_engine_with(&model, opts.backend, opts.precision, 1, gpu)?;
                 if let Some(l) = loaded {
                     let state = l
                         .state(opts)
