@@ -146,10 +146,12 @@ fn block_sample(i: u32) -> SampleSums {
     return s;
 }
 
-// Threads of the one-workgroup entry points.
-const RECORD_THREADS: u32 = 256u;
+// Threads of the one-workgroup entry points: a power of two, at most 256
+// (software adapters run a workgroup on one core, where fewer threads,
+// with fewer barrier switches, are faster).
+override RECORD_THREADS: u32 = 256u;
 
-var<workgroup> wg_sums: array<SampleSums, RECORD_THREADS>;
+var<workgroup> wg_sums: array<SampleSums, 256>;
 var<workgroup> wg_go: u32;
 
 // Reduces wg_sums[0..width] to wg_sums[0] (a fixed tree: the same bits

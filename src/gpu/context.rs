@@ -219,7 +219,14 @@ impl GpuContext {
     /// The output kernels' pipelines (`shaders/record.wgsl`).
     pub fn record_pipelines(&self) -> Arc<super::recorder::RecordPipelines> {
         self.record
-            .get_or_init(|| Arc::new(super::recorder::RecordPipelines::new(&self.device)))
+            .get_or_init(|| {
+                // lavapipe runs a workgroup on one core and a barrier as a
+                // switch of every invocation: 8 threads (one SIMD row)
+                // record a Table S1 sample faster there than 256
+                // (benches/gpu_output.rs, BENCHMARKS.md).
+                let threads = if self.is_software() { 8 } else { 256 };
+                Arc::new(super::recorder::RecordPipelines::new(&self.device, threads))
+            })
             .clone()
     }
 

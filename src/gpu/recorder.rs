@@ -32,7 +32,9 @@ pub struct RecordPipelines {
 }
 
 impl RecordPipelines {
-    pub fn new(device: &wgpu::Device) -> RecordPipelines {
+    /// `threads`: the workgroup of the one-workgroup kernels (a power of
+    /// two up to 256).
+    pub fn new(device: &wgpu::Device, threads: u32) -> RecordPipelines {
         let entry =
             |binding: u32, ty: wgpu::BufferBindingType, dynamic: bool| wgpu::BindGroupLayoutEntry {
                 binding,
@@ -74,7 +76,10 @@ impl RecordPipelines {
                 layout: Some(&layout),
                 module: &module,
                 entry_point: Some(name),
-                compilation_options: Default::default(),
+                compilation_options: wgpu::PipelineCompilationOptions {
+                    constants: &[("RECORD_THREADS", threads as f64)],
+                    ..Default::default()
+                },
                 cache: None,
             })
         };
