@@ -6,10 +6,20 @@
 // is the one that adds its lane sums, so no third barrier is needed.
 // Same phase functions, in the same order, as the one-step kernel.
 
+// With an output file, the samples of the batch (batch.records of them,
+// in step order; src/gpu/recorder.rs): a sample of step s is recorded in
+// step s's update phase, from the state before the update
+// (record_common.wgsl), then reduced across the workgroup.
+// PERSISTENT_THREADS is then a power of two of at most 256.
+@group(0) @binding(16) var<storage, read> record_entries: array<RecordEntry>;
+
 override PERSISTENT_THREADS: u32 = 256u;
 
 var<workgroup> stop: u32;
-var<workgroup> span: vec2<u32>;
+// First and end step of this dispatch, samples in the batch, the first
+// sample at or after the first step.
+var<workgroup> span: vec4<u32>;
+var<workgroup> wg_sample: u32;
 
 @compute @workgroup_size(PERSISTENT_THREADS)
 fn persistent_steps(
@@ -21,10 +31,20 @@ fn persistent_steps(
     // The steps of this dispatch, made uniform for the barriers of the loop.
     if t == 0u {
         let begin = step_offset * batch.steps_per_dispatch;
-        span = vec2<u32>(begin, min(begin + batch.steps_per_dispatch, batch.steps));
+        var first_sample = 0u;
+        while first_sample < batch.records && record_entries[first_sample].offset < begin {
+            first_sample++;
+        }
+        span = vec4<u32>(
+            begin,
+            min(begin + batch.steps_per_dispatch, batch.steps),
+            batch.records,
+            first_sample,
+        );
         stop = atomicLoad(&status[status_base()]);
     }
     let steps = workgroupUniformLoad(&span);
+    var next_sample = steps.w;
     var ran = 0u;
     if workgroupUniformLoad(&stop) != 0u {
         return;
@@ -48,6 +68,28 @@ fn persistent_steps(
             }
         }
         storageBarrier();
+        // Is step s a sample (1), and is it due (2)?
+        var sampling = false;
+        var e: RecordEntry;
+        var acc = no_sums();
+        if steps.z > 0u {
+            if t == 0u {
+                var state = 0u;
+                if next_sample < steps.z && record_entries[next_sample].offset == s {
+                    state = 1u + select(0u, 1u, sample_due(record_entries[next_sample]));
+                }
+                wg_sample = state;
+            }
+            let state = workgroupUniformLoad(&wg_sample);
+            if state != 0u {
+                e = record_entries[next_sample];
+                next_sample++;
+                sampling = state == 2u;
+                if !sampling && t == 0u {
+                    sums[e.sums_slot].recorded = 0u;
+                }
+            }
+        }
         for (var i = t; i < c.n_blocks; i += PERSISTENT_THREADS) {
             var friction = 0.0;
             if FRICTION_LAW != LAW_NONE && i < c.nx {
@@ -60,8 +102,23 @@ fn persistent_steps(
                     friction = contact[interface_base() + i].x;
                 }
             }
+            if sampling {
+                var normal = 0.0;
+                if i < c.nx {
+                    normal = contact[interface_base() + i].y;
+                }
+                let f = force[block_base() + i];
+                acc = combine(acc, block_sample(i, e, load_disp(i), load_vel(i), f, friction, normal));
+            }
             if batch.forces_only == 0u {
                 verlet(i, force[block_base() + i], friction, ld, s);
+            }
+        }
+        if sampling {
+            wg_sums[t] = acc;
+            reduce_workgroup(t, PERSISTENT_THREADS);
+            if t == 0u {
+                finish_sample(e);
             }
         }
         ran = ran + 1u;

@@ -125,8 +125,9 @@ fn worst_error(a: &[Sample], b: &[Sample]) -> (f64, String) {
 
 /// Every sample the device recorded equals the CPU twin applied to a host
 /// snapshot of a second GPU run at the same step (same bits of state: the
-/// record kernels only read), to f32 summation round-off, on both one-step
-/// kernels; the fast cadence was decided on the device the host's way.
+/// record kernels only read), to f32 summation round-off, on every kernel
+/// (the persistent one records inside its loop); the fast cadence was
+/// decided on the device the host's way.
 /// Negative control: the twin one step later (the state a record reading
 /// the wrong copy would see) is flagged.
 #[test]
@@ -134,7 +135,7 @@ fn device_samples_match_the_cpu_twin_on_host_snapshots() {
     let s = triggered(&["time.end=6e-4"]);
     let m = Model::from_scenario(&s, false).unwrap();
     let plan = plan(&m, &s);
-    for path in [GpuPath::OneStep, GpuPath::OneStepLanes] {
+    for path in [GpuPath::OneStep, GpuPath::OneStepLanes, GpuPath::Persistent] {
         let mut dev = engine(&m, path, GpuOutput::Device);
         assert!(dev.record_samples(&plan), "{path:?} records on the device");
         // Chunks that end on and off sample steps.
@@ -202,9 +203,9 @@ fn temp(name: &str) -> PathBuf {
     dir.join(name)
 }
 
-fn run_file(s: &Scenario, output: GpuOutput, name: &str) -> RunFile {
+fn run_file(s: &Scenario, path: GpuPath, output: GpuOutput, name: &str) -> RunFile {
     let m = Model::from_scenario(s, false).unwrap();
-    let mut e = engine(&m, GpuPath::Auto, output);
+    let mut e = engine(&m, path, output);
     let path = temp(name);
     let opts = RunOptions {
         output: Some(path.clone()),
@@ -219,8 +220,9 @@ fn run_file(s: &Scenario, output: GpuOutput, name: &str) -> RunFile {
 /// A whole run written from device records equals the same run written
 /// from host snapshots: every channel has the same records at the same
 /// steps (the fast cadence included) and the same values to f32 round-off,
-/// for the side-spring drive (its drive force from the driven block) and a
-/// triggered front (bulk fields, fast cadence). The state is the same bits
+/// for the side-spring drive on the one-step kernel (its drive force from
+/// the driven block) and a triggered front on the persistent kernel (bulk
+/// fields, fast cadence). The state is the same bits
 /// (host snapshots end a batch at every sample, device records do not, and
 /// batches are anchored so that this changes nothing): every field read
 /// from the state is exact, and only what the device sums in f32 (friction
@@ -235,9 +237,13 @@ fn run_files_from_device_records_equal_those_from_host_snapshots() {
     ])
     .unwrap();
     let front = triggered(&["time.end=4e-4"]);
-    for (name, s) in [("side", side), ("front", front)] {
-        let host = run_file(&s, GpuOutput::Host, &format!("{name}-host.mcap"));
-        let dev = run_file(&s, GpuOutput::Device, &format!("{name}-device.mcap"));
+    let runs = [
+        ("side", side, GpuPath::OneStep),
+        ("front", front, GpuPath::Persistent),
+    ];
+    for (name, s, path) in runs {
+        let host = run_file(&s, path, GpuOutput::Host, &format!("{name}-host.mcap"));
+        let dev = run_file(&s, path, GpuOutput::Device, &format!("{name}-device.mcap"));
         println!(
             "{name}: {} global, {} interface, {} bulk records",
             host.global.len(),
@@ -260,7 +266,8 @@ fn run_files_from_device_records_equal_those_from_host_snapshots() {
             if exact.contains(&e.field) {
                 assert_eq!(e.max_error, 0.0, "{name}: {e:?}");
             } else {
-                assert!(e.relative() < 1e-6, "{name}: {e:?}");
+                // f32 sums over ~500 blocks: √n·2⁻²⁴ ≈ 1e-6 typically.
+                assert!(e.relative() < 1e-5, "{name}: {e:?}");
             }
         }
         if name == "side" {
@@ -277,14 +284,14 @@ fn run_files_from_device_records_equal_those_from_host_snapshots() {
 fn the_run_file_comparison_flags_a_missing_record_and_another_run() {
     let s =
         slipfront::verify::small_scene(&["time.end=2e-4", "loading.drive.velocity=0.4"]).unwrap();
-    let a = run_file(&s, GpuOutput::Device, "control-a.mcap");
+    let a = run_file(&s, GpuPath::Auto, GpuOutput::Device, "control-a.mcap");
     let mut short = a.clone();
     short.interface.pop();
     assert!(compare_run_files(&a, &short).is_err());
     let faster =
         slipfront::verify::small_scene(&["time.end=2e-4", "loading.drive.velocity=0.4004"])
             .unwrap();
-    let b = run_file(&faster, GpuOutput::Device, "control-b.mcap");
+    let b = run_file(&faster, GpuPath::Auto, GpuOutput::Device, "control-b.mcap");
     let errors = compare_run_files(&a, &b).unwrap();
     assert!(errors.iter().any(|e| e.relative() > 1e-4), "{errors:?}");
 }
@@ -333,11 +340,19 @@ fn a_blow_up_while_recording_keeps_the_samples_before_it() {
     assert!(run.global.iter().all(|g| g.kinetic_energy.is_finite()));
 }
 
-/// The persistent kernel and ensembles keep host snapshots.
+/// A persistent kernel whose workgroup cannot be reduced as a tree (not a
+/// power of two) keeps host snapshots.
 #[test]
-fn the_persistent_kernel_takes_host_snapshots() {
+fn a_persistent_kernel_of_96_threads_takes_host_snapshots() {
     let s = triggered(&["time.end=1e-4"]);
     let m = Model::from_scenario(&s, false).unwrap();
-    let mut e = engine(&m, GpuPath::Persistent, GpuOutput::Device);
+    let opts = GpuOptions {
+        path: GpuPath::Persistent,
+        persistent_threads: 96,
+        ..GpuOptions::default()
+    };
+    let mut e = GpuEngine::with_options(&m, opts).unwrap();
     assert!(!e.record_samples(&plan(&m, &s)));
+    let mut e = engine(&m, GpuPath::Persistent, GpuOutput::Device);
+    assert!(e.record_samples(&plan(&m, &s)));
 }

@@ -43,9 +43,9 @@ pub fn shared() -> Result<GpuContext, EngineError> {
         .map_err(EngineError::Gpu)
 }
 
-/// Storage bindings the one-step kernel uses (the most of the two); an
-/// ensemble's constants take one more.
-const STORAGE_BINDINGS: u32 = 13;
+/// Storage bindings the persistent kernel uses (the most of them: its
+/// record buffers); an ensemble's constants take one more.
+const STORAGE_BINDINGS: u32 = 16;
 pub const ENSEMBLE_STORAGE_BINDINGS: u32 = STORAGE_BINDINGS + 1;
 
 /// Group 0's layout of one kernel family and the pipeline layout using it.
@@ -145,10 +145,15 @@ impl GpuContext {
             let mut v = vec![entry(0, consts, false)];
             v.extend((5..=11).map(|b| entry(b, if b == 6 { read } else { write }, false)));
             let state: &[u32] = match kernel {
-                Kernel::Persistent => &[1, 2, 12],
+                // 13–16: the record buffers (shaders/record_buffers.wgsl)
+                // and the batch's samples.
+                Kernel::Persistent => &[1, 2, 12, 13, 14, 15],
                 Kernel::OneStep | Kernel::OneStepLanes => &[1, 2, 3, 4],
             };
             v.extend(state.iter().map(|&b| entry(b, write, false)));
+            if kernel == Kernel::Persistent {
+                v.push(entry(16, read, false));
+            }
             let group = layout(kernel.entry_point(), &v);
             let pipeline = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
                 label: Some("slipfront"),

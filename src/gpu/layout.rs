@@ -142,6 +142,8 @@ gpu_struct! {
         /// Steps from the batch's anchor to its first step: `drive_time`
         /// and the drive target are the anchor's (0 while preparing).
         pub anchor_offset: u32,
+        /// Output samples the persistent kernel records in this batch.
+        pub records: u32,
     }
 }
 
@@ -226,6 +228,8 @@ gpu_struct! {
     /// One sample the host asks for in a batch: the state copy holding
     /// u(s) and v(s−½), the channels (`RECORD_*` bits) and its slots.
     pub struct GpuRecordEntry as "RecordEntry" {
+        /// The sample's step offset in its batch.
+        pub offset: u32,
         pub copy: u32,
         pub channels: u32,
         pub sums_slot: u32,
@@ -420,6 +424,7 @@ impl GpuBatch {
             steps_per_dispatch: steps,
             parity: 0,
             anchor_offset: (first - anchor) as u32,
+            records: 0,
         }
     }
 }

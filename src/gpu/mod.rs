@@ -60,6 +60,46 @@ struct Buffers {
     slide: wgpu::Buffer,
     status: wgpu::Buffer,
     lane_partial: wgpu::Buffer,
+    /// What the persistent kernel binds for the record buffers until it
+    /// records output samples (never read then).
+    record_placeholders: [wgpu::Buffer; 4],
+}
+
+/// Group 0 of `kernel`: the state buffers, and for the persistent kernel the
+/// record buffers (plan, sums, rows, entries) at 13–16.
+fn state_group(
+    ctx: &GpuContext,
+    kernel: Kernel,
+    ensemble: bool,
+    b: &Buffers,
+    records: [&wgpu::Buffer; 4],
+) -> wgpu::BindGroup {
+    let mut entries = vec![
+        whole(0, &b.consts),
+        whole(5, &b.force),
+        whole(6, &b.flags),
+        whole(7, &b.contact),
+        whole(8, &b.junction_spring),
+        whole(9, &b.junction_state),
+        whole(10, &b.slide),
+        whole(11, &b.status),
+        whole(1, &b.disp[0]),
+        whole(2, &b.vel[0]),
+    ];
+    match kernel {
+        Kernel::OneStep | Kernel::OneStepLanes => {
+            entries.extend([whole(3, &b.disp[1]), whole(4, &b.vel[1])])
+        }
+        Kernel::Persistent => {
+            entries.push(whole(12, &b.lane_partial));
+            entries.extend((13..).zip(records).map(|(k, buffer)| whole(k, buffer)));
+        }
+    }
+    ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some(kernel.entry_point()),
+        layout: ctx.state_layout(kernel, ensemble),
+        entries: &entries,
+    })
 }
 
 /// Elements of one scene in each buffer; scene s's slice starts at s times
@@ -312,6 +352,7 @@ impl GpuEngine {
                 "lane partial sums",
                 bytemuck::cast_slice(&vec![0f32; s * shape.nx * shape.lanes]),
             ),
+            record_placeholders: std::array::from_fn(|_| storage("no records", &[0u8; 64])),
         };
         // The step offsets 0..ONE_STEP_BATCH, one per dynamic-offset stride.
         let offset_stride = (ctx.limits.min_storage_buffer_offset_alignment as u64).max(4);
@@ -331,30 +372,8 @@ impl GpuEngine {
             usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        let b = &buffers;
-        let mut entries = vec![
-            whole(0, &b.consts),
-            whole(5, &b.force),
-            whole(6, &b.flags),
-            whole(7, &b.contact),
-            whole(8, &b.junction_spring),
-            whole(9, &b.junction_state),
-            whole(10, &b.slide),
-            whole(11, &b.status),
-            whole(1, &b.disp[0]),
-            whole(2, &b.vel[0]),
-        ];
-        match kernel {
-            Kernel::OneStep | Kernel::OneStepLanes => {
-                entries.extend([whole(3, &b.disp[1]), whole(4, &b.vel[1])])
-            }
-            Kernel::Persistent => entries.push(whole(12, &b.lane_partial)),
-        }
-        let state_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some(kernel.entry_point()),
-            layout: ctx.state_layout(kernel, ensemble),
-            entries: &entries,
-        });
+        let placeholders = buffers.record_placeholders.each_ref();
+        let state_group = state_group(&ctx, kernel, ensemble, &buffers, placeholders);
         let batch_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("batch"),
             layout: &ctx.batch_layout,
@@ -469,6 +488,9 @@ impl GpuEngine {
                 batch.forces_only = forces_only as u32;
                 batch.steps_per_dispatch = self.steps_per_dispatch as u32;
                 batch.parity = self.current as u32;
+                if self.kernel == Kernel::Persistent {
+                    batch.records = planned.len() as u32;
+                }
                 batch
             })
             .collect();
@@ -832,9 +854,13 @@ impl Engine for GpuEngine {
     }
 
     fn record_samples(&mut self, plan: &SamplePlan) -> bool {
+        let persistent = self.kernel == Kernel::Persistent;
+        // The persistent kernel reduces a sample across its workgroup: a
+        // power of two of at most 256 threads (shaders/record_common.wgsl).
+        let reducible = self.persistent_threads.is_power_of_two() && self.persistent_threads <= 256;
         if self.output == GpuOutput::Host
             || self.ensemble
-            || self.kernel == Kernel::Persistent
+            || (persistent && !reducible)
             || self.drain().is_err()
         {
             return false;
@@ -855,11 +881,17 @@ impl Engine for GpuEngine {
             slide: &b.slide,
         };
         let model = &self.scenes[0].model;
-        match recorder::Recorder::new(&self.ctx, model, state, plan, self.offset_stride) {
+        let stride = (!persistent).then_some(self.offset_stride);
+        match recorder::Recorder::new(&self.ctx, model, state, plan, stride) {
             Ok(mut rec) => {
                 // The host has taken the samples up to here (none before
                 // driving, and none at its first step).
                 rec.recorded_through = Some(self.step.max(model.prep_steps));
+                if persistent {
+                    let records = rec.persistent_bindings();
+                    self.state_group =
+                        state_group(&self.ctx, self.kernel, false, &self.buffers, records);
+                }
                 self.recorder = Some(rec);
                 true
             }

@@ -134,6 +134,8 @@ pub struct Recorder {
     entries: wgpu::Buffer,
     group: wgpu::BindGroup,
     entry_group: wgpu::BindGroup,
+    /// Bytes between entries: the dynamic-offset alignment for the output
+    /// kernels, the entry's size for the persistent kernel (an array).
     stride: u64,
     /// Workgroups of `record_sample` (x, y); None: one `record_small`.
     groups: Option<(u32, u32)>,
@@ -154,13 +156,16 @@ fn words(bytes: u64) -> u64 {
 impl Recorder {
     /// The recorder of a one-scene engine, or why the device cannot hold
     /// the records of one batch.
+    /// `stride`: the dynamic-offset alignment (one-step kernels), or None
+    /// for the persistent kernel, which reads the entries as an array.
     pub fn new(
         ctx: &GpuContext,
         model: &Model,
         state: StateBuffers,
         plan: &SamplePlan,
-        stride: u64,
+        stride: Option<u64>,
     ) -> Result<Recorder, String> {
+        let stride = stride.unwrap_or(size_of::<GpuRecordEntry>() as u64);
         let device = &ctx.device;
         let (n, nx) = (model.n_blocks() as u64, model.nx as u64);
         let interface_bytes = nx * RECORD_INTERFACE_WORDS as u64 * 4;
@@ -218,11 +223,12 @@ impl Recorder {
         };
         let sums = storage("record sums", sums_bytes, wgpu::BufferUsages::COPY_SRC);
         let rows = storage("record rows", rows_bytes, wgpu::BufferUsages::COPY_SRC);
-        let entries = storage(
-            "record entries",
-            max_entries as u64 * stride,
-            wgpu::BufferUsages::COPY_DST,
-        );
+        let entries = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("record entries"),
+            size: max_entries as u64 * stride.max(size_of::<GpuRecordEntry>() as u64),
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
         let pipelines = ctx.record_pipelines();
         use super::whole;
         let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
@@ -278,6 +284,12 @@ impl Recorder {
         })
     }
 
+    /// The buffers the persistent kernel binds at 13 (plan), 14 (sums),
+    /// 15 (rows) and 16 (entries).
+    pub fn persistent_bindings(&self) -> [&wgpu::Buffer; 4] {
+        [&self.plan_buffer, &self.sums, &self.rows, &self.entries]
+    }
+
     /// Takes a new plan (the fast cadence's state above all); only between
     /// batches (the engine has drained).
     pub fn set_plan(&mut self, queue: &wgpu::Queue, plan: &SamplePlan) {
@@ -322,6 +334,7 @@ impl Recorder {
                 offset,
                 step,
                 entry: GpuRecordEntry {
+                    offset: offset as u32,
                     copy: ((parity as u64 + offset) & 1) as u32,
                     channels,
                     sums_slot: planned.len() as u32,

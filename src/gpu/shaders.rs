@@ -23,12 +23,21 @@ pub const ONE_STEP: &str = include_str!("../../shaders/one_step.wgsl");
 pub const ONE_STEP_LANES: &str = include_str!("../../shaders/one_step_lanes.wgsl");
 pub const PERSISTENT: &str = include_str!("../../shaders/persistent.wgsl");
 pub const RECORD: &str = include_str!("../../shaders/record.wgsl");
+pub const RECORD_BUFFERS: &str = include_str!("../../shaders/record_buffers.wgsl");
+pub const RECORD_COMMON: &str = include_str!("../../shaders/record_common.wgsl");
 
 /// The output kernels' module (`record_small`, `record_sample`,
 /// `record_finish`): one
 /// scene, no override constants.
 pub fn record_source() -> String {
-    [super::layout::wgsl_prelude().as_str(), SCENE_SINGLE, RECORD].join("\n")
+    [
+        super::layout::wgsl_prelude().as_str(),
+        SCENE_SINGLE,
+        RECORD_BUFFERS,
+        RECORD_COMMON,
+        RECORD,
+    ]
+    .join("\n")
 }
 
 /// Parses and validates the output kernels' module with naga.
@@ -82,10 +91,11 @@ impl Kernel {
             Kernel::OneStepLanes => (STATE_ONE_STEP, ONE_STEP_LANES),
             Kernel::Persistent => (STATE_PERSISTENT, PERSISTENT),
         };
-        let step_forces = if self == Kernel::Persistent {
-            ""
+        // The persistent kernel records output samples in its loop.
+        let (step_forces, record_buffers, record_common) = if self == Kernel::Persistent {
+            ("", RECORD_BUFFERS, RECORD_COMMON)
         } else {
-            STEP_FORCES
+            (STEP_FORCES, "", "")
         };
         let prelude = super::layout::wgsl_prelude();
         [
@@ -104,6 +114,8 @@ impl Kernel {
             COULOMB,
             VERLET,
             step_forces,
+            record_buffers,
+            record_common,
             entry,
         ]
         .join("\n")

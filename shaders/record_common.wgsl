@@ -1,0 +1,141 @@
+// Output samples written on the device: what a block contributes to a
+// sample, the sums and their reduction, and the fast cadence's rule. Shared
+// by the output kernels of the one-step kernels (record.wgsl) and by the
+// persistent kernel, which records in its loop. The including module
+// declares c, flags, junction_state, slide and the record buffers
+// (record_buffers.wgsl). CPU twin: src/engine/sample.rs record_sample.
+
+// The fixed cadences make the sample due, or the fast one does and is on.
+fn sample_due(e: RecordEntry) -> bool {
+    return (e.channels & RECORD_FIXED) != 0u
+        || ((e.channels & RECORD_FAST) != 0u && plan.fast != 0u);
+}
+
+fn interface_due(e: RecordEntry) -> bool {
+    return (e.channels & RECORD_INTERFACE) != 0u
+        || ((e.channels & RECORD_FAST) != 0u && plan.fast != 0u);
+}
+
+fn no_sums() -> SampleSums {
+    var s: SampleSums;
+    s.min_pinned = 3.0e38;
+    return s;
+}
+
+fn combine(a: SampleSums, b: SampleSums) -> SampleSums {
+    var s = a;
+    let lo = a.ruptures_lo + b.ruptures_lo;
+    s.ruptures_hi = a.ruptures_hi + b.ruptures_hi + select(0u, 1u, lo < a.ruptures_lo);
+    s.ruptures_lo = lo;
+    s.kinetic = a.kinetic + b.kinetic;
+    s.friction = a.friction + b.friction;
+    s.pinned = a.pinned + b.pinned;
+    s.min_pinned = min(a.min_pinned, b.min_pinned);
+    s.max_slip_speed = max(a.max_slip_speed, b.max_slip_speed);
+    s.top_reaction = a.top_reaction + b.top_reaction;
+    // Only the driven block's are not zero.
+    s.driven_ux_hi = a.driven_ux_hi + b.driven_ux_hi;
+    s.driven_ux_lo = a.driven_ux_lo + b.driven_ux_lo;
+    return s;
+}
+
+// Block i's sums at the instant of sample e (u(s), v(s−½), the forces,
+// friction and normal force of s), and its rows if due.
+fn block_sample(
+    i: u32,
+    e: RecordEntry,
+    u: Disp,
+    v_half: vec2<f32>,
+    f: vec2<f32>,
+    friction: f32,
+    normal: f32,
+) -> SampleSums {
+    // The velocity at the instant of u (CPU twin:
+    // engine::synchronised_velocity); samples are taken while driving.
+    let half_dt_over_m = 0.5 * c.dt * c.inv_mass;
+    var v = vec2<f32>(v_half.x + half_dt_over_m * (f.x + friction), v_half.y + half_dt_over_m * f.y);
+    let fl = flags[i];
+    if (fl & FLAG_FIX_X) != 0u {
+        v.x = 0.0;
+    }
+    if (fl & FLAG_FIX_Z) != 0u {
+        v.y = 0.0;
+    }
+    if (fl & FLAG_PRESCRIBED_X) != 0u {
+        v.x = c.drive_velocity;
+    }
+    var s = no_sums();
+    s.kinetic = v.x * v.x + v.y * v.y;
+    if i < c.nx {
+        var pinned = 0u;
+        var ruptures = u32(slide[i].y);
+        let ns = plan.junctions_per_block;
+        for (var j = 0u; j < ns; j++) {
+            let state = junction_state[i * ns + j];
+            pinned += select(0u, 1u, state.x == PINNED);
+            ruptures += state.y;
+        }
+        var fraction = f32(pinned) / f32(max(ns, 1u));
+        if ns == 0u {
+            fraction = select(0.0, 1.0, slide[i].x == 0);
+        }
+        s.friction = friction;
+        s.pinned = fraction;
+        s.min_pinned = fraction;
+        s.max_slip_speed = abs(v.x);
+        s.ruptures_lo = ruptures;
+        if interface_due(e) {
+            let at = plan.interface_offset + (e.interface_slot * c.nx + i) * RECORD_INTERFACE_WORDS;
+            rows[at] = u.x.x;
+            rows[at + 1u] = u.x.y;
+            rows[at + 2u] = friction;
+            rows[at + 3u] = normal;
+            rows[at + 4u] = fraction;
+            rows[at + 5u] = v.x;
+        }
+    }
+    if i == plan.driven_block {
+        s.driven_ux_hi = u.x.x;
+        s.driven_ux_lo = u.x.y;
+    }
+    if plan.top_reaction != 0u && i >= c.n_blocks - c.nx {
+        s.top_reaction = c.mass * (c.drive_velocity - v_half.x) / c.dt - f.x - friction;
+    }
+    if (e.channels & RECORD_BULK) != 0u {
+        let at = plan.bulk_offset + (e.bulk_slot * c.n_blocks + i) * RECORD_BULK_WORDS;
+        // hi + lo rounded once: the f32 of the f64 displacement.
+        rows[at] = u.x.x + u.x.y;
+        rows[at + 1u] = u.z.x + u.z.y;
+        rows[at + 2u] = v.x;
+        rows[at + 3u] = v.y;
+    }
+    return s;
+}
+
+var<workgroup> wg_sums: array<SampleSums, 256>;
+var<workgroup> wg_go: u32;
+
+// Reduces wg_sums[0..width] to wg_sums[0] (a fixed tree: the same bits
+// every run).
+fn reduce_workgroup(local: u32, width: u32) {
+    for (var half = width / 2u; half > 0u; half = half / 2u) {
+        workgroupBarrier();
+        if local < half {
+            wg_sums[local] = combine(wg_sums[local], wg_sums[local + half]);
+        }
+    }
+    workgroupBarrier();
+}
+
+// Thread 0 of a workgroup whose wg_sums[0] holds the sample's sums: writes
+// them and decides the fast interface cadence for the samples after this
+// one (the host's rule, runner::outputs::Outputs::emit_sample).
+fn finish_sample(e: RecordEntry) {
+    var out = wg_sums[0];
+    out.recorded = 1u;
+    out.interface_row = select(0u, 1u, interface_due(e));
+    let fast = plan.every_fast != 0u && out.max_slip_speed > plan.fast_slip_speed;
+    out.fast = select(0u, 1u, fast);
+    sums[e.sums_slot] = out;
+    plan.fast = out.fast;
+}
