@@ -7,7 +7,7 @@
 //! (BENCHMARKS.md). The three runs of a scene are timed in rounds, one of
 //! each per round, so a noisy machine affects them alike.
 
-use slipfront::gpu::{GpuEngine, GpuOptions, GpuOutput};
+use slipfront::gpu::{GpuEngine, GpuOptions, GpuOutput, GpuPath};
 use slipfront::output::reader::RunFile;
 use slipfront::runner::{run_scene, ProgressMode, RunOptions};
 use slipfront::{Engine, Model, Scenario};
@@ -19,9 +19,14 @@ mod bench_scene;
 
 /// Wall seconds of the driving phase (the normal-load phase is run before
 /// the clock starts, by a run without output to the loaded state).
-fn timed(s: &Scenario, output: Option<(GpuOutput, &PathBuf)>) -> (f64, u64, String) {
+fn timed(
+    s: &Scenario,
+    path: GpuPath,
+    output: Option<(GpuOutput, &PathBuf)>,
+) -> (f64, u64, String) {
     let m = Model::from_scenario(s, false).expect("bench model");
     let opts = GpuOptions {
+        path,
         output: output.map_or(GpuOutput::Device, |o| o.0),
         ..GpuOptions::default()
     };
@@ -50,24 +55,33 @@ fn main() {
         .unwrap_or(4000.0);
     let dir = std::env::temp_dir().join(format!("slipfront-gpu-output-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
-    let scenes: [(&str, u32, u32, &[&str]); 2] = [
+    let scenes: [(&str, GpuPath, u32, u32, &[&str]); 3] = [
         (
             "57×31, V = 1 m/s (junctions slipping throughout)",
+            GpuPath::Auto,
             57,
             31,
             &[],
         ),
         (
             "57×31, V = 0.4 mm/s (stick phase)",
+            GpuPath::Auto,
             57,
             31,
             &["loading.drive.velocity=4e-4"],
+        ),
+        (
+            "57×31, V = 1 m/s, persistent kernel",
+            GpuPath::Persistent,
+            57,
+            31,
+            &[],
         ),
     ];
     println!("| scene | output | driving steps | wall (s) | µs/step | against no output | records (global / interface / bulk) |");
     println!("| --- | --- | ---: | ---: | ---: | ---: | --- |");
     let mut adapter = String::new();
-    for (name, nx, nz, extra) in scenes {
+    for (name, path, nx, nz, extra) in scenes {
         let m = bench_scene::scene(nx, nz);
         let t_end = format!("time.end={}", steps * m.dt);
         let mut set: Vec<&str> = vec![t_end.as_str()];
@@ -83,10 +97,12 @@ fn main() {
                 Some((GpuOutput::Device, &device_file)),
             ];
             for (k, out) in runs.into_iter().enumerate() {
-                let (wall, n, describe) = timed(&s, out);
+                let (wall, n, describe) = timed(&s, path, out);
                 best[k] = best[k].min(wall);
                 driving = n;
-                adapter = describe;
+                if path == GpuPath::Auto {
+                    adapter = describe;
+                }
             }
         }
         for (k, label) in ["none", "`-o`, host snapshots", "`-o`, device records"]
