@@ -19,11 +19,7 @@ mod bench_scene;
 
 /// Wall seconds of the driving phase (the normal-load phase is run before
 /// the clock starts, by a run without output to the loaded state).
-fn timed(
-    s: &Scenario,
-    path: GpuPath,
-    output: Option<(GpuOutput, &PathBuf)>,
-) -> (f64, u64, String) {
+fn timed(s: &Scenario, path: GpuPath, output: Option<(GpuOutput, &PathBuf)>) -> (f64, u64, String) {
     let m = Model::from_scenario(s, false).expect("bench model");
     let opts = GpuOptions {
         path,

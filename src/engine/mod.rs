@@ -232,6 +232,10 @@ pub trait Engine {
     fn dispatches(&self) -> Option<u64> {
         None
     }
+    /// GPU dispatches of output kernels so far (apart from `dispatches`).
+    fn output_dispatches(&self) -> Option<u64> {
+        None
+    }
     /// Asks the engine to record the output samples `plan` makes due on
     /// the device while it advances (the GPU engine's one-step kernels):
     /// true if it will, and then `take_samples` hands them over after each

@@ -187,7 +187,10 @@ pub struct GpuEngine {
     step: u64,
     in_flight: VecDeque<InFlight>,
     spare_staging: Vec<wgpu::Buffer>,
+    /// Dispatches that stepped the lattice (forces-only passes included).
     dispatches: u64,
+    /// Dispatches of the output kernels (one-step kernels' samples).
+    output_dispatches: u64,
     /// Where output samples are made (the option).
     output: GpuOutput,
     /// Output samples recorded on the device (one-step kernels, one scene).
@@ -442,6 +445,7 @@ impl GpuEngine {
             in_flight: VecDeque::new(),
             spare_staging: Vec::new(),
             dispatches: 0,
+            output_dispatches: 0,
             output: opts.output,
             recorder: None,
             samples: Vec::new(),
@@ -525,7 +529,7 @@ impl GpuEngine {
                         // dispatch read and the forces it computed.
                         if let Some((k, _)) = samples.next_if(|(_, p)| p.offset == i) {
                             let rec = self.recorder.as_ref().expect("samples need a recorder");
-                            rec.encode(&mut pass, k);
+                            self.output_dispatches += rec.encode(&mut pass, k);
                             pass.set_pipeline(&self.pipeline);
                             pass.set_bind_group(0, &self.state_group, &[]);
                         }
@@ -851,6 +855,10 @@ impl Engine for GpuEngine {
 
     fn dispatches(&self) -> Option<u64> {
         Some(self.dispatches)
+    }
+
+    fn output_dispatches(&self) -> Option<u64> {
+        Some(self.output_dispatches)
     }
 
     fn record_samples(&mut self, plan: &SamplePlan) -> bool {

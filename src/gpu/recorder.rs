@@ -378,9 +378,10 @@ impl Recorder {
         self.recorded_through = planned.last().map(|p| p.step);
     }
 
-    /// Records sample `k` of the batch (one or two dispatches) in `pass`; the
-    /// caller sets its own pipeline and groups again afterwards.
-    pub fn encode(&self, pass: &mut wgpu::ComputePass, k: usize) {
+    /// Records sample `k` of the batch (one or two dispatches) in `pass`;
+    /// the caller sets its own pipeline and groups again afterwards.
+    /// Returns the dispatches.
+    pub fn encode(&self, pass: &mut wgpu::ComputePass, k: usize) -> u64 {
         let offset = (k as u64 * self.stride) as u32;
         pass.set_bind_group(0, &self.group, &[]);
         pass.set_bind_group(1, &self.entry_group, &[offset]);
@@ -388,12 +389,14 @@ impl Recorder {
             None => {
                 pass.set_pipeline(&self.pipelines.small);
                 pass.dispatch_workgroups(1, 1, 1);
+                1
             }
             Some((x, y)) => {
                 pass.set_pipeline(&self.pipelines.sample);
                 pass.dispatch_workgroups(x, y, 1);
                 pass.set_pipeline(&self.pipelines.finish);
                 pass.dispatch_workgroups(1, 1, 1);
+                2
             }
         }
     }

@@ -105,8 +105,10 @@ pub struct RunSummary {
     pub peak_drive_ratio: f64,
     pub final_drive_ratio: f64,
     pub ruptures: u64,
-    /// GPU dispatches over the run (GPU engines only).
+    /// GPU dispatches over the run (GPU engines only): those that stepped
+    /// the lattice, and those that recorded output samples.
     pub dispatches: Option<u64>,
+    pub output_dispatches: Option<u64>,
     /// Quasi-static fast-forward totals (when it was on), over the whole
     /// run (a resumed run's include the part before the resume).
     pub fast_forward: Option<FastForwardStats>,
@@ -156,11 +158,15 @@ impl std::fmt::Display for RunSummary {
         writeln!(f, "  final F/F_N        {:.4}", self.final_drive_ratio)?;
         writeln!(f, "  junction ruptures  {}", self.ruptures)?;
         if let Some(d) = self.dispatches {
-            writeln!(
+            write!(
                 f,
                 "  GPU dispatches     {d} ({:.4} per step)",
                 d as f64 / self.steps.max(1) as f64
             )?;
+            match self.output_dispatches.filter(|&o| o > 0) {
+                Some(o) => writeln!(f, ", and {o} recording output samples on the device")?,
+                None => writeln!(f)?,
+            }
         }
         if let Some(ff) = &self.fast_forward {
             writeln!(
@@ -275,6 +281,7 @@ pub fn run_scene(
     let mut interrupted = false;
     let start_step = engine.steps_done();
     let start_dispatches = engine.dispatches();
+    let start_output_dispatches = engine.output_dispatches();
     let start_skipped = ff.as_ref().map_or(0, |f| f.stats.skipped_steps);
     let mut progress = Reporter::new(opts.progress, &model, start_step);
     // Steps per chunk: grows while chunks are quick, shrinks on big
@@ -402,6 +409,10 @@ pub fn run_scene(
         dispatches: engine
             .dispatches()
             .zip(start_dispatches)
+            .map(|(end, start)| end - start),
+        output_dispatches: engine
+            .output_dispatches()
+            .zip(start_output_dispatches)
             .map(|(end, start)| end - start),
         fast_forward: ff.map(|f| f.stats),
         skipped_steps: skipped,
