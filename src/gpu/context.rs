@@ -1,5 +1,7 @@
 //! Adapter selection: a hardware GPU, else a software one (lavapipe).
 
+use super::bindings::entry;
+use super::record_pipelines::RecordPipelines;
 use super::shaders::Kernel;
 use crate::engine::EngineError;
 use std::collections::HashMap;
@@ -24,7 +26,7 @@ pub struct GpuContext {
     pub batch_layout: wgpu::BindGroupLayout,
     pipelines: Arc<Mutex<HashMap<String, wgpu::ComputePipeline>>>,
     /// The output kernels, compiled on first use.
-    record: Arc<OnceLock<Arc<super::recorder::RecordPipelines>>>,
+    record: Arc<OnceLock<Arc<RecordPipelines>>>,
 }
 
 static SHARED: OnceLock<Result<GpuContext, String>> = OnceLock::new();
@@ -113,17 +115,6 @@ impl GpuContext {
                 *slot = Some(e.to_string());
             }
         }));
-        let entry =
-            |binding: u32, ty: wgpu::BufferBindingType, dynamic: bool| wgpu::BindGroupLayoutEntry {
-                binding,
-                visibility: wgpu::ShaderStages::COMPUTE,
-                ty: wgpu::BindingType::Buffer {
-                    ty,
-                    has_dynamic_offset: dynamic,
-                    min_binding_size: None,
-                },
-                count: None,
-            };
         let read = wgpu::BufferBindingType::Storage { read_only: true };
         let write = wgpu::BufferBindingType::Storage { read_only: false };
         let layout = |label: &str, entries: &[wgpu::BindGroupLayoutEntry]| {
@@ -222,7 +213,7 @@ impl GpuContext {
     }
 
     /// The output kernels' pipelines (`shaders/record.wgsl`).
-    pub fn record_pipelines(&self) -> Arc<super::recorder::RecordPipelines> {
+    pub fn record_pipelines(&self) -> Arc<RecordPipelines> {
         self.record
             .get_or_init(|| {
                 // lavapipe runs a workgroup on one core and a barrier as a
@@ -230,7 +221,7 @@ impl GpuContext {
                 // record a Table S1 sample faster there than 256
                 // (benches/gpu_output.rs, BENCHMARKS.md).
                 let threads = if self.is_software() { 8 } else { 256 };
-                Arc::new(super::recorder::RecordPipelines::new(&self.device, threads))
+                Arc::new(RecordPipelines::new(&self.device, threads))
             })
             .clone()
     }

@@ -17,12 +17,14 @@
 //! slice of every buffer (`scene_state`); `lockstep` hands its scenes to
 //! separate runners.
 
+mod bindings;
 pub mod context;
 pub mod ensemble;
 pub mod layout;
 pub mod lockstep;
 pub mod options;
 mod readback;
+mod record_pipelines;
 mod recorder;
 mod scene_state;
 pub mod shaders;
