@@ -552,3 +552,39 @@ fn branches_from_the_loaded_slider_equal_fresh_runs() {
     );
     assert!(err.contains("normal-load phase"), "{err}");
 }
+
+/// The GPU engine too: a finished GPU run extended from its checkpoint
+/// writes the records of the longer run, bit for bit (the state is restored
+/// exactly, batches are anchored at the same steps whatever the chunks, the
+/// device records resume after the last sample and with its fast cadence).
+/// Negative control: V × (1 + 1e-6) is flagged.
+#[test]
+fn a_gpu_run_extended_equals_the_longer_run() {
+    let d = dir("gpu-extend");
+    let gpu = |args: &[&str], extra: &[String]| {
+        let out = Command::new(env!("CARGO_BIN_EXE_slipfront"))
+            .args(["run", "--backend", "gpu", "--quiet"])
+            .args(args)
+            .args(extra)
+            .output()
+            .unwrap();
+        let text = String::from_utf8_lossy(&out.stderr).into_owned();
+        assert!(
+            out.status.success(),
+            "a GPU adapter is required (lavapipe in CI): {text}"
+        );
+    };
+    let whole = d.join("whole.mcap");
+    gpu(&["--t-end", "0.001", "-o", s(&whole)], &scene_args(&[]));
+    let short = d.join("short.mcap");
+    gpu(&["--t-end", "0.0005", "-o", s(&short)], &scene_args(&[]));
+    gpu(&["--resume", s(&short), "--t-end", "0.001"], &[]);
+    let whole = RunFile::read(&whole).unwrap();
+    assert_same_records(&whole, &RunFile::read(&short).unwrap());
+    let other = d.join("other.mcap");
+    gpu(
+        &["--t-end", "0.001", "-o", s(&other)],
+        &scene_args(&["loading.drive.velocity=0.2000002"]),
+    );
+    assert!(whole.global != RunFile::read(&other).unwrap().global);
+}
