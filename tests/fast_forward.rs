@@ -305,4 +305,17 @@ fn junction_events_on_the_path_keep_the_ledger() {
         );
         assert!(j.dropped_energy > -1e-9, "{j:?}");
     }
+    // The cascade check decides: with an overshoot no margin can cover,
+    // every rupture goes back to full dynamics, and the first rupture is
+    // still that of full dynamics.
+    let strict = FastForwardSettings {
+        cascade_overshoot: 1e30,
+        ..settings
+    };
+    let (summary, strict_run) = run("events-strict", Some(strict));
+    let stats = summary.fast_forward.unwrap();
+    assert_eq!(stats.path_ruptures, 0, "{stats:?}");
+    assert!(stats.jumps > 0, "{stats:?}");
+    let (t_strict, _) = first_rupture(&strict_run);
+    assert!(relative(t_strict, t_full) < 0.005, "{t_strict} vs {t_full}");
 }

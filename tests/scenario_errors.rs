@@ -205,6 +205,8 @@ fn fast_forward_keys_are_checked_and_need_junctions() {
         &["time.fast_forward=true", "fast_forward.lead_time=-1e-3"],
     );
     assert!(e.contains("fast_forward.lead_time = -0.001"), "{e}");
+    let e = parse_err(DEFAULT_SCENARIO, &["fast_forward.cascade_overshoot=-2"]);
+    assert!(e.contains("fast_forward.cascade_overshoot = -2"), "{e}");
     let e = parse_err(DEFAULT_SCENARIO, &["fast_forward.quiet_enrgy=1e-3"]);
     assert!(e.contains("quiet_enrgy"), "{e}");
     let e = parse_err(

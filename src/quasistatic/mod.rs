@@ -56,6 +56,9 @@ pub struct FastForwardSettings {
     /// quasi-static path (true), or left to full dynamics, each ending a
     /// jump.
     pub quasi_static_ruptures: bool,
+    /// Overshoot factor of the cascade check on path events (scenario
+    /// `fast_forward.cascade_overshoot`).
+    pub cascade_overshoot: f64,
 }
 
 impl FastForwardSettings {
@@ -74,6 +77,7 @@ impl FastForwardSettings {
             response_scale: 1.0,
             settle_ends: true,
             quasi_static_ruptures: f.quasi_static_ruptures,
+            cascade_overshoot: f.cascade_overshoot,
         }
     }
 }
@@ -295,6 +299,7 @@ impl FastForward {
             response_scale: self.settings.response_scale,
             settle_ends: self.settings.settle_ends,
             events: self.settings.quasi_static_ruptures,
+            cascade_overshoot: self.settings.cascade_overshoot,
         };
         let k = Tangent::at(model, snap);
         let w = cx.response(&mut self.solver, &k)?;

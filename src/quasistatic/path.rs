@@ -83,6 +83,9 @@ pub struct PathContext<'a> {
     /// Isolated junction ruptures and re-pins handled on the path (else the
     /// path ends before the first rupture).
     pub events: bool,
+    /// An event stays on the path only if every pinned junction's margin
+    /// after it exceeds this many times the force it added.
+    pub cascade_overshoot: f64,
 }
 
 impl PathContext<'_> {
@@ -356,8 +359,9 @@ pub fn build(
             let settled =
                 cx.settled(solver, &next, &k_next, &w_next, event_step, before.clone())?;
             // Could the event set off a neighbour? Each pinned junction's
-            // margin after it must exceed the force it added (the dynamic
-            // overshoot of a step load is at most as large again).
+            // margin after it must exceed the force it added times the
+            // assumed overshoot (one damped oscillator's step response
+            // overshoots by at most its static change: factor 1).
             let safe = (0..next.slip_steps_left.len()).all(|jj| {
                 if next.slip_steps_left[jj] != PINNED {
                     return true;
@@ -366,7 +370,7 @@ pub fn build(
                 let f_before = junction_force(&next, jj, before[b][0]);
                 let f_after = junction_force(&next, jj, settled[b][0]);
                 let th = per_junction * (-settled[b][1]).max(0.0);
-                th - f_after.abs() > (f_after - f_before).abs()
+                th - f_after.abs() > cx.cascade_overshoot * (f_after - f_before).abs()
             });
             if safe {
                 after = Some((settled, k_next, w_next));

@@ -70,6 +70,14 @@ pub struct FastForward {
     /// after a large one, results/fast_forward.md).
     #[serde(default = "FastForward::default_quasi_static_ruptures")]
     pub quasi_static_ruptures: bool,
+    /// With quasi-static ruptures: the dynamic overshoot assumed of an
+    /// event's load on the other pinned junctions, in units of its static
+    /// change. An event is left to full dynamics unless every pinned
+    /// junction's margin below threshold after it exceeds this many times
+    /// the force it added (1: the bound of one damped oscillator under a
+    /// step load, which peaks at twice its static change).
+    #[serde(default = "FastForward::default_cascade_overshoot")]
+    pub cascade_overshoot: f64,
 }
 
 #[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Eq)]
@@ -98,6 +106,9 @@ impl FastForward {
     fn default_quasi_static_ruptures() -> bool {
         false
     }
+    fn default_cascade_overshoot() -> f64 {
+        1.0
+    }
 }
 
 impl Default for FastForward {
@@ -109,6 +120,7 @@ impl Default for FastForward {
             check_interval: Self::default_check_interval(),
             solver: Self::default_solver(),
             quasi_static_ruptures: Self::default_quasi_static_ruptures(),
+            cascade_overshoot: Self::default_cascade_overshoot(),
         }
     }
 }

@@ -204,6 +204,7 @@ pub fn validate(s: &Scenario, text: &str, overridden: &[&str]) -> Vec<String> {
         c.at_least("fast_forward.quiet_time", f.quiet_time, 0.0);
         c.positive("fast_forward.lead_time", f.lead_time);
         c.positive("fast_forward.check_interval", f.check_interval);
+        c.at_least("fast_forward.cascade_overshoot", f.cascade_overshoot, 0.0);
     }
     if t.fast_forward
         && !matches!(
