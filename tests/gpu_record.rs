@@ -137,7 +137,10 @@ fn device_samples_match_the_cpu_twin_on_host_snapshots() {
     let plan = plan(&m, &s);
     for path in [GpuPath::OneStep, GpuPath::OneStepLanes, GpuPath::Persistent] {
         let mut dev = engine(&m, path, GpuOutput::Device);
-        assert!(dev.record_samples(&plan), "{path:?} records on the device");
+        assert!(
+            dev.record_samples(&plan).unwrap(),
+            "{path:?} records on the device"
+        );
         // Chunks that end on and off sample steps.
         let mut samples = Vec::new();
         while dev.steps_done() < m.total_steps() {
@@ -146,7 +149,7 @@ fn device_samples_match_the_cpu_twin_on_host_snapshots() {
             samples.extend(dev.take_samples());
         }
         let mut host = engine(&m, path, GpuOutput::Host);
-        assert!(!host.record_samples(&plan));
+        assert!(!host.record_samples(&plan).unwrap());
         let (mut twin, mut later) = (Vec::new(), Vec::new());
         for smp in &samples {
             advance_to(&mut host, smp.step).unwrap();
@@ -352,7 +355,7 @@ fn a_persistent_kernel_of_96_threads_takes_host_snapshots() {
         ..GpuOptions::default()
     };
     let mut e = GpuEngine::with_options(&m, opts).unwrap();
-    assert!(!e.record_samples(&plan(&m, &s)));
+    assert!(!e.record_samples(&plan(&m, &s)).unwrap());
     let mut e = engine(&m, GpuPath::Persistent, GpuOutput::Device);
-    assert!(e.record_samples(&plan(&m, &s)));
+    assert!(e.record_samples(&plan(&m, &s)).unwrap());
 }

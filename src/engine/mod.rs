@@ -240,9 +240,10 @@ pub trait Engine {
     /// the device while it advances (the GPU engine's one-step kernels):
     /// true if it will, and then `take_samples` hands them over after each
     /// `advance`. Called again after anything the host emitted itself (a
-    /// quasi-static jump) to pass on the fast cadence's state.
-    fn record_samples(&mut self, _plan: &SamplePlan) -> bool {
-        false
+    /// quasi-static jump) to pass on the fast cadence's state. An error is
+    /// the device's (a step failed while the queue was drained).
+    fn record_samples(&mut self, _plan: &SamplePlan) -> Result<bool, EngineError> {
+        Ok(false)
     }
     /// The samples recorded on the device since the last call, in step
     /// order (each step after the last sample the host saw, up to and

@@ -863,21 +863,20 @@ impl Engine for GpuEngine {
         Some(self.output_dispatches)
     }
 
-    fn record_samples(&mut self, plan: &SamplePlan) -> bool {
+    fn record_samples(&mut self, plan: &SamplePlan) -> Result<bool, EngineError> {
         let persistent = self.kernel == Kernel::Persistent;
         // The persistent kernel reduces a sample across its workgroup: a
         // power of two of at most 256 threads (shaders/record_common.wgsl).
         let reducible = self.persistent_threads.is_power_of_two() && self.persistent_threads <= 256;
-        if self.output == GpuOutput::Host
-            || self.ensemble
-            || (persistent && !reducible)
-            || self.drain().is_err()
-        {
-            return false;
+        if self.output == GpuOutput::Host || self.ensemble || (persistent && !reducible) {
+            return Ok(false);
         }
+        // The batches in flight finish first (a blow-up among them is
+        // reported here, with its step, not at the next advance).
+        self.drain()?;
         if let Some(rec) = self.recorder.as_mut() {
             rec.set_plan(&self.ctx.queue, plan);
-            return true;
+            return Ok(true);
         }
         let b = &self.buffers;
         let state = recorder::StateBuffers {
@@ -903,9 +902,11 @@ impl Engine for GpuEngine {
                         state_group(&self.ctx, self.kernel, false, &self.buffers, records);
                 }
                 self.recorder = Some(rec);
-                true
+                Ok(true)
             }
-            Err(_) => false,
+            // Output kernels this adapter cannot build: host snapshots,
+            // the reference path, record the same samples.
+            Err(_) => Ok(false),
         }
     }
 

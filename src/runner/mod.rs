@@ -276,7 +276,7 @@ pub fn run_scene(
     // The engine records the output samples on the device where it can
     // (then chunks do not stop at output steps and nothing else is read
     // back for them); otherwise each output step is a snapshot.
-    let on_device = outputs.sink.is_some() && engine.record_samples(&outputs.plan());
+    let on_device = outputs.sink.is_some() && engine.record_samples(&outputs.plan())?;
     let started = Instant::now();
     let mut interrupted = false;
     let start_step = engine.steps_done();
@@ -367,7 +367,7 @@ pub fn run_scene(
                         perform_jump(engine, &mut outputs, ff, &snap, &mut jump)?;
                         if on_device {
                             // The path's samples may have switched the fast cadence.
-                            engine.record_samples(&outputs.plan());
+                            engine.record_samples(&outputs.plan())?;
                         }
                         progress.update(engine.steps_done(), outputs.events());
                     }
