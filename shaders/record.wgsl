@@ -56,25 +56,40 @@ fn begin_sample(local: u32) -> bool {
     return workgroupUniformLoad(&wg_go) != 0u;
 }
 
-// Lattices of up to RECORD_SMALL_BLOCKS blocks: the whole sample in one
-// dispatch of one workgroup.
-@compute @workgroup_size(RECORD_THREADS)
-fn record_small(@builtin(local_invocation_index) local: u32) {
+// The one-workgroup entry points (record_small, record_finish) begin
+// alike: a sample that is not due is marked unrecorded.
+fn begin_whole_sample(local: u32) -> bool {
     if !begin_sample(local) {
         if local == 0u {
             sums[entry.sums_slot].recorded = 0u;
         }
+        return false;
+    }
+    return true;
+}
+
+// ... and end alike: each thread's sums reduced across the workgroup,
+// then the sample written.
+fn end_whole_sample(local: u32, s: SampleSums) {
+    wg_sums[local] = s;
+    reduce_workgroup(local, RECORD_THREADS);
+    if local == 0u {
+        finish_sample(entry);
+    }
+}
+
+// Lattices of up to RECORD_SMALL_BLOCKS blocks: the whole sample in one
+// dispatch of one workgroup.
+@compute @workgroup_size(RECORD_THREADS)
+fn record_small(@builtin(local_invocation_index) local: u32) {
+    if !begin_whole_sample(local) {
         return;
     }
     var s = no_sums();
     for (var i = local; i < c.n_blocks; i += RECORD_THREADS) {
         s = combine(s, block_of_entry(i));
     }
-    wg_sums[local] = s;
-    reduce_workgroup(local, RECORD_THREADS);
-    if local == 0u {
-        finish_sample(entry);
-    }
+    end_whole_sample(local, s);
 }
 
 // Larger lattices, first dispatch: a thread per block, a partial per
@@ -104,19 +119,12 @@ fn record_sample(
 // Larger lattices, second dispatch: one workgroup adds the partials.
 @compute @workgroup_size(RECORD_THREADS)
 fn record_finish(@builtin(local_invocation_index) local: u32) {
-    if !begin_sample(local) {
-        if local == 0u {
-            sums[entry.sums_slot].recorded = 0u;
-        }
+    if !begin_whole_sample(local) {
         return;
     }
     var s = no_sums();
     for (var g = local; g < plan.partials; g += RECORD_THREADS) {
         s = combine(s, sums[plan.partials_offset + g]);
     }
-    wg_sums[local] = s;
-    reduce_workgroup(local, RECORD_THREADS);
-    if local == 0u {
-        finish_sample(entry);
-    }
+    end_whole_sample(local, s);
 }

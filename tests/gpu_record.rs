@@ -200,6 +200,57 @@ fn device_samples_match_the_cpu_twin_on_host_snapshots() {
     }
 }
 
+/// Lattices above `RECORD_SMALL_BLOCKS` record in two dispatches
+/// (`record_sample`'s per-workgroup partials, then `record_finish`): the
+/// device's samples equal the CPU twin on host snapshots there too, and the
+/// twin a step later is flagged.
+#[test]
+fn a_large_lattice_records_in_two_dispatches() {
+    let set: Vec<String> = [
+        "geometry.nx=257",
+        "geometry.nz=65",
+        "geometry.length=0.64",
+        "geometry.height=0.16",
+        "loading.normal.ramp_time=2e-5",
+        "loading.normal.relax_time=2e-5",
+        "time.end=2e-5",
+        "output.global_interval=2e-6",
+        "output.interface_interval=4e-6",
+        "output.bulk_interval=1e-5",
+    ]
+    .iter()
+    .map(|s| s.to_string())
+    .collect();
+    let s = Scenario::parse(slipfront::scenario::DEFAULT_SCENARIO, "large", &set).unwrap();
+    let m = Model::from_scenario(&s, false).unwrap();
+    assert!(m.n_blocks() > slipfront::gpu::RECORD_SMALL_BLOCKS);
+    let plan = plan(&m, &s);
+    let mut dev = engine(&m, GpuPath::OneStep, GpuOutput::Device);
+    assert!(dev.record_samples(&plan).unwrap());
+    advance_to(&mut dev, m.total_steps()).unwrap();
+    let samples = dev.take_samples();
+    let mut host = engine(&m, GpuPath::OneStep, GpuOutput::Host);
+    let (mut twin, mut later) = (Vec::new(), Vec::new());
+    for smp in &samples {
+        advance_to(&mut host, smp.step).unwrap();
+        let (i, b) = (smp.interface.is_some(), smp.bulk.is_some());
+        twin.push(record_sample(&m, &host.snapshot().unwrap(), i, b));
+        advance_to(&mut host, smp.step + 1).unwrap();
+        later.push(record_sample(&m, &host.snapshot().unwrap(), i, b));
+    }
+    assert!(samples.len() >= 8, "{} samples", samples.len());
+    assert!(samples.iter().any(|x| x.bulk.is_some()));
+    let (err, field) = worst_error(&twin, &samples);
+    println!(
+        "{} samples: device against twin {err:.2e} ({field})",
+        samples.len()
+    );
+    assert!(err < 1e-5, "{field} off by {err:.2e} of its scale");
+    let (shifted, field) = worst_error(&later, &samples);
+    println!("device against the twin a step later {shifted:.2e} ({field})");
+    assert!(shifted > 1e-4, "a one-step shift must be flagged");
+}
+
 fn temp(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("slipfront-record-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
