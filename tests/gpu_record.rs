@@ -58,6 +58,21 @@ fn plan(m: &Model, s: &Scenario) -> SamplePlan {
     }
 }
 
+/// The CPU twin of each device sample, applied to host snapshots of a
+/// second run (`host`) at the sample's step and, as the negative control,
+/// one step later.
+fn twins(m: &Model, host: &mut GpuEngine, samples: &[Sample]) -> (Vec<Sample>, Vec<Sample>) {
+    let (mut twin, mut later) = (Vec::new(), Vec::new());
+    for smp in samples {
+        advance_to(host, smp.step).unwrap();
+        let (i, b) = (smp.interface.is_some(), smp.bulk.is_some());
+        twin.push(record_sample(m, &host.snapshot().unwrap(), i, b));
+        advance_to(host, smp.step + 1).unwrap();
+        later.push(record_sample(m, &host.snapshot().unwrap(), i, b));
+    }
+    (twin, later)
+}
+
 /// The largest error of `b` against `a` relative to the scale of each
 /// quantity over all samples (sums, interface rows, bulk fields), with the
 /// name of the worst quantity.
@@ -150,14 +165,7 @@ fn device_samples_match_the_cpu_twin_on_host_snapshots() {
         }
         let mut host = engine(&m, path, GpuOutput::Host);
         assert!(!host.record_samples(&plan).unwrap());
-        let (mut twin, mut later) = (Vec::new(), Vec::new());
-        for smp in &samples {
-            advance_to(&mut host, smp.step).unwrap();
-            let (i, b) = (smp.interface.is_some(), smp.bulk.is_some());
-            twin.push(record_sample(&m, &host.snapshot().unwrap(), i, b));
-            advance_to(&mut host, smp.step + 1).unwrap();
-            later.push(record_sample(&m, &host.snapshot().unwrap(), i, b));
-        }
+        let (twin, later) = twins(&m, &mut host, &samples);
         let fixed = samples.iter().filter(|x| plan.due(x.step).fixed()).count();
         let rows = samples.iter().filter(|x| x.interface.is_some()).count();
         let fast_rows = samples
@@ -230,14 +238,7 @@ fn a_large_lattice_records_in_two_dispatches() {
     advance_to(&mut dev, m.total_steps()).unwrap();
     let samples = dev.take_samples();
     let mut host = engine(&m, GpuPath::OneStep, GpuOutput::Host);
-    let (mut twin, mut later) = (Vec::new(), Vec::new());
-    for smp in &samples {
-        advance_to(&mut host, smp.step).unwrap();
-        let (i, b) = (smp.interface.is_some(), smp.bulk.is_some());
-        twin.push(record_sample(&m, &host.snapshot().unwrap(), i, b));
-        advance_to(&mut host, smp.step + 1).unwrap();
-        later.push(record_sample(&m, &host.snapshot().unwrap(), i, b));
-    }
+    let (twin, later) = twins(&m, &mut host, &samples);
     assert!(samples.len() >= 8, "{} samples", samples.len());
     assert!(samples.iter().any(|x| x.bulk.is_some()));
     let (err, field) = worst_error(&twin, &samples);
