@@ -67,7 +67,93 @@ pub struct SweepFile {
     #[serde(default)]
     pub set: BTreeMap<String, toml::Value>,
     /// The swept keys (in key order).
+    #[serde(default)]
     pub axes: BTreeMap<String, Axis>,
+    /// A perturbation ensemble of every point (after the axes and seeds).
+    pub perturb: Option<Perturb>,
+}
+
+/// `perturb = { key, relative, count, start }`: `count` runs of every point
+/// with `key` multiplied by 1 + k·relative, k taking the members `start`,
+/// `start + 1`, … of the sequence 0, +1, −1, +2, −2, … The scenes are
+/// chaotic (a 1e-6 change of the drive speed moves an event by ~2 %), so
+/// two engines or precisions are compared on such ensembles, never on one
+/// trajectory; `start` gives a second, disjoint ensemble of the same key.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Perturb {
+    pub key: String,
+    pub relative: f64,
+    pub count: usize,
+    #[serde(default)]
+    pub start: usize,
+}
+
+impl Perturb {
+    /// The column of the perturbation in the sweep table.
+    pub fn column(&self) -> String {
+        format!("perturb({})", self.key)
+    }
+
+    /// The relative offsets k·relative of the ensemble's members.
+    pub fn offsets(&self) -> Vec<f64> {
+        (self.start..self.start + self.count)
+            .map(|m| {
+                let k = m.div_ceil(2) as f64;
+                let k = if m % 2 == 0 { -k } else { k } + 0.0; // no −0
+                k * self.relative
+            })
+            .collect()
+    }
+
+    fn check(&self) -> Result<(), String> {
+        let limit = 1.0e-2;
+        if !(self.relative.is_finite() && self.relative > 0.0 && self.relative <= limit) {
+            return Err(format!(
+                "perturb.relative = {} is out of range (allowed: 0 < relative <= {limit})",
+                self.relative
+            ));
+        }
+        if self.count == 0 || self.count > 100_000 {
+            return Err(format!(
+                "perturb.count = {} is out of range (allowed: 1 to 100000)",
+                self.count
+            ));
+        }
+        if self.start > 1_000_000 {
+            return Err(format!(
+                "perturb.start = {} is out of range (allowed: 0 to 1000000)",
+                self.start
+            ));
+        }
+        if self.key.trim().is_empty() || self.key.split('.').any(str::is_empty) {
+            return Err(format!("perturb.key = \"{}\": not a scenario key", self.key));
+        }
+        Ok(())
+    }
+}
+
+/// The number at `key` (a dotted path) of a scenario's TOML.
+fn scenario_number(scenario: &Scenario, key: &str) -> Result<f64, String> {
+    let table: toml::Table = scenario
+        .to_toml()
+        .parse()
+        .map_err(|e| format!("perturb: cannot read the scenario back: {e}"))?;
+    let mut node = &toml::Value::Table(table);
+    for part in key.split('.') {
+        node = node
+            .get(part)
+            .ok_or_else(|| format!("perturb.key = \"{key}\": the scenario has no such key"))?;
+    }
+    match node {
+        toml::Value::Float(v) => Ok(*v),
+        toml::Value::Integer(_) => Err(format!(
+            "perturb.key = \"{key}\": an integer key cannot be perturbed by a relative amount"
+        )),
+        other => Err(format!(
+            "perturb.key = \"{key}\" is {other}: only a real-valued key can be perturbed"
+        )),
+    }
 }
 
 /// One run of a sweep.
@@ -180,7 +266,20 @@ impl Sweep {
             ),
         };
         let mut problems = Vec::new();
-        let axis_keys: Vec<String> = file.axes.keys().cloned().collect();
+        let mut axis_keys: Vec<String> = file.axes.keys().cloned().collect();
+        let offsets = match &file.perturb {
+            None => vec![None],
+            Some(p) => {
+                p.check().map_err(|e| vec![e])?;
+                if file.axes.contains_key(&p.key) {
+                    return Err(vec![format!(
+                        "perturb.key = \"{}\" is also an axis: perturb another key",
+                        p.key
+                    )]);
+                }
+                p.offsets().into_iter().map(Some).collect()
+            }
+        };
         let mut columns = Vec::new();
         for (key, axis) in &file.axes {
             match axis_values(key, axis) {
@@ -259,17 +358,49 @@ impl Sweep {
                         continue;
                     }
                 };
-                if let Err(e) = Model::from_scenario(&scenario, false) {
-                    problems.push(format!("point {index} ({}): {e}", label()));
-                    continue;
+                for offset in &offsets {
+                    let index = points.len() + problems.len();
+                    let mut values: Vec<(String, toml::Value)> =
+                        axis_keys.iter().cloned().zip(combo.clone()).collect();
+                    let scenario = match (offset, &file.perturb) {
+                        (Some(offset), Some(perturb)) => {
+                            let perturbed = scenario_number(&scenario, &perturb.key).and_then(
+                                |base| {
+                                    let mut set = set.clone();
+                                    set.push(format!("{}={:e}", perturb.key, base * (1.0 + offset)));
+                                    Scenario::parse(&base_text, &base_name, &set)
+                                        .map_err(|e| e.to_string().replace('\n', "\n    "))
+                                },
+                            );
+                            values.push((perturb.column(), toml::Value::Float(*offset)));
+                            match perturbed {
+                                Ok(s) => s,
+                                Err(e) => {
+                                    problems.push(format!(
+                                        "point {index} ({}, perturbation {offset:e}): {e}",
+                                        label()
+                                    ));
+                                    continue;
+                                }
+                            }
+                        }
+                        _ => scenario.clone(),
+                    };
+                    if let Err(e) = Model::from_scenario(&scenario, false) {
+                        problems.push(format!("point {index} ({}): {e}", label()));
+                        continue;
+                    }
+                    points.push(Point {
+                        index,
+                        values,
+                        seed: scenario.time.seed,
+                        scenario,
+                    });
                 }
-                points.push(Point {
-                    index,
-                    values: axis_keys.iter().cloned().zip(combo.clone()).collect(),
-                    seed: scenario.time.seed,
-                    scenario,
-                });
             }
+        }
+        if let Some(p) = &file.perturb {
+            axis_keys.push(p.column());
         }
         if problems.is_empty() {
             Ok(Sweep {
@@ -279,6 +410,89 @@ impl Sweep {
             })
         } else {
             Err(problems)
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn build(text: &str) -> Result<Sweep, Vec<String>> {
+        let file: SweepFile = toml::from_str(text).map_err(|e| vec![e.to_string()])?;
+        Sweep::build(file, Path::new(env!("CARGO_MANIFEST_DIR")))
+    }
+
+    #[test]
+    fn perturbation_members_are_symmetric_and_disjoint_by_start() {
+        let p = |start, count| Perturb {
+            key: "loading.drive.velocity".into(),
+            relative: 1.0e-6,
+            count,
+            start,
+        };
+        let first: Vec<f64> = p(0, 5).offsets().iter().map(|o| o / 1.0e-6).collect();
+        assert_eq!(first, [0.0, 1.0, -1.0, 2.0, -2.0]);
+        let next: Vec<f64> = p(5, 3).offsets().iter().map(|o| o / 1.0e-6).collect();
+        assert_eq!(next, [3.0, -3.0, 4.0]);
+    }
+
+    #[test]
+    fn a_perturbed_sweep_multiplies_the_key_of_every_point() {
+        let sweep = build(
+            "base = \"scenarios/triggered_front.toml\"\nseeds = [4, 5]\n\
+             perturb = { key = \"friction.static_coefficient\", relative = 1e-6, count = 3 }\n\
+             [axes]\n\"loading.trigger.shear_prestress\" = [0.2, 0.3]\n",
+        )
+        .expect("sweep");
+        assert_eq!(sweep.points.len(), 2 * 2 * 3);
+        assert_eq!(
+            sweep.axis_keys.last().map(String::as_str),
+            Some("perturb(friction.static_coefficient)")
+        );
+        let base = scenario_number(&sweep.points[0].scenario, "friction.static_coefficient").unwrap();
+        for (k, p) in sweep.points.iter().enumerate() {
+            let offset = [0.0, 1.0e-6, -1.0e-6][k % 3];
+            let v = scenario_number(&p.scenario, "friction.static_coefficient").unwrap();
+            assert_eq!(v, base * (1.0 + offset), "point {k}");
+            assert_eq!(p.values.last().unwrap().1, toml::Value::Float(offset));
+            assert_eq!(p.seed, [4, 4, 4, 5, 5, 5][k % 6]);
+        }
+        // Every point is its own scenario: no two share a fingerprint.
+        let mut ids: Vec<String> = sweep.points.iter().map(Point::id).collect();
+        ids.sort();
+        ids.dedup();
+        assert_eq!(ids.len(), sweep.points.len());
+    }
+
+    #[test]
+    fn bad_perturbations_are_refused_naming_the_field() {
+        let text = |p: &str| format!("base = \"scenarios/triggered_front.toml\"\nperturb = {p}\n");
+        let cases = [
+            (
+                "{ key = \"friction.static_coefficient\", relative = 0.0, count = 3 }",
+                "perturb.relative = 0 is out of range",
+            ),
+            (
+                "{ key = \"friction.static_coefficient\", relative = 1e-6, count = 0 }",
+                "perturb.count = 0 is out of range",
+            ),
+            (
+                "{ key = \"loading.drive.speed\", relative = 1e-6, count = 2 }",
+                "no such key",
+            ),
+            (
+                "{ key = \"geometry.nx\", relative = 1e-6, count = 2 }",
+                "an integer key",
+            ),
+            (
+                "{ key = \"friction.law\", relative = 1e-6, count = 2 }",
+                "only a real-valued key",
+            ),
+        ];
+        for (p, expected) in cases {
+            let err = build(&text(p)).err().expect(p).join("\n");
+            assert!(err.contains(expected), "{p}: {err}");
         }
     }
 }
