@@ -23,12 +23,15 @@ pub enum Backend {
 }
 
 impl Backend {
-    /// The precision when none is asked: the GPU's mixed f32 wherever a
-    /// GPU may run (`gpu`, `auto`), f64 on the CPU.
+    /// The precision when none is asked: f64, except on `--backend gpu`
+    /// (mixed f32, the GPU engine's only precision). `auto` never defaults to
+    /// mixed f32: on perturbation ensembles it was measured biased against
+    /// f64 (issue 31, results/precision_ensembles.md), so `auto` runs f64 on
+    /// the CPU unless `--precision f32` is asked.
     pub fn default_precision(self) -> Precision {
         match self {
-            Backend::Cpu | Backend::CpuReference => Precision::F64,
-            Backend::Gpu | Backend::Auto => Precision::F32,
+            Backend::Cpu | Backend::CpuReference | Backend::Auto => Precision::F64,
+            Backend::Gpu => Precision::F32,
         }
     }
 }
@@ -75,12 +78,28 @@ impl Precision {
     }
 }
 
+/// Refuses a malformed `SLIPFRONT_F32_PROBE` and says when the precision
+/// study's instrument is on (an f64 engine with quantities held in f32).
+fn check_probe(precision: Precision) -> Result<(), EngineError> {
+    let mask = crate::precision_probe::from_environment().map_err(EngineError::State)?;
+    if mask != 0 && precision == Precision::F64 {
+        eprintln!(
+            "slipfront: {}={}: f64 engine with these quantities held in f32 (the precision \
+             study's instrument, not an ordinary run)",
+            crate::precision_probe::VARIABLE,
+            crate::precision_probe::describe(mask)
+        );
+    }
+    Ok(())
+}
+
 /// Builds the CPU engine (the sweep engine) in the requested precision.
 pub fn cpu_engine(
     model: &Model,
     precision: Precision,
     threads: usize,
 ) -> Result<Box<dyn Engine>, EngineError> {
+    check_probe(precision)?;
     Ok(match precision {
         Precision::F64 => Box::new(SweepEngine::<f64>::new(model, threads)?),
         Precision::F32 => Box::new(SweepEngine::<f32>::new(model, threads)?),
@@ -95,6 +114,7 @@ pub fn cpu_reference_engine(
     precision: Precision,
     threads: usize,
 ) -> Result<Box<dyn Engine>, EngineError> {
+    check_probe(precision)?;
     Ok(match precision {
         Precision::F64 => Box::new(CpuEngine::<f64>::new(model, threads)?),
         Precision::F32 => Box::new(CpuEngine::<f32>::new(model, threads)?),

@@ -17,6 +17,7 @@ pub mod model;
 pub mod observables;
 pub mod output;
 pub mod plot;
+pub mod precision_probe;
 pub mod precursors;
 pub mod quasistatic;
 pub mod real;

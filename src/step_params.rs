@@ -50,6 +50,9 @@ pub struct Consts<T> {
     /// `crate::real::Coordinate`), whatever the engine computes in.
     pub drive_velocity_exact: f64,
     pub dt_exact: f64,
+    /// Quantities held in f32 by the precision study's instrument
+    /// (`crate::precision_probe`); 0 in every ordinary run.
+    pub f32_probe: u32,
 }
 
 impl<T: Real> Consts<T> {
@@ -105,6 +108,7 @@ impl<T: Real> Consts<T> {
                 .map_or(0.0, |t| t.shear_prestress * m.normal_force)),
             drive_velocity_exact: drive_velocity,
             dt_exact: m.dt,
+            f32_probe: crate::precision_probe::from_environment().unwrap_or(0),
         }
     }
 

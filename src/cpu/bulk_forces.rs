@@ -3,6 +3,7 @@
 //! so blocks are independent and the result does not depend on threading.
 
 use crate::lattice::{FLAG_DRIVEN, FLAG_INTERFACE, FLAG_TOP, STENCIL};
+use crate::precision_probe::{hold, FORCES};
 use crate::real::{Coordinate, Real};
 use crate::step_params::{Consts, StepParams};
 
@@ -77,16 +78,18 @@ pub fn bulk_force<T: Real, C: Coordinate<T>>(
         let inv_len = T::one() / len;
         let n = [r[0] * inv_len, r[1] * inv_len];
         let spring = bond.k * stretch;
-        fx = fx + spring * n[0];
-        fz = fz + spring * n[1];
+        // (The probe rounds each bond's terms as the sweep engine's rows do.)
+        let held = |x: T| hold(c.f32_probe, FORCES, x);
+        fx = fx + held(spring * n[0]);
+        fz = fz + held(spring * n[1]);
         let dv = [b.vel[j][0] - vi[0], b.vel[j][1] - vi[1]];
         if c.bond_damping {
             let along = c.eta * (dv[0] * n[0] + dv[1] * n[1]);
-            fx = fx + along * n[0];
-            fz = fz + along * n[1];
+            fx = fx + held(along * n[0]);
+            fz = fz + held(along * n[1]);
         } else {
-            fx = fx + c.eta * dv[0];
-            fz = fz + c.eta * dv[1];
+            fx = fx + held(c.eta * dv[0]);
+            fz = fz + held(c.eta * dv[1]);
         }
     }
     external_loads(
@@ -140,7 +143,7 @@ pub fn external_loads<T: Real, C: Coordinate<T>>(
     }
     fx = fx - p.absolute_eta * vi[0];
     fz = fz - p.absolute_eta * vi[1];
-    [fx, fz]
+    [hold(c.f32_probe, FORCES, fx), hold(c.f32_probe, FORCES, fz)]
 }
 
 /// Twin of the `bulk_forces` entry point: fills `force` for the blocks

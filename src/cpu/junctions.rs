@@ -12,6 +12,7 @@
 //! (Before, it re-pinned at f_N = 0 with k_j = √(c·0) = 0 and stayed pinned
 //! with no force for ever.)
 
+use crate::precision_probe::{hold, DRAWS, JUNCTIONS};
 use crate::real::{Coordinate, Real};
 use crate::rng::slip_steps;
 use crate::step_params::{Consts, StepParams};
@@ -88,12 +89,17 @@ pub fn junction_block<T: Real, C: Coordinate<T>>(
     u: [C; 2],
     v: [T; 2],
 ) -> JunctionBlock<T, C> {
-    let f_n = foundation_normal(c, u[1].value()) / T::from_f64(c.junction_count as f64);
+    let probe = c.f32_probe;
+    let f_n = hold(
+        probe,
+        JUNCTIONS,
+        foundation_normal(c, u[1].value()) / T::from_f64(c.junction_count as f64),
+    );
     JunctionBlock {
         ux: u[0],
         f_n,
-        threshold: c.mu_s * f_n,
-        sliding: -c.mu_d * f_n * velocity_sign(v[0]),
+        threshold: hold(probe, JUNCTIONS, c.mu_s * f_n),
+        sliding: hold(probe, JUNCTIONS, -c.mu_d * f_n * velocity_sign(v[0])),
     }
 }
 
@@ -135,7 +141,7 @@ pub fn junction<T: Real, C: Coordinate<T>>(
         if state[0] == 0 && f_n > T::zero() {
             *spring = JunctionSpring {
                 anchor: jb.ux,
-                stiffness: c.junction_stiffness(f_n),
+                stiffness: hold(c.f32_probe, JUNCTIONS, c.junction_stiffness(f_n)),
             };
             state[0] = PINNED;
         }
@@ -144,20 +150,35 @@ pub fn junction<T: Real, C: Coordinate<T>>(
     if state[0] == PINNED {
         if p.preparing {
             // While the normal load is applied, attachment is continuous.
-            spring.stiffness = c.junction_stiffness(f_n);
+            spring.stiffness = hold(c.f32_probe, JUNCTIONS, c.junction_stiffness(f_n));
         }
-        f = -spring.stiffness * jb.ux.diff(spring.anchor);
+        f = hold(
+            c.f32_probe,
+            JUNCTIONS,
+            -spring.stiffness * jb.ux.diff(spring.anchor),
+        );
         if !p.preparing && f.abs() > threshold {
             let count = state[1].wrapping_add(1);
             state[1] = count;
-            let n = slip_steps(
-                c.seed,
-                ix as u32,
-                j as u32,
-                count,
-                c.slip_mean_steps,
-                c.slip_std_steps,
-            );
+            let n = if c.f32_probe & DRAWS != 0 {
+                slip_steps(
+                    c.seed,
+                    ix as u32,
+                    j as u32,
+                    count,
+                    c.slip_mean_steps.as_f64() as f32,
+                    c.slip_std_steps.as_f64() as f32,
+                )
+            } else {
+                slip_steps(
+                    c.seed,
+                    ix as u32,
+                    j as u32,
+                    count,
+                    c.slip_mean_steps,
+                    c.slip_std_steps,
+                )
+            };
             // PINNED − 1 at most: a countdown never reads as pinned.
             state[0] = n.min(PINNED - 1);
             f = sliding;

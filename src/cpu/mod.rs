@@ -365,9 +365,10 @@ impl<T: Real, C: Coordinate<T>> Engine for CpuEngine<T, C> {
 
     fn describe(&self) -> String {
         format!(
-            "cpu-reference {} ({} thread(s))",
+            "cpu-reference {} ({} thread(s)){}",
             precision_name::<T, C>(),
-            self.threads()
+            self.threads(),
+            crate::precision_probe::label(self.consts.f32_probe)
         )
     }
 }

@@ -4,6 +4,7 @@
 //! losing its low bits (double-single in mixed precision).
 
 use crate::lattice::{FLAG_FIX_X, FLAG_FIX_Z, FLAG_PRESCRIBED_X};
+use crate::precision_probe::{hold, hold_coordinate, VELOCITIES};
 use crate::real::{Coordinate, Real};
 use crate::step_params::{Consts, StepParams};
 
@@ -32,10 +33,12 @@ pub fn verlet<T: Real, C: Coordinate<T>>(
     if flags & FLAG_PRESCRIBED_X != 0 {
         vx = p.top_velocity;
     }
+    let probe = c.f32_probe;
+    let (vx, vz) = (hold(probe, VELOCITIES, vx), hold(probe, VELOCITIES, vz));
     v[0] = vx;
     v[1] = vz;
-    u[0] = u[0].add(c.dt * vx);
-    u[1] = u[1].add(c.dt * vz);
+    u[0] = hold_coordinate(probe, u[0].add(c.dt * vx));
+    u[1] = hold_coordinate(probe, u[1].add(c.dt * vz));
     sane(*u, *v, speed_limit)
 }
 

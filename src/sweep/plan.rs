@@ -101,7 +101,10 @@ impl Perturb {
             .map(|m| {
                 let k = m.div_ceil(2) as f64;
                 let k = if m % 2 == 0 { -k } else { k } + 0.0; // no −0
-                k * self.relative
+                                                               // 13 significant digits: 5e-6, not 4.9999999999999996e-6.
+                format!("{:.12e}", k * self.relative)
+                    .parse::<f64>()
+                    .expect("a number")
             })
             .collect()
     }
@@ -127,7 +130,10 @@ impl Perturb {
             ));
         }
         if self.key.trim().is_empty() || self.key.split('.').any(str::is_empty) {
-            return Err(format!("perturb.key = \"{}\": not a scenario key", self.key));
+            return Err(format!(
+                "perturb.key = \"{}\": not a scenario key",
+                self.key
+            ));
         }
         Ok(())
     }
@@ -364,14 +370,17 @@ impl Sweep {
                         axis_keys.iter().cloned().zip(combo.clone()).collect();
                     let scenario = match (offset, &file.perturb) {
                         (Some(offset), Some(perturb)) => {
-                            let perturbed = scenario_number(&scenario, &perturb.key).and_then(
-                                |base| {
+                            let perturbed =
+                                scenario_number(&scenario, &perturb.key).and_then(|base| {
                                     let mut set = set.clone();
-                                    set.push(format!("{}={:e}", perturb.key, base * (1.0 + offset)));
+                                    set.push(format!(
+                                        "{}={:e}",
+                                        perturb.key,
+                                        base * (1.0 + offset)
+                                    ));
                                     Scenario::parse(&base_text, &base_name, &set)
                                         .map_err(|e| e.to_string().replace('\n', "\n    "))
-                                },
-                            );
+                                });
                             values.push((perturb.column(), toml::Value::Float(*offset)));
                             match perturbed {
                                 Ok(s) => s,
@@ -450,7 +459,8 @@ mod tests {
             sweep.axis_keys.last().map(String::as_str),
             Some("perturb(friction.static_coefficient)")
         );
-        let base = scenario_number(&sweep.points[0].scenario, "friction.static_coefficient").unwrap();
+        let base =
+            scenario_number(&sweep.points[0].scenario, "friction.static_coefficient").unwrap();
         for (k, p) in sweep.points.iter().enumerate() {
             let offset = [0.0, 1.0e-6, -1.0e-6][k % 3];
             let v = scenario_number(&p.scenario, "friction.static_coefficient").unwrap();

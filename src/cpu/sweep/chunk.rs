@@ -269,6 +269,7 @@ fn sweep_band_body<T: Real, C: Coordinate<T>>(
             first,
             down,
         );
+        down.hold_forces(s.c.f32_probe);
     } else {
         down.clear();
     }
@@ -286,6 +287,10 @@ fn sweep_band_body<T: Real, C: Coordinate<T>>(
             upward_bonds(s.bonds, s.c.eta, s.c.bond_damping, row, above.view(), up);
         } else {
             up.clear();
+        }
+        if s.c.f32_probe != 0 {
+            horizontal.hold_forces(s.c.f32_probe);
+            up.hold_forces(s.c.f32_probe);
         }
         let r = own(z);
         let (fx_row, fz_row) = (&mut fx[r.clone()], &mut fz[r]);

@@ -490,9 +490,10 @@ impl<T: Real, C: Coordinate<T>> Engine for SweepEngine<T, C> {
 
     fn describe(&self) -> String {
         format!(
-            "cpu {} ({} thread(s), sweep)",
+            "cpu {} ({} thread(s), sweep){}",
             crate::real::precision_name::<T, C>(),
-            self.threads()
+            self.threads(),
+            crate::precision_probe::label(self.fixed.consts.f32_probe)
         )
     }
 }

@@ -59,6 +59,21 @@ impl<T: Real> BondRow<T> {
         }
     }
 
+    /// Every bond force rounded to f32 when the precision probe holds
+    /// forces (`crate::precision_probe`), as the reference engine rounds
+    /// each bond's terms.
+    pub fn hold_forces(&mut self, probe: u32) {
+        use crate::precision_probe::{hold_all, FORCES};
+        for v in [
+            &mut self.spring_x,
+            &mut self.spring_z,
+            &mut self.damper_x,
+            &mut self.damper_z,
+        ] {
+            hold_all(probe, FORCES, v);
+        }
+    }
+
     fn clear(&mut self) {
         for v in [
             &mut self.spring_x,
@@ -88,6 +103,13 @@ impl<T: Real> UpwardBonds<T> {
             diagonal: BondRow::new(nx),
             anti_diagonal: BondRow::new(nx),
         }
+    }
+
+    /// See `BondRow::hold_forces`.
+    pub fn hold_forces(&mut self, probe: u32) {
+        self.vertical.hold_forces(probe);
+        self.diagonal.hold_forces(probe);
+        self.anti_diagonal.hold_forces(probe);
     }
 
     /// No row above (the top row): no bonds.
