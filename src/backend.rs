@@ -168,6 +168,35 @@ pub fn make_engine_with(
     }
 }
 
+/// What `auto` means for a sweep or an ensemble: the GPU when a hardware
+/// adapter computes in `precision`, else the CPU's threads (one scene per
+/// core). Returns the backend and a line saying why.
+pub fn resolve_auto(precision: Precision) -> (Backend, String) {
+    match crate::gpu::context::shared() {
+        Ok(ctx) if ctx.is_software() => (
+            Backend::Cpu,
+            format!(
+                "only a software GPU adapter ({}): scenes run on the CPU's threads",
+                ctx.info.name
+            ),
+        ),
+        Ok(ctx) if check_precision(Backend::Gpu, precision).is_ok() => {
+            (Backend::Gpu, format!("GPU ensembles on {}", ctx.info.name))
+        }
+        Ok(ctx) => (
+            Backend::Cpu,
+            format!(
+                "the GPU ({}) does not compute in this precision: scenes run on the CPU's threads",
+                ctx.info.name
+            ),
+        ),
+        Err(e) => (
+            Backend::Cpu,
+            format!("no usable GPU adapter ({e}): scenes run on the CPU's threads"),
+        ),
+    }
+}
+
 /// Steps per second of `engine` on its scene, measured for about `seconds`
 /// of wall time from the step it is at (after a short warm-up that also
 /// absorbs a GPU's pipeline compilation).

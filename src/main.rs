@@ -219,9 +219,11 @@ struct SweepRun {
     /// List the points, the steps and the memory, and run nothing.
     #[arg(long)]
     dry_run: bool,
-    #[arg(long, value_enum, default_value = "cpu")]
+    /// `auto`: GPU ensembles on a hardware adapter that computes in the
+    /// precision asked, else the CPU's threads.
+    #[arg(long, value_enum, default_value = "auto")]
     backend: Backend,
-    /// Default: f32 (mixed) on the GPU, f64 on the CPU.
+    /// Default: f64 (mixed f32 on `--backend gpu`).
     #[arg(long, value_enum)]
     precision: Option<Precision>,
     /// Scenes run at once, one thread each (0: one per core).

@@ -42,6 +42,24 @@ fn load(file: &Path) -> anyhow::Result<Sweep> {
     })
 }
 
+/// `--backend B [--precision P]` as the command line gave them.
+fn engine_args(backend: Backend, precision: Option<Precision>) -> String {
+    let name = |v: Option<clap::builder::PossibleValue>| {
+        v.map_or(String::new(), |v| v.get_name().to_string())
+    };
+    let mut args = format!(
+        "--backend {}",
+        name(clap::ValueEnum::to_possible_value(&backend))
+    );
+    if let Some(p) = precision {
+        args.push_str(&format!(
+            " --precision {}",
+            name(clap::ValueEnum::to_possible_value(&p))
+        ));
+    }
+    args
+}
+
 pub fn sweep(a: SweepArgs) -> anyhow::Result<ExitCode> {
     let sweep = load(&a.file)?;
     let dir = a.out_dir.clone().unwrap_or_else(|| default_dir(&a.file));
@@ -64,6 +82,7 @@ pub fn sweep(a: SweepArgs) -> anyhow::Result<ExitCode> {
                 partition: a.partition.as_deref(),
                 time: a.time.as_deref(),
                 cpus_per_task: a.cpus_per_task,
+                engine_args: &engine_args(a.backend, a.precision),
             },
         );
         let path = dir.join("sweep.sbatch");
@@ -78,12 +97,23 @@ pub fn sweep(a: SweepArgs) -> anyhow::Result<ExitCode> {
         );
         return Ok(ExitCode::SUCCESS);
     }
+    let precision = a.precision.unwrap_or(a.backend.default_precision());
+    let backend = match a.backend {
+        Backend::Auto => {
+            let (backend, why) = slipfront::backend::resolve_auto(precision);
+            if !a.quiet {
+                eprintln!("sweep: --backend auto: {why}");
+            }
+            backend
+        }
+        b => b,
+    };
     let report = run_sweep(
         &sweep,
         &SweepOptions {
             out_dir: dir,
-            backend: a.backend,
-            precision: a.precision.unwrap_or(a.backend.default_precision()),
+            backend,
+            precision,
             threads: a.threads,
             shard: a.shard,
             keep_mcap: a.mcap,

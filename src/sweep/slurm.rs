@@ -12,6 +12,9 @@ pub struct SlurmOptions<'a> {
     pub time: Option<&'a str>,
     /// CPUs per task (scenes run at once in each task).
     pub cpus_per_task: usize,
+    /// The engine flags every task passes on (`--backend … --precision …`),
+    /// so that the shards compute as the command that wrote the script asked.
+    pub engine_args: &'a str,
 }
 
 /// The script text. `exe`, `sweep_file` and `dir` should be absolute: the
@@ -41,11 +44,13 @@ pub fn script(exe: &Path, sweep_file: &Path, dir: &Path, o: &SlurmOptions) -> St
         dir.display()
     ));
     s.push_str(&format!(
-        "exec {} sweep {} -o {} --shard \"${{SLURM_ARRAY_TASK_ID}}/{}\" --threads \"${{SLURM_CPUS_PER_TASK:-1}}\"\n",
+        "exec {} sweep {} -o {} --shard \"${{SLURM_ARRAY_TASK_ID}}/{}\" --threads \"${{SLURM_CPUS_PER_TASK:-1}}\"{}{}\n",
         exe.display(),
         sweep_file.display(),
         dir.display(),
-        o.tasks.max(1)
+        o.tasks.max(1),
+        if o.engine_args.is_empty() { "" } else { " " },
+        o.engine_args
     ));
     s
 }
