@@ -99,8 +99,8 @@ impl Figure for EcdfComparison<'_> {
                     line.insert(1, (first.0, 0.0));
                     line.push((x1, last.1));
                 }
-                let series =
-                    chart.draw_series(LineSeries::new(line, colour.stroke_width(style.px(1.5))))?;
+                let series = chart
+                    .draw_series(LineSeries::new(line, colour.stroke_width(style.px(width))))?;
                 if k == 0 {
                     series
                         .label(format!("{name} (n = {})", values.len()))

@@ -25,6 +25,8 @@ pub const DEFAULT_ALPHA: f64 = 0.01;
 /// runs that have none.
 #[derive(Debug, Clone, serde::Serialize)]
 pub struct Side {
+    /// Left out of the JSON: the tables hold them.
+    #[serde(skip)]
     pub values: Vec<f64>,
     pub summary: Option<Quartiles>,
     /// Runs without a value (`missing_label` says why).
@@ -188,7 +190,10 @@ const CONTINUOUS: [ContinuousSpec; 5] = [
     },
 ];
 
-const COUNTS: [(&str, fn(&RunOutcomes) -> u64); 3] = [
+/// A count outcome of a run.
+type Count = fn(&RunOutcomes) -> u64;
+
+const COUNTS: [(&str, Count); 3] = [
     ("precursors", |r| r.precursors),
     ("events", |r| r.events),
     ("full_events", |r| r.full_events),
@@ -295,12 +300,7 @@ fn continuous(spec: &ContinuousSpec, a: &[RunOutcomes], b: &[RunOutcomes]) -> Co
     }
 }
 
-fn count(
-    name: &'static str,
-    of: fn(&RunOutcomes) -> u64,
-    a: &[RunOutcomes],
-    b: &[RunOutcomes],
-) -> CountOutcome {
+fn count(name: &'static str, of: Count, a: &[RunOutcomes], b: &[RunOutcomes]) -> CountOutcome {
     let mut histogram: BTreeMap<u64, (u64, u64)> = BTreeMap::new();
     for r in a {
         histogram.entry(of(r)).or_default().0 += 1;
