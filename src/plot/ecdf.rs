@@ -102,9 +102,7 @@ impl Figure for EcdfComparison<'_> {
                 let series = chart
                     .draw_series(LineSeries::new(line, colour.stroke_width(style.px(width))))?;
                 if k == 0 {
-                    series
-                        .label(format!("{name} (n = {})", values.len()))
-                        .legend(legend_line(colour, style));
+                    series.label(name).legend(legend_line(colour, style));
                 }
             }
             if k == 0 {
@@ -162,8 +160,9 @@ mod tests {
         };
         let svg = String::from_utf8(crate::plot::render(&fig, &options, "").unwrap()).unwrap();
         assert!(svg.contains("mean_slip_m: KS p = 0.5"));
-        assert!(svg.contains("f32 (n = 2)"));
-        assert!(!svg.contains(">empty<"));
+        // In the title and in the legend.
+        assert_eq!(svg.matches("f32").count(), 2, "{svg}");
+        assert!(!svg.contains("empty"), "a panel without values is left out");
         let nothing = EcdfComparison {
             panels: Vec::new(),
             label_a: "a",
