@@ -25,6 +25,7 @@ pub mod rng;
 pub mod runner;
 pub mod scenario;
 pub mod single_block;
+pub mod stats;
 pub mod step_params;
 pub mod studies;
 pub mod sweep;

@@ -176,6 +176,28 @@ enum Command {
         #[command(flatten)]
         run: SweepRun,
     },
+    /// Compare two sweep ensembles' outcome distributions (KS, Anderson–
+    /// Darling, exact tests on counts and mode occupancy); exits 1 when an
+    /// outcome differs at p < alpha.
+    Compare {
+        /// A sweep folder (its summary.csv) or a table (.csv).
+        a: PathBuf,
+        b: PathBuf,
+        /// Significance level of each test.
+        #[arg(long, default_value_t = slipfront::sweep::compare::DEFAULT_ALPHA)]
+        alpha: f64,
+        /// Name of A in the report (default: its path).
+        #[arg(long)]
+        label_a: Option<String>,
+        #[arg(long)]
+        label_b: Option<String>,
+        /// Print a JSON object instead of the tables.
+        #[arg(long)]
+        json: bool,
+        /// Draw both ensembles' empirical CDFs, a panel per outcome (.png or .svg).
+        #[arg(short = 'o', long, value_name = "FIGURE")]
+        output: Option<PathBuf>,
+    },
     /// Run the validation cases and compare measured against expected.
     Verify {
         #[arg(long, value_enum, default_value = "cpu")]
@@ -350,6 +372,23 @@ fn main() -> ExitCode {
             precision,
             json,
         } => commands::verify::verify(backend, precision, json),
+        Command::Compare {
+            a,
+            b,
+            alpha,
+            label_a,
+            label_b,
+            json,
+            output,
+        } => commands::compare::compare(commands::compare::CompareArgs {
+            a,
+            b,
+            alpha,
+            label_a,
+            label_b,
+            json,
+            figure: output,
+        }),
         Command::SingleBlock { scenario, output } => {
             commands::study::single_block_run(scenario.as_deref(), &output)
         }

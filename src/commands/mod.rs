@@ -1,4 +1,5 @@
 pub mod check;
+pub mod compare;
 pub mod info;
 pub mod plot;
 pub mod recover;

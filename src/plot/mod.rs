@@ -4,6 +4,7 @@
 //! holding its data that implements [`Figure`]; [`write`] renders it.
 
 pub mod colour;
+pub mod ecdf;
 mod figure;
 pub mod fronts;
 pub mod loading;

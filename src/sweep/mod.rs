@@ -5,7 +5,10 @@
 //! rerun), and split into shards for Slurm job arrays (`slurm`), whose
 //! tables `collect` merges.
 
+pub mod compare;
 mod ensembles;
+pub mod modes;
+pub mod outcome_rows;
 pub mod outcomes;
 pub mod plan;
 pub mod slurm;
