@@ -476,9 +476,59 @@ pub fn median_absolute_deviation(values: &[f64]) -> f64 {
     quantile_sorted(&deviations, 0.5)
 }
 
+/// Midranks (1-based; tied values share the mean of their ranks).
+fn midranks(values: &[f64]) -> Vec<f64> {
+    let mut order: Vec<usize> = (0..values.len()).collect();
+    order.sort_by(|&i, &j| values[i].total_cmp(&values[j]));
+    let mut ranks = vec![0.0; values.len()];
+    let mut k = 0;
+    while k < order.len() {
+        let mut end = k + 1;
+        while end < order.len() && values[order[end]] == values[order[k]] {
+            end += 1;
+        }
+        let rank = (k + end + 1) as f64 / 2.0;
+        for &i in &order[k..end] {
+            ranks[i] = rank;
+        }
+        k = end;
+    }
+    ranks
+}
+
+/// Spearman's rank correlation of paired samples (Pearson's on midranks);
+/// None with fewer than 3 pairs or a constant sample.
+pub fn spearman(x: &[f64], y: &[f64]) -> Option<f64> {
+    let n = x.len().min(y.len());
+    if n < 3 {
+        return None;
+    }
+    let (rx, ry) = (midranks(&x[..n]), midranks(&y[..n]));
+    let mean = (n as f64 + 1.0) / 2.0;
+    let (mut sxy, mut sxx, mut syy) = (0.0, 0.0, 0.0);
+    for (a, b) in rx.iter().zip(&ry) {
+        sxy += (a - mean) * (b - mean);
+        sxx += (a - mean) * (a - mean);
+        syy += (b - mean) * (b - mean);
+    }
+    (sxx > 0.0 && syy > 0.0).then(|| sxy / (sxx * syy).sqrt())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn spearman_of_monotone_reversed_and_tied_samples() {
+        let x = [1.0, 2.0, 3.0, 4.0, 5.0];
+        assert_eq!(spearman(&x, &[2.0, 4.0, 8.0, 16.0, 32.0]), Some(1.0));
+        assert_eq!(spearman(&x, &[5.0, 4.0, 3.0, 2.0, 1.0]), Some(-1.0));
+        // Ties share ranks: y = [1, 1, 2, 2, 3] against x gives 3/√10
+        let r = spearman(&x, &[1.0, 1.0, 2.0, 2.0, 3.0]).unwrap();
+        assert!((r - 0.948_683_298_050_513_8).abs() < 1e-12, "{r}");
+        assert_eq!(spearman(&x, &[1.0; 5]), None);
+        assert_eq!(spearman(&x[..2], &x[..2]), None);
+    }
 
     fn close(a: f64, b: f64, rel: f64) -> bool {
         (a - b).abs() <= rel * b.abs().max(1e-300)

@@ -3,7 +3,9 @@
 //! the empirical CDFs. Exits 1 when some outcome differs at p < alpha.
 
 use slipfront::stats::Quartiles;
-use slipfront::sweep::compare::{compare_ensembles, Comparison, ContinuousOutcome};
+use slipfront::sweep::compare::{
+    compare_ensembles, Comparison, ContinuousOutcome, FOLLOWS_PERTURBATION,
+};
 use slipfront::sweep::outcome_rows::read_ensemble;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -128,6 +130,23 @@ fn print_continuous(c: &ContinuousOutcome, la: &str, lb: &str, alpha: f64) {
         p_text(c.modes_test.map(|t| t.p), alpha),
         simulated(c.modes_test.map_or(0, |t| t.simulated)),
     );
+    let follows: Vec<String> = [
+        (la, c.a.follows_perturbation),
+        (lb, c.b.follows_perturbation),
+    ]
+    .iter()
+    .filter_map(|(l, r)| {
+        r.filter(|r| r.abs() >= FOLLOWS_PERTURBATION)
+            .map(|r| format!("{l} ρ = {r:.2}"))
+    })
+    .collect();
+    if !follows.is_empty() {
+        println!(
+            "  note: follows the perturbation smoothly ({}): chaos has not scrambled it, so this \
+             compares responses to the perturbation, not draws from one spread",
+            follows.join(", ")
+        );
+    }
 }
 
 fn simulated(tables: usize) -> String {

@@ -13,7 +13,7 @@
 use super::modes::{mode_of, split_at_gaps};
 use super::outcome_rows::{read_ensemble, Ensemble, RunOutcomes};
 use crate::stats::{
-    anderson_darling_ksample, exact_2xk, ks_two_sample, Quartiles, TableTest, TestResult,
+    anderson_darling_ksample, exact_2xk, ks_two_sample, spearman, Quartiles, TableTest, TestResult,
 };
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -31,7 +31,16 @@ pub struct Side {
     pub summary: Option<Quartiles>,
     /// Runs without a value (`missing_label` says why).
     pub missing: usize,
+    /// Spearman's ρ of the value against the run's perturbation (runs of a
+    /// `perturb` sweep with one value each). Near ±1 the outcome still
+    /// moves smoothly with the perturbation: chaos has not scrambled it, so
+    /// the ensemble samples the engine's response to the perturbation, not
+    /// the scene's spread, and two ensembles can differ by tiny shifts.
+    pub follows_perturbation: Option<f64>,
 }
+
+/// |ρ| from which an outcome counts as following the perturbation.
+pub const FOLLOWS_PERTURBATION: f64 = 0.8;
 
 /// A mode of the pooled sample (or the runs without a value) and how many
 /// values of each side fall in it.
@@ -242,12 +251,35 @@ pub fn compare_outcomes(
     }
 }
 
+/// The larger (in size) of Spearman's ρ of `v` against the perturbation
+/// and against its size: a smooth response may be monotone in k or
+/// symmetric about 0. None below 8 runs.
+fn follows(p: &[f64], v: &[f64]) -> Option<f64> {
+    if v.len() < 8 {
+        return None;
+    }
+    let size: Vec<f64> = p.iter().map(|x| x.abs()).collect();
+    [spearman(p, v), spearman(&size, v)]
+        .into_iter()
+        .flatten()
+        .max_by(|a, b| a.abs().total_cmp(&b.abs()))
+}
+
 fn side(spec: &ContinuousSpec, runs: &[RunOutcomes]) -> Side {
     let all: Vec<Option<f64>> = runs.iter().flat_map(spec.values).collect();
     let values: Vec<f64> = all.iter().flatten().copied().collect();
+    let pairs: Vec<(f64, f64)> = runs
+        .iter()
+        .filter_map(|r| match ((spec.values)(r).as_slice(), r.perturbation) {
+            ([Some(v)], Some(p)) => Some((p, *v)),
+            _ => None,
+        })
+        .collect();
+    let (p, v): (Vec<f64>, Vec<f64>) = pairs.into_iter().unzip();
     Side {
         summary: Quartiles::of(&values),
         missing: all.len() - values.len(),
+        follows_perturbation: follows(&p, &v),
         values,
     }
 }
@@ -340,7 +372,53 @@ mod tests {
             precursor_max_length_m: lengths.last().copied(),
             precursor_lengths_m: lengths,
             mean_slip_m: (events > 0).then_some(1e-6 * events as f64),
+            perturbation: None,
         }
+    }
+
+    #[test]
+    fn an_outcome_that_moves_with_the_perturbation_is_marked() {
+        // k = 0, +1, −1, … as a perturb sweep makes them.
+        let k = |m: usize| {
+            if m % 2 == 1 {
+                m.div_ceil(2) as f64
+            } else {
+                -(m.div_ceil(2) as f64)
+            }
+        };
+        let runs = |response: &dyn Fn(f64) -> f64| -> Vec<RunOutcomes> {
+            (0..16)
+                .map(|m| RunOutcomes {
+                    perturbation: Some(k(m) * 1e-6),
+                    ..run(Some(response(k(m))), 0, 3)
+                })
+                .collect()
+        };
+        // A smooth monotone response, a smooth symmetric one, and scrambled.
+        let linear = runs(&|k| 0.35 + 1e-4 * k);
+        let symmetric = runs(&|k| 0.35 + 1e-5 * k * k);
+        let scrambled = runs(&|k| 0.35 + 1e-3 * ((k * 7.3).sin() * 1e3).fract());
+        let rho = |a: &[RunOutcomes]| {
+            compare_outcomes(a, a, "a", "b").continuous[0]
+                .a
+                .follows_perturbation
+                .unwrap()
+        };
+        assert!(rho(&linear) > 0.99, "{}", rho(&linear));
+        assert!(rho(&symmetric) > 0.99, "{}", rho(&symmetric));
+        assert!(
+            rho(&scrambled).abs() < FOLLOWS_PERTURBATION,
+            "{}",
+            rho(&scrambled)
+        );
+        // Without a perturbation column there is nothing to say.
+        let plain = ensemble(16, 0.3);
+        assert_eq!(
+            compare_outcomes(&plain, &plain, "a", "b").continuous[0]
+                .a
+                .follows_perturbation,
+            None
+        );
     }
 
     /// n runs with first full events spread evenly over t0 .. t0 + 0.1.

@@ -20,6 +20,9 @@ pub struct RunOutcomes {
     pub precursor_max_length_m: Option<f64>,
     /// None: no event.
     pub mean_slip_m: Option<f64>,
+    /// The run's relative perturbation (a `perturb(KEY)` column), if the
+    /// sweep had one.
+    pub perturbation: Option<f64>,
 }
 
 /// The ok runs of one sweep table.
@@ -79,6 +82,7 @@ pub fn read_ensemble(path: &Path) -> Result<Ensemble, String> {
     };
     let status = column("status")?;
     let columns: Vec<usize> = NEEDED.iter().map(|n| column(n)).collect::<Result<_, _>>()?;
+    let perturbation = header.iter().position(|h| h.starts_with("perturb("));
     let mut runs = Vec::new();
     let mut dropped = BTreeMap::new();
     for (k, line) in lines.enumerate().filter(|(_, l)| !l.trim().is_empty()) {
@@ -89,8 +93,9 @@ pub fn read_ensemble(path: &Path) -> Result<Ensemble, String> {
             fields[status].clone()
         } else {
             let needed: Vec<&str> = columns.iter().map(|&c| fields[c].as_str()).collect();
-            let row = parse_row(&needed)
+            let mut row = parse_row(&needed)
                 .map_err(|e| format!("`{}` line {}: {e}", file.display(), k + 2))?;
+            row.perturbation = perturbation.and_then(|c| fields[c].trim().parse::<f64>().ok());
             runs.push(row);
             continue;
         };
@@ -153,5 +158,6 @@ fn parse_row(fields: &[&str]) -> Result<RunOutcomes, String> {
         precursor_lengths_m: lengths,
         precursor_max_length_m: number(6)?,
         mean_slip_m: number(7)?,
+        perturbation: None,
     })
 }
