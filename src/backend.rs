@@ -47,15 +47,15 @@ pub enum Precision {
 }
 
 /// Refuses a precision the backend cannot compute in (the GPU computes in
-/// mixed f32 only), naming the flag to change.
+/// mixed f32, or in f64 where the adapter has it: checked when the engine
+/// is built), naming the flag to change.
 pub fn check_precision(backend: Backend, precision: Precision) -> Result<(), String> {
-    if backend == Backend::Gpu && precision != Precision::F32 {
-        let name = clap::ValueEnum::to_possible_value(&precision)
-            .map_or_else(String::new, |v| v.get_name().to_string());
-        return Err(format!(
-            "--precision {name}: the GPU engine computes in mixed f32: use --precision f32 (or \
-             --backend cpu for f64 and f32-plain)"
-        ));
+    if backend == Backend::Gpu && precision == Precision::F32Plain {
+        return Err(
+            "--precision f32-plain: the GPU engine computes in mixed f32 or in f64: use \
+             --precision f32 or f64 (or --backend cpu for f32-plain)"
+                .into(),
+        );
     }
     Ok(())
 }
@@ -125,6 +125,9 @@ pub fn make_engine_with(
         Backend::CpuReference => cpu_reference_engine(model, precision, threads),
         Backend::Gpu => {
             check_precision(backend, precision).map_err(EngineError::Gpu)?;
+            if precision == Precision::F64 {
+                return Ok(Box::new(GpuEngine::<f64>::with_precision(model, gpu)?));
+            }
             Ok(Box::new(GpuEngine::with_options(model, gpu)?))
         }
         Backend::Auto => match crate::gpu::context::shared() {
