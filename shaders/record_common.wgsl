@@ -112,7 +112,9 @@ fn block_sample(
     return s;
 }
 
-var<workgroup> wg_sums: array<SampleSums, 256>;
+// REDUCTION_SLOTS (prelude): 256 in mixed precision, fewer in f64, whose
+// sums are larger (layout::reduction_slots).
+var<workgroup> wg_sums: array<SampleSums, REDUCTION_SLOTS>;
 var<workgroup> wg_go: u32;
 
 // Reduces wg_sums[0..width] to wg_sums[0] (a fixed tree: the same bits

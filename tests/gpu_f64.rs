@@ -62,10 +62,7 @@ fn gpu_f64_matches_cpu_f64_through_junction_ruptures_on_every_kernel() {
         let started = std::time::Instant::now();
         let on_gpu = snapshot_at(&mut g, end);
         let errors = compare_snapshots(&reference, &on_gpu);
-        let worst = errors
-            .iter()
-            .map(|e| e.relative())
-            .fold(0.0f64, f64::max);
+        let worst = errors.iter().map(|e| e.relative()).fold(0.0f64, f64::max);
         println!(
             "{path:?}: worst relative error {worst:.2e}, {} ruptures, {:.1} s",
             on_gpu.total_ruptures(),

@@ -7,10 +7,10 @@
 //! f64, `precision::GpuReal`): one definition gives both layouts, with
 //! the u32 fields first so that neither has padding.
 
+use super::precision::{Coord, GpuReal, Packed};
 use crate::lattice::{
     FLAG_DRIVEN, FLAG_FIX_X, FLAG_FIX_Z, FLAG_INTERFACE, FLAG_PRESCRIBED_X, FLAG_TOP, STENCIL,
 };
-use super::precision::{Coord, GpuReal, Packed};
 use crate::real::{Coordinate, DoubleSingle, Real};
 use crate::step_params::Consts;
 use bytemuck::{Pod, Zeroable};
@@ -360,6 +360,7 @@ pub fn wgsl_prelude<T: GpuReal>() -> String {
         ("FLAG_DRIVEN", FLAG_DRIVEN),
         ("FLAG_PRESCRIBED_X", FLAG_PRESCRIBED_X),
         ("WORKGROUP", WORKGROUP),
+        ("REDUCTION_SLOTS", reduction_slots::<T>()),
         ("RECORD_GLOBAL", RECORD_GLOBAL),
         ("RECORD_INTERFACE", RECORD_INTERFACE),
         ("RECORD_BULK", RECORD_BULK),
@@ -402,6 +403,14 @@ pub fn wgsl_prelude<T: GpuReal>() -> String {
         s += &decl;
     }
     s
+}
+
+/// Threads a sample's sums can be reduced across (`wg_sums` of
+/// shaders/record_common.wgsl): a power of two, at most 256, whose sums fit
+/// 16 KiB of workgroup memory (WebGPU's minimum limit; f64 sums are larger).
+pub fn reduction_slots<T: GpuReal>() -> u32 {
+    let fit = (16 * 1024 / std::mem::size_of::<GpuSampleSums<T>>()) as u32;
+    1 << fit.min(256).ilog2()
 }
 
 /// V·dt split as hi + lo with hi on 12 significant bits.
@@ -538,7 +547,7 @@ mod tests {
                 let target = b
                     .drive_target
                     .ds_add(fi * gc.drive_step_hi)
-                .ds_add(fi * gc.drive_step_lo);
+                    .ds_add(fi * gc.drive_step_lo);
                 let t = m.time_of_step(first + i as u64);
                 let exact = origin.as_f64() + 4.0e-4 * t;
                 let got = target.as_f64();
@@ -558,6 +567,10 @@ mod tests {
     fn wgsl_structs_match_the_rust_layout() {
         check_layouts::<f32>();
         check_layouts::<f64>();
+        // Mixed precision reduces across 256 threads as before; f64 sums
+        // (88 bytes) fit 128 in 16 KiB.
+        assert_eq!(reduction_slots::<f32>(), 256);
+        assert_eq!(reduction_slots::<f64>(), 128);
         assert_eq!(size_of::<GpuDisp<f32>>(), size_of::<[DoubleSingle; 2]>());
         assert_eq!(size_of::<GpuDisp<f64>>(), size_of::<[f64; 2]>());
         // Mixed precision keeps its 12-byte junction springs.
@@ -592,7 +605,11 @@ mod tests {
                 assert_eq!(m.offset as usize, offset, "{name}.{field}: offset");
             }
         };
-        check("Consts", size_of::<GpuConsts<T>>(), GpuConsts::<T>::fields());
+        check(
+            "Consts",
+            size_of::<GpuConsts<T>>(),
+            GpuConsts::<T>::fields(),
+        );
         check("Batch", size_of::<GpuBatch<T>>(), GpuBatch::<T>::fields());
         check("Disp", size_of::<GpuDisp<T>>(), GpuDisp::<T>::fields());
         check(

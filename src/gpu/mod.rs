@@ -44,9 +44,9 @@ use bytemuck::Zeroable;
 use context::GpuContext;
 use layout::{GpuBatch, GpuConsts, GpuJunctionSpring, GpuStatus, WORKGROUP};
 use options::*;
-pub use precision::GpuReal;
-use precision::Coord;
 pub use options::{GpuOptions, GpuOutput, GpuPath, PERSISTENT_MAX_BLOCKS, PERSISTENT_THREADS};
+use precision::Coord;
+pub use precision::GpuReal;
 pub use record_pipelines::RECORD_SMALL_BLOCKS;
 
 use scene_state::gpu_junction_springs;
@@ -139,6 +139,9 @@ impl Shape {
 /// precision (`GpuEngine::DISP_BYTES` and others do).
 const WORD_PAIR_BYTES: usize = std::mem::size_of::<[u32; 2]>();
 const STATUS_BYTES: usize = std::mem::size_of::<GpuStatus>();
+/// What the persistent kernel's unused record bindings hold at least (the
+/// plan, an entry, a word of rows); the sums need `GpuEngine::SUMS_BYTES`.
+const PLACEHOLDER_BYTES: usize = 64;
 
 /// One scene: its model, constants and where it stands.
 struct Scene<T: GpuReal> {
@@ -239,6 +242,7 @@ impl<T: GpuReal> GpuEngine<T> {
     const DISP_BYTES: usize = std::mem::size_of::<[Coord<T>; 2]>();
     const REAL_PAIR_BYTES: usize = std::mem::size_of::<[T; 2]>();
     const SPRING_BYTES: usize = std::mem::size_of::<GpuJunctionSpring<T>>();
+    const SUMS_BYTES: usize = std::mem::size_of::<layout::GpuSampleSums<T>>();
 
     /// The engine in precision `T` (`GpuEngine::<f64>::with_precision`) on
     /// the best adapter; f64 fails on an adapter without SHADER_F64.
@@ -276,8 +280,14 @@ impl<T: GpuReal> GpuEngine<T> {
             String::new()
         };
         for (name, bytes) in [
-            ("block displacement", (scene_count * n * Self::DISP_BYTES) as u64),
-            ("junction spring", (scene_count * nj * Self::SPRING_BYTES) as u64),
+            (
+                "block displacement",
+                (scene_count * n * Self::DISP_BYTES) as u64,
+            ),
+            (
+                "junction spring",
+                (scene_count * nj * Self::SPRING_BYTES) as u64,
+            ),
         ] {
             if bytes > limit.min(max_buffer) {
                 return Err(EngineError::Gpu(format!(
@@ -390,7 +400,13 @@ impl<T: GpuReal> GpuEngine<T> {
                 "lane partial sums",
                 bytemuck::cast_slice(&vec![T::zero(); s * shape.nx * shape.lanes]),
             ),
-            record_placeholders: std::array::from_fn(|_| storage("no records", &[0u8; 64])),
+            // One element of the largest record struct in this precision.
+            record_placeholders: std::array::from_fn(|_| {
+                storage(
+                    "no records",
+                    &vec![0u8; PLACEHOLDER_BYTES.max(Self::SUMS_BYTES)],
+                )
+            }),
         };
         // The step offsets 0..ONE_STEP_BATCH, one per dynamic-offset stride.
         let offset_stride = (ctx.limits.min_storage_buffer_offset_alignment as u64).max(4);
@@ -639,7 +655,12 @@ impl<T: GpuReal> GpuEngine<T> {
                 submission_index: Some(batch.submission),
                 timeout: None,
             })
-            .map_err(|e| EngineError::Gpu(format!("device lost: {e}")))?;
+            // A submit the device refused (its validation error) shows as
+            // a wait on a submission that never was: report the refusal.
+            .map_err(|e| match self.ctx.check() {
+                Err(refused) => refused,
+                Ok(()) => EngineError::Gpu(format!("device lost: {e}")),
+            })?;
         batch
             .mapped
             .recv()
@@ -900,8 +921,10 @@ impl<T: GpuReal> Engine for GpuEngine<T> {
     fn record_samples(&mut self, plan: &SamplePlan) -> Result<bool, EngineError> {
         let persistent = self.kernel == Kernel::Persistent;
         // The persistent kernel reduces a sample across its workgroup: a
-        // power of two of at most 256 threads (shaders/record_common.wgsl).
-        let reducible = self.persistent_threads.is_power_of_two() && self.persistent_threads <= 256;
+        // power of two of at most REDUCTION_SLOTS threads
+        // (shaders/record_common.wgsl).
+        let reducible = self.persistent_threads.is_power_of_two()
+            && self.persistent_threads <= layout::reduction_slots::<T>();
         if self.output == GpuOutput::Host
             || self.ensemble
             || (persistent && !reducible)

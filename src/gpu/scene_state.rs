@@ -217,13 +217,7 @@ impl<T: GpuReal> GpuEngine<T> {
         let pair = Self::REAL_PAIR_BYTES;
         self.write_scene(&b.force, k, n, pair, bytemuck::cast_slice(&force));
         let contact = state.contact_as::<T>();
-        self.write_scene(
-            &b.contact,
-            k,
-            nx,
-            pair,
-            bytemuck::cast_slice(&contact),
-        );
+        self.write_scene(&b.contact, k, nx, pair, bytemuck::cast_slice(&contact));
         self.write_scene(
             &b.junction_spring,
             k,

@@ -51,8 +51,8 @@ pub fn validate_record<T: GpuReal>() -> Result<naga::Module, String> {
     let module = naga::front::wgsl::parse_str(&src)
         .map_err(|e| format!("record: {}", e.emit_to_string(&src)))?;
     naga::valid::Validator::new(naga::valid::ValidationFlags::all(), T::CAPABILITIES)
-    .validate(&module)
-    .map_err(|e| format!("record: {}", e.emit_to_string(&src)))?;
+        .validate(&module)
+        .map_err(|e| format!("record: {}", e.emit_to_string(&src)))?;
     for name in ["record_small", "record_sample", "record_finish"] {
         if !module.entry_points.iter().any(|e| e.name == name) {
             return Err(format!("record: entry point {name} missing"));
@@ -186,8 +186,8 @@ pub fn validate_kernel<T: GpuReal>(phase: Kernel, ensemble: bool) -> Result<naga
     let module = naga::front::wgsl::parse_str(&src)
         .map_err(|e| format!("{}: {}", phase.entry_point(), e.emit_to_string(&src)))?;
     naga::valid::Validator::new(naga::valid::ValidationFlags::all(), T::CAPABILITIES)
-    .validate(&module)
-    .map_err(|e| format!("{}: {}", phase.entry_point(), e.emit_to_string(&src)))?;
+        .validate(&module)
+        .map_err(|e| format!("{}: {}", phase.entry_point(), e.emit_to_string(&src)))?;
     if !module
         .entry_points
         .iter()
