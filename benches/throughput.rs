@@ -1,6 +1,9 @@
 //! Block-steps per second of the engines on the Table S1 scene and on a
 //! 1024×256 lattice with junctions. `cargo bench --bench throughput`;
 //! prints a Markdown table (see BENCHMARKS.md for recorded results).
+//! SLIPFRONT_BENCH_GPU=1 adds the GPU kernels in mixed f32, and
+//! SLIPFRONT_BENCH_GPU_F64=1 the same kernels in f64 (adapters with
+//! SHADER_F64), to time f64 against mixed f32 on one card.
 
 use slipfront::backend::{make_engine, Backend, Precision};
 use slipfront::gpu::{GpuEngine, GpuOptions, GpuPath};
@@ -33,13 +36,20 @@ fn measure(model: &Model, engine: Result<Box<dyn Engine>, EngineError>) -> Optio
     }
 }
 
-/// The GPU engine on `path`.
-fn gpu_engine(model: &Model, path: GpuPath) -> Result<Box<dyn Engine>, EngineError> {
+/// The GPU engine on `path`, in mixed f32 or in f64.
+fn gpu_engine(
+    model: &Model,
+    path: GpuPath,
+    precision: Precision,
+) -> Result<Box<dyn Engine>, EngineError> {
     let opts = GpuOptions {
         path,
         ..GpuOptions::default()
     };
-    Ok(Box::new(GpuEngine::with_options(model, opts)?))
+    Ok(match precision {
+        Precision::F64 => Box::new(GpuEngine::<f64>::with_precision(model, opts)?),
+        _ => Box::new(GpuEngine::with_options(model, opts)?),
+    })
 }
 
 fn main() {
@@ -48,6 +58,7 @@ fn main() {
         .filter(|a| !a.starts_with('-'))
         .collect();
     let gpu = std::env::var("SLIPFRONT_BENCH_GPU").is_ok();
+    let gpu_f64 = std::env::var("SLIPFRONT_BENCH_GPU_F64").is_ok();
     let scaling = std::env::var("SLIPFRONT_BENCH_SCALING").is_ok();
     let mut sizes: Vec<(u32, u32)> = vec![(57, 31), (1024, 256)];
     if scaling {
@@ -90,6 +101,9 @@ fn main() {
         if gpu {
             configs.push((Backend::Gpu, Precision::F32, 0));
         }
+        if gpu_f64 {
+            configs.push((Backend::Gpu, Precision::F64, 0));
+        }
         for (backend, precision, threads) in configs {
             let bytes = match precision {
                 Precision::F64 => model.memory_bytes(8, 8),
@@ -108,7 +122,7 @@ fn main() {
             };
             for path in paths {
                 let engine = match path {
-                    Some(p) => gpu_engine(&model, p),
+                    Some(p) => gpu_engine(&model, p, precision),
                     None => make_engine(&model, backend, precision, threads),
                 };
                 match measure(&model, engine) {

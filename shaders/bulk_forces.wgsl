@@ -9,7 +9,7 @@ override USE_SIDE_SPRING: bool = true;
 override USE_RELAXATION: bool = true;    // any absolute damping (relaxation or driving)
 override USE_PRESTRESS: bool = true;
 
-fn top_share(ix: u32) -> f32 {
+fn top_share(ix: u32) -> real {
     if c.nx == 1u {
         return 1.0;
     }
@@ -20,20 +20,20 @@ fn top_share(ix: u32) -> f32 {
 }
 
 // Relative line load of column ix (CPU twin: laws::normal_profile).
-fn normal_profile(ix: u32) -> f32 {
+fn normal_profile(ix: u32) -> real {
     if c.nx == 1u {
         return 1.0;
     }
-    let x = f32(ix) / f32(c.nx - 1u);
+    let x = real(ix) / real(c.nx - 1u);
     return 1.0 + c.normal_slope * (1.0 - (x + x));
 }
 
-fn bulk_force(i: u32, ld: Loads) -> vec2<f32> {
+fn bulk_force(i: u32, ld: Loads) -> vec2<real> {
     let ix = i32(i % c.nx);
     let iz = i32(i / c.nx);
     let ui = load_disp(i);
     let vi = load_vel(i);
-    var f = vec2<f32>(0.0, 0.0);
+    var f = vec2<real>(0.0, 0.0);
     for (var b = 0u; b < 8u; b++) {
         let d = STENCIL[b];
         let jx = ix + d.x;
@@ -42,32 +42,32 @@ fn bulk_force(i: u32, ld: Loads) -> vec2<f32> {
             continue;
         }
         let j = u32(jz) * c.nx + u32(jx);
-        let r0 = vec2<f32>(f32(d.x) * c.spacing, f32(d.y) * c.spacing);
+        let r0 = vec2<real>(real(d.x) * c.spacing, real(d.y) * c.spacing);
         let rest = STENCIL_LENGTH[b] * c.spacing;
         let kb = STENCIL_STIFFNESS[b] * c.k;
         let uj = load_disp(j);
-        let du = vec2<f32>(ds_diff(uj.x, ui.x), ds_diff(uj.z, ui.z));
+        let du = vec2<real>(coord_diff(uj.x, ui.x), coord_diff(uj.z, ui.z));
         let r = r0 + du;
         let len = sqrt(r.x * r.x + r.y * r.y);
         // Elongation without cancellation: (|r|² − l²)/(|r| + l).
         let stretch = (2.0 * (r0.x * du.x + r0.y * du.y) + (du.x * du.x + du.y * du.y)) / (len + rest);
         let inv_len = 1.0 / len;
-        let n = vec2<f32>(r.x * inv_len, r.y * inv_len);
+        let n = vec2<real>(r.x * inv_len, r.y * inv_len);
         let spring = kb * stretch;
-        f = vec2<f32>(f.x + spring * n.x, f.y + spring * n.y);
+        f = vec2<real>(f.x + spring * n.x, f.y + spring * n.y);
         if DAMPING_FORM != 0u {
             let dv = load_vel(j) - vi;
             if DAMPING_FORM == 2u {
                 let along = c.eta * (dv.x * n.x + dv.y * n.y);
-                f = vec2<f32>(f.x + along * n.x, f.y + along * n.y);
+                f = vec2<real>(f.x + along * n.x, f.y + along * n.y);
             } else {
-                f = vec2<f32>(f.x + c.eta * dv.x, f.y + c.eta * dv.y);
+                f = vec2<real>(f.x + c.eta * dv.x, f.y + c.eta * dv.y);
             }
         }
     }
     let fl = flags[i];
     if USE_FOUNDATION && (fl & FLAG_INTERFACE) != 0u {
-        f.y = f.y + foundation_normal(ui.z.x);
+        f.y = f.y + foundation_normal(coord_value(ui.z));
     }
     if USE_PRESTRESS && (fl & FLAG_INTERFACE) != 0u {
         let total = select(ld.interface_shear_total, ld.strip_shear_total, u32(ix) < c.strip_blocks);
@@ -79,10 +79,10 @@ fn bulk_force(i: u32, ld: Loads) -> vec2<f32> {
         f.x = f.x + ld.top_tangential_total * share;
     }
     if USE_SIDE_SPRING && (fl & FLAG_DRIVEN) != 0u && !ld.preparing {
-        f.x = f.x + c.drive_stiffness * ds_diff(ld.drive_target, ui.x);
+        f.x = f.x + c.drive_stiffness * coord_diff(ld.drive_target, ui.x);
     }
     if USE_RELAXATION {
-        f = vec2<f32>(f.x - ld.absolute_eta * vi.x, f.y - ld.absolute_eta * vi.y);
+        f = vec2<real>(f.x - ld.absolute_eta * vi.x, f.y - ld.absolute_eta * vi.y);
     }
     return f;
 }

@@ -7,10 +7,10 @@
 // scene_ensemble.wgsl), with the offsets of that scene in every buffer.
 // Force on each block from everything but friction, at the state the step
 // starts from.
-@group(0) @binding(5) var<storage, read_write> force: array<vec2<f32>>;
+@group(0) @binding(5) var<storage, read_write> force: array<vec2<real>>;
 @group(0) @binding(6) var<storage, read> flags: array<u32>;
 // (friction along x, normal force) per interface block.
-@group(0) @binding(7) var<storage, read_write> contact: array<vec2<f32>>;
+@group(0) @binding(7) var<storage, read_write> contact: array<vec2<real>>;
 // Index ix * Ns + j.
 @group(0) @binding(8) var<storage, read_write> junction_spring: array<JunctionSpring>;
 // (slip steps left or PINNED, rupture count) per junction.
@@ -34,7 +34,7 @@ override FRICTION_LAW: u32 = 1u;
 
 // Normal force the foundation carries under an interface block
 // (CPU twin: cpu::junctions::foundation_normal).
-fn foundation_normal(uz: f32) -> f32 {
+fn foundation_normal(uz: real) -> real {
     return c.k_foundation * max(-uz, 0.0);
 }
 
@@ -44,24 +44,24 @@ fn foundation_normal(uz: f32) -> f32 {
 // batch.anchor_offset + i steps.
 struct Loads {
     preparing: bool,
-    normal_total: f32,
-    top_tangential_total: f32,
-    absolute_eta: f32,
-    interface_shear_total: f32,
-    strip_shear_total: f32,
-    top_velocity: f32,
-    drive_target: vec2<f32>,
+    normal_total: real,
+    top_tangential_total: real,
+    absolute_eta: real,
+    interface_shear_total: real,
+    strip_shear_total: real,
+    top_velocity: real,
+    drive_target: coord,
 }
 
 fn loads_at(i: u32) -> Loads {
-    var ramp = 1.0;
+    var ramp: real = 1.0;
     if batch.ramping != 0u {
-        ramp = f32(batch.first_step + i) * c.inv_ramp_steps;
+        ramp = real(batch.first_step + i) * c.inv_ramp_steps;
     }
     let preparing = batch.preparing != 0u;
     // Steps from the batch's anchor (< 4096): the drive's time and target at
     // a step do not depend on where batches begin.
-    let fi = f32(batch.anchor_offset + i);
+    let fi = real(batch.anchor_offset + i);
     var ld: Loads;
     ld.preparing = preparing;
     ld.normal_total = c.normal_force * ramp;
@@ -70,7 +70,7 @@ fn loads_at(i: u32) -> Loads {
     ld.interface_shear_total = 0.0;
     ld.strip_shear_total = 0.0;
     ld.top_velocity = 0.0;
-    ld.drive_target = vec2<f32>(batch.drive_target_hi, batch.drive_target_lo);
+    ld.drive_target = batch.drive_target;
     if !preparing {
         let drive_time = batch.drive_time + fi * c.dt;
         ld.top_tangential_total = ld.top_tangential_total + c.top_force_rate * drive_time;
@@ -79,20 +79,21 @@ fn loads_at(i: u32) -> Loads {
         ld.interface_shear_total = c.interface_shear_force;
         ld.strip_shear_total = c.strip_shear_force;
         // fi·hi is exact (hi has 12 significant bits, fi < 4096).
-        ld.drive_target = ds_add(ds_add(ld.drive_target, fi * c.drive_step_hi), fi * c.drive_step_lo);
+        ld.drive_target = coord_add(coord_add(ld.drive_target, fi * c.drive_step_hi), fi * c.drive_step_lo);
     }
     return ld;
 }
 
-// Records the first blow-up (non-finite or faster than c_p).
-fn report_blow_up(i: u32, step: u32, u: Disp, v: vec2<f32>) {
+// Records the first blow-up (non-finite or faster than c_p); the status
+// words hold real values whatever the precision.
+fn report_blow_up(i: u32, step: u32, u: Disp, v: vec2<real>) {
     let s = status_base();
     if atomicAdd(&status[s], 1u) == 0u {
         atomicStore(&status[s + 1u], step);
         atomicStore(&status[s + 2u], i);
-        atomicStore(&status[s + 3u], bitcast<u32>(u.x.x + u.x.y));
-        atomicStore(&status[s + 4u], bitcast<u32>(u.z.x + u.z.y));
-        atomicStore(&status[s + 5u], bitcast<u32>(v.x));
-        atomicStore(&status[s + 6u], bitcast<u32>(v.y));
+        atomicStore(&status[s + 3u], bitcast<u32>(coord_f32(u.x)));
+        atomicStore(&status[s + 4u], bitcast<u32>(coord_f32(u.z)));
+        atomicStore(&status[s + 5u], bitcast<u32>(f32(v.x)));
+        atomicStore(&status[s + 6u], bitcast<u32>(f32(v.y)));
     }
 }

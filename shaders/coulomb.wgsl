@@ -1,16 +1,16 @@
 // Amontons–Coulomb friction on interface block ix, given the other forces
 // along x; returns (friction, normal force). CPU twin: src/cpu/coulomb.rs.
 
-fn coulomb(ix: u32, other: f32, ld: Loads) -> vec2<f32> {
+fn coulomb(ix: u32, other: real, ld: Loads) -> vec2<real> {
     let u = load_disp(ix);
     let v = load_vel(ix);
-    let normal = foundation_normal(u.z.x);
+    let normal = foundation_normal(coord_value(u.z));
     var state = slide[interface_base() + ix];
     var dir = state.x;
-    if dir != 0 && v.x * f32(dir) <= 0.0 {
+    if dir != 0 && v.x * real(dir) <= 0.0 {
         dir = 0;
     }
-    var friction = 0.0;
+    var friction: real = 0.0;
     if dir == 0 {
         // Friction that brings the block to rest this step.
         let hold = -other - c.mass * v.x / c.dt;
@@ -19,11 +19,11 @@ fn coulomb(ix: u32, other: f32, ld: Loads) -> vec2<f32> {
         } else {
             dir = select(-1, 1, other > 0.0);
             state.y = state.y + 1;
-            friction = -c.mu_d * normal * f32(dir);
+            friction = -c.mu_d * normal * real(dir);
         }
     } else {
-        friction = -c.mu_d * normal * f32(dir);
+        friction = -c.mu_d * normal * real(dir);
     }
     slide[interface_base() + ix] = vec2<i32>(dir, state.y);
-    return vec2<f32>(friction, normal);
+    return vec2<real>(friction, normal);
 }

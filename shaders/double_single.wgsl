@@ -21,3 +21,55 @@ fn ds_add(a: vec2<f32>, d: f32) -> vec2<f32> {
 fn ds_diff(a: vec2<f32>, b: vec2<f32>) -> f32 {
     return (a.x - b.x) + (a.y - b.y);
 }
+
+// The coordinate interface the kernels use (shaders/coord_f64.wgsl is the
+// f64 one): the prelude declares `alias coord = vec2<f32>;`, and packed
+// coordinates (junction anchors, array<f32, 2>: 4-byte aligned, so a
+// JunctionSpring stays 12 bytes).
+fn coord_add(a: coord, d: real) -> coord {
+    return ds_add(a, d);
+}
+
+fn coord_diff(a: coord, b: coord) -> real {
+    return ds_diff(a, b);
+}
+
+// The value rounded to f32 as the CPU twin's Coordinate::value: hi.
+fn coord_value(a: coord) -> real {
+    return a.x;
+}
+
+// hi + lo rounded once.
+fn coord_rounded(a: coord) -> real {
+    return a.x + a.y;
+}
+
+fn coord_f32(a: coord) -> f32 {
+    return a.x + a.y;
+}
+
+// The two words an output row stores (hi, lo).
+fn coord_hi(a: coord) -> real {
+    return a.x;
+}
+
+fn coord_lo(a: coord) -> real {
+    return a.y;
+}
+
+fn coord_pack(a: coord) -> packed_coord {
+    return packed_coord(a.x, a.y);
+}
+
+fn coord_unpack(p: packed_coord) -> coord {
+    return vec2<f32>(p[0], p[1]);
+}
+
+// The junction RNG's transcendental functions (f32 has them built in).
+fn real_ln(x: real) -> real {
+    return log(x);
+}
+
+fn real_cos(x: real) -> real {
+    return cos(x);
+}

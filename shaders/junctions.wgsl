@@ -5,7 +5,7 @@
 // caller adds the lane sums in lane order.
 // CPU twin: src/cpu/junctions.rs junction_lane.
 
-fn junction_stiffness(f_n: f32) -> f32 {
+fn junction_stiffness(f_n: real) -> real {
     if c.stiffness_normal_load != 0u {
         return sqrt(c.junction_stiffness_value * f_n);
     }
@@ -14,23 +14,23 @@ fn junction_stiffness(f_n: f32) -> f32 {
 
 // What every junction of interface block ix needs this step.
 struct JunctionBlock {
-    ux: vec2<f32>,
-    f_n: f32,
-    threshold: f32,
-    sliding: f32,
+    ux: coord,
+    f_n: real,
+    threshold: real,
+    sliding: real,
 }
 
 fn junction_block(ix: u32) -> JunctionBlock {
     let u = load_disp(ix);
-    let f_n = foundation_normal(u.z.x) / f32(c.junction_count);
+    let f_n = foundation_normal(coord_value(u.z)) / real(c.junction_count);
     return JunctionBlock(u.x, f_n, c.mu_s * f_n, -c.mu_d * f_n * sign(load_vel(ix).x));
 }
 
-fn junction_lane(ix: u32, lane: u32, jb: JunctionBlock, ld: Loads) -> f32 {
+fn junction_lane(ix: u32, lane: u32, jb: JunctionBlock, ld: Loads) -> real {
     let f_n = jb.f_n;
     let threshold = jb.threshold;
     let sliding = jb.sliding;
-    var total = 0.0;
+    var total: real = 0.0;
     for (var j = lane; j < c.junction_count; j += JUNCTION_LANES) {
         let idx = junction_base() + ix * c.junction_count + j;
         var spring = junction_spring[idx];
@@ -39,7 +39,7 @@ fn junction_lane(ix: u32, lane: u32, jb: JunctionBlock, ld: Loads) -> f32 {
             // A lifted block (f_N = 0) keeps its junctions waiting at 0.
             state.x = max(state.x, 1u) - 1u;
             if state.x == 0u && f_n > 0.0 {
-                spring = JunctionSpring(jb.ux.x, jb.ux.y, junction_stiffness(f_n));
+                spring = JunctionSpring(coord_pack(jb.ux), junction_stiffness(f_n));
                 state.x = PINNED;
             }
         }
@@ -49,8 +49,7 @@ fn junction_lane(ix: u32, lane: u32, jb: JunctionBlock, ld: Loads) -> f32 {
                 // While the normal load is applied, attachment is continuous.
                 spring.stiffness = junction_stiffness(f_n);
             }
-            let anchor = vec2<f32>(spring.anchor_hi, spring.anchor_lo);
-            f = -spring.stiffness * ds_diff(jb.ux, anchor);
+            f = -spring.stiffness * coord_diff(jb.ux, coord_unpack(spring.anchor));
             if !ld.preparing && abs(f) > threshold {
                 let count = state.y + 1u;
                 state.y = count;

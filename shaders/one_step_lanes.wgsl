@@ -7,7 +7,7 @@
 // software adapters take one_step (serial lanes) instead.
 // CPU twin: src/cpu/mod.rs CpuEngine::one_step (force pass and update).
 
-var<workgroup> lane_sum: array<f32, JUNCTION_LANES>;
+var<workgroup> lane_sum: array<real, JUNCTION_LANES>;
 
 @compute @workgroup_size(WORKGROUP)
 fn one_step_lanes(
@@ -31,8 +31,8 @@ fn one_step_lanes(
     workgroupBarrier();
     if junction_group {
         if local == 0u {
-            var f: vec2<f32>;
-            var friction = 0.0;
+            var f: vec2<real>;
+            var friction: real = 0.0;
             if ready {
                 f = force[block_base() + w];
                 friction = contact[interface_base() + w].x;
@@ -42,7 +42,7 @@ fn one_step_lanes(
                     friction = friction + lane_sum[l];
                 }
                 force[block_base() + w] = f;
-                contact[interface_base() + w] = vec2<f32>(friction, foundation_normal(load_disp(w).z.x));
+                contact[interface_base() + w] = vec2<real>(friction, foundation_normal(coord_value(load_disp(w).z)));
             }
             if update {
                 verlet(w, f, friction, ld, i_step);

@@ -91,19 +91,19 @@ fn persistent_steps(
             }
         }
         for (var i = t; i < c.n_blocks; i += PERSISTENT_THREADS) {
-            var friction = 0.0;
+            var friction: real = 0.0;
             if FRICTION_LAW != LAW_NONE && i < c.nx {
                 if FRICTION_LAW == LAW_JUNCTIONS && !ready {
                     for (var l = 0u; l < lanes; l++) {
                         friction = friction + lane_partial[lane_base() + i * lanes + l];
                     }
-                    contact[interface_base() + i] = vec2<f32>(friction, foundation_normal(load_disp(i).z.x));
+                    contact[interface_base() + i] = vec2<real>(friction, foundation_normal(coord_value(load_disp(i).z)));
                 } else {
                     friction = contact[interface_base() + i].x;
                 }
             }
             if sampling {
-                var normal = 0.0;
+                var normal: real = 0.0;
                 if i < c.nx {
                     normal = contact[interface_base() + i].y;
                 }

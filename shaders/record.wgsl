@@ -14,12 +14,12 @@
 // record_sample.
 
 @group(0) @binding(1) var<storage, read> disp_a: array<Disp>;
-@group(0) @binding(2) var<storage, read> vel_a: array<vec2<f32>>;
+@group(0) @binding(2) var<storage, read> vel_a: array<vec2<real>>;
 @group(0) @binding(3) var<storage, read> disp_b: array<Disp>;
-@group(0) @binding(4) var<storage, read> vel_b: array<vec2<f32>>;
-@group(0) @binding(5) var<storage, read> force: array<vec2<f32>>;
+@group(0) @binding(4) var<storage, read> vel_b: array<vec2<real>>;
+@group(0) @binding(5) var<storage, read> force: array<vec2<real>>;
 @group(0) @binding(6) var<storage, read> flags: array<u32>;
-@group(0) @binding(7) var<storage, read> contact: array<vec2<f32>>;
+@group(0) @binding(7) var<storage, read> contact: array<vec2<real>>;
 @group(0) @binding(9) var<storage, read> junction_state: array<vec2<u32>>;
 @group(0) @binding(10) var<storage, read> slide: array<vec2<i32>>;
 @group(1) @binding(0) var<storage, read> entry: RecordEntry;
@@ -32,7 +32,7 @@ override RECORD_THREADS: u32 = 256u;
 // Block i of the sample the entry names, from the copy it names.
 fn block_of_entry(i: u32) -> SampleSums {
     var u: Disp;
-    var v_half: vec2<f32>;
+    var v_half: vec2<real>;
     if entry.copy == 1u {
         u = disp_b[i];
         v_half = vel_b[i];
@@ -40,7 +40,7 @@ fn block_of_entry(i: u32) -> SampleSums {
         u = disp_a[i];
         v_half = vel_a[i];
     }
-    var contact_i = vec2<f32>(0.0, 0.0);
+    var contact_i = vec2<real>(0.0, 0.0);
     if i < c.nx {
         contact_i = contact[i];
     }

@@ -7,4 +7,4 @@
 
 @group(0) @binding(13) var<storage, read_write> plan: RecordPlan;
 @group(0) @binding(14) var<storage, read_write> sums: array<SampleSums>;
-@group(0) @binding(15) var<storage, read_write> rows: array<f32>;
+@group(0) @binding(15) var<storage, read_write> rows: array<real>;

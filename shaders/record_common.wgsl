@@ -45,15 +45,15 @@ fn block_sample(
     i: u32,
     e: RecordEntry,
     u: Disp,
-    v_half: vec2<f32>,
-    f: vec2<f32>,
-    friction: f32,
-    normal: f32,
+    v_half: vec2<real>,
+    f: vec2<real>,
+    friction: real,
+    normal: real,
 ) -> SampleSums {
     // The velocity at the instant of u (CPU twin:
     // engine::synchronised_velocity); samples are taken while driving.
     let half_dt_over_m = 0.5 * c.dt * c.inv_mass;
-    var v = vec2<f32>(v_half.x + half_dt_over_m * (f.x + friction), v_half.y + half_dt_over_m * f.y);
+    var v = vec2<real>(v_half.x + half_dt_over_m * (f.x + friction), v_half.y + half_dt_over_m * f.y);
     let fl = flags[i];
     if (fl & FLAG_FIX_X) != 0u {
         v.x = 0.0;
@@ -75,9 +75,9 @@ fn block_sample(
             pinned += select(0u, 1u, state.x == PINNED);
             ruptures += state.y;
         }
-        var fraction = f32(pinned) / f32(max(ns, 1u));
+        var fraction = real(pinned) / real(max(ns, 1u));
         if ns == 0u {
-            fraction = select(0.0, 1.0, slide[i].x == 0);
+            fraction = select(real(0.0), real(1.0), slide[i].x == 0);
         }
         s.friction = friction;
         s.pinned = fraction;
@@ -86,8 +86,8 @@ fn block_sample(
         s.ruptures_lo = ruptures;
         if interface_due(e) {
             let at = plan.interface_offset + (e.interface_slot * c.nx + i) * RECORD_INTERFACE_WORDS;
-            rows[at] = u.x.x;
-            rows[at + 1u] = u.x.y;
+            rows[at] = coord_hi(u.x);
+            rows[at + 1u] = coord_lo(u.x);
             rows[at + 2u] = friction;
             rows[at + 3u] = normal;
             rows[at + 4u] = fraction;
@@ -95,24 +95,26 @@ fn block_sample(
         }
     }
     if i == plan.driven_block {
-        s.driven_ux_hi = u.x.x;
-        s.driven_ux_lo = u.x.y;
+        s.driven_ux_hi = coord_hi(u.x);
+        s.driven_ux_lo = coord_lo(u.x);
     }
     if plan.top_reaction != 0u && i >= c.n_blocks - c.nx {
         s.top_reaction = c.mass * (c.drive_velocity - v_half.x) / c.dt - f.x - friction;
     }
     if (e.channels & RECORD_BULK) != 0u {
         let at = plan.bulk_offset + (e.bulk_slot * c.n_blocks + i) * RECORD_BULK_WORDS;
-        // hi + lo rounded once: the f32 of the f64 displacement.
-        rows[at] = u.x.x + u.x.y;
-        rows[at + 1u] = u.z.x + u.z.y;
+        // hi + lo rounded once: the displacement in the kernels' precision.
+        rows[at] = coord_rounded(u.x);
+        rows[at + 1u] = coord_rounded(u.z);
         rows[at + 2u] = v.x;
         rows[at + 3u] = v.y;
     }
     return s;
 }
 
-var<workgroup> wg_sums: array<SampleSums, 256>;
+// REDUCTION_SLOTS (prelude): 256 in mixed precision, fewer in f64, whose
+// sums are larger (layout::reduction_slots).
+var<workgroup> wg_sums: array<SampleSums, REDUCTION_SLOTS>;
 var<workgroup> wg_go: u32;
 
 // Reduces wg_sums[0..width] to wg_sums[0] (a fixed tree: the same bits

@@ -10,19 +10,19 @@ fn draw_key(seed: u32, block: u32, junction: u32, count: u32) -> u32 {
     return pcg_hash(count ^ pcg_hash(junction ^ pcg_hash(block ^ pcg_hash(seed))));
 }
 
-fn unit_from_bits(bits: u32) -> f32 {
-    return (f32(bits >> 8u) + 1.0) * (1.0 / 16777216.0);
+fn unit_from_bits(bits: u32) -> real {
+    return (real(bits >> 8u) + 1.0) * (1.0 / 16777216.0);
 }
 
-fn standard_normal(seed: u32, block: u32, junction: u32, count: u32) -> f32 {
+fn standard_normal(seed: u32, block: u32, junction: u32, count: u32) -> real {
     let a = pcg_hash(draw_key(seed, block, junction, count));
     let b = pcg_hash(a);
     let u1 = unit_from_bits(a);
     let u2 = unit_from_bits(b);
-    return sqrt(-2.0 * log(u1)) * cos(6.2831855 * u2);
+    return sqrt(-2.0 * real_ln(u1)) * real_cos(6.283185307179586 * u2);
 }
 
-fn slip_steps(seed: u32, block: u32, junction: u32, count: u32, mean_steps: f32, std_steps: f32) -> u32 {
+fn slip_steps(seed: u32, block: u32, junction: u32, count: u32, mean_steps: real, std_steps: real) -> u32 {
     let z = standard_normal(seed, block, junction, count);
     // floor(x + 0.5): Rust's round() for the non-negative values used here.
     let steps = floor(max(mean_steps + std_steps * z, 0.0) + 0.5);

@@ -4,9 +4,9 @@
 // and the step offset (one bind group for all dispatches, see common.wgsl).
 
 @group(0) @binding(1) var<storage, read_write> disp_a: array<Disp>;
-@group(0) @binding(2) var<storage, read_write> vel_a: array<vec2<f32>>;
+@group(0) @binding(2) var<storage, read_write> vel_a: array<vec2<real>>;
 @group(0) @binding(3) var<storage, read_write> disp_b: array<Disp>;
-@group(0) @binding(4) var<storage, read_write> vel_b: array<vec2<f32>>;
+@group(0) @binding(4) var<storage, read_write> vel_b: array<vec2<real>>;
 
 fn reads_b() -> bool {
     return ((batch.parity + step_offset) & 1u) == 1u;
@@ -19,14 +19,14 @@ fn load_disp(i: u32) -> Disp {
     return disp_a[block_base() + i];
 }
 
-fn load_vel(i: u32) -> vec2<f32> {
+fn load_vel(i: u32) -> vec2<real> {
     if reads_b() {
         return vel_b[block_base() + i];
     }
     return vel_a[block_base() + i];
 }
 
-fn store_block(i: u32, u: Disp, v: vec2<f32>) {
+fn store_block(i: u32, u: Disp, v: vec2<real>) {
     if reads_b() {
         disp_a[block_base() + i] = u;
         vel_a[block_base() + i] = v;

@@ -4,18 +4,18 @@
 // the force and the update phases.
 
 @group(0) @binding(1) var<storage, read_write> disp: array<Disp>;
-@group(0) @binding(2) var<storage, read_write> vel: array<vec2<f32>>;
-@group(0) @binding(12) var<storage, read_write> lane_partial: array<f32>;
+@group(0) @binding(2) var<storage, read_write> vel: array<vec2<real>>;
+@group(0) @binding(12) var<storage, read_write> lane_partial: array<real>;
 
 fn load_disp(i: u32) -> Disp {
     return disp[block_base() + i];
 }
 
-fn load_vel(i: u32) -> vec2<f32> {
+fn load_vel(i: u32) -> vec2<real> {
     return vel[block_base() + i];
 }
 
-fn store_block(i: u32, u: Disp, v: vec2<f32>) {
+fn store_block(i: u32, u: Disp, v: vec2<real>) {
     disp[block_base() + i] = u;
     vel[block_base() + i] = v;
 }

@@ -4,17 +4,17 @@
 // the forces were computed already (by a snapshot's force pass): read them.
 // Returns (force, friction). CPU twin: src/cpu/mod.rs CpuEngine::force_pass.
 
-fn block_forces(i: u32, ld: Loads, ready: bool) -> vec3<f32> {
+fn block_forces(i: u32, ld: Loads, ready: bool) -> vec3<real> {
     if ready {
-        var friction = 0.0;
+        var friction: real = 0.0;
         if FRICTION_LAW != LAW_NONE && i < c.nx {
             friction = contact[interface_base() + i].x;
         }
-        return vec3<f32>(force[block_base() + i], friction);
+        return vec3<real>(force[block_base() + i], friction);
     }
     let f = bulk_force(i, ld);
     force[block_base() + i] = f;
-    var friction = 0.0;
+    var friction: real = 0.0;
     if FRICTION_LAW == LAW_COULOMB && i < c.nx {
         let cn = coulomb(i, f.x, ld);
         contact[interface_base() + i] = cn;
@@ -26,7 +26,7 @@ fn block_forces(i: u32, ld: Loads, ready: bool) -> vec3<f32> {
         for (var l = 0u; l < lanes; l++) {
             friction = friction + junction_lane(i, l, jb, ld);
         }
-        contact[interface_base() + i] = vec2<f32>(friction, foundation_normal(load_disp(i).z.x));
+        contact[interface_base() + i] = vec2<real>(friction, foundation_normal(coord_value(load_disp(i).z)));
     }
-    return vec3<f32>(f, friction);
+    return vec3<real>(f, friction);
 }

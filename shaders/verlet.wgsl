@@ -1,8 +1,8 @@
 // The leapfrog update of one block, v += dt F/m, u += dt v, with
-// constraints and prescribed motion; u is double-single, so the increment
-// dt v keeps its low bits. CPU twin: src/cpu/verlet.rs.
+// constraints and prescribed motion; u is a coordinate (double-single in mixed
+// precision), so the increment dt v keeps its low bits. CPU twin: src/cpu/verlet.rs.
 
-fn verlet(i: u32, f: vec2<f32>, friction: f32, ld: Loads, step: u32) {
+fn verlet(i: u32, f: vec2<real>, friction: real, ld: Loads, step: u32) {
     let v = load_vel(i);
     var vx = v.x + c.dt * ((f.x + friction) * c.inv_mass);
     var vz = v.y + c.dt * (f.y * c.inv_mass);
@@ -17,10 +17,10 @@ fn verlet(i: u32, f: vec2<f32>, friction: f32, ld: Loads, step: u32) {
         vx = ld.top_velocity;
     }
     let u = load_disp(i);
-    let next = Disp(ds_add(u.x, c.dt * vx), ds_add(u.z, c.dt * vz));
-    store_block(i, next, vec2<f32>(vx, vz));
+    let next = Disp(coord_add(u.x, c.dt * vx), coord_add(u.z, c.dt * vz));
+    store_block(i, next, vec2<real>(vx, vz));
     // NaN fails both comparisons.
     if !(abs(vx) <= c.speed_limit && abs(vz) <= c.speed_limit) {
-        report_blow_up(i, step, next, vec2<f32>(vx, vz));
+        report_blow_up(i, step, next, vec2<real>(vx, vz));
     }
 }

@@ -23,16 +23,34 @@ pub enum Backend {
 }
 
 impl Backend {
-    /// The precision when none is asked: f64, except on `--backend gpu`
-    /// (mixed f32, the GPU engine's only precision). `auto` never defaults to
-    /// mixed f32: on perturbation ensembles it was measured biased against
-    /// f64 (issue 31, results/precision_ensembles.md), so `auto` runs f64 on
-    /// the CPU unless `--precision f32` is asked.
+    /// The precision when none is asked: f64 everywhere it can run. Mixed
+    /// f32 is a choice, never a default where f64 exists (issue 31: whether
+    /// it gives f64's outcome distribution is a measured claim,
+    /// results/precision_ensembles.md). `--backend gpu` on an adapter
+    /// without SHADER_F64 is the one place it defaults to mixed f32, and it
+    /// says so.
     pub fn default_precision(self) -> Precision {
         match self {
             Backend::Cpu | Backend::CpuReference | Backend::Auto => Precision::F64,
-            Backend::Gpu => Precision::F32,
+            Backend::Gpu => gpu_default_precision(),
         }
+    }
+}
+
+/// f64 when the GPU adapter has SHADER_F64, else mixed f32 (saying why).
+/// Without an adapter, f64: building the engine then reports the missing
+/// adapter.
+fn gpu_default_precision() -> Precision {
+    match crate::gpu::context::shared() {
+        Ok(ctx) if ctx.check_precision::<f64>().is_err() => {
+            eprintln!(
+                "slipfront: {} has no SHADER_F64: the GPU runs in mixed f32 \
+                 (--backend cpu for f64)",
+                ctx.info.name
+            );
+            Precision::F32
+        }
+        _ => Precision::F64,
     }
 }
 
@@ -50,15 +68,15 @@ pub enum Precision {
 }
 
 /// Refuses a precision the backend cannot compute in (the GPU computes in
-/// mixed f32 only), naming the flag to change.
+/// mixed f32, or in f64 where the adapter has it: checked when the engine
+/// is built), naming the flag to change.
 pub fn check_precision(backend: Backend, precision: Precision) -> Result<(), String> {
-    if backend == Backend::Gpu && precision != Precision::F32 {
-        let name = clap::ValueEnum::to_possible_value(&precision)
-            .map_or_else(String::new, |v| v.get_name().to_string());
-        return Err(format!(
-            "--precision {name}: the GPU engine computes in mixed f32: use --precision f32 (or \
-             --backend cpu for f64 and f32-plain)"
-        ));
+    if backend == Backend::Gpu && precision == Precision::F32Plain {
+        return Err(
+            "--precision f32-plain: the GPU engine computes in mixed f32 or in f64: use \
+             --precision f32 or f64 (or --backend cpu for f32-plain)"
+                .into(),
+        );
     }
     Ok(())
 }
@@ -145,6 +163,9 @@ pub fn make_engine_with(
         Backend::CpuReference => cpu_reference_engine(model, precision, threads),
         Backend::Gpu => {
             check_precision(backend, precision).map_err(EngineError::Gpu)?;
+            if precision == Precision::F64 {
+                return Ok(Box::new(GpuEngine::<f64>::with_precision(model, gpu)?));
+            }
             Ok(Box::new(GpuEngine::with_options(model, gpu)?))
         }
         Backend::Auto => match crate::gpu::context::shared() {
@@ -159,7 +180,19 @@ pub fn make_engine_with(
             Ok(_) if precision == Precision::F32 => {
                 Ok(Box::new(GpuEngine::with_options(model, gpu)?))
             }
-            Ok(_) => cpu_engine(model, precision, threads),
+            Ok(ctx) if precision == Precision::F64 && ctx.check_precision::<f64>().is_ok() => {
+                Ok(Box::new(GpuEngine::<f64>::with_precision(model, gpu)?))
+            }
+            Ok(ctx) => {
+                if precision == Precision::F64 {
+                    eprintln!(
+                        "slipfront: {} has no SHADER_F64; running f64 on the CPU \
+                         (--precision f32 for the GPU's mixed precision)",
+                        ctx.info.name
+                    );
+                }
+                cpu_engine(model, precision, threads)
+            }
             Err(e) => {
                 eprintln!("slipfront: no usable GPU adapter ({e}); running on the CPU");
                 cpu_engine(model, precision, threads)
@@ -180,8 +213,12 @@ pub fn resolve_auto(precision: Precision) -> (Backend, String) {
                 ctx.info.name
             ),
         ),
-        Ok(ctx) if check_precision(Backend::Gpu, precision).is_ok() => {
-            (Backend::Gpu, format!("GPU ensembles on {}", ctx.info.name))
+        // (GPU ensembles are mixed f32; f64 points run one at a time on it.)
+        Ok(ctx)
+            if precision == Precision::F32
+                || (precision == Precision::F64 && ctx.check_precision::<f64>().is_ok()) =>
+        {
+            (Backend::Gpu, format!("GPU on {}", ctx.info.name))
         }
         Ok(ctx) => (
             Backend::Cpu,

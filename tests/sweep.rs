@@ -302,8 +302,8 @@ fn bad_sweep_input_is_refused_with_the_field_named() {
         (vec!["sweep", f, "--shard", "3/2"], "--shard 3/2"),
         (vec!["sweep", f, "--mcap", "some"], "--mcap some"),
         (
-            vec!["sweep", f, "--backend", "gpu", "--precision", "f64"],
-            "--precision f64: the GPU engine computes in mixed f32",
+            vec!["sweep", f, "--backend", "gpu", "--precision", "f32-plain"],
+            "--precision f32-plain: the GPU engine computes in mixed f32 or in f64",
         ),
         (
             vec!["run", "--set", "output.checkpoint_interval=-1"],

@@ -7,7 +7,8 @@ pub fn verify(
     precision: Option<Precision>,
     json: bool,
 ) -> anyhow::Result<ExitCode> {
-    // The GPU computes in mixed f32 only; the CPU defaults to f64.
+    // The GPU defaults to mixed f32 (f64 where asked and the adapter has
+    // it), the CPU to f64.
     let precision = precision.unwrap_or(backend.default_precision());
     let probe = slipfront::Model::from_scenario(&slipfront::verify::bare_scene("probe"), true)?;
     let engine = make_engine(&probe, backend, precision, 0)?.describe();

@@ -1,6 +1,7 @@
 //! Adapter selection: a hardware GPU, else a software one (lavapipe).
 
 use super::bindings::entry;
+use super::precision::GpuReal;
 use super::record_pipelines::RecordPipelines;
 use super::shaders::Kernel;
 use crate::engine::EngineError;
@@ -100,9 +101,12 @@ impl GpuContext {
                 info.name, limits.max_storage_buffers_per_shader_stage
             )));
         }
+        // f64 kernels where the adapter has them (`--precision f64`); the
+        // mixed kernels need no feature.
+        let features = adapter.features() & wgpu::Features::SHADER_F64;
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("slipfront"),
-            required_features: wgpu::Features::empty(),
+            required_features: features,
             required_limits: limits.clone(),
             ..Default::default()
         }))
@@ -177,15 +181,16 @@ impl GpuContext {
         &self.layouts[layout_index(kernel, ensemble)].group
     }
 
-    /// The pipeline of `kernel` with `constants`, compiled once per process.
-    pub fn pipeline(
+    /// The pipeline of `kernel` in precision `T` with `constants`, compiled
+    /// once per process.
+    pub fn pipeline<T: GpuReal>(
         &self,
         kernel: Kernel,
         ensemble: bool,
         constants: &[(&str, f64)],
     ) -> wgpu::ComputePipeline {
         let layout = &self.layouts[layout_index(kernel, ensemble)].pipeline;
-        let key = format!("{}{ensemble}{constants:?}", kernel.entry_point());
+        let key = format!("{}{}{ensemble}{constants:?}", T::NAME, kernel.entry_point());
         let mut cache = self.pipelines.lock().expect("pipeline cache");
         cache
             .entry(key)
@@ -194,7 +199,7 @@ impl GpuContext {
                     .device
                     .create_shader_module(wgpu::ShaderModuleDescriptor {
                         label: Some(kernel.entry_point()),
-                        source: wgpu::ShaderSource::Wgsl(kernel.source(ensemble).into()),
+                        source: wgpu::ShaderSource::Wgsl(kernel.source::<T>(ensemble).into()),
                     });
                 self.device
                     .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
@@ -236,6 +241,21 @@ impl GpuContext {
             self.info.driver,
             self.info.driver_info
         )
+    }
+
+    /// Fails unless the device can run kernels in precision `T` (f64
+    /// needs SHADER_F64), naming the adapter and the alternatives.
+    pub fn check_precision<T: GpuReal>(&self) -> Result<(), EngineError> {
+        if self.device.features().contains(T::FEATURES) {
+            return Ok(());
+        }
+        Err(EngineError::Gpu(format!(
+            "--precision {}: {} has no {:?} shader support: use --precision f32 (mixed, \
+             every adapter) or --backend cpu",
+            T::NAME,
+            self.info.name,
+            T::FEATURES
+        )))
     }
 
     pub fn is_software(&self) -> bool {

@@ -3,11 +3,15 @@
 //! and `wgsl_prelude` adds the constants both sides use (flags, PINNED,
 //! lanes, stencil). The shaders get these declarations prepended, so a
 //! field added here exists on both sides; a naga test checks the offsets.
+//! Most structs are generic in the kernels' precision `T` (f32 mixed or
+//! f64, `precision::GpuReal`): one definition gives both layouts, with
+//! the u32 fields first so that neither has padding.
 
+use super::precision::{Coord, GpuReal, Packed};
 use crate::lattice::{
     FLAG_DRIVEN, FLAG_FIX_X, FLAG_FIX_Z, FLAG_INTERFACE, FLAG_PRESCRIBED_X, FLAG_TOP, STENCIL,
 };
-use crate::real::{Coordinate, DoubleSingle};
+use crate::real::{Coordinate, DoubleSingle, Real};
 use crate::step_params::Consts;
 use bytemuck::{Pod, Zeroable};
 
@@ -24,8 +28,16 @@ impl WgslType for u32 {
 impl WgslType for f32 {
     const WGSL: &'static str = "f32";
 }
-impl WgslType for [f32; 2] {
+impl WgslType for f64 {
+    const WGSL: &'static str = "f64";
+}
+/// A double-single coordinate, (hi, lo), as the kernels compute with it.
+impl WgslType for DoubleSingle {
     const WGSL: &'static str = "vec2<f32>";
+}
+/// A packed double-single coordinate (4-byte aligned).
+impl WgslType for [f32; 2] {
+    const WGSL: &'static str = "array<f32, 2>";
 }
 
 /// A struct shared with WGSL: its fields, types and byte offsets.
@@ -44,6 +56,41 @@ pub trait GpuStruct {
 }
 
 macro_rules! gpu_struct {
+    // Generic in the precision: fields of type T, Coord<T>, Packed<T>.
+    ($(#[$meta:meta])* pub struct $name:ident<T> as $wgsl:literal {
+        $($(#[$fmeta:meta])* pub $field:ident : $ty:ty),* $(,)?
+    }) => {
+        $(#[$meta])*
+        #[repr(C)]
+        #[derive(Debug, Clone, Copy)]
+        pub struct $name<T: GpuReal = f32> {
+            $($(#[$fmeta])* pub $field: $ty),*
+        }
+
+        // SAFETY: repr(C), every field is Pod (u32, f32, f64, their pairs),
+        // and neither precision's layout has padding (asserted below).
+        unsafe impl<T: GpuReal> Zeroable for $name<T> {}
+        unsafe impl<T: GpuReal> Pod for $name<T> {}
+        const _: () = {
+            type T = f32;
+            assert!(std::mem::size_of::<$name<T>>() == 0 $(+ std::mem::size_of::<$ty>())*);
+        };
+        const _: () = {
+            type T = f64;
+            assert!(std::mem::size_of::<$name<T>>() == 0 $(+ std::mem::size_of::<$ty>())*);
+        };
+
+        impl<T: GpuReal> GpuStruct for $name<T> {
+            const NAME: &'static str = $wgsl;
+            fn fields() -> Vec<(&'static str, &'static str, usize)> {
+                vec![$((
+                    stringify!($field),
+                    <$ty as WgslType>::WGSL,
+                    std::mem::offset_of!($name<T>, $field),
+                )),*]
+            }
+        }
+    };
     ($(#[$meta:meta])* pub struct $name:ident as $wgsl:literal {
         $($(#[$fmeta:meta])* pub $field:ident : $ty:ty),* $(,)?
     }) => {
@@ -69,47 +116,47 @@ macro_rules! gpu_struct {
 
 gpu_struct! {
     /// The run constants (uniform `c`).
-    pub struct GpuConsts as "Consts" {
+    pub struct GpuConsts<T> as "Consts" {
         pub nx: u32,
         pub nz: u32,
         pub junction_count: u32,
         pub seed: u32,
-        pub spacing: f32,
-        pub k: f32,
-        pub eta: f32,
-        pub k_foundation: f32,
-        pub mass: f32,
-        pub inv_mass: f32,
-        pub dt: f32,
-        pub mu_s: f32,
-        pub mu_d: f32,
-        pub junction_stiffness_value: f32,
-        pub slip_mean_steps: f32,
-        pub slip_std_steps: f32,
-        pub drive_stiffness: f32,
-        pub speed_limit: f32,
-        pub top_share_full: f32,
-        pub top_share_edge: f32,
         pub stiffness_normal_load: u32,
         pub n_blocks: u32,
+        pub strip_blocks: u32,
         /// 1.0, read at run time: guards the double-single sums against
         /// reassociation (shaders/double_single.wgsl).
         pub one: f32,
-        pub normal_force: f32,
-        pub normal_slope: f32,
-        pub inv_ramp_steps: f32,
-        pub top_prestress_force: f32,
-        pub top_force_rate: f32,
-        pub relax_eta: f32,
-        pub absolute_eta: f32,
-        pub interface_shear_force: f32,
-        pub strip_shear_force: f32,
-        pub strip_blocks: u32,
-        pub drive_velocity: f32,
+        pub spacing: T,
+        pub k: T,
+        pub eta: T,
+        pub k_foundation: T,
+        pub mass: T,
+        pub inv_mass: T,
+        pub dt: T,
+        pub mu_s: T,
+        pub mu_d: T,
+        pub junction_stiffness_value: T,
+        pub slip_mean_steps: T,
+        pub slip_std_steps: T,
+        pub drive_stiffness: T,
+        pub speed_limit: T,
+        pub top_share_full: T,
+        pub top_share_edge: T,
+        pub normal_force: T,
+        pub normal_slope: T,
+        pub inv_ramp_steps: T,
+        pub top_prestress_force: T,
+        pub top_force_rate: T,
+        pub relax_eta: T,
+        pub absolute_eta: T,
+        pub interface_shear_force: T,
+        pub strip_shear_force: T,
+        pub drive_velocity: T,
         /// V·dt = hi + lo, hi with 12 significant bits so that i·hi is
         /// exact for the step offsets i < 4096 of a batch.
-        pub drive_step_hi: f32,
-        pub drive_step_lo: f32,
+        pub drive_step_hi: T,
+        pub drive_step_lo: T,
     }
 }
 
@@ -118,18 +165,19 @@ gpu_struct! {
     /// batch (`shaders/common.wgsl` `loads_at`): steps `first + i`,
     /// i < `steps`. Batches never cross the end of the ramp or of the
     /// normal-load phase, so the phase flags hold for the whole batch.
-    pub struct GpuBatch as "Batch" {
+    pub struct GpuBatch<T> as "Batch" {
+        /// The side spring's far end at the first step (a coordinate).
+        pub drive_target: Coord<T>,
+        /// Driving time of the first step (s).
+        pub drive_time: T,
+        /// Unused: keeps both precisions free of padding.
+        pub reserved_real: T,
         /// Low 32 bits of the first step (used while ramping, < 2²⁴).
         pub first_step: u32,
         pub steps: u32,
         pub preparing: u32,
         pub ramping: u32,
         pub relaxing: u32,
-        /// Driving time of the first step (s).
-        pub drive_time: f32,
-        /// The side spring's far end at the first step, double-single.
-        pub drive_target_hi: f32,
-        pub drive_target_lo: f32,
         /// 1: the forces of the first step are already in `force` and
         /// `contact` (a snapshot computed them): skip them.
         pub forces_ready: u32,
@@ -144,6 +192,8 @@ gpu_struct! {
         pub anchor_offset: u32,
         /// Output samples the persistent kernel records in this batch.
         pub records: u32,
+        /// Unused: keeps both precisions free of padding.
+        pub reserved: u32,
     }
 }
 
@@ -155,7 +205,7 @@ gpu_struct! {
 pub const DRIVE_ANCHOR_STEPS: u64 = 4096;
 
 /// The anchor of `step` (the step itself while preparing).
-pub fn drive_anchor(c: &Consts<f32>, step: u64) -> u64 {
+pub fn drive_anchor<T: Real>(c: &Consts<T>, step: u64) -> u64 {
     if step < c.prep_steps {
         step
     } else {
@@ -164,27 +214,27 @@ pub fn drive_anchor(c: &Consts<f32>, step: u64) -> u64 {
 }
 
 gpu_struct! {
-    /// A block's displacement: (hi, lo) of u_x and of u_z, the bytes of
-    /// the CPU twin's `[DoubleSingle; 2]`.
-    pub struct GpuDisp as "Disp" {
-        pub x: [f32; 2],
-        pub z: [f32; 2],
+    /// A block's displacement, u_x and u_z: the bytes of the CPU twin's
+    /// `[Coord<T>; 2]` ((hi, lo) pairs in mixed precision).
+    pub struct GpuDisp<T> as "Disp" {
+        pub x: Coord<T>,
+        pub z: Coord<T>,
     }
 }
 
 gpu_struct! {
-    /// A junction's spring (anchor hi, anchor lo, stiffness): the bytes of
-    /// the CPU twin's `JunctionSpring<DoubleSingle, f32>`.
-    pub struct GpuJunctionSpring as "JunctionSpring" {
-        pub anchor_hi: f32,
-        pub anchor_lo: f32,
-        pub stiffness: f32,
+    /// A junction's spring (anchor, stiffness): the bytes of the CPU
+    /// twin's `JunctionSpring<Coord<T>, T>`.
+    pub struct GpuJunctionSpring<T> as "JunctionSpring" {
+        pub anchor: Packed<T>,
+        pub stiffness: T,
     }
 }
 
 gpu_struct! {
     /// The first blow-up of a batch, written by the kernel that saw it
     /// (non-finite or faster than c_p): read back after every batch.
+    /// Its values are f32 in either precision (diagnostics).
     pub struct GpuStatus as "Status" {
         pub flag: u32,
         /// Step offset in the batch of the update that blew up.
@@ -204,11 +254,11 @@ gpu_struct! {
     /// run constants: the fast cadence (its state is updated by the
     /// device), the driver's blocks, and where each region of the record
     /// buffers starts.
-    pub struct GpuRecordPlan as "RecordPlan" {
+    pub struct GpuRecordPlan<T> as "RecordPlan" {
+        pub fast_slip_speed: T,
         /// 1: the fast interface cadence is on (set by each sample).
         pub fast: u32,
         pub every_fast: u32,
-        pub fast_slip_speed: f32,
         /// The block the side spring pulls (u32::MAX: none).
         pub driven_block: u32,
         /// 1: the top row's velocity is prescribed (its reaction is summed).
@@ -221,6 +271,8 @@ gpu_struct! {
         /// Word offsets of the interface rows and the bulk fields.
         pub interface_offset: u32,
         pub bulk_offset: u32,
+        /// Unused: keeps both precisions free of padding.
+        pub reserved: u32,
     }
 }
 
@@ -239,9 +291,19 @@ gpu_struct! {
 }
 
 gpu_struct! {
-    /// A sample's sums as the device reduced them (f32; the partial sums of
-    /// the workgroups have the same layout).
-    pub struct GpuSampleSums as "SampleSums" {
+    /// A sample's sums as the device reduced them (in the kernels'
+    /// precision; the partial sums of the workgroups have the same layout).
+    pub struct GpuSampleSums<T> as "SampleSums" {
+        /// Σ |v|² over the blocks (the host multiplies by m/2).
+        pub kinetic: T,
+        pub friction: T,
+        /// Σ of the interface blocks' pinned fractions.
+        pub pinned: T,
+        pub min_pinned: T,
+        pub max_slip_speed: T,
+        pub top_reaction: T,
+        pub driven_ux_hi: T,
+        pub driven_ux_lo: T,
         /// 1: the sample was due (0: a fast-cadence slot while it was off).
         pub recorded: u32,
         /// 1: its interface row was written.
@@ -250,16 +312,8 @@ gpu_struct! {
         pub fast: u32,
         pub ruptures_lo: u32,
         pub ruptures_hi: u32,
-        /// Σ |v|² over the blocks (the host multiplies by m/2).
-        pub kinetic: f32,
-        pub friction: f32,
-        /// Σ of the interface blocks' pinned fractions.
-        pub pinned: f32,
-        pub min_pinned: f32,
-        pub max_slip_speed: f32,
-        pub top_reaction: f32,
-        pub driven_ux_hi: f32,
-        pub driven_ux_lo: f32,
+        /// Unused: keeps both precisions free of padding.
+        pub reserved: u32,
     }
 }
 
@@ -275,21 +329,28 @@ pub const RECORD_INTERFACE_WORDS: u32 = 6;
 /// Words per block of a bulk field: u_x, u_z, v_x, v_z.
 pub const RECORD_BULK_WORDS: u32 = 4;
 
-/// The shared constants and structs, prepended to every shader module.
-pub fn wgsl_prelude() -> String {
+/// The shared constants and structs in precision `T`, prepended to every
+/// shader module: `real`, `coord` and `packed_coord` name `T`'s types.
+pub fn wgsl_prelude<T: GpuReal>() -> String {
     let stencil: Vec<String> = STENCIL
         .iter()
         .map(|b| format!("vec2<i32>({}, {})", b.dx, b.dz))
         .collect();
     let lengths: Vec<String> = STENCIL
         .iter()
-        .map(|b| format!("{:?}", b.length_factor as f32))
+        .map(|b| format!("{:?}", T::from_f64(b.length_factor)))
         .collect();
     let stiffness: Vec<String> = STENCIL
         .iter()
-        .map(|b| format!("{:?}", b.stiffness_factor as f32))
+        .map(|b| format!("{:?}", T::from_f64(b.stiffness_factor)))
         .collect();
     let mut s = String::from("// Generated from src/gpu/layout.rs: do not edit in the shaders.\n");
+    s += &format!(
+        "alias real = {};\nalias coord = {};\nalias packed_coord = {};\n",
+        T::WGSL,
+        <Coord<T> as WgslType>::WGSL,
+        <Packed<T> as WgslType>::WGSL
+    );
     for (name, value) in [
         ("PINNED", crate::junction::PINNED),
         ("FLAG_FIX_X", FLAG_FIX_X),
@@ -299,6 +360,7 @@ pub fn wgsl_prelude() -> String {
         ("FLAG_DRIVEN", FLAG_DRIVEN),
         ("FLAG_PRESCRIBED_X", FLAG_PRESCRIBED_X),
         ("WORKGROUP", WORKGROUP),
+        ("REDUCTION_SLOTS", reduction_slots::<T>()),
         ("RECORD_GLOBAL", RECORD_GLOBAL),
         ("RECORD_INTERFACE", RECORD_INTERFACE),
         ("RECORD_BULK", RECORD_BULK),
@@ -321,40 +383,48 @@ pub fn wgsl_prelude() -> String {
         stencil.join(", ")
     );
     s += &format!(
-        "const STENCIL_LENGTH = array<f32, 8>({});\n",
+        "const STENCIL_LENGTH = array<real, 8>({});\n",
         lengths.join(", ")
     );
     s += &format!(
-        "const STENCIL_STIFFNESS = array<f32, 8>({});\n",
+        "const STENCIL_STIFFNESS = array<real, 8>({});\n",
         stiffness.join(", ")
     );
     for decl in [
-        GpuConsts::wgsl(),
-        GpuBatch::wgsl(),
-        GpuDisp::wgsl(),
-        GpuJunctionSpring::wgsl(),
+        GpuConsts::<T>::wgsl(),
+        GpuBatch::<T>::wgsl(),
+        GpuDisp::<T>::wgsl(),
+        GpuJunctionSpring::<T>::wgsl(),
         GpuStatus::wgsl(),
-        GpuRecordPlan::wgsl(),
+        GpuRecordPlan::<T>::wgsl(),
         GpuRecordEntry::wgsl(),
-        GpuSampleSums::wgsl(),
+        GpuSampleSums::<T>::wgsl(),
     ] {
         s += &decl;
     }
     s
 }
 
+/// Threads a sample's sums can be reduced across (`wg_sums` of
+/// shaders/record_common.wgsl): a power of two, at most 256, whose sums fit
+/// 16 KiB of workgroup memory (WebGPU's minimum limit; f64 sums are larger).
+pub fn reduction_slots<T: GpuReal>() -> u32 {
+    let fit = (16 * 1024 / std::mem::size_of::<GpuSampleSums<T>>()) as u32;
+    1 << fit.min(256).ilog2()
+}
+
 /// V·dt split as hi + lo with hi on 12 significant bits.
-fn split_drive_step(v_dt: f64) -> (f32, f32) {
+fn split_drive_step<T: Real>(v_dt: f64) -> (T, T) {
     if v_dt == 0.0 {
-        return (0.0, 0.0);
+        return (T::zero(), T::zero());
     }
     let scale = 2f64.powi(11 - v_dt.abs().log2().floor() as i32);
     let hi = (v_dt * scale).round() / scale;
-    (hi as f32, (v_dt - hi) as f32)
+    (T::from_f64(hi), T::from_f64(v_dt - hi))
 }
 
-impl GpuConsts {
-    pub fn new(c: &Consts<f32>, speed_limit: f32) -> Self {
+impl<T: GpuReal> GpuConsts<T> {
+    pub fn new(c: &Consts<T>, speed_limit: T) -> Self {
         let (drive_step_hi, drive_step_lo) = split_drive_step(c.drive_velocity_exact * c.dt_exact);
         GpuConsts {
             nx: c.nx as u32,
@@ -398,54 +468,51 @@ impl GpuConsts {
     }
 }
 
-impl GpuBatch {
+impl<T: GpuReal> GpuBatch<T> {
     /// The batch of `steps` steps from global step `first`, with the
-    /// drive target origin + V·t formed in f64 and split into a pair.
-    pub fn new(c: &Consts<f32>, first: u64, steps: u32, drive_origin: DoubleSingle) -> Self {
+    /// drive target origin + V·t formed in f64 and rounded to a coordinate.
+    pub fn new(c: &Consts<T>, first: u64, steps: u32, drive_origin: Coord<T>) -> Self {
         let p = crate::step_params::step_params(c, first);
         let anchor = drive_anchor(c, first);
         let at_anchor = crate::step_params::step_params(c, anchor);
-        let target = DoubleSingle::from_f64(drive_origin.as_f64() + at_anchor.drive_offset);
+        let target = Coord::<T>::from_f64(drive_origin.as_f64() + at_anchor.drive_offset);
         GpuBatch {
+            drive_target: target,
+            reserved_real: T::zero(),
             first_step: first as u32,
             steps,
             preparing: p.preparing as u32,
             ramping: (first < c.ramp_steps) as u32,
             relaxing: (p.preparing && first >= c.ramp_steps) as u32,
             drive_time: if p.preparing {
-                0.0
+                T::zero()
             } else {
-                ((anchor - c.prep_steps) as f64 * c.dt_exact) as f32
+                T::from_f64((anchor - c.prep_steps) as f64 * c.dt_exact)
             },
-            drive_target_hi: target.hi,
-            drive_target_lo: target.lo,
             forces_ready: 0,
             forces_only: 0,
             steps_per_dispatch: steps,
             parity: 0,
             anchor_offset: (first - anchor) as u32,
             records: 0,
+            reserved: 0,
         }
     }
 }
 
-impl From<GpuJunctionSpring> for crate::junction::JunctionSpring<DoubleSingle, f32> {
-    fn from(s: GpuJunctionSpring) -> Self {
+impl<T: GpuReal> From<GpuJunctionSpring<T>> for crate::junction::JunctionSpring<Coord<T>, T> {
+    fn from(s: GpuJunctionSpring<T>) -> Self {
         crate::junction::JunctionSpring {
-            anchor: DoubleSingle {
-                hi: s.anchor_hi,
-                lo: s.anchor_lo,
-            },
+            anchor: T::unpack(s.anchor),
             stiffness: s.stiffness,
         }
     }
 }
 
-impl From<crate::junction::JunctionSpring<DoubleSingle, f32>> for GpuJunctionSpring {
-    fn from(s: crate::junction::JunctionSpring<DoubleSingle, f32>) -> Self {
+impl<T: GpuReal> From<crate::junction::JunctionSpring<Coord<T>, T>> for GpuJunctionSpring<T> {
+    fn from(s: crate::junction::JunctionSpring<Coord<T>, T>) -> Self {
         GpuJunctionSpring {
-            anchor_hi: s.anchor.hi,
-            anchor_lo: s.anchor.lo,
+            anchor: T::pack(s.anchor),
             stiffness: s.stiffness,
         }
     }
@@ -477,12 +544,10 @@ mod tests {
             for i in [0u32, 1, last] {
                 // The kernel's arithmetic (shaders/common.wgsl loads_at).
                 let fi = (b.anchor_offset + i) as f32;
-                let target = DoubleSingle {
-                    hi: b.drive_target_hi,
-                    lo: b.drive_target_lo,
-                }
-                .ds_add(fi * gc.drive_step_hi)
-                .ds_add(fi * gc.drive_step_lo);
+                let target = b
+                    .drive_target
+                    .ds_add(fi * gc.drive_step_hi)
+                    .ds_add(fi * gc.drive_step_lo);
                 let t = m.time_of_step(first + i as u64);
                 let exact = origin.as_f64() + 4.0e-4 * t;
                 let got = target.as_f64();
@@ -490,7 +555,7 @@ mod tests {
                 assert!(((exact as f32) as f64 - exact).abs() > 1e-12);
             }
         }
-        let (hi, lo) = split_drive_step(4.0e-4 * m.dt);
+        let (hi, lo) = split_drive_step::<f32>(4.0e-4 * m.dt);
         assert_eq!((4095.0 * hi) as f64, 4095.0 * hi as f64);
         assert!(((hi as f64 + lo as f64) / (4.0e-4 * m.dt) - 1.0).abs() < 1e-12);
     }
@@ -500,7 +565,24 @@ mod tests {
     /// reordered or misaligned on one side fails here, without a GPU.
     #[test]
     fn wgsl_structs_match_the_rust_layout() {
-        let src = wgsl_prelude();
+        check_layouts::<f32>();
+        check_layouts::<f64>();
+        // Mixed precision reduces across 256 threads as before; f64 sums
+        // (88 bytes) fit 128 in 16 KiB.
+        assert_eq!(reduction_slots::<f32>(), 256);
+        assert_eq!(reduction_slots::<f64>(), 128);
+        assert_eq!(size_of::<GpuDisp<f32>>(), size_of::<[DoubleSingle; 2]>());
+        assert_eq!(size_of::<GpuDisp<f64>>(), size_of::<[f64; 2]>());
+        // Mixed precision keeps its 12-byte junction springs.
+        assert_eq!(size_of::<GpuJunctionSpring<f32>>(), 12);
+        assert_eq!(
+            size_of::<GpuJunctionSpring<f64>>(),
+            size_of::<crate::junction::JunctionSpring<f64, f64>>()
+        );
+    }
+
+    fn check_layouts<T: GpuReal>() {
+        let src = wgsl_prelude::<T>();
         let module = naga::front::wgsl::parse_str(&src).expect("prelude parses");
         let mut layouter = naga::proc::Layouter::default();
         layouter
@@ -523,20 +605,23 @@ mod tests {
                 assert_eq!(m.offset as usize, offset, "{name}.{field}: offset");
             }
         };
-        check("Consts", size_of::<GpuConsts>(), GpuConsts::fields());
-        check("Batch", size_of::<GpuBatch>(), GpuBatch::fields());
-        check("Disp", size_of::<GpuDisp>(), GpuDisp::fields());
-        assert_eq!(size_of::<GpuDisp>(), size_of::<[DoubleSingle; 2]>());
+        check(
+            "Consts",
+            size_of::<GpuConsts<T>>(),
+            GpuConsts::<T>::fields(),
+        );
+        check("Batch", size_of::<GpuBatch<T>>(), GpuBatch::<T>::fields());
+        check("Disp", size_of::<GpuDisp<T>>(), GpuDisp::<T>::fields());
         check(
             "JunctionSpring",
-            size_of::<GpuJunctionSpring>(),
-            GpuJunctionSpring::fields(),
+            size_of::<GpuJunctionSpring<T>>(),
+            GpuJunctionSpring::<T>::fields(),
         );
         check("Status", size_of::<GpuStatus>(), GpuStatus::fields());
         check(
             "RecordPlan",
-            size_of::<GpuRecordPlan>(),
-            GpuRecordPlan::fields(),
+            size_of::<GpuRecordPlan<T>>(),
+            GpuRecordPlan::<T>::fields(),
         );
         check(
             "RecordEntry",
@@ -545,11 +630,11 @@ mod tests {
         );
         check(
             "SampleSums",
-            size_of::<GpuSampleSums>(),
-            GpuSampleSums::fields(),
+            size_of::<GpuSampleSums<T>>(),
+            GpuSampleSums::<T>::fields(),
         );
         // The uniform block is a whole number of 16-byte rows.
-        assert_eq!(size_of::<GpuConsts>() % 16, 0);
+        assert_eq!(size_of::<GpuConsts<T>>() % 16, 0);
     }
 
     /// The negative control of the layout test: a Rust struct whose
@@ -559,7 +644,7 @@ mod tests {
         gpu_struct! {
             pub struct Misaligned as "Misaligned" {
                 pub a: f32,
-                pub b: [f32; 2],
+                pub b: DoubleSingle,
             }
         }
         let module = naga::front::wgsl::parse_str(&Misaligned::wgsl()).unwrap();

@@ -12,6 +12,10 @@
 //! `IN_FLIGHT` batches are queued, so a blow-up stops the run within a
 //! batch or two and `advance` returns only when its steps have run.
 //!
+//! The engine computes in mixed f32 (`GpuEngine`, every adapter) or in f64
+//! (`GpuEngine::<f64>`, adapters with SHADER_F64): the same kernels,
+//! generated in either precision (`precision`, `shaders`).
+//!
 //! The same engine steps an ensemble (`ensemble`): many scenes of one
 //! lattice shape in one dispatch, each with its own constants, batch and
 //! slice of every buffer (`scene_state`); `lockstep` hands its scenes to
@@ -23,6 +27,7 @@ pub mod ensemble;
 pub mod layout;
 pub mod lockstep;
 pub mod options;
+pub mod precision;
 mod readback;
 mod record_pipelines;
 mod recorder;
@@ -32,7 +37,7 @@ pub mod shaders;
 use crate::engine::{blow_up, Engine, EngineError, EngineState, Sample, SamplePlan, Snapshot};
 use crate::lattice::{block_flags, initial_displacement};
 use crate::model::{Driver, Model};
-use crate::real::{Coordinate, DoubleSingle};
+use crate::real::{precision_name, Coordinate};
 use crate::scenario::FrictionLaw;
 use crate::step_params::Consts;
 use bytemuck::Zeroable;
@@ -40,6 +45,8 @@ use context::GpuContext;
 use layout::{GpuBatch, GpuConsts, GpuJunctionSpring, GpuStatus, WORKGROUP};
 use options::*;
 pub use options::{GpuOptions, GpuOutput, GpuPath, PERSISTENT_MAX_BLOCKS, PERSISTENT_THREADS};
+use precision::Coord;
+pub use precision::GpuReal;
 pub use record_pipelines::RECORD_SMALL_BLOCKS;
 
 use scene_state::gpu_junction_springs;
@@ -128,17 +135,19 @@ impl Shape {
     }
 }
 
-/// Bytes per element of the state buffers.
-const DISP_BYTES: usize = std::mem::size_of::<[DoubleSingle; 2]>();
-const PAIR_BYTES: usize = std::mem::size_of::<[f32; 2]>();
-const SPRING_BYTES: usize = std::mem::size_of::<GpuJunctionSpring>();
+/// Bytes per element of the state buffers that do not depend on the
+/// precision (`GpuEngine::DISP_BYTES` and others do).
+const WORD_PAIR_BYTES: usize = std::mem::size_of::<[u32; 2]>();
 const STATUS_BYTES: usize = std::mem::size_of::<GpuStatus>();
+/// What the persistent kernel's unused record bindings hold at least (the
+/// plan, an entry, a word of rows); the sums need `GpuEngine::SUMS_BYTES`.
+const PLACEHOLDER_BYTES: usize = 64;
 
 /// One scene: its model, constants and where it stands.
-struct Scene {
+struct Scene<T: GpuReal> {
     model: Model,
-    consts: Consts<f32>,
-    drive_origin: DoubleSingle,
+    consts: Consts<T>,
+    drive_origin: Coord<T>,
     /// `force` and `contact` hold the forces of the current state.
     forces_ready: bool,
     /// The blow-up that stopped this scene (an ensemble's others go on).
@@ -161,9 +170,10 @@ struct InFlight {
 }
 
 /// The GPU engine over one scene (`GpuEngine::new`), or over an ensemble of
-/// scenes of one lattice shape stepped together (`ensemble::GpuEnsemble`).
-pub struct GpuEngine {
-    scenes: Vec<Scene>,
+/// scenes of one lattice shape stepped together (`ensemble::GpuEnsemble`),
+/// computing in `T`: f32 (mixed, double-single coordinates) or f64.
+pub struct GpuEngine<T: GpuReal = f32> {
+    scenes: Vec<Scene<T>>,
     /// Built from the ensemble kernels (per-scene constants in storage).
     ensemble: bool,
     shape: Shape,
@@ -208,6 +218,7 @@ pub(crate) fn groups_for(workgroups: u32) -> (u32, u32) {
     (x, groups.div_ceil(x))
 }
 
+/// The mixed-precision engine (every adapter).
 impl GpuEngine {
     /// Builds the engine on the best adapter (hardware, else lavapipe).
     pub fn new(model: &Model) -> Result<GpuEngine, EngineError> {
@@ -225,6 +236,27 @@ impl GpuEngine {
     ) -> Result<GpuEngine, EngineError> {
         GpuEngine::build(std::slice::from_ref(model), ctx, opts, false)
     }
+}
+
+impl<T: GpuReal> GpuEngine<T> {
+    const DISP_BYTES: usize = std::mem::size_of::<[Coord<T>; 2]>();
+    const REAL_PAIR_BYTES: usize = std::mem::size_of::<[T; 2]>();
+    const SPRING_BYTES: usize = std::mem::size_of::<GpuJunctionSpring<T>>();
+    const SUMS_BYTES: usize = std::mem::size_of::<layout::GpuSampleSums<T>>();
+
+    /// The engine in precision `T` (`GpuEngine::<f64>::with_precision`) on
+    /// the best adapter; f64 fails on an adapter without SHADER_F64.
+    pub fn with_precision(model: &Model, opts: GpuOptions) -> Result<GpuEngine<T>, EngineError> {
+        GpuEngine::with_precision_and_context(model, context::shared()?, opts)
+    }
+
+    pub fn with_precision_and_context(
+        model: &Model,
+        ctx: GpuContext,
+        opts: GpuOptions,
+    ) -> Result<GpuEngine<T>, EngineError> {
+        GpuEngine::build(std::slice::from_ref(model), ctx, opts, false)
+    }
 
     /// The engine over `models`, which share one lattice shape and time
     /// schedule (checked by the caller); `ensemble` selects the kernels
@@ -234,7 +266,8 @@ impl GpuEngine {
         ctx: GpuContext,
         opts: GpuOptions,
         ensemble: bool,
-    ) -> Result<GpuEngine, EngineError> {
+    ) -> Result<GpuEngine<T>, EngineError> {
+        ctx.check_precision::<T>()?;
         let model = &models[0];
         let scene_count = models.len();
         let shape = Shape::of(model);
@@ -247,8 +280,14 @@ impl GpuEngine {
             String::new()
         };
         for (name, bytes) in [
-            ("block displacement", (scene_count * n * DISP_BYTES) as u64),
-            ("junction spring", (scene_count * nj * SPRING_BYTES) as u64),
+            (
+                "block displacement",
+                (scene_count * n * Self::DISP_BYTES) as u64,
+            ),
+            (
+                "junction spring",
+                (scene_count * nj * Self::SPRING_BYTES) as u64,
+            ),
         ] {
             if bytes > limit.min(max_buffer) {
                 return Err(EngineError::Gpu(format!(
@@ -305,16 +344,19 @@ impl GpuEngine {
                     | wgpu::BufferUsages::COPY_DST,
             })
         };
-        let disp: Vec<[DoubleSingle; 2]> = models
+        let disp: Vec<[Coord<T>; 2]> = models
             .iter()
             .flat_map(initial_displacement)
-            .map(|u| u.map(DoubleSingle::from_f64))
+            .map(|u| u.map(Coord::<T>::from_f64))
             .collect();
-        let zeros2 = |len: usize| vec![[0f32; 2]; len];
+        let zeros2 = |len: usize| vec![[T::zero(); 2]; len];
         let s = scene_count;
-        let gpu_consts: Vec<GpuConsts> = models
+        let gpu_consts: Vec<GpuConsts<T>> = models
             .iter()
-            .map(|m| GpuConsts::new(&Consts::<f32>::new(m), m.pressure_wave_speed() as f32))
+            .map(|m| {
+                let speed_limit = T::from_f64(m.pressure_wave_speed());
+                GpuConsts::new(&Consts::<T>::new(m), speed_limit)
+            })
             .collect();
         let consts_buffer = if ensemble {
             storage("scene consts", bytemuck::cast_slice(&gpu_consts))
@@ -340,7 +382,7 @@ impl GpuEngine {
             contact: storage("contact", bytemuck::cast_slice(&zeros2(s * shape.nx))),
             junction_spring: storage(
                 "junction_spring",
-                bytemuck::cast_slice(&vec![GpuJunctionSpring::zeroed(); s * nj]),
+                bytemuck::cast_slice(&vec![GpuJunctionSpring::<T>::zeroed(); s * nj]),
             ),
             junction_state: storage(
                 "junction_state",
@@ -356,9 +398,15 @@ impl GpuEngine {
             ),
             lane_partial: storage(
                 "lane partial sums",
-                bytemuck::cast_slice(&vec![0f32; s * shape.nx * shape.lanes]),
+                bytemuck::cast_slice(&vec![T::zero(); s * shape.nx * shape.lanes]),
             ),
-            record_placeholders: std::array::from_fn(|_| storage("no records", &[0u8; 64])),
+            // One element of the largest record struct in this precision.
+            record_placeholders: std::array::from_fn(|_| {
+                storage(
+                    "no records",
+                    &vec![0u8; PLACEHOLDER_BYTES.max(Self::SUMS_BYTES)],
+                )
+            }),
         };
         // The step offsets 0..ONE_STEP_BATCH, one per dynamic-offset stride.
         let offset_stride = (ctx.limits.min_storage_buffer_offset_alignment as u64).max(4);
@@ -374,7 +422,7 @@ impl GpuEngine {
         });
         let batch_buffer = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("batch"),
-            size: (s * std::mem::size_of::<GpuBatch>()) as u64,
+            size: (s * std::mem::size_of::<GpuBatch<T>>()) as u64,
             usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
@@ -400,7 +448,7 @@ impl GpuEngine {
         if kernel == Kernel::Persistent {
             constants.push(("PERSISTENT_THREADS", persistent_threads as f64));
         }
-        let pipeline = ctx.pipeline(kernel, ensemble, &constants);
+        let pipeline = ctx.pipeline::<T>(kernel, ensemble, &constants);
         let junction_groups = match (kernel, model.law) {
             (Kernel::OneStepLanes, FrictionLaw::Junctions | FrictionLaw::SingleJunction) => {
                 model.nx as u32
@@ -420,8 +468,8 @@ impl GpuEngine {
             .iter()
             .map(|m| Scene {
                 model: m.clone(),
-                consts: Consts::<f32>::new(m),
-                drive_origin: DoubleSingle::default(),
+                consts: Consts::<T>::new(m),
+                drive_origin: Coord::<T>::default(),
                 forces_ready: false,
                 failure: None,
             })
@@ -485,7 +533,7 @@ impl GpuEngine {
         if self.in_flight.len() >= IN_FLIGHT {
             self.retire_oldest()?;
         }
-        let batches: Vec<GpuBatch> = self
+        let batches: Vec<GpuBatch<T>> = self
             .scenes
             .iter()
             .map(|scene| {
@@ -607,7 +655,12 @@ impl GpuEngine {
                 submission_index: Some(batch.submission),
                 timeout: None,
             })
-            .map_err(|e| EngineError::Gpu(format!("device lost: {e}")))?;
+            // A submit the device refused (its validation error) shows as
+            // a wait on a submission that never was: report the refusal.
+            .map_err(|e| match self.ctx.check() {
+                Err(refused) => refused,
+                Ok(()) => EngineError::Gpu(format!("device lost: {e}")),
+            })?;
         batch
             .mapped
             .recv()
@@ -688,12 +741,12 @@ impl GpuEngine {
             let snap = self.read_state(k)?;
             let scene = &mut self.scenes[k];
             if let Driver::SideSpring { row, .. } = scene.model.driver {
-                scene.drive_origin = DoubleSingle::from_f64(snap.disp[row * scene.model.nx][0]);
+                scene.drive_origin = Coord::<T>::from_f64(snap.disp[row * scene.model.nx][0]);
             }
             if scene.model.sets_anchors_at_drive_start() {
                 let anchors = crate::trigger::trigger_anchors(&scene.model, &snap);
-                let spring = gpu_junction_springs(&anchors, &snap.junction_stiffness);
-                let at = (k * self.shape.junctions * SPRING_BYTES) as u64;
+                let spring = gpu_junction_springs::<T>(&anchors, &snap.junction_stiffness);
+                let at = (k * self.shape.junctions * Self::SPRING_BYTES) as u64;
                 self.ctx.queue.write_buffer(
                     &self.buffers.junction_spring,
                     at,
@@ -803,7 +856,7 @@ pub(crate) fn whole(binding: u32, buffer: &wgpu::Buffer) -> wgpu::BindGroupEntry
     }
 }
 
-impl Engine for GpuEngine {
+impl<T: GpuReal> Engine for GpuEngine<T> {
     fn model(&self) -> &Model {
         &self.scenes[0].model
     }
@@ -850,7 +903,8 @@ impl Engine for GpuEngine {
 
     fn describe(&self) -> String {
         format!(
-            "gpu f32 mixed (f32+f32 coordinates), {}, on {}",
+            "gpu {}, {}, on {}",
+            precision_name::<T, Coord<T>>(),
             self.kernel_description(),
             self.ctx.describe()
         )
@@ -867,9 +921,15 @@ impl Engine for GpuEngine {
     fn record_samples(&mut self, plan: &SamplePlan) -> Result<bool, EngineError> {
         let persistent = self.kernel == Kernel::Persistent;
         // The persistent kernel reduces a sample across its workgroup: a
-        // power of two of at most 256 threads (shaders/record_common.wgsl).
-        let reducible = self.persistent_threads.is_power_of_two() && self.persistent_threads <= 256;
-        if self.output == GpuOutput::Host || self.ensemble || (persistent && !reducible) {
+        // power of two of at most REDUCTION_SLOTS threads
+        // (shaders/record_common.wgsl).
+        let reducible = self.persistent_threads.is_power_of_two()
+            && self.persistent_threads <= layout::reduction_slots::<T>();
+        if self.output == GpuOutput::Host
+            || self.ensemble
+            || (persistent && !reducible)
+            || !T::RECORDS_ON_DEVICE
+        {
             return Ok(false);
         }
         // The batches in flight finish first (a blow-up among them is

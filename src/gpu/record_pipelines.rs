@@ -42,7 +42,7 @@ impl RecordPipelines {
         });
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("record"),
-            source: wgpu::ShaderSource::Wgsl(super::shaders::record_source().into()),
+            source: wgpu::ShaderSource::Wgsl(super::shaders::record_source::<f32>().into()),
         });
         let pipeline = |name: &str| {
             device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {

@@ -123,6 +123,7 @@ impl Recorder {
             fast: plan.fast as u32,
             every_fast: plan.every_fast.min(u32::MAX as u64) as u32,
             fast_slip_speed: plan.fast_slip_speed as f32,
+            reserved: 0,
             driven_block: match model.driver {
                 Driver::SideSpring { row, .. } => (row * model.nx) as u32,
                 _ => u32::MAX,

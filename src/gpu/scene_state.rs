@@ -4,12 +4,13 @@
 //! per-scene count of each buffer.
 
 use super::layout::GpuJunctionSpring;
+use super::precision::{Coord, GpuReal};
 use super::readback::{cast_prefix, read_ranges, Range};
-use super::{GpuEngine, Shape, DISP_BYTES, PAIR_BYTES, SPRING_BYTES};
+use super::{GpuEngine, Shape, WORD_PAIR_BYTES};
 use crate::engine::{EngineError, EngineState, Snapshot, StateArrays};
-use crate::real::{Coordinate, DoubleSingle};
+use crate::real::Coordinate;
 
-impl GpuEngine {
+impl<T: GpuReal> GpuEngine<T> {
     /// Byte range of scene `k`'s slice of a buffer with `per_scene` elements
     /// of `bytes` each.
     pub(super) fn slice<'a>(
@@ -28,7 +29,7 @@ impl GpuEngine {
     }
 
     /// Scene `k`'s buffers as they are (forces possibly of the previous step).
-    pub(super) fn read_raw(&mut self, k: usize) -> Result<RawState, EngineError> {
+    pub(super) fn read_raw(&mut self, k: usize) -> Result<RawState<T>, EngineError> {
         self.drain()?;
         let Shape {
             blocks: n,
@@ -40,13 +41,13 @@ impl GpuEngine {
         let raw = read_ranges(
             &self.ctx,
             &[
-                self.slice(&b.disp[self.current], k, n, DISP_BYTES),
-                self.slice(&b.vel[self.current], k, n, PAIR_BYTES),
-                self.slice(&b.force, k, n, PAIR_BYTES),
-                self.slice(&b.contact, k, nx, PAIR_BYTES),
-                self.slice(&b.junction_spring, k, nj, SPRING_BYTES),
-                self.slice(&b.junction_state, k, nj, PAIR_BYTES),
-                self.slice(&b.slide, k, nx, PAIR_BYTES),
+                self.slice(&b.disp[self.current], k, n, Self::DISP_BYTES),
+                self.slice(&b.vel[self.current], k, n, Self::REAL_PAIR_BYTES),
+                self.slice(&b.force, k, n, Self::REAL_PAIR_BYTES),
+                self.slice(&b.contact, k, nx, Self::REAL_PAIR_BYTES),
+                self.slice(&b.junction_spring, k, nj, Self::SPRING_BYTES),
+                self.slice(&b.junction_state, k, nj, WORD_PAIR_BYTES),
+                self.slice(&b.slide, k, nx, WORD_PAIR_BYTES),
             ],
         )?;
         Ok(RawState {
@@ -54,7 +55,7 @@ impl GpuEngine {
             vel: cast_prefix(&raw[1], n),
             force: cast_prefix(&raw[2], n),
             contact: cast_prefix(&raw[3], nx),
-            spring: cast_prefix::<GpuJunctionSpring>(&raw[4], nj)
+            spring: cast_prefix::<GpuJunctionSpring<T>>(&raw[4], nj)
                 .into_iter()
                 .map(Into::into)
                 .collect(),
@@ -106,22 +107,21 @@ impl GpuEngine {
         vel: &[[f64; 2]],
     ) -> Result<(), EngineError> {
         self.drain()?;
-        let disp: Vec<[DoubleSingle; 2]> =
-            disp.iter().map(|u| u.map(DoubleSingle::from_f64)).collect();
-        let vel: Vec<[f32; 2]> = vel.iter().map(|v| v.map(|x| x as f32)).collect();
+        let disp: Vec<[Coord<T>; 2]> = disp.iter().map(|u| u.map(Coord::<T>::from_f64)).collect();
+        let vel: Vec<[T; 2]> = vel.iter().map(|v| v.map(T::from_f64)).collect();
         let (b, n) = (&self.buffers, self.shape.blocks);
         self.write_scene(
             &b.disp[self.current],
             k,
             n,
-            DISP_BYTES,
+            Self::DISP_BYTES,
             bytemuck::cast_slice(&disp),
         );
         self.write_scene(
             &b.vel[self.current],
             k,
             n,
-            PAIR_BYTES,
+            Self::REAL_PAIR_BYTES,
             bytemuck::cast_slice(&vel),
         );
         self.scenes[k].forces_ready = false;
@@ -134,7 +134,7 @@ impl GpuEngine {
         snap: &Snapshot,
     ) -> Result<(), EngineError> {
         self.drain()?;
-        let spring = gpu_junction_springs(&snap.anchor, &snap.junction_stiffness);
+        let spring = gpu_junction_springs::<T>(&snap.anchor, &snap.junction_stiffness);
         let state: Vec<[u32; 2]> = snap
             .slip_steps_left
             .iter()
@@ -146,14 +146,14 @@ impl GpuEngine {
             &b.junction_spring,
             k,
             nj,
-            SPRING_BYTES,
+            Self::SPRING_BYTES,
             bytemuck::cast_slice(&spring),
         );
         self.write_scene(
             &b.junction_state,
             k,
             nj,
-            PAIR_BYTES,
+            WORD_PAIR_BYTES,
             bytemuck::cast_slice(&state),
         );
         self.scenes[k].forces_ready = false;
@@ -185,8 +185,8 @@ impl GpuEngine {
     ) -> Result<(), EngineError> {
         state.check_fits(&self.scenes[k].model)?;
         self.drain()?;
-        let spring: Vec<GpuJunctionSpring> = state
-            .junction_springs_as::<f32, DoubleSingle>()
+        let spring: Vec<GpuJunctionSpring<T>> = state
+            .junction_springs_as::<T, Coord<T>>()
             .into_iter()
             .map(Into::into)
             .collect();
@@ -197,50 +197,45 @@ impl GpuEngine {
             junctions: nj,
             ..
         } = self.shape;
-        let disp = state.disp_as::<f32, DoubleSingle>();
+        let disp = state.disp_as::<T, Coord<T>>();
         self.write_scene(
             &b.disp[self.current],
             k,
             n,
-            DISP_BYTES,
+            Self::DISP_BYTES,
             bytemuck::cast_slice(&disp),
         );
-        let vel = state.vel_as::<f32>();
+        let vel = state.vel_as::<T>();
         self.write_scene(
             &b.vel[self.current],
             k,
             n,
-            PAIR_BYTES,
+            Self::REAL_PAIR_BYTES,
             bytemuck::cast_slice(&vel),
         );
-        let force = state.force_as::<f32>();
-        self.write_scene(&b.force, k, n, PAIR_BYTES, bytemuck::cast_slice(&force));
-        let contact = state.contact_as::<f32>();
-        self.write_scene(
-            &b.contact,
-            k,
-            nx,
-            PAIR_BYTES,
-            bytemuck::cast_slice(&contact),
-        );
+        let force = state.force_as::<T>();
+        let pair = Self::REAL_PAIR_BYTES;
+        self.write_scene(&b.force, k, n, pair, bytemuck::cast_slice(&force));
+        let contact = state.contact_as::<T>();
+        self.write_scene(&b.contact, k, nx, pair, bytemuck::cast_slice(&contact));
         self.write_scene(
             &b.junction_spring,
             k,
             nj,
-            SPRING_BYTES,
+            Self::SPRING_BYTES,
             bytemuck::cast_slice(&spring),
         );
         let js = bytemuck::cast_slice(&state.junction_state);
-        self.write_scene(&b.junction_state, k, nj, PAIR_BYTES, js);
+        self.write_scene(&b.junction_state, k, nj, WORD_PAIR_BYTES, js);
         self.write_scene(
             &b.slide,
             k,
             nx,
-            PAIR_BYTES,
+            WORD_PAIR_BYTES,
             bytemuck::cast_slice(&state.slide),
         );
         let scene = &mut self.scenes[k];
-        scene.drive_origin = state.drive_origin_as::<f32, DoubleSingle>();
+        scene.drive_origin = state.drive_origin_as::<T, Coord<T>>();
         // The saved forces are those of the saved state.
         scene.forces_ready = true;
         Ok(())
@@ -248,29 +243,28 @@ impl GpuEngine {
 }
 
 /// The state buffers read back, in the kernels' types.
-pub(super) struct RawState {
-    disp: Vec<[DoubleSingle; 2]>,
-    vel: Vec<[f32; 2]>,
-    force: Vec<[f32; 2]>,
-    contact: Vec<[f32; 2]>,
-    spring: Vec<crate::junction::JunctionSpring<DoubleSingle, f32>>,
+pub(super) struct RawState<T: GpuReal> {
+    disp: Vec<[Coord<T>; 2]>,
+    vel: Vec<[T; 2]>,
+    force: Vec<[T; 2]>,
+    contact: Vec<[T; 2]>,
+    spring: Vec<crate::junction::JunctionSpring<Coord<T>, T>>,
     state: Vec<[u32; 2]>,
     slide: Vec<[i32; 2]>,
 }
 
-/// The `junction_spring` buffer's records: double-single anchors, f32
-/// stiffnesses.
-pub(super) fn gpu_junction_springs(anchors: &[f64], stiffness: &[f64]) -> Vec<GpuJunctionSpring> {
+/// The `junction_spring` buffer's records: anchors as coordinates,
+/// stiffnesses in `T`.
+pub(super) fn gpu_junction_springs<T: GpuReal>(
+    anchors: &[f64],
+    stiffness: &[f64],
+) -> Vec<GpuJunctionSpring<T>> {
     anchors
         .iter()
         .zip(stiffness)
-        .map(|(a, k)| {
-            let a = DoubleSingle::from_f64(*a);
-            GpuJunctionSpring {
-                anchor_hi: a.hi,
-                anchor_lo: a.lo,
-                stiffness: *k as f32,
-            }
+        .map(|(a, k)| GpuJunctionSpring {
+            anchor: T::pack(Coord::<T>::from_f64(*a)),
+            stiffness: T::from_f64(*k),
         })
         .collect()
 }

@@ -2,8 +2,11 @@
 //! `layout.rs`, the shared snippets, the scene snippet (one scene, or an
 //! ensemble of scenes), the state bindings of the kernel and its entry
 //! file), and the variant a scene needs: which kernel runs and its
-//! override constants.
+//! override constants. Every module is generated in either precision
+//! (`GpuReal`: mixed f32 or f64) from the same files: only the prelude's
+//! type aliases and the coordinate functions differ.
 
+use super::precision::GpuReal;
 use crate::model::{Driver, Model};
 use crate::scenario::{DampingForm, FrictionLaw};
 
@@ -11,6 +14,7 @@ pub const COMMON: &str = include_str!("../../shaders/common.wgsl");
 pub const SCENE_SINGLE: &str = include_str!("../../shaders/scene_single.wgsl");
 pub const SCENE_ENSEMBLE: &str = include_str!("../../shaders/scene_ensemble.wgsl");
 pub const DOUBLE_SINGLE: &str = include_str!("../../shaders/double_single.wgsl");
+pub const COORD_F64: &str = include_str!("../../shaders/coord_f64.wgsl");
 pub const RNG: &str = include_str!("../../shaders/rng.wgsl");
 pub const BULK_FORCES: &str = include_str!("../../shaders/bulk_forces.wgsl");
 pub const JUNCTIONS: &str = include_str!("../../shaders/junctions.wgsl");
@@ -29,9 +33,10 @@ pub const RECORD_COMMON: &str = include_str!("../../shaders/record_common.wgsl")
 /// The output kernels' module (`record_small`, `record_sample`,
 /// `record_finish`): one
 /// scene, no override constants.
-pub fn record_source() -> String {
+pub fn record_source<T: GpuReal>() -> String {
     [
-        super::layout::wgsl_prelude().as_str(),
+        super::layout::wgsl_prelude::<T>().as_str(),
+        T::COORDINATES,
         SCENE_SINGLE,
         RECORD_BUFFERS,
         RECORD_COMMON,
@@ -41,16 +46,13 @@ pub fn record_source() -> String {
 }
 
 /// Parses and validates the output kernels' module with naga.
-pub fn validate_record() -> Result<naga::Module, String> {
-    let src = record_source();
+pub fn validate_record<T: GpuReal>() -> Result<naga::Module, String> {
+    let src = record_source::<T>();
     let module = naga::front::wgsl::parse_str(&src)
         .map_err(|e| format!("record: {}", e.emit_to_string(&src)))?;
-    naga::valid::Validator::new(
-        naga::valid::ValidationFlags::all(),
-        naga::valid::Capabilities::empty(),
-    )
-    .validate(&module)
-    .map_err(|e| format!("record: {}", e.emit_to_string(&src)))?;
+    naga::valid::Validator::new(naga::valid::ValidationFlags::all(), T::CAPABILITIES)
+        .validate(&module)
+        .map_err(|e| format!("record: {}", e.emit_to_string(&src)))?;
     for name in ["record_small", "record_sample", "record_finish"] {
         if !module.entry_points.iter().any(|e| e.name == name) {
             return Err(format!("record: entry point {name} missing"));
@@ -85,7 +87,7 @@ impl Kernel {
 
     /// The full WGSL module of this kernel, for one scene or an ensemble
     /// (many scenes of one lattice shape per dispatch).
-    pub fn source(self, ensemble: bool) -> String {
+    pub fn source<T: GpuReal>(self, ensemble: bool) -> String {
         let (state, entry) = match self {
             Kernel::OneStep => (STATE_ONE_STEP, ONE_STEP),
             Kernel::OneStepLanes => (STATE_ONE_STEP, ONE_STEP_LANES),
@@ -97,7 +99,7 @@ impl Kernel {
         } else {
             (STEP_FORCES, "", "")
         };
-        let prelude = super::layout::wgsl_prelude();
+        let prelude = super::layout::wgsl_prelude::<T>();
         [
             prelude.as_str(),
             COMMON,
@@ -107,7 +109,7 @@ impl Kernel {
                 SCENE_SINGLE
             },
             state,
-            DOUBLE_SINGLE,
+            T::COORDINATES,
             RNG,
             BULK_FORCES,
             JUNCTIONS,
@@ -179,16 +181,13 @@ impl Variant {
 }
 
 /// Parses and validates a kernel's module with naga (no adapter needed).
-pub fn validate_kernel(phase: Kernel, ensemble: bool) -> Result<naga::Module, String> {
-    let src = phase.source(ensemble);
+pub fn validate_kernel<T: GpuReal>(phase: Kernel, ensemble: bool) -> Result<naga::Module, String> {
+    let src = phase.source::<T>(ensemble);
     let module = naga::front::wgsl::parse_str(&src)
         .map_err(|e| format!("{}: {}", phase.entry_point(), e.emit_to_string(&src)))?;
-    naga::valid::Validator::new(
-        naga::valid::ValidationFlags::all(),
-        naga::valid::Capabilities::empty(),
-    )
-    .validate(&module)
-    .map_err(|e| format!("{}: {}", phase.entry_point(), e.emit_to_string(&src)))?;
+    naga::valid::Validator::new(naga::valid::ValidationFlags::all(), T::CAPABILITIES)
+        .validate(&module)
+        .map_err(|e| format!("{}: {}", phase.entry_point(), e.emit_to_string(&src)))?;
     if !module
         .entry_points
         .iter()
@@ -203,13 +202,38 @@ pub fn validate_kernel(phase: Kernel, ensemble: bool) -> Result<naga::Module, St
 mod tests {
     use super::*;
 
-    #[test]
-    fn every_shader_parses_and_validates_with_naga() {
+    fn validate_all<T: GpuReal>() {
         for kernel in Kernel::ALL {
             for ensemble in [false, true] {
-                validate_kernel(kernel, ensemble).unwrap_or_else(|e| panic!("{e}"));
+                validate_kernel::<T>(kernel, ensemble)
+                    .unwrap_or_else(|e| panic!("{}: {e}", T::NAME));
             }
         }
-        validate_record().unwrap_or_else(|e| panic!("{e}"));
+        validate_record::<T>().unwrap_or_else(|e| panic!("{}: {e}", T::NAME));
+    }
+
+    #[test]
+    fn every_shader_parses_and_validates_with_naga() {
+        validate_all::<f32>();
+    }
+
+    #[test]
+    fn every_shader_validates_in_f64_too() {
+        validate_all::<f64>();
+    }
+
+    /// The f64 kernels need the FLOAT64 capability, so the test above
+    /// validates f64 code (the mixed ones validate without it).
+    #[test]
+    fn f64_kernels_need_the_float64_capability() {
+        let one_step = |caps| {
+            let src = Kernel::OneStep.source::<f64>(false);
+            let module = naga::front::wgsl::parse_str(&src).unwrap();
+            naga::valid::Validator::new(naga::valid::ValidationFlags::all(), caps)
+                .validate(&module)
+                .is_ok()
+        };
+        assert!(!one_step(naga::valid::Capabilities::empty()));
+        assert!(one_step(naga::valid::Capabilities::FLOAT64));
     }
 }

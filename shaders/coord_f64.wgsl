@@ -1,0 +1,133 @@
+// f64 coordinates: with f64 arithmetic a displacement keeps creep
+// increments by itself, so a coordinate is a plain f64 and these are the
+// twins of src/real.rs `impl Coordinate<f64> for f64`. The same interface
+// as the double-single functions of shaders/double_single.wgsl, which the
+// kernels compile with in mixed precision.
+
+fn coord_add(a: coord, d: real) -> coord {
+    return a + d;
+}
+
+fn coord_diff(a: coord, b: coord) -> real {
+    return a - b;
+}
+
+fn coord_value(a: coord) -> real {
+    return a;
+}
+
+fn coord_rounded(a: coord) -> real {
+    return a;
+}
+
+fn coord_f32(a: coord) -> f32 {
+    return f32(a);
+}
+
+// An output row's two words: the value and 0 (its "lo").
+fn coord_hi(a: coord) -> real {
+    return a;
+}
+
+fn coord_lo(a: coord) -> real {
+    return 0.0;
+}
+
+fn coord_pack(a: coord) -> packed_coord {
+    return a;
+}
+
+fn coord_unpack(p: packed_coord) -> coord {
+    return p;
+}
+
+// Vulkan's GLSL.std.450 has no f64 log or cos (only 16- and 32-bit), so
+// the junction RNG's are computed here from +, ×, ÷, to within a few ulp
+// of the CPU twin's libm (a slip time rounds to whole steps: only a draw
+// within ~1e-15 of a half step could round otherwise).
+
+// ln x for x in (0, 1] (the RNG's 24-bit uniforms): x = m·2^e with m in
+// [√½, √2), ln m = 2 atanh(s), s = (m − 1)/(m + 1), |s| < 0.172.
+fn real_ln(x: real) -> real {
+    var m = x;
+    var e: real = 0.0;
+    for (var k = 0; k < 1100 && m < 0.7071067811865476; k++) {
+        m = m * 2.0;
+        e = e - 1.0;
+    }
+    for (var k = 0; k < 1100 && m >= 1.4142135623730951; k++) {
+        m = m * 0.5;
+        e = e + 1.0;
+    }
+    let s = (m - 1.0) / (m + 1.0);
+    let s2 = s * s;
+    // 2 Σ s^(2k+1)/(2k+1), k ≤ 11: the next term is below 1e-19 of ln m.
+    var p: real = 1.0 / 23.0;
+    p = p * s2 + 1.0 / 21.0;
+    p = p * s2 + 1.0 / 19.0;
+    p = p * s2 + 1.0 / 17.0;
+    p = p * s2 + 1.0 / 15.0;
+    p = p * s2 + 1.0 / 13.0;
+    p = p * s2 + 1.0 / 11.0;
+    p = p * s2 + 1.0 / 9.0;
+    p = p * s2 + 1.0 / 7.0;
+    p = p * s2 + 1.0 / 5.0;
+    p = p * s2 + 1.0 / 3.0;
+    let ln_m = 2.0 * s + 2.0 * s * (s2 * p);
+    // ln 2 = LN2_HI + LN2_LO, LN2_HI with 32 significant bits: e·LN2_HI is
+    // exact for |e| < 2^21.
+    let ln2_hi: real = 6.93147180369123816490e-01;
+    let ln2_lo: real = 1.90821492927058770002e-10;
+    return e * ln2_hi + (ln_m + e * ln2_lo);
+}
+
+// sin r and cos r for |r| ≤ π/4 (Taylor series to r^19 and r^18).
+fn sin_small(r: real) -> real {
+    let r2 = r * r;
+    var p: real = -1.0 / 121645100408832000.0;
+    p = p * r2 + 1.0 / 355687428096000.0;
+    p = p * r2 - 1.0 / 1307674368000.0;
+    p = p * r2 + 1.0 / 6227020800.0;
+    p = p * r2 - 1.0 / 39916800.0;
+    p = p * r2 + 1.0 / 362880.0;
+    p = p * r2 - 1.0 / 5040.0;
+    p = p * r2 + 1.0 / 120.0;
+    p = p * r2 - 1.0 / 6.0;
+    return r + r * (r2 * p);
+}
+
+fn cos_small(r: real) -> real {
+    let r2 = r * r;
+    var p: real = -1.0 / 6402373705728000.0;
+    p = p * r2 + 1.0 / 20922789888000.0;
+    p = p * r2 - 1.0 / 87178291200.0;
+    p = p * r2 + 1.0 / 479001600.0;
+    p = p * r2 - 1.0 / 3628800.0;
+    p = p * r2 + 1.0 / 40320.0;
+    p = p * r2 - 1.0 / 720.0;
+    p = p * r2 + 1.0 / 24.0;
+    return 1.0 - 0.5 * r2 + r2 * (r2 * p);
+}
+
+// cos x for 0 ≤ x ≤ 2π (the RNG's 2π·u): x = q·π/2 + r with π/2 in two
+// parts (q·PIO2_HI exact for q ≤ 4), |r| ≤ π/4.
+fn real_cos(x: real) -> real {
+    let pio2_hi: real = 1.57079632673412561417e+00;
+    let pio2_lo: real = 6.07710050650619224932e-11;
+    let q = floor(x * 0.6366197723675814 + 0.5);
+    let r = (x - q * pio2_hi) - q * pio2_lo;
+    switch u32(q) & 3u {
+        case 0u: {
+            return cos_small(r);
+        }
+        case 1u: {
+            return -sin_small(r);
+        }
+        case 2u: {
+            return -cos_small(r);
+        }
+        default: {
+            return sin_small(r);
+        }
+    }
+}

@@ -1,0 +1,123 @@
+//! The GPU engine in f64 (`--precision f64 --backend gpu`) against the CPU
+//! reference engine in f64, on whatever adapter is present (lavapipe in
+//! CI, which has SHADER_F64). These tests fail, never skip, when no
+//! adapter (or no f64 on it) exists.
+
+use slipfront::compare::{compare_snapshots, fields_over};
+use slipfront::cpu::CpuEngine;
+use slipfront::gpu::{GpuEngine, GpuOptions, GpuPath};
+use slipfront::scenario::{Scenario, DEFAULT_SCENARIO};
+use slipfront::{advance_to, Engine, Model, Snapshot};
+
+fn model(extra: &[&str]) -> Model {
+    let mut set: Vec<String> = slipfront::verify::SMALL_SCENE
+        .iter()
+        .map(|s| s.to_string())
+        .collect();
+    // The stick-slip window of tests/gpu_engine.rs: fast drive, short slip
+    // times, so junctions break, re-pin and break again within it.
+    set.push("loading.drive.velocity=0.4".into());
+    set.push("friction.junctions.slip_time_mean=2e-4".into());
+    set.push("friction.junctions.slip_time_std=2e-5".into());
+    set.extend(extra.iter().map(|s| s.to_string()));
+    let s = Scenario::parse(DEFAULT_SCENARIO, "test", &set).unwrap();
+    Model::from_scenario(&s, false).unwrap()
+}
+
+fn gpu_f64(m: &Model, path: GpuPath) -> GpuEngine<f64> {
+    let opts = GpuOptions {
+        path,
+        ..GpuOptions::default()
+    };
+    GpuEngine::<f64>::with_precision(m, opts)
+        .unwrap_or_else(|e| panic!("a GPU adapter with f64 is required (lavapipe in CI): {e}"))
+}
+
+fn snapshot_at(e: &mut dyn Engine, step: u64) -> Snapshot {
+    advance_to(e, step).unwrap();
+    e.snapshot().unwrap()
+}
+
+/// f64 kernels compute what the CPU's f64 twin does, operation for
+/// operation; only a driver's fused multiply-adds (which the twin does not
+/// use) and the RNG's own ln and cos (Vulkan has no f64 ones) may round
+/// differently: 1e-12 of each field's scale.
+const F64_TOLERANCE: f64 = 1e-12;
+
+#[test]
+fn gpu_f64_matches_cpu_f64_through_junction_ruptures_on_every_kernel() {
+    let m = model(&[]);
+    let end = m.prep_steps + 2500;
+    let mut cpu = CpuEngine::<f64>::new(&m, 1).unwrap();
+    let reference = snapshot_at(&mut cpu, end);
+    assert!(
+        reference.total_ruptures() > 20,
+        "the window must contain ruptures: {}",
+        reference.total_ruptures()
+    );
+    let mut one_step = None;
+    for path in [GpuPath::OneStep, GpuPath::OneStepLanes, GpuPath::Persistent] {
+        let mut g = gpu_f64(&m, path);
+        assert!(g.describe().starts_with("gpu f64, "), "{}", g.describe());
+        let started = std::time::Instant::now();
+        let on_gpu = snapshot_at(&mut g, end);
+        let errors = compare_snapshots(&reference, &on_gpu);
+        let worst = errors.iter().map(|e| e.relative()).fold(0.0f64, f64::max);
+        println!(
+            "{path:?}: worst relative error {worst:.2e}, {} ruptures, {:.1} s",
+            on_gpu.total_ruptures(),
+            started.elapsed().as_secs_f64()
+        );
+        assert_eq!(
+            fields_over(&errors, F64_TOLERANCE, 0.0),
+            Vec::<String>::new(),
+            "{path:?}: {errors:?}"
+        );
+        assert_eq!(on_gpu.ruptures, reference.ruptures, "{path:?}");
+        assert_eq!(on_gpu.slips, reference.slips, "{path:?}");
+        assert_eq!(g.save_state().unwrap().precision, "f64");
+        one_step.get_or_insert(on_gpu);
+    }
+    // Negative control: the CPU with the drive 1e-9 faster is flagged by
+    // the same comparator.
+    let perturbed = model(&["loading.drive.velocity=0.4000000004"]);
+    let mut cpu = CpuEngine::<f64>::new(&perturbed, 1).unwrap();
+    let changed = snapshot_at(&mut cpu, end);
+    let errors = compare_snapshots(&changed, &one_step.unwrap());
+    println!("perturbed drive: {errors:?}");
+    assert!(
+        !fields_over(&errors, F64_TOLERANCE, 0.0).is_empty(),
+        "{errors:?}"
+    );
+}
+
+/// A state saved by the CPU's f64 engine continues on the GPU's bit for bit
+/// where both compute alike: one step later the two agree to 1e-12, and
+/// the mixed engine, loading the same state, does not.
+#[test]
+fn f64_states_cross_between_cpu_and_gpu() {
+    let m = model(&[]);
+    let at = m.prep_steps + 500;
+    let mut cpu = CpuEngine::<f64>::new(&m, 1).unwrap();
+    advance_to(&mut cpu, at).unwrap();
+    let state = cpu.save_state().unwrap();
+    assert_eq!(state.precision, "f64");
+    let mut g = gpu_f64(&m, GpuPath::OneStep);
+    g.load_state(&state).unwrap();
+    let reloaded = g.save_state().unwrap();
+    assert_eq!(reloaded, state, "an f64 state comes back bit for bit");
+    let reference = snapshot_at(&mut cpu, at + 200);
+    let errors = compare_snapshots(&reference, &snapshot_at(&mut g, at + 200));
+    assert_eq!(
+        fields_over(&errors, F64_TOLERANCE, 0.0),
+        Vec::<String>::new(),
+        "{errors:?}"
+    );
+    let mut mixed = GpuEngine::with_options(&m, GpuOptions::default()).unwrap();
+    mixed.load_state(&state).unwrap();
+    let errors = compare_snapshots(&reference, &snapshot_at(&mut mixed, at + 200));
+    assert!(
+        !fields_over(&errors, F64_TOLERANCE, 0.0).is_empty(),
+        "{errors:?}"
+    );
+}
