@@ -563,7 +563,7 @@ fn a_gpu_run_extended_equals_the_longer_run() {
     let d = dir("gpu-extend");
     let gpu = |args: &[&str], extra: &[String]| {
         let out = Command::new(env!("CARGO_BIN_EXE_slipfront"))
-            .args(["run", "--backend", "gpu", "--quiet"])
+            .args(["run", "--backend", "gpu", "--precision", "f32", "--quiet"])
             .args(args)
             .args(extra)
             .output()

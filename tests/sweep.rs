@@ -343,7 +343,7 @@ fn a_gpu_ensemble_sweep_gives_the_table_of_points_run_one_at_a_time() {
     let d = dir("ensemble");
     let file = sweep_file(&d, "\"loading.normal.force\" = [1800.0, 1920.0]");
     let together = d.join("together");
-    // No --precision: a GPU sweep defaults to the GPU's mixed f32.
+    // GPU ensembles compute in mixed f32 (asked: the default is f64).
     let text = ok(&[
         "sweep",
         s(&file),
@@ -351,6 +351,8 @@ fn a_gpu_ensemble_sweep_gives_the_table_of_points_run_one_at_a_time() {
         s(&together),
         "--backend",
         "gpu",
+        "--precision",
+        "f32",
         "--ensemble",
         "8",
     ]);
