@@ -136,6 +136,28 @@ impl Comparison {
         out
     }
 
+    /// The p-values of the outcomes chaos has mixed: every count outcome,
+    /// and each continuous outcome that follows the perturbation on
+    /// neither side (|ρ| < `FOLLOWS_PERTURBATION`, or no perturbation
+    /// column). Those are the tests that ask whether two ensembles are
+    /// draws from one distribution.
+    pub fn mixed_p_values(&self) -> Vec<PValue> {
+        let follows = |s: &Side| {
+            s.follows_perturbation
+                .is_some_and(|r| r.abs() >= FOLLOWS_PERTURBATION)
+        };
+        let smooth: Vec<&str> = self
+            .continuous
+            .iter()
+            .filter(|c| follows(&c.a) || follows(&c.b))
+            .map(|c| c.name)
+            .collect();
+        self.p_values()
+            .into_iter()
+            .filter(|v| !smooth.contains(&v.outcome))
+            .collect()
+    }
+
     /// The smallest p-value (the first of equals); None when no test ran.
     pub fn min_p(&self) -> Option<PValue> {
         self.p_values()
