@@ -12,7 +12,7 @@ use super::rows::RowView;
 use super::step::{Interface, Shared};
 use crate::cpu::junctions::{self, JunctionBlock, JUNCTION_LANES};
 use crate::cpu::{coulomb, JunctionSpring, PINNED};
-use crate::precision_probe::{hold, JUNCTIONS};
+use crate::precision_probe::JUNCTIONS;
 use crate::real::{Coordinate, Real};
 use crate::scenario::FrictionLaw;
 
@@ -86,14 +86,15 @@ fn junction_row<T: Real, C: Coordinate<T>>(
         let spring = &mut out.spring[ix * ns..(ix + 1) * ns];
         let state = &mut out.state[ix * ns..(ix + 1) * ns];
         let lane_sums = &mut lanes[ix * JUNCTION_LANES..ix * JUNCTION_LANES + lanes_used];
-        if s.after.preparing {
-            // Every pinned junction's stiffness follows the load: the
-            // reference's path for all.
+        if s.after.preparing || c.f32_probe & JUNCTIONS != 0 {
+            // While the normal load is applied every pinned junction's
+            // stiffness follows it, and the precision probe rounds junction
+            // values: the reference's path for all.
             for (j, ((f, spring), state)) in force.iter_mut().zip(spring).zip(state).enumerate() {
                 *f = junctions::junction(c, &s.after, ix, j, &jb, spring, state);
             }
-        } else if !pinned_forces(&jb, spring, state, force, c.f32_probe)
-            && common_junctions(&jb, spring, state, force, rare, c.f32_probe)
+        } else if !pinned_forces(&jb, spring, state, force)
+            && common_junctions(&jb, spring, state, force, rare)
         {
             let each = force.iter_mut().zip(spring).zip(state).zip(&*rare);
             for (j, (((f, spring), state), _)) in each.enumerate().filter(|(_, x)| *x.1) {
@@ -123,7 +124,6 @@ fn pinned_forces<T: Real, C: Coordinate<T>>(
     spring: &[JunctionSpring<C, T>],
     state: &[[u32; 2]],
     force: &mut [T],
-    probe: u32,
 ) -> bool {
     let n = force.len();
     let (spring, state) = (&spring[..n], &state[..n]);
@@ -137,7 +137,7 @@ fn pinned_forces<T: Real, C: Coordinate<T>>(
     let mut over = false;
     for (f, s) in force.iter_mut().zip(spring) {
         // As the reference: f = −k_j (u_x − anchor).
-        *f = hold(probe, JUNCTIONS, -s.stiffness * jb.ux.diff(s.anchor));
+        *f = -s.stiffness * jb.ux.diff(s.anchor);
         over |= f.abs() > jb.threshold;
     }
     !over
@@ -156,7 +156,6 @@ fn common_junctions<T: Real, C: Coordinate<T>>(
     state: &mut [[u32; 2]],
     force: &mut [T],
     rare: &mut [bool],
-    probe: u32,
 ) -> bool {
     let n = force.len();
     let (spring, state, rare) = (&spring[..n], &mut state[..n], &mut rare[..n]);
@@ -164,11 +163,7 @@ fn common_junctions<T: Real, C: Coordinate<T>>(
     for j in 0..n {
         let left = state[j][0];
         let pinned = left == PINNED;
-        let held = hold(
-            probe,
-            JUNCTIONS,
-            -spring[j].stiffness * jb.ux.diff(spring[j].anchor),
-        );
+        let held = -spring[j].stiffness * jb.ux.diff(spring[j].anchor);
         let next_left = left.saturating_sub(1);
         let is_rare = if pinned {
             held.abs() > jb.threshold
