@@ -33,7 +33,11 @@ fn bulk_force(i: u32, ld: Loads) -> vec2<real> {
     let iz = i32(i / c.nx);
     let ui = load_disp(i);
     let vi = load_vel(i);
-    var f = vec2<real>(0.0, 0.0);
+    // Summed as coordinates (double-single in mixed precision): the terms
+    // nearly cancel, and an f32 running sum would round at the scale of the
+    // largest partial sum (CPU twin: bulk_forces::external_loads says more).
+    var fx = coord_zero();
+    var fz = coord_zero();
     for (var b = 0u; b < 8u; b++) {
         let d = STENCIL[b];
         let jx = ix + d.x;
@@ -54,35 +58,39 @@ fn bulk_force(i: u32, ld: Loads) -> vec2<real> {
         let inv_len = 1.0 / len;
         let n = vec2<real>(r.x * inv_len, r.y * inv_len);
         let spring = kb * stretch;
-        f = vec2<real>(f.x + spring * n.x, f.y + spring * n.y);
+        fx = coord_add(fx, spring * n.x);
+        fz = coord_add(fz, spring * n.y);
         if DAMPING_FORM != 0u {
             let dv = load_vel(j) - vi;
             if DAMPING_FORM == 2u {
                 let along = c.eta * (dv.x * n.x + dv.y * n.y);
-                f = vec2<real>(f.x + along * n.x, f.y + along * n.y);
+                fx = coord_add(fx, along * n.x);
+                fz = coord_add(fz, along * n.y);
             } else {
-                f = vec2<real>(f.x + c.eta * dv.x, f.y + c.eta * dv.y);
+                fx = coord_add(fx, c.eta * dv.x);
+                fz = coord_add(fz, c.eta * dv.y);
             }
         }
     }
     let fl = flags[i];
     if USE_FOUNDATION && (fl & FLAG_INTERFACE) != 0u {
-        f.y = f.y + foundation_normal(coord_value(ui.z));
+        fz = coord_add(fz, foundation_normal(coord_value(ui.z)));
     }
     if USE_PRESTRESS && (fl & FLAG_INTERFACE) != 0u {
         let total = select(ld.interface_shear_total, ld.strip_shear_total, u32(ix) < c.strip_blocks);
-        f.x = f.x + total * (top_share(u32(ix)) * normal_profile(u32(ix)));
+        fx = coord_add(fx, total * (top_share(u32(ix)) * normal_profile(u32(ix))));
     }
     if USE_TOP_LOADS && (fl & FLAG_TOP) != 0u {
         let share = top_share(u32(ix));
-        f.y = f.y - ld.normal_total * (share * normal_profile(u32(ix)));
-        f.x = f.x + ld.top_tangential_total * share;
+        fz = coord_add(fz, -(ld.normal_total * (share * normal_profile(u32(ix)))));
+        fx = coord_add(fx, ld.top_tangential_total * share);
     }
     if USE_SIDE_SPRING && (fl & FLAG_DRIVEN) != 0u && !ld.preparing {
-        f.x = f.x + c.drive_stiffness * coord_diff(ld.drive_target, ui.x);
+        fx = coord_add(fx, c.drive_stiffness * coord_diff(ld.drive_target, ui.x));
     }
     if USE_RELAXATION {
-        f = vec2<real>(f.x - ld.absolute_eta * vi.x, f.y - ld.absolute_eta * vi.y);
+        fx = coord_add(fx, -(ld.absolute_eta * vi.x));
+        fz = coord_add(fz, -(ld.absolute_eta * vi.y));
     }
-    return f;
+    return vec2<real>(coord_value(fx), coord_value(fz));
 }

@@ -8,6 +8,10 @@ fn coord_add(a: coord, d: real) -> coord {
     return a + d;
 }
 
+fn coord_zero() -> coord {
+    return 0.0;
+}
+
 fn coord_diff(a: coord, b: coord) -> real {
     return a - b;
 }

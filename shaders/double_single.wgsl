@@ -30,6 +30,10 @@ fn coord_add(a: coord, d: real) -> coord {
     return ds_add(a, d);
 }
 
+fn coord_zero() -> coord {
+    return vec2<f32>(0.0, 0.0);
+}
+
 fn coord_diff(a: coord, b: coord) -> real {
     return ds_diff(a, b);
 }

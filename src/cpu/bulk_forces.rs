@@ -58,8 +58,10 @@ pub fn bulk_force<T: Real, C: Coordinate<T>>(
     let (ix, iz) = ((i % c.nx) as i32, (i / c.nx) as i32);
     let ui = b.disp[i];
     let vi = b.vel[i];
-    let mut fx = T::zero();
-    let mut fz = T::zero();
+    // The force is summed in the coordinate type (`force_sum`): a
+    // double-single pair in mixed precision.
+    let mut fx = C::from_f64(0.0);
+    let mut fz = C::from_f64(0.0);
     for bond in bonds {
         let jx = ix + bond.dx;
         let jz = iz + bond.dz;
@@ -80,16 +82,16 @@ pub fn bulk_force<T: Real, C: Coordinate<T>>(
         let spring = bond.k * stretch;
         // (The probe rounds each bond's terms as the sweep engine's rows do.)
         let held = |x: T| hold(c.f32_probe, FORCES, x);
-        fx = fx + held(spring * n[0]);
-        fz = fz + held(spring * n[1]);
+        fx = fx.add(held(spring * n[0]));
+        fz = fz.add(held(spring * n[1]));
         let dv = [b.vel[j][0] - vi[0], b.vel[j][1] - vi[1]];
         if c.bond_damping {
             let along = c.eta * (dv[0] * n[0] + dv[1] * n[1]);
-            fx = fx + held(along * n[0]);
-            fz = fz + held(along * n[1]);
+            fx = fx.add(held(along * n[0]));
+            fz = fz.add(held(along * n[1]));
         } else {
-            fx = fx + held(c.eta * dv[0]);
-            fz = fz + held(c.eta * dv[1]);
+            fx = fx.add(held(c.eta * dv[0]));
+            fz = fz.add(held(c.eta * dv[1]));
         }
     }
     external_loads(
@@ -107,7 +109,19 @@ pub fn bulk_force<T: Real, C: Coordinate<T>>(
 /// Adds to the bond forces `f` of a block at column `ix` the loads that do
 /// not come from bonds: foundation and interface prestress, top load, side spring and the
 /// absolute damping (in this order, which the fast
-/// engine keeps too).
+/// engine keeps too), and returns the total rounded to `T` once.
+///
+/// Why the sum is a coordinate (`C`, a double-single pair in mixed
+/// precision): a block's terms are large and nearly cancel (every bond
+/// carries the normal load's compression, the foundation and the top load
+/// balance it), so an f32 running sum rounds at the scale of the largest
+/// partial sum, not of the net force. In a near-static lattice that
+/// rounding is the same step after step: a fixed spurious force field
+/// that swallowed the drive's 1e-6 perturbations and biased mixed f32's
+/// outcome distribution against f64's (results/precision_ensembles.md).
+/// Each term alone rounded to f32 does no harm (the f32 probe showed it);
+/// only the sum needs the extra bits. In f64 and plain f32, `C::add` is
+/// the plain sum: the same bits as before.
 #[inline]
 #[allow(clippy::too_many_arguments)]
 pub fn external_loads<T: Real, C: Coordinate<T>>(
@@ -118,11 +132,11 @@ pub fn external_loads<T: Real, C: Coordinate<T>>(
     ix: usize,
     ui: [C; 2],
     vi: [T; 2],
-    f: [T; 2],
+    f: [C; 2],
 ) -> [T; 2] {
     let [mut fx, mut fz] = f;
     if flags & FLAG_INTERFACE != 0 {
-        fz = fz + crate::laws::foundation_normal(c.k_foundation, ui[1].value());
+        fz = fz.add(crate::laws::foundation_normal(c.k_foundation, ui[1].value()));
         let total = if ix < c.strip_blocks {
             p.strip_shear_total
         } else {
@@ -130,20 +144,23 @@ pub fn external_loads<T: Real, C: Coordinate<T>>(
         };
         let share = crate::laws::top_share::<T>(c.nx, c.nz, ix)
             * crate::laws::normal_profile(c.normal_slope, c.nx, ix);
-        fx = fx + total * share;
+        fx = fx.add(total * share);
     }
     if flags & FLAG_TOP != 0 {
         let share = crate::laws::top_share::<T>(c.nx, c.nz, ix);
         let profile = crate::laws::normal_profile(c.normal_slope, c.nx, ix);
-        fz = fz - p.normal_total * (share * profile);
-        fx = fx + p.top_tangential_total * share;
+        fz = fz.add(-(p.normal_total * (share * profile)));
+        fx = fx.add(p.top_tangential_total * share);
     }
     if flags & FLAG_DRIVEN != 0 && !p.preparing {
-        fx = fx + c.drive_stiffness * drive_target.diff(ui[0]);
+        fx = fx.add(c.drive_stiffness * drive_target.diff(ui[0]));
     }
-    fx = fx - p.absolute_eta * vi[0];
-    fz = fz - p.absolute_eta * vi[1];
-    [hold(c.f32_probe, FORCES, fx), hold(c.f32_probe, FORCES, fz)]
+    fx = fx.add(-(p.absolute_eta * vi[0]));
+    fz = fz.add(-(p.absolute_eta * vi[1]));
+    [
+        hold(c.f32_probe, FORCES, fx.value()),
+        hold(c.f32_probe, FORCES, fz.value()),
+    ]
 }
 
 /// Twin of the `bulk_forces` entry point: fills `force` for the blocks
@@ -160,5 +177,119 @@ pub fn bulk_forces<T: Real, C: Coordinate<T>>(
 ) {
     for (k, f) in force.iter_mut().enumerate() {
         *f = bulk_force(c, bonds, p, drive_target, b, first + k);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::cpu::SweepEngine;
+    use crate::real::DoubleSingle;
+    use crate::step_params::step_params;
+    use crate::{Engine, Model};
+
+    /// Mixed f32 as it was before its sums became coordinates: the
+    /// double-single differences, but an f32 running sum. Only a force sum
+    /// may use it (its `add` drops a coordinate's low word).
+    #[derive(Debug, Clone, Copy, Default, PartialEq)]
+    struct RunningF32Sum(DoubleSingle);
+
+    impl Coordinate<f32> for RunningF32Sum {
+        const NAME: &'static str = "f32+f32 with f32 sums";
+        fn from_f64(v: f64) -> Self {
+            RunningF32Sum(DoubleSingle::from_f64(v))
+        }
+        fn as_f64(self) -> f64 {
+            self.0.as_f64()
+        }
+        fn add(self, d: f32) -> Self {
+            RunningF32Sum(DoubleSingle {
+                hi: self.0.hi + d,
+                lo: 0.0,
+            })
+        }
+        fn diff(self, other: Self) -> f32 {
+            self.0.ds_diff(other.0)
+        }
+        fn value(self) -> f32 {
+            self.0.hi
+        }
+    }
+
+    /// Bond forces alone (no block carries a flag, so no external load) on
+    /// every block of a snapshot, in precision (T, C).
+    fn bond_forces<T: Real, C: Coordinate<T>>(m: &Model, snap: &crate::Snapshot) -> Vec<[f64; 2]> {
+        let c = Consts::<T>::new(m);
+        let bonds = bond_consts(&c);
+        let p = step_params(&c, snap.step);
+        let disp: Vec<[C; 2]> = snap
+            .disp
+            .iter()
+            .map(|u| [C::from_f64(u[0]), C::from_f64(u[1])])
+            .collect();
+        let vel: Vec<[T; 2]> = snap
+            .vel_half
+            .iter()
+            .map(|v| [T::from_f64(v[0]), T::from_f64(v[1])])
+            .collect();
+        let flags = vec![0; disp.len()];
+        let blocks = Blocks {
+            disp: &disp,
+            vel: &vel,
+            flags: &flags,
+        };
+        let target = C::from_f64(0.0);
+        (0..disp.len())
+            .map(|i| {
+                let f = bulk_force(&c, &bonds, &p, target, blocks, i);
+                [f[0].as_f64(), f[1].as_f64()]
+            })
+            .collect()
+    }
+
+    /// Action equals reaction: a bond's force on its far end is the exact
+    /// negation of its force on its near end, so the bond forces of the
+    /// whole lattice sum to zero, and with each block's sum rounded once
+    /// (double-single sums) to within Σ ulp(F_i)/2. An f32 running sum
+    /// rounds each block at its largest partial sum, and in a nearly
+    /// uniform strain every block rounds the same numbers alike: a net
+    /// spurious force on the lattice, the mechanism of mixed f32's old bias
+    /// (results/precision_ensembles.md). The loaded Table S1 lattice.
+    #[test]
+    fn mixed_bond_forces_keep_action_equal_to_reaction() {
+        let s = crate::scenario::Scenario::parse(
+            include_str!("../../scenarios/tromborg2014_precursors.toml"),
+            "precursors",
+            &[],
+        )
+        .unwrap();
+        let m = Model::from_scenario(&s, false).unwrap();
+        let mut e = SweepEngine::<f64, f64>::new(&m, 1).unwrap();
+        e.advance(m.prep_steps + 500).unwrap();
+        let snap = e.snapshot().unwrap();
+        let net = |f: &[[f64; 2]], k: usize| f.iter().map(|b| b[k]).sum::<f64>();
+        let exact = bond_forces::<f64, f64>(&m, &snap);
+        let mixed = bond_forces::<f32, DoubleSingle>(&m, &snap);
+        let running = bond_forces::<f32, RunningF32Sum>(&m, &snap);
+        for k in 0..2 {
+            // Each block's f32 force is within half an ulp of its exact sum.
+            let bound: f64 = mixed
+                .iter()
+                .map(|b| 0.5 * f32::EPSILON as f64 * b[k].abs())
+                .sum();
+            let largest: f64 = exact.iter().map(|b| b[k].abs()).fold(0.0, f64::max);
+            assert!(net(&exact, k).abs() < 1e-12 * largest * exact.len() as f64);
+            assert!(
+                net(&mixed, k).abs() <= bound,
+                "component {k}: mixed net bond force {:e} N above {bound:e} N",
+                net(&mixed, k)
+            );
+            // The negative control: f32 running sums break it, by far.
+            assert!(
+                net(&running, k).abs() > 10.0 * net(&mixed, k).abs(),
+                "component {k}: running f32 sums' net {:e} N within 10 × mixed's",
+                net(&running, k)
+            );
+        }
     }
 }

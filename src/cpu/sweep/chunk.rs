@@ -36,6 +36,10 @@ pub struct Scratch<T, C> {
     horizontal: BondRow<T>,
     up: UpwardBonds<T>,
     down: UpwardBonds<T>,
+    /// A row's bond-force sums in the coordinate type, before the external
+    /// loads join them (`bulk_forces::external_loads` says why).
+    sum_x: Vec<C>,
+    sum_z: Vec<C>,
     junctions: JunctionScratch<T>,
 }
 
@@ -47,6 +51,8 @@ impl<T: Real, C: Coordinate<T>> Scratch<T, C> {
             horizontal: BondRow::new(nx),
             up: UpwardBonds::new(nx),
             down: UpwardBonds::new(nx),
+            sum_x: vec![C::default(); nx],
+            sum_z: vec![C::default(); nx],
             junctions: JunctionScratch::default(),
         }
     }
@@ -235,6 +241,8 @@ fn sweep_band_body<T: Real, C: Coordinate<T>>(
         horizontal,
         up,
         down,
+        sum_x,
+        sum_z,
         junctions,
     } = scratch;
     // Halo rows (a blow-up there is reported by the band owning them).
@@ -294,7 +302,7 @@ fn sweep_band_body<T: Real, C: Coordinate<T>>(
         }
         let r = own(z);
         let (fx_row, fz_row) = (&mut fx[r.clone()], &mut fz[r]);
-        gather_row(horizontal, up, down, fx_row, fz_row);
+        gather_row(horizontal, up, down, sum_x, sum_z);
         for ix in 0..nx {
             let i = z * nx + ix;
             [fx_row[ix], fz_row[ix]] = external_loads(
@@ -305,7 +313,7 @@ fn sweep_band_body<T: Real, C: Coordinate<T>>(
                 ix,
                 [row.ux[ix], row.uz[ix]],
                 [row.vx[ix], row.vz[ix]],
-                [fx_row[ix], fz_row[ix]],
+                [sum_x[ix], sum_z[ix]],
             );
         }
         if z == 0 {

@@ -7,7 +7,7 @@
 //! subtraction is antisymmetric, and every later operation either squares
 //! the sign away or carries it through a product), and the gather adds the
 //! two terms of each bond (spring, then dashpot) in the order of
-//! `lattice::STENCIL`, subtracting where the reference adds the reversed
+//! `lattice::STENCIL`, adding the negation where the reference adds the reversed
 //! bond. Missing bonds (edges) are +0.0 in the padding: a sum that starts at
 //! +0.0 never becomes −0.0, so adding +0.0 changes no bit.
 
@@ -303,13 +303,14 @@ pub fn upward_bonds<T: Real, C: Coordinate<T>>(
 /// Sum of the bond forces on each block of a row, in the order of
 /// `lattice::STENCIL`: (1,0), (−1,0), (0,1), (0,−1), (1,1), (−1,1), (1,−1),
 /// (−1,−1); `up` are this row's upward bonds, `down` the row below's.
+/// The sums are coordinates (`C`), as in the reference's `bulk_force`.
 #[inline(always)]
-pub fn gather_row<T: Real>(
+pub fn gather_row<T: Real, C: Coordinate<T>>(
     horizontal: &BondRow<T>,
     up: &UpwardBonds<T>,
     down: &UpwardBonds<T>,
-    fx: &mut [T],
-    fz: &mut [T],
+    fx: &mut [C],
+    fz: &mut [C],
 ) {
     gather_component(
         [
@@ -355,7 +356,7 @@ pub fn gather_row<T: Real>(
 /// (spring, damper), up vertical, down vertical, up diagonal, up
 /// anti-diagonal, down anti-diagonal, down diagonal.
 #[inline(always)]
-fn gather_component<T: Real>(rows: [&Vec<T>; 14], out: &mut [T]) {
+fn gather_component<T: Real, C: Coordinate<T>>(rows: [&Vec<T>; 14], out: &mut [C]) {
     let n = out.len();
     fn at<T>(r: &[T], shift: usize, n: usize) -> &[T] {
         &r[shift..shift + n]
@@ -373,23 +374,24 @@ fn gather_component<T: Real>(rows: [&Vec<T>; 14], out: &mut [T]) {
     let (ab_s, ab_d) = (at(rows[10], 2, n), at(rows[11], 2, n));
     let (db_s, db_d) = (at(rows[12], 0, n), at(rows[13], 0, n));
     for k in 0..n {
-        let mut f = T::zero();
-        f = f + h_s[k];
-        f = f + h_d[k];
-        f = f - hb_s[k];
-        f = f - hb_d[k];
-        f = f + v_s[k];
-        f = f + v_d[k];
-        f = f - vb_s[k];
-        f = f - vb_d[k];
-        f = f + d_s[k];
-        f = f + d_d[k];
-        f = f + a_s[k];
-        f = f + a_d[k];
-        f = f - ab_s[k];
-        f = f - ab_d[k];
-        f = f - db_s[k];
-        f = f - db_d[k];
+        // Subtracting a far-end term is adding its negation (exact).
+        let mut f = C::from_f64(0.0);
+        f = f.add(h_s[k]);
+        f = f.add(h_d[k]);
+        f = f.add(-hb_s[k]);
+        f = f.add(-hb_d[k]);
+        f = f.add(v_s[k]);
+        f = f.add(v_d[k]);
+        f = f.add(-vb_s[k]);
+        f = f.add(-vb_d[k]);
+        f = f.add(d_s[k]);
+        f = f.add(d_d[k]);
+        f = f.add(a_s[k]);
+        f = f.add(a_d[k]);
+        f = f.add(-ab_s[k]);
+        f = f.add(-ab_d[k]);
+        f = f.add(-db_s[k]);
+        f = f.add(-db_d[k]);
         out[k] = f;
     }
 }
