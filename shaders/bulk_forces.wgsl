@@ -33,11 +33,9 @@ fn bulk_force(i: u32, ld: Loads) -> vec2<real> {
     let iz = i32(i / c.nx);
     let ui = load_disp(i);
     let vi = load_vel(i);
-    // Summed as coordinates (double-single in mixed precision): the terms
-    // nearly cancel, and an f32 running sum would round at the scale of the
-    // largest partial sum (CPU twin: bulk_forces::external_loads says more).
-    var fx = coord_zero();
-    var fz = coord_zero();
+    // Compensated sums in mixed precision (force_sum_add says why).
+    var fx = force_sum_zero();
+    var fz = force_sum_zero();
     for (var b = 0u; b < 8u; b++) {
         let d = STENCIL[b];
         let jx = ix + d.x;
@@ -58,39 +56,38 @@ fn bulk_force(i: u32, ld: Loads) -> vec2<real> {
         let inv_len = 1.0 / len;
         let n = vec2<real>(r.x * inv_len, r.y * inv_len);
         let spring = kb * stretch;
-        fx = coord_add(fx, spring * n.x);
-        fz = coord_add(fz, spring * n.y);
+        var damper = vec2<real>(0.0, 0.0);
         if DAMPING_FORM != 0u {
             let dv = load_vel(j) - vi;
             if DAMPING_FORM == 2u {
                 let along = c.eta * (dv.x * n.x + dv.y * n.y);
-                fx = coord_add(fx, along * n.x);
-                fz = coord_add(fz, along * n.y);
+                damper = vec2<real>(along * n.x, along * n.y);
             } else {
-                fx = coord_add(fx, c.eta * dv.x);
-                fz = coord_add(fz, c.eta * dv.y);
+                damper = vec2<real>(c.eta * dv.x, c.eta * dv.y);
             }
         }
+        fx = force_sum_add_bond(fx, spring * n.x, damper.x);
+        fz = force_sum_add_bond(fz, spring * n.y, damper.y);
     }
     let fl = flags[i];
     if USE_FOUNDATION && (fl & FLAG_INTERFACE) != 0u {
-        fz = coord_add(fz, foundation_normal(coord_value(ui.z)));
+        fz = force_sum_add(fz, foundation_normal(coord_value(ui.z)));
     }
     if USE_PRESTRESS && (fl & FLAG_INTERFACE) != 0u {
         let total = select(ld.interface_shear_total, ld.strip_shear_total, u32(ix) < c.strip_blocks);
-        fx = coord_add(fx, total * (top_share(u32(ix)) * normal_profile(u32(ix))));
+        fx = force_sum_add(fx, total * (top_share(u32(ix)) * normal_profile(u32(ix))));
     }
     if USE_TOP_LOADS && (fl & FLAG_TOP) != 0u {
         let share = top_share(u32(ix));
-        fz = coord_add(fz, -(ld.normal_total * (share * normal_profile(u32(ix)))));
-        fx = coord_add(fx, ld.top_tangential_total * share);
+        fz = force_sum_add(fz, -(ld.normal_total * (share * normal_profile(u32(ix)))));
+        fx = force_sum_add(fx, ld.top_tangential_total * share);
     }
     if USE_SIDE_SPRING && (fl & FLAG_DRIVEN) != 0u && !ld.preparing {
-        fx = coord_add(fx, c.drive_stiffness * coord_diff(ld.drive_target, ui.x));
+        fx = force_sum_add(fx, c.drive_stiffness * coord_diff(ld.drive_target, ui.x));
     }
     if USE_RELAXATION {
-        fx = coord_add(fx, -(ld.absolute_eta * vi.x));
-        fz = coord_add(fz, -(ld.absolute_eta * vi.y));
+        fx = force_sum_add(fx, -(ld.absolute_eta * vi.x));
+        fz = force_sum_add(fz, -(ld.absolute_eta * vi.y));
     }
-    return vec2<real>(coord_value(fx), coord_value(fz));
+    return vec2<real>(force_sum_value(fx), force_sum_value(fz));
 }

@@ -8,8 +8,21 @@ fn coord_add(a: coord, d: real) -> coord {
     return a + d;
 }
 
-fn coord_zero() -> coord {
+// A block's force sum: plain in f64 (CPU twin: ForceSum for f64).
+fn force_sum_zero() -> force_sum {
     return 0.0;
+}
+
+fn force_sum_add(a: force_sum, x: real) -> force_sum {
+    return a + x;
+}
+
+fn force_sum_add_bond(a: force_sum, spring: real, damper: real) -> force_sum {
+    return (a + spring) + damper;
+}
+
+fn force_sum_value(a: force_sum) -> real {
+    return a;
 }
 
 fn coord_diff(a: coord, b: coord) -> real {

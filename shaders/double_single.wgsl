@@ -30,8 +30,29 @@ fn coord_add(a: coord, d: real) -> coord {
     return ds_add(a, d);
 }
 
-fn coord_zero() -> coord {
+// The forces on one block are summed with their rounding errors kept
+// apart (x = sum, y = error; Knuth's two-sum per term): a block's terms
+// nearly cancel, and an f32 running sum broke action = reaction at the
+// rounding level. CPU twin: src/real.rs CompensatedSum::add and value.
+fn force_sum_zero() -> force_sum {
     return vec2<f32>(0.0, 0.0);
+}
+
+fn force_sum_add(a: force_sum, x: f32) -> force_sum {
+    let t = (a.x + x) * c.one;
+    let b = (t - a.x) * c.one;
+    let e = (a.x - (t - b)) + (x - b);
+    return vec2<f32>(t, a.y + e);
+}
+
+// One bond's spring and dashpot terms: their f32 sum, whose rounding is
+// antisymmetric like the terms (CompensatedSum::add_bond).
+fn force_sum_add_bond(a: force_sum, spring: f32, damper: f32) -> force_sum {
+    return force_sum_add(a, spring + damper);
+}
+
+fn force_sum_value(a: force_sum) -> f32 {
+    return a.x + a.y;
 }
 
 fn coord_diff(a: coord, b: coord) -> real {

@@ -56,6 +56,8 @@ pub trait Coordinate<T: Real>:
 {
     /// Name for logs: "f64", "f32" (plain) or "f32+f32" (double-single).
     const NAME: &'static str;
+    /// How this precision sums the forces on one block (`ForceSum`).
+    type Sum: ForceSum<T>;
     /// Nearest representable coordinate.
     fn from_f64(v: f64) -> Self;
     /// Exact value (a double-single pair fits an f64 exactly).
@@ -81,6 +83,7 @@ pub trait Coordinate<T: Real>:
 
 impl Coordinate<f64> for f64 {
     const NAME: &'static str = "f64";
+    type Sum = f64;
     #[inline]
     fn from_f64(v: f64) -> Self {
         v
@@ -107,6 +110,7 @@ impl Coordinate<f64> for f64 {
 /// Kept on the CPU as the negative control of the long-run accuracy tests.
 impl Coordinate<f32> for f32 {
     const NAME: &'static str = "f32";
+    type Sum = f32;
     #[inline]
     fn from_f64(v: f64) -> Self {
         v as f32
@@ -170,6 +174,7 @@ impl DoubleSingle {
 
 impl Coordinate<f32> for DoubleSingle {
     const NAME: &'static str = "f32+f32";
+    type Sum = CompensatedSum;
     #[inline]
     fn from_f64(v: f64) -> Self {
         let hi = v as f32;
@@ -207,6 +212,88 @@ impl Coordinate<f32> for DoubleSingle {
     }
 }
 
+/// The sum of the forces on one block, term by term.
+///
+/// Why mixed precision needs more than an f32 running sum: a block's terms
+/// are large and nearly cancel (every bond carries the normal load's
+/// compression), and a running sum rounds at the scale of its largest
+/// partial sum. A bond's force on its far end is the exact negation of its
+/// force on its near end, so exact sums keep action equal to reaction; the
+/// running sums did not, and in a nearly uniform strain every block
+/// rounded the same numbers alike: a net spurious force on the lattice,
+/// step after step, that biased mixed f32's outcome distribution against
+/// f64's (results/precision_ensembles.md). f64 and plain f32 sum plainly
+/// (the same bits as before); mixed f32 uses `CompensatedSum`.
+pub trait ForceSum<T: Real>: Copy + Send + Sync + Default + std::fmt::Debug + 'static {
+    /// `self + x`.
+    fn add(self, x: T) -> Self;
+    /// `self + spring + damper`, one bond's two terms. Plain sums add them
+    /// one at a time (the same bits as ever); the compensated sum adds
+    /// their f32 sum, whose rounding is antisymmetric like the terms (a
+    /// bond's far end gets −spring − damper = −(spring + damper) exactly),
+    /// so action still equals reaction at half the cost.
+    #[inline(always)]
+    fn add_bond(self, spring: T, damper: T) -> Self {
+        self.add(spring).add(damper)
+    }
+    /// The sum rounded to `T` once.
+    fn value(self) -> T;
+}
+
+impl ForceSum<f64> for f64 {
+    #[inline(always)]
+    fn add(self, x: f64) -> f64 {
+        self + x
+    }
+    #[inline(always)]
+    fn value(self) -> f64 {
+        self
+    }
+}
+
+impl ForceSum<f32> for f32 {
+    #[inline(always)]
+    fn add(self, x: f32) -> f32 {
+        self + x
+    }
+    #[inline(always)]
+    fn value(self) -> f32 {
+        self
+    }
+}
+
+/// An f32 sum with its rounding errors kept apart (Knuth's two-sum of each
+/// term, the errors summed: Ogita, Rump and Oishi's Sum2), as accurate as
+/// a sum in twice f32's precision rounded once. The running sum's chain is
+/// one add per term (the error terms are off it), so it vectorises and
+/// pipelines. WGSL twin: `force_sum_add` in `shaders/double_single.wgsl`.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct CompensatedSum {
+    pub sum: f32,
+    pub err: f32,
+}
+
+impl ForceSum<f32> for CompensatedSum {
+    #[inline(always)]
+    fn add(self, x: f32) -> Self {
+        let t = self.sum + x;
+        let b = t - self.sum;
+        let e = (self.sum - (t - b)) + (x - b);
+        CompensatedSum {
+            sum: t,
+            err: self.err + e,
+        }
+    }
+    #[inline(always)]
+    fn add_bond(self, spring: f32, damper: f32) -> Self {
+        self.add(spring + damper)
+    }
+    #[inline(always)]
+    fn value(self) -> f32 {
+        self.sum + self.err
+    }
+}
+
 /// "f64", "f32 mixed (double-single displacements)" or "f32 plain".
 pub fn precision_name<T: Real, C: Coordinate<T>>() -> String {
     if T::NAME == C::NAME {
@@ -240,6 +327,23 @@ mod tests {
         // The plain f32 sum is off by a large fraction of the 9e-5 m crept
         // (the control: the test above could not pass with plain f32).
         assert!((plain as f64 - exact).abs() > 1e-6, "{plain}");
+    }
+
+    #[test]
+    fn compensated_sum_of_cancelling_terms_is_rounded_once() {
+        // 1e4 + 1e-3 − 1e4: an f32 running sum loses the 1e-3 to the
+        // partial sum's ulp (≈ 1e-3); the compensated sum returns it to
+        // f32's relative precision.
+        let terms = [1.0e4f32, 1.0e-3, -1.0e4, 3.0e-7, 2.5e3, -2.5e3];
+        let exact: f64 = terms.iter().map(|&x| x as f64).sum();
+        let sum = terms
+            .iter()
+            .fold(CompensatedSum::default(), |s, &x| s.add(x));
+        assert_eq!(sum.value(), exact as f32);
+        let running = terms.iter().fold(0.0f32, |s, &x| ForceSum::add(s, x));
+        assert!((running as f64 - exact).abs() > 1e-5, "{running}");
+        // Adding +0.0 (the sweep engine's missing bonds) changes no bit.
+        assert_eq!(sum.add(0.0), sum);
     }
 
     #[test]

@@ -4,7 +4,7 @@
 
 use crate::lattice::{FLAG_DRIVEN, FLAG_INTERFACE, FLAG_TOP, STENCIL};
 use crate::precision_probe::{hold, FORCES};
-use crate::real::{Coordinate, Real};
+use crate::real::{Coordinate, ForceSum, Real};
 use crate::step_params::{Consts, StepParams};
 
 /// Per-bond constants in the engine's precision, built once.
@@ -58,10 +58,9 @@ pub fn bulk_force<T: Real, C: Coordinate<T>>(
     let (ix, iz) = ((i % c.nx) as i32, (i / c.nx) as i32);
     let ui = b.disp[i];
     let vi = b.vel[i];
-    // The force is summed in the coordinate type (`force_sum`): a
-    // double-single pair in mixed precision.
-    let mut fx = C::from_f64(0.0);
-    let mut fz = C::from_f64(0.0);
+    // Summed as the precision's `ForceSum` (`crate::real` says why).
+    let mut fx = C::Sum::default();
+    let mut fz = C::Sum::default();
     for bond in bonds {
         let jx = ix + bond.dx;
         let jz = iz + bond.dz;
@@ -82,17 +81,16 @@ pub fn bulk_force<T: Real, C: Coordinate<T>>(
         let spring = bond.k * stretch;
         // (The probe rounds each bond's terms as the sweep engine's rows do.)
         let held = |x: T| hold(c.f32_probe, FORCES, x);
-        fx = fx.add(held(spring * n[0]));
-        fz = fz.add(held(spring * n[1]));
+        let (sx, sz) = (held(spring * n[0]), held(spring * n[1]));
         let dv = [b.vel[j][0] - vi[0], b.vel[j][1] - vi[1]];
-        if c.bond_damping {
+        let (dx, dz) = if c.bond_damping {
             let along = c.eta * (dv[0] * n[0] + dv[1] * n[1]);
-            fx = fx.add(held(along * n[0]));
-            fz = fz.add(held(along * n[1]));
+            (held(along * n[0]), held(along * n[1]))
         } else {
-            fx = fx.add(held(c.eta * dv[0]));
-            fz = fz.add(held(c.eta * dv[1]));
-        }
+            (held(c.eta * dv[0]), held(c.eta * dv[1]))
+        };
+        fx = fx.add_bond(sx, dx);
+        fz = fz.add_bond(sz, dz);
     }
     external_loads(
         c,
@@ -109,20 +107,9 @@ pub fn bulk_force<T: Real, C: Coordinate<T>>(
 /// Adds to the bond forces `f` of a block at column `ix` the loads that do
 /// not come from bonds: foundation and interface prestress, top load, side spring and the
 /// absolute damping (in this order, which the fast
-/// engine keeps too), and returns the total rounded to `T` once.
-///
-/// Why the sum is a coordinate (`C`, a double-single pair in mixed
-/// precision): a block's terms are large and nearly cancel (every bond
-/// carries the normal load's compression, the foundation and the top load
-/// balance it), so an f32 running sum rounds at the scale of the largest
-/// partial sum, not of the net force. In a near-static lattice that
-/// rounding is the same step after step: a fixed spurious force field
-/// that swallowed the drive's 1e-6 perturbations and biased mixed f32's
-/// outcome distribution against f64's (results/precision_ensembles.md).
-/// Each term alone rounded to f32 does no harm (the f32 probe showed it);
-/// only the sum needs the extra bits. In f64 and plain f32, `C::add` is
-/// the plain sum: the same bits as before.
-#[inline]
+/// engine keeps too), and returns the total rounded to `T` once (the sum
+/// is the precision's `ForceSum`: compensated in mixed f32).
+#[inline(always)]
 #[allow(clippy::too_many_arguments)]
 pub fn external_loads<T: Real, C: Coordinate<T>>(
     c: &Consts<T>,
@@ -132,7 +119,7 @@ pub fn external_loads<T: Real, C: Coordinate<T>>(
     ix: usize,
     ui: [C; 2],
     vi: [T; 2],
-    f: [C; 2],
+    f: [C::Sum; 2],
 ) -> [T; 2] {
     let [mut fx, mut fz] = f;
     if flags & FLAG_INTERFACE != 0 {
@@ -188,14 +175,14 @@ mod tests {
     use crate::step_params::step_params;
     use crate::{Engine, Model};
 
-    /// Mixed f32 as it was before its sums became coordinates: the
-    /// double-single differences, but an f32 running sum. Only a force sum
-    /// may use it (its `add` drops a coordinate's low word).
+    /// Mixed f32 as it was before its sums were compensated: double-single
+    /// coordinates, an f32 running sum.
     #[derive(Debug, Clone, Copy, Default, PartialEq)]
     struct RunningF32Sum(DoubleSingle);
 
     impl Coordinate<f32> for RunningF32Sum {
         const NAME: &'static str = "f32+f32 with f32 sums";
+        type Sum = f32;
         fn from_f64(v: f64) -> Self {
             RunningF32Sum(DoubleSingle::from_f64(v))
         }
@@ -203,10 +190,7 @@ mod tests {
             self.0.as_f64()
         }
         fn add(self, d: f32) -> Self {
-            RunningF32Sum(DoubleSingle {
-                hi: self.0.hi + d,
-                lo: 0.0,
-            })
+            RunningF32Sum(self.0.ds_add(d))
         }
         fn diff(self, other: Self) -> f32 {
             self.0.ds_diff(other.0)
@@ -250,7 +234,7 @@ mod tests {
     /// Action equals reaction: a bond's force on its far end is the exact
     /// negation of its force on its near end, so the bond forces of the
     /// whole lattice sum to zero, and with each block's sum rounded once
-    /// (double-single sums) to within Σ ulp(F_i)/2. An f32 running sum
+    /// (compensated sums) to within Σ ulp(F_i)/2. An f32 running sum
     /// rounds each block at its largest partial sum, and in a nearly
     /// uniform strain every block rounds the same numbers alike: a net
     /// spurious force on the lattice, the mechanism of mixed f32's old bias

@@ -330,7 +330,8 @@ pub const RECORD_INTERFACE_WORDS: u32 = 6;
 pub const RECORD_BULK_WORDS: u32 = 4;
 
 /// The shared constants and structs in precision `T`, prepended to every
-/// shader module: `real`, `coord` and `packed_coord` name `T`'s types.
+/// shader module: `real`, `coord`, `packed_coord` and `force_sum` name
+/// `T`'s types.
 pub fn wgsl_prelude<T: GpuReal>() -> String {
     let stencil: Vec<String> = STENCIL
         .iter()
@@ -351,6 +352,9 @@ pub fn wgsl_prelude<T: GpuReal>() -> String {
         <Coord<T> as WgslType>::WGSL,
         <Packed<T> as WgslType>::WGSL
     );
+    // A block's force sum (`crate::real::ForceSum`): a (sum, error) pair in
+    // mixed precision, like the coordinate pair; a plain f64 in f64.
+    s += &format!("alias force_sum = {};\n", <Coord<T> as WgslType>::WGSL);
     for (name, value) in [
         ("PINNED", crate::junction::PINNED),
         ("FLAG_FIX_X", FLAG_FIX_X),

@@ -30,16 +30,16 @@ pub struct Band<'a, T, C> {
 }
 
 /// A band's working rows, kept between steps.
-pub struct Scratch<T, C> {
+pub struct Scratch<T: Real, C: Coordinate<T>> {
     below: Kinematics<T, C>,
     above: Kinematics<T, C>,
     horizontal: BondRow<T>,
     up: UpwardBonds<T>,
     down: UpwardBonds<T>,
-    /// A row's bond-force sums in the coordinate type, before the external
+    /// A row's bond-force sums (`ForceSum`), before the external
     /// loads join them (`bulk_forces::external_loads` says why).
-    sum_x: Vec<C>,
-    sum_z: Vec<C>,
+    sum_x: Vec<C::Sum>,
+    sum_z: Vec<C::Sum>,
     junctions: JunctionScratch<T>,
 }
 
@@ -51,8 +51,8 @@ impl<T: Real, C: Coordinate<T>> Scratch<T, C> {
             horizontal: BondRow::new(nx),
             up: UpwardBonds::new(nx),
             down: UpwardBonds::new(nx),
-            sum_x: vec![C::default(); nx],
-            sum_z: vec![C::default(); nx],
+            sum_x: vec![Default::default(); nx],
+            sum_z: vec![Default::default(); nx],
             junctions: JunctionScratch::default(),
         }
     }

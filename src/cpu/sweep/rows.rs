@@ -12,7 +12,7 @@
 //! +0.0 never becomes −0.0, so adding +0.0 changes no bit.
 
 use crate::cpu::bulk_forces::BondConsts;
-use crate::real::{Coordinate, Real};
+use crate::real::{Coordinate, ForceSum, Real};
 
 /// One row of blocks, read-only: displacements and velocities.
 #[derive(Clone, Copy)]
@@ -303,14 +303,15 @@ pub fn upward_bonds<T: Real, C: Coordinate<T>>(
 /// Sum of the bond forces on each block of a row, in the order of
 /// `lattice::STENCIL`: (1,0), (−1,0), (0,1), (0,−1), (1,1), (−1,1), (1,−1),
 /// (−1,−1); `up` are this row's upward bonds, `down` the row below's.
-/// The sums are coordinates (`C`), as in the reference's `bulk_force`.
+/// The sums are the precision's `ForceSum`, as in the reference's
+/// `bulk_force`.
 #[inline(always)]
-pub fn gather_row<T: Real, C: Coordinate<T>>(
+pub fn gather_row<T: Real, S: ForceSum<T>>(
     horizontal: &BondRow<T>,
     up: &UpwardBonds<T>,
     down: &UpwardBonds<T>,
-    fx: &mut [C],
-    fz: &mut [C],
+    fx: &mut [S],
+    fz: &mut [S],
 ) {
     gather_component(
         [
@@ -356,7 +357,7 @@ pub fn gather_row<T: Real, C: Coordinate<T>>(
 /// (spring, damper), up vertical, down vertical, up diagonal, up
 /// anti-diagonal, down anti-diagonal, down diagonal.
 #[inline(always)]
-fn gather_component<T: Real, C: Coordinate<T>>(rows: [&Vec<T>; 14], out: &mut [C]) {
+fn gather_component<T: Real, S: ForceSum<T>>(rows: [&Vec<T>; 14], out: &mut [S]) {
     let n = out.len();
     fn at<T>(r: &[T], shift: usize, n: usize) -> &[T] {
         &r[shift..shift + n]
@@ -375,23 +376,15 @@ fn gather_component<T: Real, C: Coordinate<T>>(rows: [&Vec<T>; 14], out: &mut [C
     let (db_s, db_d) = (at(rows[12], 0, n), at(rows[13], 0, n));
     for k in 0..n {
         // Subtracting a far-end term is adding its negation (exact).
-        let mut f = C::from_f64(0.0);
-        f = f.add(h_s[k]);
-        f = f.add(h_d[k]);
-        f = f.add(-hb_s[k]);
-        f = f.add(-hb_d[k]);
-        f = f.add(v_s[k]);
-        f = f.add(v_d[k]);
-        f = f.add(-vb_s[k]);
-        f = f.add(-vb_d[k]);
-        f = f.add(d_s[k]);
-        f = f.add(d_d[k]);
-        f = f.add(a_s[k]);
-        f = f.add(a_d[k]);
-        f = f.add(-ab_s[k]);
-        f = f.add(-ab_d[k]);
-        f = f.add(-db_s[k]);
-        f = f.add(-db_d[k]);
+        let mut f = S::default();
+        f = f.add_bond(h_s[k], h_d[k]);
+        f = f.add_bond(-hb_s[k], -hb_d[k]);
+        f = f.add_bond(v_s[k], v_d[k]);
+        f = f.add_bond(-vb_s[k], -vb_d[k]);
+        f = f.add_bond(d_s[k], d_d[k]);
+        f = f.add_bond(a_s[k], a_d[k]);
+        f = f.add_bond(-ab_s[k], -ab_d[k]);
+        f = f.add_bond(-db_s[k], -db_d[k]);
         out[k] = f;
     }
 }
