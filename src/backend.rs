@@ -56,10 +56,12 @@ fn gpu_default_precision() -> Precision {
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
 pub enum Precision {
-    /// f64 throughout (CPU only).
+    /// f64 throughout: the CPU engines, and the GPU where the adapter has
+    /// f64 shaders (SHADER_F64).
     F64,
     /// Mixed: f32 forces and velocities, double-single (f32 + f32)
-    /// displacements, junction anchors and drive position. The GPU's mode.
+    /// displacements, junction anchors and drive position, compensated
+    /// force sums. Every adapter has it.
     F32,
     /// Plain f32 displacements (CPU only): loses creep below one f32 ulp of
     /// u and changes long runs. Kept as the negative control of the

@@ -121,3 +121,52 @@ fn f64_states_cross_between_cpu_and_gpu() {
         "{errors:?}"
     );
 }
+
+/// An f64 GPU ensemble (what `sweep --backend gpu --precision f64` runs):
+/// each scene matches the CPU's f64 run of its own model to f64 round-off
+/// with the same ruptures, and a scene compared with another scene's CPU
+/// run is flagged (the comparison is not vacuous).
+#[test]
+fn gpu_f64_ensemble_scenes_match_their_cpu_f64_runs() {
+    use slipfront::gpu::ensemble::GpuEnsemble;
+    let models = [
+        model(&[]),
+        model(&["friction.static_coefficient=0.404"]),
+        model(&["time.seed=7", "loading.normal.force=1800"]),
+    ];
+    let end = models[0].prep_steps + 2500;
+    let opts = GpuOptions {
+        path: GpuPath::OneStepLanes,
+        ..GpuOptions::default()
+    };
+    let mut ensemble = GpuEnsemble::<f64>::with_precision(&models, opts)
+        .unwrap_or_else(|e| panic!("a GPU adapter with f64 is required (lavapipe in CI): {e}"));
+    assert!(
+        ensemble
+            .describe()
+            .starts_with("gpu f64, ensemble of 3 scenes"),
+        "{}",
+        ensemble.describe()
+    );
+    ensemble.advance(end).unwrap();
+    let cpu: Vec<Snapshot> = models
+        .iter()
+        .map(|m| snapshot_at(&mut CpuEngine::<f64>::new(m, 1).unwrap(), end))
+        .collect();
+    for (k, reference) in cpu.iter().enumerate() {
+        assert!(ensemble.failure(k).is_none());
+        let scene = ensemble.snapshot(k).unwrap();
+        assert!(reference.total_ruptures() > 20, "scene {k}");
+        let errors = compare_snapshots(reference, &scene);
+        assert_eq!(
+            fields_over(&errors, F64_TOLERANCE, 0.0),
+            Vec::<String>::new(),
+            "scene {k}: {errors:?}"
+        );
+        assert_eq!(scene.ruptures, reference.ruptures, "scene {k}");
+        assert_eq!(ensemble.save_state(k).unwrap().precision, "f64");
+    }
+    // Negative control: scene 1 (μs 1 % higher) against scene 0's run.
+    let errors = compare_snapshots(&cpu[0], &ensemble.snapshot(1).unwrap());
+    assert!(!fields_over(&errors, F64_TOLERANCE, 0.0).is_empty());
+}

@@ -123,7 +123,10 @@ pub fn external_loads<T: Real, C: Coordinate<T>>(
 ) -> [T; 2] {
     let [mut fx, mut fz] = f;
     if flags & FLAG_INTERFACE != 0 {
-        fz = fz.add(crate::laws::foundation_normal(c.k_foundation, ui[1].value()));
+        fz = fz.add(crate::laws::foundation_normal(
+            c.k_foundation,
+            ui[1].value(),
+        ));
         let total = if ix < c.strip_blocks {
             p.strip_shear_total
         } else {

@@ -6,14 +6,18 @@
 //! blows up stops alone: its error is kept and the others go on.
 
 use super::context::{self, GpuContext};
+use super::precision::GpuReal;
 use super::shaders::Variant;
 use super::{GpuEngine, GpuOptions};
 use crate::engine::{EngineError, EngineState, Snapshot};
 use crate::lattice::block_flags;
 use crate::model::Model;
+use crate::real::precision_name;
 
-pub struct GpuEnsemble {
-    engine: GpuEngine,
+/// An ensemble computing in `T`: mixed f32 (every adapter) or f64 (an
+/// adapter with SHADER_F64), from the same kernels as `GpuEngine<T>`.
+pub struct GpuEnsemble<T: GpuReal = f32> {
+    engine: GpuEngine<T>,
 }
 
 /// Why `models` cannot be stepped as one ensemble, or None if they can:
@@ -41,6 +45,7 @@ pub fn incompatibility(models: &[Model]) -> Option<String> {
     })
 }
 
+/// The mixed-precision ensemble (every adapter).
 impl GpuEnsemble {
     /// The ensemble of `models` on the best adapter.
     pub fn new(models: &[Model], opts: GpuOptions) -> Result<GpuEnsemble, EngineError> {
@@ -52,6 +57,25 @@ impl GpuEnsemble {
         ctx: GpuContext,
         opts: GpuOptions,
     ) -> Result<GpuEnsemble, EngineError> {
+        GpuEnsemble::with_precision_and_context(models, ctx, opts)
+    }
+}
+
+impl<T: GpuReal> GpuEnsemble<T> {
+    /// The ensemble in precision `T` (`GpuEnsemble::<f64>::with_precision`)
+    /// on the best adapter; f64 fails on an adapter without SHADER_F64.
+    pub fn with_precision(
+        models: &[Model],
+        opts: GpuOptions,
+    ) -> Result<GpuEnsemble<T>, EngineError> {
+        GpuEnsemble::with_precision_and_context(models, context::shared()?, opts)
+    }
+
+    pub fn with_precision_and_context(
+        models: &[Model],
+        ctx: GpuContext,
+        opts: GpuOptions,
+    ) -> Result<GpuEnsemble<T>, EngineError> {
         if models.is_empty() {
             return Err(EngineError::Gpu(
                 "an ensemble needs at least one scene".into(),
@@ -145,7 +169,8 @@ impl GpuEnsemble {
 
     pub fn describe(&self) -> String {
         format!(
-            "gpu f32 mixed (f32+f32 coordinates), ensemble of {} scenes, {}, on {}",
+            "gpu {}, ensemble of {} scenes, {}, on {}",
+            precision_name::<T, T::Coord>(),
             self.len(),
             self.engine.kernel_description(),
             self.engine.ctx.describe()

@@ -7,12 +7,13 @@
 //! (its engine dropped) no longer holds the others back.
 
 use super::ensemble::GpuEnsemble;
+use super::precision::GpuReal;
 use crate::engine::{Engine, EngineError, EngineState, Snapshot};
 use crate::model::Model;
 use std::sync::{Arc, Condvar, Mutex, MutexGuard};
 
-struct Shared {
-    ensemble: GpuEnsemble,
+struct Shared<T: GpuReal> {
+    ensemble: GpuEnsemble<T>,
     /// Steps each scene still waits for (None: not waiting).
     wants: Vec<Option<u64>>,
     /// Scenes whose engine is still in use.
@@ -21,22 +22,22 @@ struct Shared {
     device_error: Option<String>,
 }
 
-pub struct Lockstep {
-    shared: Mutex<Shared>,
+pub struct Lockstep<T: GpuReal> {
+    shared: Mutex<Shared<T>>,
     moved: Condvar,
 }
 
 /// One scene of a lockstep ensemble, as an [`Engine`].
-pub struct LockstepScene {
-    lockstep: Arc<Lockstep>,
+pub struct LockstepScene<T: GpuReal = f32> {
+    lockstep: Arc<Lockstep<T>>,
     scene: usize,
     model: Model,
     description: String,
 }
 
-impl Lockstep {
+impl<T: GpuReal> Lockstep<T> {
     /// One engine per scene of `ensemble`, in scene order.
-    pub fn split(ensemble: GpuEnsemble) -> Vec<LockstepScene> {
+    pub fn split(ensemble: GpuEnsemble<T>) -> Vec<LockstepScene<T>> {
         let n = ensemble.len();
         let models: Vec<Model> = (0..n).map(|k| ensemble.model(k).clone()).collect();
         let description = ensemble.describe();
@@ -61,14 +62,14 @@ impl Lockstep {
             .collect()
     }
 
-    fn lock(&self) -> MutexGuard<'_, Shared> {
+    fn lock(&self) -> MutexGuard<'_, Shared<T>> {
         // A thread that panicked holding the lock leaves the state as it
         // was between two ensemble steps: still usable.
         self.shared.lock().unwrap_or_else(|p| p.into_inner())
     }
 }
 
-impl Shared {
+impl<T: GpuReal> Shared<T> {
     /// Advances the ensemble while every running scene is waiting, by the
     /// smallest request each time; true if it moved.
     fn step_while_all_wait(&mut self) -> bool {
@@ -138,7 +139,7 @@ impl Shared {
     }
 }
 
-impl LockstepScene {
+impl<T: GpuReal> LockstepScene<T> {
     fn no_jumps(&self) -> EngineError {
         EngineError::Gpu(
             "a scene of a GPU ensemble cannot jump (quasi-static fast-forward): run it alone"
@@ -147,7 +148,7 @@ impl LockstepScene {
     }
 }
 
-impl Engine for LockstepScene {
+impl<T: GpuReal> Engine for LockstepScene<T> {
     fn model(&self) -> &Model {
         &self.model
     }
@@ -217,7 +218,7 @@ impl Engine for LockstepScene {
     }
 }
 
-impl Drop for LockstepScene {
+impl<T: GpuReal> Drop for LockstepScene<T> {
     fn drop(&mut self) {
         let mut shared = self.lockstep.lock();
         shared.running[self.scene] = false;

@@ -3,9 +3,12 @@
 //! own thread running the ordinary runner (`gpu::lockstep`).
 
 use super::{run_point, EngineSource, Loading, Point, Recorder, SweepOptions};
+use crate::backend::Precision;
 use crate::engine::EngineState;
+use crate::engine::{Engine, EngineError};
 use crate::gpu::ensemble::{incompatibility, GpuEnsemble};
 use crate::gpu::lockstep::Lockstep;
+use crate::gpu::precision::GpuReal;
 use crate::gpu::GpuOptions;
 use crate::model::Model;
 use std::time::Instant;
@@ -70,7 +73,7 @@ pub fn plan(todo: &[&Point], loading_of: &[Option<usize>], max: usize) -> Plan {
 /// loaded state where the points will look for it. A loading that cannot
 /// join one, or whose scene blew up, is left to be made alone on first
 /// use, with its own error. Returns the loadings made here.
-pub fn prepare_loadings(loadings: &[Loading], max: usize) -> usize {
+pub fn prepare_loadings(loadings: &[Loading], max: usize, precision: Precision) -> usize {
     let mut models: Vec<(usize, Model)> = loadings
         .iter()
         .enumerate()
@@ -96,18 +99,15 @@ pub fn prepare_loadings(loadings: &[Loading], max: usize) -> usize {
             continue;
         }
         let scenes: Vec<Model> = batch.iter().map(|(_, m)| m.clone()).collect();
-        let Ok(mut ensemble) = GpuEnsemble::new(&scenes, GpuOptions::default()) else {
+        // As `Loading::state`: one step before driving starts.
+        let Ok(states) = (match precision {
+            Precision::F64 => loaded_states::<f64>(&scenes, first.prep_steps - 1),
+            _ => loaded_states::<f32>(&scenes, first.prep_steps - 1),
+        }) else {
             continue;
         };
-        // As `Loading::state`: one step before driving starts.
-        if ensemble.advance(first.prep_steps - 1).is_err() {
-            continue;
-        }
-        for (scene, &(g, _)) in batch.iter().enumerate() {
-            if ensemble.failure(scene).is_some() {
-                continue;
-            }
-            if let Ok(state) = ensemble.save_state(scene) {
+        for (state, &(g, _)) in states.into_iter().zip(&batch) {
+            if let Some(state) = state {
                 if loadings[g].state.set(Ok(state)).is_ok() {
                     made += 1;
                 }
@@ -115,6 +115,42 @@ pub fn prepare_loadings(loadings: &[Loading], max: usize) -> usize {
         }
     }
     made
+}
+
+/// Each scene's state after `steps` as one ensemble in precision `T`
+/// (None for a scene that blew up or whose state cannot be read).
+fn loaded_states<T: GpuReal>(
+    scenes: &[Model],
+    steps: u64,
+) -> Result<Vec<Option<EngineState>>, EngineError> {
+    let mut ensemble = GpuEnsemble::<T>::with_precision(scenes, GpuOptions::default())?;
+    ensemble.advance(steps)?;
+    Ok((0..scenes.len())
+        .map(|scene| {
+            if ensemble.failure(scene).is_some() {
+                None
+            } else {
+                ensemble.save_state(scene).ok()
+            }
+        })
+        .collect())
+}
+
+/// The scenes of an ensemble of `models` in precision `T`, each its own
+/// engine, started from `states` when given.
+fn lockstep_engines<T: GpuReal>(
+    models: &[Model],
+    states: Option<&[&EngineState]>,
+) -> Result<Vec<Box<dyn Engine + Send>>, String> {
+    let mut ensemble = GpuEnsemble::<T>::with_precision(models, GpuOptions::default())
+        .map_err(|e| format!("no ensemble of {} points: {e}", models.len()))?;
+    if let Some(states) = states {
+        ensemble.start_from(states).map_err(|e| e.to_string())?;
+    }
+    Ok(Lockstep::split(ensemble)
+        .into_iter()
+        .map(|e| Box::new(e) as Box<dyn Engine + Send>)
+        .collect())
 }
 
 /// What running an ensemble needs from the sweep.
@@ -137,20 +173,24 @@ impl Run<'_> {
             .map(|&k| Model::from_scenario(&self.todo[k].scenario, false))
             .collect::<Result<Vec<Model>, _>>()
             .map_err(|e| e.to_string())?;
-        let mut ensemble = GpuEnsemble::new(&models, GpuOptions::default())
-            .map_err(|e| format!("no ensemble of {} points: {e}", members.len()))?;
         let loaded = self.group_of[members[0]].is_some();
-        if loaded {
-            let states = members
-                .iter()
-                .map(|&k| {
-                    let g = self.group_of[k].expect("members all start loaded");
-                    self.loadings[g].state(self.opts)
-                })
-                .collect::<Result<Vec<&EngineState>, String>>()?;
-            ensemble.start_from(&states).map_err(|e| e.to_string())?;
-        }
-        let engines = Lockstep::split(ensemble);
+        let states = if loaded {
+            Some(
+                members
+                    .iter()
+                    .map(|&k| {
+                        let g = self.group_of[k].expect("members all start loaded");
+                        self.loadings[g].state(self.opts)
+                    })
+                    .collect::<Result<Vec<&EngineState>, String>>()?,
+            )
+        } else {
+            None
+        };
+        let engines = match self.opts.precision {
+            Precision::F64 => lockstep_engines::<f64>(&models, states.as_deref())?,
+            _ => lockstep_engines::<f32>(&models, states.as_deref())?,
+        };
         std::thread::scope(|s| {
             for (engine, &k) in engines.into_iter().zip(members) {
                 s.spawn(move || {
@@ -161,10 +201,7 @@ impl Run<'_> {
                     if self.recorder.stopped() {
                         return;
                     }
-                    let source = EngineSource::Ensemble {
-                        engine: Box::new(engine),
-                        loaded,
-                    };
+                    let source = EngineSource::Ensemble { engine, loaded };
                     let row = run_point(p, self.opts, self.header_len, source);
                     self.recorder.record(p, row, started);
                 });

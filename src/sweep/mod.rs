@@ -19,7 +19,6 @@ pub use plan::{Point, Sweep, SweepFile};
 use crate::backend::{make_engine, make_engine_with, Backend, Precision};
 use crate::checkpoint::RunnerState;
 use crate::engine::{Engine, EngineError, EngineState};
-use crate::gpu::lockstep::LockstepScene;
 use crate::model::Model;
 use crate::output::reader::RunFile;
 use crate::runner::{run_scene, RunError, RunOptions, StartFrom};
@@ -194,7 +193,7 @@ enum EngineSource<'a> {
     /// A scene of a GPU ensemble, standing at the point's start (the end of
     /// its normal-load phase when `loaded`).
     Ensemble {
-        engine: Box<LockstepScene>,
+        engine: Box<dyn Engine + Send>,
         loaded: bool,
     },
 }
@@ -426,10 +425,11 @@ pub fn run_sweep(sweep: &Sweep, opts: &SweepOptions) -> Result<SweepReport, Stri
     let mut alone: Vec<usize> = (0..todo.len()).collect();
     let mut ensemble_sizes = Vec::new();
     // (Another precision than the GPU's: each point fails alone, saying so.)
-    if opts.backend == Backend::Gpu && opts.precision == Precision::F32 && opts.ensemble > 1 {
+    let gpu_precision = matches!(opts.precision, Precision::F32 | Precision::F64);
+    if opts.backend == Backend::Gpu && gpu_precision && opts.ensemble > 1 {
         let plan = ensembles::plan(&todo, &group_of, opts.ensemble);
         alone = plan.alone;
-        let made = ensembles::prepare_loadings(&groups, opts.ensemble);
+        let made = ensembles::prepare_loadings(&groups, opts.ensemble, opts.precision);
         if opts.progress && made > 0 {
             eprintln!("sweep: {made} shared normal-load phases run as GPU ensembles");
         }
