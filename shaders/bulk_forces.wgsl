@@ -53,18 +53,34 @@ fn bulk_force(i: u32, ld: Loads) -> vec2<real> {
         let len = sqrt(r.x * r.x + r.y * r.y);
         // Elongation without cancellation: (|r|² − l²)/(|r| + l).
         let stretch = (2.0 * (r0.x * du.x + r0.y * du.y) + (du.x * du.x + du.y * du.y)) / (len + rest);
+        var damper = vec2<real>(0.0, 0.0);
+        let dv = load_vel(j) - vi;
+        if SPLITS_BONDS {
+            // Mixed f32: r0 + du would round du to ulp(r0), about two steps
+            // of creep, and turn the bond's direction in stairs; the force
+            // q·r is summed as q·r0 + q·du instead (CPU twin: bulk_force).
+            let q = kb * stretch / (rest + stretch);
+            if DAMPING_FORM == 2u {
+                let inv = 1.0 / (rest + stretch);
+                let n0 = vec2<real>(r0.x * inv, r0.y * inv);
+                let n1 = vec2<real>(du.x * inv, du.y * inv);
+                let along = c.eta * ((dv.x * n0.x + dv.y * n0.y) + (dv.x * n1.x + dv.y * n1.y));
+                damper = vec2<real>(along * n0.x + along * n1.x, along * n0.y + along * n1.y);
+            } else if DAMPING_FORM != 0u {
+                damper = vec2<real>(c.eta * dv.x, c.eta * dv.y);
+            }
+            fx = force_sum_add_bond(force_sum_add(fx, q * r0.x), q * du.x, damper.x);
+            fz = force_sum_add_bond(force_sum_add(fz, q * r0.y), q * du.y, damper.y);
+            continue;
+        }
         let inv_len = 1.0 / len;
         let n = vec2<real>(r.x * inv_len, r.y * inv_len);
         let spring = kb * stretch;
-        var damper = vec2<real>(0.0, 0.0);
-        if DAMPING_FORM != 0u {
-            let dv = load_vel(j) - vi;
-            if DAMPING_FORM == 2u {
-                let along = c.eta * (dv.x * n.x + dv.y * n.y);
-                damper = vec2<real>(along * n.x, along * n.y);
-            } else {
-                damper = vec2<real>(c.eta * dv.x, c.eta * dv.y);
-            }
+        if DAMPING_FORM == 2u {
+            let along = c.eta * (dv.x * n.x + dv.y * n.y);
+            damper = vec2<real>(along * n.x, along * n.y);
+        } else if DAMPING_FORM != 0u {
+            damper = vec2<real>(c.eta * dv.x, c.eta * dv.y);
         }
         fx = force_sum_add_bond(fx, spring * n.x, damper.x);
         fz = force_sum_add_bond(fz, spring * n.y, damper.y);

@@ -9,6 +9,9 @@ fn coord_add(a: coord, d: real) -> coord {
 }
 
 // A block's force sum: plain in f64 (CPU twin: ForceSum for f64).
+// CPU twin: ForceSum::SPLITS_BONDS; f64: one term per bond (CPU twin: ForceSum::SPLITS_BONDS).
+const SPLITS_BONDS: bool = false;
+
 fn force_sum_zero() -> force_sum {
     return 0.0;
 }

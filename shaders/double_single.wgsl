@@ -34,6 +34,9 @@ fn coord_add(a: coord, d: real) -> coord {
 // apart (x = sum, y = error; Knuth's two-sum per term): a block's terms
 // nearly cancel, and an f32 running sum broke action = reaction at the
 // rounding level. CPU twin: src/real.rs CompensatedSum::add and value.
+// CPU twin: ForceSum::SPLITS_BONDS; mixed f32: bonds split into q·r0 + q·du (shaders/bulk_forces.wgsl).
+const SPLITS_BONDS: bool = true;
+
 fn force_sum_zero() -> force_sum {
     return vec2<f32>(0.0, 0.0);
 }

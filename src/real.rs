@@ -225,6 +225,10 @@ impl Coordinate<f32> for DoubleSingle {
 /// f64's (results/precision_ensembles.md). f64 and plain f32 sum plainly
 /// (the same bits as before); mixed f32 uses `CompensatedSum`.
 pub trait ForceSum<T: Real>: Copy + Send + Sync + Default + std::fmt::Debug + 'static {
+    /// Whether the bond forces are split into a rest-direction and a
+    /// rotation term (`bulk_forces::bulk_force` says why): true for the
+    /// compensated sum; f64 and plain f32 keep their one term per bond.
+    const SPLITS_BONDS: bool = false;
     /// `self + x`.
     fn add(self, x: T) -> Self;
     /// `self + spring + damper`, one bond's two terms. Plain sums add them
@@ -274,6 +278,7 @@ pub struct CompensatedSum {
 }
 
 impl ForceSum<f32> for CompensatedSum {
+    const SPLITS_BONDS: bool = true;
     #[inline(always)]
     fn add(self, x: f32) -> Self {
         let t = self.sum + x;

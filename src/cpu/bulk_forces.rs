@@ -76,13 +76,36 @@ pub fn bulk_force<T: Real, C: Coordinate<T>>(
         let stretch = (two * (bond.r0[0] * du[0] + bond.r0[1] * du[1])
             + (du[0] * du[0] + du[1] * du[1]))
             / (len + bond.rest);
+        let held = |x: T| hold(c.f32_probe, FORCES, x);
+        let dv = [b.vel[j][0] - vi[0], b.vel[j][1] - vi[1]];
+        if C::Sum::SPLITS_BONDS {
+            // Mixed f32: r = r0 + du rounds du to ulp(r0) ≈ 2e-10 m, about
+            // two steps of creep, so the bond's direction would move in
+            // stairs, step after step alike, and bias the lattice. Instead
+            // the force q·r (q = k·stretch/|r|, |r| = rest + stretch) is
+            // summed as q·r0 + q·du, each exact to f32's relative precision.
+            let q = bond.k * stretch / (bond.rest + stretch);
+            let rot = [q * du[0], q * du[1]];
+            let (dx, dz) = if c.bond_damping {
+                // n = r0/|r| + du/|r|, kept as its two parts alike.
+                let inv = T::one() / (bond.rest + stretch);
+                let n0 = [bond.r0[0] * inv, bond.r0[1] * inv];
+                let n1 = [du[0] * inv, du[1] * inv];
+                let along =
+                    c.eta * ((dv[0] * n0[0] + dv[1] * n0[1]) + (dv[0] * n1[0] + dv[1] * n1[1]));
+                (along * n0[0] + along * n1[0], along * n0[1] + along * n1[1])
+            } else {
+                (c.eta * dv[0], c.eta * dv[1])
+            };
+            fx = fx.add(q * bond.r0[0]).add_bond(rot[0], dx);
+            fz = fz.add(q * bond.r0[1]).add_bond(rot[1], dz);
+            continue;
+        }
         let inv_len = T::one() / len;
         let n = [r[0] * inv_len, r[1] * inv_len];
         let spring = bond.k * stretch;
         // (The probe rounds each bond's terms as the sweep engine's rows do.)
-        let held = |x: T| hold(c.f32_probe, FORCES, x);
         let (sx, sz) = (held(spring * n[0]), held(spring * n[1]));
-        let dv = [b.vel[j][0] - vi[0], b.vel[j][1] - vi[1]];
         let (dx, dz) = if c.bond_damping {
             let along = c.eta * (dv[0] * n[0] + dv[1] * n[1]);
             (held(along * n[0]), held(along * n[1]))

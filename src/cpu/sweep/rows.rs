@@ -44,6 +44,10 @@ impl<'a, T, C> RowView<'a, T, C> {
 pub struct BondRow<T> {
     pub spring_x: Vec<T>,
     pub spring_z: Vec<T>,
+    /// The spring's rotation term q·du where bonds are split (mixed f32,
+    /// `ForceSum::SPLITS_BONDS`; spring_x/z then hold q·r0); unused else.
+    pub rotation_x: Vec<T>,
+    pub rotation_z: Vec<T>,
     pub damper_x: Vec<T>,
     pub damper_z: Vec<T>,
 }
@@ -54,6 +58,8 @@ impl<T: Real> BondRow<T> {
         BondRow {
             spring_x: zeros.clone(),
             spring_z: zeros.clone(),
+            rotation_x: zeros.clone(),
+            rotation_z: zeros.clone(),
             damper_x: zeros.clone(),
             damper_z: zeros,
         }
@@ -78,6 +84,8 @@ impl<T: Real> BondRow<T> {
         for v in [
             &mut self.spring_x,
             &mut self.spring_z,
+            &mut self.rotation_x,
+            &mut self.rotation_z,
             &mut self.damper_x,
             &mut self.damper_z,
         ] {
@@ -165,10 +173,14 @@ fn bond_span<T: Real, C: Coordinate<T>, const BOND_DAMPING: bool>(
         eta,
         [near.ux, near.uz, far.ux, far.uz],
         [near.vx, near.vz, far.vx, far.vz],
-        &mut out.spring_x[at..at + n],
-        &mut out.spring_z[at..at + n],
-        &mut out.damper_x[at..at + n],
-        &mut out.damper_z[at..at + n],
+        [
+            &mut out.spring_x[at..at + n],
+            &mut out.spring_z[at..at + n],
+            &mut out.rotation_x[at..at + n],
+            &mut out.rotation_z[at..at + n],
+            &mut out.damper_x[at..at + n],
+            &mut out.damper_z[at..at + n],
+        ],
     );
 }
 
@@ -177,19 +189,22 @@ fn bond_span<T: Real, C: Coordinate<T>, const BOND_DAMPING: bool>(
 /// nothing and vectorises it (sqrt and divides included). Inlined into the
 /// band sweep so that it takes that function's instruction set.
 #[inline(always)]
-#[allow(clippy::too_many_arguments)]
 fn bond_kernel<T: Real, C: Coordinate<T>, const BOND_DAMPING: bool>(
     b: &BondConsts<T>,
     eta: T,
     u: [&[C]; 4],
     v: [&[T]; 4],
-    sx: &mut [T],
-    sz: &mut [T],
-    dx: &mut [T],
-    dz: &mut [T],
+    out: [&mut [T]; 6],
 ) {
+    let [sx, sz, rx, rz, dx, dz] = out;
     let n = sx.len();
-    let (sz, dx, dz) = (&mut sz[..n], &mut dx[..n], &mut dz[..n]);
+    let (sz, rx, rz, dx, dz) = (
+        &mut sz[..n],
+        &mut rx[..n],
+        &mut rz[..n],
+        &mut dx[..n],
+        &mut dz[..n],
+    );
     let (uxi, uzi, uxj, uzj) = (&u[0][..n], &u[1][..n], &u[2][..n], &u[3][..n]);
     let (vxi, vzi, vxj, vzj) = (&v[0][..n], &v[1][..n], &v[2][..n], &v[3][..n]);
     let two = T::one() + T::one();
@@ -202,14 +217,33 @@ fn bond_kernel<T: Real, C: Coordinate<T>, const BOND_DAMPING: bool>(
         let r1 = r01 + du1;
         let len = (r0 * r0 + r1 * r1).sqrt();
         let stretch = (two * (r00 * du0 + r01 * du1) + (du0 * du0 + du1 * du1)) / (len + rest);
+        let dv0 = vxj[i] - vxi[i];
+        let dv1 = vzj[i] - vzi[i];
+        if <C::Sum as ForceSum<T>>::SPLITS_BONDS {
+            let q = k * stretch / (rest + stretch);
+            sx[i] = q * r00;
+            sz[i] = q * r01;
+            rx[i] = q * du0;
+            rz[i] = q * du1;
+            if BOND_DAMPING {
+                let inv = T::one() / (rest + stretch);
+                let (n00, n01) = (r00 * inv, r01 * inv);
+                let (n10, n11) = (du0 * inv, du1 * inv);
+                let along = eta * ((dv0 * n00 + dv1 * n01) + (dv0 * n10 + dv1 * n11));
+                dx[i] = along * n00 + along * n10;
+                dz[i] = along * n01 + along * n11;
+            } else {
+                dx[i] = eta * dv0;
+                dz[i] = eta * dv1;
+            }
+            continue;
+        }
         let inv_len = T::one() / len;
         let n0 = r0 * inv_len;
         let n1 = r1 * inv_len;
         let spring = k * stretch;
         sx[i] = spring * n0;
         sz[i] = spring * n1;
-        let dv0 = vxj[i] - vxi[i];
-        let dv1 = vzj[i] - vzi[i];
         if BOND_DAMPING {
             let along = eta * (dv0 * n0 + dv1 * n1);
             dx[i] = along * n0;
@@ -313,78 +347,65 @@ pub fn gather_row<T: Real, S: ForceSum<T>>(
     fx: &mut [S],
     fz: &mut [S],
 ) {
-    gather_component(
-        [
-            &horizontal.spring_x,
-            &horizontal.damper_x,
-            &up.vertical.spring_x,
-            &up.vertical.damper_x,
-            &down.vertical.spring_x,
-            &down.vertical.damper_x,
-            &up.diagonal.spring_x,
-            &up.diagonal.damper_x,
-            &up.anti_diagonal.spring_x,
-            &up.anti_diagonal.damper_x,
-            &down.anti_diagonal.spring_x,
-            &down.anti_diagonal.damper_x,
-            &down.diagonal.spring_x,
-            &down.diagonal.damper_x,
-        ],
-        fx,
-    );
-    gather_component(
-        [
-            &horizontal.spring_z,
-            &horizontal.damper_z,
-            &up.vertical.spring_z,
-            &up.vertical.damper_z,
-            &down.vertical.spring_z,
-            &down.vertical.damper_z,
-            &up.diagonal.spring_z,
-            &up.diagonal.damper_z,
-            &up.anti_diagonal.spring_z,
-            &up.anti_diagonal.damper_z,
-            &down.anti_diagonal.spring_z,
-            &down.anti_diagonal.damper_z,
-            &down.diagonal.spring_z,
-            &down.diagonal.damper_z,
-        ],
-        fz,
-    );
+    fn x<T>(b: &BondRow<T>) -> [&[T]; 3] {
+        [&b.spring_x, &b.rotation_x, &b.damper_x]
+    }
+    fn z<T>(b: &BondRow<T>) -> [&[T]; 3] {
+        [&b.spring_z, &b.rotation_z, &b.damper_z]
+    }
+    for (part, out) in [(x::<T> as fn(&BondRow<T>) -> [&[T]; 3], fx), (z::<T>, fz)] {
+        gather_component(
+            [
+                part(horizontal),
+                part(&up.vertical),
+                part(&down.vertical),
+                part(&up.diagonal),
+                part(&up.anti_diagonal),
+                part(&down.anti_diagonal),
+                part(&down.diagonal),
+            ],
+            out,
+        );
+    }
 }
 
-/// One force component of `gather_row`. `rows` in the order: horizontal
-/// (spring, damper), up vertical, down vertical, up diagonal, up
+/// One force component of `gather_row`. `rows` (spring, rotation, damper)
+/// in the order: horizontal, up vertical, down vertical, up diagonal, up
 /// anti-diagonal, down anti-diagonal, down diagonal.
 #[inline(always)]
-fn gather_component<T: Real, S: ForceSum<T>>(rows: [&Vec<T>; 14], out: &mut [S]) {
+fn gather_component<T: Real, S: ForceSum<T>>(rows: [[&[T]; 3]; 7], out: &mut [S]) {
     let n = out.len();
-    fn at<T>(r: &[T], shift: usize, n: usize) -> &[T] {
-        &r[shift..shift + n]
-    }
     // Padded index of the bond on each side: a block at column ix is the
     // near end of the bonds at ix + 1 and the far end of the horizontal
     // one at ix, the anti-diagonal below at ix + 2 and the diagonal below
-    // at ix.
-    let (h_s, h_d) = (at(rows[0], 1, n), at(rows[1], 1, n));
-    let (hb_s, hb_d) = (at(rows[0], 0, n), at(rows[1], 0, n));
-    let (v_s, v_d) = (at(rows[2], 1, n), at(rows[3], 1, n));
-    let (vb_s, vb_d) = (at(rows[4], 1, n), at(rows[5], 1, n));
-    let (d_s, d_d) = (at(rows[6], 1, n), at(rows[7], 1, n));
-    let (a_s, a_d) = (at(rows[8], 1, n), at(rows[9], 1, n));
-    let (ab_s, ab_d) = (at(rows[10], 2, n), at(rows[11], 2, n));
-    let (db_s, db_d) = (at(rows[12], 0, n), at(rows[13], 0, n));
+    // at ix. Far ends take the negated terms (exact).
+    const SHIFT: [usize; 7] = [1, 1, 1, 1, 1, 2, 0];
+    const FAR: [bool; 7] = [false, false, true, false, false, true, true];
+    let at = |b: usize, part: usize| &rows[b][part][SHIFT[b]..SHIFT[b] + n];
+    let terms: [[&[T]; 3]; 7] = std::array::from_fn(|b| [at(b, 0), at(b, 1), at(b, 2)]);
+    // The horizontal bond's far end (the bond at ix, shift 0).
+    let hb = [&rows[0][0][..n], &rows[0][1][..n], &rows[0][2][..n]];
     for k in 0..n {
-        // Subtracting a far-end term is adding its negation (exact).
         let mut f = S::default();
-        f = f.add_bond(h_s[k], h_d[k]);
-        f = f.add_bond(-hb_s[k], -hb_d[k]);
-        f = f.add_bond(v_s[k], v_d[k]);
-        f = f.add_bond(-vb_s[k], -vb_d[k]);
-        f = f.add_bond(d_s[k], d_d[k]);
-        f = f.add_bond(a_s[k], a_d[k]);
-        f = f.add_bond(-ab_s[k], -ab_d[k]);
-        f = f.add_bond(-db_s[k], -db_d[k]);
+        let mut add = |s: T, r: T, d: T| {
+            f = if S::SPLITS_BONDS {
+                f.add(s).add_bond(r, d)
+            } else {
+                f.add_bond(s, d)
+            };
+        };
+        // The reference's `lattice::STENCIL` order: (1,0), (−1,0), (0,1),
+        // (0,−1), (1,1), (−1,1), (1,−1), (−1,−1).
+        add(terms[0][0][k], terms[0][1][k], terms[0][2][k]);
+        add(-hb[0][k], -hb[1][k], -hb[2][k]);
+        for b in 1..7 {
+            let [s, r, d] = [terms[b][0][k], terms[b][1][k], terms[b][2][k]];
+            if FAR[b] {
+                add(-s, -r, -d);
+            } else {
+                add(s, r, d);
+            }
+        }
         out[k] = f;
     }
 }
