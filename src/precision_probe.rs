@@ -8,7 +8,9 @@
 //! force rounded to f32), `velocities` (each block's velocity after its
 //! update), `coordinates` (each displacement kept to a double-single
 //! pair's ≈ 48 bits), `junctions` (junction forces, thresholds, sliding
-//! forces and stiffnesses) and `draws` (slip times drawn in f32), or `all`.
+//! forces and stiffnesses), `draws` (slip times drawn in f32) and
+//! `constants` (every run constant rounded to f32, as an f32 engine holds
+//! them: dt, stiffnesses, 1/m, μs, μd, loads), or `all`.
 //! It is read once per engine into `Consts::f32_probe`; empty or unset, the
 //! engines are untouched (every test runs that way). In an f32 engine the
 //! rounding changes nothing: its values are f32 already.
@@ -20,13 +22,15 @@ pub const VELOCITIES: u32 = 2;
 pub const COORDINATES: u32 = 4;
 pub const JUNCTIONS: u32 = 8;
 pub const DRAWS: u32 = 16;
+pub const CONSTANTS: u32 = 32;
 
-const NAMES: [(&str, u32); 5] = [
+const NAMES: [(&str, u32); 6] = [
     ("forces", FORCES),
     ("velocities", VELOCITIES),
     ("coordinates", COORDINATES),
     ("junctions", JUNCTIONS),
     ("draws", DRAWS),
+    ("constants", CONSTANTS),
 ];
 
 /// The environment variable naming the quantities held in f32.
@@ -45,7 +49,7 @@ pub fn parse(list: &str) -> Result<u32, String> {
                 .ok_or_else(|| {
                     format!(
                         "{VARIABLE}: unknown quantity `{name}` (allowed: forces, velocities, \
-                         coordinates, junctions, draws, all)"
+                         coordinates, junctions, draws, constants, all)"
                     )
                 })?,
         };
@@ -127,7 +131,7 @@ mod tests {
         assert_eq!(parse("forces, draws").unwrap(), FORCES | DRAWS);
         assert_eq!(
             describe(parse("all").unwrap()),
-            "forces,velocities,coordinates,junctions,draws"
+            "forces,velocities,coordinates,junctions,draws,constants"
         );
         let err = parse("forces,speed").unwrap_err();
         assert!(err.contains("unknown quantity `speed`"), "{err}");

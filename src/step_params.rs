@@ -57,7 +57,12 @@ pub struct Consts<T> {
 
 impl<T: Real> Consts<T> {
     pub fn new(m: &Model) -> Self {
-        let c = |v: f64| T::from_f64(v);
+        let f32_probe = crate::precision_probe::from_environment().unwrap_or(0);
+        let c = |v: f64| {
+            let held = std::mem::size_of::<T>() == 8
+                && f32_probe & crate::precision_probe::CONSTANTS != 0;
+            T::from_f64(if held { v as f32 as f64 } else { v })
+        };
         let (drive_stiffness, drive_velocity, top_force_rate) = match m.driver {
             Driver::None => (0.0, 0.0, 0.0),
             Driver::SideSpring {
@@ -108,7 +113,7 @@ impl<T: Real> Consts<T> {
                 .map_or(0.0, |t| t.shear_prestress * m.normal_force)),
             drive_velocity_exact: drive_velocity,
             dt_exact: m.dt,
-            f32_probe: crate::precision_probe::from_environment().unwrap_or(0),
+            f32_probe,
         }
     }
 

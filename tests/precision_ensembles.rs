@@ -20,8 +20,11 @@
 //!
 //! Plain f32 is not a usable control at this size: over 0.3 s of 120 large
 //! blocks its creep loss does not change the outcomes (measured: smallest p
-//! 0.07); its bias shows on the full Table S1 lattice
-//! (results/precision_ensembles.md).
+//! 0.07); its bias, and mixed f32's before its fix, show on the full Table
+//! S1 lattice (results/precision_ensembles.md). The mechanism of mixed
+//! f32's old bias has its own deterministic guard with the old arithmetic
+//! as negative control (`mixed_bond_forces_keep_action_equal_to_reaction`
+//! in src/cpu/bulk_forces.rs).
 
 use slipfront::sweep::compare::{compare_tables, Comparison};
 use std::path::{Path, PathBuf};
