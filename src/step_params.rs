@@ -59,8 +59,8 @@ impl<T: Real> Consts<T> {
     pub fn new(m: &Model) -> Self {
         let f32_probe = crate::precision_probe::from_environment().unwrap_or(0);
         let c = |v: f64| {
-            let held = std::mem::size_of::<T>() == 8
-                && f32_probe & crate::precision_probe::CONSTANTS != 0;
+            let held =
+                std::mem::size_of::<T>() == 8 && f32_probe & crate::precision_probe::CONSTANTS != 0;
             T::from_f64(if held { v as f32 as f64 } else { v })
         };
         let (drive_stiffness, drive_velocity, top_force_rate) = match m.driver {
