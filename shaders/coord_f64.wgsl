@@ -24,6 +24,10 @@ fn force_sum_add_bond(a: force_sum, spring: real, damper: real) -> force_sum {
     return (a + spring) + damper;
 }
 
+fn force_sum_merge(a: force_sum, b: force_sum) -> force_sum {
+    return a + b;
+}
+
 fn force_sum_value(a: force_sum) -> real {
     return a;
 }

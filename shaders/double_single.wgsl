@@ -54,6 +54,13 @@ fn force_sum_add_bond(a: force_sum, spring: f32, damper: f32) -> force_sum {
     return force_sum_add(a, spring + damper);
 }
 
+// Two partial sums joined (a block's junction lanes): the sums two-summed,
+// both error terms kept. CPU twin: CompensatedSum::merge.
+fn force_sum_merge(a: force_sum, b: force_sum) -> force_sum {
+    let joined = force_sum_add(a, b.x);
+    return vec2<f32>(joined.x, joined.y + b.y);
+}
+
 fn force_sum_value(a: force_sum) -> f32 {
     return a.x + a.y;
 }

@@ -26,11 +26,14 @@ fn junction_block(ix: u32) -> JunctionBlock {
     return JunctionBlock(u.x, f_n, c.mu_s * f_n, -c.mu_d * f_n * sign(load_vel(ix).x));
 }
 
-fn junction_lane(ix: u32, lane: u32, jb: JunctionBlock, ld: Loads) -> real {
+// The lane's sum is a force_sum: compensated in mixed precision, since an
+// f32 running sum of a block's alike junction forces rounded the friction
+// coherently across the interface (CPU twin's doc says more).
+fn junction_lane(ix: u32, lane: u32, jb: JunctionBlock, ld: Loads) -> force_sum {
     let f_n = jb.f_n;
     let threshold = jb.threshold;
     let sliding = jb.sliding;
-    var total: real = 0.0;
+    var total = force_sum_zero();
     for (var j = lane; j < c.junction_count; j += JUNCTION_LANES) {
         let idx = junction_base() + ix * c.junction_count + j;
         var spring = junction_spring[idx];
@@ -61,7 +64,7 @@ fn junction_lane(ix: u32, lane: u32, jb: JunctionBlock, ld: Loads) -> real {
         }
         junction_spring[idx] = spring;
         junction_state[idx] = state;
-        total = total + f;
+        total = force_sum_add(total, f);
     }
     return total;
 }

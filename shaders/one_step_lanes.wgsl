@@ -7,7 +7,7 @@
 // software adapters take one_step (serial lanes) instead.
 // CPU twin: src/cpu/mod.rs CpuEngine::one_step (force pass and update).
 
-var<workgroup> lane_sum: array<real, JUNCTION_LANES>;
+var<workgroup> lane_sum: array<force_sum, JUNCTION_LANES>;
 
 @compute @workgroup_size(WORKGROUP)
 fn one_step_lanes(
@@ -38,9 +38,11 @@ fn one_step_lanes(
                 friction = contact[interface_base() + w].x;
             } else {
                 f = bulk_force(w, ld);
+                var friction_sum = force_sum_zero();
                 for (var l = 0u; l < lanes; l++) {
-                    friction = friction + lane_sum[l];
+                    friction_sum = force_sum_merge(friction_sum, lane_sum[l]);
                 }
+                friction = force_sum_value(friction_sum);
                 force[block_base() + w] = f;
                 contact[interface_base() + w] = vec2<real>(friction, foundation_normal(coord_value(load_disp(w).z)));
             }

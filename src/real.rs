@@ -240,6 +240,13 @@ pub trait ForceSum<T: Real>: Copy + Send + Sync + Default + std::fmt::Debug + 's
     fn add_bond(self, spring: T, damper: T) -> Self {
         self.add(spring).add(damper)
     }
+    /// `self + other`, two partial sums joined (a block's junction lanes).
+    /// Plain sums add `other`'s value (the same bits as ever); the
+    /// compensated sum two-sums the sums and adds both error terms.
+    #[inline(always)]
+    fn merge(self, other: Self) -> Self {
+        self.add(other.value())
+    }
     /// The sum rounded to `T` once.
     fn value(self) -> T;
 }
@@ -292,6 +299,14 @@ impl ForceSum<f32> for CompensatedSum {
     #[inline(always)]
     fn add_bond(self, spring: f32, damper: f32) -> Self {
         self.add(spring + damper)
+    }
+    #[inline(always)]
+    fn merge(self, other: Self) -> Self {
+        let joined = self.add(other.sum);
+        CompensatedSum {
+            sum: joined.sum,
+            err: joined.err + other.err,
+        }
     }
     #[inline(always)]
     fn value(self) -> f32 {
@@ -349,6 +364,42 @@ mod tests {
         assert!((running as f64 - exact).abs() > 1e-5, "{running}");
         // Adding +0.0 (the sweep engine's missing bonds) changes no bit.
         assert_eq!(sum.add(0.0), sum);
+    }
+
+    /// A block's junction forces are alike in size and summed in lanes
+    /// that are then merged (`junctions::junction_lane`): merged compensated
+    /// lane sums are the exact sum rounded to f32, where running lane sums
+    /// and a running merge are off by 8.5 ulp (the control).
+    #[test]
+    fn merged_compensated_lane_sums_are_the_sum_rounded_once() {
+        let lanes = 64;
+        // Junctions pinned together (after the normal-load phase) carry the
+        // same force: the running sums' roundings all lean one way.
+        let terms = vec![-0.0123f32; 6400];
+        let exact: f64 = terms.iter().map(|&x| x as f64).sum();
+        let merged = (0..lanes)
+            .map(|l| {
+                let lane = terms.iter().skip(l).step_by(lanes);
+                lane.fold(CompensatedSum::default(), |s, &x| s.add(x))
+            })
+            .fold(CompensatedSum::default(), |t, lane| t.merge(lane));
+        assert_eq!(merged.value(), exact as f32);
+        let running = (0..lanes)
+            .map(|l| {
+                terms
+                    .iter()
+                    .skip(l)
+                    .step_by(lanes)
+                    .fold(0.0f32, |s, &x| s + x)
+            })
+            .fold(0.0f32, ForceSum::merge);
+        let ulp = (exact as f32).abs() * f32::EPSILON;
+        assert!(
+            (running as f64 - exact).abs() > 4.0 * ulp as f64,
+            "{running} {exact}"
+        );
+        // Merging an empty sum changes no bit.
+        assert_eq!(merged.merge(CompensatedSum::default()), merged);
     }
 
     #[test]

@@ -13,7 +13,7 @@
 //! with no force for ever.)
 
 use crate::precision_probe::{hold, DRAWS, JUNCTIONS};
-use crate::real::{Coordinate, Real};
+use crate::real::{Coordinate, ForceSum, Real};
 use crate::rng::slip_steps;
 use crate::step_params::{Consts, StepParams};
 
@@ -62,15 +62,15 @@ pub fn junctions<T: Real, C: Coordinate<T>>(
     slots: JunctionSlots<'_, T, C>,
 ) -> (T, T) {
     let jb = junction_block(c, u, v);
-    let mut total = T::zero();
+    let mut total = C::Sum::default();
     for lane in 0..JUNCTION_LANES.min(c.junction_count) {
         let slots = JunctionSlots {
             spring: &mut *slots.spring,
             state: &mut *slots.state,
         };
-        total = total + junction_lane(c, p, ix, lane, &jb, slots);
+        total = total.merge(junction_lane(c, p, ix, lane, &jb, slots));
     }
-    (total, foundation_normal(c, u[1].value()))
+    (total.value(), foundation_normal(c, u[1].value()))
 }
 
 /// What every junction of one interface block needs this step (twin of the
@@ -106,6 +106,12 @@ pub fn junction_block<T: Real, C: Coordinate<T>>(
 /// Twin of the WGSL `junction_lane`: advances junctions `lane`,
 /// `lane + JUNCTION_LANES`, ... of block `ix` by one step and returns the
 /// sum of their forces on the block along x.
+///
+/// The sum is the precision's `ForceSum`: compensated in mixed f32. A
+/// block's Ns junction forces are alike in size, and an f32 running sum of
+/// them rounded the friction coherently across the interface; it moved the
+/// default scene's first full event 0.18 ms late against f64 in 21 of 32
+/// perturbed runs (results/precision_ensembles.md, the third cause).
 pub fn junction_lane<T: Real, C: Coordinate<T>>(
     c: &Consts<T>,
     p: &StepParams<T>,
@@ -113,10 +119,18 @@ pub fn junction_lane<T: Real, C: Coordinate<T>>(
     lane: usize,
     jb: &JunctionBlock<T, C>,
     slots: JunctionSlots<'_, T, C>,
-) -> T {
-    let mut total = T::zero();
+) -> C::Sum {
+    let mut total = C::Sum::default();
     for j in (lane..c.junction_count).step_by(JUNCTION_LANES) {
-        total = total + junction(c, p, ix, j, jb, &mut slots.spring[j], &mut slots.state[j]);
+        total = total.add(junction(
+            c,
+            p,
+            ix,
+            j,
+            jb,
+            &mut slots.spring[j],
+            &mut slots.state[j],
+        ));
     }
     total
 }

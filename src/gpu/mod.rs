@@ -398,7 +398,9 @@ impl<T: GpuReal> GpuEngine<T> {
             ),
             lane_partial: storage(
                 "lane partial sums",
-                bytemuck::cast_slice(&vec![T::zero(); s * shape.nx * shape.lanes]),
+                // One WGSL `force_sum` per lane: laid out as a coordinate
+                // ((sum, error) in mixed precision).
+                bytemuck::cast_slice(&vec![Coord::<T>::from_f64(0.0); s * shape.nx * shape.lanes]),
             ),
             // One element of the largest record struct in this precision.
             record_placeholders: std::array::from_fn(|_| {

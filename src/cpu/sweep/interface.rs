@@ -13,17 +13,18 @@ use super::step::{Interface, Shared};
 use crate::cpu::junctions::{self, JunctionBlock, JUNCTION_LANES};
 use crate::cpu::{coulomb, JunctionSpring, PINNED};
 use crate::precision_probe::JUNCTIONS;
-use crate::real::{Coordinate, Real};
+use crate::real::{Coordinate, ForceSum, Real};
 use crate::scenario::FrictionLaw;
 
 /// Working arrays of the junction pass, kept between steps.
 #[derive(Debug, Clone, Default)]
-pub struct JunctionScratch<T> {
+pub struct JunctionScratch<T, S> {
     /// Forces of one block's junctions.
     force: Vec<T>,
-    /// Lane sums, block-major: `lanes[ix * JUNCTION_LANES + lane]`.
-    lanes: Vec<T>,
-    total: Vec<T>,
+    /// Lane sums (the precision's `ForceSum`), block-major:
+    /// `lanes[ix * JUNCTION_LANES + lane]`.
+    lanes: Vec<S>,
+    total: Vec<S>,
     /// Junctions of one block left to the reference's `junction`.
     rare: Vec<bool>,
 }
@@ -36,7 +37,7 @@ pub fn interface_row<T: Real, C: Coordinate<T>>(
     row: RowView<'_, T, C>,
     fx: &[T],
     out: &mut Interface<'_, T, C>,
-    scratch: &mut JunctionScratch<T>,
+    scratch: &mut JunctionScratch<T, C::Sum>,
 ) {
     let c = s.c;
     match s.law {
@@ -65,14 +66,14 @@ fn junction_row<T: Real, C: Coordinate<T>>(
     s: &Shared<'_, T, C>,
     row: RowView<'_, T, C>,
     out: &mut Interface<'_, T, C>,
-    scratch: &mut JunctionScratch<T>,
+    scratch: &mut JunctionScratch<T, C::Sum>,
 ) {
     let c = s.c;
     let (nx, ns) = (c.nx, c.junction_count);
     let lanes_used = JUNCTION_LANES.min(ns);
     scratch.force.resize(ns, T::zero());
-    scratch.lanes.resize(nx * JUNCTION_LANES, T::zero());
-    scratch.total.resize(nx, T::zero());
+    scratch.lanes.resize(nx * JUNCTION_LANES, C::Sum::default());
+    scratch.total.resize(nx, C::Sum::default());
     scratch.rare.resize(ns, false);
     let JunctionScratch {
         force,
@@ -104,14 +105,17 @@ fn junction_row<T: Real, C: Coordinate<T>>(
         sum_lanes(force, lane_sums);
     }
     // The reference's final sum, lane by lane, every block at once.
-    total.fill(T::zero());
+    total.fill(C::Sum::default());
     for lane in 0..lanes_used {
         for (ix, t) in total.iter_mut().enumerate() {
-            *t = *t + lanes[ix * JUNCTION_LANES + lane];
+            *t = t.merge(lanes[ix * JUNCTION_LANES + lane]);
         }
     }
     for ((contact, friction), uz) in out.contact.iter_mut().zip(&*total).zip(row.uz) {
-        *contact = [*friction, junctions::foundation_normal(c, uz.value())];
+        *contact = [
+            friction.value(),
+            junctions::foundation_normal(c, uz.value()),
+        ];
     }
 }
 
@@ -179,16 +183,16 @@ fn common_junctions<T: Real, C: Coordinate<T>>(
 }
 
 /// Lane sums of one block's junction forces in the reference's order:
-/// lane l holds 0 + f_l + f_(l+LANES) + ...
+/// lane l holds 0 + f_l + f_(l+LANES) + ..., in the precision's `ForceSum`.
 #[inline(always)]
-fn sum_lanes<T: Real>(force: &[T], lane_sums: &mut [T]) {
+fn sum_lanes<T: Real, S: ForceSum<T>>(force: &[T], lane_sums: &mut [S]) {
     let lanes = lane_sums.len();
     for (sum, f) in lane_sums.iter_mut().zip(&force[..lanes]) {
-        *sum = T::zero() + *f;
+        *sum = S::default().add(*f);
     }
     for chunk in force[lanes..].chunks(lanes) {
         for (sum, f) in lane_sums.iter_mut().zip(chunk) {
-            *sum = *sum + *f;
+            *sum = sum.add(*f);
         }
     }
 }
