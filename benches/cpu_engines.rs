@@ -7,9 +7,9 @@
 //!
 //! SLIPFRONT_BENCH_SECONDS (default 2) sets the time per measurement.
 
-use slipfront::cpu::{CpuEngine, SweepEngine};
-use slipfront::real::{Coordinate, DoubleSingle, Real};
-use slipfront::scenario::{Scenario, DEFAULT_SCENARIO};
+use slipfront::engines::cpu::{CpuEngine, SweepEngine};
+use slipfront::model::real::{Coordinate, DoubleSingle, Real};
+use slipfront::model::scenario::{Scenario, DEFAULT_SCENARIO};
 use slipfront::{advance_to, Engine, Model};
 use std::time::Instant;
 

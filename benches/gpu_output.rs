@@ -7,9 +7,9 @@
 //! (BENCHMARKS.md). The three runs of a scene are timed in rounds, one of
 //! each per round, so a noisy machine affects them alike.
 
-use slipfront::gpu::{GpuEngine, GpuOptions, GpuOutput, GpuPath};
-use slipfront::output::reader::RunFile;
-use slipfront::runner::{run_scene, ProgressMode, RunOptions};
+use slipfront::app::runner::{run_scene, ProgressMode, RunOptions};
+use slipfront::engines::gpu::{GpuEngine, GpuOptions, GpuOutput, GpuPath};
+use slipfront::io::output::reader::RunFile;
 use slipfront::{Engine, Model, Scenario};
 use std::path::PathBuf;
 use std::time::Instant;
@@ -35,7 +35,7 @@ fn timed(s: &Scenario, path: GpuPath, output: Option<(GpuOutput, &PathBuf)>) -> 
     };
     if let Some((_, p)) = output {
         let _ = std::fs::remove_file(p);
-        let _ = std::fs::remove_file(slipfront::checkpoint::path_for(p));
+        let _ = std::fs::remove_file(slipfront::io::checkpoint::path_for(p));
     }
     let t0 = Instant::now();
     run_scene(&mut e, s, &run).expect("run");

@@ -2,12 +2,12 @@
 //! phase on the 1024×256 lattice with Ns = 100 (single thread).
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
-use slipfront::cpu::bulk_forces::{bond_consts, bulk_forces, Blocks};
-use slipfront::cpu::junctions::{junctions, JunctionSlots, JunctionSpring, PINNED};
-use slipfront::cpu::verlet::verlet;
-use slipfront::lattice::block_flags;
-use slipfront::scenario::{Scenario, DEFAULT_SCENARIO};
-use slipfront::step_params::{step_params, Consts};
+use slipfront::engines::kernels::bulk_forces::{bond_consts, bulk_forces, Blocks};
+use slipfront::engines::kernels::junctions::{junctions, JunctionSlots, JunctionSpring, PINNED};
+use slipfront::engines::kernels::verlet::verlet;
+use slipfront::engines::step_params::{step_params, Consts};
+use slipfront::model::lattice::block_flags;
+use slipfront::model::scenario::{Scenario, DEFAULT_SCENARIO};
 use slipfront::Model;
 use std::hint::black_box;
 

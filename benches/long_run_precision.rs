@@ -15,11 +15,11 @@
 //! PREFIX_f32_seed_K.mcap, and tabulates them up to the time every file
 //! reached (or T).
 
-use slipfront::backend::{make_engine, Backend, Precision};
-use slipfront::compare::{outcome_mismatch, RunOutcome};
-use slipfront::output::reader::RunFile;
-use slipfront::runner::{run_scene, RunOptions};
-use slipfront::scenario::Scenario;
+use slipfront::app::runner::{run_scene, RunOptions};
+use slipfront::engines::backend::{make_engine, Backend, Precision};
+use slipfront::io::compare::{outcome_mismatch, RunOutcome};
+use slipfront::io::output::reader::RunFile;
+use slipfront::model::scenario::Scenario;
 use slipfront::Model;
 use std::path::PathBuf;
 

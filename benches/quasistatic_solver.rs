@@ -9,11 +9,11 @@
 //! stiffness pattern of a quiet phase (the solver's cost does not depend on
 //! the loads).
 
-use slipfront::cpu::CpuEngine;
-use slipfront::quasistatic::cg::{self, Preconditioner};
-use slipfront::quasistatic::equilibrium::{drive_response, Solver, SolverKind};
-use slipfront::quasistatic::tangent::Tangent;
-use slipfront::scenario::{Scenario, DEFAULT_SCENARIO};
+use slipfront::engines::cpu::CpuEngine;
+use slipfront::engines::quasistatic::cg::{self, Preconditioner};
+use slipfront::engines::quasistatic::equilibrium::{drive_response, Solver, SolverKind};
+use slipfront::engines::quasistatic::tangent::Tangent;
+use slipfront::model::scenario::{Scenario, DEFAULT_SCENARIO};
 use slipfront::{Engine, Model};
 use std::time::Instant;
 

@@ -2,9 +2,9 @@
 //! 1e5 steps: everything finite, the foundation carrying F_N, the slider's
 //! mean height bounded. `cargo bench --bench soak [-- f64|f32|gpu]`.
 
-use slipfront::backend::{make_engine, Backend, Precision};
-use slipfront::runner::global_sample;
-use slipfront::scenario::{Scenario, DEFAULT_SCENARIO};
+use slipfront::app::runner::global_sample;
+use slipfront::engines::backend::{make_engine, Backend, Precision};
+use slipfront::model::scenario::{Scenario, DEFAULT_SCENARIO};
 use slipfront::{advance_to, Model};
 use std::time::Instant;
 

@@ -10,8 +10,8 @@
 //! Markdown table (see BENCHMARKS.md, GPU engine v2).
 
 use slipfront::advance_to;
-use slipfront::backend::{make_engine, Backend, Precision};
-use slipfront::gpu::context;
+use slipfront::engines::backend::{make_engine, Backend, Precision};
+use slipfront::engines::gpu::context;
 use std::time::Instant;
 
 #[path = "support/bench_scene.rs"]

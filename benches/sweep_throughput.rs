@@ -21,8 +21,8 @@
 //!
 //!     cargo bench --bench sweep_throughput -- gpu [SEEDS] [shared-only|separate]
 
-use slipfront::backend::Backend;
-use slipfront::sweep::{run_sweep, KeepMcap, Sweep, SweepOptions};
+use slipfront::app::sweeps::{run_sweep, KeepMcap, Sweep, SweepOptions};
+use slipfront::engines::backend::Backend;
 use std::path::Path;
 use std::process::Command;
 use std::time::Instant;
@@ -111,7 +111,9 @@ fn bench_sweep(dir: &Path, seeds: u32) -> Sweep {
 
 /// The title and header of a GPU table: the scene, the adapter, the columns.
 fn gpu_table_header(model: &slipfront::Model, n: usize, against: &str) {
-    let adapter = slipfront::gpu::context::shared().unwrap().describe();
+    let adapter = slipfront::engines::gpu::context::shared()
+        .unwrap()
+        .describe();
     println!(
         "{n} points of {} ({} x {} blocks, {} steps each) on {adapter}",
         model.name,

@@ -5,8 +5,8 @@
 //! SLIPFRONT_BENCH_GPU_F64=1 the same kernels in f64 (adapters with
 //! SHADER_F64), to time f64 against mixed f32 on one card.
 
-use slipfront::backend::{make_engine, Backend, Precision};
-use slipfront::gpu::{GpuEngine, GpuOptions, GpuPath};
+use slipfront::engines::backend::{make_engine, Backend, Precision};
+use slipfront::engines::gpu::{GpuEngine, GpuOptions, GpuPath};
 use slipfront::{advance_to, Model};
 use slipfront::{Engine, EngineError};
 use std::time::Instant;

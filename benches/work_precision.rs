@@ -8,10 +8,10 @@
 //! SVG or PNG by extension) to the path given by SLIPFRONT_PLOT (default
 //! work_precision.svg). SLIPFRONT_REPLOT=CSV redraws them from saved data.
 
-use slipfront::backend::{make_engine, Backend, Precision};
-use slipfront::observables::{first_full_sliding, FirstEvent};
-use slipfront::scenario::Component;
-use slipfront::verify::{coulomb_ensemble_error, measure_wave_speed};
+use slipfront::app::observables::{first_full_sliding, FirstEvent};
+use slipfront::app::verify::{coulomb_ensemble_error, measure_wave_speed};
+use slipfront::engines::backend::{make_engine, Backend, Precision};
+use slipfront::model::scenario::Component;
 use slipfront::{Engine, EngineError, Model};
 use std::time::Instant;
 
@@ -19,7 +19,7 @@ const FRACTIONS: [f64; 6] = [0.1, 0.05, 0.02, 0.01, 0.005, 0.0025];
 
 fn stick_slip_model(fraction: f64) -> Result<Model, String> {
     let dt = format!("time.dt_fraction={fraction}");
-    let s = slipfront::verify::small_scene(&["loading.drive.velocity=0.04", &dt])
+    let s = slipfront::app::verify::small_scene(&["loading.drive.velocity=0.04", &dt])
         .map_err(|e| e.to_string())?;
     Model::from_scenario(&s, false).map_err(|e| e.to_string())
 }
@@ -30,7 +30,7 @@ fn first_event(engine: &mut dyn Engine) -> Result<FirstEvent, String> {
         .ok_or_else(|| "no full sliding event".to_string())
 }
 
-use slipfront::plot::scatter::{WorkPoint as Point, WorkPrecision};
+use slipfront::analysis::plot::scatter::{WorkPoint as Point, WorkPrecision};
 
 /// Points from a CSV written by an earlier run (observable,engine,fraction,seconds,error).
 fn read_csv(path: &str) -> Vec<Point> {
@@ -62,13 +62,14 @@ fn read_csv(path: &str) -> Vec<Point> {
 
 fn write_outputs(points: &[Point]) {
     let path = std::env::var("SLIPFRONT_PLOT").unwrap_or("work_precision.svg".into());
-    let options = slipfront::plot::FigureOptions {
-        format: slipfront::plot::Format::from_path(std::path::Path::new(&path)).expect("format"),
+    let options = slipfront::analysis::plot::FigureOptions {
+        format: slipfront::analysis::plot::Format::from_path(std::path::Path::new(&path))
+            .expect("format"),
         width: 1350,
         height: 480,
         dpi: 100,
     };
-    slipfront::plot::write(
+    slipfront::analysis::plot::write(
         &WorkPrecision { points },
         std::path::Path::new(&path),
         &options,

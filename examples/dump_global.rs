@@ -7,7 +7,7 @@ fn main() {
         .iter()
         .find(|a| !a.starts_with("--"))
         .expect("usage: dump_global [--jumps] RUN.mcap");
-    let run = slipfront::output::reader::RunFile::read(std::path::Path::new(path))
+    let run = slipfront::io::output::reader::RunFile::read(std::path::Path::new(path))
         .unwrap_or_else(|e| panic!("{e}"));
     if args.iter().any(|a| a == "--jumps") {
         println!("start_time,end_time,predicted_change,block,junction,dropped_energy");

@@ -3,7 +3,7 @@
 //! Shows how far the local stress ratio is from the slider average F/F_N
 //! (the side spring loads the trailing edge first).
 
-use slipfront::output::reader::RunFile;
+use slipfront::io::output::reader::RunFile;
 
 fn main() -> anyhow::Result<()> {
     let args: Vec<String> = std::env::args().collect();

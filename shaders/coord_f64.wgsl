@@ -1,6 +1,6 @@
 // f64 coordinates: with f64 arithmetic a displacement keeps creep
 // increments by itself, so a coordinate is a plain f64 and these are the
-// twins of src/real.rs `impl Coordinate<f64> for f64`. The same interface
+// twins of src/model/real.rs `impl Coordinate<f64> for f64`. The same interface
 // as the double-single functions of shaders/double_single.wgsl, which the
 // kernels compile with in mixed precision.
 

@@ -1,6 +1,6 @@
 // Double-single coordinates: a displacement is the unevaluated sum hi + lo
 // of two f32 (vec2: x = hi, y = lo), so creep increments below one f32 ulp
-// of u are kept. CPU twins: src/real.rs DoubleSingle::ds_add and ds_diff,
+// of u are kept. CPU twins: src/model/real.rs DoubleSingle::ds_add and ds_diff,
 // the same operations in the same order.
 //
 // c.one is a runtime 1.0 from the uniform block. Multiplying the partial
@@ -33,7 +33,7 @@ fn coord_add(a: coord, d: real) -> coord {
 // The forces on one block are summed with their rounding errors kept
 // apart (x = sum, y = error; Knuth's two-sum per term): a block's terms
 // nearly cancel, and an f32 running sum broke action = reaction at the
-// rounding level. CPU twin: src/real.rs CompensatedSum::add and value.
+// rounding level. CPU twin: src/model/real.rs CompensatedSum::add and value.
 // CPU twin: ForceSum::SPLITS_BONDS; mixed f32: bonds split into q·r0 + q·du (shaders/bulk_forces.wgsl).
 const SPLITS_BONDS: bool = true;
 

@@ -3,7 +3,7 @@
 // slipping junction counts its slip steps down (no global step count).
 // Lane l of block ix handles junctions l, l + JUNCTION_LANES, ...; the
 // caller adds the lane sums in lane order.
-// CPU twin: src/cpu/junctions.rs junction_lane.
+// CPU twin: src/engines/kernels/junctions.rs junction_lane.
 
 fn junction_stiffness(f_n: real) -> real {
     if c.stiffness_normal_load != 0u {

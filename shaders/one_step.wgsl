@@ -2,7 +2,7 @@
 // the forces and friction at step n (an interface block's thread walks its
 // junction lanes in order), then the leapfrog update written to the other
 // state buffer. Workgroup row z is scene z of an ensemble. No barrier, so software adapters run it without
-// coroutines. CPU twin: src/cpu/mod.rs CpuEngine::one_step.
+// coroutines. CPU twin: src/engines/cpu/mod.rs CpuEngine::one_step.
 
 @compute @workgroup_size(WORKGROUP)
 fn one_step(

@@ -5,7 +5,7 @@
 // other workgroups update WORKGROUP blocks each, one per thread. The
 // workgroup barrier makes llvmpipe run the whole shader as coroutines, so
 // software adapters take one_step (serial lanes) instead.
-// CPU twin: src/cpu/mod.rs CpuEngine::one_step (force pass and update).
+// CPU twin: src/engines/cpu/mod.rs CpuEngine::one_step (force pass and update).
 
 var<workgroup> lane_sum: array<force_sum, JUNCTION_LANES>;
 

@@ -7,7 +7,7 @@
 // Same phase functions, in the same order, as the one-step kernel.
 
 // With an output file, the samples of the batch (batch.records of them,
-// in step order; src/gpu/recorder.rs): a sample of step s is recorded in
+// in step order; src/engines/gpu/recorder.rs): a sample of step s is recorded in
 // step s's update phase, from the state before the update
 // (record_common.wgsl), then reduced across the workgroup.
 // PERSISTENT_THREADS is then a power of two of at most 256.

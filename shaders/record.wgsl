@@ -10,7 +10,7 @@
 // reduces each workgroup's sums to a partial, then record_finish adds the
 // partials. The sample's sums also decide the fast interface cadence for
 // the next samples.
-// The shared part is record_common.wgsl. CPU twin: src/engine/sample.rs
+// The shared part is record_common.wgsl. CPU twin: src/engines/sample.rs
 // record_sample.
 
 @group(0) @binding(1) var<storage, read> disp_a: array<Disp>;

@@ -1,4 +1,4 @@
-// The record buffers (src/gpu/recorder.rs): the plan, whose fast flag the
+// The record buffers (src/engines/gpu/recorder.rs): the plan, whose fast flag the
 // device updates; each sample's sums, then from plan.partials_offset one
 // partial per workgroup of record_sample; the interface rows
 // (RECORD_INTERFACE_WORDS per block) from plan.interface_offset and the

@@ -3,7 +3,7 @@
 // by the output kernels of the one-step kernels (record.wgsl) and by the
 // persistent kernel, which records in its loop. The including module
 // declares c, flags, junction_state, slide and the record buffers
-// (record_buffers.wgsl). CPU twin: src/engine/sample.rs record_sample.
+// (record_buffers.wgsl). CPU twin: src/engines/sample.rs record_sample.
 
 // The fixed cadences make the sample due, or the fast one does and is on.
 fn sample_due(e: RecordEntry) -> bool {

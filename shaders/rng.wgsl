@@ -1,4 +1,4 @@
-// Counter-based junction RNG: the same functions as src/rng.rs, line for line.
+// Counter-based junction RNG: the same functions as src/model/rng.rs, line for line.
 
 fn pcg_hash(v: u32) -> u32 {
     let state = v * 747796405u + 2891336453u;

@@ -2,7 +2,7 @@
 // friction: Amontons–Coulomb, or the junction lanes of an interface block
 // one after the other, in lane order (the CPU twin's order). With `ready`
 // the forces were computed already (by a snapshot's force pass): read them.
-// Returns (force, friction). CPU twin: src/cpu/mod.rs CpuEngine::force_pass.
+// Returns (force, friction). CPU twin: src/engines/cpu/mod.rs CpuEngine::force_pass.
 
 fn block_forces(i: u32, ld: Loads, ready: bool) -> vec3<real> {
     if ready {

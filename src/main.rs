@@ -3,7 +3,7 @@
 mod commands;
 
 use clap::{Parser, Subcommand};
-use slipfront::backend::{Backend, Precision};
+use slipfront::engines::backend::{Backend, Precision};
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -21,64 +21,7 @@ struct Cli {
 #[derive(Subcommand)]
 enum Command {
     /// Run a scenario (the built-in Table S1 stick-slip scene when none is given).
-    Run {
-        scenario: Option<PathBuf>,
-        #[arg(long, value_enum, default_value = "auto")]
-        backend: Backend,
-        /// GPU kernel: one-step (1 dispatch per step), one-step-lanes
-        /// (junction lanes in parallel), persistent (many steps per
-        /// dispatch, small lattices) or auto.
-        #[arg(long, value_enum, default_value = "auto")]
-        gpu_path: slipfront::gpu::GpuPath,
-        /// Where a GPU run's output samples are made: device (only the
-        /// channels due are read back) or host (a snapshot per sample).
-        #[arg(long, value_enum, default_value = "device")]
-        gpu_output: slipfront::gpu::GpuOutput,
-        #[arg(long, value_enum)]
-        precision: Option<Precision>,
-        /// Override a scenario key: --set loading.drive.velocity=1e-3
-        #[arg(long = "set", value_name = "KEY=VALUE")]
-        set: Vec<String>,
-        /// Simulated time after the normal-load phase (s); overrides time.end.
-        #[arg(long, value_parser = parse_t_end)]
-        t_end: Option<f64>,
-        /// Quasi-static fast-forward through the stick phases: on or off
-        /// (overrides time.fast_forward).
-        #[arg(long, value_name = "on|off", value_parser = parse_on_off)]
-        fast_forward: Option<bool>,
-        /// MCAP output file.
-        #[arg(short = 'o', long)]
-        output: Option<PathBuf>,
-        /// CPU threads (0: all cores, 1: deterministic single thread).
-        #[arg(long, default_value_t = 0)]
-        threads: usize,
-        /// Run even if dt is above the computed stability limit.
-        #[arg(long)]
-        allow_unstable: bool,
-        /// Progress: a bar on a terminal, else a log line every 10 s (auto),
-        /// or bar, plain or none.
-        #[arg(long, value_enum, default_value = "auto")]
-        progress: slipfront::runner::ProgressMode,
-        /// No progress report (--progress none).
-        #[arg(long)]
-        quiet: bool,
-        /// Continue RUN.mcap from its checkpoint (RUN.mcap.ckpt), in the
-        /// same file unless -o names another; --t-end extends a finished run.
-        #[arg(long, value_name = "RUN.mcap", conflicts_with = "from")]
-        resume: Option<PathBuf>,
-        /// Start from a saved state (a checkpoint, or a run file with one
-        /// beside it): the scenario given (or the checkpoint's) with --set
-        /// changes the saved state allows.
-        #[arg(long, value_name = "CHECKPOINT")]
-        from: Option<PathBuf>,
-        /// Replace the output file if it exists.
-        #[arg(long)]
-        force: bool,
-        /// Start even if the engine needs more memory than the machine has
-        /// available now.
-        #[arg(long)]
-        no_memory_check: bool,
-    },
+    Run(commands::run::RunArgs),
     /// Derived quantities, stability limit, memory and terms, without running.
     Check {
         scenario: Option<PathBuf>,
@@ -117,9 +60,9 @@ enum Command {
         #[arg(long, value_delimiter = ',', allow_negative_numbers = true)]
         at: Vec<f64>,
         #[arg(long, value_enum, default_value = "png")]
-        format: slipfront::plot::Format,
+        format: slipfront::analysis::plot::Format,
         /// Size in pixels at 100 dpi, WIDTHxHEIGHT.
-        #[arg(long, default_value = "900x600", value_parser = slipfront::plot::FigureOptions::parse_size)]
+        #[arg(long, default_value = "900x600", value_parser = slipfront::analysis::plot::FigureOptions::parse_size)]
         size: (u32, u32),
         /// Density: scales pixels, fonts and lines together (300 for print).
         #[arg(long, default_value_t = 100)]
@@ -184,7 +127,7 @@ enum Command {
         a: PathBuf,
         b: PathBuf,
         /// Significance level of each test.
-        #[arg(long, default_value_t = slipfront::sweep::compare::DEFAULT_ALPHA)]
+        #[arg(long, default_value_t = slipfront::app::sweeps::compare::DEFAULT_ALPHA)]
         alpha: f64,
         /// Name of A in the report (default: its path).
         #[arg(long)]
@@ -253,10 +196,10 @@ struct SweepRun {
     threads: usize,
     /// Run every N-th point from I (a job-array task's share): I/N.
     #[arg(long)]
-    shard: Option<slipfront::sweep::Shard>,
+    shard: Option<slipfront::app::sweeps::Shard>,
     /// Which runs keep their MCAP file: all, none or first:N.
     #[arg(long, default_value = "none")]
-    mcap: slipfront::sweep::KeepMcap,
+    mcap: slipfront::app::sweeps::KeepMcap,
     /// Write DIR/sweep.sbatch, a Slurm job array of shards, and run nothing.
     #[arg(long)]
     slurm: bool,
@@ -279,7 +222,7 @@ struct SweepRun {
     no_shared_loading: bool,
     /// GPU backend: scenes stepped together in one dispatch at most (points
     /// of one lattice shape and time schedule); 1 runs them one at a time.
-    #[arg(long, default_value_t = slipfront::sweep::DEFAULT_ENSEMBLE)]
+    #[arg(long, default_value_t = slipfront::app::sweeps::DEFAULT_ENSEMBLE)]
     ensemble: usize,
 }
 
@@ -288,43 +231,7 @@ fn main() -> ExitCode {
     private_runtime_dir();
     let cli = Cli::parse();
     let result = match cli.command {
-        Command::Run {
-            scenario,
-            backend,
-            gpu_path,
-            gpu_output,
-            precision,
-            set,
-            t_end,
-            fast_forward,
-            output,
-            threads,
-            allow_unstable,
-            progress,
-            quiet,
-            resume,
-            from,
-            force,
-            no_memory_check,
-        } => commands::run::run(commands::run::RunArgs {
-            scenario,
-            backend,
-            gpu_path,
-            gpu_output,
-            precision,
-            set,
-            t_end,
-            fast_forward,
-            output,
-            threads,
-            allow_unstable,
-            progress,
-            quiet,
-            resume,
-            from,
-            force,
-            no_memory_check,
-        }),
+        Command::Run(args) => commands::run::run(args),
         Command::Check {
             scenario,
             set,
@@ -354,7 +261,7 @@ fn main() -> ExitCode {
             kinds: kind,
             event,
             at,
-            options: slipfront::plot::FigureOptions {
+            options: slipfront::analysis::plot::FigureOptions {
                 format,
                 width: size.0,
                 height: size.1,
@@ -455,7 +362,7 @@ fn main() -> ExitCode {
     }
 }
 
-use slipfront::analysis::DEFAULT_QUIET_GAP;
+use slipfront::analysis::events::DEFAULT_QUIET_GAP;
 
 /// An error and its causes, each said once: most of our messages already
 /// quote their cause, which the chain would repeat.
@@ -468,17 +375,6 @@ fn error_text(e: &anyhow::Error) -> String {
         }
     }
     text
-}
-
-fn parse_t_end(text: &str) -> Result<f64, String> {
-    match text.trim().parse::<f64>() {
-        // 0: the normal-load phase only (a loaded slider to branch from).
-        Ok(v) if v.is_finite() && v >= 0.0 => Ok(v),
-        _ => Err(format!(
-            "--t-end = {}: expected a time in seconds, finite, 0 or more",
-            text.chars().take(40).collect::<String>()
-        )),
-    }
 }
 
 fn parse_quiet_gap(text: &str) -> Result<f64, String> {
@@ -518,13 +414,5 @@ fn restore_default_sigpipe() {
     // SAFETY: called first thing in main, before any thread or I/O exists.
     unsafe {
         libc::signal(libc::SIGPIPE, libc::SIG_DFL);
-    }
-}
-
-fn parse_on_off(s: &str) -> Result<bool, String> {
-    match s {
-        "on" | "true" => Ok(true),
-        "off" | "false" => Ok(false),
-        _ => Err(format!("`{s}`: expected on or off")),
     }
 }

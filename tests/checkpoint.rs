@@ -3,10 +3,10 @@
 //! bit on the CPU; damaged checkpoints are refused; branches differ from
 //! their parent only after the branch point.
 
-use slipfront::backend::{cpu_engine, cpu_reference_engine, Precision};
-use slipfront::checkpoint::{path_for, Checkpoint, CheckpointError};
+use slipfront::engines::backend::{cpu_engine, cpu_reference_engine, Precision};
+use slipfront::io::checkpoint::{path_for, Checkpoint, CheckpointError};
+use slipfront::io::output::reader::RunFile;
 use slipfront::model::Model;
-use slipfront::output::reader::RunFile;
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
@@ -30,7 +30,7 @@ fn command(args: &[&str], extra: &[String]) -> Command {
 }
 
 fn scene_args(more: &[&str]) -> Vec<String> {
-    slipfront::verify::SMALL_SCENE
+    slipfront::app::verify::SMALL_SCENE
         .iter()
         .chain(&[DRIVE])
         .chain(more)
@@ -242,7 +242,7 @@ fn a_damaged_checkpoint_is_refused_and_the_previous_one_used() {
         .iter()
         .any(|l| l.contains(&format!("resumed at step {prev_step} "))));
     // Both damaged: the loaded slider's checkpoint is the last resort.
-    let loaded = slipfront::checkpoint::loaded_path_for(&run);
+    let loaded = slipfront::io::checkpoint::loaded_path_for(&run);
     let loaded_step = Checkpoint::read(&loaded).unwrap().header.step;
     std::fs::write(path_for(&run), b"SLIPCKPT").unwrap();
     std::fs::write(&prev, b"x").unwrap();
@@ -370,7 +370,7 @@ fn a_branch_refuses_keys_the_saved_state_fixes() {
 /// in every precision, and across the two engines.
 #[test]
 fn engine_state_round_trips_bit_for_bit() {
-    let scenario = slipfront::verify::small_scene(&["loading.drive.velocity=0.2"]).unwrap();
+    let scenario = slipfront::app::verify::small_scene(&["loading.drive.velocity=0.2"]).unwrap();
     let model = Model::from_scenario(&scenario, false).unwrap();
     let n = model.prep_steps + 2500;
     for precision in [Precision::F64, Precision::F32, Precision::F32Plain] {
@@ -408,7 +408,7 @@ fn engine_state_round_trips_bit_for_bit() {
     }
     // A state of another lattice is refused, naming the sizes.
     let other =
-        slipfront::verify::small_scene(&["geometry.nx=57", "geometry.length=0.14"]).unwrap();
+        slipfront::app::verify::small_scene(&["geometry.nx=57", "geometry.length=0.14"]).unwrap();
     let other = Model::from_scenario(&other, false).unwrap();
     let mut e = cpu_engine(&other, Precision::F64, 1).unwrap();
     let saved = cpu_engine(&model, Precision::F64, 1)
@@ -506,7 +506,7 @@ fn branches_from_the_loaded_slider_equal_fresh_runs() {
     ];
     let base = d.join("base.mcap");
     run_ok(&["--t-end", "0", "-o", s(&base)], &scene_args(&trigger));
-    let loaded = slipfront::checkpoint::loaded_path_for(&base);
+    let loaded = slipfront::io::checkpoint::loaded_path_for(&base);
     for (name, changes) in [
         ("velocity", vec!["loading.drive.velocity=0.3"]),
         (

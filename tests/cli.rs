@@ -235,7 +235,7 @@ fn sigint_stops_a_big_lattice_promptly() {
         "{:?} to stop",
         sent.elapsed()
     );
-    let run = slipfront::output::reader::RunFile::read(&file).unwrap();
+    let run = slipfront::io::output::reader::RunFile::read(&file).unwrap();
     assert!(!run.truncated);
 }
 
@@ -288,19 +288,19 @@ fn outputs_inputs_and_foreign_files_are_guarded() {
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
-    assert!(slipfront::checkpoint::Checkpoint::read(&stale).is_ok());
+    assert!(slipfront::io::checkpoint::Checkpoint::read(&stale).is_ok());
     // The old checkpoint did not survive as the new run's previous one.
     assert!(!dir.join("run.mcap.ckpt.prev").exists());
     // The scenario itself as the output: refused, even with --force.
     let scenario = dir.join("s.toml");
-    std::fs::write(&scenario, slipfront::scenario::DEFAULT_SCENARIO).unwrap();
+    std::fs::write(&scenario, slipfront::model::scenario::DEFAULT_SCENARIO).unwrap();
     let s = scenario.to_str().unwrap();
     let out = slipfront(&["run", s, "--backend", "cpu", "-o", s, "--force"]);
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("input of this run"));
     assert_eq!(
         std::fs::read_to_string(&scenario).unwrap(),
-        slipfront::scenario::DEFAULT_SCENARIO
+        slipfront::model::scenario::DEFAULT_SCENARIO
     );
     let out = slipfront(&[
         "run",

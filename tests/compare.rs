@@ -2,8 +2,8 @@
 //! and the command line, for ensembles that agree, differ in location or
 //! in mode occupancy, and for bad input.
 
-use slipfront::sweep::compare::compare_tables;
-use slipfront::sweep::table;
+use slipfront::app::sweeps::compare::compare_tables;
+use slipfront::app::sweeps::table;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 

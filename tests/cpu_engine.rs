@@ -1,9 +1,9 @@
 //! CPU engine properties: threads do not change results, blow-ups stop with
 //! the step, time and block, the normal load is carried by the foundation.
 
-use slipfront::backend::{cpu_engine, Precision};
-use slipfront::cpu::CpuEngine;
-use slipfront::scenario::{Scenario, DEFAULT_SCENARIO};
+use slipfront::engines::backend::{cpu_engine, Precision};
+use slipfront::engines::cpu::CpuEngine;
+use slipfront::model::scenario::{Scenario, DEFAULT_SCENARIO};
 use slipfront::{advance_to, Engine, EngineError, Model};
 
 fn model(set: &[&str], allow_unstable: bool) -> Model {

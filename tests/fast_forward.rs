@@ -5,11 +5,11 @@
 //! jump; and the negative control, a jump onto the linear prediction with
 //! a drive response 5% too small, which the same comparison must flag.
 
-use slipfront::backend::{cpu_engine, Precision};
-use slipfront::output::reader::RunFile;
-use slipfront::quasistatic::FastForwardSettings;
-use slipfront::runner::{run_scene, RunOptions, RunSummary};
-use slipfront::scenario::{Scenario, DEFAULT_SCENARIO};
+use slipfront::app::runner::{run_scene, RunOptions, RunSummary};
+use slipfront::engines::backend::{cpu_engine, Precision};
+use slipfront::engines::quasistatic::FastForwardSettings;
+use slipfront::io::output::reader::RunFile;
+use slipfront::model::scenario::{Scenario, DEFAULT_SCENARIO};
 use slipfront::Model;
 use std::path::PathBuf;
 
@@ -167,10 +167,10 @@ fn a_drive_response_too_small_is_flagged() {
 #[test]
 fn dynamics_from_the_quasi_static_state_follow_the_path() {
     use slipfront::advance_to;
-    use slipfront::quasistatic::equilibrium::{
+    use slipfront::engines::quasistatic::equilibrium::{
         drive_response, residual, residual_ratio, settle, Solver, SolverKind,
     };
-    use slipfront::quasistatic::tangent::Tangent;
+    use slipfront::engines::quasistatic::tangent::Tangent;
     let scenario = scene();
     let m = Model::from_scenario(&scenario, false).unwrap();
     let mut e = cpu_engine(&m, Precision::F64, 1).unwrap();
@@ -240,7 +240,7 @@ fn top_force_and_top_velocity_drives_fast_forward_to_the_first_rupture() {
             &DEFAULT_SCENARIO[..drive_start],
             &DEFAULT_SCENARIO[drive_end..]
         );
-        let set: Vec<String> = slipfront::verify::SMALL_SCENE
+        let set: Vec<String> = slipfront::app::verify::SMALL_SCENE
             .iter()
             .chain(&[
                 "time.end=0.036",

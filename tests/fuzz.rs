@@ -7,8 +7,8 @@
 
 use proptest::prelude::*;
 use proptest::test_runner::{Config, TestRunner};
-use slipfront::analysis::FRONT_WINDOW;
-use slipfront::output::reader::RunFile;
+use slipfront::analysis::events::FRONT_WINDOW;
+use slipfront::io::output::reader::RunFile;
 use slipfront::{Model, Scenario};
 use std::path::{Path, PathBuf};
 
@@ -108,7 +108,7 @@ fn apply(base: &[u8], edits: &[Edit]) -> Vec<u8> {
 
 /// A parsed scenario must give a model with a finite, positive time step
 /// and a step count that fits, or an error; never a panic.
-fn check_scenario(result: Result<Scenario, slipfront::scenario::ScenarioError>) {
+fn check_scenario(result: Result<Scenario, slipfront::model::scenario::ScenarioError>) {
     if let Ok(s) = result {
         if let Ok(m) = Model::from_scenario(&s, false) {
             assert!(m.dt.is_finite() && m.dt > 0.0, "dt = {:e}", m.dt);
@@ -121,7 +121,11 @@ fn check_scenario(result: Result<Scenario, slipfront::scenario::ScenarioError>) 
 fn scenario_corpus() -> Vec<Vec<u8>> {
     let mut c = files(&root().join("scenarios"), "toml");
     c.extend(files(&root().join("tests/fuzz/corpus/scenario"), "toml"));
-    c.push(slipfront::scenario::DEFAULT_SCENARIO.as_bytes().to_vec());
+    c.push(
+        slipfront::model::scenario::DEFAULT_SCENARIO
+            .as_bytes()
+            .to_vec(),
+    );
     c
 }
 
@@ -178,7 +182,7 @@ fn hostile_set_values_give_a_model_or_an_error() {
                 .map(|(k, v)| format!("{}={v}", keys[*k]))
                 .collect();
             check_scenario(Scenario::parse(
-                slipfront::scenario::DEFAULT_SCENARIO,
+                slipfront::model::scenario::DEFAULT_SCENARIO,
                 "fuzz",
                 &set,
             ));
@@ -188,7 +192,7 @@ fn hostile_set_values_give_a_model_or_an_error() {
     // The seeds themselves, each alone.
     for line in seeds.lines() {
         check_scenario(Scenario::parse(
-            slipfront::scenario::DEFAULT_SCENARIO,
+            slipfront::model::scenario::DEFAULT_SCENARIO,
             "fuzz",
             &[line.to_string()],
         ));

@@ -1,11 +1,11 @@
 //! The GPU engine against the CPU reference, on whatever adapter is present
 //! (lavapipe in CI). These tests fail, never skip, when no adapter exists.
 
-use slipfront::backend::{cpu_engine, Precision};
-use slipfront::compare::{compare_snapshots, fields_over};
-use slipfront::gpu::shaders::Variant;
-use slipfront::gpu::{GpuEngine, GpuOptions, GpuPath};
-use slipfront::scenario::{Scenario, DEFAULT_SCENARIO};
+use slipfront::engines::backend::{cpu_engine, Precision};
+use slipfront::engines::gpu::shaders::Variant;
+use slipfront::engines::gpu::{GpuEngine, GpuOptions, GpuPath};
+use slipfront::io::compare::{compare_snapshots, fields_over};
+use slipfront::model::scenario::{Scenario, DEFAULT_SCENARIO};
 use slipfront::{advance_to, Engine, EngineError, Model, Snapshot};
 
 fn model(set: &[&str]) -> Model {
@@ -39,7 +39,7 @@ fn run_both(m: &Model, steps: u64, path: GpuPath) -> (Snapshot, Snapshot) {
 }
 
 /// The small side-driven scene of the cross-checks (29 × 16 blocks).
-const SMALL: &[&str] = &slipfront::verify::SMALL_SCENE;
+const SMALL: &[&str] = &slipfront::app::verify::SMALL_SCENE;
 
 #[test]
 fn gpu_f32_matches_cpu_f32_field_by_field() {
@@ -171,7 +171,7 @@ fn each_example_scenario_builds_only_the_terms_it_uses() {
         }
         // The single-block scene has no lattice and no kernels.
         let text = std::fs::read_to_string(&path).unwrap();
-        if slipfront::scenario::looks_like_single_block(&text) {
+        if slipfront::model::scenario::looks_like_single_block(&text) {
             continue;
         }
         let s = Scenario::load(&path, &[]).unwrap();
@@ -190,7 +190,7 @@ fn each_example_scenario_builds_only_the_terms_it_uses() {
         "FRICTION_LAW=1,DAMPING_FORM=1,USE_FOUNDATION=1,USE_TOP_LOADS=1,USE_SIDE_SPRING=1,USE_RELAXATION=1,USE_PRESTRESS=0"
     );
     // A frictionless, undamped wave test builds no friction kernel.
-    let wave = slipfront::verify::bare_scene("wave");
+    let wave = slipfront::app::verify::bare_scene("wave");
     let v = Variant::for_model(&Model::from_scenario(&wave, false).unwrap()).describe();
     assert_eq!(
         v,
@@ -243,7 +243,7 @@ fn a_lattice_beyond_the_adapter_limits_is_refused_clearly() {
 /// same per block on the GPU as on the CPU.
 #[test]
 fn coulomb_stick_slip_transitions_are_counted_as_ruptures_on_both_engines() {
-    use slipfront::runner::{run_scene, RunOptions};
+    use slipfront::app::runner::{run_scene, RunOptions};
     let mut set: Vec<String> = SMALL.iter().map(|s| s.to_string()).collect();
     set.extend(
         [
@@ -301,7 +301,7 @@ fn lifted_blocks_re_pin_only_when_pressed_back_on_both_engines() {
             for ix in 0..m.nx {
                 let block = ix * ns..(ix + 1) * ns;
                 let zero_pinned = block
-                    .filter(|&j| s.slip_steps_left[j] == slipfront::cpu::PINNED)
+                    .filter(|&j| s.slip_steps_left[j] == slipfront::engines::cpu::PINNED)
                     .any(|j| s.junction_stiffness[j] <= 0.0);
                 assert!(
                     !zero_pinned,
@@ -373,7 +373,7 @@ fn a_persistent_dispatch_cut_short_is_an_error() {
 /// an interface block, and stop there.
 #[test]
 fn a_blow_up_stops_the_run_at_its_step_and_block_on_every_kernel() {
-    let s = slipfront::verify::small_scene(&[
+    let s = slipfront::app::verify::small_scene(&[
         "loading.drive.velocity=0.4",
         "friction.junctions.stiffness_coefficient=39.2e17",
         "time.end=1e-3",
@@ -405,9 +405,9 @@ fn a_blow_up_stops_the_run_at_its_step_and_block_on_every_kernel() {
 /// 0.5% in time and F/F_N, with most of the loading skipped.
 #[test]
 fn gpu_fast_forward_finds_the_first_rupture_of_full_dynamics() {
-    use slipfront::quasistatic::FastForwardSettings;
-    use slipfront::runner::{run_scene, RunOptions};
-    let scenario = slipfront::verify::small_scene(&[
+    use slipfront::app::runner::{run_scene, RunOptions};
+    use slipfront::engines::quasistatic::FastForwardSettings;
+    let scenario = slipfront::app::verify::small_scene(&[
         "loading.drive.velocity=4e-3",
         "time.end=0.032",
         "output.global_interval=1e-5",
@@ -427,7 +427,7 @@ fn gpu_fast_forward_finds_the_first_rupture_of_full_dynamics() {
             ..RunOptions::default()
         };
         let summary = run_scene(engine, &scenario, &opts).unwrap();
-        let run = slipfront::output::reader::RunFile::read(&path).unwrap();
+        let run = slipfront::io::output::reader::RunFile::read(&path).unwrap();
         let g = run
             .global
             .iter()

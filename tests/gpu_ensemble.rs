@@ -2,14 +2,14 @@
 //! at a time on the GPU engine, on whatever adapter is present (lavapipe in
 //! CI). These tests fail, never skip, when no adapter exists.
 
-use slipfront::compare::{compare_snapshots, fields_over};
-use slipfront::gpu::ensemble::{incompatibility, GpuEnsemble};
-use slipfront::gpu::{GpuEngine, GpuOptions, GpuPath};
-use slipfront::scenario::{Scenario, DEFAULT_SCENARIO};
+use slipfront::engines::gpu::ensemble::{incompatibility, GpuEnsemble};
+use slipfront::engines::gpu::{GpuEngine, GpuOptions, GpuPath};
+use slipfront::io::compare::{compare_snapshots, fields_over};
+use slipfront::model::scenario::{Scenario, DEFAULT_SCENARIO};
 use slipfront::{advance_to, Engine, EngineError, Model, Snapshot};
 
 fn model(extra: &[&str]) -> Model {
-    let mut set: Vec<String> = slipfront::verify::SMALL_SCENE
+    let mut set: Vec<String> = slipfront::app::verify::SMALL_SCENE
         .iter()
         .map(|s| s.to_string())
         .collect();

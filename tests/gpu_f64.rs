@@ -3,14 +3,14 @@
 //! CI, which has SHADER_F64). These tests fail, never skip, when no
 //! adapter (or no f64 on it) exists.
 
-use slipfront::compare::{compare_snapshots, fields_over};
-use slipfront::cpu::CpuEngine;
-use slipfront::gpu::{GpuEngine, GpuOptions, GpuPath};
-use slipfront::scenario::{Scenario, DEFAULT_SCENARIO};
+use slipfront::engines::cpu::CpuEngine;
+use slipfront::engines::gpu::{GpuEngine, GpuOptions, GpuPath};
+use slipfront::io::compare::{compare_snapshots, fields_over};
+use slipfront::model::scenario::{Scenario, DEFAULT_SCENARIO};
 use slipfront::{advance_to, Engine, Model, Snapshot};
 
 fn model(extra: &[&str]) -> Model {
-    let mut set: Vec<String> = slipfront::verify::SMALL_SCENE
+    let mut set: Vec<String> = slipfront::app::verify::SMALL_SCENE
         .iter()
         .map(|s| s.to_string())
         .collect();
@@ -128,7 +128,7 @@ fn f64_states_cross_between_cpu_and_gpu() {
 /// run is flagged (the comparison is not vacuous).
 #[test]
 fn gpu_f64_ensemble_scenes_match_their_cpu_f64_runs() {
-    use slipfront::gpu::ensemble::GpuEnsemble;
+    use slipfront::engines::gpu::ensemble::GpuEnsemble;
     let models = [
         model(&[]),
         model(&["friction.static_coefficient=0.404"]),

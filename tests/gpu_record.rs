@@ -3,11 +3,11 @@
 //! GPU run, and whole run files written both ways. These tests fail, never
 //! skip, when no adapter exists (lavapipe in CI).
 
-use slipfront::compare::compare_run_files;
-use slipfront::engine::{record_sample, Sample, SamplePlan};
-use slipfront::gpu::{GpuEngine, GpuOptions, GpuOutput, GpuPath};
-use slipfront::output::reader::RunFile;
-use slipfront::runner::{run_scene, RunOptions};
+use slipfront::app::runner::{run_scene, RunOptions};
+use slipfront::engines::gpu::{GpuEngine, GpuOptions, GpuOutput, GpuPath};
+use slipfront::engines::{record_sample, Sample, SamplePlan};
+use slipfront::io::compare::compare_run_files;
+use slipfront::io::output::reader::RunFile;
 use slipfront::{advance_to, Engine, EngineError, Model, Scenario};
 use std::path::PathBuf;
 
@@ -16,7 +16,7 @@ use std::path::PathBuf;
 /// 20 µs otherwise) switches on and off.
 fn triggered(extra: &[&str]) -> Scenario {
     let text = std::fs::read_to_string("scenarios/triggered_front.toml").unwrap();
-    let mut set: Vec<String> = slipfront::verify::SMALL_SCENE
+    let mut set: Vec<String> = slipfront::app::verify::SMALL_SCENE
         .iter()
         .chain(&[
             "output.interface_interval=2e-5",
@@ -229,9 +229,9 @@ fn a_large_lattice_records_in_two_dispatches() {
     .iter()
     .map(|s| s.to_string())
     .collect();
-    let s = Scenario::parse(slipfront::scenario::DEFAULT_SCENARIO, "large", &set).unwrap();
+    let s = Scenario::parse(slipfront::model::scenario::DEFAULT_SCENARIO, "large", &set).unwrap();
     let m = Model::from_scenario(&s, false).unwrap();
-    assert!(m.n_blocks() > slipfront::gpu::RECORD_SMALL_BLOCKS);
+    assert!(m.n_blocks() > slipfront::engines::gpu::RECORD_SMALL_BLOCKS);
     let plan = plan(&m, &s);
     let mut dev = engine(&m, GpuPath::OneStep, GpuOutput::Device);
     assert!(dev.record_samples(&plan).unwrap());
@@ -264,7 +264,7 @@ fn run_file(s: &Scenario, path: GpuPath, output: GpuOutput, name: &str) -> RunFi
     let path = temp(name);
     let opts = RunOptions {
         output: Some(path.clone()),
-        progress: slipfront::runner::ProgressMode::None,
+        progress: slipfront::app::runner::ProgressMode::None,
         ..RunOptions::default()
     };
     run_scene(&mut e, s, &opts).unwrap();
@@ -285,7 +285,7 @@ fn run_file(s: &Scenario, path: GpuPath, output: GpuOutput, name: &str) -> RunFi
 /// velocity at the instant) differs, by round-off.
 #[test]
 fn run_files_from_device_records_equal_those_from_host_snapshots() {
-    let side = slipfront::verify::small_scene(&[
+    let side = slipfront::app::verify::small_scene(&[
         "time.end=4e-4",
         "loading.drive.velocity=0.4",
         "output.bulk_interval=1e-4",
@@ -337,14 +337,14 @@ fn run_files_from_device_records_equal_those_from_host_snapshots() {
 /// are one sample short, or whose drive differs by 1e-3, is flagged.
 #[test]
 fn the_run_file_comparison_flags_a_missing_record_and_another_run() {
-    let s =
-        slipfront::verify::small_scene(&["time.end=2e-4", "loading.drive.velocity=0.4"]).unwrap();
+    let s = slipfront::app::verify::small_scene(&["time.end=2e-4", "loading.drive.velocity=0.4"])
+        .unwrap();
     let a = run_file(&s, GpuPath::Auto, GpuOutput::Device, "control-a.mcap");
     let mut short = a.clone();
     short.interface.pop();
     assert!(compare_run_files(&a, &short).is_err());
     let faster =
-        slipfront::verify::small_scene(&["time.end=2e-4", "loading.drive.velocity=0.4004"])
+        slipfront::app::verify::small_scene(&["time.end=2e-4", "loading.drive.velocity=0.4004"])
             .unwrap();
     let b = run_file(&faster, GpuPath::Auto, GpuOutput::Device, "control-b.mcap");
     let errors = compare_run_files(&a, &b).unwrap();
@@ -357,7 +357,7 @@ fn the_run_file_comparison_flags_a_missing_record_and_another_run() {
 /// model is edited: the scenario check refuses it), with a sample every step.
 #[test]
 fn a_blow_up_while_recording_keeps_the_samples_before_it() {
-    let s = slipfront::verify::small_scene(&[
+    let s = slipfront::app::verify::small_scene(&[
         "loading.drive.velocity=0.4",
         "time.end=1e-4",
         "output.global_interval=2e-7",
@@ -371,13 +371,13 @@ fn a_blow_up_while_recording_keeps_the_samples_before_it() {
     let path = temp("blow-up.mcap");
     let opts = RunOptions {
         output: Some(path.clone()),
-        progress: slipfront::runner::ProgressMode::None,
+        progress: slipfront::app::runner::ProgressMode::None,
         ..RunOptions::default()
     };
     let err = run_scene(&mut e, &s, &opts).unwrap_err();
     let text = err.to_string();
     assert!(text.contains("blew up at step"), "{text}");
-    let slipfront::runner::RunError::Engine(EngineError::BlowUp { step, .. }) = err else {
+    let slipfront::app::runner::RunError::Engine(EngineError::BlowUp { step, .. }) = err else {
         panic!("{text}");
     };
     let run = RunFile::read(&path).unwrap();

@@ -1,8 +1,8 @@
 //! Every case of `slipfront verify` on the GPU engine (lavapipe in CI).
 //! Fails, never skips, when no adapter exists.
 
-use slipfront::gpu::GpuEngine;
-use slipfront::verify::{failures, run_all};
+use slipfront::app::verify::{failures, run_all};
+use slipfront::engines::gpu::GpuEngine;
 use slipfront::{Engine, EngineError, Model};
 
 // About 70 s on 2-core lavapipe.

@@ -27,7 +27,7 @@ fn s(p: &Path) -> &str {
 fn small_run(at: &Path) {
     let mut args = vec!["run", "--backend", "cpu", "--threads", "1", "--quiet"];
     args.extend(["--t-end", "1e-3", "-o", s(at)]);
-    let sets: Vec<String> = slipfront::verify::SMALL_SCENE
+    let sets: Vec<String> = slipfront::app::verify::SMALL_SCENE
         .iter()
         .flat_map(|s| ["--set".to_string(), s.to_string()])
         .collect();
@@ -145,7 +145,7 @@ fn a_cut_short_file_is_recovered_whole() {
     let cut = d.join("cut.mcap");
     let after_chunks = first_record(&bytes, 0x07) + 5;
     std::fs::write(&cut, &bytes[..after_chunks]).unwrap();
-    let before = slipfront::output::reader::RunFile::read(&cut).unwrap();
+    let before = slipfront::io::output::reader::RunFile::read(&cut).unwrap();
     assert!(before.truncated && !before.interface.is_empty());
     // A reader that needs the summary finds none (negative control).
     assert!(mcap::Summary::read(&std::fs::read(&cut).unwrap())
@@ -163,7 +163,7 @@ fn a_cut_short_file_is_recovered_whole() {
         "{text}"
     );
     assert!(d.join("cut.mcap.cut").exists());
-    let after = slipfront::output::reader::RunFile::read(&cut).unwrap();
+    let after = slipfront::io::output::reader::RunFile::read(&cut).unwrap();
     assert!(!after.truncated);
     assert_eq!(after.global, before.global);
     assert_eq!(after.interface, before.interface);
@@ -196,7 +196,7 @@ fn a_cut_short_file_is_recovered_whole() {
 /// `global` times as given.
 fn crafted(at: &Path, rows: &[Vec<f64>], global_times: &[f64]) {
     use prost::Message;
-    use slipfront::output::messages::{Global, Interface};
+    use slipfront::io::output::messages::{Global, Interface};
     let file = std::io::BufWriter::new(std::fs::File::create(at).unwrap());
     let mut w = mcap::WriteOptions::new().create(file).unwrap();
     let meta = [
@@ -372,7 +372,7 @@ fn hostile_files_and_times_get_bounded_clear_errors() {
 fn two_runs_cannot_write_one_file() {
     let d = dir("lock");
     let out = d.join("run.mcap");
-    let sets: Vec<String> = slipfront::verify::SMALL_SCENE
+    let sets: Vec<String> = slipfront::app::verify::SMALL_SCENE
         .iter()
         .flat_map(|s| ["--set".to_string(), s.to_string()])
         .collect();
@@ -409,7 +409,7 @@ fn two_runs_cannot_write_one_file() {
         "the first run ended before the test could race it"
     );
     assert!(first.wait().unwrap().success());
-    let run = slipfront::output::reader::RunFile::read(&out).unwrap();
+    let run = slipfront::io::output::reader::RunFile::read(&out).unwrap();
     assert!(!run.truncated && run.global.last().unwrap().time > 0.19);
 }
 
@@ -417,7 +417,7 @@ fn two_runs_cannot_write_one_file() {
 fn sigterm_closes_the_file_and_exits_143() {
     let d = dir("term");
     let out = d.join("run.mcap");
-    let sets: Vec<String> = slipfront::verify::SMALL_SCENE
+    let sets: Vec<String> = slipfront::app::verify::SMALL_SCENE
         .iter()
         .flat_map(|s| ["--set".to_string(), s.to_string()])
         .collect();
@@ -439,7 +439,7 @@ fn sigterm_closes_the_file_and_exits_143() {
         "stopped after {:?}",
         t0.elapsed()
     );
-    let run = slipfront::output::reader::RunFile::read(&out).unwrap();
+    let run = slipfront::io::output::reader::RunFile::read(&out).unwrap();
     assert!(!run.truncated, "the file was closed with its summary");
     assert!(!run.global.is_empty());
 }
@@ -498,7 +498,7 @@ fn a_run_without_driving_plots_nothing_and_says_why() {
     let run = d.join("zero.mcap");
     let mut args = vec!["run", "--backend", "cpu", "--threads", "1", "--quiet"];
     args.extend(["--t-end", "0", "-o", s(&run)]);
-    let sets: Vec<String> = slipfront::verify::SMALL_SCENE
+    let sets: Vec<String> = slipfront::app::verify::SMALL_SCENE
         .iter()
         .flat_map(|s| ["--set".to_string(), s.to_string()])
         .collect();
@@ -532,7 +532,7 @@ fn the_run_file_on_disk_lags_the_run_by_about_a_second_at_most() {
         "output.interface_interval=1e-4",
         "output.fast_interval=1e-4",
     ];
-    let sets: Vec<String> = slipfront::verify::SMALL_SCENE
+    let sets: Vec<String> = slipfront::app::verify::SMALL_SCENE
         .iter()
         .chain(&sparse)
         .flat_map(|s| ["--set".to_string(), s.to_string()])
@@ -565,6 +565,6 @@ fn the_run_file_on_disk_lags_the_run_by_about_a_second_at_most() {
         worst < 1.75,
         "the file grew at {growths:?}: a gap of {worst:.2} s"
     );
-    let run = slipfront::output::reader::RunFile::read(&out).unwrap();
+    let run = slipfront::io::output::reader::RunFile::read(&out).unwrap();
     assert!(run.truncated && !run.global.is_empty());
 }

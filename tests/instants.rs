@@ -4,10 +4,10 @@
 //! junction states came from the step before the displacements and the
 //! velocity was the leapfrog half-step v(n−½): both checks below failed.
 
-use slipfront::backend::{cpu_engine, make_engine, Backend, Precision};
-use slipfront::cpu::PINNED;
-use slipfront::runner::global_sample;
-use slipfront::scenario::{Scenario, DEFAULT_SCENARIO};
+use slipfront::app::runner::global_sample;
+use slipfront::engines::backend::{cpu_engine, make_engine, Backend, Precision};
+use slipfront::engines::cpu::PINNED;
+use slipfront::model::scenario::{Scenario, DEFAULT_SCENARIO};
 use slipfront::{advance_to, Engine, Model, Snapshot};
 
 fn single_block() -> Model {
@@ -134,14 +134,14 @@ fn a_record_holds_force_displacement_and_velocity_of_one_instant_on_the_gpu() {
 /// is the programmed ramp at every sample (it was the interface friction).
 #[test]
 fn a_top_force_run_reports_the_applied_ramp_as_its_drive_force() {
-    use slipfront::output::reader::RunFile;
-    use slipfront::runner::{run_scene, RunOptions};
+    use slipfront::app::runner::{run_scene, RunOptions};
+    use slipfront::io::output::reader::RunFile;
     let text = DEFAULT_SCENARIO.replace(
         "mode = \"side_spring\"\nstiffness = 4.0e6   # K (N/m) [paper]\nheight = 5.0e-3     # h (m) above the interface [paper]\nvelocity = 4.0e-4   # V (m/s) [paper]",
         "mode = \"top_force\"\nforce_rate = 1600.0",
     );
     assert!(text.contains("top_force"));
-    let mut set: Vec<String> = slipfront::verify::SMALL_SCENE
+    let mut set: Vec<String> = slipfront::app::verify::SMALL_SCENE
         .iter()
         .map(|s| s.to_string())
         .collect();

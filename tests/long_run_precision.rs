@@ -10,11 +10,11 @@
 //! junction sums in the order before the GPU v2 lanes it was a 55 mm
 //! precursor 4.6% late), so the comparison must flag them.
 
-use slipfront::backend::{make_engine, Backend, Precision};
-use slipfront::compare::{outcome_mismatch, RunOutcome};
-use slipfront::output::reader::RunFile;
-use slipfront::runner::{run_scene, RunOptions};
-use slipfront::scenario::Scenario;
+use slipfront::app::runner::{run_scene, RunOptions};
+use slipfront::engines::backend::{make_engine, Backend, Precision};
+use slipfront::io::compare::{outcome_mismatch, RunOutcome};
+use slipfront::io::output::reader::RunFile;
+use slipfront::model::scenario::Scenario;
 use slipfront::Model;
 
 const SCENE: &str = concat!(

@@ -1,10 +1,10 @@
 //! The MCAP output read back: every channel against the engine state, the
 //! protobuf schema, and `info`/`plot` on a real run.
 
-use slipfront::backend::{cpu_engine, Precision};
-use slipfront::output::reader::RunFile;
-use slipfront::runner::{run_scene, RunOptions};
-use slipfront::scenario::{Scenario, DEFAULT_SCENARIO};
+use slipfront::app::runner::{run_scene, RunOptions};
+use slipfront::engines::backend::{cpu_engine, Precision};
+use slipfront::io::output::reader::RunFile;
+use slipfront::model::scenario::{Scenario, DEFAULT_SCENARIO};
 use slipfront::{advance_to, Model};
 
 #[test]

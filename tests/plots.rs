@@ -28,7 +28,7 @@ fn s(p: &Path) -> &str {
 fn small_run(at: &Path, t_end: &str) {
     let mut args = vec!["run", "--backend", "cpu", "--threads", "1", "--quiet"];
     args.extend(["--t-end", t_end, "-o", s(at)]);
-    let sets: Vec<String> = slipfront::verify::SMALL_SCENE
+    let sets: Vec<String> = slipfront::app::verify::SMALL_SCENE
         .iter()
         .chain(&["loading.drive.velocity=0.2"])
         .flat_map(|s| ["--set".to_string(), s.to_string()])

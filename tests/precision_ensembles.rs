@@ -24,9 +24,9 @@
 //! S1 lattice (results/precision_ensembles.md). The mechanism of mixed
 //! f32's old bias has its own deterministic guard with the old arithmetic
 //! as negative control (`mixed_bond_forces_keep_action_equal_to_reaction`
-//! in src/cpu/bulk_forces.rs).
+//! in src/engines/kernels/bulk_forces.rs).
 
-use slipfront::sweep::compare::{compare_tables, Comparison};
+use slipfront::app::sweeps::compare::{compare_tables, Comparison};
 use std::path::{Path, PathBuf};
 use std::process::Command;
 

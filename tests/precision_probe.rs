@@ -3,7 +3,7 @@
 //! same bits), a probed run differs from a plain one, the run file says the
 //! probe was on, and a misspelt quantity is refused.
 
-use slipfront::output::reader::RunFile;
+use slipfront::io::output::reader::RunFile;
 use std::path::Path;
 use std::process::Command;
 

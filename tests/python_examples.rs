@@ -47,7 +47,7 @@ fn python_reads_complete_and_recovered_run_files() {
     std::fs::create_dir_all(&d).unwrap();
     let run = d.join("run.mcap");
     std::fs::copy(root().join("tests/fuzz/corpus/mcap/small_run.mcap"), &run).unwrap();
-    let expected = slipfront::output::reader::RunFile::read(&run)
+    let expected = slipfront::io::output::reader::RunFile::read(&run)
         .unwrap()
         .interface
         .len();

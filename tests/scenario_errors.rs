@@ -1,8 +1,8 @@
 //! Bad scenario input is refused with the key, the value, the allowed range
 //! and the line; never a panic.
 
+use slipfront::model::scenario::{Scenario, DEFAULT_SCENARIO};
 use slipfront::model::Model;
-use slipfront::scenario::{Scenario, DEFAULT_SCENARIO};
 
 fn parse_err(text: &str, set: &[&str]) -> String {
     let set: Vec<String> = set.iter().map(|s| s.to_string()).collect();
@@ -114,8 +114,8 @@ fn every_shipped_scenario_is_valid() {
             continue;
         }
         let text = std::fs::read_to_string(&path).unwrap();
-        if slipfront::scenario::looks_like_single_block(&text) {
-            slipfront::single_block::SingleBlockScene::load(&path)
+        if slipfront::model::scenario::looks_like_single_block(&text) {
+            slipfront::engines::single_block::SingleBlockScene::load(&path)
                 .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
             single_blocks += 1;
             continue;
@@ -129,7 +129,7 @@ fn every_shipped_scenario_is_valid() {
     // Sweep files: every point of each valid.
     for entry in std::fs::read_dir(format!("{dir}/sweeps")).unwrap() {
         let path = entry.unwrap().path();
-        let sweep = slipfront::sweep::Sweep::load(&path)
+        let sweep = slipfront::app::sweeps::Sweep::load(&path)
             .unwrap_or_else(|p| panic!("{}: {}", path.display(), p.join("; ")));
         assert!(!sweep.points.is_empty());
     }
@@ -239,7 +239,7 @@ fn each_scene_kind_refused_by_the_other_loader_names_the_right_command() {
     let e = Scenario::load(&single, &[]).unwrap_err().to_string();
     assert!(e.contains("slipfront single-block"), "{e}");
     let lattice = std::path::PathBuf::from(format!("{dir}/tromborg2014_stick_slip.toml"));
-    let e = slipfront::single_block::SingleBlockScene::load(&lattice)
+    let e = slipfront::engines::single_block::SingleBlockScene::load(&lattice)
         .unwrap_err()
         .to_string();
     assert!(e.contains("slipfront run"), "{e}");

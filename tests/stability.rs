@@ -2,10 +2,10 @@
 //! analytic bound, stress scenes that must run stably or stop with the clear
 //! blow-up error, and the energy balance of a stick-slip run.
 
-use slipfront::backend::{cpu_engine, Precision};
-use slipfront::energy::{step_power, stored_energy};
+use slipfront::analysis::energy::{step_power, stored_energy};
+use slipfront::engines::backend::{cpu_engine, Precision};
+use slipfront::model::scenario::{Component, Pulse, Scenario};
 use slipfront::model::{Driver, ModelError};
-use slipfront::scenario::{Component, Pulse, Scenario};
 use slipfront::{advance_to, EngineError, Model};
 
 /// A 29 × 16 Table S1 lattice with short loading phases, and `extra` keys.
@@ -16,7 +16,7 @@ fn small(extra: &[&str]) -> Scenario {
         "friction.junctions.slip_time_std=2e-5",
     ];
     set.extend_from_slice(extra);
-    slipfront::verify::small_scene(&set).unwrap()
+    slipfront::app::verify::small_scene(&set).unwrap()
 }
 
 /// Whether `s` at `dt` runs `steps` steps without blowing up.
@@ -48,7 +48,7 @@ fn largest_stable_dt(s: &Scenario, mut lo: f64, mut hi: f64, steps: u64) -> f64 
 }
 
 fn pulsed_bulk(damping: f64) -> Scenario {
-    let mut s = slipfront::verify::bare_scene("bulk");
+    let mut s = slipfront::app::verify::bare_scene("bulk");
     s.geometry.nx = 21;
     s.geometry.nz = 11;
     s.geometry.length = 0.05;
@@ -173,8 +173,8 @@ fn stress_scenes_run_stably_or_stop_clearly() {
     stress("very high normal load", &["loading.normal.force=1.9e5"]);
     // Pulled hard from the top with no normal load: the slider lifts off.
     let mut s = small(&["time.end=2e-3", "loading.normal.force=0"]);
-    s.loading.drive = slipfront::scenario::Drive {
-        mode: slipfront::scenario::DriveMode::TopForce,
+    s.loading.drive = slipfront::model::scenario::Drive {
+        mode: slipfront::model::scenario::DriveMode::TopForce,
         stiffness: None,
         height: None,
         velocity: None,

@@ -68,7 +68,10 @@ fn s(p: &Path) -> &str {
 /// The table without its wall-time column (the only one that may differ).
 fn table(path: &Path) -> Vec<Vec<String>> {
     let text = std::fs::read_to_string(path).unwrap();
-    let mut rows: Vec<Vec<String>> = text.lines().map(slipfront::sweep::table::split).collect();
+    let mut rows: Vec<Vec<String>> = text
+        .lines()
+        .map(slipfront::app::sweeps::table::split)
+        .collect();
     let wall = rows[0].iter().position(|h| h == "wall_s").unwrap();
     for r in &mut rows {
         r.remove(wall);
@@ -389,7 +392,7 @@ fn gpu_ensemble_sweep_matches_points_run_alone(precision: &str) {
         table(&together.join("summary.csv")),
         table(&apart.join("summary.csv")),
     );
-    let software = slipfront::gpu::context::shared()
+    let software = slipfront::engines::gpu::context::shared()
         .unwrap_or_else(|e| panic!("a GPU adapter is required (lavapipe in CI): {e}"))
         .is_software();
     if software && precision == "f32" {

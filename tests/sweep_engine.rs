@@ -5,9 +5,9 @@
 //! law, damping form, driver and the trigger. A perturbed reference run is
 //! the negative control: the comparison must see a one-ulp change.
 
-use slipfront::cpu::{CpuEngine, SweepEngine};
-use slipfront::real::{Coordinate, DoubleSingle, Real};
-use slipfront::scenario::{Scenario, DEFAULT_SCENARIO};
+use slipfront::engines::cpu::{CpuEngine, SweepEngine};
+use slipfront::model::real::{Coordinate, DoubleSingle, Real};
+use slipfront::model::scenario::{Scenario, DEFAULT_SCENARIO};
 use slipfront::{advance_to, Engine, Model, Snapshot};
 
 /// The Table S1 scene shortened: brief normal-load phase, hard driving so

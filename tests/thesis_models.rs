@@ -1,9 +1,9 @@
 //! The thesis's other models: published trends on small versions, the GPU
 //! against the CPU on them, and the energy ledger of their new loads.
 
-use slipfront::backend::{cpu_engine, Backend, Precision};
-use slipfront::energy::{step_power, stored_energy};
-use slipfront::studies::front_1d::{run_chain, run_point, FrontCase, Grid, Viscosity};
+use slipfront::analysis::energy::{step_power, stored_energy};
+use slipfront::app::studies::front_1d::{run_chain, run_point, FrontCase, Grid, Viscosity};
+use slipfront::engines::backend::{cpu_engine, Backend, Precision};
 use slipfront::{advance_to, Model};
 
 fn chain(case: FrontCase, dt_scale: f64) -> Model {
@@ -154,9 +154,9 @@ fn energy_balance_of_a_prestressed_chain_with_absolute_viscosity() {
 }
 
 mod single_block {
-    use slipfront::single_block::law::{JunctionLaw, SlipForce, SlipTime};
-    use slipfront::single_block::{next_static_threshold, simulated_steady_friction};
-    use slipfront::studies::single_block::{laws, shape};
+    use slipfront::app::studies::junction_laws::{laws, shape};
+    use slipfront::engines::single_block::law::{JunctionLaw, SlipForce, SlipTime};
+    use slipfront::engines::single_block::{next_static_threshold, simulated_steady_friction};
 
     fn base() -> JunctionLaw {
         JunctionLaw {
@@ -174,7 +174,7 @@ mod single_block {
     #[test]
     fn simulated_steady_friction_is_within_2_percent_of_the_renewal_formula() {
         let mut all = laws(&base());
-        all.push(slipfront::studies::single_block::NamedLaw {
+        all.push(slipfront::app::studies::junction_laws::NamedLaw {
             name: "exponential slip times",
             law: JunctionLaw {
                 slip_time: SlipTime::Exponential { mean: 1e-3 },
@@ -236,7 +236,7 @@ mod single_block {
 
 #[test]
 fn gpu_asymmetric_normal_load_matches_the_cpu_field_by_field() {
-    use slipfront::compare::{compare_snapshots, fields_over};
+    use slipfront::io::compare::{compare_snapshots, fields_over};
     let load = |ratio: f64| {
         let s = slipfront::Scenario::load(
             std::path::Path::new("scenarios/tromborg2011_coulomb_precursors.toml"),
@@ -254,7 +254,7 @@ fn gpu_asymmetric_normal_load_matches_the_cpu_field_by_field() {
     let m = load(3.0);
     let steps = m.prep_steps + 2000;
     let run = |m: &Model, backend: Backend| {
-        let mut e = slipfront::backend::make_engine(m, backend, Precision::F32, 1)
+        let mut e = slipfront::engines::backend::make_engine(m, backend, Precision::F32, 1)
             .unwrap_or_else(|e| panic!("{backend:?}: {e} (lavapipe in CI)"));
         advance_to(e.as_mut(), steps).unwrap();
         e.snapshot().unwrap()

@@ -1,8 +1,8 @@
 //! The validation cases on the CPU engine, and negative controls: an engine
 //! whose model is perturbed must be flagged by the same comparators.
 
-use slipfront::backend::{cpu_engine, Precision};
-use slipfront::verify::{failures, run_all};
+use slipfront::app::verify::{failures, run_all};
+use slipfront::engines::backend::{cpu_engine, Precision};
 use slipfront::Model;
 
 #[test]

@@ -2,7 +2,7 @@
 //! spacing, a short normal-load phase, then driven hard enough that
 //! junctions rupture. Shared by `throughput` and `stencil_ceiling`.
 
-use slipfront::scenario::{Scenario, DEFAULT_SCENARIO};
+use slipfront::model::scenario::{Scenario, DEFAULT_SCENARIO};
 use slipfront::Model;
 
 pub fn scene(nx: u32, nz: u32) -> Model {

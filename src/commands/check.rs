@@ -1,4 +1,4 @@
-use slipfront::backend::{make_engine, measure_steps_per_second, Backend, Precision};
+use slipfront::engines::backend::{make_engine, measure_steps_per_second, Backend, Precision};
 use slipfront::model::Model;
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -22,7 +22,7 @@ fn estimates(m: &Model) -> Vec<Estimate> {
         (Backend::Cpu, Precision::F64),
         (Backend::Cpu, Precision::F32),
     ];
-    if slipfront::gpu::context::shared().is_ok() {
+    if slipfront::engines::gpu::context::shared().is_ok() {
         engines.push((Backend::Gpu, Precision::F32));
     }
     engines

@@ -2,11 +2,11 @@
 //! by side with their tests, as text or JSON, and optionally a figure of
 //! the empirical CDFs. Exits 1 when some outcome differs at p < alpha.
 
-use slipfront::stats::Quartiles;
-use slipfront::sweep::compare::{
+use slipfront::analysis::stats::Quartiles;
+use slipfront::app::sweeps::compare::{
     compare_ensembles, Comparison, ContinuousOutcome, FOLLOWS_PERTURBATION,
 };
-use slipfront::sweep::outcome_rows::read_ensemble;
+use slipfront::app::sweeps::outcome_rows::read_ensemble;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
@@ -27,7 +27,7 @@ pub fn compare(args: CompareArgs) -> anyhow::Result<ExitCode> {
         args.alpha
     );
     if let Some(f) = &args.figure {
-        slipfront::plot::Format::from_path(f)?;
+        slipfront::analysis::plot::Format::from_path(f)?;
     }
     let ea = read_ensemble(&args.a).map_err(|e| anyhow::anyhow!(e))?;
     let eb = read_ensemble(&args.b).map_err(|e| anyhow::anyhow!(e))?;
@@ -225,7 +225,7 @@ fn print_report(c: &Comparison, alpha: f64) {
 /// One panel per continuous outcome with values: both empirical CDFs,
 /// captioned with the KS and AD p-values.
 fn write_figure(c: &Comparison, path: &Path) -> anyhow::Result<()> {
-    use slipfront::plot::ecdf::{EcdfComparison, EcdfPanel};
+    use slipfront::analysis::plot::ecdf::{EcdfComparison, EcdfPanel};
     let p = |p: Option<f64>| p_text(p, 0.0);
     let figure = EcdfComparison {
         panels: c
@@ -245,12 +245,12 @@ fn write_figure(c: &Comparison, path: &Path) -> anyhow::Result<()> {
         label_a: &c.label_a,
         label_b: &c.label_b,
     };
-    let options = slipfront::plot::FigureOptions {
-        format: slipfront::plot::Format::from_path(path)?,
+    let options = slipfront::analysis::plot::FigureOptions {
+        format: slipfront::analysis::plot::Format::from_path(path)?,
         width: 1200,
         height: 700,
         dpi: 100,
     };
-    slipfront::plot::write(&figure, path, &options, "")?;
+    slipfront::analysis::plot::write(&figure, path, &options, "")?;
     Ok(())
 }

@@ -1,7 +1,7 @@
 use super::printable;
-use slipfront::analysis::{Event, FRONT_WINDOW};
-use slipfront::output::reader::RunFile;
-use slipfront::precursors::PrecursorSequence;
+use slipfront::analysis::events::{Event, FRONT_WINDOW};
+use slipfront::analysis::precursors::PrecursorSequence;
+use slipfront::io::output::reader::RunFile;
 use std::path::Path;
 use std::process::ExitCode;
 
@@ -28,8 +28,8 @@ pub fn info(path: &Path, quiet_gap: f64) -> anyhow::Result<ExitCode> {
             println!("  {}", printable(line));
         }
     }
-    let checkpoint = slipfront::checkpoint::path_for(path);
-    if let Ok(c) = slipfront::checkpoint::Checkpoint::read(&checkpoint) {
+    let checkpoint = slipfront::io::checkpoint::path_for(path);
+    if let Ok(c) = slipfront::io::checkpoint::Checkpoint::read(&checkpoint) {
         println!(
             "checkpoint  {} at step {} (t = {:.6e} s), by {}; continue with slipfront run \
              --resume {}",
@@ -80,13 +80,13 @@ pub fn info(path: &Path, quiet_gap: f64) -> anyhow::Result<ExitCode> {
         series.spacing,
     );
     let pairs = series.slip_front_pairs(&events, FRONT_WINDOW);
-    if let Some(fit) = slipfront::analysis::slip_front_relation(&pairs) {
+    if let Some(fit) = slipfront::analysis::events::slip_front_relation(&pairs) {
         println!(
             "slip speed vs front speed: v_slip = {:.3e} v_front; fitted v_slip ∝ v_front^{:.2} (1: proportional), log-log correlation {:.3}, {} crossings",
             fit.alpha, fit.exponent, fit.correlation, fit.points
         );
         println!("  front speed decade   count   median v_front   median v_slip   ratio");
-        for (decade, n, f, s) in slipfront::analysis::slip_front_by_decade(&pairs) {
+        for (decade, n, f, s) in slipfront::analysis::events::slip_front_by_decade(&pairs) {
             println!(
                 "  {decade:<9.0e} m/s      {n:<7} {f:<16.3e} {s:<15.3e} {:.2e}",
                 s / f
@@ -110,7 +110,11 @@ struct EventRow {
 }
 
 impl EventRow {
-    fn new(series: &slipfront::analysis::InterfaceSeries, e: &Event, drive_ratio: f64) -> Self {
+    fn new(
+        series: &slipfront::analysis::events::InterfaceSeries,
+        e: &Event,
+        drive_ratio: f64,
+    ) -> Self {
         let (speeds, bound) = series.resolved_front_speeds(e, FRONT_WINDOW);
         EventRow {
             kind: if e.full { "full" } else { "partial" },
@@ -178,7 +182,7 @@ fn unit(key: &str) -> &'static str {
 
 /// The precursors before the first full event and whether they grow.
 fn print_precursors(seq: &PrecursorSequence, spacing: f64) {
-    let list = |p: &[slipfront::precursors::Precursor]| {
+    let list = |p: &[slipfront::analysis::precursors::Precursor]| {
         p.iter()
             .map(|p| {
                 format!(

@@ -8,7 +8,7 @@ pub mod study;
 pub mod sweep;
 pub mod verify;
 
-use slipfront::scenario::{Scenario, DEFAULT_SCENARIO, DEFAULT_SCENARIO_NAME};
+use slipfront::model::scenario::{Scenario, DEFAULT_SCENARIO, DEFAULT_SCENARIO_NAME};
 use std::path::Path;
 
 /// The scenario at `path`, or the built-in default, with overrides applied.

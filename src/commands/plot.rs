@@ -1,14 +1,16 @@
 //! `slipfront plot`: the figures of one run.
 
-use slipfront::analysis::{Event, InterfaceSeries, FRONT_WINDOW};
-use slipfront::output::reader::RunFile;
-use slipfront::plot::fronts::{FrontSpeedPlot, FrontTipPlot, SlipVsFrontPlot, WaveSpeeds};
-use slipfront::plot::loading::LoadingCurve;
-use slipfront::plot::maps::{MapField, SpaceTimeMap};
-use slipfront::plot::precursors::PrecursorPlot;
-use slipfront::plot::slip::{SlipHistory, SlipProfiles};
-use slipfront::plot::{write, Figure, FigureOptions};
-use slipfront::precursors::PrecursorSequence;
+use slipfront::analysis::events::{Event, InterfaceSeries, FRONT_WINDOW};
+use slipfront::analysis::plot::fronts::{
+    FrontSpeedPlot, FrontTipPlot, SlipVsFrontPlot, WaveSpeeds,
+};
+use slipfront::analysis::plot::loading::LoadingCurve;
+use slipfront::analysis::plot::maps::{MapField, SpaceTimeMap};
+use slipfront::analysis::plot::precursors::PrecursorPlot;
+use slipfront::analysis::plot::slip::{SlipHistory, SlipProfiles};
+use slipfront::analysis::plot::{write, Figure, FigureOptions};
+use slipfront::analysis::precursors::PrecursorSequence;
+use slipfront::io::output::reader::RunFile;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 

@@ -1,7 +1,7 @@
 //! `slipfront recover`: a cut-short run file rewritten whole.
 
-use slipfront::output::recover::rewrite;
-use slipfront::output::scan::Ending;
+use slipfront::io::output::recover::rewrite;
+use slipfront::io::output::scan::Ending;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 

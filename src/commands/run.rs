@@ -1,35 +1,72 @@
-use slipfront::backend::{make_engine_with, Backend, Precision};
-use slipfront::checkpoint::{branch, path_for, Checkpoint};
-use slipfront::engine::Engine;
-use slipfront::gpu::{GpuOptions, GpuOutput, GpuPath};
+use slipfront::app::runner::{run_scene, ProgressMode, RunOptions, StartFrom};
+use slipfront::engines::backend::{make_engine_with, Backend, Precision};
+use slipfront::engines::gpu::{GpuOptions, GpuOutput, GpuPath};
+use slipfront::engines::Engine;
+use slipfront::io::checkpoint::{branch, path_for, Checkpoint};
+use slipfront::io::output::fnv1a;
+use slipfront::model::scenario::Scenario;
 use slipfront::model::Model;
-use slipfront::output::fnv1a;
-use slipfront::runner::{run_scene, ProgressMode, RunOptions, StartFrom};
-use slipfront::scenario::Scenario;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
+/// `slipfront run`: its options, parsed by clap straight into this.
+#[derive(clap::Args)]
 pub struct RunArgs {
     pub scenario: Option<PathBuf>,
+    #[arg(long, value_enum, default_value = "auto")]
     pub backend: Backend,
+    /// GPU kernel: one-step (1 dispatch per step), one-step-lanes
+    /// (junction lanes in parallel), persistent (many steps per
+    /// dispatch, small lattices) or auto.
+    #[arg(long, value_enum, default_value = "auto")]
     pub gpu_path: GpuPath,
+    /// Where a GPU run's output samples are made: device (only the
+    /// channels due are read back) or host (a snapshot per sample).
+    #[arg(long, value_enum, default_value = "device")]
     pub gpu_output: GpuOutput,
+    #[arg(long, value_enum)]
     pub precision: Option<Precision>,
+    /// Override a scenario key: --set loading.drive.velocity=1e-3
+    #[arg(long = "set", value_name = "KEY=VALUE")]
     pub set: Vec<String>,
+    /// Simulated time after the normal-load phase (s); overrides time.end.
+    #[arg(long, value_parser = parse_t_end)]
     pub t_end: Option<f64>,
+    /// Quasi-static fast-forward through the stick phases: on or off
+    /// (overrides time.fast_forward).
+    #[arg(long, value_name = "on|off", value_parser = parse_on_off)]
     pub fast_forward: Option<bool>,
+    /// MCAP output file.
+    #[arg(short = 'o', long)]
     pub output: Option<PathBuf>,
+    /// CPU threads (0: all cores, 1: deterministic single thread).
+    #[arg(long, default_value_t = 0)]
     pub threads: usize,
+    /// Run even if dt is above the computed stability limit.
+    #[arg(long)]
     pub allow_unstable: bool,
+    /// Progress: a bar on a terminal, else a log line every 10 s (auto),
+    /// or bar, plain or none.
+    #[arg(long, value_enum, default_value = "auto")]
     pub progress: ProgressMode,
+    /// No progress report (--progress none).
+    #[arg(long)]
     pub quiet: bool,
-    /// Continue this run file from its checkpoint.
+    /// Continue RUN.mcap from its checkpoint (RUN.mcap.ckpt), in the
+    /// same file unless -o names another; --t-end extends a finished run.
+    #[arg(long, value_name = "RUN.mcap", conflicts_with = "from")]
     pub resume: Option<PathBuf>,
-    /// Branch from this checkpoint (or run file).
+    /// Start from a saved state (a checkpoint, or a run file with one
+    /// beside it): the scenario given (or the checkpoint's) with --set
+    /// changes the saved state allows.
+    #[arg(long, value_name = "CHECKPOINT")]
     pub from: Option<PathBuf>,
-    /// Replace an existing output file.
+    /// Replace the output file if it exists.
+    #[arg(long)]
     pub force: bool,
-    /// Skip the comparison of the engine's memory with the machine's.
+    /// Start even if the engine needs more memory than the machine has
+    /// available now.
+    #[arg(long)]
     pub no_memory_check: bool,
 }
 
@@ -107,9 +144,9 @@ impl RunArgs {
                 Precision::F32 => (4, 8),
                 Precision::F32Plain => (4, 4),
             };
-            slipfront::memory::check(
+            slipfront::engines::memory::check(
                 model.memory_bytes(real, coord) as u64,
-                slipfront::memory::available_bytes(),
+                slipfront::engines::memory::available_bytes(),
                 &format!("a {} × {} lattice in {precision:?}", model.nx, model.nz),
                 "pass --no-memory-check to try anyway",
             )
@@ -182,7 +219,7 @@ fn finish(
     // 128 + the signal (130 for Ctrl-C, 143 for SIGTERM), as shells report
     // it; the file is closed and a checkpoint written by now.
     Ok(if summary.interrupted {
-        ExitCode::from(128 + slipfront::runner::stopping_signal().unwrap_or(2) as u8)
+        ExitCode::from(128 + slipfront::app::runner::stopping_signal().unwrap_or(2) as u8)
     } else {
         ExitCode::SUCCESS
     })
@@ -194,7 +231,7 @@ fn is_checkpoint(path: &Path) -> bool {
     let mut magic = [0u8; 8];
     std::fs::File::open(path)
         .and_then(|mut f| f.read_exact(&mut magic))
-        .is_ok_and(|_| &magic == slipfront::checkpoint::format::MAGIC)
+        .is_ok_and(|_| &magic == slipfront::io::checkpoint::format::MAGIC)
 }
 
 /// The checkpoint named by `path`: a checkpoint file, or a run file with
@@ -403,4 +440,23 @@ fn branch_run(a: RunArgs) -> anyhow::Result<ExitCode> {
         parent_output,
     };
     finish(&a, engine.as_mut(), &child, history, Some(start))
+}
+
+fn parse_t_end(text: &str) -> Result<f64, String> {
+    match text.trim().parse::<f64>() {
+        // 0: the normal-load phase only (a loaded slider to branch from).
+        Ok(v) if v.is_finite() && v >= 0.0 => Ok(v),
+        _ => Err(format!(
+            "--t-end = {}: expected a time in seconds, finite, 0 or more",
+            text.chars().take(40).collect::<String>()
+        )),
+    }
+}
+
+fn parse_on_off(s: &str) -> Result<bool, String> {
+    match s {
+        "on" | "true" => Ok(true),
+        "off" | "false" => Ok(false),
+        _ => Err(format!("`{s}`: expected on or off")),
+    }
 }

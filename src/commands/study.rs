@@ -2,8 +2,8 @@
 
 use anyhow::Context;
 use rayon::prelude::*;
-use slipfront::backend::{Backend, Precision};
-use slipfront::studies::{coulomb_precursors, front_1d, single_block};
+use slipfront::app::studies::{coulomb_precursors, front_1d, junction_laws};
+use slipfront::engines::backend::{Backend, Precision};
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Instant;
@@ -138,8 +138,8 @@ fn coulomb_precursors_study(a: &StudyArgs) -> anyhow::Result<()> {
             crate::commands::run::run(crate::commands::run::RunArgs {
                 scenario: Some(scenario.to_path_buf()),
                 backend: a.backend,
-                gpu_path: slipfront::gpu::GpuPath::Auto,
-                gpu_output: slipfront::gpu::GpuOutput::Device,
+                gpu_path: slipfront::engines::gpu::GpuPath::Auto,
+                gpu_output: slipfront::engines::gpu::GpuOutput::Device,
                 precision: Some(a.precision),
                 set: loading.overrides(),
                 t_end,
@@ -147,7 +147,7 @@ fn coulomb_precursors_study(a: &StudyArgs) -> anyhow::Result<()> {
                 output: Some(output.clone()),
                 threads: 1,
                 allow_unstable: false,
-                progress: slipfront::runner::ProgressMode::None,
+                progress: slipfront::app::runner::ProgressMode::None,
                 quiet: true,
                 resume: None,
                 from: None,
@@ -190,16 +190,16 @@ fn coulomb_precursors_study(a: &StudyArgs) -> anyhow::Result<()> {
 }
 
 fn single_block_study(a: &StudyArgs) -> anyhow::Result<()> {
-    let scene = slipfront::single_block::SingleBlockScene::parse(
-        slipfront::single_block::SCENARIO,
+    let scene = slipfront::engines::single_block::SingleBlockScene::parse(
+        slipfront::engines::single_block::SCENARIO,
         "scenarios/thogersen2014_single_block.toml",
     )?;
     let started = Instant::now();
-    let laws = single_block::laws(&scene.law);
+    let laws = junction_laws::laws(&scene.law);
     let (per_decade, cycles) = if a.quick { (1, 10.0) } else { (4, 40.0) };
-    let points = single_block::friction_curves(
+    let points = junction_laws::friction_curves(
         &laws,
-        &single_block::speeds(per_decade),
+        &junction_laws::speeds(per_decade),
         scene.junctions as usize,
         cycles,
     );
@@ -210,16 +210,16 @@ fn single_block_study(a: &StudyArgs) -> anyhow::Result<()> {
             .map(|i| 10f64.powf(-3.0 + 0.5 * i as f64))
             .collect()
     };
-    let thresholds = single_block::threshold_vs_deceleration(&scene, &decelerations);
-    let pulled = single_block::PulledBlock::study(&scene.law);
-    let (events, trace) = single_block::slow_slip(
+    let thresholds = junction_laws::threshold_vs_deceleration(&scene, &decelerations);
+    let pulled = junction_laws::PulledBlock::study(&scene.law);
+    let (events, trace) = junction_laws::slow_slip(
         &scene.law,
         if a.quick { 100 } else { 400 },
         scene.seed,
         &pulled,
     );
     let search_duration = if a.quick { 0.05 } else { 0.25 };
-    let search = single_block::slow_slip_search(
+    let search = junction_laws::slow_slip_search(
         &scene.law,
         if a.quick { 100 } else { 400 },
         scene.seed,
@@ -230,11 +230,11 @@ fn single_block_study(a: &StudyArgs) -> anyhow::Result<()> {
         "slipfront study single-block{}",
         if a.quick { " --quick" } else { "" }
     );
-    let mut notes = single_block::report(&laws, &points, &thresholds, &scene, &how);
-    notes.push_str(&single_block::slow_slip_report(
+    let mut notes = junction_laws::report(&laws, &points, &thresholds, &scene, &how);
+    notes.push_str(&junction_laws::slow_slip_report(
         &scene.law, &pulled, &events,
     ));
-    notes.push_str(&single_block::slow_slip_search_report(
+    notes.push_str(&junction_laws::slow_slip_search_report(
         &search,
         search_duration,
     ));
@@ -250,7 +250,7 @@ fn single_block_study(a: &StudyArgs) -> anyhow::Result<()> {
     };
     write(
         "thogersen2014_friction_vs_speed.csv",
-        single_block::friction_csv(&laws, &points),
+        junction_laws::friction_csv(&laws, &points),
     )?;
     let mut t = String::from("deceleration_m_per_s2,static_threshold\n");
     for (d, m) in &thresholds {
@@ -258,8 +258,8 @@ fn single_block_study(a: &StudyArgs) -> anyhow::Result<()> {
     }
     write("thogersen2014_threshold_vs_deceleration.csv", t)?;
     write("thogersen2014_single_block.md", notes)?;
-    let mut figures = single_block::write_figures(&laws, &points, &thresholds, &a.out_dir)?;
-    figures.extend(single_block::write_slow_slip_figure(&trace, &a.out_dir)?);
+    let mut figures = junction_laws::write_figures(&laws, &points, &thresholds, &a.out_dir)?;
+    figures.extend(junction_laws::write_slow_slip_figure(&trace, &a.out_dir)?);
     eprintln!(
         "single-block: notes, 2 tables and {} figure(s) in {} in {wall:.0} s",
         figures.len(),
@@ -273,11 +273,11 @@ pub fn single_block_run(
     scenario: Option<&std::path::Path>,
     output: &std::path::Path,
 ) -> anyhow::Result<ExitCode> {
-    use slipfront::single_block::SingleBlockScene;
+    use slipfront::engines::single_block::SingleBlockScene;
     let scene = match scenario {
         Some(p) => SingleBlockScene::load(p)?,
         None => SingleBlockScene::parse(
-            slipfront::single_block::SCENARIO,
+            slipfront::engines::single_block::SCENARIO,
             "scenarios/thogersen2014_single_block.toml (built in)",
         )?,
     };

@@ -1,7 +1,7 @@
-use slipfront::backend::{Backend, Precision};
+use slipfront::app::sweeps::slurm::{script, SlurmOptions};
+use slipfront::app::sweeps::{collect, run_sweep, KeepMcap, Shard, Sweep, SweepOptions};
+use slipfront::engines::backend::{Backend, Precision};
 use slipfront::model::Model;
-use slipfront::sweep::slurm::{script, SlurmOptions};
-use slipfront::sweep::{collect, run_sweep, KeepMcap, Shard, Sweep, SweepOptions};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
@@ -100,7 +100,7 @@ pub fn sweep(a: SweepArgs) -> anyhow::Result<ExitCode> {
     let precision = a.precision.unwrap_or(a.backend.default_precision());
     let backend = match a.backend {
         Backend::Auto => {
-            let (backend, why) = slipfront::backend::resolve_auto(precision);
+            let (backend, why) = slipfront::engines::backend::resolve_auto(precision);
             if !a.quiet {
                 eprintln!("sweep: --backend auto: {why}");
             }
@@ -216,7 +216,7 @@ pub fn plot(
     color: Option<&str>,
     log_y: bool,
 ) -> anyhow::Result<ExitCode> {
-    use slipfront::sweep::table::split;
+    use slipfront::app::sweeps::table::split;
     let path = dir.join("summary.csv");
     let text = std::fs::read_to_string(&path).map_err(|e| {
         anyhow::anyhow!("`{}`: {e} (run or collect the sweep first)", path.display())
@@ -255,8 +255,8 @@ pub fn plot(
     }
     let file = dir.join(format!("plot_{}_vs_{}.png", y, x).replace(['/', ' '], "_"));
     let title = format!("{y} against {x}");
-    slipfront::plot::write(
-        &slipfront::plot::scatter::Scatter {
+    slipfront::analysis::plot::write(
+        &slipfront::analysis::plot::scatter::Scatter {
             points: &points,
             groups: &groups,
             group_label: color.unwrap_or(""),
@@ -267,7 +267,7 @@ pub fn plot(
             connect: false,
         },
         &file,
-        &slipfront::plot::FigureOptions::default(),
+        &slipfront::analysis::plot::FigureOptions::default(),
         &dir.display().to_string(),
     )?;
     println!("{}", file.display());

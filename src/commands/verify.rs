@@ -1,5 +1,5 @@
-use slipfront::backend::{make_engine, Backend, Precision};
-use slipfront::verify::run_all_reporting;
+use slipfront::app::verify::run_all_reporting;
+use slipfront::engines::backend::{make_engine, Backend, Precision};
 use std::process::ExitCode;
 
 pub fn verify(
@@ -10,7 +10,8 @@ pub fn verify(
     // The GPU defaults to mixed f32 (f64 where asked and the adapter has
     // it), the CPU to f64.
     let precision = precision.unwrap_or(backend.default_precision());
-    let probe = slipfront::Model::from_scenario(&slipfront::verify::bare_scene("probe"), true)?;
+    let probe =
+        slipfront::Model::from_scenario(&slipfront::app::verify::bare_scene("probe"), true)?;
     let engine = make_engine(&probe, backend, precision, 0)?.describe();
     eprintln!("verify: on {engine}");
     let factory = |m: &slipfront::Model| make_engine(m, backend, precision, 0);

@@ -1,0 +1,111 @@
+//! When a run writes its checkpoint, and what goes into it.
+
+use super::outputs::Outputs;
+use super::RunError;
+use crate::engines::quasistatic::FastForward;
+use crate::engines::Engine;
+use crate::io::checkpoint::{unix_now, Checkpoint, Header};
+use crate::io::output::fnv1a;
+use crate::model::scenario::Scenario;
+use std::path::PathBuf;
+use std::time::{Duration, Instant};
+
+pub(super) struct Checkpointer {
+    pub path: PathBuf,
+    /// The run file the checkpoints go beside.
+    pub output_path: PathBuf,
+    /// Wall time between periodic checkpoints (None: only at the start of
+    /// driving, at the end, and on a signal).
+    interval: Option<Duration>,
+    last: Instant,
+    scenario: String,
+    /// The run file (absolute), named in the checkpoint.
+    output: PathBuf,
+    history: Vec<String>,
+    pub written: u64,
+}
+
+impl Checkpointer {
+    pub fn new(output: PathBuf, scenario: &Scenario, history: Vec<String>) -> Self {
+        let every = scenario.output.checkpoint_interval;
+        Checkpointer {
+            path: crate::io::checkpoint::path_for(&output),
+            interval: (every > 0.0).then(|| Duration::from_secs_f64(every)),
+            last: Instant::now(),
+            scenario: scenario.to_toml(),
+            output: std::path::absolute(&output).unwrap_or(output.clone()),
+            output_path: output,
+            history,
+            written: 0,
+        }
+    }
+
+    /// A periodic checkpoint is due.
+    pub fn due(&self) -> bool {
+        self.interval.is_some_and(|i| self.last.elapsed() >= i)
+    }
+
+    /// Writes the run's checkpoint.
+    pub fn write(
+        &mut self,
+        engine: &mut dyn Engine,
+        outputs: &mut Outputs,
+        ff: Option<&FastForward>,
+    ) -> Result<(), RunError> {
+        let path = self.path.clone();
+        self.write_to(&path, engine, outputs, ff)?;
+        self.last = Instant::now();
+        self.written += 1;
+        Ok(())
+    }
+
+    /// Syncs the run file (the checkpoint counts on its messages), then
+    /// writes the engine's and the runner's state to `path`.
+    pub fn write_to(
+        &mut self,
+        path: &std::path::Path,
+        engine: &mut dyn Engine,
+        outputs: &mut Outputs,
+        ff: Option<&FastForward>,
+    ) -> Result<(), RunError> {
+        if let Some(sink) = outputs.sink.as_mut() {
+            sink.sync()?;
+        }
+        let model = engine.model().clone();
+        let engine_state = engine.save_state()?;
+        let mut runner = outputs.save();
+        runner.fast_forward = ff.map(FastForward::state);
+        let solver_factor_shape = runner
+            .fast_forward
+            .as_ref()
+            .and_then(|f| f.factor.as_ref())
+            .map(|f| {
+                let (n, band, _) = f.parts();
+                (n, band)
+            });
+        let header = Header {
+            slipfront_version: env!("CARGO_PKG_VERSION").into(),
+            created_unix: unix_now(),
+            scenario: self.scenario.clone(),
+            scenario_hash: format!("{:016x}", fnv1a(self.scenario.as_bytes())),
+            backend: engine.describe(),
+            precision: engine_state.precision.clone(),
+            step: engine_state.step,
+            time: model.time_of_step(engine_state.step),
+            total_steps: model.total_steps(),
+            blocks: model.n_blocks(),
+            nx: model.nx,
+            junctions: model.n_junctions(),
+            output: Some(self.output.clone()),
+            runner,
+            solver_factor_shape,
+            history: self.history.clone(),
+        };
+        Checkpoint {
+            header,
+            engine: engine_state,
+        }
+        .write(path)
+        .map_err(|e| RunError::Checkpoint(e.to_string()))
+    }
+}

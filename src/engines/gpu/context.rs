@@ -1,0 +1,272 @@
+//! Adapter selection: a hardware GPU, else a software one (lavapipe).
+
+use super::bindings::entry;
+use super::precision::GpuReal;
+use super::record_pipelines::RecordPipelines;
+use super::shaders::Kernel;
+use crate::engines::EngineError;
+use std::collections::HashMap;
+use std::sync::{Arc, Mutex, OnceLock};
+
+/// The device engines run on, what it is, and what is built once on it:
+/// the bind group layouts and the compiled pipelines of each variant. One
+/// per process, shared by every engine (software drivers JIT-compile each
+/// pipeline and do not give that memory back).
+#[derive(Clone)]
+pub struct GpuContext {
+    pub device: wgpu::Device,
+    pub queue: wgpu::Queue,
+    pub info: wgpu::AdapterInfo,
+    pub limits: wgpu::Limits,
+    /// The first uncaptured device error, if any (checked after submits).
+    pub error: Arc<Mutex<Option<String>>>,
+    /// Group 0 of each kernel, for one scene and for an ensemble (their
+    /// state bindings and their constants' binding differ).
+    layouts: Arc<[KernelLayout; 4]>,
+    /// Group 1: the step offset (dynamic) and the batch (or the batches).
+    pub batch_layout: wgpu::BindGroupLayout,
+    pipelines: Arc<Mutex<HashMap<String, wgpu::ComputePipeline>>>,
+    /// The output kernels, compiled on first use.
+    record: Arc<OnceLock<Arc<RecordPipelines>>>,
+}
+
+static SHARED: OnceLock<Result<GpuContext, String>> = OnceLock::new();
+
+/// The process-wide context, opened on first use.
+pub fn shared() -> Result<GpuContext, EngineError> {
+    SHARED
+        .get_or_init(|| {
+            // Keep the bare message: `EngineError::Gpu` adds its own prefix.
+            GpuContext::open().map_err(|e| match e {
+                EngineError::Gpu(why) => why,
+                other => other.to_string(),
+            })
+        })
+        .clone()
+        .map_err(EngineError::Gpu)
+}
+
+/// Storage bindings the persistent kernel uses (the most of them: its
+/// record buffers); an ensemble's constants take one more.
+const STORAGE_BINDINGS: u32 = 16;
+pub const ENSEMBLE_STORAGE_BINDINGS: u32 = STORAGE_BINDINGS + 1;
+
+/// Group 0's layout of one kernel family and the pipeline layout using it.
+struct KernelLayout {
+    group: wgpu::BindGroupLayout,
+    pipeline: wgpu::PipelineLayout,
+}
+
+/// Index in `GpuContext::layouts`.
+fn layout_index(kernel: Kernel, ensemble: bool) -> usize {
+    let persistent = kernel == Kernel::Persistent;
+    persistent as usize + 2 * ensemble as usize
+}
+
+/// Lists the adapters with Vulkan/Metal/DX12 support, hardware first.
+pub fn adapters() -> Vec<wgpu::Adapter> {
+    // Without GL: its adapters are never used here, and starting EGL makes
+    // Mesa warn about XDG_RUNTIME_DIR on every headless run.
+    let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
+    desc.backends = wgpu::Backends::PRIMARY;
+    let instance = wgpu::Instance::new(desc.with_env());
+    let mut list = pollster::block_on(instance.enumerate_adapters(wgpu::Backends::PRIMARY));
+    list.retain(|a| a.get_info().backend != wgpu::Backend::Gl);
+    let rank = |a: &wgpu::Adapter| match a.get_info().device_type {
+        wgpu::DeviceType::DiscreteGpu => 0,
+        wgpu::DeviceType::IntegratedGpu => 1,
+        wgpu::DeviceType::VirtualGpu => 2,
+        wgpu::DeviceType::Other => 3,
+        wgpu::DeviceType::Cpu => 4,
+    };
+    list.sort_by_key(rank);
+    list
+}
+
+impl GpuContext {
+    /// Opens the best adapter, with its full limits.
+    pub fn open() -> Result<GpuContext, EngineError> {
+        let adapter = adapters().into_iter().next().ok_or_else(|| {
+            EngineError::Gpu(
+                "no GPU adapter found (not even a software one): install Mesa's Vulkan \
+                 driver (apt-get install mesa-vulkan-drivers) or use --backend cpu"
+                    .into(),
+            )
+        })?;
+        let info = adapter.get_info();
+        let limits = adapter.limits();
+        if limits.max_storage_buffers_per_shader_stage < STORAGE_BINDINGS {
+            return Err(EngineError::Gpu(format!(
+                "{} allows {} storage buffers per shader stage; slipfront needs {STORAGE_BINDINGS}",
+                info.name, limits.max_storage_buffers_per_shader_stage
+            )));
+        }
+        // f64 kernels where the adapter has them (`--precision f64`); the
+        // mixed kernels need no feature.
+        let features = adapter.features() & wgpu::Features::SHADER_F64;
+        let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+            label: Some("slipfront"),
+            required_features: features,
+            required_limits: limits.clone(),
+            ..Default::default()
+        }))
+        .map_err(|e| EngineError::Gpu(format!("cannot open {}: {e}", info.name)))?;
+        let error = Arc::new(Mutex::new(None));
+        let sink = error.clone();
+        device.on_uncaptured_error(Arc::new(move |e: wgpu::Error| {
+            let mut slot = sink.lock().expect("error slot");
+            if slot.is_none() {
+                *slot = Some(e.to_string());
+            }
+        }));
+        let read = wgpu::BufferBindingType::Storage { read_only: true };
+        let write = wgpu::BufferBindingType::Storage { read_only: false };
+        let layout = |label: &str, entries: &[wgpu::BindGroupLayoutEntry]| {
+            device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                label: Some(label),
+                entries,
+            })
+        };
+        let batch_layout = layout("batch", &[entry(0, read, true), entry(1, read, false)]);
+        let kernel_layout = |kernel: Kernel, ensemble: bool| {
+            // Binding 0: the constants (a uniform block, or one record per
+            // scene); 5..=11 (shaders/common.wgsl): force, flags (read
+            // only), contact, junction spring and state, slide, status.
+            let consts = if ensemble {
+                read
+            } else {
+                wgpu::BufferBindingType::Uniform
+            };
+            let mut v = vec![entry(0, consts, false)];
+            v.extend((5..=11).map(|b| entry(b, if b == 6 { read } else { write }, false)));
+            let state: &[u32] = match kernel {
+                // 13–16: the record buffers (shaders/record_buffers.wgsl)
+                // and the batch's samples.
+                Kernel::Persistent => &[1, 2, 12, 13, 14, 15],
+                Kernel::OneStep | Kernel::OneStepLanes => &[1, 2, 3, 4],
+            };
+            v.extend(state.iter().map(|&b| entry(b, write, false)));
+            if kernel == Kernel::Persistent {
+                v.push(entry(16, read, false));
+            }
+            let group = layout(kernel.entry_point(), &v);
+            let pipeline = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some("slipfront"),
+                bind_group_layouts: &[Some(&group), Some(&batch_layout)],
+                immediate_size: 0,
+            });
+            KernelLayout { group, pipeline }
+        };
+        let layouts = Arc::new([
+            kernel_layout(Kernel::OneStep, false),
+            kernel_layout(Kernel::Persistent, false),
+            kernel_layout(Kernel::OneStep, true),
+            kernel_layout(Kernel::Persistent, true),
+        ]);
+        Ok(GpuContext {
+            device,
+            queue,
+            info,
+            limits,
+            error,
+            layouts,
+            batch_layout,
+            pipelines: Arc::new(Mutex::new(HashMap::new())),
+            record: Arc::new(OnceLock::new()),
+        })
+    }
+
+    /// Group 0's layout of `kernel` (for an ensemble or one scene).
+    pub fn state_layout(&self, kernel: Kernel, ensemble: bool) -> &wgpu::BindGroupLayout {
+        &self.layouts[layout_index(kernel, ensemble)].group
+    }
+
+    /// The pipeline of `kernel` in precision `T` with `constants`, compiled
+    /// once per process.
+    pub fn pipeline<T: GpuReal>(
+        &self,
+        kernel: Kernel,
+        ensemble: bool,
+        constants: &[(&str, f64)],
+    ) -> wgpu::ComputePipeline {
+        let layout = &self.layouts[layout_index(kernel, ensemble)].pipeline;
+        let key = format!("{}{}{ensemble}{constants:?}", T::NAME, kernel.entry_point());
+        let mut cache = self.pipelines.lock().expect("pipeline cache");
+        cache
+            .entry(key)
+            .or_insert_with(|| {
+                let module = self
+                    .device
+                    .create_shader_module(wgpu::ShaderModuleDescriptor {
+                        label: Some(kernel.entry_point()),
+                        source: wgpu::ShaderSource::Wgsl(kernel.source::<T>(ensemble).into()),
+                    });
+                self.device
+                    .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                        label: Some(kernel.entry_point()),
+                        layout: Some(layout),
+                        module: &module,
+                        entry_point: Some(kernel.entry_point()),
+                        compilation_options: wgpu::PipelineCompilationOptions {
+                            constants,
+                            ..Default::default()
+                        },
+                        cache: None,
+                    })
+            })
+            .clone()
+    }
+
+    /// The output kernels' pipelines (`shaders/record.wgsl`).
+    pub fn record_pipelines(&self) -> Arc<RecordPipelines> {
+        self.record
+            .get_or_init(|| {
+                // lavapipe runs a workgroup on one core and a barrier as a
+                // switch of every invocation: 8 threads (one SIMD row)
+                // record a Table S1 sample faster there than 256
+                // (benches/gpu_output.rs, BENCHMARKS.md).
+                let threads = if self.is_software() { 8 } else { 256 };
+                Arc::new(RecordPipelines::new(&self.device, threads))
+            })
+            .clone()
+    }
+
+    /// Adapter name, type and driver.
+    pub fn describe(&self) -> String {
+        format!(
+            "{} ({:?}, {:?}, driver {} {})",
+            self.info.name,
+            self.info.device_type,
+            self.info.backend,
+            self.info.driver,
+            self.info.driver_info
+        )
+    }
+
+    /// Fails unless the device can run kernels in precision `T` (f64
+    /// needs SHADER_F64), naming the adapter and the alternatives.
+    pub fn check_precision<T: GpuReal>(&self) -> Result<(), EngineError> {
+        if self.device.features().contains(T::FEATURES) {
+            return Ok(());
+        }
+        Err(EngineError::Gpu(format!(
+            "--precision {}: {} has no {:?} shader support: use --precision f32 (mixed, \
+             every adapter) or --backend cpu",
+            T::NAME,
+            self.info.name,
+            T::FEATURES
+        )))
+    }
+
+    pub fn is_software(&self) -> bool {
+        self.info.device_type == wgpu::DeviceType::Cpu
+    }
+
+    /// Fails with the first device error seen, if any.
+    pub fn check(&self) -> Result<(), EngineError> {
+        match self.error.lock().expect("error slot").take() {
+            Some(e) => Err(EngineError::Gpu(format!("device error: {e}"))),
+            None => Ok(()),
+        }
+    }
+}

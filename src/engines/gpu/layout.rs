@@ -1,0 +1,645 @@
+//! The structs the host shares with the WGSL kernels, declared once here:
+//! `gpu_struct!` defines the Rust struct and writes its WGSL declaration,
+//! and `wgsl_prelude` adds the constants both sides use (flags, PINNED,
+//! lanes, stencil). The shaders get these declarations prepended, so a
+//! field added here exists on both sides; a naga test checks the offsets.
+//! Most structs are generic in the kernels' precision `T` (f32 mixed or
+//! f64, `precision::GpuReal`): one definition gives both layouts, with
+//! the u32 fields first so that neither has padding.
+
+use super::precision::{Coord, GpuReal, Packed, WgslType};
+use crate::engines::step_params::Consts;
+use crate::model::lattice::{
+    FLAG_DRIVEN, FLAG_FIX_X, FLAG_FIX_Z, FLAG_INTERFACE, FLAG_PRESCRIBED_X, FLAG_TOP, STENCIL,
+};
+use crate::model::real::{Coordinate, Real};
+use bytemuck::{Pod, Zeroable};
+
+/// Threads per workgroup of the one-step kernel.
+pub const WORKGROUP: u32 = 64;
+
+/// A struct shared with WGSL: its fields, types and byte offsets.
+pub trait GpuStruct {
+    const NAME: &'static str;
+    /// (field, WGSL type, byte offset in the Rust struct).
+    fn fields() -> Vec<(&'static str, &'static str, usize)>;
+    /// The WGSL declaration.
+    fn wgsl() -> String {
+        let body: String = Self::fields()
+            .iter()
+            .map(|(name, ty, _)| format!("    {name}: {ty},\n"))
+            .collect();
+        format!("struct {} {{\n{body}}}\n", Self::NAME)
+    }
+}
+
+macro_rules! gpu_struct {
+    // Generic in the precision: fields of type T, Coord<T>, Packed<T>.
+    ($(#[$meta:meta])* pub struct $name:ident<T> as $wgsl:literal {
+        $($(#[$fmeta:meta])* pub $field:ident : $ty:ty),* $(,)?
+    }) => {
+        $(#[$meta])*
+        #[repr(C)]
+        #[derive(Debug, Clone, Copy)]
+        pub struct $name<T: GpuReal = f32> {
+            $($(#[$fmeta])* pub $field: $ty),*
+        }
+
+        // SAFETY: repr(C), every field is Pod (u32, f32, f64, their pairs),
+        // and neither precision's layout has padding (asserted below).
+        unsafe impl<T: GpuReal> Zeroable for $name<T> {}
+        unsafe impl<T: GpuReal> Pod for $name<T> {}
+        const _: () = {
+            type T = f32;
+            assert!(std::mem::size_of::<$name<T>>() == 0 $(+ std::mem::size_of::<$ty>())*);
+        };
+        const _: () = {
+            type T = f64;
+            assert!(std::mem::size_of::<$name<T>>() == 0 $(+ std::mem::size_of::<$ty>())*);
+        };
+
+        impl<T: GpuReal> GpuStruct for $name<T> {
+            const NAME: &'static str = $wgsl;
+            fn fields() -> Vec<(&'static str, &'static str, usize)> {
+                vec![$((
+                    stringify!($field),
+                    <$ty as WgslType>::WGSL,
+                    std::mem::offset_of!($name<T>, $field),
+                )),*]
+            }
+        }
+    };
+    ($(#[$meta:meta])* pub struct $name:ident as $wgsl:literal {
+        $($(#[$fmeta:meta])* pub $field:ident : $ty:ty),* $(,)?
+    }) => {
+        $(#[$meta])*
+        #[repr(C)]
+        #[derive(Debug, Clone, Copy, Pod, Zeroable)]
+        pub struct $name {
+            $($(#[$fmeta])* pub $field: $ty),*
+        }
+
+        impl GpuStruct for $name {
+            const NAME: &'static str = $wgsl;
+            fn fields() -> Vec<(&'static str, &'static str, usize)> {
+                vec![$((
+                    stringify!($field),
+                    <$ty as WgslType>::WGSL,
+                    std::mem::offset_of!($name, $field),
+                )),*]
+            }
+        }
+    };
+}
+
+gpu_struct! {
+    /// The run constants (uniform `c`).
+    pub struct GpuConsts<T> as "Consts" {
+        pub nx: u32,
+        pub nz: u32,
+        pub junction_count: u32,
+        pub seed: u32,
+        pub stiffness_normal_load: u32,
+        pub n_blocks: u32,
+        pub strip_blocks: u32,
+        /// 1.0, read at run time: guards the double-single sums against
+        /// reassociation (shaders/double_single.wgsl).
+        pub one: f32,
+        pub spacing: T,
+        pub k: T,
+        pub eta: T,
+        pub k_foundation: T,
+        pub mass: T,
+        pub inv_mass: T,
+        pub dt: T,
+        pub mu_s: T,
+        pub mu_d: T,
+        pub junction_stiffness_value: T,
+        pub slip_mean_steps: T,
+        pub slip_std_steps: T,
+        pub drive_stiffness: T,
+        pub speed_limit: T,
+        pub top_share_full: T,
+        pub top_share_edge: T,
+        pub normal_force: T,
+        pub normal_slope: T,
+        pub inv_ramp_steps: T,
+        pub top_prestress_force: T,
+        pub top_force_rate: T,
+        pub relax_eta: T,
+        pub absolute_eta: T,
+        pub interface_shear_force: T,
+        pub strip_shear_force: T,
+        pub drive_velocity: T,
+        /// V·dt = hi + lo, hi with 12 significant bits so that i·hi is
+        /// exact for the step offsets i < 4096 of a batch.
+        pub drive_step_hi: T,
+        pub drive_step_lo: T,
+    }
+}
+
+gpu_struct! {
+    /// What the kernels need to compute the loads of the steps of one
+    /// batch (`shaders/common.wgsl` `loads_at`): steps `first + i`,
+    /// i < `steps`. Batches never cross the end of the ramp or of the
+    /// normal-load phase, so the phase flags hold for the whole batch.
+    pub struct GpuBatch<T> as "Batch" {
+        /// The side spring's far end at the first step (a coordinate).
+        pub drive_target: Coord<T>,
+        /// Driving time of the first step (s).
+        pub drive_time: T,
+        /// Unused: keeps both precisions free of padding.
+        pub reserved_real: T,
+        /// Low 32 bits of the first step (used while ramping, < 2²⁴).
+        pub first_step: u32,
+        pub steps: u32,
+        pub preparing: u32,
+        pub ramping: u32,
+        pub relaxing: u32,
+        /// 1: the forces of the first step are already in `force` and
+        /// `contact` (a snapshot computed them): skip them.
+        pub forces_ready: u32,
+        /// 1: compute the forces of the first step only, no update.
+        pub forces_only: u32,
+        /// Steps per dispatch of the persistent kernel.
+        pub steps_per_dispatch: u32,
+        /// The state copy (0 or 1) the one-step kernel reads at the first step.
+        pub parity: u32,
+        /// Steps from the batch's anchor to its first step: `drive_time`
+        /// and the drive target are the anchor's (0 while preparing).
+        pub anchor_offset: u32,
+        /// Output samples the persistent kernel records in this batch.
+        pub records: u32,
+        /// Unused: keeps both precisions free of padding.
+        pub reserved: u32,
+    }
+}
+
+/// While driving, batches are anchored at every this many steps of
+/// driving and never cross an anchor: a step's drive time and target are
+/// then the same whatever batch it falls in, so where a run is cut into
+/// batches (output samples, snapshots, chunks sized by wall time) changes
+/// no bit. At most 4096: the kernels' `fi · hi` must stay exact.
+pub const DRIVE_ANCHOR_STEPS: u64 = 4096;
+
+/// The anchor of `step` (the step itself while preparing).
+pub fn drive_anchor<T: Real>(c: &Consts<T>, step: u64) -> u64 {
+    if step < c.prep_steps {
+        step
+    } else {
+        c.prep_steps + (step - c.prep_steps) / DRIVE_ANCHOR_STEPS * DRIVE_ANCHOR_STEPS
+    }
+}
+
+gpu_struct! {
+    /// A block's displacement, u_x and u_z: the bytes of the CPU twin's
+    /// `[Coord<T>; 2]` ((hi, lo) pairs in mixed precision).
+    pub struct GpuDisp<T> as "Disp" {
+        pub x: Coord<T>,
+        pub z: Coord<T>,
+    }
+}
+
+gpu_struct! {
+    /// A junction's spring (anchor, stiffness): the bytes of the CPU
+    /// twin's `JunctionSpring<Coord<T>, T>`.
+    pub struct GpuJunctionSpring<T> as "JunctionSpring" {
+        pub anchor: Packed<T>,
+        pub stiffness: T,
+    }
+}
+
+gpu_struct! {
+    /// The first blow-up of a batch, written by the kernel that saw it
+    /// (non-finite or faster than c_p): read back after every batch.
+    /// Its values are f32 in either precision (diagnostics).
+    pub struct GpuStatus as "Status" {
+        pub flag: u32,
+        /// Step offset in the batch of the update that blew up.
+        pub step: u32,
+        pub block: u32,
+        pub ux: f32,
+        pub uz: f32,
+        pub vx: f32,
+        pub vz: f32,
+        /// Steps the persistent kernel has run, all dispatches (mod 2³²).
+        pub persistent_steps: u32,
+    }
+}
+
+gpu_struct! {
+    /// What the output kernels (`shaders/record.wgsl`) need besides the
+    /// run constants: the fast cadence (its state is updated by the
+    /// device), the driver's blocks, and where each region of the record
+    /// buffers starts.
+    pub struct GpuRecordPlan<T> as "RecordPlan" {
+        pub fast_slip_speed: T,
+        /// 1: the fast interface cadence is on (set by each sample).
+        pub fast: u32,
+        pub every_fast: u32,
+        /// The block the side spring pulls (u32::MAX: none).
+        pub driven_block: u32,
+        /// 1: the top row's velocity is prescribed (its reaction is summed).
+        pub top_reaction: u32,
+        pub junctions_per_block: u32,
+        /// Workgroups of `record_sample`, and where their partial sums go
+        /// in the sums buffer.
+        pub partials: u32,
+        pub partials_offset: u32,
+        /// Word offsets of the interface rows and the bulk fields.
+        pub interface_offset: u32,
+        pub bulk_offset: u32,
+        /// Unused: keeps both precisions free of padding.
+        pub reserved: u32,
+    }
+}
+
+gpu_struct! {
+    /// One sample the host asks for in a batch: the state copy holding
+    /// u(s) and v(s−½), the channels (`RECORD_*` bits) and its slots.
+    pub struct GpuRecordEntry as "RecordEntry" {
+        /// The sample's step offset in its batch.
+        pub offset: u32,
+        pub copy: u32,
+        pub channels: u32,
+        pub sums_slot: u32,
+        pub interface_slot: u32,
+        pub bulk_slot: u32,
+    }
+}
+
+gpu_struct! {
+    /// A sample's sums as the device reduced them (in the kernels'
+    /// precision; the partial sums of the workgroups have the same layout).
+    pub struct GpuSampleSums<T> as "SampleSums" {
+        /// Σ |v|² over the blocks (the host multiplies by m/2).
+        pub kinetic: T,
+        pub friction: T,
+        /// Σ of the interface blocks' pinned fractions.
+        pub pinned: T,
+        pub min_pinned: T,
+        pub max_slip_speed: T,
+        pub top_reaction: T,
+        pub driven_ux_hi: T,
+        pub driven_ux_lo: T,
+        /// 1: the sample was due (0: a fast-cadence slot while it was off).
+        pub recorded: u32,
+        /// 1: its interface row was written.
+        pub interface_row: u32,
+        /// The fast cadence after this sample.
+        pub fast: u32,
+        pub ruptures_lo: u32,
+        pub ruptures_hi: u32,
+        /// Unused: keeps both precisions free of padding.
+        pub reserved: u32,
+    }
+}
+
+/// `GpuRecordEntry::channels` bits.
+pub const RECORD_GLOBAL: u32 = 1;
+pub const RECORD_INTERFACE: u32 = 2;
+pub const RECORD_BULK: u32 = 4;
+/// A multiple of the fast cadence: recorded if the fast cadence is on.
+pub const RECORD_FAST: u32 = 8;
+/// Words per interface block of a row: u_x (hi, lo), friction, normal
+/// force, pinned fraction, v_x.
+pub const RECORD_INTERFACE_WORDS: u32 = 6;
+/// Words per block of a bulk field: u_x, u_z, v_x, v_z.
+pub const RECORD_BULK_WORDS: u32 = 4;
+
+/// The shared constants and structs in precision `T`, prepended to every
+/// shader module: `real`, `coord`, `packed_coord` and `force_sum` name
+/// `T`'s types.
+pub fn wgsl_prelude<T: GpuReal>() -> String {
+    let stencil: Vec<String> = STENCIL
+        .iter()
+        .map(|b| format!("vec2<i32>({}, {})", b.dx, b.dz))
+        .collect();
+    let lengths: Vec<String> = STENCIL
+        .iter()
+        .map(|b| format!("{:?}", T::from_f64(b.length_factor)))
+        .collect();
+    let stiffness: Vec<String> = STENCIL
+        .iter()
+        .map(|b| format!("{:?}", T::from_f64(b.stiffness_factor)))
+        .collect();
+    let mut s =
+        String::from("// Generated from src/engines/gpu/layout.rs: do not edit in the shaders.\n");
+    s += &format!(
+        "alias real = {};\nalias coord = {};\nalias packed_coord = {};\n",
+        T::WGSL,
+        <Coord<T> as WgslType>::WGSL,
+        <Packed<T> as WgslType>::WGSL
+    );
+    // A block's force sum (`crate::model::real::ForceSum`): a (sum, error) pair in
+    // mixed precision, like the coordinate pair; a plain f64 in f64.
+    s += &format!("alias force_sum = {};\n", <Coord<T> as WgslType>::WGSL);
+    for (name, value) in [
+        ("PINNED", crate::model::junction::PINNED),
+        ("FLAG_FIX_X", FLAG_FIX_X),
+        ("FLAG_FIX_Z", FLAG_FIX_Z),
+        ("FLAG_TOP", FLAG_TOP),
+        ("FLAG_INTERFACE", FLAG_INTERFACE),
+        ("FLAG_DRIVEN", FLAG_DRIVEN),
+        ("FLAG_PRESCRIBED_X", FLAG_PRESCRIBED_X),
+        ("WORKGROUP", WORKGROUP),
+        ("REDUCTION_SLOTS", reduction_slots::<T>()),
+        ("RECORD_GLOBAL", RECORD_GLOBAL),
+        ("RECORD_INTERFACE", RECORD_INTERFACE),
+        ("RECORD_BULK", RECORD_BULK),
+        ("RECORD_FAST", RECORD_FAST),
+        (
+            "RECORD_FIXED",
+            RECORD_GLOBAL | RECORD_INTERFACE | RECORD_BULK,
+        ),
+        ("RECORD_INTERFACE_WORDS", RECORD_INTERFACE_WORDS),
+        ("RECORD_BULK_WORDS", RECORD_BULK_WORDS),
+        (
+            "JUNCTION_LANES",
+            crate::model::junction::JUNCTION_LANES as u32,
+        ),
+    ] {
+        s += &format!("const {name}: u32 = {value}u;\n");
+    }
+    s += &format!(
+        "const STENCIL = array<vec2<i32>, 8>({});\n",
+        stencil.join(", ")
+    );
+    s += &format!(
+        "const STENCIL_LENGTH = array<real, 8>({});\n",
+        lengths.join(", ")
+    );
+    s += &format!(
+        "const STENCIL_STIFFNESS = array<real, 8>({});\n",
+        stiffness.join(", ")
+    );
+    for decl in [
+        GpuConsts::<T>::wgsl(),
+        GpuBatch::<T>::wgsl(),
+        GpuDisp::<T>::wgsl(),
+        GpuJunctionSpring::<T>::wgsl(),
+        GpuStatus::wgsl(),
+        GpuRecordPlan::<T>::wgsl(),
+        GpuRecordEntry::wgsl(),
+        GpuSampleSums::<T>::wgsl(),
+    ] {
+        s += &decl;
+    }
+    s
+}
+
+/// Threads a sample's sums can be reduced across (`wg_sums` of
+/// shaders/record_common.wgsl): a power of two, at most 256, whose sums fit
+/// 16 KiB of workgroup memory (WebGPU's minimum limit; f64 sums are larger).
+pub fn reduction_slots<T: GpuReal>() -> u32 {
+    let fit = (16 * 1024 / std::mem::size_of::<GpuSampleSums<T>>()) as u32;
+    1 << fit.min(256).ilog2()
+}
+
+/// V·dt split as hi + lo with hi on 12 significant bits.
+fn split_drive_step<T: Real>(v_dt: f64) -> (T, T) {
+    if v_dt == 0.0 {
+        return (T::zero(), T::zero());
+    }
+    let scale = 2f64.powi(11 - v_dt.abs().log2().floor() as i32);
+    let hi = (v_dt * scale).round() / scale;
+    (T::from_f64(hi), T::from_f64(v_dt - hi))
+}
+
+impl<T: GpuReal> GpuConsts<T> {
+    pub fn new(c: &Consts<T>, speed_limit: T) -> Self {
+        let (drive_step_hi, drive_step_lo) = split_drive_step(c.drive_velocity_exact * c.dt_exact);
+        GpuConsts {
+            nx: c.nx as u32,
+            nz: c.nz as u32,
+            junction_count: c.junction_count as u32,
+            seed: c.seed,
+            spacing: c.spacing,
+            k: c.k,
+            eta: c.eta,
+            k_foundation: c.k_foundation,
+            mass: c.mass,
+            inv_mass: c.inv_mass,
+            dt: c.dt,
+            mu_s: c.mu_s,
+            mu_d: c.mu_d,
+            junction_stiffness_value: c.junction_stiffness_value,
+            slip_mean_steps: c.slip_mean_steps,
+            slip_std_steps: c.slip_std_steps,
+            drive_stiffness: c.drive_stiffness,
+            speed_limit,
+            // Column 1 is interior whenever a full share is used (nx > 2).
+            top_share_full: crate::model::laws::top_share(c.nx, c.nz, 1),
+            top_share_edge: crate::model::laws::top_share(c.nx, c.nz, 0),
+            stiffness_normal_load: c.junction_stiffness_normal_load as u32,
+            n_blocks: (c.nx * c.nz) as u32,
+            one: 1.0,
+            normal_force: c.normal_force,
+            normal_slope: c.normal_slope,
+            inv_ramp_steps: c.inv_ramp_steps,
+            top_prestress_force: c.top_prestress_force,
+            top_force_rate: c.top_force_rate,
+            relax_eta: c.relax_eta,
+            absolute_eta: c.absolute_eta,
+            interface_shear_force: c.interface_shear_force,
+            strip_shear_force: c.strip_shear_force,
+            strip_blocks: c.strip_blocks as u32,
+            drive_velocity: c.drive_velocity,
+            drive_step_hi,
+            drive_step_lo,
+        }
+    }
+}
+
+impl<T: GpuReal> GpuBatch<T> {
+    /// The batch of `steps` steps from global step `first`, with the
+    /// drive target origin + V·t formed in f64 and rounded to a coordinate.
+    pub fn new(c: &Consts<T>, first: u64, steps: u32, drive_origin: Coord<T>) -> Self {
+        let p = crate::engines::step_params::step_params(c, first);
+        let anchor = drive_anchor(c, first);
+        let at_anchor = crate::engines::step_params::step_params(c, anchor);
+        let target = Coord::<T>::from_f64(drive_origin.as_f64() + at_anchor.drive_offset);
+        GpuBatch {
+            drive_target: target,
+            reserved_real: T::zero(),
+            first_step: first as u32,
+            steps,
+            preparing: p.preparing as u32,
+            ramping: (first < c.ramp_steps) as u32,
+            relaxing: (p.preparing && first >= c.ramp_steps) as u32,
+            drive_time: if p.preparing {
+                T::zero()
+            } else {
+                T::from_f64((anchor - c.prep_steps) as f64 * c.dt_exact)
+            },
+            forces_ready: 0,
+            forces_only: 0,
+            steps_per_dispatch: steps,
+            parity: 0,
+            anchor_offset: (first - anchor) as u32,
+            records: 0,
+            reserved: 0,
+        }
+    }
+}
+
+impl<T: GpuReal> From<GpuJunctionSpring<T>>
+    for crate::model::junction::JunctionSpring<Coord<T>, T>
+{
+    fn from(s: GpuJunctionSpring<T>) -> Self {
+        crate::model::junction::JunctionSpring {
+            anchor: T::unpack(s.anchor),
+            stiffness: s.stiffness,
+        }
+    }
+}
+
+impl<T: GpuReal> From<crate::model::junction::JunctionSpring<Coord<T>, T>>
+    for GpuJunctionSpring<T>
+{
+    fn from(s: crate::model::junction::JunctionSpring<Coord<T>, T>) -> Self {
+        GpuJunctionSpring {
+            anchor: T::pack(s.anchor),
+            stiffness: s.stiffness,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::real::DoubleSingle;
+    use crate::model::scenario::{Scenario, DEFAULT_SCENARIO};
+
+    fn table_s1() -> crate::Model {
+        let s = Scenario::parse(DEFAULT_SCENARIO, "test", &[]).unwrap();
+        crate::Model::from_scenario(&s, false).unwrap()
+    }
+
+    /// The kernels add i·(V·dt) to the batch's first drive target as
+    /// i·hi + i·lo: after 1e8 and 2³² steps, and 4095 steps into a batch,
+    /// the target is still origin + V·t to f64 round-off (a plain f32
+    /// would be ~1e-10 m off, a whole creep step).
+    #[test]
+    fn drive_target_after_1e8_steps_stays_exact() {
+        let m = table_s1();
+        let c = Consts::<f32>::new(&m);
+        let gc = GpuConsts::new(&c, 1.0);
+        let origin = DoubleSingle::from_f64(1.234_567e-5);
+        for first in [m.prep_steps + 100_000_000, m.prep_steps + (1 << 32) + 7] {
+            let b = GpuBatch::new(&c, first, 4096, origin);
+            let last = (DRIVE_ANCHOR_STEPS - 1) as u32 - b.anchor_offset;
+            for i in [0u32, 1, last] {
+                // The kernel's arithmetic (shaders/common.wgsl loads_at).
+                let fi = (b.anchor_offset + i) as f32;
+                let target = b
+                    .drive_target
+                    .ds_add(fi * gc.drive_step_hi)
+                    .ds_add(fi * gc.drive_step_lo);
+                let t = m.time_of_step(first + i as u64);
+                let exact = origin.as_f64() + 4.0e-4 * t;
+                let got = target.as_f64();
+                assert!((got - exact).abs() <= exact * 1e-13, "{got} vs {exact}");
+                assert!(((exact as f32) as f64 - exact).abs() > 1e-12);
+            }
+        }
+        let (hi, lo) = split_drive_step::<f32>(4.0e-4 * m.dt);
+        assert_eq!((4095.0 * hi) as f64, 4095.0 * hi as f64);
+        assert!(((hi as f64 + lo as f64) / (4.0e-4 * m.dt) - 1.0).abs() < 1e-12);
+    }
+
+    /// Every shared struct has, in the WGSL the shaders see, the size and
+    /// the field offsets of its Rust twin (naga's layout): a field added,
+    /// reordered or misaligned on one side fails here, without a GPU.
+    #[test]
+    fn wgsl_structs_match_the_rust_layout() {
+        check_layouts::<f32>();
+        check_layouts::<f64>();
+        // Mixed precision reduces across 256 threads as before; f64 sums
+        // (88 bytes) fit 128 in 16 KiB.
+        assert_eq!(reduction_slots::<f32>(), 256);
+        assert_eq!(reduction_slots::<f64>(), 128);
+        assert_eq!(size_of::<GpuDisp<f32>>(), size_of::<[DoubleSingle; 2]>());
+        assert_eq!(size_of::<GpuDisp<f64>>(), size_of::<[f64; 2]>());
+        // Mixed precision keeps its 12-byte junction springs.
+        assert_eq!(size_of::<GpuJunctionSpring<f32>>(), 12);
+        assert_eq!(
+            size_of::<GpuJunctionSpring<f64>>(),
+            size_of::<crate::model::junction::JunctionSpring<f64, f64>>()
+        );
+    }
+
+    fn check_layouts<T: GpuReal>() {
+        let src = wgsl_prelude::<T>();
+        let module = naga::front::wgsl::parse_str(&src).expect("prelude parses");
+        let mut layouter = naga::proc::Layouter::default();
+        layouter
+            .update(module.to_ctx())
+            .expect("layout of the prelude");
+        let check = |name: &str, size: usize, fields: Vec<(&str, &str, usize)>| {
+            let (handle, ty) = module
+                .types
+                .iter()
+                .find(|(_, t)| t.name.as_deref() == Some(name))
+                .unwrap_or_else(|| panic!("struct {name} missing in WGSL"));
+            let naga::TypeInner::Struct { members, span } = &ty.inner else {
+                panic!("{name} is not a struct");
+            };
+            assert_eq!(*span as usize, size, "{name}: WGSL size vs Rust size");
+            assert_eq!(layouter[handle].size as usize, size);
+            assert_eq!(members.len(), fields.len(), "{name}: field count");
+            for (m, (field, _, offset)) in members.iter().zip(fields) {
+                assert_eq!(m.name.as_deref(), Some(field), "{name}: field order");
+                assert_eq!(m.offset as usize, offset, "{name}.{field}: offset");
+            }
+        };
+        check(
+            "Consts",
+            size_of::<GpuConsts<T>>(),
+            GpuConsts::<T>::fields(),
+        );
+        check("Batch", size_of::<GpuBatch<T>>(), GpuBatch::<T>::fields());
+        check("Disp", size_of::<GpuDisp<T>>(), GpuDisp::<T>::fields());
+        check(
+            "JunctionSpring",
+            size_of::<GpuJunctionSpring<T>>(),
+            GpuJunctionSpring::<T>::fields(),
+        );
+        check("Status", size_of::<GpuStatus>(), GpuStatus::fields());
+        check(
+            "RecordPlan",
+            size_of::<GpuRecordPlan<T>>(),
+            GpuRecordPlan::<T>::fields(),
+        );
+        check(
+            "RecordEntry",
+            size_of::<GpuRecordEntry>(),
+            GpuRecordEntry::fields(),
+        );
+        check(
+            "SampleSums",
+            size_of::<GpuSampleSums<T>>(),
+            GpuSampleSums::<T>::fields(),
+        );
+        // The uniform block is a whole number of 16-byte rows.
+        assert_eq!(size_of::<GpuConsts<T>>() % 16, 0);
+    }
+
+    /// The negative control of the layout test: a Rust struct whose
+    /// vec2 field sits at a 4-byte offset (WGSL aligns it to 8) is caught.
+    #[test]
+    fn layout_check_flags_a_misaligned_vec2() {
+        gpu_struct! {
+            pub struct Misaligned as "Misaligned" {
+                pub a: f32,
+                pub b: DoubleSingle,
+            }
+        }
+        let module = naga::front::wgsl::parse_str(&Misaligned::wgsl()).unwrap();
+        let (_, ty) = module.types.iter().find(|(_, t)| t.name.is_some()).unwrap();
+        let naga::TypeInner::Struct { members, .. } = &ty.inner else {
+            panic!()
+        };
+        assert_ne!(members[1].offset as usize, Misaligned::fields()[1].2);
+    }
+}

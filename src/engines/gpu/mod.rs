@@ -1,0 +1,979 @@
+//! The GPU engine: state in storage buffers, and one of two kernels:
+//!
+//! - `one_step` (any lattice): one dispatch per step, forces, friction and
+//!   the leapfrog update fused, reading the state of step n from one buffer
+//!   pair and writing step n+1 to the other;
+//! - `persistent_steps` (small lattices): one workgroup loops over up to
+//!   4096 steps inside one dispatch, with barriers between the phases.
+//!
+//! Steps go in batches (one submit each) whose loads the kernels compute
+//! from the batch's first step. After each batch the kernel's blow-up
+//! status is copied to a staging buffer and mapped asynchronously; at most
+//! `IN_FLIGHT` batches are queued, so a blow-up stops the run within a
+//! batch or two and `advance` returns only when its steps have run.
+//!
+//! The engine computes in mixed f32 (`GpuEngine`, every adapter) or in f64
+//! (`GpuEngine::<f64>`, adapters with SHADER_F64): the same kernels,
+//! generated in either precision (`precision`, `shaders`).
+//!
+//! The same engine steps an ensemble (`ensemble`): many scenes of one
+//! lattice shape in one dispatch, each with its own constants, batch and
+//! slice of every buffer (`scene_state`); `lockstep` hands its scenes to
+//! separate runners.
+
+mod bindings;
+pub mod context;
+pub mod ensemble;
+pub mod layout;
+pub mod lockstep;
+pub mod options;
+pub mod precision;
+mod readback;
+mod record_pipelines;
+mod recorder;
+mod scene_state;
+pub mod shaders;
+
+use crate::engines::step_params::Consts;
+use crate::engines::{blow_up, Engine, EngineError, EngineState, Sample, SamplePlan, Snapshot};
+use crate::model::lattice::{block_flags, initial_displacement};
+use crate::model::real::{precision_name, Coordinate};
+use crate::model::scenario::FrictionLaw;
+use crate::model::{Driver, Model};
+use bytemuck::Zeroable;
+use context::GpuContext;
+use layout::{GpuBatch, GpuConsts, GpuJunctionSpring, GpuStatus, WORKGROUP};
+use options::*;
+pub use options::{GpuOptions, GpuOutput, GpuPath, PERSISTENT_MAX_BLOCKS, PERSISTENT_THREADS};
+use precision::Coord;
+pub use precision::GpuReal;
+pub use record_pipelines::RECORD_SMALL_BLOCKS;
+
+use scene_state::gpu_junction_springs;
+use shaders::{Kernel, Variant};
+use std::collections::VecDeque;
+use std::sync::mpsc;
+use wgpu::util::DeviceExt;
+
+struct Buffers {
+    /// The run constants: a uniform block (one scene) or one record per scene.
+    consts: wgpu::Buffer,
+    /// Two copies of u and v: the one-step kernel reads one, writes the other.
+    disp: [wgpu::Buffer; 2],
+    vel: [wgpu::Buffer; 2],
+    force: wgpu::Buffer,
+    /// One lattice: shared by the scenes of an ensemble.
+    flags: wgpu::Buffer,
+    contact: wgpu::Buffer,
+    junction_spring: wgpu::Buffer,
+    junction_state: wgpu::Buffer,
+    slide: wgpu::Buffer,
+    status: wgpu::Buffer,
+    lane_partial: wgpu::Buffer,
+    /// What the persistent kernel binds for the record buffers until it
+    /// records output samples (never read then).
+    record_placeholders: [wgpu::Buffer; 4],
+}
+
+/// Group 0 of `kernel`: the state buffers, and for the persistent kernel the
+/// record buffers (plan, sums, rows, entries) at 13–16.
+fn state_group(
+    ctx: &GpuContext,
+    kernel: Kernel,
+    ensemble: bool,
+    b: &Buffers,
+    records: [&wgpu::Buffer; 4],
+) -> wgpu::BindGroup {
+    let mut entries = vec![
+        whole(0, &b.consts),
+        whole(5, &b.force),
+        whole(6, &b.flags),
+        whole(7, &b.contact),
+        whole(8, &b.junction_spring),
+        whole(9, &b.junction_state),
+        whole(10, &b.slide),
+        whole(11, &b.status),
+        whole(1, &b.disp[0]),
+        whole(2, &b.vel[0]),
+    ];
+    match kernel {
+        Kernel::OneStep | Kernel::OneStepLanes => {
+            entries.extend([whole(3, &b.disp[1]), whole(4, &b.vel[1])])
+        }
+        Kernel::Persistent => {
+            entries.push(whole(12, &b.lane_partial));
+            entries.extend((13..).zip(records).map(|(k, buffer)| whole(k, buffer)));
+        }
+    }
+    ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some(kernel.entry_point()),
+        layout: ctx.state_layout(kernel, ensemble),
+        entries: &entries,
+    })
+}
+
+/// Elements of one scene in each buffer; scene s's slice starts at s times
+/// these (scene-major, `shaders/scene_ensemble.wgsl`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Shape {
+    blocks: usize,
+    nx: usize,
+    junctions: usize,
+    lanes: usize,
+}
+
+impl Shape {
+    fn of(model: &Model) -> Shape {
+        let lanes =
+            crate::model::junction::JUNCTION_LANES.min(model.junctions.map_or(0, |j| j.count));
+        Shape {
+            blocks: model.n_blocks(),
+            nx: model.nx,
+            junctions: model.n_junctions(),
+            lanes,
+        }
+    }
+}
+
+/// Bytes per element of the state buffers that do not depend on the
+/// precision (`GpuEngine::DISP_BYTES` and others do).
+const WORD_PAIR_BYTES: usize = std::mem::size_of::<[u32; 2]>();
+const STATUS_BYTES: usize = std::mem::size_of::<GpuStatus>();
+/// What the persistent kernel's unused record bindings hold at least (the
+/// plan, an entry, a word of rows); the sums need `GpuEngine::SUMS_BYTES`.
+const PLACEHOLDER_BYTES: usize = 64;
+
+/// One scene: its model, constants and where it stands.
+struct Scene<T: GpuReal> {
+    model: Model,
+    consts: Consts<T>,
+    drive_origin: Coord<T>,
+    /// `force` and `contact` hold the forces of the current state.
+    forces_ready: bool,
+    /// The blow-up that stopped this scene (an ensemble's others go on).
+    failure: Option<EngineError>,
+}
+
+/// A submitted batch whose status copy is being mapped.
+struct InFlight {
+    staging: wgpu::Buffer,
+    submission: wgpu::SubmissionIndex,
+    mapped: mpsc::Receiver<Result<(), wgpu::BufferAsyncError>>,
+    first_step: u64,
+    /// The persistent kernel's step counter once this batch has run.
+    persistent_steps: u32,
+    /// The batch's output records, mapped with its status.
+    records: Option<(
+        recorder::Pending,
+        mpsc::Receiver<Result<(), wgpu::BufferAsyncError>>,
+    )>,
+}
+
+/// The GPU engine over one scene (`GpuEngine::new`), or over an ensemble of
+/// scenes of one lattice shape stepped together (`ensemble::GpuEnsemble`),
+/// computing in `T`: f32 (mixed, double-single coordinates) or f64.
+pub struct GpuEngine<T: GpuReal = f32> {
+    scenes: Vec<Scene<T>>,
+    /// Built from the ensemble kernels (per-scene constants in storage).
+    ensemble: bool,
+    shape: Shape,
+    ctx: GpuContext,
+    buffers: Buffers,
+    kernel: Kernel,
+    pipeline: wgpu::ComputePipeline,
+    /// Both state copies (one step) or copy 0 (persistent).
+    state_group: wgpu::BindGroup,
+    batch_group: wgpu::BindGroup,
+    batch_buffer: wgpu::Buffer,
+    offset_stride: u64,
+    /// Workgroups (x, y) of a one-step dispatch of one scene.
+    groups: (u32, u32),
+    persistent_threads: u32,
+    /// Steps per persistent dispatch (bounded on software adapters).
+    steps_per_dispatch: u64,
+    /// Steps the persistent kernel has been asked to run (mod 2³²).
+    persistent_steps: u32,
+    variant: Variant,
+    /// The copy of u and v that holds the current state.
+    current: usize,
+    /// Steps submitted (every scene is at this step).
+    step: u64,
+    in_flight: VecDeque<InFlight>,
+    spare_staging: Vec<wgpu::Buffer>,
+    /// Dispatches that stepped the lattice (forces-only passes included).
+    dispatches: u64,
+    /// Dispatches of the output kernels (one-step kernels' samples).
+    output_dispatches: u64,
+    /// Where output samples are made (the option).
+    output: GpuOutput,
+    /// Output samples recorded on the device (one-step kernels, one scene).
+    recorder: Option<recorder::Recorder>,
+    /// Samples read back and not yet taken.
+    samples: Vec<Sample>,
+}
+
+pub(crate) fn groups_for(workgroups: u32) -> (u32, u32) {
+    let groups = workgroups.max(1);
+    let x = groups.min(65_535);
+    (x, groups.div_ceil(x))
+}
+
+/// The mixed-precision engine (every adapter).
+impl GpuEngine {
+    /// Builds the engine on the best adapter (hardware, else lavapipe).
+    pub fn new(model: &Model) -> Result<GpuEngine, EngineError> {
+        GpuEngine::with_options(model, GpuOptions::default())
+    }
+
+    pub fn with_options(model: &Model, opts: GpuOptions) -> Result<GpuEngine, EngineError> {
+        GpuEngine::with_context(model, context::shared()?, opts)
+    }
+
+    pub fn with_context(
+        model: &Model,
+        ctx: GpuContext,
+        opts: GpuOptions,
+    ) -> Result<GpuEngine, EngineError> {
+        GpuEngine::build(std::slice::from_ref(model), ctx, opts, false)
+    }
+}
+
+impl<T: GpuReal> GpuEngine<T> {
+    const DISP_BYTES: usize = std::mem::size_of::<[Coord<T>; 2]>();
+    const REAL_PAIR_BYTES: usize = std::mem::size_of::<[T; 2]>();
+    const SPRING_BYTES: usize = std::mem::size_of::<GpuJunctionSpring<T>>();
+    const SUMS_BYTES: usize = std::mem::size_of::<layout::GpuSampleSums<T>>();
+
+    /// The engine in precision `T` (`GpuEngine::<f64>::with_precision`) on
+    /// the best adapter; f64 fails on an adapter without SHADER_F64.
+    pub fn with_precision(model: &Model, opts: GpuOptions) -> Result<GpuEngine<T>, EngineError> {
+        GpuEngine::with_precision_and_context(model, context::shared()?, opts)
+    }
+
+    pub fn with_precision_and_context(
+        model: &Model,
+        ctx: GpuContext,
+        opts: GpuOptions,
+    ) -> Result<GpuEngine<T>, EngineError> {
+        GpuEngine::build(std::slice::from_ref(model), ctx, opts, false)
+    }
+
+    /// The engine over `models`, which share one lattice shape and time
+    /// schedule (checked by the caller); `ensemble` selects the kernels
+    /// that address a scene's slice of each buffer.
+    fn build(
+        models: &[Model],
+        ctx: GpuContext,
+        opts: GpuOptions,
+        ensemble: bool,
+    ) -> Result<GpuEngine<T>, EngineError> {
+        ctx.check_precision::<T>()?;
+        let model = &models[0];
+        let scene_count = models.len();
+        let shape = Shape::of(model);
+        let (n, nj) = (shape.blocks, shape.junctions);
+        let limit = ctx.limits.max_storage_buffer_binding_size;
+        let max_buffer = ctx.limits.max_buffer_size;
+        let what = if ensemble {
+            format!(" of {scene_count} scenes")
+        } else {
+            String::new()
+        };
+        for (name, bytes) in [
+            (
+                "block displacement",
+                (scene_count * n * Self::DISP_BYTES) as u64,
+            ),
+            (
+                "junction spring",
+                (scene_count * nj * Self::SPRING_BYTES) as u64,
+            ),
+        ] {
+            if bytes > limit.min(max_buffer) {
+                return Err(EngineError::Gpu(format!(
+                    "the {name} buffer{what} needs {bytes} bytes but {} allows at most {} per \
+                     storage binding: use a smaller lattice{}",
+                    ctx.info.name,
+                    limit.min(max_buffer),
+                    if ensemble {
+                        ", fewer junctions or fewer scenes"
+                    } else {
+                        " or fewer junctions"
+                    }
+                )));
+            }
+        }
+        if ensemble
+            && ctx.limits.max_storage_buffers_per_shader_stage < context::ENSEMBLE_STORAGE_BINDINGS
+        {
+            return Err(EngineError::Gpu(format!(
+                "{} allows {} storage buffers per shader stage; an ensemble needs {}",
+                ctx.info.name,
+                ctx.limits.max_storage_buffers_per_shader_stage,
+                context::ENSEMBLE_STORAGE_BINDINGS
+            )));
+        }
+        let max_groups = ctx.limits.max_compute_workgroups_per_dimension as usize;
+        if scene_count > max_groups {
+            return Err(EngineError::Gpu(format!(
+                "{scene_count} scenes in one dispatch: {} allows at most {max_groups}",
+                ctx.info.name
+            )));
+        }
+        let kernel = choose_kernel(opts.path, n, ctx.is_software());
+        let persistent_threads = opts
+            .persistent_threads
+            .min(ctx.limits.max_compute_invocations_per_workgroup)
+            .min(ctx.limits.max_compute_workgroup_size_x)
+            .max(1);
+        let device = &ctx.device;
+        let storage = |label: &str, bytes: &[u8]| {
+            // Zero-sized bindings are invalid: pad empty arrays to one element.
+            let padded;
+            let contents = if bytes.is_empty() {
+                padded = vec![0u8; 48]; // a whole number of every element size
+                &padded[..]
+            } else {
+                bytes
+            };
+            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(label),
+                contents,
+                usage: wgpu::BufferUsages::STORAGE
+                    | wgpu::BufferUsages::COPY_SRC
+                    | wgpu::BufferUsages::COPY_DST,
+            })
+        };
+        let disp: Vec<[Coord<T>; 2]> = models
+            .iter()
+            .flat_map(initial_displacement)
+            .map(|u| u.map(Coord::<T>::from_f64))
+            .collect();
+        let zeros2 = |len: usize| vec![[T::zero(); 2]; len];
+        let s = scene_count;
+        let gpu_consts: Vec<GpuConsts<T>> = models
+            .iter()
+            .map(|m| {
+                let speed_limit = T::from_f64(m.pressure_wave_speed());
+                GpuConsts::new(&Consts::<T>::new(m), speed_limit)
+            })
+            .collect();
+        let consts_buffer = if ensemble {
+            storage("scene consts", bytemuck::cast_slice(&gpu_consts))
+        } else {
+            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("consts"),
+                contents: bytemuck::bytes_of(&gpu_consts[0]),
+                usage: wgpu::BufferUsages::UNIFORM,
+            })
+        };
+        let buffers = Buffers {
+            consts: consts_buffer,
+            disp: [
+                storage("disp 0", bytemuck::cast_slice(&disp)),
+                storage("disp 1", bytemuck::cast_slice(&disp)),
+            ],
+            vel: [
+                storage("vel 0", bytemuck::cast_slice(&zeros2(s * n))),
+                storage("vel 1", bytemuck::cast_slice(&zeros2(s * n))),
+            ],
+            force: storage("force", bytemuck::cast_slice(&zeros2(s * n))),
+            flags: storage("flags", bytemuck::cast_slice(&block_flags(model))),
+            contact: storage("contact", bytemuck::cast_slice(&zeros2(s * shape.nx))),
+            junction_spring: storage(
+                "junction_spring",
+                bytemuck::cast_slice(&vec![GpuJunctionSpring::<T>::zeroed(); s * nj]),
+            ),
+            junction_state: storage(
+                "junction_state",
+                bytemuck::cast_slice(&vec![[crate::model::junction::PINNED, 0u32]; s * nj]),
+            ),
+            slide: storage(
+                "slide",
+                bytemuck::cast_slice(&vec![[0i32; 2]; s * shape.nx]),
+            ),
+            status: storage(
+                "status",
+                bytemuck::cast_slice(&vec![GpuStatus::zeroed(); s]),
+            ),
+            lane_partial: storage(
+                "lane partial sums",
+                // One WGSL `force_sum` per lane: laid out as a coordinate
+                // ((sum, error) in mixed precision).
+                bytemuck::cast_slice(&vec![Coord::<T>::from_f64(0.0); s * shape.nx * shape.lanes]),
+            ),
+            // One element of the largest record struct in this precision.
+            record_placeholders: std::array::from_fn(|_| {
+                storage(
+                    "no records",
+                    &vec![0u8; PLACEHOLDER_BYTES.max(Self::SUMS_BYTES)],
+                )
+            }),
+        };
+        // The step offsets 0..ONE_STEP_BATCH, one per dynamic-offset stride.
+        let offset_stride = (ctx.limits.min_storage_buffer_offset_alignment as u64).max(4);
+        let mut table = vec![0u8; (offset_stride * ONE_STEP_BATCH) as usize];
+        for i in 0..ONE_STEP_BATCH {
+            let at = (i * offset_stride) as usize;
+            table[at..at + 4].copy_from_slice(&(i as u32).to_le_bytes());
+        }
+        let offsets = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("step offsets"),
+            contents: &table,
+            usage: wgpu::BufferUsages::STORAGE,
+        });
+        let batch_buffer = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("batch"),
+            size: (s * std::mem::size_of::<GpuBatch<T>>()) as u64,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let placeholders = buffers.record_placeholders.each_ref();
+        let state_group = state_group(&ctx, kernel, ensemble, &buffers, placeholders);
+        let batch_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("batch"),
+            layout: &ctx.batch_layout,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                        buffer: &offsets,
+                        offset: 0,
+                        size: wgpu::BufferSize::new(4),
+                    }),
+                },
+                whole(1, &batch_buffer),
+            ],
+        });
+        let variant = Variant::for_model(model);
+        let mut constants = variant.constants.clone();
+        if kernel == Kernel::Persistent {
+            constants.push(("PERSISTENT_THREADS", persistent_threads as f64));
+        }
+        let pipeline = ctx.pipeline::<T>(kernel, ensemble, &constants);
+        let junction_groups = match (kernel, model.law) {
+            (Kernel::OneStepLanes, FrictionLaw::Junctions | FrictionLaw::SingleJunction) => {
+                model.nx as u32
+            }
+            _ => 0,
+        };
+        let plain_blocks = n as u32 - junction_groups;
+        let groups = groups_for(junction_groups + plain_blocks.div_ceil(WORKGROUP));
+        let steps_per_dispatch = opts
+            .steps_per_dispatch
+            .unwrap_or_else(|| {
+                persistent_steps_per_dispatch(model, persistent_threads, ctx.is_software())
+            })
+            .clamp(1, PERSISTENT_BATCH);
+        ctx.check()?;
+        let scenes = models
+            .iter()
+            .map(|m| Scene {
+                model: m.clone(),
+                consts: Consts::<T>::new(m),
+                drive_origin: Coord::<T>::default(),
+                forces_ready: false,
+                failure: None,
+            })
+            .collect();
+        let mut engine = GpuEngine {
+            scenes,
+            ensemble,
+            shape,
+            ctx,
+            buffers,
+            kernel,
+            pipeline,
+            state_group,
+            batch_group,
+            batch_buffer,
+            offset_stride,
+            groups,
+            persistent_threads,
+            steps_per_dispatch,
+            persistent_steps: 0,
+            variant,
+            current: 0,
+            step: 0,
+            in_flight: VecDeque::new(),
+            spare_staging: Vec::new(),
+            dispatches: 0,
+            output_dispatches: 0,
+            output: opts.output,
+            recorder: None,
+            samples: Vec::new(),
+        };
+        if model.prep_steps == 0 {
+            engine.begin_driving()?;
+        }
+        Ok(engine)
+    }
+
+    /// The override constants this scene compiled with.
+    pub fn variant(&self) -> &Variant {
+        &self.variant
+    }
+
+    /// The kernel that steps this scene.
+    pub fn kernel(&self) -> Kernel {
+        self.kernel
+    }
+
+    pub fn adapter(&self) -> String {
+        self.ctx.describe()
+    }
+
+    /// Submits `steps` steps from the current one (or, with `forces_only`,
+    /// the forces of the current state where they are not ready), and the
+    /// copy of the status.
+    fn submit_batch(
+        &mut self,
+        steps: u64,
+        forces_only: bool,
+        planned: Vec<recorder::Planned>,
+    ) -> Result<(), EngineError> {
+        if self.in_flight.len() >= IN_FLIGHT {
+            self.retire_oldest()?;
+        }
+        let batches: Vec<GpuBatch<T>> = self
+            .scenes
+            .iter()
+            .map(|scene| {
+                let mut batch =
+                    GpuBatch::new(&scene.consts, self.step, steps as u32, scene.drive_origin);
+                batch.forces_ready = scene.forces_ready as u32;
+                batch.forces_only = forces_only as u32;
+                batch.steps_per_dispatch = self.steps_per_dispatch as u32;
+                batch.parity = self.current as u32;
+                if self.kernel == Kernel::Persistent {
+                    batch.records = planned.len() as u32;
+                }
+                batch
+            })
+            .collect();
+        self.ctx
+            .queue
+            .write_buffer(&self.batch_buffer, 0, bytemuck::cast_slice(&batches));
+        let mut encoder = self
+            .ctx
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("steps"),
+            });
+        let scene_count = self.scenes.len() as u32;
+        {
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("steps"),
+                timestamp_writes: None,
+            });
+            pass.set_pipeline(&self.pipeline);
+            pass.set_bind_group(0, &self.state_group, &[]);
+            match self.kernel {
+                Kernel::OneStep | Kernel::OneStepLanes => {
+                    let mut samples = planned.iter().enumerate().peekable();
+                    for i in 0..steps {
+                        let offset = (i * self.offset_stride) as u32;
+                        pass.set_bind_group(1, &self.batch_group, &[offset]);
+                        pass.dispatch_workgroups(self.groups.0, self.groups.1, scene_count);
+                        if !forces_only {
+                            self.current = 1 - self.current;
+                        }
+                        // The sample of step first + i, from the state this
+                        // dispatch read and the forces it computed.
+                        if let Some((k, _)) = samples.next_if(|(_, p)| p.offset == i) {
+                            let rec = self.recorder.as_ref().expect("samples need a recorder");
+                            self.output_dispatches += rec.encode(&mut pass, k);
+                            pass.set_pipeline(&self.pipeline);
+                            pass.set_bind_group(0, &self.state_group, &[]);
+                        }
+                    }
+                    self.dispatches += steps;
+                }
+                Kernel::Persistent => {
+                    for d in 0..steps.div_ceil(self.steps_per_dispatch) {
+                        let offset = (d * self.offset_stride) as u32;
+                        pass.set_bind_group(1, &self.batch_group, &[offset]);
+                        pass.dispatch_workgroups(1, 1, scene_count);
+                        self.dispatches += 1;
+                    }
+                    self.persistent_steps = self.persistent_steps.wrapping_add(steps as u32);
+                }
+            }
+        }
+        let status_size = (self.scenes.len() * STATUS_BYTES) as u64;
+        let staging = self.spare_staging.pop().unwrap_or_else(|| {
+            self.ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("status readback"),
+                size: status_size,
+                usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            })
+        });
+        encoder.copy_buffer_to_buffer(&self.buffers.status, 0, &staging, 0, status_size);
+        let pending = match self.recorder.as_mut() {
+            Some(rec) => rec.copy_out(&self.ctx.device, &mut encoder, planned),
+            None => None,
+        };
+        let submission = self.ctx.queue.submit([encoder.finish()]);
+        let map = |buffer: &wgpu::Buffer| {
+            let (tx, rx) = mpsc::channel();
+            buffer.slice(..).map_async(wgpu::MapMode::Read, move |r| {
+                let _ = tx.send(r);
+            });
+            rx
+        };
+        let rx = map(&staging);
+        let records = pending.map(|p| {
+            let rx = map(recorder::Recorder::staging(&p));
+            (p, rx)
+        });
+        self.in_flight.push_back(InFlight {
+            staging,
+            submission,
+            mapped: rx,
+            first_step: self.step,
+            persistent_steps: self.persistent_steps,
+            records,
+        });
+        for scene in &mut self.scenes {
+            scene.forces_ready = forces_only;
+        }
+        if !forces_only {
+            self.step += steps;
+        }
+        Ok(())
+    }
+
+    /// Waits for the oldest batch and records each scene's blow-up; one
+    /// scene's blow-up is this engine's error (an ensemble's scenes keep
+    /// theirs, `GpuEnsemble::failure`).
+    fn retire_oldest(&mut self) -> Result<(), EngineError> {
+        let Some(batch) = self.in_flight.pop_front() else {
+            return Ok(());
+        };
+        self.ctx
+            .device
+            .poll(wgpu::PollType::Wait {
+                submission_index: Some(batch.submission),
+                timeout: None,
+            })
+            // A submit the device refused (its validation error) shows as
+            // a wait on a submission that never was: report the refusal.
+            .map_err(|e| match self.ctx.check() {
+                Err(refused) => refused,
+                Ok(()) => EngineError::Gpu(format!("device lost: {e}")),
+            })?;
+        batch
+            .mapped
+            .recv()
+            .map_err(|e| EngineError::Gpu(format!("status readback: {e}")))?
+            .map_err(|e| EngineError::Gpu(format!("status readback: {e}")))?;
+        let statuses: Vec<GpuStatus> = {
+            let view = batch
+                .staging
+                .slice(..)
+                .get_mapped_range()
+                .map_err(|e| EngineError::Gpu(format!("status readback: {e}")))?;
+            bytemuck::cast_slice(&view).to_vec()
+        };
+        batch.staging.unmap();
+        self.spare_staging.push(batch.staging);
+        self.ctx.check()?;
+        if let Some((pending, mapped)) = batch.records {
+            mapped
+                .recv()
+                .map_err(|e| EngineError::Gpu(format!("record readback: {e}")))?
+                .map_err(|e| EngineError::Gpu(format!("record readback: {e}")))?;
+            // After a blow-up only the samples before it are kept.
+            let before = statuses
+                .first()
+                .filter(|s| s.flag != 0)
+                .map_or(u64::MAX, |s| batch.first_step + s.step as u64 + 1);
+            let rec = self.recorder.as_mut().expect("records need a recorder");
+            let samples = rec.decode(pending, before).map_err(EngineError::Gpu)?;
+            self.samples.extend(samples);
+        }
+        for (scene, status) in self.scenes.iter_mut().zip(&statuses) {
+            if scene.failure.is_some() {
+                continue;
+            }
+            if self.kernel == Kernel::Persistent
+                && status.flag == 0
+                && status.persistent_steps != batch.persistent_steps
+            {
+                return Err(EngineError::Gpu(format!(
+                    "{} cut a persistent dispatch short ({} steps run in all, {} asked for): \
+                     use --gpu-path one-step",
+                    self.ctx.info.name, status.persistent_steps, batch.persistent_steps
+                )));
+            }
+            if status.flag != 0 {
+                // The update of step first + s led to step first + s + 1.
+                let step = batch.first_step + status.step as u64 + 1;
+                let u = [status.ux as f64, status.uz as f64];
+                let v = [status.vx as f64, status.vz as f64];
+                scene.failure = Some(blow_up(&scene.model, step, status.block as usize, u, v));
+            }
+        }
+        if !self.ensemble {
+            if let Some(e) = self.scenes[0].failure.take() {
+                self.in_flight.clear();
+                if let EngineError::BlowUp { step, .. } = e {
+                    self.step = step;
+                }
+                return Err(e);
+            }
+        }
+        Ok(())
+    }
+
+    /// Waits for every submitted batch.
+    fn drain(&mut self) -> Result<(), EngineError> {
+        while !self.in_flight.is_empty() {
+            self.retire_oldest()?;
+        }
+        Ok(())
+    }
+
+    /// Once, when driving starts (before the forces of that step): fixes
+    /// each scene's driver origin and applies its trigger's initial
+    /// junction forces (host code shared with the CPU).
+    fn begin_driving(&mut self) -> Result<(), EngineError> {
+        for k in 0..self.scenes.len() {
+            let snap = self.read_state(k)?;
+            let scene = &mut self.scenes[k];
+            if let Driver::SideSpring { row, .. } = scene.model.driver {
+                scene.drive_origin = Coord::<T>::from_f64(snap.disp[row * scene.model.nx][0]);
+            }
+            if scene.model.sets_anchors_at_drive_start() {
+                let anchors = crate::engines::trigger::trigger_anchors(&scene.model, &snap);
+                let spring = gpu_junction_springs::<T>(&anchors, &snap.junction_stiffness);
+                let at = (k * self.shape.junctions * Self::SPRING_BYTES) as u64;
+                self.ctx.queue.write_buffer(
+                    &self.buffers.junction_spring,
+                    at,
+                    bytemuck::cast_slice(&spring),
+                );
+            }
+            // The forces of this step change with the driver: recompute them.
+            scene.forces_ready = false;
+        }
+        Ok(())
+    }
+
+    /// Advances every scene `n` steps, in batches that never cross the end
+    /// of the ramp or of the normal-load phase.
+    fn advance_steps(&mut self, n: u64) -> Result<(), EngineError> {
+        let (prep, ramp) = (
+            self.scenes[0].model.prep_steps,
+            self.scenes[0].model.ramp_steps,
+        );
+        let max_batch = match self.kernel {
+            Kernel::OneStep | Kernel::OneStepLanes => ONE_STEP_BATCH,
+            Kernel::Persistent => PERSISTENT_BATCH.min(self.steps_per_dispatch * ONE_STEP_BATCH),
+        };
+        let mut left = n;
+        while left > 0 {
+            // A batch's loads are of one kind throughout, and while driving
+            // it does not cross an anchor of the drive (layout::drive_anchor).
+            let mut k = left.min(max_batch);
+            if self.step >= prep {
+                let consts = &self.scenes[0].consts;
+                let next = layout::drive_anchor(consts, self.step) + layout::DRIVE_ANCHOR_STEPS;
+                k = k.min(next - self.step);
+            }
+            for boundary in [ramp, prep] {
+                if self.step < boundary {
+                    k = k.min(boundary - self.step);
+                }
+            }
+            let planned = match self.recorder.as_mut() {
+                Some(rec) => {
+                    let (planned, fits) = rec.plan_batch(self.step, k, self.current);
+                    k = fits;
+                    rec.write_entries(&self.ctx.queue, &planned);
+                    planned
+                }
+                None => Vec::new(),
+            };
+            self.submit_batch(k, false, planned)?;
+            left -= k;
+            if self.step == prep {
+                self.begin_driving()?;
+            }
+        }
+        // The sample of the step reached, if it is one: after the forces
+        // of that step (which the next step then reads).
+        if let Some(rec) = self.recorder.as_mut() {
+            let planned = rec.plan_now(self.step, self.current);
+            if !planned.is_empty() {
+                rec.write_entries(&self.ctx.queue, &planned);
+                self.submit_batch(1, true, planned)?;
+            }
+        }
+        self.drain()
+    }
+
+    /// Computes the forces of the current state of the scenes whose forces
+    /// are not ready (a snapshot describes one instant).
+    fn ready_forces(&mut self) -> Result<(), EngineError> {
+        self.drain()?;
+        if self.scenes.iter().any(|s| !s.forces_ready) {
+            self.submit_batch(1, true, Vec::new())?;
+            self.drain()?;
+        }
+        Ok(())
+    }
+
+    /// The host has the sample of `step` (or it is not one to take).
+    fn mark_sampled(&mut self, step: u64) {
+        if let Some(rec) = self.recorder.as_mut() {
+            rec.recorded_through = Some(step);
+        }
+    }
+
+    /// Whether output samples are recorded on the device.
+    pub fn records_on_device(&self) -> bool {
+        self.recorder.is_some()
+    }
+
+    fn kernel_description(&self) -> String {
+        match self.kernel {
+            Kernel::OneStep => "one-step kernel, 1 dispatch per step".to_string(),
+            Kernel::OneStepLanes => {
+                "one-step kernel with junction lanes, 1 dispatch per step".to_string()
+            }
+            Kernel::Persistent => format!(
+                "persistent kernel, 1 dispatch per {} steps, {} threads",
+                self.steps_per_dispatch, self.persistent_threads
+            ),
+        }
+    }
+}
+
+pub(crate) fn whole(binding: u32, buffer: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {
+    wgpu::BindGroupEntry {
+        binding,
+        resource: buffer.as_entire_binding(),
+    }
+}
+
+impl<T: GpuReal> Engine for GpuEngine<T> {
+    fn model(&self) -> &Model {
+        &self.scenes[0].model
+    }
+
+    fn steps_done(&self) -> u64 {
+        self.step
+    }
+
+    fn advance(&mut self, n: u64) -> Result<(), EngineError> {
+        self.advance_steps(n)
+    }
+
+    fn snapshot(&mut self) -> Result<Snapshot, EngineError> {
+        self.snapshot_of(0)
+    }
+
+    fn set_kinematics(
+        &mut self,
+        step: u64,
+        disp: &[[f64; 2]],
+        vel: &[[f64; 2]],
+    ) -> Result<(), EngineError> {
+        crate::engines::assert_driving_phase(&self.scenes[0].model, self.step, step);
+        self.set_kinematics_of(0, disp, vel)?;
+        self.step = step;
+        self.mark_sampled(step);
+        Ok(())
+    }
+
+    fn set_junctions(&mut self, snap: &Snapshot) -> Result<(), EngineError> {
+        self.set_junctions_of(0, snap)
+    }
+
+    fn save_state(&mut self) -> Result<EngineState, EngineError> {
+        self.save_state_of(0)
+    }
+
+    fn load_state(&mut self, state: &EngineState) -> Result<(), EngineError> {
+        self.load_state_of(0, state)?;
+        self.step = state.step;
+        self.mark_sampled(state.step);
+        Ok(())
+    }
+
+    fn describe(&self) -> String {
+        format!(
+            "gpu {}, {}, on {}",
+            precision_name::<T, Coord<T>>(),
+            self.kernel_description(),
+            self.ctx.describe()
+        )
+    }
+
+    fn dispatches(&self) -> Option<u64> {
+        Some(self.dispatches)
+    }
+
+    fn output_dispatches(&self) -> Option<u64> {
+        Some(self.output_dispatches)
+    }
+
+    fn record_samples(&mut self, plan: &SamplePlan) -> Result<bool, EngineError> {
+        let persistent = self.kernel == Kernel::Persistent;
+        // The persistent kernel reduces a sample across its workgroup: a
+        // power of two of at most REDUCTION_SLOTS threads
+        // (shaders/record_common.wgsl).
+        let reducible = self.persistent_threads.is_power_of_two()
+            && self.persistent_threads <= layout::reduction_slots::<T>();
+        if self.output == GpuOutput::Host
+            || self.ensemble
+            || (persistent && !reducible)
+            || !T::RECORDS_ON_DEVICE
+        {
+            return Ok(false);
+        }
+        // The batches in flight finish first (a blow-up among them is
+        // reported here, with its step, not at the next advance).
+        self.drain()?;
+        if let Some(rec) = self.recorder.as_mut() {
+            rec.set_plan(&self.ctx.queue, plan);
+            return Ok(true);
+        }
+        let b = &self.buffers;
+        let state = recorder::StateBuffers {
+            consts: &b.consts,
+            disp: &b.disp,
+            vel: &b.vel,
+            force: &b.force,
+            flags: &b.flags,
+            contact: &b.contact,
+            junction_state: &b.junction_state,
+            slide: &b.slide,
+        };
+        let model = &self.scenes[0].model;
+        let stride = (!persistent).then_some(self.offset_stride);
+        match recorder::Recorder::new(&self.ctx, model, state, plan, stride) {
+            Ok(mut rec) => {
+                // The host has taken the samples up to here (none before
+                // driving, and none at its first step).
+                rec.recorded_through = Some(self.step.max(model.prep_steps));
+                if persistent {
+                    let records = rec.persistent_bindings();
+                    self.state_group =
+                        state_group(&self.ctx, self.kernel, false, &self.buffers, records);
+                }
+                self.recorder = Some(rec);
+                Ok(true)
+            }
+            // Output kernels this adapter cannot build: host snapshots,
+            // the reference path, record the same samples.
+            Err(_) => Ok(false),
+        }
+    }
+
+    fn take_samples(&mut self) -> Vec<Sample> {
+        std::mem::take(&mut self.samples)
+    }
+}

@@ -1,0 +1,142 @@
+//! The choices of the GPU engine: which kernel steps a scene, with how many
+//! threads and steps per dispatch, and how many steps go in a batch.
+
+use super::shaders::Kernel;
+use crate::model::scenario::FrictionLaw;
+use crate::model::Model;
+
+/// Steps of one batch of the persistent kernel (one dispatch). The drive
+/// target arithmetic in the kernels needs it ≤ 4096.
+pub const PERSISTENT_BATCH: u64 = 4096;
+/// Dispatches of the one-step kernel per batch (one submit).
+pub const ONE_STEP_BATCH: u64 = 1024;
+/// Batches queued on the device at most.
+pub const IN_FLIGHT: usize = 2;
+/// Lattices up to this many blocks take the persistent kernel by default.
+pub const PERSISTENT_MAX_BLOCKS: usize = 8192;
+/// Threads of the persistent kernel's workgroup by default.
+pub const PERSISTENT_THREADS: u32 = 256;
+
+/// Which kernel steps the lattice.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum GpuPath {
+    /// Hardware: the persistent kernel up to `PERSISTENT_MAX_BLOCKS`
+    /// blocks, else one step per dispatch with parallel junction lanes.
+    /// Software adapters: one step per dispatch, one thread per block.
+    Auto,
+    /// One dispatch per step, one thread per block.
+    OneStep,
+    /// One dispatch per step, a workgroup per interface block's junctions.
+    OneStepLanes,
+    /// One workgroup, many steps per dispatch (any lattice: slow for large ones).
+    Persistent,
+}
+
+/// Where the output samples of a run with an output file are made.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, clap::ValueEnum)]
+pub enum GpuOutput {
+    /// On the device (`shaders/record.wgsl`): only the channels due are
+    /// read back, asynchronously with the batches (one-step kernels; the
+    /// persistent kernel and ensembles take host snapshots).
+    #[default]
+    Device,
+    /// A whole-state snapshot read back at every output step (the
+    /// reference the device records are tested against).
+    Host,
+}
+
+#[derive(Debug, Clone, Copy)]
+pub struct GpuOptions {
+    pub path: GpuPath,
+    pub output: GpuOutput,
+    pub persistent_threads: u32,
+    /// Steps per persistent dispatch instead of the adapter's safe default.
+    pub steps_per_dispatch: Option<u64>,
+}
+
+impl Default for GpuOptions {
+    fn default() -> Self {
+        GpuOptions {
+            path: GpuPath::Auto,
+            output: GpuOutput::Device,
+            persistent_threads: PERSISTENT_THREADS,
+            steps_per_dispatch: None,
+        }
+    }
+}
+
+/// Steps per dispatch of the persistent kernel. Hardware runs a whole batch
+/// in one dispatch. llvmpipe (lavapipe) silently ends a shader's loops after
+/// 65535 iterations per invocation in all, so there a dispatch runs at most
+/// half that many loop iterations, counted here per step for the busiest
+/// invocation: its blocks (8 bonds each) in both phases, its junction
+/// lanes (each with its junctions), one lane sum and the step loop.
+pub fn persistent_steps_per_dispatch(model: &Model, threads: u32, software: bool) -> u64 {
+    if !software {
+        return PERSISTENT_BATCH;
+    }
+    let t = threads as usize;
+    let (lanes, ns) = match (model.law, model.junctions) {
+        (FrictionLaw::Junctions | FrictionLaw::SingleJunction, Some(j)) => {
+            (crate::model::junction::JUNCTION_LANES.min(j.count), j.count)
+        }
+        _ => (0, 0),
+    };
+    let blocks = model.n_blocks().div_ceil(t);
+    let items = (model.nx * lanes).div_ceil(t);
+    let per_step = 3 + blocks * 10 + items * (1 + ns.div_ceil(lanes.max(1))) + lanes;
+    (32_768 / per_step as u64).clamp(1, PERSISTENT_BATCH)
+}
+
+/// The kernel for `path` on a lattice of `n_blocks`.
+pub fn choose_kernel(path: GpuPath, n_blocks: usize, software: bool) -> Kernel {
+    match path {
+        GpuPath::OneStep => Kernel::OneStep,
+        GpuPath::OneStepLanes => Kernel::OneStepLanes,
+        GpuPath::Persistent => Kernel::Persistent,
+        // Measured on lavapipe (BENCHMARKS.md): barriers cost more than
+        // dispatches there, so neither the lanes nor the persistent kernel
+        // pays.
+        GpuPath::Auto if software => Kernel::OneStep,
+        GpuPath::Auto if n_blocks <= PERSISTENT_MAX_BLOCKS => Kernel::Persistent,
+        GpuPath::Auto => Kernel::OneStepLanes,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::scenario::{Scenario, DEFAULT_SCENARIO};
+
+    #[test]
+    fn auto_takes_the_barrier_free_kernel_on_software_adapters() {
+        assert_eq!(choose_kernel(GpuPath::Auto, 1767, true), Kernel::OneStep);
+        assert_eq!(
+            choose_kernel(GpuPath::Auto, 1767, false),
+            Kernel::Persistent
+        );
+        assert_eq!(
+            choose_kernel(GpuPath::Auto, 1 << 20, false),
+            Kernel::OneStepLanes
+        );
+        assert_eq!(
+            choose_kernel(GpuPath::Persistent, 1 << 20, true),
+            Kernel::Persistent
+        );
+    }
+
+    /// On llvmpipe a persistent dispatch of Table S1 stays well inside the
+    /// 65535 loop iterations per invocation (measured: a 29 × 16 scene ran
+    /// 517 steps per dispatch at most with 256 threads, the bound gives 295).
+    #[test]
+    fn software_dispatches_stay_within_half_the_loop_limit() {
+        let s = Scenario::parse(DEFAULT_SCENARIO, "test", &[]).unwrap();
+        let m = Model::from_scenario(&s, false).unwrap();
+        let k = persistent_steps_per_dispatch(&m, 256, true);
+        assert_eq!(k, 180);
+        assert_eq!(
+            persistent_steps_per_dispatch(&m, 256, false),
+            PERSISTENT_BATCH
+        );
+    }
+}

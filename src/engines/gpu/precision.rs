@@ -1,0 +1,91 @@
+//! The precisions the kernels compile in, from one WGSL source: mixed f32
+//! (f32 forces and velocities, double-single coordinates) and f64. The
+//! prelude (`layout::wgsl_prelude`) declares `real`, `coord` and
+//! `packed_coord` as this precision's types, and the coordinate functions
+//! (`coord_add`, `coord_diff`, ...) come from `COORDINATES`.
+
+use crate::model::real::{DoubleSingle, Real};
+use bytemuck::Pod;
+
+/// The WGSL name of a field type.
+pub trait WgslType {
+    const WGSL: &'static str;
+}
+impl WgslType for u32 {
+    const WGSL: &'static str = "u32";
+}
+impl WgslType for f32 {
+    const WGSL: &'static str = "f32";
+}
+impl WgslType for f64 {
+    const WGSL: &'static str = "f64";
+}
+/// A double-single coordinate, (hi, lo), as the kernels compute with it.
+impl WgslType for DoubleSingle {
+    const WGSL: &'static str = "vec2<f32>";
+}
+/// A packed double-single coordinate (4-byte aligned).
+impl WgslType for [f32; 2] {
+    const WGSL: &'static str = "array<f32, 2>";
+}
+
+/// The coordinate functions of each precision (`GpuReal::COORDINATES`).
+pub const DOUBLE_SINGLE: &str = include_str!(concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/shaders/double_single.wgsl"
+));
+pub const COORD_F64: &str = include_str!(concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/shaders/coord_f64.wgsl"
+));
+
+/// A number type the kernels compute in: f32 (mixed) or f64.
+pub trait GpuReal: Real<Coord: Pod + WgslType> + WgslType {
+    /// A coordinate inside a struct that must stay 4-byte aligned (the
+    /// junction springs: 12 bytes in mixed precision, not 16).
+    type Packed: Pod + WgslType + std::fmt::Debug;
+    fn pack(c: Self::Coord) -> Self::Packed;
+    fn unpack(p: Self::Packed) -> Self::Coord;
+    /// The WGSL of the coordinate functions.
+    const COORDINATES: &'static str;
+    /// What naga must allow, and the device must have, for these kernels.
+    const CAPABILITIES: naga::valid::Capabilities;
+    const FEATURES: wgpu::Features;
+    /// Whether output samples may be recorded on the device: the output
+    /// kernels' host side (recorder.rs) reads mixed-precision sums and
+    /// rows, so f64 runs take their samples from host snapshots.
+    const RECORDS_ON_DEVICE: bool;
+}
+
+impl GpuReal for f32 {
+    type Packed = [f32; 2];
+    fn pack(c: DoubleSingle) -> [f32; 2] {
+        [c.hi, c.lo]
+    }
+    fn unpack(p: [f32; 2]) -> DoubleSingle {
+        DoubleSingle { hi: p[0], lo: p[1] }
+    }
+    const COORDINATES: &'static str = DOUBLE_SINGLE;
+    const CAPABILITIES: naga::valid::Capabilities = naga::valid::Capabilities::empty();
+    const FEATURES: wgpu::Features = wgpu::Features::empty();
+    const RECORDS_ON_DEVICE: bool = true;
+}
+
+impl GpuReal for f64 {
+    type Packed = f64;
+    fn pack(c: f64) -> f64 {
+        c
+    }
+    fn unpack(p: f64) -> f64 {
+        p
+    }
+    const COORDINATES: &'static str = COORD_F64;
+    const CAPABILITIES: naga::valid::Capabilities = naga::valid::Capabilities::FLOAT64;
+    const FEATURES: wgpu::Features = wgpu::Features::SHADER_F64;
+    const RECORDS_ON_DEVICE: bool = false;
+}
+
+/// The coordinate type of `T`'s kernels.
+pub type Coord<T> = <T as Real>::Coord;
+/// Its packed form.
+pub type Packed<T> = <T as GpuReal>::Packed;

@@ -1,0 +1,481 @@
+//! Output samples recorded on the device (`shaders/record.wgsl`): which
+//! steps of a batch are samples and where their records go, the two
+//! dispatches that write them, the copy of a batch's records into a staging
+//! buffer read back with the batch's status, and their decoding into
+//! `Sample`s. Only the channels due are written and copied.
+
+use super::context::GpuContext;
+use super::layout::{
+    GpuRecordEntry, GpuRecordPlan, GpuSampleSums, RECORD_BULK, RECORD_BULK_WORDS, RECORD_FAST,
+    RECORD_GLOBAL, RECORD_INTERFACE, RECORD_INTERFACE_WORDS, WORKGROUP,
+};
+use super::options::ONE_STEP_BATCH;
+use super::record_pipelines::{RecordPipelines, RECORD_SMALL_BLOCKS};
+use crate::engines::{BulkField, InterfaceRow, Sample, SamplePlan, SampleSums};
+use crate::model::{Driver, Model};
+use wgpu::util::DeviceExt;
+
+/// Record buffers of one batch at most (interface rows and bulk fields);
+/// a batch ends early rather than go past it (one bulk field always fits).
+const ROWS_BUDGET: u64 = 64 << 20;
+
+/// The state buffers the output kernels read.
+pub struct StateBuffers<'a> {
+    pub consts: &'a wgpu::Buffer,
+    pub disp: &'a [wgpu::Buffer; 2],
+    pub vel: &'a [wgpu::Buffer; 2],
+    pub force: &'a wgpu::Buffer,
+    pub flags: &'a wgpu::Buffer,
+    pub contact: &'a wgpu::Buffer,
+    pub junction_state: &'a wgpu::Buffer,
+    pub slide: &'a wgpu::Buffer,
+}
+
+/// A sample asked for in a batch: after the step dispatch at `offset` (or
+/// after the batch's forces-only pass), at global step `step`.
+#[derive(Debug, Clone, Copy)]
+pub struct Planned {
+    pub offset: u64,
+    pub step: u64,
+    pub entry: GpuRecordEntry,
+}
+
+/// A batch's records on their way back: the staging buffer and what is
+/// where in it.
+pub struct Pending {
+    staging: wgpu::Buffer,
+    planned: Vec<Planned>,
+    interface_slots: u32,
+    bulk_slots: u32,
+}
+
+/// The output side of one GPU engine.
+pub struct Recorder {
+    plan: SamplePlan,
+    model: Model,
+    pipelines: std::sync::Arc<RecordPipelines>,
+    plan_buffer: wgpu::Buffer,
+    sums: wgpu::Buffer,
+    rows: wgpu::Buffer,
+    entries: wgpu::Buffer,
+    group: wgpu::BindGroup,
+    entry_group: wgpu::BindGroup,
+    /// Bytes between entries: the dynamic-offset alignment for the output
+    /// kernels, the entry's size for the persistent kernel (an array).
+    stride: u64,
+    /// Workgroups of `record_sample` (x, y); None: one `record_small`.
+    groups: Option<(u32, u32)>,
+    max_entries: u32,
+    max_interface: u32,
+    max_bulk: u32,
+    interface_offset: u64,
+    bulk_offset: u64,
+    /// The last step sampled (by the device or by the host).
+    pub recorded_through: Option<u64>,
+    spare: Vec<wgpu::Buffer>,
+}
+
+fn words(bytes: u64) -> u64 {
+    bytes / 4
+}
+
+impl Recorder {
+    /// The recorder of a one-scene engine, or why the device cannot hold
+    /// the records of one batch.
+    /// `stride`: the dynamic-offset alignment (one-step kernels), or None
+    /// for the persistent kernel, which reads the entries as an array.
+    pub fn new(
+        ctx: &GpuContext,
+        model: &Model,
+        state: StateBuffers,
+        plan: &SamplePlan,
+        stride: Option<u64>,
+    ) -> Result<Recorder, String> {
+        let stride = stride.unwrap_or(size_of::<GpuRecordEntry>() as u64);
+        let device = &ctx.device;
+        let (n, nx) = (model.n_blocks() as u64, model.nx as u64);
+        let interface_bytes = nx * RECORD_INTERFACE_WORDS as u64 * 4;
+        let bulk_bytes = n * RECORD_BULK_WORDS as u64 * 4;
+        let max_entries = ONE_STEP_BATCH as u32 + 1;
+        let max_interface = (ROWS_BUDGET / 2 / interface_bytes).clamp(1, max_entries as u64) as u32;
+        let max_bulk = if plan.every_bulk > 0 {
+            (ROWS_BUDGET / 2 / bulk_bytes).clamp(1, max_entries as u64) as u32
+        } else {
+            0
+        };
+        let interface_offset = 0;
+        let bulk_offset = max_interface as u64 * interface_bytes;
+        let rows_bytes = (bulk_offset + max_bulk as u64 * bulk_bytes).max(16);
+        let limit = ctx
+            .limits
+            .max_storage_buffer_binding_size
+            .min(ctx.limits.max_buffer_size);
+        if rows_bytes > limit {
+            return Err(format!(
+                "the records of one batch need {rows_bytes} bytes, {} binds at most {limit}",
+                ctx.info.name
+            ));
+        }
+        let partials = (n as u32).div_ceil(WORKGROUP);
+        let groups = (model.n_blocks() > RECORD_SMALL_BLOCKS).then(|| super::groups_for(partials));
+        let sums_bytes = (max_entries + partials) as u64 * size_of::<GpuSampleSums>() as u64;
+        let gpu_plan = GpuRecordPlan {
+            fast: plan.fast as u32,
+            every_fast: plan.every_fast.min(u32::MAX as u64) as u32,
+            fast_slip_speed: plan.fast_slip_speed as f32,
+            reserved: 0,
+            driven_block: match model.driver {
+                Driver::SideSpring { row, .. } => (row * model.nx) as u32,
+                _ => u32::MAX,
+            },
+            top_reaction: matches!(model.driver, Driver::TopVelocity { .. }) as u32,
+            junctions_per_block: (model.n_junctions() / model.nx.max(1)) as u32,
+            partials,
+            partials_offset: max_entries,
+            interface_offset: words(interface_offset) as u32,
+            bulk_offset: words(bulk_offset) as u32,
+        };
+        let plan_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("record plan"),
+            contents: bytemuck::bytes_of(&gpu_plan),
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+        });
+        let storage = |label: &str, size: u64, usage: wgpu::BufferUsages| {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size,
+                usage: wgpu::BufferUsages::STORAGE | usage,
+                mapped_at_creation: false,
+            })
+        };
+        let sums = storage("record sums", sums_bytes, wgpu::BufferUsages::COPY_SRC);
+        let rows = storage("record rows", rows_bytes, wgpu::BufferUsages::COPY_SRC);
+        let entries = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("record entries"),
+            size: max_entries as u64 * stride.max(size_of::<GpuRecordEntry>() as u64),
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let pipelines = ctx.record_pipelines();
+        use super::whole;
+        let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("record"),
+            layout: &pipelines.group,
+            entries: &[
+                whole(0, state.consts),
+                whole(1, &state.disp[0]),
+                whole(2, &state.vel[0]),
+                whole(3, &state.disp[1]),
+                whole(4, &state.vel[1]),
+                whole(5, state.force),
+                whole(6, state.flags),
+                whole(7, state.contact),
+                whole(9, state.junction_state),
+                whole(10, state.slide),
+                whole(13, &plan_buffer),
+                whole(14, &sums),
+                whole(15, &rows),
+            ],
+        });
+        let entry_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("record entry"),
+            layout: &pipelines.entry,
+            entries: &[wgpu::BindGroupEntry {
+                binding: 0,
+                resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                    buffer: &entries,
+                    offset: 0,
+                    size: wgpu::BufferSize::new(size_of::<GpuRecordEntry>() as u64),
+                }),
+            }],
+        });
+        Ok(Recorder {
+            plan: *plan,
+            model: model.clone(),
+            pipelines,
+            plan_buffer,
+            sums,
+            rows,
+            entries,
+            group,
+            entry_group,
+            stride,
+            groups,
+            max_entries,
+            max_interface,
+            max_bulk,
+            interface_offset,
+            bulk_offset,
+            recorded_through: None,
+            spare: Vec::new(),
+        })
+    }
+
+    /// The buffers the persistent kernel binds at 13 (plan), 14 (sums),
+    /// 15 (rows) and 16 (entries).
+    pub fn persistent_bindings(&self) -> [&wgpu::Buffer; 4] {
+        [&self.plan_buffer, &self.sums, &self.rows, &self.entries]
+    }
+
+    /// Takes a new plan (the fast cadence's state above all); only between
+    /// batches (the engine has drained).
+    pub fn set_plan(&mut self, queue: &wgpu::Queue, plan: &SamplePlan) {
+        self.plan = *plan;
+        // The fast flag is the plan's first word.
+        queue.write_buffer(
+            &self.plan_buffer,
+            0,
+            bytemuck::bytes_of(&(plan.fast as u32)),
+        );
+    }
+
+    /// Whether `step` is a sample not yet taken.
+    fn wanted(&self, step: u64) -> bool {
+        self.recorded_through.is_none_or(|r| step > r) && self.plan.due(step).any()
+    }
+
+    /// The samples of a batch of `steps` steps from `first` whose first
+    /// step reads state copy `parity`, and how many steps the batch may
+    /// take before its records would overflow (≤ `steps`).
+    pub fn plan_batch(&self, first: u64, steps: u64, parity: usize) -> (Vec<Planned>, u64) {
+        let mut planned = Vec::new();
+        let (mut interface, mut bulk) = (0u32, 0u32);
+        for offset in 0..steps {
+            let step = first + offset;
+            if !self.wanted(step) {
+                continue;
+            }
+            let due = self.plan.due(step);
+            let needs_interface = due.interface || due.fast;
+            if planned.len() as u32 == self.max_entries
+                || (needs_interface && interface == self.max_interface)
+                || (due.bulk && bulk == self.max_bulk)
+            {
+                return (planned, offset);
+            }
+            let channels = (due.global as u32 * RECORD_GLOBAL)
+                | (due.interface as u32 * RECORD_INTERFACE)
+                | (due.bulk as u32 * RECORD_BULK)
+                | (due.fast as u32 * RECORD_FAST);
+            planned.push(Planned {
+                offset,
+                step,
+                entry: GpuRecordEntry {
+                    offset: offset as u32,
+                    copy: ((parity as u64 + offset) & 1) as u32,
+                    channels,
+                    sums_slot: planned.len() as u32,
+                    interface_slot: interface,
+                    bulk_slot: bulk,
+                },
+            });
+            interface += needs_interface as u32;
+            bulk += due.bulk as u32;
+        }
+        (planned, steps)
+    }
+
+    /// The sample of the current step (after a forces-only pass), if it is
+    /// one not yet taken.
+    pub fn plan_now(&self, step: u64, copy: usize) -> Vec<Planned> {
+        if !self.wanted(step) {
+            return Vec::new();
+        }
+        let mut v = self.plan_batch(step, 1, copy).0;
+        // No step dispatch runs: the copy is the current one.
+        if let Some(p) = v.first_mut() {
+            p.entry.copy = copy as u32;
+        }
+        v
+    }
+
+    /// Writes a batch's entries (before its submit) and marks its samples
+    /// as taken.
+    pub fn write_entries(&mut self, queue: &wgpu::Queue, planned: &[Planned]) {
+        if planned.is_empty() {
+            return;
+        }
+        let mut table = vec![0u8; planned.len() * self.stride as usize];
+        for (k, p) in planned.iter().enumerate() {
+            let at = k * self.stride as usize;
+            table[at..at + size_of::<GpuRecordEntry>()]
+                .copy_from_slice(bytemuck::bytes_of(&p.entry));
+        }
+        queue.write_buffer(&self.entries, 0, &table);
+        self.recorded_through = planned.last().map(|p| p.step);
+    }
+
+    /// Records sample `k` of the batch (one or two dispatches) in `pass`;
+    /// the caller sets its own pipeline and groups again afterwards.
+    /// Returns the dispatches.
+    pub fn encode(&self, pass: &mut wgpu::ComputePass, k: usize) -> u64 {
+        let offset = (k as u64 * self.stride) as u32;
+        pass.set_bind_group(0, &self.group, &[]);
+        pass.set_bind_group(1, &self.entry_group, &[offset]);
+        match self.groups {
+            None => {
+                pass.set_pipeline(&self.pipelines.small);
+                pass.dispatch_workgroups(1, 1, 1);
+                1
+            }
+            Some((x, y)) => {
+                pass.set_pipeline(&self.pipelines.sample);
+                pass.dispatch_workgroups(x, y, 1);
+                pass.set_pipeline(&self.pipelines.finish);
+                pass.dispatch_workgroups(1, 1, 1);
+                2
+            }
+        }
+    }
+
+    /// Copies the batch's records (only the slots it used) into a staging
+    /// buffer, after its steps in `encoder`.
+    pub fn copy_out(
+        &mut self,
+        device: &wgpu::Device,
+        encoder: &mut wgpu::CommandEncoder,
+        planned: Vec<Planned>,
+    ) -> Option<Pending> {
+        if planned.is_empty() {
+            return None;
+        }
+        let interface_slots = planned
+            .iter()
+            .filter(|p| p.entry.channels & (RECORD_INTERFACE | RECORD_FAST) != 0)
+            .count() as u32;
+        let bulk_slots = planned
+            .iter()
+            .filter(|p| p.entry.channels & RECORD_BULK != 0)
+            .count() as u32;
+        let sums_bytes = planned.len() as u64 * size_of::<GpuSampleSums>() as u64;
+        let interface_bytes = interface_slots as u64 * self.interface_bytes();
+        let bulk_bytes = bulk_slots as u64 * self.bulk_bytes();
+        let size = sums_bytes + interface_bytes + bulk_bytes;
+        let staging = match self.spare.iter().position(|b| b.size() >= size) {
+            Some(k) => self.spare.swap_remove(k),
+            None => device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("record readback"),
+                size,
+                usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            }),
+        };
+        encoder.copy_buffer_to_buffer(&self.sums, 0, &staging, 0, sums_bytes);
+        if interface_bytes > 0 {
+            encoder.copy_buffer_to_buffer(
+                &self.rows,
+                self.interface_offset,
+                &staging,
+                sums_bytes,
+                interface_bytes,
+            );
+        }
+        if bulk_bytes > 0 {
+            encoder.copy_buffer_to_buffer(
+                &self.rows,
+                self.bulk_offset,
+                &staging,
+                sums_bytes + interface_bytes,
+                bulk_bytes,
+            );
+        }
+        Some(Pending {
+            staging,
+            planned,
+            interface_slots,
+            bulk_slots,
+        })
+    }
+
+    fn interface_bytes(&self) -> u64 {
+        self.model.nx as u64 * RECORD_INTERFACE_WORDS as u64 * 4
+    }
+
+    fn bulk_bytes(&self) -> u64 {
+        self.model.n_blocks() as u64 * RECORD_BULK_WORDS as u64 * 4
+    }
+
+    /// The staging buffer to map once the batch has run.
+    pub fn staging(pending: &Pending) -> &wgpu::Buffer {
+        &pending.staging
+    }
+
+    /// Decodes a mapped batch's records: the samples that were due, those
+    /// before step `before` only (a blow-up's), in step order.
+    pub fn decode(&mut self, pending: Pending, before: u64) -> Result<Vec<Sample>, String> {
+        let view = pending
+            .staging
+            .slice(..)
+            .get_mapped_range()
+            .map_err(|e| format!("record readback: {e}"))?;
+        let sums_bytes = pending.planned.len() * size_of::<GpuSampleSums>();
+        let sums: &[GpuSampleSums] = bytemuck::cast_slice(&view[..sums_bytes]);
+        let floats: &[f32] = bytemuck::cast_slice(&view[sums_bytes..]);
+        let interface_words = self.interface_bytes() as usize / 4;
+        let bulk_at = pending.interface_slots as usize * interface_words;
+        let bulk_words = self.bulk_bytes() as usize / 4;
+        debug_assert!(floats.len() >= bulk_at + pending.bulk_slots as usize * bulk_words);
+        let m = &self.model;
+        let mut samples = Vec::new();
+        for (p, s) in pending.planned.iter().zip(sums) {
+            if s.recorded == 0 || p.step >= before {
+                continue;
+            }
+            let interface = (s.interface_row != 0).then(|| {
+                let at = p.entry.interface_slot as usize * interface_words;
+                let row = &floats[at..at + interface_words];
+                let col = |k: usize| -> Vec<f64> {
+                    row.chunks(RECORD_INTERFACE_WORDS as usize)
+                        .map(|b| b[k] as f64)
+                        .collect()
+                };
+                InterfaceRow {
+                    ux: row
+                        .chunks(RECORD_INTERFACE_WORDS as usize)
+                        .map(|b| b[0] as f64 + b[1] as f64)
+                        .collect(),
+                    friction: col(2),
+                    normal: col(3),
+                    pinned_fraction: col(4),
+                    slip_speed: col(5),
+                }
+            });
+            let bulk = (p.entry.channels & RECORD_BULK != 0).then(|| {
+                let at = bulk_at + p.entry.bulk_slot as usize * bulk_words;
+                let field = &floats[at..at + bulk_words];
+                let col = |k: usize| -> Vec<f32> {
+                    field
+                        .chunks(RECORD_BULK_WORDS as usize)
+                        .map(|b| b[k])
+                        .collect()
+                };
+                BulkField {
+                    ux: col(0),
+                    uz: col(1),
+                    vx: col(2),
+                    vz: col(3),
+                }
+            });
+            samples.push(Sample {
+                step: p.step,
+                time: m.time_of_step(p.step),
+                sums: SampleSums {
+                    kinetic_energy: 0.5 * m.mass * s.kinetic as f64,
+                    friction: s.friction as f64,
+                    pinned_fraction: s.pinned as f64 / m.nx.max(1) as f64,
+                    min_pinned_fraction: s.min_pinned as f64,
+                    max_slip_speed: s.max_slip_speed as f64,
+                    ruptures: s.ruptures_lo as u64 | (s.ruptures_hi as u64) << 32,
+                    driven_ux: s.driven_ux_hi as f64 + s.driven_ux_lo as f64,
+                    top_reaction: s.top_reaction as f64,
+                },
+                interface,
+                bulk,
+            });
+        }
+        drop(view);
+        pending.staging.unmap();
+        self.spare.push(pending.staging);
+        Ok(samples)
+    }
+}

@@ -1,0 +1,270 @@
+//! One scene's slice of the engine's buffers: read back as a snapshot or
+//! a saved state, and written (a loaded state, a quasi-static jump's
+//! kinematics and junctions). Scene k's elements start at k times the
+//! per-scene count of each buffer.
+
+use super::layout::GpuJunctionSpring;
+use super::precision::{Coord, GpuReal};
+use super::readback::{cast_prefix, read_ranges, Range};
+use super::{GpuEngine, Shape, WORD_PAIR_BYTES};
+use crate::engines::{EngineError, EngineState, Snapshot, StateArrays};
+use crate::model::real::Coordinate;
+
+impl<T: GpuReal> GpuEngine<T> {
+    /// Byte range of scene `k`'s slice of a buffer with `per_scene` elements
+    /// of `bytes` each.
+    pub(super) fn slice<'a>(
+        &self,
+        buffer: &'a wgpu::Buffer,
+        k: usize,
+        per_scene: usize,
+        bytes: usize,
+    ) -> Range<'a> {
+        let size = (per_scene * bytes) as u64;
+        Range {
+            buffer,
+            offset: k as u64 * size,
+            size,
+        }
+    }
+
+    /// Scene `k`'s buffers as they are (forces possibly of the previous step).
+    pub(super) fn read_raw(&mut self, k: usize) -> Result<RawState<T>, EngineError> {
+        self.drain()?;
+        let Shape {
+            blocks: n,
+            nx,
+            junctions: nj,
+            ..
+        } = self.shape;
+        let b = &self.buffers;
+        let raw = read_ranges(
+            &self.ctx,
+            &[
+                self.slice(&b.disp[self.current], k, n, Self::DISP_BYTES),
+                self.slice(&b.vel[self.current], k, n, Self::REAL_PAIR_BYTES),
+                self.slice(&b.force, k, n, Self::REAL_PAIR_BYTES),
+                self.slice(&b.contact, k, nx, Self::REAL_PAIR_BYTES),
+                self.slice(&b.junction_spring, k, nj, Self::SPRING_BYTES),
+                self.slice(&b.junction_state, k, nj, WORD_PAIR_BYTES),
+                self.slice(&b.slide, k, nx, WORD_PAIR_BYTES),
+            ],
+        )?;
+        Ok(RawState {
+            disp: cast_prefix(&raw[0], n),
+            vel: cast_prefix(&raw[1], n),
+            force: cast_prefix(&raw[2], n),
+            contact: cast_prefix(&raw[3], nx),
+            spring: cast_prefix::<GpuJunctionSpring<T>>(&raw[4], nj)
+                .into_iter()
+                .map(Into::into)
+                .collect(),
+            state: cast_prefix(&raw[5], nj),
+            slide: cast_prefix(&raw[6], nx),
+        })
+    }
+
+    pub(super) fn read_state(&mut self, k: usize) -> Result<Snapshot, EngineError> {
+        let r = self.read_raw(k)?;
+        Ok(Snapshot::from_buffers(
+            &self.scenes[k].model,
+            self.step,
+            &r.disp,
+            &r.vel,
+            &r.force,
+            &r.contact,
+            &r.spring,
+            &r.state,
+            &r.slide,
+        ))
+    }
+
+    /// Writes `bytes` at element `k · per_scene` of a buffer with elements
+    /// of `element` bytes (nothing for an empty array).
+    pub(super) fn write_scene(
+        &self,
+        buffer: &wgpu::Buffer,
+        k: usize,
+        per_scene: usize,
+        element: usize,
+        bytes: &[u8],
+    ) {
+        if !bytes.is_empty() {
+            let at = (k * per_scene * element) as u64;
+            self.ctx.queue.write_buffer(buffer, at, bytes);
+        }
+    }
+
+    pub(super) fn snapshot_of(&mut self, k: usize) -> Result<Snapshot, EngineError> {
+        self.ready_forces()?;
+        self.read_state(k)
+    }
+
+    pub(super) fn set_kinematics_of(
+        &mut self,
+        k: usize,
+        disp: &[[f64; 2]],
+        vel: &[[f64; 2]],
+    ) -> Result<(), EngineError> {
+        self.drain()?;
+        let disp: Vec<[Coord<T>; 2]> = disp.iter().map(|u| u.map(Coord::<T>::from_f64)).collect();
+        let vel: Vec<[T; 2]> = vel.iter().map(|v| v.map(T::from_f64)).collect();
+        let (b, n) = (&self.buffers, self.shape.blocks);
+        self.write_scene(
+            &b.disp[self.current],
+            k,
+            n,
+            Self::DISP_BYTES,
+            bytemuck::cast_slice(&disp),
+        );
+        self.write_scene(
+            &b.vel[self.current],
+            k,
+            n,
+            Self::REAL_PAIR_BYTES,
+            bytemuck::cast_slice(&vel),
+        );
+        self.scenes[k].forces_ready = false;
+        Ok(())
+    }
+
+    pub(super) fn set_junctions_of(
+        &mut self,
+        k: usize,
+        snap: &Snapshot,
+    ) -> Result<(), EngineError> {
+        self.drain()?;
+        let spring = gpu_junction_springs::<T>(&snap.anchor, &snap.junction_stiffness);
+        let state: Vec<[u32; 2]> = snap
+            .slip_steps_left
+            .iter()
+            .zip(&snap.ruptures)
+            .map(|(l, r)| [*l, *r])
+            .collect();
+        let (b, nj) = (&self.buffers, self.shape.junctions);
+        self.write_scene(
+            &b.junction_spring,
+            k,
+            nj,
+            Self::SPRING_BYTES,
+            bytemuck::cast_slice(&spring),
+        );
+        self.write_scene(
+            &b.junction_state,
+            k,
+            nj,
+            WORD_PAIR_BYTES,
+            bytemuck::cast_slice(&state),
+        );
+        self.scenes[k].forces_ready = false;
+        Ok(())
+    }
+
+    pub(super) fn save_state_of(&mut self, k: usize) -> Result<EngineState, EngineError> {
+        self.ready_forces()?;
+        let r = self.read_raw(k)?;
+        Ok(EngineState::capture(StateArrays {
+            step: self.step,
+            drive_origin: self.scenes[k].drive_origin,
+            disp: &r.disp,
+            vel: &r.vel,
+            force: &r.force,
+            contact: &r.contact,
+            junction_spring: &r.spring,
+            junction_state: &r.state,
+            slide: &r.slide,
+        }))
+    }
+
+    /// Replaces scene `k`'s state (at the engine's step: an ensemble's
+    /// scenes stand at one step).
+    pub(super) fn load_state_of(
+        &mut self,
+        k: usize,
+        state: &EngineState,
+    ) -> Result<(), EngineError> {
+        state.check_fits(&self.scenes[k].model)?;
+        self.drain()?;
+        let spring: Vec<GpuJunctionSpring<T>> = state
+            .junction_springs_as::<T, Coord<T>>()
+            .into_iter()
+            .map(Into::into)
+            .collect();
+        let b = &self.buffers;
+        let Shape {
+            blocks: n,
+            nx,
+            junctions: nj,
+            ..
+        } = self.shape;
+        let disp = state.disp_as::<T, Coord<T>>();
+        self.write_scene(
+            &b.disp[self.current],
+            k,
+            n,
+            Self::DISP_BYTES,
+            bytemuck::cast_slice(&disp),
+        );
+        let vel = state.vel_as::<T>();
+        self.write_scene(
+            &b.vel[self.current],
+            k,
+            n,
+            Self::REAL_PAIR_BYTES,
+            bytemuck::cast_slice(&vel),
+        );
+        let force = state.force_as::<T>();
+        let pair = Self::REAL_PAIR_BYTES;
+        self.write_scene(&b.force, k, n, pair, bytemuck::cast_slice(&force));
+        let contact = state.contact_as::<T>();
+        self.write_scene(&b.contact, k, nx, pair, bytemuck::cast_slice(&contact));
+        self.write_scene(
+            &b.junction_spring,
+            k,
+            nj,
+            Self::SPRING_BYTES,
+            bytemuck::cast_slice(&spring),
+        );
+        let js = bytemuck::cast_slice(&state.junction_state);
+        self.write_scene(&b.junction_state, k, nj, WORD_PAIR_BYTES, js);
+        self.write_scene(
+            &b.slide,
+            k,
+            nx,
+            WORD_PAIR_BYTES,
+            bytemuck::cast_slice(&state.slide),
+        );
+        let scene = &mut self.scenes[k];
+        scene.drive_origin = state.drive_origin_as::<T, Coord<T>>();
+        // The saved forces are those of the saved state.
+        scene.forces_ready = true;
+        Ok(())
+    }
+}
+
+/// The state buffers read back, in the kernels' types.
+pub(super) struct RawState<T: GpuReal> {
+    disp: Vec<[Coord<T>; 2]>,
+    vel: Vec<[T; 2]>,
+    force: Vec<[T; 2]>,
+    contact: Vec<[T; 2]>,
+    spring: Vec<crate::model::junction::JunctionSpring<Coord<T>, T>>,
+    state: Vec<[u32; 2]>,
+    slide: Vec<[i32; 2]>,
+}
+
+/// The `junction_spring` buffer's records: anchors as coordinates,
+/// stiffnesses in `T`.
+pub(super) fn gpu_junction_springs<T: GpuReal>(
+    anchors: &[f64],
+    stiffness: &[f64],
+) -> Vec<GpuJunctionSpring<T>> {
+    anchors
+        .iter()
+        .zip(stiffness)
+        .map(|(a, k)| GpuJunctionSpring {
+            anchor: T::pack(Coord::<T>::from_f64(*a)),
+            stiffness: T::from_f64(*k),
+        })
+        .collect()
+}

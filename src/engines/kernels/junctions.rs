@@ -1,0 +1,324 @@
+//! CPU twin of `shaders/junctions.wgsl`: the Ns micro-junctions of one
+//! interface block pin, break at μs·f_N, slip for a drawn time at μd·f_N and
+//! re-pin with zero stretch. A slipping junction counts down the steps left
+//! of its slip, so nothing here depends on the global step count (runs of
+//! any length, and fast-forward, never wrap it).
+//!
+//! Opening: junctions only attach where the block touches the track. While
+//! a block is lifted off (f_N = 0), its pinned junctions break as soon as
+//! they carry any force (their threshold μs·f_N is 0) and a junction whose
+//! slip time is over waits; it re-pins at the first step the block is
+//! pressed back, with the stiffness of the normal force at that step.
+//! (Before, it re-pinned at f_N = 0 with k_j = √(c·0) = 0 and stayed pinned
+//! with no force for ever.)
+
+use crate::engines::precision_probe::{hold, DRAWS, JUNCTIONS};
+use crate::engines::step_params::{Consts, StepParams};
+use crate::model::real::{Coordinate, ForceSum, Real};
+use crate::model::rng::slip_steps;
+
+pub use crate::model::junction::{JunctionSpring, JUNCTION_LANES, PINNED};
+
+/// The junction arrays of one interface block (length Ns each), laid out
+/// as the GPU's `junction_spring` and `junction_state` buffers.
+pub struct JunctionSlots<'a, T, C> {
+    pub spring: &'a mut [JunctionSpring<C, T>],
+    /// (slip steps left or PINNED, rupture count) per junction.
+    pub state: &'a mut [[u32; 2]],
+}
+
+/// Normal force the foundation carries under interface block with u_z.
+#[inline]
+pub fn foundation_normal<T: Real>(c: &Consts<T>, uz: T) -> T {
+    crate::model::laws::foundation_normal(c.k_foundation, uz)
+}
+
+/// Sign of the block velocity, 0 when it is exactly zero.
+#[inline]
+pub fn velocity_sign<T: Real>(v: T) -> T {
+    if v > T::zero() {
+        T::one()
+    } else if v < T::zero() {
+        -T::one()
+    } else {
+        T::zero()
+    }
+}
+
+/// Advances the junctions of interface block `ix` by one step and returns
+/// (friction force on the block along x, normal force p).
+pub fn junctions<T: Real, C: Coordinate<T>>(
+    c: &Consts<T>,
+    p: &StepParams<T>,
+    ix: usize,
+    u: [C; 2],
+    v: [T; 2],
+    slots: JunctionSlots<'_, T, C>,
+) -> (T, T) {
+    let jb = junction_block(c, u, v);
+    let mut total = C::Sum::default();
+    for lane in 0..JUNCTION_LANES.min(c.junction_count) {
+        let slots = JunctionSlots {
+            spring: &mut *slots.spring,
+            state: &mut *slots.state,
+        };
+        total = total.merge(junction_lane(c, p, ix, lane, &jb, slots));
+    }
+    (total.value(), foundation_normal(c, u[1].value()))
+}
+
+/// What every junction of one interface block needs this step (twin of the
+/// WGSL `JunctionBlock`): the block's u_x, the normal force per junction,
+/// the break threshold μs·f_N and the sliding force.
+pub struct JunctionBlock<T, C> {
+    pub ux: C,
+    pub f_n: T,
+    pub threshold: T,
+    pub sliding: T,
+}
+
+/// Twin of the WGSL `junction_block`.
+pub fn junction_block<T: Real, C: Coordinate<T>>(
+    c: &Consts<T>,
+    u: [C; 2],
+    v: [T; 2],
+) -> JunctionBlock<T, C> {
+    let probe = c.f32_probe;
+    let f_n = hold(
+        probe,
+        JUNCTIONS,
+        foundation_normal(c, u[1].value()) / T::from_f64(c.junction_count as f64),
+    );
+    JunctionBlock {
+        ux: u[0],
+        f_n,
+        threshold: hold(probe, JUNCTIONS, c.mu_s * f_n),
+        sliding: hold(probe, JUNCTIONS, -c.mu_d * f_n * velocity_sign(v[0])),
+    }
+}
+
+/// Twin of the WGSL `junction_lane`: advances junctions `lane`,
+/// `lane + JUNCTION_LANES`, ... of block `ix` by one step and returns the
+/// sum of their forces on the block along x.
+///
+/// The sum is the precision's `ForceSum`: compensated in mixed f32. A
+/// block's Ns junction forces are alike in size, and an f32 running sum of
+/// them rounded the friction coherently across the interface; it moved the
+/// default scene's first full event 0.18 ms late against f64 in 21 of 32
+/// perturbed runs (results/precision_ensembles.md, the third cause).
+pub fn junction_lane<T: Real, C: Coordinate<T>>(
+    c: &Consts<T>,
+    p: &StepParams<T>,
+    ix: usize,
+    lane: usize,
+    jb: &JunctionBlock<T, C>,
+    slots: JunctionSlots<'_, T, C>,
+) -> C::Sum {
+    let mut total = C::Sum::default();
+    for j in (lane..c.junction_count).step_by(JUNCTION_LANES) {
+        total = total.add(junction(
+            c,
+            p,
+            ix,
+            j,
+            jb,
+            &mut slots.spring[j],
+            &mut slots.state[j],
+        ));
+    }
+    total
+}
+
+/// One junction `j` of block `ix` advanced by one step; returns its force
+/// on the block along x. Every junction is independent of the others (its
+/// slip time is drawn from its own key), so the sweep engine calls this in
+/// any order and gets the same bits.
+#[inline(always)]
+pub fn junction<T: Real, C: Coordinate<T>>(
+    c: &Consts<T>,
+    p: &StepParams<T>,
+    ix: usize,
+    j: usize,
+    jb: &JunctionBlock<T, C>,
+    spring: &mut JunctionSpring<C, T>,
+    state: &mut [u32; 2],
+) -> T {
+    let (f_n, threshold, sliding) = (jb.f_n, jb.threshold, jb.sliding);
+    if state[0] != PINNED {
+        state[0] = state[0].saturating_sub(1);
+        if state[0] == 0 && f_n > T::zero() {
+            *spring = JunctionSpring {
+                anchor: jb.ux,
+                stiffness: hold(c.f32_probe, JUNCTIONS, c.junction_stiffness(f_n)),
+            };
+            state[0] = PINNED;
+        }
+    }
+    let mut f = sliding;
+    if state[0] == PINNED {
+        if p.preparing {
+            // While the normal load is applied, attachment is continuous.
+            spring.stiffness = hold(c.f32_probe, JUNCTIONS, c.junction_stiffness(f_n));
+        }
+        f = hold(
+            c.f32_probe,
+            JUNCTIONS,
+            -spring.stiffness * jb.ux.diff(spring.anchor),
+        );
+        if !p.preparing && f.abs() > threshold {
+            let count = state[1].wrapping_add(1);
+            state[1] = count;
+            let n = if c.f32_probe & DRAWS != 0 {
+                slip_steps(
+                    c.seed,
+                    ix as u32,
+                    j as u32,
+                    count,
+                    c.slip_mean_steps.as_f64() as f32,
+                    c.slip_std_steps.as_f64() as f32,
+                )
+            } else {
+                slip_steps(
+                    c.seed,
+                    ix as u32,
+                    j as u32,
+                    count,
+                    c.slip_mean_steps,
+                    c.slip_std_steps,
+                )
+            };
+            // PINNED − 1 at most: a countdown never reads as pinned.
+            state[0] = n.min(PINNED - 1);
+            f = sliding;
+        }
+    }
+    f
+}
+
+/// The junction arrays (anchor, stiffness; slip steps left, rupture
+/// count) of a snapshot, in an engine's number types.
+pub fn load_junctions<T: Real, C: Coordinate<T>>(
+    snap: &crate::engines::Snapshot,
+    spring: &mut [JunctionSpring<C, T>],
+    state: &mut [[u32; 2]],
+) {
+    let anchors = snap.anchor.iter().zip(&snap.junction_stiffness);
+    for (s, (a, k)) in spring.iter_mut().zip(anchors) {
+        *s = JunctionSpring {
+            anchor: C::from_f64(*a),
+            stiffness: T::from_f64(*k),
+        };
+    }
+    let states = snap.slip_steps_left.iter().zip(&snap.ruptures);
+    for (s, (left, count)) in state.iter_mut().zip(states) {
+        *s = [*left, *count];
+    }
+}
+
+/// The Amontons–Coulomb sliding state (direction, stick → slip count) of
+/// each interface block of a snapshot.
+pub fn load_slide(snap: &crate::engines::Snapshot, slide: &mut [[i32; 2]]) {
+    for (s, (d, n)) in slide.iter_mut().zip(snap.slide_dir.iter().zip(&snap.slips)) {
+        *s = [*d, *n as i32];
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::engines::step_params::step_params;
+    use crate::model::scenario::{Scenario, DEFAULT_SCENARIO};
+
+    type Springs = Vec<JunctionSpring<f64, f64>>;
+
+    /// The Table S1 model and one interface block's junctions, all pinned
+    /// at 0 with k_j = 1e5 N/m.
+    fn pinned_block() -> (crate::Model, Consts<f64>, Springs, Vec<[u32; 2]>) {
+        let s = Scenario::parse(DEFAULT_SCENARIO, "test", &[]).unwrap();
+        let m = crate::Model::from_scenario(&s, false).unwrap();
+        let c = Consts::<f64>::new(&m);
+        let spring = JunctionSpring {
+            anchor: 0.0,
+            stiffness: 1.0e5,
+        };
+        let ns = c.junction_count;
+        (m, c, vec![spring; ns], vec![[PINNED, 0u32]; ns])
+    }
+
+    /// Junctions that break just before step 2³² re-pin after their drawn
+    /// slip time: the countdown does not see the global step, which used to
+    /// be cast to u32 (re-pin steps past 2³² saturated or wrapped).
+    #[test]
+    fn junctions_broken_near_step_2_pow_32_re_pin_after_their_slip_time() {
+        let (_, c, mut spring, mut state) = pinned_block();
+        let ns = c.junction_count;
+        // Compressed and stretched far past μs·f_N: every junction breaks.
+        let u = [1.0e-3, -1.0e-6];
+        let start = (1u64 << 32) - 3;
+        let mut pinned_at = vec![None; ns];
+        for step in start..start + 4 * c.slip_mean_steps as u64 {
+            let p = step_params(&c, step);
+            assert!(!p.preparing);
+            // After the first step the block sits at the anchors' position,
+            // so re-pinned junctions stay pinned.
+            let ux = if step == start { u[0] } else { 0.0 };
+            let slots = JunctionSlots {
+                spring: &mut spring,
+                state: &mut state,
+            };
+            junctions(&c, &p, 0, [ux, u[1]], [0.0; 2], slots);
+            for (j, s) in state.iter().enumerate() {
+                if s[0] == PINNED && pinned_at[j].is_none() {
+                    pinned_at[j] = Some(step);
+                }
+            }
+        }
+        for (j, at) in pinned_at.iter().enumerate() {
+            let n = slip_steps(c.seed, 0, j as u32, 1, c.slip_mean_steps, c.slip_std_steps);
+            assert_eq!(*at, Some(start + n as u64), "junction {j}");
+            assert_eq!(state[j][1], 1, "junction {j} broke once");
+        }
+    }
+
+    /// A block lifted off the track while its junctions slip: none re-pins
+    /// while it is open (and none with zero stiffness); pressed back, all
+    /// re-pin at once with the stiffness of the new normal force and carry
+    /// force again.
+    #[test]
+    fn junctions_wait_while_the_block_is_lifted_and_re_pin_when_pressed_back() {
+        let (m, c, mut spring, mut state) = pinned_block();
+        let ns = c.junction_count;
+        let step0 = m.prep_steps + 10;
+        let pressed = -1.0e-6;
+        let run = |step: u64,
+                   ux: f64,
+                   uz: f64,
+                   spring: &mut [JunctionSpring<f64, f64>],
+                   state: &mut [[u32; 2]]| {
+            let slots = JunctionSlots { spring, state };
+            junctions(&c, &step_params(&c, step), 0, [ux, uz], [0.0; 2], slots)
+        };
+        // Break them all, then lift the block for longer than any slip.
+        run(step0, 1.0e-3, pressed, &mut spring, &mut state);
+        assert!(state.iter().all(|s| s[0] != PINNED));
+        let lifted = 1.0e-6;
+        let wait = 4 * c.slip_mean_steps as u64;
+        for step in step0 + 1..step0 + wait {
+            let (friction, normal) = run(step, 0.0, lifted, &mut spring, &mut state);
+            assert_eq!((friction, normal), (0.0, 0.0));
+            assert!(state.iter().all(|s| s[0] != PINNED), "none re-pins lifted");
+        }
+        assert!(state.iter().all(|s| s[0] == 0), "all waiting");
+        // Pressed back: every junction re-pins with k_j = sqrt(c f_N) > 0.
+        let back = step0 + wait;
+        run(back, 0.0, pressed, &mut spring, &mut state);
+        let f_n = c.k_foundation * 1.0e-6 / ns as f64;
+        let k = c.junction_stiffness(f_n);
+        assert!(k > 0.0);
+        assert!(state.iter().all(|s| s[0] == PINNED));
+        assert!(spring.iter().all(|s| s.stiffness == k && s.anchor == 0.0));
+        // And they hold: a small displacement meets −Ns·k_j·du.
+        let (friction, _) = run(back + 1, 1.0e-9, pressed, &mut spring, &mut state);
+        assert!((friction + ns as f64 * k * 1.0e-9).abs() < 1e-12 * ns as f64 * k);
+    }
+}

@@ -1,0 +1,209 @@
+//! Reading a run back: metadata, the scenario, and every channel decoded.
+//! Reads record by record, so a file cut short by a killed run yields
+//! everything up to its last complete chunk.
+
+use super::messages::{Bulk, FastForwardJump, Global, Interface};
+use super::scan::{scan, Ending, Flow};
+use super::OutputError;
+use crate::analysis::events::InterfaceSeries;
+use mcap::records::Record;
+use prost::Message;
+use std::collections::{BTreeMap, HashMap};
+use std::path::Path;
+
+/// A run file, decoded.
+#[derive(Debug, Default, Clone)]
+pub struct RunFile {
+    pub metadata: BTreeMap<String, String>,
+    pub scenario: Option<String>,
+    pub global: Vec<Global>,
+    pub interface: Vec<Interface>,
+    pub bulk: Vec<Bulk>,
+    /// Quasi-static jumps (fast-forwarded runs).
+    pub fast_forward: Vec<FastForwardJump>,
+    /// Totals of the fast-forward (`slipfront_fast_forward` metadata).
+    pub fast_forward_totals: BTreeMap<String, String>,
+    /// One line per start, resume and branch (`slipfront_history`).
+    pub history: Vec<String>,
+    /// The file ended before its summary (the run was killed).
+    pub truncated: bool,
+}
+
+const GIB: f64 = (1u64 << 30) as f64;
+
+/// How many bytes of decoded messages a read may hold: SLIPFRONT_READ_MEMORY
+/// if set, else half the memory available now (the analysis copies the
+/// interface rows once more).
+pub fn memory_budget() -> u64 {
+    if let Some(v) = std::env::var("SLIPFRONT_READ_MEMORY")
+        .ok()
+        .and_then(|v| v.trim().parse::<f64>().ok())
+        .filter(|v| *v > 0.0)
+    {
+        return v as u64;
+    }
+    crate::engines::memory::available_bytes().map_or(8 << 30, |b| b / 2)
+}
+
+impl RunFile {
+    pub fn read(path: &Path) -> Result<RunFile, OutputError> {
+        RunFile::read_within(path, memory_budget())
+    }
+
+    /// Reads `path` record by record from disk ([`super::scan`]), stopping
+    /// with an error once the decoded messages would pass `budget` bytes.
+    pub fn read_within(path: &Path, budget: u64) -> Result<RunFile, OutputError> {
+        let fail = |why: String| OutputError::Read {
+            path: path.display().to_string(),
+            why,
+        };
+        let size = std::fs::metadata(path).map_err(|e| fail(e.to_string()))?;
+        if !size.is_file() {
+            return Err(fail("not a regular file".into()));
+        }
+        let mut run = RunFile::default();
+        let mut topics: HashMap<u16, String> = HashMap::new();
+        let mut saw_slipfront = false;
+        let mut decoded: u64 = 0;
+        let ending = scan(path, fail, |record| {
+            match record {
+                Record::Channel(c) => {
+                    topics.insert(c.id, c.topic);
+                }
+                Record::Metadata(m) if m.name == "slipfront" => {
+                    saw_slipfront = true;
+                    run.metadata = m.metadata
+                }
+                Record::Metadata(m) if m.name == "slipfront_history" => {
+                    run.history = m.metadata.into_values().collect()
+                }
+                Record::Metadata(m) if m.name == "slipfront_fast_forward" => {
+                    run.fast_forward_totals = m.metadata
+                }
+                Record::Attachment { header, data, .. } if header.name == "scenario.toml" => {
+                    run.scenario = Some(String::from_utf8_lossy(&data).into_owned())
+                }
+                Record::Message { header, data } => {
+                    let bad =
+                        |e: prost::DecodeError| fail(format!("message {}: {e}", header.sequence));
+                    // Decoded, a message takes about as many bytes as it
+                    // has on disk, plus its vectors' headers.
+                    decoded += data.len() as u64 + 128;
+                    if decoded > budget {
+                        return Err(fail(format!(
+                            "its messages need more than {:.2} GiB of memory once decoded, \
+                             the most this machine can give now ({} bytes on disk); set \
+                             SLIPFRONT_READ_MEMORY=BYTES to allow more",
+                            budget as f64 / GIB,
+                            size.len()
+                        )));
+                    }
+                    match topics.get(&header.channel_id).map(String::as_str) {
+                        Some("/global") => run.global.push(Global::decode(&data[..]).map_err(bad)?),
+                        Some("/interface") => run
+                            .interface
+                            .push(Interface::decode(&data[..]).map_err(bad)?),
+                        Some("/bulk") => run.bulk.push(Bulk::decode(&data[..]).map_err(bad)?),
+                        Some("/fast_forward") => run
+                            .fast_forward
+                            .push(FastForwardJump::decode(&data[..]).map_err(bad)?),
+                        _ => {}
+                    }
+                }
+                _ => {}
+            }
+            Ok(Flow::Continue)
+        })?;
+        let saw_footer = ending == Ending::Complete;
+        run.truncated |= !saw_footer;
+        if !saw_slipfront {
+            return Err(fail(
+                "not a slipfront run file (an MCAP file without the `slipfront` metadata \
+                 record)"
+                    .into(),
+            ));
+        }
+        run.check_consistent().map_err(fail)?;
+        Ok(run)
+    }
+
+    /// Every /interface row as long as the interface, and no channel's
+    /// time going backwards: what the analysis relies on. A file that
+    /// breaks either is damaged.
+    fn check_consistent(&self) -> Result<(), String> {
+        let nx = self
+            .metadata
+            .get("nx")
+            .and_then(|v| v.parse::<usize>().ok())
+            .or_else(|| self.interface.first().map(|m| m.pinned_fraction.len()));
+        for (k, m) in self.interface.iter().enumerate() {
+            let lengths = [
+                m.shear_stress.len(),
+                m.normal_stress.len(),
+                m.pinned_fraction.len(),
+                m.slip.len(),
+                m.slip_speed.len(),
+            ];
+            if let Some(nx) = nx.filter(|&nx| lengths.iter().any(|&l| l != nx)) {
+                return Err(format!(
+                    "damaged: /interface message {k} (t = {:e} s) has rows of lengths \
+                     {lengths:?}, the interface has {nx} blocks",
+                    m.time
+                ));
+            }
+        }
+        let backwards = |name: &str, times: &mut dyn Iterator<Item = f64>| {
+            let mut last = f64::NEG_INFINITY;
+            for (k, t) in times.enumerate() {
+                if !t.is_finite() || t < last {
+                    return Err(format!(
+                        "damaged: {name} message {k} is at t = {t:e} s, after one at {last:e} s"
+                    ));
+                }
+                last = t;
+            }
+            Ok(())
+        };
+        backwards("/global", &mut self.global.iter().map(|m| m.time))?;
+        backwards("/interface", &mut self.interface.iter().map(|m| m.time))?;
+        backwards("/bulk", &mut self.bulk.iter().map(|m| m.time))
+    }
+
+    /// F/F_N of the global sample nearest to time `t` (NaN without one).
+    pub fn drive_ratio_at(&self, t: f64) -> f64 {
+        let k = self.global.partition_point(|g| g.time < t);
+        [k.checked_sub(1), Some(k)]
+            .into_iter()
+            .flatten()
+            .filter_map(|i| self.global.get(i))
+            .min_by(|a, b| (a.time - t).abs().total_cmp(&(b.time - t).abs()))
+            .map_or(f64::NAN, |g| g.drive_ratio)
+    }
+
+    /// Lattice spacing from the metadata (m).
+    pub fn spacing(&self) -> f64 {
+        self.metadata
+            .get("spacing")
+            .and_then(|s| s.parse().ok())
+            .unwrap_or(1.0)
+    }
+
+    /// The interface channel as a series for the event analysis.
+    pub fn interface_series(&self) -> InterfaceSeries {
+        InterfaceSeries {
+            time: self.interface.iter().map(|m| m.time).collect(),
+            spacing: self.spacing(),
+            pinned: self
+                .interface
+                .iter()
+                .map(|m| m.pinned_fraction.clone())
+                .collect(),
+            slip: self.interface.iter().map(|m| m.slip.clone()).collect(),
+            slip_speed: self
+                .interface
+                .iter()
+                .map(|m| m.slip_speed.clone())
+                .collect(),
+        }
+    }
+}
