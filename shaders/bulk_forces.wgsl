@@ -1,6 +1,7 @@
 // Springs, dashpots, foundation and external loads on one block.
 // CPU twin: src/engines/kernels/bulk_forces.rs bulk_force. Terms a scene does not use
 // are removed by the pipeline-overridable constants below.
+// import: common, coordinates, scene, state
 
 override DAMPING_FORM: u32 = 1u;      // 0 none, 1 full relative velocity, 2 bond-projected
 override USE_FOUNDATION: bool = true;

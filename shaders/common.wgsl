@@ -1,6 +1,8 @@
 // Shared by both kernels: the bindings other than the block state, the
 // force laws every phase uses, and the loads of a step. The structs and
 // constants come from src/engines/gpu/layout.rs (prepended as a prelude).
+// CPU twin: src/engines/step_params.rs step_params (the loads of a step).
+// import: scene, coordinates
 
 // The run constants `c` and the batch `batch` of the scene a thread steps
 // are declared by the scene snippet (scene_single.wgsl or

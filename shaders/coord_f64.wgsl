@@ -3,6 +3,8 @@
 // twins of src/model/real.rs `impl Coordinate<f64> for f64`. The same interface
 // as the double-single functions of shaders/double_single.wgsl, which the
 // kernels compile with in mixed precision.
+// CPU twin: src/model/real.rs Coordinate, ForceSum (their f64 impls).
+// import: (none)
 
 fn coord_add(a: coord, d: real) -> coord {
     return a + d;

@@ -1,5 +1,6 @@
 // Amontons–Coulomb friction on interface block ix, given the other forces
-// along x; returns (friction, normal force). CPU twin: src/engines/kernels/coulomb.rs.
+// along x; returns (friction, normal force). CPU twin: src/engines/kernels/coulomb.rs coulomb.
+// import: common, coordinates, scene, state
 
 fn coulomb(ix: u32, other: real, ld: Loads) -> vec2<real> {
     let u = load_disp(ix);

@@ -1,11 +1,12 @@
 // Double-single coordinates: a displacement is the unevaluated sum hi + lo
 // of two f32 (vec2: x = hi, y = lo), so creep increments below one f32 ulp
-// of u are kept. CPU twins: src/model/real.rs DoubleSingle::ds_add and ds_diff,
-// the same operations in the same order.
+// of u are kept. CPU twin: src/model/real.rs DoubleSingle::ds_add, DoubleSingle::ds_diff
+// (the same operations in the same order), CompensatedSum.
 //
 // c.one is a runtime 1.0 from the uniform block. Multiplying the partial
 // sums by it is exact but opaque to the compiler, so no driver can
 // reassociate (s - hi) - s to -hi and cancel the error terms (gpuweb #2076).
+// import: scene
 
 // hi + lo + d, renormalised.
 fn ds_add(a: vec2<f32>, d: f32) -> vec2<f32> {

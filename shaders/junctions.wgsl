@@ -4,6 +4,7 @@
 // Lane l of block ix handles junctions l, l + JUNCTION_LANES, ...; the
 // caller adds the lane sums in lane order.
 // CPU twin: src/engines/kernels/junctions.rs junction_lane.
+// import: common, coordinates, rng, scene, state
 
 fn junction_stiffness(f_n: real) -> real {
     if c.stiffness_normal_load != 0u {

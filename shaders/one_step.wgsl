@@ -3,6 +3,7 @@
 // junction lanes in order), then the leapfrog update written to the other
 // state buffer. Workgroup row z is scene z of an ensemble. No barrier, so software adapters run it without
 // coroutines. CPU twin: src/engines/cpu/mod.rs CpuEngine::one_step.
+// import: common, scene, step_forces, verlet
 
 @compute @workgroup_size(WORKGROUP)
 fn one_step(

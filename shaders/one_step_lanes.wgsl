@@ -6,6 +6,7 @@
 // workgroup barrier makes llvmpipe run the whole shader as coroutines, so
 // software adapters take one_step (serial lanes) instead.
 // CPU twin: src/engines/cpu/mod.rs CpuEngine::one_step (force pass and update).
+// import: bulk_forces, common, coordinates, junctions, scene, state, step_forces, verlet
 
 var<workgroup> lane_sum: array<force_sum, JUNCTION_LANES>;
 

@@ -5,6 +5,8 @@
 // place, then waits at a barrier again. The thread that updates block ix
 // is the one that adds its lane sums, so no third barrier is needed.
 // Same phase functions, in the same order, as the one-step kernel.
+// CPU twin: src/engines/cpu/mod.rs CpuEngine::one_step (one step of its loop).
+// import: bulk_forces, common, coordinates, coulomb, junctions, record_buffers, record_common, scene, state, verlet
 
 // With an output file, the samples of the batch (batch.records of them,
 // in step order; src/engines/gpu/recorder.rs): a sample of step s is recorded in

@@ -10,8 +10,8 @@
 // reduces each workgroup's sums to a partial, then record_finish adds the
 // partials. The sample's sums also decide the fast interface cadence for
 // the next samples.
-// The shared part is record_common.wgsl. CPU twin: src/engines/sample.rs
-// record_sample.
+// The shared part is record_common.wgsl. CPU twin: src/engines/sample.rs record_sample.
+// import: coordinates, record_buffers, record_common, scene
 
 @group(0) @binding(1) var<storage, read> disp_a: array<Disp>;
 @group(0) @binding(2) var<storage, read> vel_a: array<vec2<real>>;

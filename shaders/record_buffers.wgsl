@@ -4,6 +4,8 @@
 // (RECORD_INTERFACE_WORDS per block) from plan.interface_offset and the
 // bulk fields (RECORD_BULK_WORDS per block) from plan.bulk_offset, in the
 // slots an entry names. One scene: block i is element i of every buffer.
+// CPU twin: src/engines/gpu/layout.rs GpuRecordPlan, GpuSampleSums (the host's layout).
+// import: (none)
 
 @group(0) @binding(13) var<storage, read_write> plan: RecordPlan;
 @group(0) @binding(14) var<storage, read_write> sums: array<SampleSums>;

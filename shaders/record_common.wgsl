@@ -4,6 +4,7 @@
 // persistent kernel, which records in its loop. The including module
 // declares c, flags, junction_state, slide and the record buffers
 // (record_buffers.wgsl). CPU twin: src/engines/sample.rs record_sample.
+// import: bindings, coordinates, record_buffers, scene
 
 // The fixed cadences make the sample due, or the fast one does and is on.
 fn sample_due(e: RecordEntry) -> bool {

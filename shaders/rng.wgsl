@@ -1,4 +1,6 @@
 // Counter-based junction RNG: the same functions as src/model/rng.rs, line for line.
+// CPU twin: src/model/rng.rs pcg_hash, draw_key, uniform_pair, standard_normal, slip_steps
+// import: coordinates
 
 fn pcg_hash(v: u32) -> u32 {
     let state = v * 747796405u + 2891336453u;

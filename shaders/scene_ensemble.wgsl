@@ -6,6 +6,8 @@
 // constants and batch keep the phase functions the same as for one scene;
 // they are not uniform to the uniformity analysis, so the kernels with
 // barriers take their loop bounds through workgroupUniformLoad.
+// CPU twin: src/engines/gpu/layout.rs GpuConsts, GpuBatch (one of each per scene).
+// import: common
 
 @group(0) @binding(0) var<storage, read> scene_consts: array<Consts>;
 @group(1) @binding(1) var<storage, read> scene_batches: array<Batch>;

@@ -4,6 +4,8 @@
 // submit (2.7 MB each), so the one-step kernel keeps one group and picks
 // its state copy from the step parity. Every buffer holds this one scene:
 // its offsets are 0 (folded away).
+// CPU twin: src/engines/gpu/layout.rs GpuConsts, GpuBatch (the host's layout).
+// import: (none)
 
 @group(0) @binding(0) var<uniform> c: Consts;
 @group(1) @binding(1) var<storage, read> batch: Batch;

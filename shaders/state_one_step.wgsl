@@ -2,6 +2,8 @@
 // one and writes step n+1 to the other (ping-pong), so no block waits for
 // another. Which copy holds step n follows from the batch's starting copy
 // and the step offset (one bind group for all dispatches, see common.wgsl).
+// CPU twin: src/engines/gpu/mod.rs state_group (the host side of these bindings).
+// import: common, scene
 
 @group(0) @binding(1) var<storage, read_write> disp_a: array<Disp>;
 @group(0) @binding(2) var<storage, read_write> vel_a: array<vec2<real>>;

@@ -3,6 +3,7 @@
 // one after the other, in lane order (the CPU twin's order). With `ready`
 // the forces were computed already (by a snapshot's force pass): read them.
 // Returns (force, friction). CPU twin: src/engines/cpu/mod.rs CpuEngine::force_pass.
+// import: bulk_forces, junctions, coulomb, common, coordinates, scene, state
 
 fn block_forces(i: u32, ld: Loads, ready: bool) -> vec3<real> {
     if ready {

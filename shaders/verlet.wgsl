@@ -1,6 +1,7 @@
 // The leapfrog update of one block, v += dt F/m, u += dt v, with
 // constraints and prescribed motion; u is a coordinate (double-single in mixed
-// precision), so the increment dt v keeps its low bits. CPU twin: src/engines/kernels/verlet.rs.
+// precision), so the increment dt v keeps its low bits. CPU twin: src/engines/kernels/verlet.rs verlet.
+// import: common, coordinates, scene, state
 
 fn verlet(i: u32, f: vec2<real>, friction: real, ld: Loads, step: u32) {
     let v = load_vel(i);

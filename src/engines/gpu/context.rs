@@ -1,6 +1,6 @@
 //! Adapter selection: a hardware GPU, else a software one (lavapipe).
 
-use super::bindings::entry;
+use super::bindings::Bindings;
 use super::precision::GpuReal;
 use super::record_pipelines::RecordPipelines;
 use super::shaders::Kernel;
@@ -55,7 +55,12 @@ pub const ENSEMBLE_STORAGE_BINDINGS: u32 = STORAGE_BINDINGS + 1;
 struct KernelLayout {
     group: wgpu::BindGroupLayout,
     pipeline: wgpu::PipelineLayout,
+    /// What the kernels of this family declare (`bindings::Bindings`).
+    bindings: Bindings,
 }
+
+/// The batch group's binding that takes a dynamic offset per dispatch.
+pub const STEP_OFFSET: &str = "step_offset";
 
 /// Index in `GpuContext::layouts`.
 fn layout_index(kernel: Kernel, ensemble: bool) -> usize {
@@ -119,43 +124,43 @@ impl GpuContext {
                 *slot = Some(e.to_string());
             }
         }));
-        let read = wgpu::BufferBindingType::Storage { read_only: true };
-        let write = wgpu::BufferBindingType::Storage { read_only: false };
         let layout = |label: &str, entries: &[wgpu::BindGroupLayoutEntry]| {
             device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
                 label: Some(label),
                 entries,
             })
         };
-        let batch_layout = layout("batch", &[entry(0, read, true), entry(1, read, false)]);
+        // Group 1 (the step offset, with a dynamic offset per dispatch, and
+        // the batch) is the same in every kernel.
+        let reflect = |kernel: Kernel, ensemble: bool| {
+            Bindings::reflect(&kernel.source::<f32>(ensemble))
+                .expect("the kernels parse (tested with naga)")
+        };
+        let batch_layout = layout(
+            "batch",
+            &reflect(Kernel::OneStep, false).layout(1, &[STEP_OFFSET]),
+        );
         let kernel_layout = |kernel: Kernel, ensemble: bool| {
-            // Binding 0: the constants (a uniform block, or one record per
-            // scene); 5..=11 (shaders/common.wgsl): force, flags (read
-            // only), contact, junction spring and state, slide, status.
-            let consts = if ensemble {
-                read
-            } else {
-                wgpu::BufferBindingType::Uniform
+            // Group 0 as the kernel's module declares it: the constants (a
+            // uniform block, or one record per scene), the state, and the
+            // persistent kernel's record buffers.
+            // The one-step kernels share a layout: what either uses.
+            let bindings = match kernel {
+                Kernel::OneStep | Kernel::OneStepLanes => reflect(Kernel::OneStep, ensemble)
+                    .union(reflect(Kernel::OneStepLanes, ensemble)),
+                Kernel::Persistent => reflect(kernel, ensemble),
             };
-            let mut v = vec![entry(0, consts, false)];
-            v.extend((5..=11).map(|b| entry(b, if b == 6 { read } else { write }, false)));
-            let state: &[u32] = match kernel {
-                // 13–16: the record buffers (shaders/record_buffers.wgsl)
-                // and the batch's samples.
-                Kernel::Persistent => &[1, 2, 12, 13, 14, 15],
-                Kernel::OneStep | Kernel::OneStepLanes => &[1, 2, 3, 4],
-            };
-            v.extend(state.iter().map(|&b| entry(b, write, false)));
-            if kernel == Kernel::Persistent {
-                v.push(entry(16, read, false));
-            }
-            let group = layout(kernel.entry_point(), &v);
+            let group = layout(kernel.entry_point(), &bindings.layout(0, &[]));
             let pipeline = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
                 label: Some("slipfront"),
                 bind_group_layouts: &[Some(&group), Some(&batch_layout)],
                 immediate_size: 0,
             });
-            KernelLayout { group, pipeline }
+            KernelLayout {
+                group,
+                pipeline,
+                bindings,
+            }
         };
         let layouts = Arc::new([
             kernel_layout(Kernel::OneStep, false),
@@ -179,6 +184,11 @@ impl GpuContext {
     /// Group 0's layout of `kernel` (for an ensemble or one scene).
     pub fn state_layout(&self, kernel: Kernel, ensemble: bool) -> &wgpu::BindGroupLayout {
         &self.layouts[layout_index(kernel, ensemble)].group
+    }
+
+    /// The bindings the kernels of `kernel`'s family declare.
+    pub fn bindings(&self, kernel: Kernel, ensemble: bool) -> &Bindings {
+        &self.layouts[layout_index(kernel, ensemble)].bindings
     }
 
     /// The pipeline of `kernel` in precision `T` with `constants`, compiled

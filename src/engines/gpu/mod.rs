@@ -76,7 +76,8 @@ struct Buffers {
 }
 
 /// Group 0 of `kernel`: the state buffers, and for the persistent kernel the
-/// record buffers (plan, sums, rows, entries) at 13–16.
+/// record buffers `[plan, sums, rows, entries]`, bound by the names the
+/// kernel's module declares (`bindings::Bindings`).
 fn state_group(
     ctx: &GpuContext,
     kernel: Kernel,
@@ -84,31 +85,36 @@ fn state_group(
     b: &Buffers,
     records: [&wgpu::Buffer; 4],
 ) -> wgpu::BindGroup {
-    let mut entries = vec![
-        whole(0, &b.consts),
-        whole(5, &b.force),
-        whole(6, &b.flags),
-        whole(7, &b.contact),
-        whole(8, &b.junction_spring),
-        whole(9, &b.junction_state),
-        whole(10, &b.slide),
-        whole(11, &b.status),
-        whole(1, &b.disp[0]),
-        whole(2, &b.vel[0]),
-    ];
-    match kernel {
-        Kernel::OneStep | Kernel::OneStepLanes => {
-            entries.extend([whole(3, &b.disp[1]), whole(4, &b.vel[1])])
-        }
-        Kernel::Persistent => {
-            entries.push(whole(12, &b.lane_partial));
-            entries.extend((13..).zip(records).map(|(k, buffer)| whole(k, buffer)));
-        }
-    }
+    let [plan, sums, rows, entries] = records;
+    let resources = [
+        ("c", &b.consts),
+        ("scene_consts", &b.consts),
+        // The one-step kernels' ping-pong copies; the persistent kernel's
+        // state in place.
+        ("disp_a", &b.disp[0]),
+        ("vel_a", &b.vel[0]),
+        ("disp_b", &b.disp[1]),
+        ("vel_b", &b.vel[1]),
+        ("disp", &b.disp[0]),
+        ("vel", &b.vel[0]),
+        ("force", &b.force),
+        ("flags", &b.flags),
+        ("contact", &b.contact),
+        ("junction_spring", &b.junction_spring),
+        ("junction_state", &b.junction_state),
+        ("slide", &b.slide),
+        ("status", &b.status),
+        ("lane_partial", &b.lane_partial),
+        ("plan", plan),
+        ("sums", sums),
+        ("rows", rows),
+        ("record_entries", entries),
+    ]
+    .map(|(name, buffer)| (name, buffer.as_entire_binding()));
     ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
         label: Some(kernel.entry_point()),
         layout: ctx.state_layout(kernel, ensemble),
-        entries: &entries,
+        entries: &ctx.bindings(kernel, ensemble).entries(0, &resources),
     })
 }
 
@@ -433,17 +439,21 @@ impl<T: GpuReal> GpuEngine<T> {
         let batch_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("batch"),
             layout: &ctx.batch_layout,
-            entries: &[
-                wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
-                        buffer: &offsets,
-                        offset: 0,
-                        size: wgpu::BufferSize::new(4),
-                    }),
-                },
-                whole(1, &batch_buffer),
-            ],
+            entries: &ctx.bindings(kernel, ensemble).entries(
+                1,
+                &[
+                    (
+                        context::STEP_OFFSET,
+                        wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                            buffer: &offsets,
+                            offset: 0,
+                            size: wgpu::BufferSize::new(4),
+                        }),
+                    ),
+                    ("batch", batch_buffer.as_entire_binding()),
+                    ("scene_batches", batch_buffer.as_entire_binding()),
+                ],
+            ),
         });
         let variant = Variant::for_model(model);
         let mut constants = variant.constants.clone();
@@ -848,13 +858,6 @@ impl<T: GpuReal> GpuEngine<T> {
                 self.steps_per_dispatch, self.persistent_threads
             ),
         }
-    }
-}
-
-pub(crate) fn whole(binding: u32, buffer: &wgpu::Buffer) -> wgpu::BindGroupEntry<'_> {
-    wgpu::BindGroupEntry {
-        binding,
-        resource: buffer.as_entire_binding(),
     }
 }
 

@@ -29,16 +29,6 @@ impl WgslType for [f32; 2] {
     const WGSL: &'static str = "array<f32, 2>";
 }
 
-/// The coordinate functions of each precision (`GpuReal::COORDINATES`).
-pub const DOUBLE_SINGLE: &str = include_str!(concat!(
-    env!("CARGO_MANIFEST_DIR"),
-    "/shaders/double_single.wgsl"
-));
-pub const COORD_F64: &str = include_str!(concat!(
-    env!("CARGO_MANIFEST_DIR"),
-    "/shaders/coord_f64.wgsl"
-));
-
 /// A number type the kernels compute in: f32 (mixed) or f64.
 pub trait GpuReal: Real<Coord: Pod + WgslType> + WgslType {
     /// A coordinate inside a struct that must stay 4-byte aligned (the
@@ -46,7 +36,8 @@ pub trait GpuReal: Real<Coord: Pod + WgslType> + WgslType {
     type Packed: Pod + WgslType + std::fmt::Debug;
     fn pack(c: Self::Coord) -> Self::Packed;
     fn unpack(p: Self::Packed) -> Self::Coord;
-    /// The WGSL of the coordinate functions.
+    /// The shader file of the coordinate functions (the `coordinates`
+    /// slot of `shaders::compose`).
     const COORDINATES: &'static str;
     /// What naga must allow, and the device must have, for these kernels.
     const CAPABILITIES: naga::valid::Capabilities;
@@ -65,7 +56,7 @@ impl GpuReal for f32 {
     fn unpack(p: [f32; 2]) -> DoubleSingle {
         DoubleSingle { hi: p[0], lo: p[1] }
     }
-    const COORDINATES: &'static str = DOUBLE_SINGLE;
+    const COORDINATES: &'static str = "double_single";
     const CAPABILITIES: naga::valid::Capabilities = naga::valid::Capabilities::empty();
     const FEATURES: wgpu::Features = wgpu::Features::empty();
     const RECORDS_ON_DEVICE: bool = true;
@@ -79,7 +70,7 @@ impl GpuReal for f64 {
     fn unpack(p: f64) -> f64 {
         p
     }
-    const COORDINATES: &'static str = COORD_F64;
+    const COORDINATES: &'static str = "coord_f64";
     const CAPABILITIES: naga::valid::Capabilities = naga::valid::Capabilities::FLOAT64;
     const FEATURES: wgpu::Features = wgpu::Features::SHADER_F64;
     const RECORDS_ON_DEVICE: bool = false;

@@ -1,7 +1,10 @@
 //! The output kernels' pipelines (`shaders/record.wgsl`) and their bind
 //! group layouts, built once per device (`GpuContext::record_pipelines`).
 
-use super::bindings::entry;
+use super::bindings::Bindings;
+
+/// The output module's binding that takes a dynamic offset per sample.
+pub const RECORD_ENTRY: &str = "entry";
 
 /// Lattices up to this many blocks record a sample in one dispatch of one
 /// workgroup (`record_small`): a dispatch costs more than the work there.
@@ -9,6 +12,8 @@ pub const RECORD_SMALL_BLOCKS: usize = 16_384;
 
 /// The layouts and pipelines of the output kernels, built once per context.
 pub struct RecordPipelines {
+    /// What the output module declares (`bindings::Bindings`).
+    pub bindings: Bindings,
     pub group: wgpu::BindGroupLayout,
     pub entry: wgpu::BindGroupLayout,
     pub small: wgpu::ComputePipeline,
@@ -20,20 +25,18 @@ impl RecordPipelines {
     /// `threads`: the workgroup of the one-workgroup kernels (a power of
     /// two up to 256).
     pub fn new(device: &wgpu::Device, threads: u32) -> RecordPipelines {
-        let read = wgpu::BufferBindingType::Storage { read_only: true };
-        let write = wgpu::BufferBindingType::Storage { read_only: false };
-        // 0: constants; 1–7, 9, 10: the state (read only); 13: the plan;
-        // 14: sums and partials; 15: rows.
-        let mut entries = vec![entry(0, wgpu::BufferBindingType::Uniform, false)];
-        entries.extend([1, 2, 3, 4, 5, 6, 7, 9, 10].map(|b| entry(b, read, false)));
-        entries.extend([13, 14, 15].map(|b| entry(b, write, false)));
+        // The output module's own declarations (shaders/record.wgsl):
+        // group 0 the constants, the state (read only) and the record
+        // buffers; group 1 the sample's entry, at a dynamic offset.
+        let source = super::shaders::record_source::<f32>();
+        let bindings = Bindings::reflect(&source).expect("record.wgsl parses (tested with naga)");
         let group = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("record"),
-            entries: &entries,
+            entries: &bindings.layout(0, &[]),
         });
         let entry_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("record entry"),
-            entries: &[entry(0, read, true)],
+            entries: &bindings.layout(1, &[RECORD_ENTRY]),
         });
         let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("record"),
@@ -42,7 +45,7 @@ impl RecordPipelines {
         });
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("record"),
-            source: wgpu::ShaderSource::Wgsl(super::shaders::record_source::<f32>().into()),
+            source: wgpu::ShaderSource::Wgsl(source.into()),
         });
         let pipeline = |name: &str| {
             device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
@@ -58,6 +61,7 @@ impl RecordPipelines {
             })
         };
         RecordPipelines {
+            bindings,
             small: pipeline("record_small"),
             sample: pipeline("record_sample"),
             finish: pipeline("record_finish"),

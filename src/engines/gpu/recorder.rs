@@ -157,37 +157,43 @@ impl Recorder {
             mapped_at_creation: false,
         });
         let pipelines = ctx.record_pipelines();
-        use super::whole;
         let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("record"),
             layout: &pipelines.group,
-            entries: &[
-                whole(0, state.consts),
-                whole(1, &state.disp[0]),
-                whole(2, &state.vel[0]),
-                whole(3, &state.disp[1]),
-                whole(4, &state.vel[1]),
-                whole(5, state.force),
-                whole(6, state.flags),
-                whole(7, state.contact),
-                whole(9, state.junction_state),
-                whole(10, state.slide),
-                whole(13, &plan_buffer),
-                whole(14, &sums),
-                whole(15, &rows),
-            ],
+            entries: &pipelines.bindings.entries(
+                0,
+                &[
+                    ("c", state.consts),
+                    ("disp_a", &state.disp[0]),
+                    ("vel_a", &state.vel[0]),
+                    ("disp_b", &state.disp[1]),
+                    ("vel_b", &state.vel[1]),
+                    ("force", state.force),
+                    ("flags", state.flags),
+                    ("contact", state.contact),
+                    ("junction_state", state.junction_state),
+                    ("slide", state.slide),
+                    ("plan", &plan_buffer),
+                    ("sums", &sums),
+                    ("rows", &rows),
+                ]
+                .map(|(name, buffer)| (name, buffer.as_entire_binding())),
+            ),
         });
         let entry_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("record entry"),
             layout: &pipelines.entry,
-            entries: &[wgpu::BindGroupEntry {
-                binding: 0,
-                resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
-                    buffer: &entries,
-                    offset: 0,
-                    size: wgpu::BufferSize::new(size_of::<GpuRecordEntry>() as u64),
-                }),
-            }],
+            entries: &pipelines.bindings.entries(
+                1,
+                &[(
+                    super::record_pipelines::RECORD_ENTRY,
+                    wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                        buffer: &entries,
+                        offset: 0,
+                        size: wgpu::BufferSize::new(size_of::<GpuRecordEntry>() as u64),
+                    }),
+                )],
+            ),
         });
         Ok(Recorder {
             plan: *plan,

@@ -1,83 +1,146 @@
-//! WGSL sources, composed per kernel (the generated prelude of
-//! `layout.rs`, the shared snippets, the scene snippet (one scene, or an
-//! ensemble of scenes), the state bindings of the kernel and its entry
-//! file), and the variant a scene needs: which kernel runs and its
-//! override constants. Every module is generated in either precision
-//! (`GpuReal`: mixed f32 or f64) from the same files: only the prelude's
-//! type aliases and the coordinate functions differ.
+//! WGSL sources and how they are composed into modules, and the variant a
+//! scene needs: which kernel runs and its override constants.
+//!
+//! Every file of `shaders/` says what it uses in an `// import:` line: other
+//! files by name, or a slot that each module fills with one file of its
+//! choice: `scene` (one scene or an ensemble of scenes per dispatch),
+//! `state` (the one-step kernels' ping-pong state, or the persistent
+//! kernel's), `coordinates` (double-single or f64: the precision) and
+//! `bindings` (where the output code finds the state buffers: the
+//! kernels' common.wgsl, or the output module's read-only views). A module
+//! is the generated prelude of `layout.rs` and the closure of its entry
+//! file's imports, each file once (WGSL declarations are order-free).
+//! Every file validates with naga with only what it imports, so the
+//! imports are all there is to know (`every_shader_validates_with_only_its_imports`).
+//! Every module is generated in either precision (`GpuReal`: mixed f32 or
+//! f64) from the same files: only the prelude's type aliases and the
+//! coordinate functions differ.
 
 use super::precision::GpuReal;
 use crate::model::scenario::{DampingForm, FrictionLaw};
 use crate::model::{Driver, Model};
 
-pub const COMMON: &str = include_str!(concat!(env!("CARGO_MANIFEST_DIR"), "/shaders/common.wgsl"));
-pub const SCENE_SINGLE: &str = include_str!(concat!(
-    env!("CARGO_MANIFEST_DIR"),
-    "/shaders/scene_single.wgsl"
-));
-pub const SCENE_ENSEMBLE: &str = include_str!(concat!(
-    env!("CARGO_MANIFEST_DIR"),
-    "/shaders/scene_ensemble.wgsl"
-));
-pub const RNG: &str = include_str!(concat!(env!("CARGO_MANIFEST_DIR"), "/shaders/rng.wgsl"));
-pub const BULK_FORCES: &str = include_str!(concat!(
-    env!("CARGO_MANIFEST_DIR"),
-    "/shaders/bulk_forces.wgsl"
-));
-pub const JUNCTIONS: &str = include_str!(concat!(
-    env!("CARGO_MANIFEST_DIR"),
-    "/shaders/junctions.wgsl"
-));
-pub const COULOMB: &str =
-    include_str!(concat!(env!("CARGO_MANIFEST_DIR"), "/shaders/coulomb.wgsl"));
-pub const VERLET: &str = include_str!(concat!(env!("CARGO_MANIFEST_DIR"), "/shaders/verlet.wgsl"));
-pub const STATE_ONE_STEP: &str = include_str!(concat!(
-    env!("CARGO_MANIFEST_DIR"),
-    "/shaders/state_one_step.wgsl"
-));
-pub const STATE_PERSISTENT: &str = include_str!(concat!(
-    env!("CARGO_MANIFEST_DIR"),
-    "/shaders/state_persistent.wgsl"
-));
-pub const STEP_FORCES: &str = include_str!(concat!(
-    env!("CARGO_MANIFEST_DIR"),
-    "/shaders/step_forces.wgsl"
-));
-pub const ONE_STEP: &str = include_str!(concat!(
-    env!("CARGO_MANIFEST_DIR"),
-    "/shaders/one_step.wgsl"
-));
-pub const ONE_STEP_LANES: &str = include_str!(concat!(
-    env!("CARGO_MANIFEST_DIR"),
-    "/shaders/one_step_lanes.wgsl"
-));
-pub const PERSISTENT: &str = include_str!(concat!(
-    env!("CARGO_MANIFEST_DIR"),
-    "/shaders/persistent.wgsl"
-));
-pub const RECORD: &str = include_str!(concat!(env!("CARGO_MANIFEST_DIR"), "/shaders/record.wgsl"));
-pub const RECORD_BUFFERS: &str = include_str!(concat!(
-    env!("CARGO_MANIFEST_DIR"),
-    "/shaders/record_buffers.wgsl"
-));
-pub const RECORD_COMMON: &str = include_str!(concat!(
-    env!("CARGO_MANIFEST_DIR"),
-    "/shaders/record_common.wgsl"
-));
+macro_rules! wgsl_files {
+    ($($name:literal),* $(,)?) => {
+        /// Every file of `shaders/`, by name (without `.wgsl`).
+        pub const FILES: &[(&str, &str)] = &[$((
+            $name,
+            include_str!(concat!(env!("CARGO_MANIFEST_DIR"), "/shaders/", $name, ".wgsl")),
+        )),*];
+    };
+}
+
+wgsl_files!(
+    "bulk_forces",
+    "common",
+    "coord_f64",
+    "coulomb",
+    "double_single",
+    "junctions",
+    "one_step",
+    "one_step_lanes",
+    "persistent",
+    "record",
+    "record_buffers",
+    "record_common",
+    "rng",
+    "scene_ensemble",
+    "scene_single",
+    "state_one_step",
+    "state_persistent",
+    "step_forces",
+    "verlet",
+);
+
+/// The text of shader file `name`.
+pub fn file(name: &str) -> Option<&'static str> {
+    FILES
+        .iter()
+        .find(|(n, _)| *n == name)
+        .map(|(_, text)| *text)
+}
+
+/// The names in a file's `// import:` line (none for `(none)`).
+pub fn imports(text: &str) -> Result<Vec<&str>, String> {
+    let line = text
+        .lines()
+        .find_map(|l| l.strip_prefix("// import:"))
+        .ok_or("no `// import:` line")?;
+    Ok(line
+        .split(',')
+        .map(str::trim)
+        .filter(|n| !n.is_empty() && *n != "(none)")
+        .collect())
+}
+
+/// The file each slot stands for in one module.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Slots {
+    pub scene: &'static str,
+    pub state: &'static str,
+    pub coordinates: &'static str,
+    pub bindings: &'static str,
+}
+
+impl Slots {
+    /// A kernel's slots: one scene or an ensemble, its state, `T`'s
+    /// coordinates, the kernels' bindings.
+    pub fn kernel<T: GpuReal>(ensemble: bool, state: &'static str) -> Slots {
+        Slots {
+            scene: if ensemble {
+                "scene_ensemble"
+            } else {
+                "scene_single"
+            },
+            state,
+            coordinates: T::COORDINATES,
+            bindings: "common",
+        }
+    }
+
+    fn resolve<'a>(&self, name: &'a str) -> &'a str {
+        match name {
+            "scene" => self.scene,
+            "state" => self.state,
+            "coordinates" => self.coordinates,
+            "bindings" => self.bindings,
+            other => other,
+        }
+    }
+}
+
+/// The module of entry file `entry`: `prelude`, then the entry file and
+/// every file it imports, directly or not, each once.
+pub fn compose(prelude: &str, entry: &str, slots: &Slots) -> Result<String, String> {
+    let mut order: Vec<&str> = Vec::new();
+    let mut todo = vec![entry];
+    while let Some(name) = todo.pop() {
+        let name = slots.resolve(name);
+        if order.contains(&name) {
+            continue;
+        }
+        let text = file(name).ok_or_else(|| format!("no shader file {name}.wgsl"))?;
+        order.push(name);
+        let wanted = imports(text).map_err(|e| format!("{name}.wgsl: {e}"))?;
+        todo.extend(wanted.into_iter().rev());
+    }
+    let mut module = String::from(prelude);
+    for name in order {
+        module += &format!("\n// ---- shaders/{name}.wgsl\n");
+        module += file(name).unwrap_or_default();
+    }
+    Ok(module)
+}
 
 /// The output kernels' module (`record_small`, `record_sample`,
-/// `record_finish`): one
-/// scene, no override constants.
+/// `record_finish`): one scene, no override constants.
 pub fn record_source<T: GpuReal>() -> String {
-    [
-        super::layout::wgsl_prelude::<T>().as_str(),
-        T::COORDINATES,
-        SCENE_SINGLE,
-        RECORD_BUFFERS,
-        RECORD_COMMON,
-        RECORD,
-    ]
-    .join("\n")
+    let slots = Slots {
+        bindings: "record",
+        ..Slots::kernel::<T>(false, "state_one_step")
+    };
+    compose(&super::layout::wgsl_prelude::<T>(), "record", &slots)
+        .expect("the shader files' imports resolve (tested)")
 }
 
 /// Parses and validates the output kernels' module with naga.
@@ -124,38 +187,13 @@ impl Kernel {
     /// (many scenes of one lattice shape per dispatch).
     pub fn source<T: GpuReal>(self, ensemble: bool) -> String {
         let (state, entry) = match self {
-            Kernel::OneStep => (STATE_ONE_STEP, ONE_STEP),
-            Kernel::OneStepLanes => (STATE_ONE_STEP, ONE_STEP_LANES),
-            Kernel::Persistent => (STATE_PERSISTENT, PERSISTENT),
+            Kernel::OneStep => ("state_one_step", "one_step"),
+            Kernel::OneStepLanes => ("state_one_step", "one_step_lanes"),
+            Kernel::Persistent => ("state_persistent", "persistent"),
         };
-        // The persistent kernel records output samples in its loop.
-        let (step_forces, record_buffers, record_common) = if self == Kernel::Persistent {
-            ("", RECORD_BUFFERS, RECORD_COMMON)
-        } else {
-            (STEP_FORCES, "", "")
-        };
-        let prelude = super::layout::wgsl_prelude::<T>();
-        [
-            prelude.as_str(),
-            COMMON,
-            if ensemble {
-                SCENE_ENSEMBLE
-            } else {
-                SCENE_SINGLE
-            },
-            state,
-            T::COORDINATES,
-            RNG,
-            BULK_FORCES,
-            JUNCTIONS,
-            COULOMB,
-            VERLET,
-            step_forces,
-            record_buffers,
-            record_common,
-            entry,
-        ]
-        .join("\n")
+        let slots = Slots::kernel::<T>(ensemble, state);
+        compose(&super::layout::wgsl_prelude::<T>(), entry, &slots)
+            .expect("the shader files' imports resolve (tested)")
     }
 }
 
@@ -233,9 +271,181 @@ pub fn validate_kernel<T: GpuReal>(phase: Kernel, ensemble: bool) -> Result<naga
     Ok(module)
 }
 
+/// What is wrong with a shader's `CPU twin:` line (the first in the file):
+/// `// CPU twin: src/PATH.rs NAME, NAME ...`, each NAME (`Type::item` or
+/// `item`) defined in PATH under `root`. Empty when the twin is there.
+pub fn twin_errors(file: &str, wgsl: &str, root: &std::path::Path) -> Vec<String> {
+    let Some(at) = wgsl.find("CPU twin: ") else {
+        return vec![format!("{file}: no `CPU twin:` line")];
+    };
+    let rest = &wgsl[at + "CPU twin: ".len()..];
+    let rest = rest.lines().next().unwrap_or("");
+    let mut words = rest.split([' ', ',']).filter(|w| !w.is_empty());
+    let path = words.next().unwrap_or("").trim_end_matches('.');
+    let Ok(source) = std::fs::read_to_string(root.join(path)) else {
+        return vec![format!("{file}: CPU twin {path:?} does not exist")];
+    };
+    // Names up to the end of the line, a word that ends a sentence, or
+    // anything that is not a name ("(the host's layout)").
+    let mut names = Vec::new();
+    for word in words {
+        let name = word.trim_end_matches('.');
+        let is_name = !name.is_empty()
+            && name
+                .chars()
+                .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == ':');
+        if !is_name {
+            break;
+        }
+        names.push(name);
+        if word.ends_with('.') {
+            break;
+        }
+    }
+    if names.is_empty() {
+        return vec![format!("{file}: CPU twin {path} names no function or type")];
+    }
+    let defines = |item: &str| {
+        ["fn", "struct", "trait", "enum", "const", "type"]
+            .iter()
+            .any(|kw| source.contains(&format!("{kw} {item}")))
+    };
+    names
+        .into_iter()
+        .filter(|name| !defines(name.rsplit("::").next().unwrap_or(name)))
+        .map(|name| format!("{file}: {name} is not defined in {path}"))
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The slots a file stands for: composed alone, it fills them itself.
+    fn slots_for<T: GpuReal>(name: &'static str) -> Slots {
+        let mut slots = Slots::kernel::<T>(false, "state_one_step");
+        match name {
+            "scene_single" | "scene_ensemble" => slots.scene = name,
+            "state_one_step" | "state_persistent" => slots.state = name,
+            "persistent" => slots.state = "state_persistent",
+            "double_single" | "coord_f64" => slots.coordinates = name,
+            "common" | "record" => slots.bindings = name,
+            _ => {}
+        }
+        slots
+    }
+
+    fn naga_errors<T: GpuReal>(src: &str) -> Option<String> {
+        let module = match naga::front::wgsl::parse_str(src) {
+            Ok(m) => m,
+            Err(e) => return Some(e.emit_to_string(src)),
+        };
+        naga::valid::Validator::new(naga::valid::ValidationFlags::all(), T::CAPABILITIES)
+            .validate(&module)
+            .err()
+            .map(|e| e.emit_to_string(src))
+    }
+
+    fn alone<T: GpuReal>() -> Vec<String> {
+        let prelude = crate::engines::gpu::layout::wgsl_prelude::<T>();
+        FILES
+            .iter()
+            .filter(|(name, _)| match *name {
+                "double_single" => T::COORDINATES == "double_single",
+                "coord_f64" => T::COORDINATES == "coord_f64",
+                _ => true,
+            })
+            .filter_map(|(name, _)| {
+                let src = compose(&prelude, name, &slots_for::<T>(name)).unwrap();
+                naga_errors::<T>(&src).map(|e| format!("{name}.wgsl ({}): {e}", T::NAME))
+            })
+            .collect()
+    }
+
+    /// The imports are explicit and complete: each file, composed with
+    /// only what it imports (and the prelude), validates, in both
+    /// precisions. A file that drops an import fails (the control).
+    #[test]
+    fn every_shader_validates_with_only_its_imports() {
+        let errors: Vec<String> = alone::<f32>().into_iter().chain(alone::<f64>()).collect();
+        assert!(errors.is_empty(), "{}", errors.join("\n"));
+        let junctions = file("junctions").unwrap();
+        let without_rng = junctions.replace(", rng,", ",");
+        assert_ne!(without_rng, junctions);
+        let prelude = crate::engines::gpu::layout::wgsl_prelude::<f32>();
+        let slots = slots_for::<f32>("junctions");
+        let mut src = prelude.clone();
+        for (name, text) in FILES {
+            let wanted = compose("", "junctions", &slots).unwrap();
+            if wanted.contains(&format!("// ---- shaders/{name}.wgsl\n")) && *name != "rng" {
+                src += if *name == "junctions" {
+                    &without_rng
+                } else {
+                    text
+                };
+            }
+        }
+        assert!(naga_errors::<f32>(&src).is_some(), "junctions needs rng");
+    }
+
+    /// FILES lists every file of shaders/, and an unknown import is refused.
+    #[test]
+    fn every_shader_file_is_registered_and_imports_resolve() {
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("shaders");
+        let mut on_disk: Vec<String> = std::fs::read_dir(root)
+            .unwrap()
+            .filter_map(|e| {
+                let name = e.unwrap().file_name().to_string_lossy().to_string();
+                name.strip_suffix(".wgsl").map(str::to_string)
+            })
+            .collect();
+        on_disk.sort();
+        let mut registered: Vec<String> = FILES.iter().map(|(n, _)| n.to_string()).collect();
+        registered.sort();
+        assert_eq!(on_disk, registered);
+        for (name, text) in FILES {
+            let wanted = imports(text).unwrap_or_else(|e| panic!("{name}: {e}"));
+            for w in wanted {
+                let known =
+                    file(w).is_some() || ["scene", "state", "coordinates", "bindings"].contains(&w);
+                assert!(known, "{name}.wgsl imports unknown {w}");
+            }
+        }
+        let slots = Slots::kernel::<f32>(false, "state_one_step");
+        assert!(compose("", "no_such_file", &slots).is_err());
+    }
+
+    /// Every file in shaders/ names its CPU twin, and the twin is there;
+    /// a twin that was renamed or moved is flagged (the control).
+    #[test]
+    fn every_shader_names_a_cpu_twin_that_exists() {
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+        let mut files: Vec<_> = std::fs::read_dir(root.join("shaders"))
+            .unwrap()
+            .map(|e| e.unwrap().path())
+            .filter(|p| p.extension().is_some_and(|x| x == "wgsl"))
+            .collect();
+        files.sort();
+        assert!(files.len() >= 19, "{files:?}");
+        let errors: Vec<String> = files
+            .iter()
+            .flat_map(|p| {
+                let name = p.file_name().unwrap().to_string_lossy().to_string();
+                twin_errors(&name, &std::fs::read_to_string(p).unwrap(), root)
+            })
+            .collect();
+        assert!(errors.is_empty(), "{errors:#?}");
+        let good = "// CPU twin: src/engines/kernels/verlet.rs verlet.";
+        assert!(twin_errors("x", good, root).is_empty());
+        for bad in [
+            "// no twin named",
+            "// CPU twin: src/cpu/verlet.rs verlet.",
+            "// CPU twin: src/engines/kernels/verlet.rs leapfrog.",
+            "// CPU twin: src/engines/kernels/verlet.rs.",
+        ] {
+            assert_eq!(twin_errors("x", bad, root).len(), 1, "{bad}");
+        }
+    }
 
     fn validate_all<T: GpuReal>() {
         for kernel in Kernel::ALL {
