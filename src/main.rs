@@ -191,7 +191,8 @@ struct SweepRun {
     /// Default: f64 (mixed f32 on `--backend gpu`).
     #[arg(long, value_enum)]
     precision: Option<Precision>,
-    /// Scenes run at once, one thread each (0: one per core).
+    /// Scenes run at once, one thread each (0: one per core; on the GPU
+    /// backend, 0 runs the points alone one at a time).
     #[arg(long, default_value_t = 0)]
     threads: usize,
     /// Run every N-th point from I (a job-array task's share): I/N.
@@ -224,6 +225,16 @@ struct SweepRun {
     /// of one lattice shape and time schedule); 1 runs them one at a time.
     #[arg(long, default_value_t = slipfront::app::sweeps::DEFAULT_ENSEMBLE)]
     ensemble: usize,
+    /// GPU backend, points run alone (`--ensemble 1`): the kernel, as
+    /// `run --gpu-path`.
+    #[arg(long, value_enum, default_value = "auto")]
+    gpu_path: slipfront::engines::gpu::GpuPath,
+    /// GPU backend, points run alone: where their samples are made. `host`
+    /// (the default) makes them as an ensemble's scenes do, so the table
+    /// does not depend on --ensemble; `device` is faster with the one-step
+    /// kernels.
+    #[arg(long, value_enum, default_value = "host")]
+    gpu_output: slipfront::engines::gpu::GpuOutput,
 }
 
 fn main() -> ExitCode {
@@ -350,6 +361,11 @@ fn main() -> ExitCode {
                 quiet: run.quiet,
                 no_shared_loading: run.no_shared_loading,
                 ensemble: run.ensemble,
+                gpu_alone: slipfront::engines::gpu::GpuOptions {
+                    path: run.gpu_path,
+                    output: run.gpu_output,
+                    ..Default::default()
+                },
             }),
         },
     };

@@ -431,3 +431,42 @@ fn gpu_ensemble_sweep_matches_points_run_alone(precision: &str) {
     };
     assert_ne!(of("1800.0"), of("1920.0"));
 }
+
+/// GPU points run alone can use the fast solo path (`--gpu-path
+/// one-step-lanes --gpu-output device`, several at once): the table is the
+/// one whose samples were host snapshots taken one point at a time.
+#[test]
+fn gpu_points_alone_with_device_records_give_the_host_snapshot_table() {
+    let d = dir("gpu_alone_device");
+    let file = sweep_file(&d, "");
+    let run = |name: &str, extra: &[&str]| {
+        let out = d.join(name);
+        let mut args = vec![
+            "sweep",
+            s(&file),
+            "-o",
+            s(&out),
+            "--backend",
+            "gpu",
+            "--precision",
+            "f32",
+            "--ensemble",
+            "1",
+            "--gpu-path",
+            "one-step-lanes",
+            "--quiet",
+        ];
+        args.extend(extra);
+        let text = ok(&args);
+        assert!(text.contains("8 run now (0 not ok)"), "{text}");
+        table(&out.join("summary.csv"))
+    };
+    let host = run("host", &["--gpu-output", "host", "--threads", "1"]);
+    let device = run("device", &["--gpu-output", "device", "--threads", "2"]);
+    assert_eq!(host, device);
+    // Not vacuous: the points slip, and differently.
+    let events = column(&host, "events");
+    assert!(events.iter().any(|e| *e != "0"), "{events:?}");
+    let first = column(&host, "first_full_time_s");
+    assert!(first.iter().any(|t| *t != first[0]), "{first:?}");
+}

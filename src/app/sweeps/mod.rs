@@ -90,11 +90,24 @@ pub struct SweepOptions {
     /// GPU backend: scenes stepped together in one dispatch at most (1: one
     /// point at a time).
     pub ensemble: usize,
+    /// GPU backend: how a point run alone is stepped (its kernel, and
+    /// whether its samples are made on the device or as host snapshots).
+    pub gpu_alone: crate::engines::gpu::GpuOptions,
 }
 
 /// Scenes per GPU ensemble by default: enough to fill a software adapter's
 /// threads and a hardware GPU's multiprocessors with small lattices.
 pub const DEFAULT_ENSEMBLE: usize = 64;
+
+/// How a GPU point alone is stepped unless asked otherwise: it makes its
+/// samples as an ensemble's scenes do (host snapshots), so the table does
+/// not depend on --ensemble.
+pub fn default_gpu_alone() -> crate::engines::gpu::GpuOptions {
+    crate::engines::gpu::GpuOptions {
+        output: crate::engines::gpu::GpuOutput::Host,
+        ..Default::default()
+    }
+}
 
 /// What a sweep invocation did.
 #[derive(Debug)]
@@ -227,14 +240,8 @@ fn run_point(
             .map_err(|e| RunError::Engine(EngineError::State(e.to_string())))?;
         let (mut engine, loaded): (Box<dyn Engine>, bool) = match source {
             EngineSource::Own(loaded) => {
-                // A GPU point alone makes its samples as an ensemble's
-                // scenes do (host snapshots), so the table does not depend
-                // on --ensemble.
-                let gpu = crate::engines::gpu::GpuOptions {
-                    output: crate::engines::gpu::GpuOutput::Host,
-                    ..Default::default()
-                };
-                let mut engine = make_engine_with(&model, opts.backend, opts.precision, 1, gpu)?;
+                let mut engine =
+                    make_engine_with(&model, opts.backend, opts.precision, 1, opts.gpu_alone)?;
                 if let Some(l) = loaded {
                     let state = l
                         .state(opts)
@@ -459,8 +466,10 @@ pub fn run_sweep(sweep: &Sweep, opts: &SweepOptions) -> Result<SweepReport, Stri
         }
     }
     let threads = match (opts.backend, opts.threads) {
-        // One GPU engine at a time: they share the device.
-        (Backend::Gpu, _) => 1,
+        // GPU points alone: one at a time unless asked (they share the
+        // device; with small scenes the host's encoding is the limit, so a
+        // few at once can keep a hardware GPU busier).
+        (Backend::Gpu, 0) => 1,
         (_, 0) => std::thread::available_parallelism().map_or(1, |n| n.get()),
         (_, t) => t,
     };
