@@ -525,3 +525,38 @@ fn gpu_bits_do_not_depend_on_where_batches_begin() {
         assert_ne!(a.disp, other.snapshot().unwrap().disp, "{path:?}: control");
     }
 }
+
+/// A slider started 1 cm along the track (`start.position`) slips as on the
+/// CPU on every kernel: its blocks, junction anchors and drive start there
+/// (were the anchors left at 0, every junction would break at once).
+#[test]
+fn a_slider_started_along_the_track_slips_as_on_the_cpu_on_every_kernel() {
+    let m = stick_slip_scene(&["start.position=0.01"]);
+    let end = m.prep_steps + 6000;
+    let reference = rupture_record(&m, cpu_engine(&m, Precision::F32, 1).unwrap().as_mut(), end);
+    let at_zero = stick_slip_scene(&[]);
+    let unmoved = rupture_record(
+        &at_zero,
+        cpu_engine(&at_zero, Precision::F32, 1).unwrap().as_mut(),
+        end,
+    );
+    // Mixed f32 keeps displacements to 48 bits: where the slider starts
+    // does not change what it does.
+    assert_eq!(
+        stick_slip_mismatch(&unmoved, &reference),
+        Vec::<String>::new()
+    );
+    for path in KERNELS {
+        let on_gpu = rupture_record(&m, &mut gpu_on(&m, path), end);
+        assert_eq!(
+            stick_slip_mismatch(&reference, &on_gpu),
+            Vec::<String>::new(),
+            "{path:?}"
+        );
+        let s = gpu_on(&m, path).snapshot().unwrap();
+        assert!(
+            s.disp.iter().all(|u| (u[0] - 0.01).abs() < 1e-12),
+            "{path:?}"
+        );
+    }
+}

@@ -63,6 +63,11 @@ fn set_overrides_apply_and_are_checked() {
     assert!(e.contains("typo"), "{e}");
     let e = parse_err(DEFAULT_SCENARIO, &["friction.law=sticky"]);
     assert!(e.contains("sticky"), "{e}");
+    let e = parse_err(DEFAULT_SCENARIO, &["start.position=2.5"]);
+    assert!(e.contains("start.position = 2.5"), "{e}");
+    let e = parse_err(DEFAULT_SCENARIO, &["start.speed=1"]);
+    assert!(e.contains("speed"), "{e}");
+    Scenario::parse(DEFAULT_SCENARIO, "t", &["start.position=0.01".into()]).unwrap();
 }
 
 #[test]

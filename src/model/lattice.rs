@@ -138,10 +138,11 @@ pub fn block_flags(model: &Model) -> Vec<u32> {
     flags
 }
 
-/// Initial displacements: zero, or the Gaussian pulse of a wave test,
-/// uniform in z so that the wave is plane.
+/// Initial displacements: the start position along x (zero by default),
+/// plus the Gaussian pulse of a wave test, uniform in z so that the wave
+/// is plane.
 pub fn initial_displacement(model: &Model) -> Vec<[f64; 2]> {
-    let mut u = vec![[0.0; 2]; model.n_blocks()];
+    let mut u = vec![[model.start_position, 0.0]; model.n_blocks()];
     if let Some(p) = model.pulse {
         for iz in 0..model.nz {
             for ix in 0..model.nx {
@@ -151,11 +152,21 @@ pub fn initial_displacement(model: &Model) -> Vec<[f64; 2]> {
                     crate::model::scenario::Component::X => 0,
                     crate::model::scenario::Component::Z => 1,
                 };
-                u[iz * model.nx + ix][c] = g;
+                u[iz * model.nx + ix][c] += g;
             }
         }
     }
     u
+}
+
+/// Initial junction anchors, index ix·Ns + j: every junction pinned where
+/// its interface block starts (a junction pinned at rest carries no force).
+pub fn initial_anchors(model: &Model) -> Vec<f64> {
+    let u = initial_displacement(model);
+    let per_block = model.junctions.map_or(0, |j| j.count);
+    (0..model.n_junctions())
+        .map(|k| u[k / per_block][0])
+        .collect()
 }
 
 #[cfg(test)]

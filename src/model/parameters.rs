@@ -115,6 +115,8 @@ pub struct Model {
     pub top: EdgeConstraint,
     pub bottom: EdgeConstraint,
     pub pulse: Option<PulseModel>,
+    /// x displacement of every block and junction anchor at t = 0 (m).
+    pub start_position: f64,
     /// Steps after the normal-load phase.
     pub drive_steps: u64,
     pub seed: u32,
@@ -349,6 +351,7 @@ impl Model {
                 width: p.width,
                 amplitude: p.amplitude,
             }),
+            start_position: s.start.as_ref().map_or(0.0, |st| st.position),
             drive_steps: steps(s.time.end),
             seed: s.time.seed,
             youngs_modulus: s.material.youngs_modulus,

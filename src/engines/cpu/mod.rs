@@ -84,7 +84,7 @@ impl<T: Real, C: Coordinate<T>> CpuEngine<T, C> {
             vel: vec![[T::zero(); 2]; n],
             force: vec![[T::zero(); 2]; n],
             contact: vec![[T::zero(); 2]; model.nx],
-            junction_spring: vec![JunctionSpring::default(); nj],
+            junction_spring: crate::engines::kernels::junctions::initial_springs(model),
             junction_state: vec![[PINNED, 0]; nj],
             slide: vec![[0; 2]; model.nx],
             drive_origin: C::default(),

@@ -388,7 +388,17 @@ impl<T: GpuReal> GpuEngine<T> {
             contact: storage("contact", bytemuck::cast_slice(&zeros2(s * shape.nx))),
             junction_spring: storage(
                 "junction_spring",
-                bytemuck::cast_slice(&vec![GpuJunctionSpring::<T>::zeroed(); s * nj]),
+                bytemuck::cast_slice(
+                    &models
+                        .iter()
+                        .flat_map(|m| {
+                            gpu_junction_springs::<T>(
+                                &crate::model::lattice::initial_anchors(m),
+                                &vec![0.0; nj],
+                            )
+                        })
+                        .collect::<Vec<_>>(),
+                ),
             ),
             junction_state: storage(
                 "junction_state",

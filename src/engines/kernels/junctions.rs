@@ -195,6 +195,20 @@ pub fn junction<T: Real, C: Coordinate<T>>(
     f
 }
 
+/// The junction springs at t = 0: pinned where their blocks start
+/// (`lattice::initial_anchors`), stiffness set by the normal-load phase.
+pub fn initial_springs<T: Real, C: Coordinate<T>>(
+    model: &crate::model::Model,
+) -> Vec<JunctionSpring<C, T>> {
+    crate::model::lattice::initial_anchors(model)
+        .into_iter()
+        .map(|a| JunctionSpring {
+            anchor: C::from_f64(a),
+            stiffness: T::zero(),
+        })
+        .collect()
+}
+
 /// The junction arrays (anchor, stiffness; slip steps left, rupture
 /// count) of a snapshot, in an engine's number types.
 pub fn load_junctions<T: Real, C: Coordinate<T>>(

@@ -38,6 +38,9 @@ pub struct Scenario {
     /// Optional initial displacement pulse (wave tests).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub pulse: Option<Pulse>,
+    /// Optional: where along the track the slider starts.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub start: Option<Start>,
     /// Thresholds of the quasi-static fast-forward (`time.fast_forward`);
     /// defaults when absent.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -419,6 +422,19 @@ pub struct Pulse {
     pub width: f64,
     /// Peak displacement (m).
     pub amplitude: f64,
+}
+
+/// `[start]`: where along the track the slider starts, as if it had
+/// already slid that far. The track is uniform, so the physics does not
+/// depend on it; the rounding of stored displacements does (one f32 ulp of
+/// 1 cm is 0.9 nm): a short run at a late run's position shows what f32
+/// displacements do to a long run.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Start {
+    /// Displacement along x of every block, junction anchor and the drive's
+    /// far end at t = 0 (m).
+    pub position: f64,
 }
 
 /// A scenario error: every problem found, each naming key, value, range and line.

@@ -152,7 +152,7 @@ impl<T: Real, C: Coordinate<T>> SweepEngine<T, C> {
             },
             next: now.clone(),
             now,
-            junction_spring: vec![JunctionSpring::default(); nj],
+            junction_spring: crate::engines::kernels::junctions::initial_springs(model),
             junction_state: vec![[PINNED, 0]; nj],
             slide: vec![[0; 2]; nx],
             drive_origin: C::default(),
