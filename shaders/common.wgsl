@@ -28,10 +28,8 @@
 // recompile.
 @group(1) @binding(0) var<storage, read> step_offset: u32;
 
-// Friction laws (override FRICTION_LAW).
-const LAW_NONE: u32 = 0u;
-const LAW_JUNCTIONS: u32 = 1u;
-const LAW_COULOMB: u32 = 2u;
+// The friction law compiled in: one of the LAW_* constants, which the
+// prelude generates from layout::KernelLaw.
 override FRICTION_LAW: u32 = 1u;
 
 // Normal force the foundation carries under an interface block

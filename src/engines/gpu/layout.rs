@@ -307,6 +307,36 @@ pub const RECORD_INTERFACE_WORDS: u32 = 6;
 /// Words per block of a bulk field: u_x, u_z, v_x, v_z.
 pub const RECORD_BULK_WORDS: u32 = 4;
 
+/// The friction code a kernel compiles in (its `FRICTION_LAW` override):
+/// the WGSL constants `LAW_*` are generated from this list, so the numbers
+/// exist once.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum KernelLaw {
+    None = 0,
+    Junctions = 1,
+    Coulomb = 2,
+}
+
+impl KernelLaw {
+    /// Every kernel law with its WGSL constant's name.
+    pub const ALL: [(KernelLaw, &'static str); 3] = [
+        (KernelLaw::None, "LAW_NONE"),
+        (KernelLaw::Junctions, "LAW_JUNCTIONS"),
+        (KernelLaw::Coulomb, "LAW_COULOMB"),
+    ];
+
+    /// The kernel code of a scenario's law: the single-junction law is the
+    /// junction code with one junction per block.
+    pub fn of(law: crate::model::scenario::FrictionLaw) -> KernelLaw {
+        use crate::model::scenario::FrictionLaw;
+        match law {
+            FrictionLaw::None => KernelLaw::None,
+            FrictionLaw::Junctions | FrictionLaw::SingleJunction => KernelLaw::Junctions,
+            FrictionLaw::Coulomb => KernelLaw::Coulomb,
+        }
+    }
+}
+
 /// The shared constants and structs in precision `T`, prepended to every
 /// shader module: `real`, `coord`, `packed_coord` and `force_sum` name
 /// `T`'s types.
@@ -360,6 +390,9 @@ pub fn wgsl_prelude<T: GpuReal>() -> String {
         ),
     ] {
         s += &format!("const {name}: u32 = {value}u;\n");
+    }
+    for (law, name) in KernelLaw::ALL {
+        s += &format!("const {name}: u32 = {}u;\n", law as u32);
     }
     s += &format!(
         "const STENCIL = array<vec2<i32>, 8>({});\n",

@@ -44,7 +44,7 @@ use bytemuck::Zeroable;
 use context::GpuContext;
 use layout::{GpuBatch, GpuConsts, GpuJunctionSpring, GpuStatus, WORKGROUP};
 use options::*;
-pub use options::{GpuOptions, GpuOutput, GpuPath, PERSISTENT_MAX_BLOCKS, PERSISTENT_THREADS};
+pub use options::{GpuOptions, GpuOutput, GpuPath, PERSISTENT_THREADS};
 use precision::Coord;
 pub use precision::GpuReal;
 pub use record_pipelines::RECORD_SMALL_BLOCKS;
@@ -326,7 +326,7 @@ impl<T: GpuReal> GpuEngine<T> {
                 ctx.info.name
             )));
         }
-        let kernel = choose_kernel(opts.path, n, ctx.is_software());
+        let kernel = choose_kernel(opts.path, ctx.is_software());
         let persistent_threads = opts
             .persistent_threads
             .min(ctx.limits.max_compute_invocations_per_workgroup)

@@ -17,7 +17,7 @@
 //! coordinate functions differ.
 
 use super::precision::GpuReal;
-use crate::model::scenario::{DampingForm, FrictionLaw};
+use crate::model::scenario::DampingForm;
 use crate::model::{Driver, Model};
 
 macro_rules! wgsl_files {
@@ -217,11 +217,7 @@ impl Variant {
         let top_loads = m.normal_force != 0.0
             || m.trigger.is_some()
             || matches!(m.driver, Driver::TopForce { .. });
-        let law = match m.law {
-            FrictionLaw::None => 0.0,
-            FrictionLaw::Junctions | FrictionLaw::SingleJunction => 1.0,
-            FrictionLaw::Coulomb => 2.0,
-        };
+        let law = super::layout::KernelLaw::of(m.law) as u32 as f64;
         Variant {
             constants: vec![
                 ("FRICTION_LAW", law),
