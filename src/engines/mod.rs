@@ -9,6 +9,7 @@
 
 pub mod backend;
 pub mod cpu;
+mod friction_state;
 pub mod gpu;
 pub mod kernels;
 pub mod memory;
@@ -21,10 +22,10 @@ pub mod trigger;
 mod sample;
 mod state;
 
+pub use friction_state::FrictionState;
 pub use sample::{record_sample, BulkField, Due, InterfaceRow, Sample, SamplePlan, SampleSums};
 pub use state::{EngineState, StateArrays};
 
-use crate::model::junction::JunctionSpring;
 use crate::model::real::{Coordinate, Real};
 use crate::model::Model;
 
@@ -64,7 +65,6 @@ pub struct Snapshot {
 impl Snapshot {
     /// Converts engine buffers (the layout shared by the CPU twins and the
     /// WGSL kernels) to a snapshot.
-    #[allow(clippy::too_many_arguments)]
     pub fn from_buffers<T: Real, C: Coordinate<T>>(
         model: &Model,
         step: u64,
@@ -72,10 +72,13 @@ impl Snapshot {
         vel: &[[T; 2]],
         force: &[[T; 2]],
         contact: &[[T; 2]],
-        junction_spring: &[JunctionSpring<C, T>],
-        junction_state: &[[u32; 2]],
-        slide: &[[i32; 2]],
+        friction_state: &FrictionState<T, C>,
     ) -> Snapshot {
+        let FrictionState {
+            junction_spring,
+            junction_state,
+            slide,
+        } = friction_state;
         let f2 = |v: &[[T; 2]]| v.iter().map(|x| x.map(|y| y.as_f64())).collect::<Vec<_>>();
         let col = |v: &[[T; 2]], k: usize| v.iter().map(|x| x[k].as_f64()).collect::<Vec<_>>();
         let vel_half = f2(vel);

@@ -4,7 +4,7 @@
 //! so a state saved and loaded by engines of the same precision comes back
 //! bit for bit, and one loaded by another precision is rounded once.
 
-use super::EngineError;
+use super::{EngineError, FrictionState};
 use crate::model::junction::JunctionSpring;
 use crate::model::real::{Coordinate, Real};
 use crate::model::Model;
@@ -43,9 +43,7 @@ pub struct StateArrays<'a, T, C> {
     pub vel: &'a [[T; 2]],
     pub force: &'a [[T; 2]],
     pub contact: &'a [[T; 2]],
-    pub junction_spring: &'a [JunctionSpring<C, T>],
-    pub junction_state: &'a [[u32; 2]],
-    pub slide: &'a [[i32; 2]],
+    pub friction: &'a FrictionState<T, C>,
 }
 
 fn reals<T: Real>(v: &[[T; 2]]) -> Vec<[f64; 2]> {
@@ -62,14 +60,20 @@ impl EngineState {
             vel: reals(a.vel),
             force: reals(a.force),
             contact: reals(a.contact),
-            anchor: a.junction_spring.iter().map(|s| s.anchor.parts()).collect(),
+            anchor: a
+                .friction
+                .junction_spring
+                .iter()
+                .map(|s| s.anchor.parts())
+                .collect(),
             junction_stiffness: a
+                .friction
                 .junction_spring
                 .iter()
                 .map(|s| s.stiffness.as_f64())
                 .collect(),
-            junction_state: a.junction_state.to_vec(),
-            slide: a.slide.to_vec(),
+            junction_state: a.friction.junction_state.clone(),
+            slide: a.friction.slide.clone(),
         }
     }
 

@@ -12,7 +12,9 @@ use crate::engines::kernels::bulk_forces::{bond_consts, Blocks, BondConsts};
 use crate::engines::kernels::junctions::JunctionSlots;
 use crate::engines::kernels::{bulk_forces, coulomb, junctions, verlet};
 use crate::engines::step_params::{step_params, Consts};
-use crate::engines::{blow_up, Engine, EngineError, EngineState, Snapshot, StateArrays};
+use crate::engines::{
+    blow_up, Engine, EngineError, EngineState, FrictionState, Snapshot, StateArrays,
+};
 use crate::model::lattice::{block_flags, initial_displacement};
 use crate::model::real::{precision_name, Coordinate, Real};
 use crate::model::scenario::FrictionLaw;
@@ -37,13 +39,8 @@ pub struct CpuEngine<T: Real, C: Coordinate<T> = <T as Real>::Coord> {
     force: Vec<[T; 2]>,
     /// (friction along x, normal force) per interface block.
     contact: Vec<[T; 2]>,
-    /// (anchor, stiffness) per junction, index ix·Ns + j.
-    junction_spring: Vec<JunctionSpring<C, T>>,
-    /// (slip steps left or PINNED, rupture count) per junction.
-    junction_state: Vec<[u32; 2]>,
-    /// (sliding direction, stick → slip count) per interface block
-    /// (Amontons–Coulomb).
-    slide: Vec<[i32; 2]>,
+    /// The friction laws' junction and sliding arrays.
+    friction: FrictionState<T, C>,
     drive_origin: C,
     step: u64,
     pool: Option<rayon::ThreadPool>,
@@ -55,7 +52,6 @@ impl<T: Real, C: Coordinate<T>> CpuEngine<T, C> {
     pub fn new(model: &Model, threads: usize) -> Result<Self, EngineError> {
         let consts = Consts::<T>::new(model);
         let n = model.n_blocks();
-        let nj = model.n_junctions();
         let threads = if threads == 0 {
             std::thread::available_parallelism().map_or(1, |n| n.get())
         } else {
@@ -84,9 +80,7 @@ impl<T: Real, C: Coordinate<T>> CpuEngine<T, C> {
             vel: vec![[T::zero(); 2]; n],
             force: vec![[T::zero(); 2]; n],
             contact: vec![[T::zero(); 2]; model.nx],
-            junction_spring: crate::engines::kernels::junctions::initial_springs(model),
-            junction_state: vec![[PINNED, 0]; nj],
-            slide: vec![[0; 2]; model.nx],
+            friction: FrictionState::initial(model),
             drive_origin: C::default(),
             step: 0,
             pool,
@@ -142,7 +136,7 @@ impl<T: Real, C: Coordinate<T>> CpuEngine<T, C> {
                         self.disp[ix],
                         self.vel[ix],
                         self.force[ix][0],
-                        &mut self.slide[ix],
+                        &mut self.friction.slide[ix],
                     );
                     self.contact[ix] = [f, n];
                 }
@@ -162,8 +156,8 @@ impl<T: Real, C: Coordinate<T>> CpuEngine<T, C> {
                     Some(pool) => pool.install(|| {
                         self.contact
                             .par_iter_mut()
-                            .zip(self.junction_spring.par_chunks_mut(ns))
-                            .zip(self.junction_state.par_chunks_mut(ns))
+                            .zip(self.friction.junction_spring.par_chunks_mut(ns))
+                            .zip(self.friction.junction_state.par_chunks_mut(ns))
                             .enumerate()
                             .for_each(|(ix, ((out, spring), state))| run(ix, out, spring, state))
                     }),
@@ -171,8 +165,8 @@ impl<T: Real, C: Coordinate<T>> CpuEngine<T, C> {
                         for (ix, ((out, spring), state)) in self
                             .contact
                             .iter_mut()
-                            .zip(self.junction_spring.chunks_mut(ns))
-                            .zip(self.junction_state.chunks_mut(ns))
+                            .zip(self.friction.junction_spring.chunks_mut(ns))
+                            .zip(self.friction.junction_state.chunks_mut(ns))
                             .enumerate()
                         {
                             run(ix, out, spring, state);
@@ -245,9 +239,7 @@ impl<T: Real, C: Coordinate<T>> CpuEngine<T, C> {
         if self.model.sets_anchors_at_drive_start() {
             let snap = self.snapshot_now();
             let anchors = crate::engines::trigger::trigger_anchors(&self.model, &snap);
-            for (spring, a) in self.junction_spring.iter_mut().zip(anchors) {
-                spring.anchor = C::from_f64(a);
-            }
+            self.friction.set_anchors(anchors);
         }
     }
 
@@ -263,15 +255,10 @@ impl<T: Real, C: Coordinate<T>> CpuEngine<T, C> {
     ) -> Result<Self, EngineError> {
         let mut e = Self::new(model, 1)?;
         e.drive_origin = C::from_f64(drive_origin);
-        e.load_junctions(base);
-        junctions::load_slide(base, &mut e.slide);
+        e.friction.load_junctions(base);
+        e.friction.load_slide(base);
         e.step = model.prep_steps.max(base.step);
         Ok(e)
-    }
-
-    /// Junction arrays from a snapshot.
-    fn load_junctions(&mut self, base: &Snapshot) {
-        junctions::load_junctions(base, &mut self.junction_spring, &mut self.junction_state);
     }
 
     fn snapshot_now(&self) -> Snapshot {
@@ -282,9 +269,7 @@ impl<T: Real, C: Coordinate<T>> CpuEngine<T, C> {
             &self.vel,
             &self.force,
             &self.contact,
-            &self.junction_spring,
-            &self.junction_state,
-            &self.slide,
+            &self.friction,
         )
     }
 }
@@ -328,7 +313,7 @@ impl<T: Real, C: Coordinate<T>> Engine for CpuEngine<T, C> {
     }
 
     fn set_junctions(&mut self, snap: &Snapshot) -> Result<(), EngineError> {
-        self.load_junctions(snap);
+        self.friction.load_junctions(snap);
         Ok(())
     }
 
@@ -340,9 +325,7 @@ impl<T: Real, C: Coordinate<T>> Engine for CpuEngine<T, C> {
             vel: &self.vel,
             force: &self.force,
             contact: &self.contact,
-            junction_spring: &self.junction_spring,
-            junction_state: &self.junction_state,
-            slide: &self.slide,
+            friction: &self.friction,
         }))
     }
 
@@ -354,9 +337,7 @@ impl<T: Real, C: Coordinate<T>> Engine for CpuEngine<T, C> {
         self.vel = state.vel_as();
         self.force = state.force_as();
         self.contact = state.contact_as();
-        self.junction_spring = state.junction_springs_as();
-        self.junction_state = state.junction_state.clone();
-        self.slide = state.slide.clone();
+        self.friction = FrictionState::from_state(state);
         Ok(())
     }
 

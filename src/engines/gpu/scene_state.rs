@@ -7,7 +7,7 @@ use super::layout::GpuJunctionSpring;
 use super::precision::{Coord, GpuReal};
 use super::readback::{cast_prefix, read_ranges, Range};
 use super::{GpuEngine, Shape, WORD_PAIR_BYTES};
-use crate::engines::{EngineError, EngineState, Snapshot, StateArrays};
+use crate::engines::{EngineError, EngineState, FrictionState, Snapshot, StateArrays};
 use crate::model::real::Coordinate;
 
 impl<T: GpuReal> GpuEngine<T> {
@@ -55,12 +55,14 @@ impl<T: GpuReal> GpuEngine<T> {
             vel: cast_prefix(&raw[1], n),
             force: cast_prefix(&raw[2], n),
             contact: cast_prefix(&raw[3], nx),
-            spring: cast_prefix::<GpuJunctionSpring<T>>(&raw[4], nj)
-                .into_iter()
-                .map(Into::into)
-                .collect(),
-            state: cast_prefix(&raw[5], nj),
-            slide: cast_prefix(&raw[6], nx),
+            friction: FrictionState {
+                junction_spring: cast_prefix::<GpuJunctionSpring<T>>(&raw[4], nj)
+                    .into_iter()
+                    .map(Into::into)
+                    .collect(),
+                junction_state: cast_prefix(&raw[5], nj),
+                slide: cast_prefix(&raw[6], nx),
+            },
         })
     }
 
@@ -73,9 +75,7 @@ impl<T: GpuReal> GpuEngine<T> {
             &r.vel,
             &r.force,
             &r.contact,
-            &r.spring,
-            &r.state,
-            &r.slide,
+            &r.friction,
         ))
     }
 
@@ -170,9 +170,7 @@ impl<T: GpuReal> GpuEngine<T> {
             vel: &r.vel,
             force: &r.force,
             contact: &r.contact,
-            junction_spring: &r.spring,
-            junction_state: &r.state,
-            slide: &r.slide,
+            friction: &r.friction,
         }))
     }
 
@@ -248,9 +246,7 @@ pub(super) struct RawState<T: GpuReal> {
     vel: Vec<[T; 2]>,
     force: Vec<[T; 2]>,
     contact: Vec<[T; 2]>,
-    spring: Vec<crate::model::junction::JunctionSpring<Coord<T>, T>>,
-    state: Vec<[u32; 2]>,
-    slide: Vec<[i32; 2]>,
+    friction: FrictionState<T, Coord<T>>,
 }
 
 /// The `junction_spring` buffer's records: anchors as coordinates,

@@ -195,48 +195,6 @@ pub fn junction<T: Real, C: Coordinate<T>>(
     f
 }
 
-/// The junction springs at t = 0: pinned where their blocks start
-/// (`lattice::initial_anchors`), stiffness set by the normal-load phase.
-pub fn initial_springs<T: Real, C: Coordinate<T>>(
-    model: &crate::model::Model,
-) -> Vec<JunctionSpring<C, T>> {
-    crate::model::lattice::initial_anchors(model)
-        .into_iter()
-        .map(|a| JunctionSpring {
-            anchor: C::from_f64(a),
-            stiffness: T::zero(),
-        })
-        .collect()
-}
-
-/// The junction arrays (anchor, stiffness; slip steps left, rupture
-/// count) of a snapshot, in an engine's number types.
-pub fn load_junctions<T: Real, C: Coordinate<T>>(
-    snap: &crate::engines::Snapshot,
-    spring: &mut [JunctionSpring<C, T>],
-    state: &mut [[u32; 2]],
-) {
-    let anchors = snap.anchor.iter().zip(&snap.junction_stiffness);
-    for (s, (a, k)) in spring.iter_mut().zip(anchors) {
-        *s = JunctionSpring {
-            anchor: C::from_f64(*a),
-            stiffness: T::from_f64(*k),
-        };
-    }
-    let states = snap.slip_steps_left.iter().zip(&snap.ruptures);
-    for (s, (left, count)) in state.iter_mut().zip(states) {
-        *s = [*left, *count];
-    }
-}
-
-/// The Amontons–Coulomb sliding state (direction, stick → slip count) of
-/// each interface block of a snapshot.
-pub fn load_slide(snap: &crate::engines::Snapshot, slide: &mut [[i32; 2]]) {
-    for (s, (d, n)) in slide.iter_mut().zip(snap.slide_dir.iter().zip(&snap.slips)) {
-        *s = [*d, *n as i32];
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -16,10 +16,11 @@ mod persistent;
 mod rows;
 mod step;
 
-use super::{JunctionSpring, PINNED};
 use crate::engines::kernels::bulk_forces::bond_consts;
 use crate::engines::step_params::Consts;
-use crate::engines::{blow_up, Engine, EngineError, EngineState, Snapshot, StateArrays};
+use crate::engines::{
+    blow_up, Engine, EngineError, EngineState, FrictionState, Snapshot, StateArrays,
+};
 use crate::model::lattice::{block_flags, initial_displacement};
 use crate::model::real::{Coordinate, Real};
 use crate::model::{Driver, Model};
@@ -97,9 +98,7 @@ pub struct SweepEngine<T: Real, C: Coordinate<T> = <T as Real>::Coord> {
     fixed: Fixed<T>,
     now: State<T, C>,
     next: State<T, C>,
-    junction_spring: Vec<JunctionSpring<C, T>>,
-    junction_state: Vec<[u32; 2]>,
-    slide: Vec<[i32; 2]>,
+    friction: FrictionState<T, C>,
     drive_origin: C,
     step: u64,
     /// Row ranges of the bands, bottom (interface) first.
@@ -141,7 +140,6 @@ impl<T: Real, C: Coordinate<T>> SweepEngine<T, C> {
             now.kin.ux[i] = C::from_f64(u[0]);
             now.kin.uz[i] = C::from_f64(u[1]);
         }
-        let nj = model.n_junctions();
         let mut engine = SweepEngine {
             fixed: Fixed {
                 consts,
@@ -152,9 +150,7 @@ impl<T: Real, C: Coordinate<T>> SweepEngine<T, C> {
             },
             next: now.clone(),
             now,
-            junction_spring: crate::engines::kernels::junctions::initial_springs(model),
-            junction_state: vec![[PINNED, 0]; nj],
-            slide: vec![[0; 2]; nx],
+            friction: FrictionState::initial(model),
             drive_origin: C::default(),
             step: 0,
             scratch: bands.iter().map(|_| Scratch::new(nx)).collect(),
@@ -185,12 +181,8 @@ impl<T: Real, C: Coordinate<T>> SweepEngine<T, C> {
     ) -> Result<Self, EngineError> {
         let mut e = Self::new(model, 1)?;
         e.drive_origin = C::from_f64(drive_origin);
-        crate::engines::kernels::junctions::load_junctions(
-            base,
-            &mut e.junction_spring,
-            &mut e.junction_state,
-        );
-        crate::engines::kernels::junctions::load_slide(base, &mut e.slide);
+        e.friction.load_junctions(base);
+        e.friction.load_slide(base);
         e.step = model.prep_steps.max(base.step);
         Ok(e)
     }
@@ -224,9 +216,9 @@ impl<T: Real, C: Coordinate<T>> SweepEngine<T, C> {
             self.fixed.consts.nx,
             &mut self.next,
             (
-                &mut self.junction_spring,
-                &mut self.junction_state,
-                &mut self.slide,
+                &mut self.friction.junction_spring,
+                &mut self.friction.junction_state,
+                &mut self.friction.slide,
             ),
         );
         let bad = bands
@@ -261,9 +253,9 @@ impl<T: Real, C: Coordinate<T>> SweepEngine<T, C> {
             isa: self.isa,
         };
         let interface = (
-            &mut self.junction_spring[..],
-            &mut self.junction_state[..],
-            &mut self.slide[..],
+            &mut self.friction.junction_spring[..],
+            &mut self.friction.junction_state[..],
+            &mut self.friction.slide[..],
         );
         let (done, bad, busy) = run.go(
             pool,
@@ -325,9 +317,7 @@ impl<T: Real, C: Coordinate<T>> SweepEngine<T, C> {
         if self.model.sets_anchors_at_drive_start() {
             let snap = self.snapshot_now();
             let anchors = crate::engines::trigger::trigger_anchors(&self.model, &snap);
-            for (spring, a) in self.junction_spring.iter_mut().zip(anchors) {
-                spring.anchor = C::from_f64(a);
-            }
+            self.friction.set_anchors(anchors);
         }
     }
 
@@ -353,9 +343,7 @@ impl<T: Real, C: Coordinate<T>> SweepEngine<T, C> {
             &vel,
             &force,
             &self.now.contact,
-            &self.junction_spring,
-            &self.junction_state,
-            &self.slide,
+            &self.friction,
         )
     }
 }
@@ -452,11 +440,7 @@ impl<T: Real, C: Coordinate<T>> Engine for SweepEngine<T, C> {
     }
 
     fn set_junctions(&mut self, snap: &Snapshot) -> Result<(), EngineError> {
-        crate::engines::kernels::junctions::load_junctions(
-            snap,
-            &mut self.junction_spring,
-            &mut self.junction_state,
-        );
+        self.friction.load_junctions(snap);
         Ok(())
     }
 
@@ -469,9 +453,7 @@ impl<T: Real, C: Coordinate<T>> Engine for SweepEngine<T, C> {
             vel: &vel,
             force: &force,
             contact: &self.now.contact,
-            junction_spring: &self.junction_spring,
-            junction_state: &self.junction_state,
-            slide: &self.slide,
+            friction: &self.friction,
         }))
     }
 
@@ -490,9 +472,7 @@ impl<T: Real, C: Coordinate<T>> Engine for SweepEngine<T, C> {
             [now.fx[i], now.fz[i]] = f;
         }
         now.contact = state.contact_as();
-        self.junction_spring = state.junction_springs_as();
-        self.junction_state = state.junction_state.clone();
-        self.slide = state.slide.clone();
+        self.friction = FrictionState::from_state(state);
         Ok(())
     }
 
