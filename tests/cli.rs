@@ -138,6 +138,11 @@ fn bad_input_exits_with_a_clear_message() {
     let out = slipfront(&["info", "--quiet-gap=-1", "run.mcap"]);
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("--quiet-gap = -1"));
+    // A missing --from names the path given, not a derived one.
+    let out = slipfront(&["run", "--from", "nope.ckpt", "-o", "never.mcap"]);
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("--from `nope.ckpt`: no such file"), "{err}");
 }
 
 #[test]

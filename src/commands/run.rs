@@ -368,6 +368,14 @@ fn resume(mut a: RunArgs) -> anyhow::Result<ExitCode> {
 /// changes where the saved state allows them.
 fn branch_run(a: RunArgs) -> anyhow::Result<ExitCode> {
     let from = a.from.clone().expect("from");
+    if !from.exists() && !path_for(&from).exists() {
+        anyhow::bail!(
+            "--from `{}`: no such file (a checkpoint, or a run file with its checkpoint \
+             `{}` beside it)",
+            from.display(),
+            path_for(&from).display()
+        );
+    }
     let ckpt_path = checkpoint_of(&from);
     let ckpt = Checkpoint::read(&ckpt_path)
         .map_err(|e| anyhow::anyhow!("cannot branch from `{}`: {e}", ckpt_path.display()))?;

@@ -241,6 +241,74 @@ fn axis_values(key: &str, axis: &Axis) -> Result<Vec<toml::Value>, String> {
     }
 }
 
+/// The most points one sweep file may hold. A point is a run; a study of
+/// more runs than this is several sweep files (or several shards of each).
+/// Every point is built and validated up front (about 1 KB each).
+pub const MAX_SWEEP_POINTS: u128 = 100_000;
+
+/// How many points `file` makes, from its axes, seeds and perturbation,
+/// before any is built; an error names the counts when they are out of
+/// bounds (no seeds, or more than [`MAX_SWEEP_POINTS`]).
+fn point_count(file: &SweepFile) -> Result<u128, String> {
+    let lengths: Vec<(&String, u128)> = file
+        .axes
+        .iter()
+        .map(|(k, a)| {
+            let n = match a {
+                Axis::List(v) => v.len(),
+                Axis::Range(r) => r.count,
+            };
+            (k, n as u128)
+        })
+        .collect();
+    let combos = match file.combine {
+        // Saturating: a product past u128 is refused below like any count
+        // over the cap.
+        Combine::Grid => lengths
+            .iter()
+            .fold(1u128, |acc, (_, n)| acc.saturating_mul(*n)),
+        Combine::Zip => lengths.first().map_or(1, |(_, n)| *n),
+    };
+    let seeds = match &file.seeds {
+        None => 1,
+        Some(Seeds::Count(0)) => return Err("seeds = 0: give at least one seed".into()),
+        Some(Seeds::List(l)) if l.is_empty() => {
+            return Err("seeds = []: give at least one seed".into())
+        }
+        Some(Seeds::Count(n)) => *n as u128,
+        Some(Seeds::List(l)) => l.len() as u128,
+    };
+    let runs = file.perturb.as_ref().map_or(1, |p| p.count as u128);
+    let total = combos.saturating_mul(seeds).saturating_mul(runs);
+    if total > MAX_SWEEP_POINTS {
+        let axes: Vec<String> = lengths
+            .iter()
+            .map(|(k, n)| format!("axes.\"{k}\" {n}"))
+            .collect();
+        return Err(format!(
+            "the sweep has {} points ({}{}, {seeds} seed(s), {runs} perturbed run(s) each): \
+             more than the {MAX_SWEEP_POINTS} one sweep file may hold; split it into several \
+             sweep files",
+            if total == u128::MAX {
+                "more than 2¹²⁸".to_string()
+            } else {
+                total.to_string()
+            },
+            if axes.is_empty() {
+                "no axes".to_string()
+            } else {
+                axes.join(" × ")
+            },
+            if file.combine == Combine::Zip {
+                " zipped"
+            } else {
+                ""
+            },
+        ));
+    }
+    Ok(total)
+}
+
 /// "key=value" as `--set` takes it.
 fn override_item(key: &str, value: &toml::Value) -> String {
     format!("{key}={value}")
@@ -271,6 +339,7 @@ impl Sweep {
                 DEFAULT_SCENARIO_NAME.to_string(),
             ),
         };
+        point_count(&file).map_err(|e| vec![e])?;
         let mut problems = Vec::new();
         let mut axis_keys: Vec<String> = file.axes.keys().cloned().collect();
         let offsets = match &file.perturb {
@@ -504,5 +573,40 @@ mod tests {
             let err = build(&text(p)).err().expect(p).join("\n");
             assert!(err.contains(expected), "{p}: {err}");
         }
+    }
+
+    /// Counts are checked before any point is built: no panic, no
+    /// allocation of a huge sweep, and no sweep without seeds.
+    #[test]
+    fn point_counts_are_bounded_before_any_point_is_built() {
+        let build = |text: &str| {
+            let file: SweepFile = toml::from_str(text).unwrap();
+            Sweep::build(file, Path::new(".")).map(|s| s.points.len())
+        };
+        let huge = build(
+            "[axes]\n\"friction.static_coefficient\" = \
+             { from = 0.3, to = 0.5, count = 18446744073709551615 }\n",
+        )
+        .unwrap_err();
+        assert!(huge[0].contains("18446744073709551615 points"), "{huge:?}");
+        assert!(huge[0].contains("more than the 100000"), "{huge:?}");
+        let grid = build(
+            "[axes]\n\"friction.static_coefficient\" = { from = 0.3, to = 0.5, count = 100000 }\n\
+             \"friction.dynamic_coefficient\" = { from = 0.1, to = 0.2, count = 100000 }\n\
+             \"loading.drive.velocity\" = { from = 1e-4, to = 1e-3, count = 100000 }\n",
+        )
+        .unwrap_err();
+        assert!(grid[0].contains("1000000000000000 points"), "{grid:?}");
+        for (seeds, message) in [("0", "seeds = 0"), ("[]", "seeds = []")] {
+            let e = build(&format!("seeds = {seeds}\n")).unwrap_err();
+            assert!(e[0].contains(message), "{e:?}");
+        }
+        // At the cap it builds (and a count just over is refused).
+        let at_cap = "perturb = { key = \"loading.drive.velocity\", relative = 1e-6, \
+                      count = 50000 }\nseeds = 2\n";
+        assert_eq!(point_count(&toml::from_str(at_cap).unwrap()), Ok(100_000));
+        let over = at_cap.replace("seeds = 2", "seeds = 3");
+        assert!(point_count(&toml::from_str(&over).unwrap()).is_err());
+        assert_eq!(build("seeds = 2\n"), Ok(2));
     }
 }
