@@ -196,6 +196,46 @@ fn check_estimates_the_wall_time_and_fails_when_unstable() {
     assert!(String::from_utf8_lossy(&out.stderr).contains("stability limit"));
 }
 
+/// `check` refuses to measure what `run` would refuse (memory), and times a
+/// large lattice over a few steps instead of hanging on long calls (it took
+/// over a minute on 2000 × 1000 before).
+#[test]
+fn check_is_bounded_in_memory_and_time() {
+    let huge = [
+        "check",
+        "--set",
+        "geometry.nx=65536",
+        "--set",
+        "geometry.nz=65536",
+        "--set",
+        "geometry.height=0.14",
+    ];
+    let out = slipfront(&huge);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{text}");
+    assert!(
+        text.contains("not measured    Cpu F64: a 65536 × 65536 lattice needs about"),
+        "{text}"
+    );
+    let started = std::time::Instant::now();
+    let large = [
+        "check",
+        "--set",
+        "geometry.nx=2000",
+        "--set",
+        "geometry.nz=1000",
+        "--set",
+        "geometry.height=0.069965",
+    ];
+    let out = slipfront(&large);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{text}");
+    assert!(text.contains("block-steps/s"), "{text}");
+    // A bound on behaviour, not a speed claim: each of three engines is
+    // timed for 0.4 s plus one step.
+    assert!(started.elapsed().as_secs() < 60, "{:?}", started.elapsed());
+}
+
 /// On a big lattice a step takes milliseconds: a signal must still stop
 /// the run within a second or so (chunks of steps are sized by wall time,
 /// not a fixed step count), exiting 130 with its file closed.

@@ -70,6 +70,23 @@ fn set_overrides_apply_and_are_checked() {
     Scenario::parse(DEFAULT_SCENARIO, "t", &["start.position=0.01".into()]).unwrap();
 }
 
+/// A material out of scale makes dt tiny: the refusal names the material,
+/// not only the run length it breaks.
+#[test]
+fn a_tiny_time_step_names_what_set_it() {
+    let s = Scenario::parse(
+        DEFAULT_SCENARIO,
+        "t",
+        &["material.youngs_modulus=1e308".into()],
+    )
+    .unwrap();
+    let e = slipfront::Model::from_scenario(&s, false)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("time.end"), "{e}");
+    assert!(e.contains("material.youngs_modulus = 1e308"), "{e}");
+}
+
 #[test]
 fn keys_a_mode_does_not_use_are_refused_and_needed_ones_required() {
     let e = parse_err(DEFAULT_SCENARIO, &["loading.drive.mode=none"]);

@@ -16,8 +16,11 @@ struct Estimate {
 /// Measures every engine this machine can run the scene on (the CPU in f64
 /// and mixed f32, with the threads `run` would use; the GPU in mixed f32
 /// when an adapter is found), at the start of the scene: the speed of quiet
-/// loading (events cost more, fast-forward skips some).
-fn estimates(m: &Model) -> Vec<Estimate> {
+/// loading (events cost more, fast-forward skips some). An engine that
+/// cannot run the scene here (more memory than the machine has, beyond the
+/// adapter's limits) is not measured, and the second list says why, as
+/// `run` would refuse it.
+fn estimates(m: &Model) -> (Vec<Estimate>, Vec<String>) {
     let mut engines: Vec<(Backend, Precision)> = vec![
         (Backend::Cpu, Precision::F64),
         (Backend::Cpu, Precision::F32),
@@ -25,18 +28,38 @@ fn estimates(m: &Model) -> Vec<Estimate> {
     if slipfront::engines::gpu::context::shared().is_ok() {
         engines.push((Backend::Gpu, Precision::F32));
     }
-    engines
-        .into_iter()
-        .filter_map(|(backend, precision)| {
-            let mut e = make_engine(m, backend, precision, 0).ok()?;
-            let rate = measure_steps_per_second(e.as_mut(), MEASURE_SECONDS).ok()?;
-            Some(Estimate {
+    let mut measured = Vec::new();
+    let mut not_measured = Vec::new();
+    for (backend, precision) in engines {
+        let label = format!("{backend:?} {precision:?}");
+        let (real, coord) = match precision {
+            Precision::F64 => (8, 8),
+            Precision::F32 => (4, 8),
+            Precision::F32Plain => (4, 4),
+        };
+        let fits = slipfront::engines::memory::check(
+            m.memory_bytes(real, coord) as u64,
+            slipfront::engines::memory::available_bytes(),
+            &format!("{label}: a {} × {} lattice", m.nx, m.nz),
+            "run it elsewhere",
+        );
+        let measure = fits.and_then(|()| {
+            let mut e =
+                make_engine(m, backend, precision, 0).map_err(|e| format!("{label}: {e}"))?;
+            let rate = measure_steps_per_second(e.as_mut(), MEASURE_SECONDS)
+                .map_err(|e| format!("{label}: {e}"))?;
+            Ok(Estimate {
                 engine: e.describe(),
                 steps_per_second: rate,
                 wall_seconds: m.total_steps() as f64 / rate,
             })
-        })
-        .collect()
+        });
+        match measure {
+            Ok(e) => measured.push(e),
+            Err(why) => not_measured.push(why),
+        }
+    }
+    (measured, not_measured)
 }
 
 /// 95 s, 3.2 min, 1.5 h.
@@ -55,7 +78,11 @@ pub fn check(scenario: Option<PathBuf>, set: &[String], json: bool) -> anyhow::R
     let m = Model::from_scenario(&s, true)?;
     let lim = m.stability_limit();
     let stable = m.dt <= lim.min();
-    let estimates = if stable { estimates(&m) } else { Vec::new() };
+    let (estimates, not_measured) = if stable {
+        estimates(&m)
+    } else {
+        (Vec::new(), Vec::new())
+    };
     let report = serde_json::json!({
         "scenario": name,
         "blocks": [m.nx, m.nz],
@@ -97,6 +124,7 @@ pub fn check(scenario: Option<PathBuf>, set: &[String], json: bool) -> anyhow::R
             "block_steps_per_second": e.steps_per_second * m.n_blocks() as f64,
             "wall_seconds": e.wall_seconds,
         })).collect::<Vec<_>>(),
+        "not_measured": not_measured,
     });
     if json {
         println!("{}", serde_json::to_string_pretty(&report)?);
@@ -174,6 +202,9 @@ pub fn check(scenario: Option<PathBuf>, set: &[String], json: bool) -> anyhow::R
                 "                (measured here over {MEASURE_SECONDS} s of quiet loading: events \
                  run slower, --fast-forward skips quiet stretches)"
             );
+        }
+        for why in &not_measured {
+            println!("not measured    {why}");
         }
     }
     Ok(if stable {

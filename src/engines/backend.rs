@@ -240,16 +240,23 @@ pub fn resolve_auto(precision: Precision) -> (Backend, String) {
 /// of wall time from the step it is at (after a short warm-up that also
 /// absorbs a GPU's pipeline compilation).
 pub fn measure_steps_per_second(engine: &mut dyn Engine, seconds: f64) -> Result<f64, EngineError> {
-    engine.advance(32)?;
+    // One untimed step: pipelines built, first dispatch made.
+    engine.advance(1)?;
     let started = std::time::Instant::now();
     let mut steps = 0u64;
-    // Growing calls, so that a GPU's per-call round trip is amortised as
-    // in a run (which advances up to 20 000 steps a call).
-    let mut chunk = 64u64;
-    while started.elapsed().as_secs_f64() < seconds {
+    let mut chunk = 1u64;
+    loop {
         engine.advance(chunk)?;
         steps += chunk;
-        chunk = (chunk * 2).min(8192);
+        let elapsed = started.elapsed().as_secs_f64();
+        if elapsed >= seconds {
+            return Ok(steps as f64 / elapsed);
+        }
+        // Growing calls, so that a GPU's per-call round trip is amortised
+        // as in a run (which advances up to 20 000 steps a call), but never
+        // past the time left at the rate so far: a large lattice is timed
+        // over a few steps, not hung on a long call.
+        let left = ((seconds - elapsed) * steps as f64 / elapsed.max(1e-9)) as u64;
+        chunk = (chunk * 2).min(8192).min(left.max(1));
     }
-    Ok(steps as f64 / started.elapsed().as_secs_f64())
 }

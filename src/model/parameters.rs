@@ -250,9 +250,19 @@ impl Model {
             ("loading.normal.relax_time", s.loading.normal.relax_time),
         ] {
             if t / dt >= 2f64.powi(53) {
+                // Name what set dt: a tiny dt is more often a material out
+                // of scale (youngs_modulus = 1e308) than a long run.
+                let dt_from = match s.time.dt {
+                    Some(_) => "time.dt".to_string(),
+                    None => format!(
+                        "time.dt_fraction × the period 2π√(m/k) = {period:.4e} s, set by \
+                         material.density = {:e} and material.youngs_modulus = {:e}",
+                        s.material.density, s.material.youngs_modulus
+                    ),
+                };
                 return Err(ModelError::Invalid(format!(
                     "{name} = {t:e} s is out of range (allowed: below {:.4e} s, 2^53 steps of dt \
-                     = {dt:.4e} s, so that every step time is exact)",
+                     = {dt:.4e} s, so that every step time is exact); dt comes from {dt_from}",
                     2f64.powi(53) * dt
                 )));
             }
