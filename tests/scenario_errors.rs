@@ -268,3 +268,55 @@ fn each_scene_kind_refused_by_the_other_loader_names_the_right_command() {
     // Negative control: the lattice scene still loads as a lattice.
     assert!(Scenario::load(&lattice, &[]).is_ok());
 }
+
+/// No foundation under a normal load: refused (no time step can help), as
+/// `check` and `run` both read the scenario; held in z, it is allowed.
+#[test]
+fn a_normal_load_needs_a_foundation_or_a_held_interface() {
+    let e = parse_err(DEFAULT_SCENARIO, &["foundation.stiffness_ratio=0"]);
+    assert!(e.contains("foundation.stiffness_ratio = 0"), "{e}");
+    assert!(e.contains("nothing carries the normal load"), "{e}");
+    Scenario::parse(
+        DEFAULT_SCENARIO,
+        "t",
+        &[
+            "foundation.stiffness_ratio=0".into(),
+            "boundary.bottom=fix_z".into(),
+        ],
+    )
+    .unwrap();
+    Scenario::parse(
+        DEFAULT_SCENARIO,
+        "t",
+        &[
+            "foundation.stiffness_ratio=0".into(),
+            "loading.normal.force=0".into(),
+        ],
+    )
+    .unwrap();
+}
+
+/// The single-block scene checks its time step as the lattice scenes do: a
+/// light block on stiff junctions is refused, not left to rattle.
+#[test]
+fn a_single_block_pulled_through_a_spring_checks_its_stability_limit() {
+    use slipfront::engines::single_block::{SingleBlockScene, SCENARIO};
+    let start = SCENARIO.find("[motion]").unwrap();
+    let end = start
+        + SCENARIO[start..]
+            .find("\n\n")
+            .unwrap_or(SCENARIO.len() - start);
+    let spring = |mass: f64| {
+        format!(
+            "{}[motion]\nkind = \"spring\"\nmass_per_normal_force = {mass:e}\n\
+             stiffness_per_normal_force = 1.0e3\nspeed = 1.0e-3\nduration = 1.0e-3\n{}",
+            &SCENARIO[..start],
+            &SCENARIO[end..]
+        )
+    };
+    let e = SingleBlockScene::parse(&spring(1e-7), "light.toml")
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("above the stability limit"), "{e}");
+    SingleBlockScene::parse(&spring(1e-3), "heavy.toml").unwrap();
+}

@@ -142,6 +142,28 @@ impl SingleBlockScene {
                 self.law.drag
             ));
         }
+        // A block pulled through a spring is integrated explicitly
+        // (symplectic Euler): stable while dt·ω < 2, ω² the spring's and
+        // the pinned junctions' stiffness over the mass (all per unit
+        // normal force), as the lattice scenes check their dt.
+        if let MotionSpec::Spring {
+            mass_per_normal_force: mass,
+            stiffness_per_normal_force: spring,
+            ..
+        } = self.motion
+        {
+            let stiffness = spring + self.law.threshold / self.law.break_stretch;
+            let limit = 2.0 * (mass / stiffness).sqrt();
+            if limit.is_finite() && self.dt > limit {
+                p.push(format!(
+                    "dt = {:e} s is above the stability limit {limit:.4e} s of the block on its \
+                     spring and pinned junctions (2/ω, ω² = (motion.stiffness_per_normal_force \
+                     + law.threshold / law.break_stretch) / motion.mass_per_normal_force) \
+                     (allowed: dt <= {limit:.4e} s)",
+                    self.dt
+                ));
+            }
+        }
         p
     }
 

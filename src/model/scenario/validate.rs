@@ -1,7 +1,7 @@
 //! Range checks on a parsed scenario. Each problem names the key, the value,
 //! the allowed range and, where the key is in the file, its line.
 
-use super::{DriveMode, FrictionLaw, JunctionStiffness, Scenario};
+use super::{DriveMode, EdgeConstraint, FrictionLaw, JunctionStiffness, Scenario};
 
 /// Returns every problem found; empty when the scenario is valid.
 /// `overridden` lists the keys set with `--set` (their line is the command line).
@@ -40,6 +40,21 @@ pub fn validate(s: &Scenario, text: &str, overridden: &[&str]) -> Vec<String> {
         s.foundation.stiffness_ratio,
         0.0,
     );
+    // Without a foundation nothing carries the normal load (unless the
+    // interface row is held in z): the slider falls through the track, which
+    // no time step can fix.
+    if s.foundation.stiffness_ratio == 0.0
+        && s.loading.normal.force > 0.0
+        && s.boundary.bottom != EdgeConstraint::FixZ
+    {
+        let line = c.line("foundation.stiffness_ratio");
+        c.problems.push(format!(
+            "foundation.stiffness_ratio = 0 with loading.normal.force = {} N: nothing carries \
+             the normal load, and the slider would fall through the track (allowed: > 0, or \
+             boundary.bottom = \"fix_z\"){line}",
+            s.loading.normal.force
+        ));
+    }
 
     let f = &s.friction;
     c.at_least("friction.static_coefficient", f.static_coefficient, 0.0);
