@@ -23,10 +23,18 @@ fn s(p: &Path) -> &str {
     p.to_str().unwrap()
 }
 
-/// A small run with a few hundred messages in several chunks.
+/// A small run with a few hundred messages.
 fn small_run(at: &Path) {
+    small_run_with(at, "1e-3", &[]);
+}
+
+/// The small scene for `t_end` seconds with extra `--set`s.
+fn small_run_with(at: &Path, t_end: &str, extra: &[&str]) {
     let mut args = vec!["run", "--backend", "cpu", "--threads", "1", "--quiet"];
-    args.extend(["--t-end", "1e-3", "-o", s(at)]);
+    args.extend(["--t-end", t_end, "-o", s(at)]);
+    for e in extra {
+        args.extend(["--set", e]);
+    }
     let sets: Vec<String> = slipfront::app::verify::SMALL_SCENE
         .iter()
         .flat_map(|s| ["--set".to_string(), s.to_string()])
@@ -82,9 +90,10 @@ fn a_corrupted_chunk_length_is_damage_not_an_allocation() {
         assert!(out.status.code().is_some(), "{cmd}: {text}");
         assert!(!text.contains("memory allocation"), "{cmd}: {text}");
     }
+    // The chunk is all there but its header is impossible: damage.
     let out = slipfront(&["info", s(&bad)], &[]);
     assert!(
-        String::from_utf8_lossy(&out.stdout).contains("cut short"),
+        String::from_utf8_lossy(&out.stdout).contains("DAMAGED"),
         "{}",
         String::from_utf8_lossy(&out.stdout)
     );
@@ -567,4 +576,98 @@ fn the_run_file_on_disk_lags_the_run_by_about_a_second_at_most() {
     );
     let run = slipfront::io::output::reader::RunFile::read(&out).unwrap();
     assert!(run.truncated && !run.global.is_empty());
+}
+
+/// Offsets of every record with `opcode` after the magic.
+fn records(bytes: &[u8], opcode: u8) -> Vec<(usize, usize)> {
+    let mut at = 8;
+    let mut found = Vec::new();
+    while at + 9 <= bytes.len() {
+        let len = u64::from_le_bytes(bytes[at + 1..at + 9].try_into().unwrap()) as usize;
+        if bytes[at] == opcode {
+            found.push((at, len));
+        }
+        at += 9 + len;
+    }
+    found
+}
+
+/// A flipped byte inside a chunk fails its CRC: `info` says which chunk and
+/// which times are lost, `recover` drops that chunk, keeps the ones after
+/// it and never re-signs the damaged data, and a resume refuses the file.
+/// A file cut inside its closing magic is cut, not complete.
+#[test]
+fn damaged_chunks_are_found_by_their_crc_and_dropped() {
+    let d = dir("crc");
+    let run = d.join("run.mcap");
+    // Dense samples: several 1 MiB chunks.
+    small_run_with(
+        &run,
+        "2e-3",
+        &[
+            "output.interface_interval=1e-6",
+            "output.global_interval=1e-6",
+        ],
+    );
+    let bytes = std::fs::read(&run).unwrap();
+    let chunks = records(&bytes, 0x06);
+    assert!(chunks.len() >= 3, "{} chunks", chunks.len());
+    let (at, len) = chunks[1];
+    let mut flipped = bytes.clone();
+    flipped[at + 9 + len / 2] ^= 0x10;
+    let bad = d.join("bad.mcap");
+    std::fs::write(&bad, &flipped).unwrap();
+    let out = slipfront(&["info", s(&bad)], &[]);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.contains("DAMAGED: 1 damaged chunk(s)"), "{text}");
+    assert!(text.contains("chunk 2 (messages from t ="), "{text}");
+    let whole = slipfront::io::output::reader::RunFile::read(&run).unwrap();
+    let read = slipfront::io::output::reader::RunFile::read(&bad).unwrap();
+    assert!(read.damage.is_some() && read.truncated);
+    let (n_whole, n_read) = (
+        whole.global.len() + whole.interface.len(),
+        read.global.len() + read.interface.len(),
+    );
+    assert!(n_read < n_whole && n_read > 0, "{n_read} of {n_whole}");
+    // The chunks after the damaged one are kept: the last sample is there.
+    assert_eq!(
+        read.global.last().map(|g| g.time),
+        whole.global.last().map(|g| g.time)
+    );
+    // A resume does not continue a damaged file.
+    std::fs::copy(
+        slipfront::io::checkpoint::path_for(&run),
+        slipfront::io::checkpoint::path_for(&bad),
+    )
+    .unwrap();
+    let out = slipfront(&["run", "--resume", s(&bad), "--t-end", "2e-3"], &[]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_ne!(out.status.code(), Some(0), "{err}");
+    assert!(err.contains("recover"), "{err}");
+    // Recovered: what was read, under valid CRCs, and no damage left.
+    let out = slipfront(&["recover", s(&bad)], &[]);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success() && text.contains("was damaged"),
+        "{text}"
+    );
+    let recovered = slipfront::io::output::reader::RunFile::read(&bad).unwrap();
+    assert!(recovered.damage.is_none() && !recovered.truncated);
+    assert_eq!(recovered.global, read.global);
+    assert_eq!(recovered.interface, read.interface);
+    // Cut inside the closing magic: cut short, not complete.
+    for cut in [1, 4, 8] {
+        let short = d.join(format!("short{cut}.mcap"));
+        std::fs::write(&short, &bytes[..bytes.len() - cut]).unwrap();
+        let read = slipfront::io::output::reader::RunFile::read(&short).unwrap();
+        assert!(read.truncated && read.damage.is_none(), "cut {cut}");
+        let out = slipfront(&["recover", s(&short)], &[]);
+        let text = String::from_utf8_lossy(&out.stdout);
+        assert!(
+            text.contains("ended before its summary"),
+            "cut {cut}: {text}"
+        );
+    }
+    // Negative control: the file as written reads complete.
+    assert!(!whole.truncated && whole.damage.is_none());
 }

@@ -8,8 +8,12 @@ use std::process::ExitCode;
 pub fn info(path: &Path, quiet_gap: f64) -> anyhow::Result<ExitCode> {
     let run = RunFile::read(path)?;
     println!("file        {}", path.display());
-    if run.truncated {
-        println!("            (cut short: no summary; everything before the cut is read)");
+    match (&run.damage, run.truncated) {
+        (Some(why), _) => println!("            (DAMAGED: {why})"),
+        (None, true) => {
+            println!("            (cut short: no summary; everything before the cut is read)")
+        }
+        (None, false) => {}
     }
     let width = run
         .metadata

@@ -225,7 +225,7 @@ impl McapSink {
         };
         let mut ours = std::collections::HashMap::new();
         let mut copied = 0;
-        scan::scan(parent, fail, |record| {
+        let ending = scan::scan(parent, fail, |record| {
             match record {
                 Record::Channel(c) => {
                     let id = match c.topic.as_str() {
@@ -254,6 +254,12 @@ impl McapSink {
             }
             Ok(scan::Flow::Continue)
         })?;
+        // A damaged file would be continued with a hole in it: refused.
+        if let scan::Ending::Damaged(why) = ending {
+            return Err(fail(format!(
+                "it is damaged ({why}); run `slipfront recover` on it first"
+            )));
+        }
         self.sequence = upto;
         Ok(copied)
     }

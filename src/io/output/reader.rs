@@ -25,8 +25,12 @@ pub struct RunFile {
     pub fast_forward_totals: BTreeMap<String, String>,
     /// One line per start, resume and branch (`slipfront_history`).
     pub history: Vec<String>,
-    /// The file ended before its summary (the run was killed).
+    /// The file ended before its summary (the run was killed), or was
+    /// damaged (below).
     pub truncated: bool,
+    /// Why the read stopped early, where a record or chunk was damaged
+    /// (a chunk failing its CRC: which, and the time range lost).
+    pub damage: Option<String>,
 }
 
 const GIB: f64 = (1u64 << 30) as f64;
@@ -116,6 +120,9 @@ impl RunFile {
         })?;
         let saw_footer = ending == Ending::Complete;
         run.truncated |= !saw_footer;
+        if let Ending::Damaged(why) = ending {
+            run.damage = Some(why);
+        }
         if !saw_slipfront {
             return Err(fail(
                 "not a slipfront run file (an MCAP file without the `slipfront` metadata \

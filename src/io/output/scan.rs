@@ -1,7 +1,9 @@
-//! Reading an MCAP file record by record from disk, chunks decompressed as
-//! a stream: the file is never held in memory, no length field becomes an
-//! allocation larger than [`RECORD_LIMIT`], and a file cut short (a killed
-//! run) or damaged yields every record before the cut.
+//! Reading an MCAP file record by record from disk: the file is never held
+//! in memory (one chunk at a time, 1 MiB as written), no length field
+//! becomes an allocation larger than [`RECORD_LIMIT`], a file cut short (a
+//! killed run) yields every record before the cut, and a chunk whose
+//! records fail their CRC (or do not decompress or parse) is skipped and
+//! reported, the chunks after it kept.
 //!
 //! (The mcap crate's readers either need the whole file in memory or, given
 //! a chunk whose stated uncompressed size exceeds its data, loop forever.)
@@ -54,41 +56,74 @@ pub fn scan<E>(
         )));
     }
     let mut body = Vec::new();
-    loop {
+    let mut chunks = 0u64;
+    // Chunks that are all there but do not read are skipped (their records
+    // lost, the later ones kept) and reported in the ending.
+    let mut damaged: Vec<String> = Vec::new();
+    let ending = loop {
         let Some((opcode, len)) = (match header(&mut r) {
             Ok(h) => h,
-            Err(_) => return Ok(Ending::CutShort),
+            Err(_) => break Ending::CutShort,
         }) else {
-            return Ok(Ending::CutShort);
+            break Ending::CutShort;
         };
+        if opcode == OP_CHUNK && len == u64::MAX {
+            // A chunk the writer had begun: its length is written when it
+            // closes, so a killed run's file ends in one.
+            break Ending::CutShort;
+        }
         if len > RECORD_LIMIT {
-            return Ok(Ending::Damaged(format!(
+            break Ending::Damaged(format!(
                 "record of {len} bytes (opcode {opcode:#04x}), more than {RECORD_LIMIT}"
-            )));
+            ));
         }
         if opcode == OP_CHUNK {
-            match chunk(&mut r, len, &mut each)? {
-                Some(Flow::Stop) => return Ok(Ending::Complete),
-                Some(Flow::Continue) => continue,
-                None => return Ok(Ending::CutShort),
+            chunks += 1;
+            match chunk(&mut r, len, chunks, &mut each)? {
+                ChunkEnd::Read(Flow::Stop) => break Ending::Complete,
+                ChunkEnd::Read(Flow::Continue) => continue,
+                ChunkEnd::Cut => break Ending::CutShort,
+                ChunkEnd::Damaged(why) => {
+                    damaged.push(why);
+                    continue;
+                }
             }
         }
         body.clear();
         if (&mut r).take(len).read_to_end(&mut body).is_err() || body.len() as u64 != len {
-            return Ok(Ending::CutShort);
+            break Ending::CutShort;
         }
         if opcode == OP_FOOTER {
-            return Ok(Ending::Complete);
+            // Complete only with the closing magic whole and nothing after
+            // it: a file cut inside its last 8 bytes is unreadable to
+            // other readers.
+            let mut tail = Vec::new();
+            if r.read_to_end(&mut tail).is_err() || tail != mcap::MAGIC {
+                break Ending::CutShort;
+            }
+            break Ending::Complete;
         }
         match mcap::parse_record(opcode, &body) {
             Ok(record) => {
                 if let Flow::Stop = each(record)? {
-                    return Ok(Ending::Complete);
+                    break Ending::Complete;
                 }
             }
-            Err(e) => return Ok(Ending::Damaged(format!("opcode {opcode:#04x}: {e}"))),
+            Err(e) => break Ending::Damaged(format!("opcode {opcode:#04x}: {e}")),
         }
-    }
+    };
+    Ok(match (damaged.first(), ending) {
+        (None, ending) => ending,
+        (Some(first), ending) => Ending::Damaged(format!(
+            "{} damaged chunk(s), their records lost and the rest kept; the first: {first}{}",
+            damaged.len(),
+            match ending {
+                Ending::Damaged(then) => format!("; then: {then}"),
+                Ending::CutShort => "; then the file is cut short".to_string(),
+                Ending::Complete => String::new(),
+            }
+        )),
+    })
 }
 
 /// Opcode and length of the next record; None at a clean end of file.
@@ -108,71 +143,181 @@ fn header(r: &mut impl Read) -> std::io::Result<Option<(u8, u64)>> {
     )))
 }
 
-/// Reads a chunk record of `len` bytes and passes its records to `each`.
-/// None when the chunk is cut short or damaged (the records before that
-/// have been passed on).
+/// How reading one chunk ended.
+enum ChunkEnd {
+    /// Its records were passed on; what `each` said last.
+    Read(Flow),
+    /// The file ends inside it (the records before were passed on).
+    Cut,
+    /// It is all there but does not read: its CRC fails, it does not
+    /// decompress, or a record in it is malformed. None of its records is
+    /// passed on (damaged data is neither read nor rewritten).
+    Damaged(String),
+}
+
+/// Reads chunk number `index`, a record of `len` bytes, and, if it is whole
+/// and its records match their CRC (when the writer stored one), passes
+/// them to `each`.
 fn chunk<E>(
     r: &mut impl Read,
     len: u64,
+    index: u64,
     each: &mut impl FnMut(Record<'_>) -> Result<Flow, E>,
-) -> Result<Option<Flow>, E> {
-    let mut chunk = r.take(len);
-    // start time, end time, uncompressed size (u64 each), CRC (u32),
-    // compression name length (u32).
-    let mut fixed = [0u8; 32];
-    if chunk.read_exact(&mut fixed).is_err() {
-        return Ok(None);
-    }
-    let uncompressed = u64::from_le_bytes(fixed[16..24].try_into().expect("8 bytes"));
-    let name_len = u32::from_le_bytes(fixed[28..32].try_into().expect("4 bytes")) as u64;
-    if name_len > 64 || uncompressed > RECORD_LIMIT {
-        return Ok(None);
-    }
-    let mut name = vec![0u8; name_len as usize];
-    let mut records_len = [0u8; 8];
-    if chunk.read_exact(&mut name).is_err() || chunk.read_exact(&mut records_len).is_err() {
-        return Ok(None);
-    }
-    let records_len = u64::from_le_bytes(records_len);
-    {
-        let compressed = (&mut chunk).take(records_len);
-        let decoded: Box<dyn Read + '_> = match name.as_slice() {
-            b"" => Box::new(compressed),
-            b"zstd" => match zstd::stream::read::Decoder::new(compressed) {
-                Ok(d) => Box::new(d),
-                Err(_) => return Ok(None),
-            },
-            _ => return Ok(None),
-        };
-        // The records, never more than the chunk says it holds.
-        let mut inner = decoded.take(uncompressed);
-        let mut body = Vec::new();
-        loop {
-            let (opcode, len) = match header(&mut inner) {
-                Ok(Some(h)) => h,
-                Ok(None) => break,
-                Err(_) => return Ok(None),
-            };
-            if len > RECORD_LIMIT {
-                return Ok(None);
+) -> Result<ChunkEnd, E> {
+    // The record whole first (len ≤ RECORD_LIMIT; the writer's chunks are
+    // 1 MiB): a chunk the file ends inside is a cut, one that is all there
+    // but does not read is damage.
+    let mut raw = Vec::new();
+    if r.take(len).read_to_end(&mut raw).is_err() || (raw.len() as u64) < len {
+        // Cut inside the chunk: no CRC to check, so every whole record
+        // that decompresses before the cut is passed on, as a reader of a
+        // killed run expects.
+        let records = cut_chunk_records(&raw);
+        let mut inner = records.as_slice();
+        while let Ok(Some((opcode, len))) = header(&mut inner) {
+            if len > inner.len() as u64 {
+                break;
             }
-            body.clear();
-            if (&mut inner).take(len).read_to_end(&mut body).is_err() || body.len() as u64 != len {
-                return Ok(None);
-            }
-            match mcap::parse_record(opcode, &body) {
+            let (body, rest) = inner.split_at(len as usize);
+            inner = rest;
+            match mcap::parse_record(opcode, body) {
                 Ok(record) => {
                     if let Flow::Stop = each(record)? {
-                        return Ok(Some(Flow::Stop));
+                        return Ok(ChunkEnd::Read(Flow::Stop));
                     }
                 }
-                Err(_) => return Ok(None),
+                Err(_) => break,
             }
         }
+        return Ok(ChunkEnd::Cut);
     }
-    // Padding after the records, up to the chunk's end.
-    if std::io::copy(&mut chunk, &mut std::io::sink()).is_err() || chunk.limit() != 0 {
-        return Ok(None);
+    match chunk_records(&raw) {
+        Ok(records) => {
+            let mut inner = records.as_slice();
+            while !inner.is_empty() {
+                let (opcode, len) = header(&mut inner)
+                    .ok()
+                    .flatten()
+                    .expect("checked by chunk_records");
+                let (body, rest) = inner.split_at(len as usize);
+                inner = rest;
+                let record = mcap::parse_record(opcode, body).expect("checked by chunk_records");
+                if let Flow::Stop = each(record)? {
+                    return Ok(ChunkEnd::Read(Flow::Stop));
+                }
+            }
+            Ok(ChunkEnd::Read(Flow::Continue))
+        }
+        Err(why) => Ok(ChunkEnd::Damaged(format!("chunk {index} {why}"))),
     }
-    Ok(Some(Flow::Continue))
+}
+
+/// The records of a chunk cut short, decompressed as far as the data goes
+/// (never more than the chunk says it holds).
+fn cut_chunk_records(raw: &[u8]) -> Vec<u8> {
+    let mut records = Vec::new();
+    let Some(fixed) = raw.get(..32) else {
+        return records;
+    };
+    let uncompressed = u64::from_le_bytes(fixed[16..24].try_into().expect("8 bytes"));
+    let name_len = u32::from_le_bytes(fixed[28..32].try_into().expect("4 bytes")) as usize;
+    if name_len > 64 || uncompressed > RECORD_LIMIT {
+        return records;
+    }
+    let (Some(name), Some(compressed)) = (raw.get(32..32 + name_len), raw.get(40 + name_len..))
+    else {
+        return records;
+    };
+    let mut buf = [0u8; 1 << 16];
+    let mut read_all = |mut decoded: Box<dyn Read + '_>| {
+        let mut decoded = (&mut decoded).take(uncompressed);
+        // Whatever decodes before the cut (the decoder's error at the cut
+        // ends it).
+        while let Ok(n) = decoded.read(&mut buf) {
+            if n == 0 {
+                break;
+            }
+            records.extend_from_slice(&buf[..n]);
+        }
+    };
+    match name {
+        b"" => read_all(Box::new(compressed)),
+        b"zstd" => {
+            if let Ok(d) = zstd::stream::read::Decoder::new(compressed) {
+                read_all(Box::new(d))
+            }
+        }
+        _ => {}
+    }
+    records
+}
+
+/// A whole chunk record's records, decompressed and checked (CRC, lengths,
+/// every record parses), or why not.
+fn chunk_records(raw: &[u8]) -> Result<Vec<u8>, String> {
+    // start time, end time, uncompressed size (u64 each), CRC (u32),
+    // compression name length (u32).
+    let fixed = raw.get(..32).ok_or("is shorter than its header")?;
+    let word = |k: usize| u64::from_le_bytes(fixed[k..k + 8].try_into().expect("8 bytes"));
+    let (start_ns, end_ns, uncompressed) = (word(0), word(8), word(16));
+    let span = format!(
+        "(messages from t = {:.6e} s to {:.6e} s)",
+        start_ns as f64 * 1e-9,
+        end_ns as f64 * 1e-9
+    );
+    let stored = u32::from_le_bytes(fixed[24..28].try_into().expect("4 bytes"));
+    let name_len = u32::from_le_bytes(fixed[28..32].try_into().expect("4 bytes")) as usize;
+    if name_len > 64 || uncompressed > RECORD_LIMIT {
+        return Err(format!("{span} has a malformed header"));
+    }
+    let name = raw
+        .get(32..32 + name_len)
+        .ok_or_else(|| format!("{span} has a malformed header"))?;
+    let records_len = raw
+        .get(32 + name_len..40 + name_len)
+        .map(|b| u64::from_le_bytes(b.try_into().expect("8 bytes")))
+        .ok_or_else(|| format!("{span} has a malformed header"))?;
+    let compressed = raw
+        .get(40 + name_len..)
+        .and_then(|rest| rest.get(..usize::try_from(records_len).ok()?))
+        .ok_or_else(|| format!("{span}: its records run past its end"))?;
+    let mut records = Vec::new();
+    let decoded = match name {
+        b"" => compressed.take(uncompressed).read_to_end(&mut records),
+        b"zstd" => zstd::stream::read::Decoder::new(compressed)
+            .and_then(|d| d.take(uncompressed).read_to_end(&mut records)),
+        other => {
+            return Err(format!(
+                "{span}: unknown compression `{}`",
+                String::from_utf8_lossy(other)
+            ))
+        }
+    };
+    if decoded.is_err() || records.len() as u64 != uncompressed {
+        return Err(format!("{span} does not decompress to its stated size"));
+    }
+    if stored != 0 {
+        let computed = crc32fast::hash(&records);
+        if computed != stored {
+            return Err(format!(
+                "{span} fails its CRC (stored {stored:#010x}, computed {computed:#010x})"
+            ));
+        }
+    }
+    // Every record whole and parsed before any is used.
+    let mut inner = records.as_slice();
+    while !inner.is_empty() {
+        let Ok(Some((opcode, len))) = header(&mut inner) else {
+            return Err(format!("{span}: a record header is cut"));
+        };
+        if len > inner.len() as u64 {
+            return Err(format!("{span}: a record runs past the chunk"));
+        }
+        let (body, rest) = inner.split_at(len as usize);
+        inner = rest;
+        if let Err(e) = mcap::parse_record(opcode, body) {
+            return Err(format!("{span}: record {opcode:#04x}: {e}"));
+        }
+    }
+    Ok(records)
 }
