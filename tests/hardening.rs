@@ -32,11 +32,10 @@ fn small_run(at: &Path) {
 fn small_run_with(at: &Path, t_end: &str, extra: &[&str]) {
     let mut args = vec!["run", "--backend", "cpu", "--threads", "1", "--quiet"];
     args.extend(["--t-end", t_end, "-o", s(at)]);
-    for e in extra {
-        args.extend(["--set", e]);
-    }
+    // The extra settings after the small scene's: the last --set wins.
     let sets: Vec<String> = slipfront::app::verify::SMALL_SCENE
         .iter()
+        .chain(extra)
         .flat_map(|s| ["--set".to_string(), s.to_string()])
         .collect();
     let out = Command::new(env!("CARGO_BIN_EXE_slipfront"))
@@ -670,4 +669,41 @@ fn damaged_chunks_are_found_by_their_crc_and_dropped() {
     }
     // Negative control: the file as written reads complete.
     assert!(!whole.truncated && whole.damage.is_none());
+}
+
+/// A checkpoint of another scene beside a run file (copied over, or the
+/// file replaced) is refused by a resume, naming both scenes, before the
+/// file is touched; the run's own checkpoint still resumes.
+#[test]
+fn a_resume_refuses_a_checkpoint_of_another_scene() {
+    let d = dir("foreign-ckpt");
+    let run = d.join("run.mcap");
+    small_run(&run);
+    let other = d.join("other.mcap");
+    small_run_with(
+        &other,
+        "1e-3",
+        &["geometry.nx=9", "geometry.nz=5", "geometry.height=0.035"],
+    );
+    let ckpt = slipfront::io::checkpoint::path_for(&run);
+    let own = std::fs::read(&ckpt).unwrap();
+    std::fs::copy(slipfront::io::checkpoint::path_for(&other), &ckpt).unwrap();
+    let before = std::fs::read(&run).unwrap();
+    let out = slipfront(&["run", "--resume", s(&run), "--t-end", "2e-3"], &[]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(err.contains("is of another scene"), "{err}");
+    assert!(
+        err.contains("29 × 16 blocks") && err.contains("9 × 5 blocks"),
+        "{err}"
+    );
+    assert_eq!(std::fs::read(&run).unwrap(), before, "the file was touched");
+    // Negative control: with its own checkpoint back, the run resumes.
+    std::fs::write(&ckpt, own).unwrap();
+    let out = slipfront(&["run", "--resume", s(&run), "--t-end", "2e-3"], &[]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
 }

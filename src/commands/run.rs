@@ -271,6 +271,52 @@ fn precision_note(ckpt: &Checkpoint, engine: &mut dyn Engine) -> anyhow::Result<
     })
 }
 
+/// Refuses, before anything is written, a checkpoint `used` of another
+/// scene than the run file `file` it would continue (a checkpoint copied
+/// over, or a file replaced): the two scenarios must be the same but for
+/// their end time (which --t-end moves).
+fn check_checkpoint_belongs(file: &Path, used: &Path, ckpt: &Checkpoint) -> anyhow::Result<()> {
+    if !file.is_file() {
+        return Ok(());
+    }
+    let (meta, text) = slipfront::io::output::reader::RunFile::read_head(file)
+        .map_err(|e| anyhow::anyhow!("cannot resume `{}`: {e}", file.display()))?;
+    let Some(text) = text else {
+        anyhow::bail!(
+            "cannot resume `{}`: it holds no scenario (not a slipfront run file); nothing was \
+             changed",
+            file.display()
+        );
+    };
+    let parse = |text: &str, what: &str| {
+        Scenario::parse(text, what, &[]).map(|mut s| {
+            s.time.end = 0.0;
+            s
+        })
+    };
+    let (ours, theirs) = (
+        parse(&text, "the run file's scenario")?,
+        parse(&ckpt.header.scenario, "the checkpoint's scenario")?,
+    );
+    if ours != theirs {
+        let shape =
+            |s: &Scenario| format!("`{}`, {} × {} blocks", s.name, s.geometry.nx, s.geometry.nz);
+        anyhow::bail!(
+            "cannot resume `{}`: its checkpoint `{}` is of another scene (the file: {}{}; the \
+             checkpoint: {}); nothing was changed. Resume from the run's own checkpoint, or \
+             start a new run from this one with --from {} -o NEW.mcap",
+            file.display(),
+            used.display(),
+            shape(&ours),
+            meta.get("scenario_hash")
+                .map_or(String::new(), |h| format!(", scenario hash {h}")),
+            shape(&theirs),
+            used.display()
+        );
+    }
+    Ok(())
+}
+
 /// `--resume RUN.mcap`: the same run, continued from its newest good
 /// checkpoint into the same file (or `-o`), to its end or a new `--t-end`.
 fn resume(mut a: RunArgs) -> anyhow::Result<ExitCode> {
@@ -311,6 +357,7 @@ fn resume(mut a: RunArgs) -> anyhow::Result<ExitCode> {
             file.display()
         ),
     };
+    check_checkpoint_belongs(&file, &used, &ckpt)?;
     let scenario = Scenario::parse(
         &ckpt.header.scenario,
         "the checkpoint's scenario",

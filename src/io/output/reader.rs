@@ -50,6 +50,32 @@ pub fn memory_budget() -> u64 {
 }
 
 impl RunFile {
+    /// The run file's `slipfront` metadata and scenario text, read from its
+    /// head only (they are written before any message): what a resume
+    /// checks its checkpoint against.
+    pub fn read_head(
+        path: &Path,
+    ) -> Result<(BTreeMap<String, String>, Option<String>), OutputError> {
+        let fail = |why: String| OutputError::Read {
+            path: path.display().to_string(),
+            why,
+        };
+        let (mut metadata, mut scenario) = (BTreeMap::new(), None);
+        scan(path, fail, |record| {
+            match record {
+                Record::Metadata(m) if m.name == "slipfront" => metadata = m.metadata,
+                Record::Attachment { header, data, .. } if header.name == "scenario.toml" => {
+                    scenario = Some(String::from_utf8_lossy(&data).into_owned());
+                    return Ok(Flow::Stop);
+                }
+                Record::Message { .. } => return Ok(Flow::Stop),
+                _ => {}
+            }
+            Ok(Flow::Continue)
+        })?;
+        Ok((metadata, scenario))
+    }
+
     pub fn read(path: &Path) -> Result<RunFile, OutputError> {
         RunFile::read_within(path, memory_budget())
     }
