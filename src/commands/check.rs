@@ -32,13 +32,8 @@ fn estimates(m: &Model) -> (Vec<Estimate>, Vec<String>) {
     let mut not_measured = Vec::new();
     for (backend, precision) in engines {
         let label = format!("{backend:?} {precision:?}");
-        let (real, coord) = match precision {
-            Precision::F64 => (8, 8),
-            Precision::F32 => (4, 8),
-            Precision::F32Plain => (4, 4),
-        };
         let fits = slipfront::engines::memory::check(
-            m.memory_bytes(real, coord) as u64,
+            precision.memory_bytes(m),
             slipfront::engines::memory::available_bytes(),
             &format!("{label}: a {} × {} lattice", m.nx, m.nz),
             "run it elsewhere",

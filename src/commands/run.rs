@@ -139,13 +139,8 @@ impl RunArgs {
             );
         }
         if !self.no_memory_check {
-            let (real, coord) = match precision {
-                Precision::F64 => (8, 8),
-                Precision::F32 => (4, 8),
-                Precision::F32Plain => (4, 4),
-            };
             slipfront::engines::memory::check(
-                model.memory_bytes(real, coord) as u64,
+                precision.memory_bytes(model),
                 slipfront::engines::memory::available_bytes(),
                 &format!("a {} × {} lattice in {precision:?}", model.nx, model.nz),
                 "pass --no-memory-check to try anyway",

@@ -84,6 +84,18 @@ pub fn check_precision(backend: Backend, precision: Precision) -> Result<(), Str
 }
 
 impl Precision {
+    /// Bytes of engine state for `model` in this precision
+    /// (`Model::memory_bytes`: 8 and 8 bytes per float and accumulated
+    /// coordinate in f64, 4 and 8 in mixed f32, 4 and 4 in plain f32).
+    pub fn memory_bytes(self, model: &crate::model::Model) -> u64 {
+        let (real, coord) = match self {
+            Precision::F64 => (8, 8),
+            Precision::F32 => (4, 8),
+            Precision::F32Plain => (4, 4),
+        };
+        model.memory_bytes(real, coord) as u64
+    }
+
     /// The precision of a saved state (`EngineState::precision`).
     pub fn of_state(name: &str) -> Option<Precision> {
         use crate::model::real::precision_name;

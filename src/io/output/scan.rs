@@ -173,43 +173,59 @@ fn chunk<E>(
         // that decompresses before the cut is passed on, as a reader of a
         // killed run expects.
         let records = cut_chunk_records(&raw);
-        let mut inner = records.as_slice();
-        while let Ok(Some((opcode, len))) = header(&mut inner) {
-            if len > inner.len() as u64 {
-                break;
-            }
-            let (body, rest) = inner.split_at(len as usize);
-            inner = rest;
-            match mcap::parse_record(opcode, body) {
-                Ok(record) => {
-                    if let Flow::Stop = each(record)? {
-                        return Ok(ChunkEnd::Read(Flow::Stop));
-                    }
-                }
-                Err(_) => break,
-            }
+        let (spans, _) = record_spans(&records);
+        if let Some(stop) = pass_on(&records, &spans, each)? {
+            return Ok(stop);
         }
         return Ok(ChunkEnd::Cut);
     }
     match chunk_records(&raw) {
-        Ok(records) => {
-            let mut inner = records.as_slice();
-            while !inner.is_empty() {
-                let (opcode, len) = header(&mut inner)
-                    .ok()
-                    .flatten()
-                    .expect("checked by chunk_records");
-                let (body, rest) = inner.split_at(len as usize);
-                inner = rest;
-                let record = mcap::parse_record(opcode, body).expect("checked by chunk_records");
-                if let Flow::Stop = each(record)? {
-                    return Ok(ChunkEnd::Read(Flow::Stop));
-                }
-            }
-            Ok(ChunkEnd::Read(Flow::Continue))
+        Ok((records, spans)) => {
+            Ok(pass_on(&records, &spans, each)?.unwrap_or(ChunkEnd::Read(Flow::Continue)))
         }
         Err(why) => Ok(ChunkEnd::Damaged(format!("chunk {index} {why}"))),
     }
+}
+
+/// Where the records of a chunk's decompressed bytes lie: (opcode, byte
+/// range of its body) of each whole record that parses, in order, up to the
+/// first that does not; and whether every byte was such a record.
+fn record_spans(records: &[u8]) -> (Vec<(u8, std::ops::Range<usize>)>, bool) {
+    let mut spans = Vec::new();
+    let mut at = 0;
+    while at < records.len() {
+        let mut inner = &records[at..];
+        let Ok(Some((opcode, len))) = header(&mut inner) else {
+            return (spans, false);
+        };
+        let body = at + 9;
+        if len > (records.len() - body) as u64 {
+            return (spans, false);
+        }
+        let end = body + len as usize;
+        if mcap::parse_record(opcode, &records[body..end]).is_err() {
+            return (spans, false);
+        }
+        spans.push((opcode, body..end));
+        at = end;
+    }
+    (spans, true)
+}
+
+/// Passes the records at `spans` to `each`; `Some` if it said stop.
+fn pass_on<E>(
+    records: &[u8],
+    spans: &[(u8, std::ops::Range<usize>)],
+    each: &mut impl FnMut(Record<'_>) -> Result<Flow, E>,
+) -> Result<Option<ChunkEnd>, E> {
+    for (opcode, span) in spans {
+        let record =
+            mcap::parse_record(*opcode, &records[span.clone()]).expect("parsed by record_spans");
+        if let Flow::Stop = each(record)? {
+            return Ok(Some(ChunkEnd::Read(Flow::Stop)));
+        }
+    }
+    Ok(None)
 }
 
 /// The records of a chunk cut short, decompressed as far as the data goes
@@ -254,7 +270,8 @@ fn cut_chunk_records(raw: &[u8]) -> Vec<u8> {
 
 /// A whole chunk record's records, decompressed and checked (CRC, lengths,
 /// every record parses), or why not.
-fn chunk_records(raw: &[u8]) -> Result<Vec<u8>, String> {
+#[allow(clippy::type_complexity)]
+fn chunk_records(raw: &[u8]) -> Result<(Vec<u8>, Vec<(u8, std::ops::Range<usize>)>), String> {
     // start time, end time, uncompressed size (u64 each), CRC (u32),
     // compression name length (u32).
     let fixed = raw.get(..32).ok_or("is shorter than its header")?;
@@ -305,19 +322,8 @@ fn chunk_records(raw: &[u8]) -> Result<Vec<u8>, String> {
         }
     }
     // Every record whole and parsed before any is used.
-    let mut inner = records.as_slice();
-    while !inner.is_empty() {
-        let Ok(Some((opcode, len))) = header(&mut inner) else {
-            return Err(format!("{span}: a record header is cut"));
-        };
-        if len > inner.len() as u64 {
-            return Err(format!("{span}: a record runs past the chunk"));
-        }
-        let (body, rest) = inner.split_at(len as usize);
-        inner = rest;
-        if let Err(e) = mcap::parse_record(opcode, body) {
-            return Err(format!("{span}: record {opcode:#04x}: {e}"));
-        }
+    match record_spans(&records) {
+        (spans, true) => Ok((records, spans)),
+        (_, false) => Err(format!("{span}: a record is cut or malformed")),
     }
-    Ok(records)
 }
