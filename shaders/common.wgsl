@@ -19,6 +19,10 @@
 @group(0) @binding(9) var<storage, read_write> junction_state: array<vec2<u32>>;
 // (sliding direction 0/±1, stick → slip count) per interface block.
 @group(0) @binding(10) var<storage, read_write> slide: array<vec2<i32>>;
+// The friction law's own state, its block_state_words per interface block
+// (crate::model::friction::Law): θ of rate-and-state. Coordinates, as
+// displacements are: tiny increments (aging at rest) are kept.
+@group(0) @binding(17) var<storage, read_write> law_state: array<packed_coord>;
 // The first blow-up of each scene, as GpuStatus (flag, step, block, ux,
 // uz, vx, vz, persistent steps run): 8 words per scene.
 @group(0) @binding(11) var<storage, read_write> status: array<atomic<u32>>;

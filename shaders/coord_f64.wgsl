@@ -72,11 +72,21 @@ fn coord_unpack(p: packed_coord) -> coord {
 // of the CPU twin's libm (a slip time rounds to whole steps: only a draw
 // within ~1e-15 of a half step could round otherwise).
 
-// ln x for x in (0, 1] (the RNG's 24-bit uniforms): x = m·2^e with m in
-// [√½, √2), ln m = 2 atanh(s), s = (m − 1)/(m + 1), |s| < 0.172.
+// ln x for x > 0 (the RNG's 24-bit uniforms, rate-and-state's ratios):
+// x = m·2^e with m in [√½, √2), ln m = 2 atanh(s), s = (m − 1)/(m + 1),
+// |s| < 0.172. Powers of two scale exactly, so the coarse steps change
+// nothing but the time taken.
 fn real_ln(x: real) -> real {
     var m = x;
     var e: real = 0.0;
+    for (var k = 0; k < 40 && m < 2.3283064365386963e-10; k++) {
+        m = m * 4294967296.0;
+        e = e - 32.0;
+    }
+    for (var k = 0; k < 40 && m >= 4294967296.0; k++) {
+        m = m * 2.3283064365386963e-10;
+        e = e + 32.0;
+    }
     for (var k = 0; k < 1100 && m < 0.7071067811865476; k++) {
         m = m * 2.0;
         e = e - 1.0;
@@ -105,6 +115,49 @@ fn real_ln(x: real) -> real {
     let ln2_hi: real = 6.93147180369123816490e-01;
     let ln2_lo: real = 1.90821492927058770002e-10;
     return e * ln2_hi + (ln_m + e * ln2_lo);
+}
+
+// e^x (rate-and-state friction): x = n·ln 2 + r with ln 2 in two parts
+// (n·LN2_HI exact for |n| < 2^21), |r| ≤ ln2/2, e^r by its Taylor series
+// to r^13 (the next term is below 5e-18), times 2^n in exact steps; 0
+// below −745 and held at e^709 above (the f64 range).
+fn real_exp(x: real) -> real {
+    if x < -745.0 {
+        return 0.0;
+    }
+    let xc = min(x, 709.0);
+    let n = floor(xc * 1.4426950408889634 + 0.5);
+    let ln2_hi: real = 6.93147180369123816490e-01;
+    let ln2_lo: real = 1.90821492927058770002e-10;
+    let r = (xc - n * ln2_hi) - n * ln2_lo;
+    var p: real = 1.0 / 6227020800.0;
+    p = p * r + 1.0 / 479001600.0;
+    p = p * r + 1.0 / 39916800.0;
+    p = p * r + 1.0 / 3628800.0;
+    p = p * r + 1.0 / 362880.0;
+    p = p * r + 1.0 / 40320.0;
+    p = p * r + 1.0 / 5040.0;
+    p = p * r + 1.0 / 720.0;
+    p = p * r + 1.0 / 120.0;
+    p = p * r + 1.0 / 24.0;
+    p = p * r + 1.0 / 6.0;
+    p = p * r + 0.5;
+    p = p * r + 1.0;
+    var y = p * r + 1.0;
+    var k = i32(n);
+    for (var i = 0; i < 40 && k >= 30; i++) {
+        y = y * 1073741824.0;
+        k = k - 30;
+    }
+    for (var i = 0; i < 40 && k <= -30; i++) {
+        y = y * 9.313225746154785e-10;
+        k = k + 30;
+    }
+    let scale = real(1u << u32(abs(k)));
+    if k >= 0 {
+        return y * scale;
+    }
+    return y / scale;
 }
 
 // sin r and cos r for |r| ≤ π/4 (Taylor series to r^19 and r^18).

@@ -109,3 +109,8 @@ fn real_ln(x: real) -> real {
 fn real_cos(x: real) -> real {
     return cos(x);
 }
+
+// e^x (rate-and-state friction).
+fn real_exp(x: real) -> real {
+    return exp(x);
+}

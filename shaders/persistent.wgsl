@@ -6,7 +6,7 @@
 // is the one that adds its lane sums, so no third barrier is needed.
 // Same phase functions, in the same order, as the one-step kernel.
 // CPU twin: src/engines/cpu/mod.rs CpuEngine::one_step (one step of its loop).
-// import: bulk_forces, common, coordinates, coulomb, junctions, record_buffers, record_common, scene, state, verlet
+// import: bulk_forces, common, coordinates, friction_law, junctions, record_buffers, record_common, scene, state, verlet
 
 // With an output file, the samples of the batch (batch.records of them,
 // in step order; src/engines/gpu/recorder.rs): a sample of step s is recorded in
@@ -58,8 +58,8 @@ fn persistent_steps(
             for (var i = t; i < c.n_blocks; i += PERSISTENT_THREADS) {
                 let f = bulk_force(i, ld);
                 force[block_base() + i] = f;
-                if FRICTION_LAW == LAW_COULOMB && i < c.nx {
-                    contact[interface_base() + i] = coulomb(i, f.x, ld);
+                if is_block_law() && i < c.nx {
+                    contact[interface_base() + i] = block_law_friction(i, f.x, ld);
                 }
             }
             if FRICTION_LAW == LAW_JUNCTIONS {

@@ -1,9 +1,9 @@
 // The forces of block i at the start of a step, stored in `force`, and its
-// friction: Amontons–Coulomb, or the junction lanes of an interface block
+// friction: a per-block law (friction_law), or the junction lanes of an interface block
 // one after the other, in lane order (the CPU twin's order). With `ready`
 // the forces were computed already (by a snapshot's force pass): read them.
 // Returns (force, friction). CPU twin: src/engines/cpu/mod.rs CpuEngine::force_pass.
-// import: bulk_forces, junctions, coulomb, common, coordinates, scene, state
+// import: bulk_forces, junctions, friction_law, common, coordinates, scene, state
 
 fn block_forces(i: u32, ld: Loads, ready: bool) -> vec3<real> {
     if ready {
@@ -16,8 +16,8 @@ fn block_forces(i: u32, ld: Loads, ready: bool) -> vec3<real> {
     let f = bulk_force(i, ld);
     force[block_base() + i] = f;
     var friction: real = 0.0;
-    if FRICTION_LAW == LAW_COULOMB && i < c.nx {
-        let cn = coulomb(i, f.x, ld);
+    if is_block_law() && i < c.nx {
+        let cn = block_law_friction(i, f.x, ld);
         contact[interface_base() + i] = cn;
         friction = cn.x;
     }

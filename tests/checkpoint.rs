@@ -588,3 +588,73 @@ fn a_gpu_run_extended_equals_the_longer_run() {
     );
     assert!(whole.global != RunFile::read(&other).unwrap().global);
 }
+
+/// A rate-and-state run stopped at its end and resumed gives the records
+/// of the run that never stopped: the law's state θ travels in the
+/// checkpoint (a resume that restarted θ would slip elsewhere).
+#[test]
+fn a_rate_state_run_resumes_bit_for_bit() {
+    let d = dir("rate-state");
+    let scene = ["scenarios/rate_state.toml"];
+    let args = |more: &[&str]| -> Vec<String> {
+        let mut v: Vec<String> = scene.iter().map(|s| s.to_string()).collect();
+        v.extend(
+            slipfront::app::verify::SMALL_SCENE
+                .iter()
+                .chain(&["loading.drive.velocity=0.4"])
+                .chain(more)
+                .flat_map(|s| ["--set".to_string(), s.to_string()]),
+        );
+        v
+    };
+    let whole = d.join("whole.mcap");
+    run_ok(&["--t-end", "0.002", "-o", s(&whole)], &args(&[]));
+    let run = d.join("run.mcap");
+    run_ok(&["--t-end", "0.001", "-o", s(&run)], &args(&[]));
+    let ckpt = Checkpoint::read(&path_for(&run)).unwrap();
+    assert_eq!(ckpt.engine.law_state.len(), 29, "θ of each interface block");
+    run_ok(&["--resume", s(&run), "--t-end", "0.002"], &[]);
+    let (a, b) = (RunFile::read(&whole).unwrap(), RunFile::read(&run).unwrap());
+    assert!(
+        a.global.iter().any(|g| g.ruptures > 0),
+        "the run must contain slips"
+    );
+    assert_same_records(&a, &b);
+}
+
+/// A checkpoint of format version 1 (before the law state) is still read,
+/// with no law state: every law then had none.
+#[test]
+fn a_version_1_checkpoint_is_still_read() {
+    let d = dir("version-1");
+    let run = d.join("run.mcap");
+    run_ok(&["--t-end", "0.0005", "-o", s(&run)], &scene_args(&[]));
+    let path = path_for(&run);
+    let now = Checkpoint::read(&path).unwrap();
+    let bytes = std::fs::read(&path).unwrap();
+    // The empty law_state section's count sits after the sections before it.
+    let h = &now.header;
+    let header_len = u64::from_le_bytes(bytes[12..20].try_into().unwrap()) as usize;
+    let (n, nx, nj) = (h.blocks, h.nx, h.junctions);
+    let values = [
+        2 * 8,
+        4 * n * 8,
+        2 * n * 8,
+        2 * n * 8,
+        2 * nx * 8,
+        2 * nj * 8,
+        nj * 8,
+        2 * nj * 4,
+        2 * nx * 4,
+    ];
+    let at = 20 + header_len + values.iter().map(|v| 8 + v).sum::<usize>();
+    assert_eq!(&bytes[at..at + 8], &[0u8; 8], "the empty law_state section");
+    let mut old = [&bytes[..at], &bytes[at + 8..bytes.len() - 8]].concat();
+    old[8..12].copy_from_slice(&1u32.to_le_bytes());
+    let sum = slipfront::io::output::fnv1a(&old);
+    old.extend_from_slice(&sum.to_le_bytes());
+    std::fs::write(&path, &old).unwrap();
+    let back = Checkpoint::read(&path).unwrap();
+    assert_eq!(back.engine, now.engine);
+    assert_eq!(back.header.step, now.header.step);
+}

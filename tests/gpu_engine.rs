@@ -560,3 +560,28 @@ fn a_slider_started_along_the_track_slips_as_on_the_cpu_on_every_kernel() {
         );
     }
 }
+
+/// Rate-and-state friction on every kernel (mixed f32) against the CPU in
+/// f32: every field, θ included, through the first slips of the small
+/// scene, and the same blocks slipping.
+#[test]
+fn rate_state_friction_matches_the_cpu_on_every_kernel() {
+    let text = std::fs::read_to_string("scenarios/rate_state.toml").unwrap();
+    let mut set: Vec<String> = SMALL.iter().map(|s| s.to_string()).collect();
+    set.push("loading.drive.velocity=0.4".into());
+    let s = Scenario::parse(&text, "rate_state", &set).unwrap();
+    let m = Model::from_scenario(&s, false).unwrap();
+    for path in KERNELS {
+        let (c, g) = run_both(&m, m.prep_steps + 3000, path);
+        let slips: u32 = c.slips.iter().sum();
+        assert!(slips > 0, "the window must contain slips");
+        let errors = compare_snapshots(&c, &g);
+        println!("{path:?}: {errors:?}");
+        assert_eq!(
+            fields_over(&errors, 1e-4, 1e-5),
+            Vec::<String>::new(),
+            "{path:?}: {errors:?}"
+        );
+        assert_eq!(c.slips, g.slips, "{path:?}");
+    }
+}

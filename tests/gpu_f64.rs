@@ -170,3 +170,35 @@ fn gpu_f64_ensemble_scenes_match_their_cpu_f64_runs() {
     let errors = compare_snapshots(&cpu[0], &ensemble.snapshot(1).unwrap());
     assert!(!fields_over(&errors, F64_TOLERANCE, 0.0).is_empty());
 }
+
+/// Rate-and-state friction in f64 on every kernel: the implicit solve and
+/// the state's evolution (the kernels' own f64 exp and ln, as Vulkan has
+/// none) give the CPU's f64 fields, θ included, through the first slips.
+#[test]
+fn gpu_f64_rate_state_matches_cpu_f64_on_every_kernel() {
+    let text = std::fs::read_to_string("scenarios/rate_state.toml").unwrap();
+    let mut set: Vec<String> = slipfront::app::verify::SMALL_SCENE
+        .iter()
+        .map(|s| s.to_string())
+        .collect();
+    set.push("loading.drive.velocity=0.4".into());
+    let s = Scenario::parse(&text, "rate_state", &set).unwrap();
+    let m = Model::from_scenario(&s, false).unwrap();
+    let end = m.prep_steps + 3000;
+    let mut cpu = CpuEngine::<f64>::new(&m, 1).unwrap();
+    let reference = snapshot_at(&mut cpu, end);
+    let slips: u32 = reference.slips.iter().sum();
+    assert!(slips > 0, "the window must contain slips");
+    for path in [GpuPath::OneStep, GpuPath::OneStepLanes, GpuPath::Persistent] {
+        let mut g = gpu_f64(&m, path);
+        let got = snapshot_at(&mut g, end);
+        let errors = compare_snapshots(&reference, &got);
+        println!("{path:?}: {errors:?}");
+        assert_eq!(
+            fields_over(&errors, 1e-9, 1e-12),
+            Vec::<String>::new(),
+            "{path:?}: {errors:?}"
+        );
+        assert_eq!(got.slips, reference.slips, "{path:?}");
+    }
+}

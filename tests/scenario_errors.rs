@@ -320,3 +320,44 @@ fn a_single_block_pulled_through_a_spring_checks_its_stability_limit() {
     assert!(e.contains("above the stability limit"), "{e}");
     SingleBlockScene::parse(&spring(1e-3), "heavy.toml").unwrap();
 }
+
+/// Rate-and-state friction needs its own table, and its table is refused
+/// under another law; its keys are range-checked with their line.
+#[test]
+fn the_rate_state_table_is_required_by_its_law_only_and_checked() {
+    let text = std::fs::read_to_string("scenarios/rate_state.toml").unwrap();
+    let start = text.find("\n[friction.rate_state]\n").unwrap() + 1;
+    let end = start + text[start..].find("\n[").unwrap() + 1;
+    let without = format!("{}{}", &text[..start], &text[end..]);
+    let e = parse_err(&without, &[]);
+    assert!(
+        e.contains(
+            "missing table [friction.rate_state], required by friction.law = \"rate_state\""
+        ),
+        "{e}"
+    );
+    let e = parse_err(&text, &["friction.law=coulomb"]);
+    assert!(
+        e.contains("[friction.rate_state] is read only by friction.law = \"rate_state\""),
+        "{e}"
+    );
+    let bad = text.replace(
+        "characteristic_slip = 1.0e-6",
+        "characteristic_slip = -1.0e-6",
+    );
+    let e = parse_err(&bad, &[]);
+    assert!(
+        e.contains("friction.rate_state.characteristic_slip = -0.000001"),
+        "{e}"
+    );
+    assert!(e.contains("allowed: 0 < characteristic_slip <= 1"), "{e}");
+    assert!(e.contains("(line "), "{e}");
+    let e = parse_err(&text, &["friction.rate_state.state_evolution=\"ageing\""]);
+    assert!(e.contains("ageing"), "{e}");
+    let slip = Scenario::parse(
+        &text,
+        "slip law",
+        &["friction.rate_state.state_evolution=\"slip\"".into()],
+    );
+    assert!(slip.is_ok());
+}

@@ -125,6 +125,23 @@ fn coulomb_law_and_bond_damping_sweeps_are_bitwise_the_reference() {
     same_bits::<f32, DoubleSingle>(&m, 1, 400);
 }
 
+/// Rate-and-state friction (a per-block law with its own state θ): the
+/// same bits, θ included, through slip.
+#[test]
+fn rate_state_law_sweeps_are_bitwise_the_reference() {
+    let text = std::fs::read_to_string("scenarios/rate_state.toml").unwrap();
+    let m = model_from(&text, &["loading.drive.velocity=2.0"]);
+    let last = same_bits::<f64, f64>(&m, 2, 800);
+    assert!(last.slips.iter().any(|&s| s > 0), "blocks must slide");
+    assert_eq!(last.law_state.len(), m.nx);
+    let start = m.law_initial_state()[0];
+    assert!(
+        last.law_state.iter().any(|&theta| theta < start),
+        "θ must renew"
+    );
+    same_bits::<f32, DoubleSingle>(&m, 2, 400);
+}
+
 #[test]
 fn top_drives_and_the_trigger_sweeps_are_bitwise_the_reference() {
     let drive_start = DEFAULT_SCENARIO.find("[loading.drive]").unwrap();

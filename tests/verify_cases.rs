@@ -81,3 +81,66 @@ fn negative_control_another_seed_fails_the_engine_draw_case() {
         "{failed:?}"
     );
 }
+
+/// The rate-and-state cases alone, printed (also run by `run_all`).
+#[test]
+fn rate_state_cases_pass_on_cpu_f64_and_f32() {
+    use slipfront::app::verify::rate_state::rate_state_cases;
+    for precision in [Precision::F64, Precision::F32] {
+        let f = |m: &Model| cpu_engine(m, precision, 1);
+        let r = rate_state_cases(&f).unwrap();
+        for c in &r {
+            println!(
+                "{precision:?} {}: {} vs {}",
+                c.name,
+                c.measured,
+                c.requirement()
+            );
+        }
+        assert_eq!(failures(&r), Vec::<String>::new(), "{precision:?}");
+    }
+}
+
+/// A law changed by 10% in b, in a, or in Dc is flagged by the cases that
+/// measure it: the steady friction and its slope a − b, the direct effect,
+/// the evolution distance.
+#[test]
+fn negative_controls_changed_law_parameters_fail_the_rate_state_cases() {
+    use slipfront::app::verify::rate_state::rate_state_cases;
+    use slipfront::model::scenario::RateStateTable;
+    let failed = |perturb: fn(&mut RateStateTable)| -> Vec<String> {
+        let f = |m: &Model| {
+            let mut m = m.clone();
+            perturb(
+                m.law_tables
+                    .rate_state
+                    .as_mut()
+                    .expect("a rate-and-state scene"),
+            );
+            cpu_engine(&m, Precision::F64, 1)
+        };
+        rate_state_cases(&f)
+            .unwrap()
+            .into_iter()
+            .filter(|r| !r.pass)
+            .map(|r| r.name)
+            .collect()
+    };
+    let b = failed(|r| r.evolution_effect *= 1.1);
+    for name in [
+        "rate_state_steady_friction_rel_error",
+        "rate_state_steady_slope_a_minus_b",
+    ] {
+        assert!(b.contains(&name.to_string()), "b: {b:?}");
+    }
+    let a = failed(|r| r.direct_effect *= 1.1);
+    assert!(
+        a.contains(&"rate_state_direct_effect_a".to_string()),
+        "a: {a:?}"
+    );
+    let dc = failed(|r| r.characteristic_slip *= 1.1);
+    assert!(
+        dc.contains(&"rate_state_evolution_distance_dc".to_string()),
+        "Dc: {dc:?}"
+    );
+}

@@ -18,6 +18,11 @@ pub struct FrictionState<T, C> {
     pub junction_state: Vec<[u32; 2]>,
     /// Per interface block: (sliding direction, stick → slip count).
     pub slide: Vec<[i32; 2]>,
+    /// The law's own state, `block_state_words` per interface block,
+    /// block-major (`model::friction::Law`): θ of rate-and-state. Kept as
+    /// coordinates, as displacements are: a state that grows by tiny steps
+    /// (θ aging by dt at rest) keeps them in mixed precision.
+    pub law_state: Vec<C>,
 }
 
 impl<T: Real, C: Coordinate<T>> FrictionState<T, C> {
@@ -35,6 +40,7 @@ impl<T: Real, C: Coordinate<T>> FrictionState<T, C> {
                 .collect(),
             junction_state: vec![[PINNED, 0]; model.n_junctions()],
             slide: vec![[0; 2]; model.nx],
+            law_state: initial_law_state(model),
         }
     }
 
@@ -44,6 +50,7 @@ impl<T: Real, C: Coordinate<T>> FrictionState<T, C> {
             junction_spring: state.junction_springs_as(),
             junction_state: state.junction_state.clone(),
             slide: state.slide.clone(),
+            law_state: state.law_state.iter().map(|&v| C::from_parts(v)).collect(),
         }
     }
 
@@ -62,11 +69,15 @@ impl<T: Real, C: Coordinate<T>> FrictionState<T, C> {
         }
     }
 
-    /// The Amontons–Coulomb sliding state of a snapshot.
+    /// The per-block laws' state of a snapshot: sliding state and law
+    /// state.
     pub fn load_slide(&mut self, snap: &Snapshot) {
         let slides = snap.slide_dir.iter().zip(&snap.slips);
         for (s, (d, n)) in self.slide.iter_mut().zip(slides) {
             *s = [*d, *n as i32];
+        }
+        for (s, v) in self.law_state.iter_mut().zip(&snap.law_state) {
+            *s = C::from_f64(*v);
         }
     }
 
@@ -76,4 +87,13 @@ impl<T: Real, C: Coordinate<T>> FrictionState<T, C> {
             spring.anchor = C::from_f64(a);
         }
     }
+}
+
+/// The law state of every interface block at t = 0: the law's initial
+/// values repeated, block-major.
+pub fn initial_law_state<T: Real, C: Coordinate<T>>(model: &Model) -> Vec<C> {
+    let one = model.law_initial_state();
+    (0..model.nx)
+        .flat_map(|_| one.iter().map(|&v| C::from_f64(v)))
+        .collect()
 }

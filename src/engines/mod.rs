@@ -60,6 +60,9 @@ pub struct Snapshot {
     pub slide_dir: Vec<i32>,
     /// Amontons–Coulomb stick → slip transitions per interface block.
     pub slips: Vec<u32>,
+    /// The friction law's state per interface block
+    /// (`block_state_words` each, block-major): θ (s) of rate-and-state.
+    pub law_state: Vec<f64>,
 }
 
 impl Snapshot {
@@ -78,6 +81,7 @@ impl Snapshot {
             junction_spring,
             junction_state,
             slide,
+            law_state,
         } = friction_state;
         let f2 = |v: &[[T; 2]]| v.iter().map(|x| x.map(|y| y.as_f64())).collect::<Vec<_>>();
         let col = |v: &[[T; 2]], k: usize| v.iter().map(|x| x[k].as_f64()).collect::<Vec<_>>();
@@ -102,6 +106,7 @@ impl Snapshot {
             ruptures: junction_state.iter().map(|s| s[1]).collect(),
             slide_dir: slide.iter().map(|s| s[0]).collect(),
             slips: slide.iter().map(|s| s[1] as u32).collect(),
+            law_state: law_state.iter().map(|v| v.as_f64()).collect(),
         }
     }
 

@@ -32,6 +32,9 @@ pub struct EngineState {
     pub junction_state: Vec<[u32; 2]>,
     /// Per interface block: (sliding direction, stick → slip count).
     pub slide: Vec<[i32; 2]>,
+    /// The friction law's state, `block_state_words` per interface block,
+    /// as coordinate parts.
+    pub law_state: Vec<[f64; 2]>,
 }
 
 /// An engine's arrays, borrowed in its own number types: the input of
@@ -74,6 +77,7 @@ impl EngineState {
                 .collect(),
             junction_state: a.friction.junction_state.clone(),
             slide: a.friction.slide.clone(),
+            law_state: a.friction.law_state.iter().map(|v| v.parts()).collect(),
         }
     }
 
@@ -89,6 +93,11 @@ impl EngineState {
             ("junction stiffnesses", self.junction_stiffness.len(), nj),
             ("junction states", self.junction_state.len(), nj),
             ("interface slide states", self.slide.len(), nx),
+            (
+                "interface law states",
+                self.law_state.len(),
+                nx * model.law.declaration().block_state_words,
+            ),
         ];
         for (what, got, want) in sizes {
             if got != want {

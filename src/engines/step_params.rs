@@ -21,6 +21,8 @@ pub struct Consts<T> {
     pub dt: T,
     pub mu_s: T,
     pub mu_d: T,
+    /// The friction law's constants (`Model::law_constants`).
+    pub law: [T; crate::model::friction::LAW_CONSTANTS],
     pub junction_count: usize,
     pub junction_stiffness_normal_load: bool,
     pub junction_stiffness_value: T,
@@ -88,6 +90,7 @@ impl<T: Real> Consts<T> {
             dt: c(m.dt),
             mu_s: c(m.mu_s),
             mu_d: c(m.mu_d),
+            law: m.law_constants().map(c),
             junction_count: j.map_or(0, |j| j.count),
             junction_stiffness_normal_load: j.is_some_and(|j| {
                 j.stiffness == crate::model::scenario::JunctionStiffness::NormalLoad

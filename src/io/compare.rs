@@ -61,6 +61,7 @@ pub fn compare_snapshots(a: &Snapshot, b: &Snapshot) -> Vec<FieldError> {
             &b.junction_stiffness,
         ),
         field("ruptures", &as_f64(&a.ruptures), &as_f64(&b.ruptures)),
+        field("law_state", &a.law_state, &b.law_state),
     ]
 }
 

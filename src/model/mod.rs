@@ -3,6 +3,7 @@
 //! re-exported here: `model::Model`), the lattice, the force laws, the
 //! junction record, the random numbers and the number types.
 
+pub mod friction;
 pub mod junction;
 pub mod lattice;
 pub mod laws;

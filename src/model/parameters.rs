@@ -96,6 +96,8 @@ pub struct Model {
     pub law: FrictionLaw,
     pub mu_s: f64,
     pub mu_d: f64,
+    /// The laws' own tables (`[friction.<law>]`).
+    pub law_tables: crate::model::friction::LawTables,
     pub junctions: Option<JunctionModel>,
     /// Total normal load F_N (N).
     pub normal_force: f64,
@@ -340,6 +342,7 @@ impl Model {
             law: s.friction.law,
             mu_s: s.friction.static_coefficient,
             mu_d: s.friction.dynamic_coefficient,
+            law_tables: s.friction.law_tables(),
             junctions,
             normal_force: s.loading.normal.force,
             normal_slope: {
@@ -447,6 +450,18 @@ impl Model {
     /// Total junction slots (interface blocks × Ns); 0 without junctions.
     pub fn n_junctions(&self) -> usize {
         self.junctions.map_or(0, |j| j.count * self.nx)
+    }
+
+    /// The friction law's constants, in the engines' run constants as
+    /// `law` (`crate::model::friction::constants`).
+    pub fn law_constants(&self) -> [f64; crate::model::friction::LAW_CONSTANTS] {
+        crate::model::friction::constants(self.law, self.mu_s, self.mu_d, &self.law_tables)
+    }
+
+    /// The friction law's state of each interface block at t = 0
+    /// (`block_state_words` values).
+    pub fn law_initial_state(&self) -> Vec<f64> {
+        crate::model::friction::initial_block_state(self.law, &self.law_tables)
     }
 
     pub fn total_steps(&self) -> u64 {
@@ -625,10 +640,8 @@ impl Model {
             Driver::TopVelocity { .. } => "top_velocity",
         });
         t.push(match self.law {
-            FrictionLaw::Junctions => "junctions",
-            FrictionLaw::SingleJunction => "single_junction",
-            FrictionLaw::Coulomb => "coulomb",
             FrictionLaw::None => "frictionless",
+            law => law.name(),
         });
         if self.trigger.is_some() {
             t.push("trigger");

@@ -4,6 +4,7 @@
 mod coulomb_block;
 mod elastic;
 mod junction_drag;
+pub mod rate_state;
 mod rng_stats;
 mod waves;
 
@@ -100,11 +101,12 @@ pub enum VerifyError {
 type CaseGroup = fn(EngineFactory<'_>) -> Result<Vec<CaseResult>, VerifyError>;
 
 /// The groups of cases, in order, by name.
-const GROUPS: [(&str, CaseGroup); 5] = [
+const GROUPS: [(&str, CaseGroup); 6] = [
     ("wave speeds", waves::wave_speed_cases),
     ("elastic constants", elastic::elastic_constant_cases),
     ("coulomb block", coulomb_block::coulomb_block_cases),
     ("junction drag", junction_drag::junction_drag_cases),
+    ("rate and state", rate_state::rate_state_cases),
     ("rng", rng_stats::rng_cases),
 ];
 

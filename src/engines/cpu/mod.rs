@@ -10,11 +10,12 @@ pub use fast::SweepEngine;
 
 use crate::engines::kernels::bulk_forces::{bond_consts, Blocks, BondConsts};
 use crate::engines::kernels::junctions::JunctionSlots;
-use crate::engines::kernels::{bulk_forces, coulomb, junctions, verlet};
+use crate::engines::kernels::{bulk_forces, junctions, verlet};
 use crate::engines::step_params::{step_params, Consts};
 use crate::engines::{
     blow_up, Engine, EngineError, EngineState, FrictionState, Snapshot, StateArrays,
 };
+use crate::model::friction::{block_law_friction, BlockContact};
 use crate::model::lattice::{block_flags, initial_displacement};
 use crate::model::real::{precision_name, Coordinate, Real};
 use crate::model::scenario::FrictionLaw;
@@ -128,17 +129,26 @@ impl<T: Real, C: Coordinate<T>> CpuEngine<T, C> {
 
         match self.model.law {
             FrictionLaw::None => {}
-            FrictionLaw::Coulomb => {
+            law @ (FrictionLaw::Coulomb | FrictionLaw::RateState) => {
+                let words = law.declaration().block_state_words;
                 for ix in 0..nx {
-                    let (f, n) = coulomb::coulomb(
-                        c,
-                        &p,
-                        self.disp[ix],
-                        self.vel[ix],
-                        self.force[ix][0],
+                    let normal = junctions::foundation_normal(c, self.disp[ix][1].value());
+                    let contact = BlockContact {
+                        mass: c.mass,
+                        dt: c.dt,
+                        normal,
+                        velocity: self.vel[ix][0],
+                        other_force: self.force[ix][0],
+                        preparing: p.preparing,
+                    };
+                    let f = block_law_friction(
+                        law,
+                        &c.law,
+                        &contact,
                         &mut self.friction.slide[ix],
+                        &mut self.friction.law_state[ix * words..(ix + 1) * words],
                     );
-                    self.contact[ix] = [f, n];
+                    self.contact[ix] = [f, normal];
                 }
             }
             FrictionLaw::Junctions | FrictionLaw::SingleJunction => {

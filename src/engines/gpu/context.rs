@@ -47,8 +47,8 @@ pub fn shared() -> Result<GpuContext, EngineError> {
 }
 
 /// Storage bindings the persistent kernel uses (the most of them: its
-/// record buffers); an ensemble's constants take one more.
-const STORAGE_BINDINGS: u32 = 16;
+/// record buffers and the law state); an ensemble's constants take one more.
+const STORAGE_BINDINGS: u32 = 17;
 pub const ENSEMBLE_STORAGE_BINDINGS: u32 = STORAGE_BINDINGS + 1;
 
 /// Group 0's layout of one kernel family and the pipeline layout using it.

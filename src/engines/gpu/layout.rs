@@ -135,6 +135,16 @@ gpu_struct! {
         /// exact for the step offsets i < 4096 of a batch.
         pub drive_step_hi: T,
         pub drive_step_lo: T,
+        /// The friction law's constants (`Consts::law`): each per-block
+        /// law's WGSL names its own.
+        pub law0: T,
+        pub law1: T,
+        pub law2: T,
+        pub law3: T,
+        pub law4: T,
+        pub law5: T,
+        pub law6: T,
+        pub law7: T,
     }
 }
 
@@ -307,36 +317,6 @@ pub const RECORD_INTERFACE_WORDS: u32 = 6;
 /// Words per block of a bulk field: u_x, u_z, v_x, v_z.
 pub const RECORD_BULK_WORDS: u32 = 4;
 
-/// The friction code a kernel compiles in (its `FRICTION_LAW` override):
-/// the WGSL constants `LAW_*` are generated from this list, so the numbers
-/// exist once.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum KernelLaw {
-    None = 0,
-    Junctions = 1,
-    Coulomb = 2,
-}
-
-impl KernelLaw {
-    /// Every kernel law with its WGSL constant's name.
-    pub const ALL: [(KernelLaw, &'static str); 3] = [
-        (KernelLaw::None, "LAW_NONE"),
-        (KernelLaw::Junctions, "LAW_JUNCTIONS"),
-        (KernelLaw::Coulomb, "LAW_COULOMB"),
-    ];
-
-    /// The kernel code of a scenario's law: the single-junction law is the
-    /// junction code with one junction per block.
-    pub fn of(law: crate::model::scenario::FrictionLaw) -> KernelLaw {
-        use crate::model::scenario::FrictionLaw;
-        match law {
-            FrictionLaw::None => KernelLaw::None,
-            FrictionLaw::Junctions | FrictionLaw::SingleJunction => KernelLaw::Junctions,
-            FrictionLaw::Coulomb => KernelLaw::Coulomb,
-        }
-    }
-}
-
 /// The shared constants and structs in precision `T`, prepended to every
 /// shader module: `real`, `coord`, `packed_coord` and `force_sum` name
 /// `T`'s types.
@@ -391,9 +371,12 @@ pub fn wgsl_prelude<T: GpuReal>() -> String {
     ] {
         s += &format!("const {name}: u32 = {value}u;\n");
     }
-    for (law, name) in KernelLaw::ALL {
-        s += &format!("const {name}: u32 = {}u;\n", law as u32);
+    // The friction laws' kernel codes (`FRICTION_LAW`), from the laws'
+    // declarations (crate::model::friction::LAWS).
+    for (code, name) in crate::model::friction::kernel_codes() {
+        s += &format!("const {name}: u32 = {code}u;\n");
     }
+    s += &format!("const REAL_EPSILON: real = {:?};\n", T::epsilon());
     s += &format!(
         "const STENCIL = array<vec2<i32>, 8>({});\n",
         stencil.join(", ")
@@ -480,6 +463,14 @@ impl<T: GpuReal> GpuConsts<T> {
             drive_velocity: c.drive_velocity,
             drive_step_hi,
             drive_step_lo,
+            law0: c.law[0],
+            law1: c.law[1],
+            law2: c.law[2],
+            law3: c.law[3],
+            law4: c.law[4],
+            law5: c.law[5],
+            law6: c.law[6],
+            law7: c.law[7],
         }
     }
 }

@@ -45,8 +45,8 @@ use context::GpuContext;
 use layout::{GpuBatch, GpuConsts, GpuJunctionSpring, GpuStatus, WORKGROUP};
 use options::*;
 pub use options::{GpuOptions, GpuOutput, GpuPath, PERSISTENT_THREADS};
-use precision::Coord;
 pub use precision::GpuReal;
+use precision::{Coord, Packed};
 pub use record_pipelines::RECORD_SMALL_BLOCKS;
 
 use scene_state::gpu_junction_springs;
@@ -68,6 +68,8 @@ struct Buffers {
     junction_spring: wgpu::Buffer,
     junction_state: wgpu::Buffer,
     slide: wgpu::Buffer,
+    /// The friction law's state (`Shape::law_words` per scene).
+    law_state: wgpu::Buffer,
     status: wgpu::Buffer,
     lane_partial: wgpu::Buffer,
     /// What the persistent kernel binds for the record buffers until it
@@ -103,6 +105,7 @@ fn state_group(
         ("junction_spring", &b.junction_spring),
         ("junction_state", &b.junction_state),
         ("slide", &b.slide),
+        ("law_state", &b.law_state),
         ("status", &b.status),
         ("lane_partial", &b.lane_partial),
         ("plan", plan),
@@ -126,6 +129,8 @@ struct Shape {
     nx: usize,
     junctions: usize,
     lanes: usize,
+    /// Reals of friction-law state: `block_state_words` per interface block.
+    law_words: usize,
 }
 
 impl Shape {
@@ -137,6 +142,7 @@ impl Shape {
             nx: model.nx,
             junctions: model.n_junctions(),
             lanes,
+            law_words: model.nx * model.law.declaration().block_state_words,
         }
     }
 }
@@ -247,6 +253,7 @@ impl GpuEngine {
 impl<T: GpuReal> GpuEngine<T> {
     const DISP_BYTES: usize = std::mem::size_of::<[Coord<T>; 2]>();
     const REAL_PAIR_BYTES: usize = std::mem::size_of::<[T; 2]>();
+    const PACKED_BYTES: usize = std::mem::size_of::<Packed<T>>();
     const SPRING_BYTES: usize = std::mem::size_of::<GpuJunctionSpring<T>>();
     const SUMS_BYTES: usize = std::mem::size_of::<layout::GpuSampleSums<T>>();
 
@@ -407,6 +414,16 @@ impl<T: GpuReal> GpuEngine<T> {
             slide: storage(
                 "slide",
                 bytemuck::cast_slice(&vec![[0i32; 2]; s * shape.nx]),
+            ),
+            law_state: storage(
+                "law_state",
+                bytemuck::cast_slice(
+                    &models
+                        .iter()
+                        .flat_map(crate::engines::friction_state::initial_law_state::<T, Coord<T>>)
+                        .map(T::pack)
+                        .collect::<Vec<Packed<T>>>(),
+                ),
             ),
             status: storage(
                 "status",

@@ -67,7 +67,8 @@ impl Default for GpuOptions {
 /// 65535 iterations per invocation in all, so there a dispatch runs at most
 /// half that many loop iterations, counted here per step for the busiest
 /// invocation: its blocks (8 bonds each) in both phases, its junction
-/// lanes (each with its junctions), one lane sum and the step loop.
+/// lanes (each with its junctions), one lane sum, the step loop and its
+/// interface blocks' per-block friction law (`Law::block_loop_iterations`).
 pub fn persistent_steps_per_dispatch(model: &Model, threads: u32, software: bool) -> u64 {
     if !software {
         return PERSISTENT_BATCH;
@@ -81,7 +82,8 @@ pub fn persistent_steps_per_dispatch(model: &Model, threads: u32, software: bool
     };
     let blocks = model.n_blocks().div_ceil(t);
     let items = (model.nx * lanes).div_ceil(t);
-    let per_step = 3 + blocks * 10 + items * (1 + ns.div_ceil(lanes.max(1))) + lanes;
+    let friction = model.nx.div_ceil(t) * model.law.declaration().block_loop_iterations;
+    let per_step = 3 + blocks * 10 + items * (1 + ns.div_ceil(lanes.max(1))) + lanes + friction;
     (32_768 / per_step as u64).clamp(1, PERSISTENT_BATCH)
 }
 

@@ -4,7 +4,7 @@
 //! per-scene count of each buffer.
 
 use super::layout::GpuJunctionSpring;
-use super::precision::{Coord, GpuReal};
+use super::precision::{Coord, GpuReal, Packed};
 use super::readback::{cast_prefix, read_ranges, Range};
 use super::{GpuEngine, Shape, WORD_PAIR_BYTES};
 use crate::engines::{EngineError, EngineState, FrictionState, Snapshot, StateArrays};
@@ -35,21 +35,23 @@ impl<T: GpuReal> GpuEngine<T> {
             blocks: n,
             nx,
             junctions: nj,
+            law_words,
             ..
         } = self.shape;
         let b = &self.buffers;
-        let raw = read_ranges(
-            &self.ctx,
-            &[
-                self.slice(&b.disp[self.current], k, n, Self::DISP_BYTES),
-                self.slice(&b.vel[self.current], k, n, Self::REAL_PAIR_BYTES),
-                self.slice(&b.force, k, n, Self::REAL_PAIR_BYTES),
-                self.slice(&b.contact, k, nx, Self::REAL_PAIR_BYTES),
-                self.slice(&b.junction_spring, k, nj, Self::SPRING_BYTES),
-                self.slice(&b.junction_state, k, nj, WORD_PAIR_BYTES),
-                self.slice(&b.slide, k, nx, WORD_PAIR_BYTES),
-            ],
-        )?;
+        let mut ranges = vec![
+            self.slice(&b.disp[self.current], k, n, Self::DISP_BYTES),
+            self.slice(&b.vel[self.current], k, n, Self::REAL_PAIR_BYTES),
+            self.slice(&b.force, k, n, Self::REAL_PAIR_BYTES),
+            self.slice(&b.contact, k, nx, Self::REAL_PAIR_BYTES),
+            self.slice(&b.junction_spring, k, nj, Self::SPRING_BYTES),
+            self.slice(&b.junction_state, k, nj, WORD_PAIR_BYTES),
+            self.slice(&b.slide, k, nx, WORD_PAIR_BYTES),
+        ];
+        if law_words > 0 {
+            ranges.push(self.slice(&b.law_state, k, law_words, Self::PACKED_BYTES));
+        }
+        let raw = read_ranges(&self.ctx, &ranges)?;
         Ok(RawState {
             disp: cast_prefix(&raw[0], n),
             vel: cast_prefix(&raw[1], n),
@@ -62,6 +64,12 @@ impl<T: GpuReal> GpuEngine<T> {
                     .collect(),
                 junction_state: cast_prefix(&raw[5], nj),
                 slide: cast_prefix(&raw[6], nx),
+                law_state: raw.get(7).map_or(Vec::new(), |r| {
+                    cast_prefix::<Packed<T>>(r, law_words)
+                        .into_iter()
+                        .map(T::unpack)
+                        .collect()
+                }),
             },
         })
     }
@@ -193,6 +201,7 @@ impl<T: GpuReal> GpuEngine<T> {
             blocks: n,
             nx,
             junctions: nj,
+            law_words,
             ..
         } = self.shape;
         let disp = state.disp_as::<T, Coord<T>>();
@@ -231,6 +240,18 @@ impl<T: GpuReal> GpuEngine<T> {
             nx,
             WORD_PAIR_BYTES,
             bytemuck::cast_slice(&state.slide),
+        );
+        let law_state: Vec<Packed<T>> = state
+            .law_state
+            .iter()
+            .map(|&v| T::pack(Coord::<T>::from_parts(v)))
+            .collect();
+        self.write_scene(
+            &b.law_state,
+            k,
+            law_words,
+            Self::PACKED_BYTES,
+            bytemuck::cast_slice(&law_state),
         );
         let scene = &mut self.scenes[k];
         scene.drive_origin = state.drive_origin_as::<T, Coord<T>>();

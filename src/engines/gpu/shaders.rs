@@ -34,7 +34,6 @@ wgsl_files!(
     "bulk_forces",
     "common",
     "coord_f64",
-    "coulomb",
     "double_single",
     "junctions",
     "one_step",
@@ -52,12 +51,36 @@ wgsl_files!(
     "verlet",
 );
 
+/// The generated shader of the friction laws' dispatch
+/// (`crate::model::friction::wgsl_dispatch`).
+pub const FRICTION_LAW_FILE: &str = "friction_law";
+
+/// Every shader by name: the files of `shaders/`, the per-block friction
+/// laws' files of `shaders/laws/` (declared by each law), and the
+/// generated dispatch.
+pub fn all_files() -> Vec<(&'static str, &'static str)> {
+    let mut all: Vec<(&'static str, &'static str)> = FILES.to_vec();
+    all.extend(crate::model::friction::wgsl_files());
+    all.push((FRICTION_LAW_FILE, friction_dispatch()));
+    all
+}
+
+fn friction_dispatch() -> &'static str {
+    static TEXT: std::sync::OnceLock<String> = std::sync::OnceLock::new();
+    TEXT.get_or_init(crate::model::friction::wgsl_dispatch)
+}
+
 /// The text of shader file `name`.
 pub fn file(name: &str) -> Option<&'static str> {
+    if name == FRICTION_LAW_FILE {
+        return Some(friction_dispatch());
+    }
     FILES
         .iter()
+        .copied()
+        .chain(crate::model::friction::wgsl_files())
         .find(|(n, _)| *n == name)
-        .map(|(_, text)| *text)
+        .map(|(_, text)| text)
 }
 
 /// The names in a file's `// import:` line (none for `(none)`).
@@ -217,7 +240,7 @@ impl Variant {
         let top_loads = m.normal_force != 0.0
             || m.trigger.is_some()
             || matches!(m.driver, Driver::TopForce { .. });
-        let law = super::layout::KernelLaw::of(m.law) as u32 as f64;
+        let law = m.law.declaration().kernel as f64;
         Variant {
             constants: vec![
                 ("FRICTION_LAW", law),
@@ -344,8 +367,8 @@ mod tests {
 
     fn alone<T: GpuReal>() -> Vec<String> {
         let prelude = crate::engines::gpu::layout::wgsl_prelude::<T>();
-        FILES
-            .iter()
+        all_files()
+            .into_iter()
             .filter(|(name, _)| match *name {
                 "double_single" => T::COORDINATES == "double_single",
                 "coord_f64" => T::COORDINATES == "coord_f64",
@@ -371,10 +394,10 @@ mod tests {
         let prelude = crate::engines::gpu::layout::wgsl_prelude::<f32>();
         let slots = slots_for::<f32>("junctions");
         let mut src = prelude.clone();
-        for (name, text) in FILES {
+        for (name, text) in all_files() {
             let wanted = compose("", "junctions", &slots).unwrap();
-            if wanted.contains(&format!("// ---- shaders/{name}.wgsl\n")) && *name != "rng" {
-                src += if *name == "junctions" {
+            if wanted.contains(&format!("// ---- shaders/{name}.wgsl\n")) && name != "rng" {
+                src += if name == "junctions" {
                     &without_rng
                 } else {
                     text
@@ -384,22 +407,32 @@ mod tests {
         assert!(naga_errors::<f32>(&src).is_some(), "junctions needs rng");
     }
 
-    /// FILES lists every file of shaders/, and an unknown import is refused.
-    #[test]
-    fn every_shader_file_is_registered_and_imports_resolve() {
-        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("shaders");
-        let mut on_disk: Vec<String> = std::fs::read_dir(root)
+    fn wgsl_names(dir: &std::path::Path) -> Vec<String> {
+        let mut names: Vec<String> = std::fs::read_dir(dir)
             .unwrap()
             .filter_map(|e| {
                 let name = e.unwrap().file_name().to_string_lossy().to_string();
                 name.strip_suffix(".wgsl").map(str::to_string)
             })
             .collect();
-        on_disk.sort();
+        names.sort();
+        names
+    }
+
+    /// FILES lists every file of shaders/, the laws every file of
+    /// shaders/laws/, and an unknown import is refused.
+    #[test]
+    fn every_shader_file_is_registered_and_imports_resolve() {
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("shaders");
         let mut registered: Vec<String> = FILES.iter().map(|(n, _)| n.to_string()).collect();
         registered.sort();
-        assert_eq!(on_disk, registered);
-        for (name, text) in FILES {
+        assert_eq!(wgsl_names(&root), registered);
+        let mut laws: Vec<String> = crate::model::friction::wgsl_files()
+            .map(|(n, _)| n.to_string())
+            .collect();
+        laws.sort();
+        assert_eq!(wgsl_names(&root.join("laws")), laws);
+        for (name, text) in all_files() {
             let wanted = imports(text).unwrap_or_else(|e| panic!("{name}: {e}"));
             for w in wanted {
                 let known =
@@ -416,20 +449,26 @@ mod tests {
     #[test]
     fn every_shader_names_a_cpu_twin_that_exists() {
         let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
-        let mut files: Vec<_> = std::fs::read_dir(root.join("shaders"))
-            .unwrap()
+        let mut files: Vec<_> = ["shaders", "shaders/laws"]
+            .iter()
+            .flat_map(|dir| std::fs::read_dir(root.join(dir)).unwrap())
             .map(|e| e.unwrap().path())
             .filter(|p| p.extension().is_some_and(|x| x == "wgsl"))
             .collect();
         files.sort();
-        assert!(files.len() >= 19, "{files:?}");
-        let errors: Vec<String> = files
+        assert!(files.len() >= 20, "{files:?}");
+        let mut errors: Vec<String> = files
             .iter()
             .flat_map(|p| {
                 let name = p.file_name().unwrap().to_string_lossy().to_string();
                 twin_errors(&name, &std::fs::read_to_string(p).unwrap(), root)
             })
             .collect();
+        errors.extend(twin_errors(
+            FRICTION_LAW_FILE,
+            file(FRICTION_LAW_FILE).unwrap(),
+            root,
+        ));
         assert!(errors.is_empty(), "{errors:#?}");
         let good = "// CPU twin: src/engines/kernels/verlet.rs verlet.";
         assert!(twin_errors("x", good, root).is_empty());

@@ -21,11 +21,14 @@ use crate::engines::EngineState;
 use crate::io::output::fnv1a;
 
 pub const MAGIC: &[u8; 8] = b"SLIPCKPT";
-/// Bump on any change of the layout or of the header's meaning.
-pub const FORMAT_VERSION: u32 = 1;
+/// Bump on any change of the layout or of the header's meaning. Version 2
+/// added `law_state`; version 1 files (no law state: every law then had
+/// none) are still read.
+pub const FORMAT_VERSION: u32 = 2;
+const FIRST_READ_VERSION: u32 = 1;
 
 /// The binary sections, in file order.
-pub const SECTIONS: [&str; 11] = [
+pub const SECTIONS: [&str; 12] = [
     "drive_origin",
     "disp",
     "vel",
@@ -35,6 +38,7 @@ pub const SECTIONS: [&str; 11] = [
     "junction_stiffness",
     "junction_state",
     "slide",
+    "law_state",
     "solver_factor",
     "end",
 ];
@@ -74,6 +78,7 @@ pub fn encode(c: &Checkpoint) -> Vec<u8> {
     put_f64s(&mut out, s.junction_stiffness.iter());
     put_u32s(&mut out, s.junction_state.as_flattened().iter().copied());
     put_u32s(&mut out, s.slide.as_flattened().iter().map(|&v| v as u32));
+    put_f64s(&mut out, s.law_state.as_flattened().iter());
     let factor = c
         .header
         .runner
@@ -161,7 +166,7 @@ pub fn decode(bytes: &[u8]) -> Result<Checkpoint, CheckpointError> {
         return Err(damaged(format!("it is cut short ({} bytes)", bytes.len())));
     }
     let version = u32::from_le_bytes(bytes[8..12].try_into().expect("4 bytes"));
-    if version != FORMAT_VERSION {
+    if !(FIRST_READ_VERSION..=FORMAT_VERSION).contains(&version) {
         return Err(CheckpointError::Version(version));
     }
     if bytes.len() < 12 + 8 + 8 {
@@ -205,6 +210,11 @@ pub fn decode(bytes: &[u8]) -> Result<Checkpoint, CheckpointError> {
                     .map(|v| v as i32)
                     .collect(),
             ),
+            law_state: if version >= 2 {
+                pairs(c.f64s("law_state", None)?)
+            } else {
+                Vec::new()
+            },
         };
         let factor = c.f64s("solver_factor", None)?;
         if c.u64("end")? != 0 || c.at != c.bytes.len() {

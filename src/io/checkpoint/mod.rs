@@ -83,8 +83,8 @@ pub enum CheckpointError {
     #[error("not a slipfront checkpoint (no SLIPCKPT magic at its start)")]
     NotACheckpoint,
     #[error(
-        "written in checkpoint format version {0}; this slipfront ({ours}) reads version \
-         {reads}: continue it with the slipfront version that wrote it",
+        "written in checkpoint format version {0}; this slipfront ({ours}) reads versions \
+         1 to {reads}: continue it with the slipfront version that wrote it",
         ours = env!("CARGO_PKG_VERSION"),
         reads = format::FORMAT_VERSION
     )]

@@ -11,6 +11,9 @@ mod validate;
 pub use overrides::apply_override;
 pub use validate::validate;
 
+pub use crate::model::friction::rate_state::{RateStateTable, StateEvolution};
+pub use crate::model::friction::FrictionLaw;
+use crate::model::friction::LawTables;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
@@ -188,19 +191,6 @@ pub struct Foundation {
     pub stiffness_ratio: f64,
 }
 
-#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Eq)]
-#[serde(rename_all = "snake_case")]
-pub enum FrictionLaw {
-    /// Ns micro-junctions per interface block.
-    Junctions,
-    /// Amontons–Coulomb per interface block.
-    Coulomb,
-    /// One junction per block with slow post-rupture slip.
-    SingleJunction,
-    /// Frictionless (wave tests).
-    None,
-}
-
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct Friction {
@@ -212,6 +202,18 @@ pub struct Friction {
     /// Required for `junctions` and `single_junction`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub junctions: Option<Junctions>,
+    /// Required for `rate_state`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rate_state: Option<RateStateTable>,
+}
+
+impl Friction {
+    /// The laws' own tables.
+    pub fn law_tables(&self) -> LawTables {
+        LawTables {
+            rate_state: self.rate_state.clone(),
+        }
+    }
 }
 
 #[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Eq)]

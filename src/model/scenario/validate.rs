@@ -118,6 +118,14 @@ pub fn validate(s: &Scenario, text: &str, overridden: &[&str]) -> Vec<String> {
         }
         _ => {}
     }
+    let mut law_problems = Vec::new();
+    crate::model::friction::validate(
+        f.law,
+        &f.law_tables(),
+        &|key| c.line(key),
+        &mut law_problems,
+    );
+    c.problems.extend(law_problems);
 
     let n = &s.loading.normal;
     c.at_least("loading.normal.force", n.force, 0.0);
@@ -304,12 +312,7 @@ fn validate_prestress(c: &mut Checker<'_>, s: &Scenario, p: &super::Prestress) {
 }
 
 fn law_name(l: FrictionLaw) -> &'static str {
-    match l {
-        FrictionLaw::Junctions => "junctions",
-        FrictionLaw::Coulomb => "coulomb",
-        FrictionLaw::SingleJunction => "single_junction",
-        FrictionLaw::None => "none",
-    }
+    l.name()
 }
 
 fn drive_name(m: DriveMode) -> &'static str {

@@ -10,9 +10,10 @@
 
 use super::rows::RowView;
 use super::step::{Interface, Shared};
-use crate::engines::cpu::{coulomb, JunctionSpring, PINNED};
+use crate::engines::cpu::{JunctionSpring, PINNED};
 use crate::engines::kernels::junctions::{self, JunctionBlock, JUNCTION_LANES};
 use crate::engines::precision_probe::JUNCTIONS;
+use crate::model::friction::{block_law_friction, BlockContact};
 use crate::model::real::{Coordinate, ForceSum, Real};
 use crate::model::scenario::FrictionLaw;
 
@@ -42,17 +43,21 @@ pub fn interface_row<T: Real, C: Coordinate<T>>(
     let c = s.c;
     match s.law {
         FrictionLaw::None => {}
-        FrictionLaw::Coulomb => {
-            for (ix, (contact, slide)) in out.contact.iter_mut().zip(&mut *out.slide).enumerate() {
-                let (f, n) = coulomb::coulomb(
-                    c,
-                    &s.after,
-                    [row.ux[ix], row.uz[ix]],
-                    [row.vx[ix], row.vz[ix]],
-                    fx[ix],
-                    slide,
-                );
-                *contact = [f, n];
+        law @ (FrictionLaw::Coulomb | FrictionLaw::RateState) => {
+            let words = law.declaration().block_state_words;
+            let blocks = out.contact.iter_mut().zip(&mut *out.slide);
+            for (ix, (contact, slide)) in blocks.enumerate() {
+                let normal = junctions::foundation_normal(c, row.uz[ix].value());
+                let b = BlockContact {
+                    mass: c.mass,
+                    dt: c.dt,
+                    normal,
+                    velocity: row.vx[ix],
+                    other_force: fx[ix],
+                    preparing: s.after.preparing,
+                };
+                let state = &mut out.law_state[ix * words..(ix + 1) * words];
+                *contact = [block_law_friction(law, &c.law, &b, slide, state), normal];
             }
         }
         FrictionLaw::Junctions | FrictionLaw::SingleJunction => {

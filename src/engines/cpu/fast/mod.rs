@@ -219,6 +219,7 @@ impl<T: Real, C: Coordinate<T>> SweepEngine<T, C> {
                 &mut self.friction.junction_spring,
                 &mut self.friction.junction_state,
                 &mut self.friction.slide,
+                &mut self.friction.law_state,
             ),
         );
         let bad = bands
@@ -256,6 +257,7 @@ impl<T: Real, C: Coordinate<T>> SweepEngine<T, C> {
             &mut self.friction.junction_spring[..],
             &mut self.friction.junction_state[..],
             &mut self.friction.slide[..],
+            &mut self.friction.law_state[..],
         );
         let (done, bad, busy) = run.go(
             pool,

@@ -188,7 +188,7 @@ impl<T: Real, C: Coordinate<T>> Run<'_, T, C> {
                     let arrays = interface
                         .as_mut()
                         .and_then(|g| g.as_mut())
-                        .map(|(s, j, l)| (&mut **s, &mut **j, &mut **l));
+                        .map(|(s, j, l, w)| (&mut **s, &mut **j, &mut **l, &mut **w));
                     let band = next.band(self.bands[t].clone(), arrays);
                     chunk::sweep_band(self.isa, &shared, band, &mut scratch)
                 };

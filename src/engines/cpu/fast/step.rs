@@ -94,12 +94,14 @@ impl<'a, T: Real, C: Coordinate<T>> Shared<'a, T, C> {
     }
 }
 
-/// The junction and slide arrays the band holding row 0 updates in place
-/// (they are not double-buffered: only that band touches them).
+/// The junction, slide and law-state arrays the band holding row 0
+/// updates in place (they are not double-buffered: only that band touches
+/// them).
 pub type InterfaceArrays<'a, T, C> = (
     &'a mut [JunctionSpring<C, T>],
     &'a mut [[u32; 2]],
     &'a mut [[i32; 2]],
+    &'a mut [C],
 );
 
 /// The interface arrays, owned by the band holding row 0.
@@ -108,17 +110,19 @@ pub struct Interface<'a, T, C> {
     pub spring: &'a mut [JunctionSpring<C, T>],
     pub state: &'a mut [[u32; 2]],
     pub slide: &'a mut [[i32; 2]],
+    pub law_state: &'a mut [C],
 }
 
 impl<'a, T, C> Interface<'a, T, C> {
     /// The next state's `contact` with the arrays updated in place.
     pub fn new(contact: &'a mut [[T; 2]], arrays: InterfaceArrays<'a, T, C>) -> Self {
-        let (spring, state, slide) = arrays;
+        let (spring, state, slide, law_state) = arrays;
         Interface {
             contact,
             spring,
             state,
             slide,
+            law_state,
         }
     }
 }

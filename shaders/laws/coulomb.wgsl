@@ -1,5 +1,6 @@
 // Amontons–Coulomb friction on interface block ix, given the other forces
-// along x; returns (friction, normal force). CPU twin: src/engines/kernels/coulomb.rs coulomb.
+// along x; returns (friction, normal force). Its constants c.law0, c.law1
+// are (μs, μd). CPU twin: src/model/friction/coulomb/mod.rs coulomb.
 // import: common, coordinates, scene, state
 
 fn coulomb(ix: u32, other: real, ld: Loads) -> vec2<real> {
@@ -15,15 +16,15 @@ fn coulomb(ix: u32, other: real, ld: Loads) -> vec2<real> {
     if dir == 0 {
         // Friction that brings the block to rest this step.
         let hold = -other - c.mass * v.x / c.dt;
-        if ld.preparing || abs(hold) <= c.mu_s * normal {
+        if ld.preparing || abs(hold) <= c.law0 * normal {
             friction = hold;
         } else {
             dir = select(-1, 1, other > 0.0);
             state.y = state.y + 1;
-            friction = -c.mu_d * normal * real(dir);
+            friction = -c.law1 * normal * real(dir);
         }
     } else {
-        friction = -c.mu_d * normal * real(dir);
+        friction = -c.law1 * normal * real(dir);
     }
     slide[interface_base() + ix] = vec2<i32>(dir, state.y);
     return vec2<real>(friction, normal);
