@@ -129,7 +129,7 @@ impl<T: Real, C: Coordinate<T>> CpuEngine<T, C> {
 
         match self.model.law {
             FrictionLaw::None => {}
-            law @ (FrictionLaw::Coulomb | FrictionLaw::RateState) => {
+            law if law.is_per_block() => {
                 let words = law.declaration().block_state_words;
                 for ix in 0..nx {
                     let normal = junctions::foundation_normal(c, self.disp[ix][1].value());
@@ -184,6 +184,8 @@ impl<T: Real, C: Coordinate<T>> CpuEngine<T, C> {
                     }
                 }
             }
+            // Every law is per-block or a junction law (`model::friction::Law`).
+            law => unreachable!("{law:?} has no engine path"),
         }
     }
 

@@ -43,7 +43,7 @@ pub fn interface_row<T: Real, C: Coordinate<T>>(
     let c = s.c;
     match s.law {
         FrictionLaw::None => {}
-        law @ (FrictionLaw::Coulomb | FrictionLaw::RateState) => {
+        law if law.is_per_block() => {
             let words = law.declaration().block_state_words;
             let blocks = out.contact.iter_mut().zip(&mut *out.slide);
             for (ix, (contact, slide)) in blocks.enumerate() {
@@ -63,6 +63,8 @@ pub fn interface_row<T: Real, C: Coordinate<T>>(
         FrictionLaw::Junctions | FrictionLaw::SingleJunction => {
             junction_row(s, row, out, scratch);
         }
+        // Every law is per-block or a junction law (`model::friction::Law`).
+        law => unreachable!("{law:?} has no engine path"),
     }
 }
 
