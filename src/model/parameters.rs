@@ -1,6 +1,7 @@
 //! The model, defined once: parameters and derived quantities in SI units,
 //! used by every engine (CPU and GPU).
 
+pub use crate::model::friction::junctions::JunctionModel;
 use crate::model::scenario::{
     Component, DampingForm, DriveMode, EdgeConstraint, FrictionLaw, JunctionStiffness, Scenario,
 };
@@ -23,18 +24,6 @@ pub enum Driver {
     TopVelocity {
         velocity: f64,
     },
-}
-
-/// Junction parameters resolved from the scenario.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct JunctionModel {
-    /// Ns per interface block.
-    pub count: usize,
-    pub stiffness: JunctionStiffness,
-    /// N/m² for normal-load stiffness, N/m for constant.
-    pub stiffness_value: f64,
-    pub slip_time_mean: f64,
-    pub slip_time_std: f64,
 }
 
 /// The initial trigger of a prestressed interface.
@@ -277,21 +266,7 @@ impl Model {
                 let j = s.friction.junctions.as_ref().ok_or_else(|| {
                     ModelError::Invalid("missing table [friction.junctions]".into())
                 })?;
-                Some(JunctionModel {
-                    count: j.count as usize,
-                    // The engines know two kinds: a bulk ratio is a constant.
-                    stiffness: match j.stiffness {
-                        JunctionStiffness::BulkRatio => JunctionStiffness::Constant,
-                        other => other,
-                    },
-                    stiffness_value: match j.stiffness {
-                        JunctionStiffness::NormalLoad => j.stiffness_coefficient,
-                        JunctionStiffness::Constant => j.constant_stiffness,
-                        JunctionStiffness::BulkRatio => j.stiffness_ratio.unwrap_or(0.0) * k,
-                    },
-                    slip_time_mean: j.slip_time_mean,
-                    slip_time_std: j.slip_time_std,
-                })
+                Some(JunctionModel::from_table(j, k))
             }
             _ => None,
         };

@@ -1,6 +1,7 @@
 //! CPU twin of `shaders/junctions.wgsl`: the Ns micro-junctions of one
 //! interface block pin, break at μs·f_N, slip for a drawn time at μd·f_N and
-//! re-pin with zero stretch. A slipping junction counts down the steps left
+//! re-pin with zero stretch. The law's table, parameters and break
+//! threshold are in `crate::model::friction::junctions`. A slipping junction counts down the steps left
 //! of its slip, so nothing here depends on the global step count (runs of
 //! any length, and fast-forward, never wrap it).
 //!
@@ -14,6 +15,7 @@
 
 use crate::engines::precision_probe::{hold, DRAWS, JUNCTIONS};
 use crate::engines::step_params::{Consts, StepParams};
+use crate::model::friction::junctions::break_threshold;
 use crate::model::real::{Coordinate, ForceSum, Real};
 use crate::model::rng::slip_steps;
 
@@ -92,7 +94,7 @@ pub fn junction_block<T: Real, C: Coordinate<T>>(
     JunctionBlock {
         ux: u[0],
         f_n,
-        threshold: hold(probe, JUNCTIONS, c.mu_s * f_n),
+        threshold: hold(probe, JUNCTIONS, break_threshold(c.mu_s, f_n)),
         sliding: hold(probe, JUNCTIONS, -c.mu_d * f_n * velocity_sign(v[0])),
     }
 }

@@ -180,7 +180,10 @@ pub fn junction_energy_scale(model: &Model, snap: &Snapshot) -> f64 {
     }
     let k = pinned.iter().sum::<f64>() / pinned.len() as f64;
     let ns = snap.slip_steps_left.len() as f64 / model.nx as f64;
-    let f = model.mu_s * model.normal_force / (model.nx as f64 * ns);
+    let f = crate::model::friction::junctions::break_threshold(
+        model.mu_s,
+        model.normal_force / (model.nx as f64 * ns),
+    );
     0.5 * f * f / k
 }
 

@@ -17,6 +17,7 @@ use super::threshold::{first_change, threshold_margin, PathEnd};
 use super::{quadratic, SETTLE_TOLERANCE};
 use crate::engines::step_params::Consts;
 use crate::engines::Snapshot;
+use crate::model::friction::junctions::break_threshold;
 use crate::model::junction::PINNED;
 use crate::model::Model;
 
@@ -173,7 +174,8 @@ pub fn build(
     let model = cx.model;
     let consts = Consts::<f64>::new(model);
     let ns = start.slip_steps_left.len() / model.nx.max(1);
-    let per_junction = model.mu_s * model.k_foundation / ns.max(1) as f64;
+    // The law's break threshold per metre of indentation (f_N = k_f·d/Ns).
+    let per_junction = break_threshold(model.mu_s, model.k_foundation / ns.max(1) as f64);
     let (mut base, mut k, mut w) = (start, k, w);
     let mut now = base.step;
     let mut segments: Vec<Segment> = Vec::new();

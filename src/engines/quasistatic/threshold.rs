@@ -5,6 +5,7 @@
 //! which changes the stiffness) is found exactly.
 
 use crate::engines::Snapshot;
+use crate::model::friction::junctions::break_threshold;
 use crate::model::junction::PINNED;
 use crate::model::Model;
 
@@ -31,7 +32,8 @@ pub fn first_change(
 ) -> (f64, PathEnd) {
     let mut best = (f64::INFINITY, PathEnd::Never);
     let ns = snap.slip_steps_left.len() / model.nx.max(1);
-    let per_junction = model.mu_s * model.k_foundation / ns.max(1) as f64;
+    // The law's break threshold per metre of indentation (f_N = k_f·d/Ns).
+    let per_junction = break_threshold(model.mu_s, model.k_foundation / ns.max(1) as f64);
     for ix in 0..model.nx {
         let (ux, uz) = (disp[ix][0], disp[ix][1]);
         let (wx, wz) = (w[ix][0], w[ix][1]);
@@ -79,7 +81,8 @@ pub fn first_change(
 /// state, as a fraction of the threshold (negative: one is past it).
 pub fn threshold_margin(model: &Model, snap: &Snapshot, disp: &[[f64; 2]]) -> f64 {
     let ns = snap.slip_steps_left.len() / model.nx.max(1);
-    let per_junction = model.mu_s * model.k_foundation / ns.max(1) as f64;
+    // The law's break threshold per metre of indentation (f_N = k_f·d/Ns).
+    let per_junction = break_threshold(model.mu_s, model.k_foundation / ns.max(1) as f64);
     let mut margin = f64::INFINITY;
     for (ix, u) in disp.iter().enumerate().take(model.nx) {
         let theta = per_junction * (-u[1]).max(0.0);

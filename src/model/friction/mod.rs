@@ -22,6 +22,7 @@
 //! (docs/adding-a-law.md).
 
 pub mod coulomb;
+pub mod junctions;
 pub mod rate_state;
 
 use crate::model::real::{Coordinate, Real};
@@ -79,28 +80,8 @@ pub const LAWS: [(FrictionLaw, Law); 5] = [
             block_loop_iterations: 0,
         },
     ),
-    (
-        FrictionLaw::Junctions,
-        Law {
-            name: "junctions",
-            kernel: 1,
-            kernel_constant: "LAW_JUNCTIONS",
-            block_state_words: 0,
-            block_shader: None,
-            block_loop_iterations: 0,
-        },
-    ),
-    (
-        FrictionLaw::SingleJunction,
-        Law {
-            name: "single_junction",
-            kernel: 1,
-            kernel_constant: "LAW_JUNCTIONS",
-            block_state_words: 0,
-            block_shader: None,
-            block_loop_iterations: 0,
-        },
-    ),
+    (FrictionLaw::Junctions, junctions::LAW),
+    (FrictionLaw::SingleJunction, junctions::SINGLE_JUNCTION_LAW),
     (FrictionLaw::Coulomb, coulomb::LAW),
     (FrictionLaw::RateState, rate_state::LAW),
 ];
@@ -128,7 +109,20 @@ impl FrictionLaw {
 /// law in use needs its own (`validate`).
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct LawTables {
+    pub junctions: Option<junctions::Junctions>,
     pub rate_state: Option<rate_state::RateStateTable>,
+}
+
+/// The checks a law's table needs, each problem naming the key, the value,
+/// the allowed range and the key's place in the file (`line`): the
+/// scenario's validator implements them.
+pub trait TableChecks {
+    /// Where `key` is set, as " (line N)" or how else it was set.
+    fn line(&self, key: &str) -> String;
+    fn problem(&mut self, text: String);
+    fn positive(&mut self, key: &str, v: f64);
+    fn at_least(&mut self, key: &str, v: f64, lo: f64);
+    fn range_u(&mut self, key: &str, v: u32, lo: u32, hi: u32);
 }
 
 /// A law's constants (unused slots 0), from the static and dynamic
@@ -155,26 +149,23 @@ pub fn initial_block_state(law: FrictionLaw, t: &LawTables) -> Vec<f64> {
     }
 }
 
-/// The range problems of a law's own table (each naming key, value and
-/// allowed range), or that it is missing; `line` gives a key's place in
-/// the file.
-pub fn validate(
-    law: FrictionLaw,
-    t: &LawTables,
-    line: &dyn Fn(&str) -> String,
-    problems: &mut Vec<String>,
-) {
+/// The problems of the laws' tables for `law`: its own table present and
+/// in range, no table of another law.
+pub fn validate(law: FrictionLaw, t: &LawTables, c: &mut dyn TableChecks) {
+    junctions::validate(law, t.junctions.as_ref(), c);
     match (law, &t.rate_state) {
-        (FrictionLaw::RateState, Some(r)) => r.validate(line, problems),
-        (FrictionLaw::RateState, None) => problems.push(
+        (FrictionLaw::RateState, Some(r)) => r.validate(c),
+        (FrictionLaw::RateState, None) => c.problem(
             "missing table [friction.rate_state], required by friction.law = \"rate_state\"".into(),
         ),
-        (_, Some(_)) => problems.push(format!(
-            "table [friction.rate_state] is read only by friction.law = \"rate_state\", but \
-             friction.law = \"{}\"{}",
-            law.name(),
-            line("friction.law")
-        )),
+        (_, Some(_)) => {
+            let line = c.line("friction.law");
+            c.problem(format!(
+                "table [friction.rate_state] is read only by friction.law = \"rate_state\", but \
+                 friction.law = \"{}\"{line}",
+                law.name()
+            ))
+        }
         _ => {}
     }
 }

@@ -11,6 +11,7 @@ mod validate;
 pub use overrides::apply_override;
 pub use validate::validate;
 
+pub use crate::model::friction::junctions::{JunctionStiffness, Junctions};
 pub use crate::model::friction::rate_state::{RateStateTable, StateEvolution};
 pub use crate::model::friction::FrictionLaw;
 use crate::model::friction::LawTables;
@@ -211,40 +212,10 @@ impl Friction {
     /// The laws' own tables.
     pub fn law_tables(&self) -> LawTables {
         LawTables {
+            junctions: self.junctions.clone(),
             rate_state: self.rate_state.clone(),
         }
     }
-}
-
-#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq, Eq)]
-#[serde(rename_all = "snake_case")]
-pub enum JunctionStiffness {
-    /// k_j = √(coefficient · f_N) at attachment.
-    NormalLoad,
-    /// k_j = constant_stiffness.
-    Constant,
-    /// k_j = stiffness_ratio · k, the interface/bulk stiffness ratio of the
-    /// 1D front literature.
-    BulkRatio,
-}
-
-#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
-#[serde(deny_unknown_fields)]
-pub struct Junctions {
-    /// Ns, junctions per interface block.
-    pub count: u32,
-    pub stiffness: JunctionStiffness,
-    /// N/m², for `normal_load` stiffness (placeholder 39.2e9).
-    pub stiffness_coefficient: f64,
-    /// N/m, for `constant` stiffness.
-    pub constant_stiffness: f64,
-    /// k_j / k, for `bulk_ratio` stiffness.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub stiffness_ratio: Option<f64>,
-    /// ⟨t_R⟩ (s).
-    pub slip_time_mean: f64,
-    /// σ_R (s).
-    pub slip_time_std: f64,
 }
 
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]

@@ -1,7 +1,8 @@
 //! Range checks on a parsed scenario. Each problem names the key, the value,
 //! the allowed range and, where the key is in the file, its line.
 
-use super::{DriveMode, EdgeConstraint, FrictionLaw, JunctionStiffness, Scenario};
+use super::{DriveMode, EdgeConstraint, FrictionLaw, Scenario};
+use crate::model::friction::TableChecks;
 
 /// Returns every problem found; empty when the scenario is valid.
 /// `overridden` lists the keys set with `--set` (their line is the command line).
@@ -67,65 +68,7 @@ pub fn validate(s: &Scenario, text: &str, overridden: &[&str]) -> Vec<String> {
             f.dynamic_coefficient, f.static_coefficient
         ));
     }
-    match (f.law, &f.junctions) {
-        (FrictionLaw::Junctions | FrictionLaw::SingleJunction, None) => c.problems.push(format!(
-            "missing table [friction.junctions], required by friction.law = \"{}\"",
-            law_name(f.law)
-        )),
-        (FrictionLaw::Junctions | FrictionLaw::SingleJunction, Some(j)) => {
-            if f.law == FrictionLaw::SingleJunction && j.count != 1 {
-                let line = c.line("friction.junctions.count");
-                c.problems.push(format!(
-                    "friction.junctions.count = {} but friction.law = \"single_junction\" needs \
-                     exactly 1 (allowed: 1){line}",
-                    j.count
-                ));
-            } else {
-                // f_N / Ns is formed in f32 on the GPU: every count up to
-                // 2^24 is exact there.
-                c.range_u("friction.junctions.count", j.count, 1, 1 << 24);
-            }
-            match j.stiffness {
-                JunctionStiffness::NormalLoad => c.positive(
-                    "friction.junctions.stiffness_coefficient",
-                    j.stiffness_coefficient,
-                ),
-                JunctionStiffness::Constant => c.positive(
-                    "friction.junctions.constant_stiffness",
-                    j.constant_stiffness,
-                ),
-                JunctionStiffness::BulkRatio => match j.stiffness_ratio {
-                    Some(r) => c.positive("friction.junctions.stiffness_ratio", r),
-                    None => c.problems.push(
-                        "missing key friction.junctions.stiffness_ratio, required by \
-                         friction.junctions.stiffness = \"bulk_ratio\""
-                            .into(),
-                    ),
-                },
-            }
-            if j.stiffness != JunctionStiffness::BulkRatio {
-                if let Some(r) = j.stiffness_ratio {
-                    let line = c.line("friction.junctions.stiffness_ratio");
-                    c.problems.push(format!(
-                        "friction.junctions.stiffness_ratio = {r} is used only with \
-                         friction.junctions.stiffness = \"bulk_ratio\"{line}"
-                    ));
-                }
-            }
-            // Bounded above by the 32-bit slip countdown, in Model.
-            c.at_least("friction.junctions.slip_time_mean", j.slip_time_mean, 0.0);
-            c.at_least("friction.junctions.slip_time_std", j.slip_time_std, 0.0);
-        }
-        _ => {}
-    }
-    let mut law_problems = Vec::new();
-    crate::model::friction::validate(
-        f.law,
-        &f.law_tables(),
-        &|key| c.line(key),
-        &mut law_problems,
-    );
-    c.problems.extend(law_problems);
+    crate::model::friction::validate(f.law, &f.law_tables(), &mut c);
 
     let n = &s.loading.normal;
     c.at_least("loading.normal.force", n.force, 0.0);
@@ -384,6 +327,24 @@ impl Checker<'_> {
                 "{path} = {v} is out of range (allowed: {lo} to {hi}){line}"
             ));
         }
+    }
+}
+
+impl TableChecks for Checker<'_> {
+    fn line(&self, key: &str) -> String {
+        Checker::line(self, key)
+    }
+    fn problem(&mut self, text: String) {
+        self.problems.push(text);
+    }
+    fn positive(&mut self, key: &str, v: f64) {
+        Checker::positive(self, key, v)
+    }
+    fn at_least(&mut self, key: &str, v: f64, lo: f64) {
+        Checker::at_least(self, key, v, lo)
+    }
+    fn range_u(&mut self, key: &str, v: u32, lo: u32, hi: u32) {
+        Checker::range_u(self, key, v, lo, hi)
     }
 }
 

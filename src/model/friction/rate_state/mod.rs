@@ -15,7 +15,7 @@ pub use twin::{
     evolve_state, friction_coefficient, rate_state, solve_friction_level, state_increment,
 };
 
-use super::Law;
+use super::{Law, TableChecks};
 use serde::{Deserialize, Serialize};
 
 pub const LAW: Law = Law {
@@ -102,15 +102,15 @@ impl RateStateTable {
         vec![self.initial_state]
     }
 
-    pub fn validate(&self, line: &dyn Fn(&str) -> String, problems: &mut Vec<String>) {
+    pub fn validate(&self, c: &mut dyn TableChecks) {
         let mut check = |key: &str, v: f64, lo: f64, hi: f64, open_lo: bool| {
             let ok = v.is_finite() && (if open_lo { v > lo } else { v >= lo }) && v <= hi;
             if !ok {
                 let lo_sign = if open_lo { "<" } else { "<=" };
-                problems.push(format!(
+                let line = c.line(&format!("friction.rate_state.{key}"));
+                c.problem(format!(
                     "friction.rate_state.{key} = {v} is out of range (allowed: {lo} {lo_sign} \
-                     {key} <= {hi}){}",
-                    line(&format!("friction.rate_state.{key}"))
+                     {key} <= {hi}){line}"
                 ));
             }
         };
@@ -166,19 +166,34 @@ mod tests {
         }
     }
 
+    struct Problems(Vec<String>);
+
+    impl TableChecks for Problems {
+        fn line(&self, _: &str) -> String {
+            String::new()
+        }
+        fn problem(&mut self, text: String) {
+            self.0.push(text);
+        }
+        fn positive(&mut self, _: &str, _: f64) {}
+        fn at_least(&mut self, _: &str, _: f64, _: f64) {}
+        fn range_u(&mut self, _: &str, _: u32, _: u32, _: u32) {}
+    }
+
     #[test]
     fn out_of_range_keys_are_named_with_their_range() {
         let mut t = table();
         t.direct_effect = 0.0;
         t.characteristic_slip = -1.0;
-        let mut problems = Vec::new();
-        t.validate(&|_| String::new(), &mut problems);
+        let mut problems = Problems(Vec::new());
+        t.validate(&mut problems);
+        let problems = problems.0;
         assert_eq!(problems.len(), 2, "{problems:?}");
         assert!(problems[0].contains("friction.rate_state.direct_effect = 0"));
         assert!(problems[0].contains("allowed: 0 < direct_effect <= 1"));
         assert!(problems[1].contains("characteristic_slip = -1"));
-        let mut none = Vec::new();
-        table().validate(&|_| String::new(), &mut none);
-        assert!(none.is_empty(), "{none:?}");
+        let mut none = Problems(Vec::new());
+        table().validate(&mut none);
+        assert!(none.0.is_empty(), "{:?}", none.0);
     }
 }
