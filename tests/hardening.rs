@@ -707,3 +707,103 @@ fn a_resume_refuses_a_checkpoint_of_another_scene() {
         String::from_utf8_lossy(&out.stderr)
     );
 }
+
+/// A run of the small scene to `t_end`, started in the background.
+fn spawn_run(out: &Path, t_end: &str, extra: &[&str]) -> std::process::Child {
+    let sets: Vec<String> = slipfront::app::verify::SMALL_SCENE
+        .iter()
+        .chain(extra)
+        .flat_map(|s| ["--set".to_string(), s.to_string()])
+        .collect();
+    Command::new(env!("CARGO_BIN_EXE_slipfront"))
+        .args(["run", "--backend", "cpu", "--threads", "1", "--quiet"])
+        .args(["--t-end", t_end, "-o", s(out)])
+        .args(&sets)
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap()
+}
+
+fn wait_for(what: &str, mut done: impl FnMut() -> bool) {
+    let t0 = std::time::Instant::now();
+    while !done() {
+        assert!(t0.elapsed().as_secs() < 60, "timed out waiting for {what}");
+        std::thread::sleep(std::time::Duration::from_millis(10));
+    }
+}
+
+/// /global is whole: from the start of driving to `t_end`, no record
+/// missing (no gap over 1.5 output intervals).
+fn assert_whole(out: &Path, t_end: f64) {
+    let run = slipfront::io::output::reader::RunFile::read(out).unwrap();
+    assert!(!run.truncated, "the file is cut short");
+    let times: Vec<f64> = run.global.iter().map(|g| g.time).collect();
+    assert!(*times.last().unwrap() > 0.95 * t_end, "{:?}", times.last());
+    let gap = times.windows(2).map(|w| w[1] - w[0]).fold(0.0, f64::max);
+    assert!(gap < 1.5e-5, "a gap of {gap} s in /global");
+}
+
+/// A resume or a `recover` of a file that a run is still writing is
+/// refused before it touches the file, naming the run that holds it; the
+/// run goes on and ends whole (case 1–2: the run's data ended in `.cut`).
+#[test]
+fn a_file_being_written_cannot_be_resumed_or_recovered() {
+    let d = dir("held");
+    let out = d.join("run.mcap");
+    let mut first = spawn_run(&out, "0.1", &[]);
+    wait_for("the run's file", || out.exists());
+    std::thread::sleep(std::time::Duration::from_millis(300));
+    let holder = format!("held by slipfront run, pid {}", first.id());
+    let resume = slipfront(&["run", "--resume", s(&out)], &[]);
+    let recover = slipfront(&["recover", s(&out)], &[]);
+    let running = first.try_wait().unwrap().is_none();
+    for (what, o) in [("resume", resume), ("recover", recover)] {
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success(), "{what} must be refused: {err}");
+        assert!(err.contains(&holder), "{what}: {err}");
+    }
+    assert!(running, "the run ended before the test could race it");
+    assert!(first.wait().unwrap().success());
+    assert!(!d.join("run.mcap.cut").exists());
+    assert_whole(&out, 0.1);
+}
+
+/// Two resumes of one killed run, the second started while the first is
+/// under way: one continues the run, the other is refused naming it, and
+/// the file ends whole (case 1: one kept only 0–67 of 199 records).
+#[test]
+fn two_resumes_of_one_file_leave_it_whole() {
+    let d = dir("two-resumes");
+    let out = d.join("run.mcap");
+    let mut run = spawn_run(&out, "0.1", &["output.checkpoint_interval=0.2"]);
+    let ckpt = slipfront::io::checkpoint::path_for(&out);
+    let prev = PathBuf::from(format!("{}.prev", ckpt.display()));
+    wait_for("a checkpoint in the driving phase", || {
+        prev.exists()
+            && slipfront::io::checkpoint::Checkpoint::read(&ckpt).is_ok_and(|c| c.header.time > 0.0)
+    });
+    run.kill().unwrap();
+    run.wait().unwrap();
+    let resume = || {
+        Command::new(env!("CARGO_BIN_EXE_slipfront"))
+            .args(["run", "--resume", s(&out), "--quiet"])
+            .stdout(std::process::Stdio::null())
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .unwrap()
+    };
+    let first = resume();
+    std::thread::sleep(std::time::Duration::from_millis(150));
+    let second = resume().wait_with_output().unwrap();
+    let first = first.wait_with_output().unwrap();
+    let err = String::from_utf8_lossy(&second.stderr);
+    assert!(
+        first.status.success(),
+        "{}",
+        String::from_utf8_lossy(&first.stderr)
+    );
+    assert!(!second.status.success(), "the second resume ran too: {err}");
+    assert!(err.contains("held by slipfront resume, pid"), "{err}");
+    assert_whole(&out, 0.1);
+}

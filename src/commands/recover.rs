@@ -1,5 +1,6 @@
 //! `slipfront recover`: a cut-short run file rewritten whole.
 
+use slipfront::io::output::lock::RunLock;
 use slipfront::io::output::recover::rewrite;
 use slipfront::io::output::scan::Ending;
 use std::path::{Path, PathBuf};
@@ -29,6 +30,12 @@ pub fn recover(file: &Path, out: Option<PathBuf>, force: bool) -> anyhow::Result
             target.display()
         );
     }
+    // Neither the file nor its target may be written by a run meanwhile.
+    let _locks = [Some(file), (!in_place).then_some(target.as_path())]
+        .into_iter()
+        .flatten()
+        .map(|p| RunLock::acquire(p, "recover").map_err(anyhow::Error::msg))
+        .collect::<anyhow::Result<Vec<_>>>()?;
     let partial = with_suffix(&target, ".recovering");
     let report = match rewrite(file, &partial) {
         Ok(r) => r,

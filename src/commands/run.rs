@@ -4,6 +4,7 @@ use slipfront::engines::gpu::{GpuOptions, GpuOutput, GpuPath};
 use slipfront::engines::Engine;
 use slipfront::io::checkpoint::{branch, path_for, Checkpoint};
 use slipfront::io::output::fnv1a;
+use slipfront::io::output::lock::RunLock;
 use slipfront::model::scenario::Scenario;
 use slipfront::model::Model;
 use std::path::{Path, PathBuf};
@@ -172,6 +173,7 @@ pub fn run(a: RunArgs) -> anyhow::Result<ExitCode> {
     let (scenario, name) = super::load_scenario(a.scenario.as_deref(), &a.overrides())?;
     let model = Model::from_scenario(&scenario, a.allow_unstable)?;
     a.claim_output(&a.scenario.iter().map(PathBuf::as_path).collect::<Vec<_>>())?;
+    let _lock = lock_output(&a, "run")?;
     let precision = a.precision.unwrap_or(a.backend.default_precision());
     let mut engine = a.engine(&model, precision)?;
     eprintln!("slipfront: {name} on {}", engine.describe());
@@ -323,6 +325,12 @@ fn resume(mut a: RunArgs) -> anyhow::Result<ExitCode> {
             path_for(&file).display()
         );
     }
+    // The run file is locked before anything of it is read: a run still
+    // writing it, or another resume, is refused here.
+    let mut locks = Vec::new();
+    if !is_checkpoint(&file) {
+        locks.push(RunLock::acquire(&file, "resume").map_err(anyhow::Error::msg)?);
+    }
     // The run file's checkpoints, newest first (or the one named).
     let candidates = if path_for(&file).exists() || !is_checkpoint(&file) {
         Checkpoint::candidates(&file)
@@ -352,6 +360,9 @@ fn resume(mut a: RunArgs) -> anyhow::Result<ExitCode> {
             file.display()
         ),
     };
+    if locks.is_empty() {
+        locks.push(RunLock::acquire(&file, "resume").map_err(anyhow::Error::msg)?);
+    }
     check_checkpoint_belongs(&file, &used, &ckpt)?;
     let scenario = Scenario::parse(
         &ckpt.header.scenario,
@@ -396,7 +407,10 @@ fn resume(mut a: RunArgs) -> anyhow::Result<ExitCode> {
     );
     match &a.output {
         None => a.output = Some(file.clone()),
-        Some(out) if !same_file(out, &file) => a.claim_output(&[&file, &used])?,
+        Some(out) if !same_file(out, &file) => {
+            a.claim_output(&[&file, &used])?;
+            locks.push(lock_output(&a, "resume")?.expect("an output"));
+        }
         Some(_) => {}
     }
     let start = StartFrom {
@@ -439,6 +453,7 @@ fn branch_run(a: RunArgs) -> anyhow::Result<ExitCode> {
     inputs.extend(a.scenario.as_deref());
     inputs.extend(ckpt.header.output.as_deref());
     a.claim_output(&inputs)?;
+    let _lock = lock_output(&a, "branch")?;
     let step = ckpt.header.step;
     let changes =
         branch::check(&parent, &parent_model, &child, &child_model, step).map_err(|refusals| {
@@ -490,6 +505,15 @@ fn branch_run(a: RunArgs) -> anyhow::Result<ExitCode> {
         parent_output,
     };
     finish(&a, engine.as_mut(), &child, history, Some(start))
+}
+
+/// The lock of the run's output file, if it has one
+/// (`slipfront::io::output::lock`): held until the command returns.
+fn lock_output(a: &RunArgs, what: &str) -> anyhow::Result<Option<RunLock>> {
+    a.output
+        .as_deref()
+        .map(|out| RunLock::acquire(out, what).map_err(anyhow::Error::msg))
+        .transpose()
 }
 
 fn parse_t_end(text: &str) -> Result<f64, String> {

@@ -5,6 +5,7 @@
 //! zstd-compressed and flushed every few seconds so that a killed run leaves
 //! a readable file.
 
+pub mod lock;
 pub mod messages;
 pub mod reader;
 pub mod recover;
