@@ -807,3 +807,94 @@ fn two_resumes_of_one_file_leave_it_whole() {
     assert!(err.contains("held by slipfront resume, pid"), "{err}");
     assert_whole(&out, 0.1);
 }
+
+/// A tmpfs of `kib` KiB mounted at a fresh folder, unmounted on drop.
+struct SmallDisk(PathBuf);
+
+impl SmallDisk {
+    /// None when this process may not mount (not root): the full-disk
+    /// cases need a real full file system, which only root can make here.
+    fn mount(name: &str, kib: u32) -> Option<SmallDisk> {
+        let d = dir(name);
+        let ok = Command::new("mount")
+            .args(["-t", "tmpfs", "-o", &format!("size={kib}k"), "tmpfs", s(&d)])
+            .status()
+            .is_ok_and(|st| st.success());
+        if !ok {
+            // SAFETY: getuid has no preconditions.
+            assert_ne!(unsafe { libc::getuid() }, 0, "root could not mount a tmpfs");
+            return None;
+        }
+        Some(SmallDisk(d))
+    }
+}
+
+impl Drop for SmallDisk {
+    fn drop(&mut self) {
+        let _ = Command::new("umount").arg(&self.0).status();
+    }
+}
+
+/// A full disk is named with the OS's own error (it showed as "attempted
+/// another write after a write method failed"), and a checkpoint that did
+/// not fit leaves no `.ckpt.tmp` behind (case 8).
+#[test]
+fn a_full_disk_is_named_and_leaves_no_temporary() {
+    let small = slipfront::app::verify::SMALL_SCENE;
+    for (kib, what) in [(300, "output: MCAP"), (120, "checkpoint: cannot write")] {
+        let Some(disk) = SmallDisk::mount(&format!("full-{kib}"), kib) else {
+            eprintln!("not root: the full-disk case needs a tmpfs and was not run");
+            return;
+        };
+        let out = disk.0.join("r.mcap");
+        let mut args = vec!["run", "--backend", "cpu", "--threads", "1", "--quiet"];
+        args.extend(["--t-end", "0.01", "-o", s(&out)]);
+        let sets: Vec<String> = small
+            .iter()
+            .flat_map(|s| ["--set".to_string(), s.to_string()])
+            .collect();
+        let o = Command::new(env!("CARGO_BIN_EXE_slipfront"))
+            .args(&args)
+            .args(&sets)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{err}");
+        assert!(err.contains(what), "{kib} KiB: {err}");
+        assert!(err.contains("No space left on device"), "{kib} KiB: {err}");
+        assert!(!err.contains("attempted another write"), "{err}");
+        let left: Vec<String> = std::fs::read_dir(&disk.0)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        assert!(!left.iter().any(|n| n.ends_with(".tmp")), "{left:?}");
+    }
+}
+
+/// Without a normal load F/F_N has no meaning: /global's drive_ratio is
+/// the documented 0 beside the drive force, and the summary says why
+/// instead of printing a ratio (case 8).
+#[test]
+fn without_a_normal_load_the_drive_ratio_is_documented_not_invented() {
+    let d = dir("no-normal-load");
+    let out = d.join("r.mcap");
+    let mut args = vec!["run", "--backend", "cpu", "--threads", "1"];
+    args.extend(["--t-end", "2e-3", "-o", s(&out)]);
+    let sets: Vec<String> = slipfront::app::verify::SMALL_SCENE
+        .iter()
+        .chain(&["loading.normal.force=0", "loading.drive.velocity=0.4"])
+        .flat_map(|s| ["--set".to_string(), s.to_string()])
+        .collect();
+    let o = Command::new(env!("CARGO_BIN_EXE_slipfront"))
+        .args(&args)
+        .args(&sets)
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(text.contains("none: no normal load (F_N = 0)"), "{text}");
+    assert!(!text.contains("peak F/F_N"), "{text}");
+    let run = slipfront::io::output::reader::RunFile::read(&out).unwrap();
+    assert!(run.global.iter().any(|g| g.drive_force != 0.0));
+    assert!(run.global.iter().all(|g| g.drive_ratio == 0.0));
+}

@@ -102,8 +102,12 @@ pub struct RunSummary {
     pub wall_seconds: f64,
     /// Integrated (not skipped) block-steps per wall second.
     pub block_steps_per_second: f64,
+    /// F/F_N; 0 without a normal load (`normal_load` false), where it has
+    /// no meaning.
     pub peak_drive_ratio: f64,
     pub final_drive_ratio: f64,
+    /// F_N > 0: the drive ratios mean something.
+    pub normal_load: bool,
     pub ruptures: u64,
     /// GPU dispatches over the run (GPU engines only): those that stepped
     /// the lattice, and those that recorded output samples.
@@ -154,8 +158,12 @@ impl std::fmt::Display for RunSummary {
             "  throughput         {:.3e} block-steps/s",
             self.block_steps_per_second
         )?;
-        writeln!(f, "  peak F/F_N         {:.4}", self.peak_drive_ratio)?;
-        writeln!(f, "  final F/F_N        {:.4}", self.final_drive_ratio)?;
+        if self.normal_load {
+            writeln!(f, "  peak F/F_N         {:.4}", self.peak_drive_ratio)?;
+            writeln!(f, "  final F/F_N        {:.4}", self.final_drive_ratio)?;
+        } else {
+            writeln!(f, "  F/F_N              none: no normal load (F_N = 0)")?;
+        }
         writeln!(f, "  junction ruptures  {}", self.ruptures)?;
         if let Some(d) = self.dispatches {
             write!(
@@ -380,7 +388,9 @@ pub fn run_scene(
         Ok(())
     })();
     if let Err(e) = result {
-        outputs.finish(ff.as_ref().map(|f| &f.stats))?;
+        // Closing is best effort here: the first error is the cause (a
+        // full disk fails the close too, with a message that hides it).
+        let _ = outputs.finish(ff.as_ref().map(|f| &f.stats));
         progress.abandon();
         return Err(e);
     }
@@ -405,6 +415,7 @@ pub fn run_scene(
         } else {
             outputs.last
         },
+        normal_load: model.normal_force > 0.0,
         ruptures: outputs.ruptures.max(g.ruptures),
         dispatches: engine
             .dispatches()

@@ -46,6 +46,8 @@ pub fn global_of(model: &Model, sample: &Sample, origin: f64) -> GlobalSample {
         time: sample.time,
         step: sample.step,
         drive_force: force,
+        // Without a normal load F/F_N has no meaning: 0, documented
+        // (README, /global), and the run summary says so.
         drive_ratio: if model.normal_force > 0.0 {
             force / model.normal_force
         } else {

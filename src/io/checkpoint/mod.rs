@@ -123,10 +123,16 @@ impl Checkpoint {
         };
         let tmp = with_suffix(path, ".tmp");
         let bytes = format::encode(self);
-        {
+        let written = (|| {
             let mut f = std::fs::File::create(&tmp).map_err(|e| io("create", &tmp, e))?;
             f.write_all(&bytes).map_err(|e| io("write", &tmp, e))?;
-            f.sync_all().map_err(|e| io("sync", &tmp, e))?;
+            f.sync_all().map_err(|e| io("sync", &tmp, e))
+        })();
+        if let Err(e) = written {
+            // No stray temporary (a full disk): the last good checkpoint
+            // stays as it was.
+            let _ = std::fs::remove_file(&tmp);
+            return Err(e);
         }
         if path.exists() {
             let prev = with_suffix(path, ".prev");
