@@ -39,6 +39,7 @@ pub fn rewrite(cut: &Path, out: &Path) -> Result<Recovered, OutputError> {
     let mut channels: HashMap<u16, u16> = HashMap::new();
     let mut messages = 0u64;
     let mut last_time = None;
+    let mut a_run = false;
     let ending = scan(cut, fail, |record| {
         match record {
             Record::Schema { header, data } => {
@@ -64,7 +65,10 @@ pub fn rewrite(cut: &Path, out: &Path) -> Result<Recovered, OutputError> {
                     last_time = Some(header.log_time as f64 * 1e-9);
                 }
             }
-            Record::Metadata(m) => writer.write_metadata(&m)?,
+            Record::Metadata(m) => {
+                a_run |= m.name == "slipfront";
+                writer.write_metadata(&m)?
+            }
             Record::Attachment { header, data, .. } => writer.attach(&mcap::Attachment {
                 log_time: header.log_time,
                 create_time: header.create_time,
@@ -76,6 +80,15 @@ pub fn rewrite(cut: &Path, out: &Path) -> Result<Recovered, OutputError> {
         }
         Ok(Flow::Continue)
     })?;
+    // Without its metadata record no reader takes the file for a run:
+    // nothing is written rather than a file `info` would refuse.
+    if !a_run {
+        return Err(fail(
+            "nothing of a slipfront run survives in it (no `slipfront` metadata record before \
+             the cut or the damage): nothing to recover"
+                .into(),
+        ));
+    }
     writer.finish()?;
     Ok(Recovered {
         messages,
