@@ -708,17 +708,24 @@ fn a_resume_refuses_a_checkpoint_of_another_scene() {
     );
 }
 
-/// A run of the small scene to `t_end`, started in the background.
-fn spawn_run(out: &Path, t_end: &str, extra: &[&str]) -> std::process::Child {
+/// `slipfront run` of the small scene to `t_end` into `out`, with extra
+/// `--set`s after the small scene's.
+fn small_command(out: &Path, t_end: &str, extra: &[&str]) -> Command {
     let sets: Vec<String> = slipfront::app::verify::SMALL_SCENE
         .iter()
         .chain(extra)
         .flat_map(|s| ["--set".to_string(), s.to_string()])
         .collect();
-    Command::new(env!("CARGO_BIN_EXE_slipfront"))
-        .args(["run", "--backend", "cpu", "--threads", "1", "--quiet"])
+    let mut c = Command::new(env!("CARGO_BIN_EXE_slipfront"));
+    c.args(["run", "--backend", "cpu", "--threads", "1", "--quiet"])
         .args(["--t-end", t_end, "-o", s(out)])
-        .args(&sets)
+        .args(&sets);
+    c
+}
+
+/// A run of the small scene to `t_end`, started in the background.
+fn spawn_run(out: &Path, t_end: &str, extra: &[&str]) -> std::process::Child {
+    small_command(out, t_end, extra)
         .stdout(std::process::Stdio::null())
         .stderr(std::process::Stdio::piped())
         .spawn()
@@ -840,24 +847,13 @@ impl Drop for SmallDisk {
 /// not fit leaves no `.ckpt.tmp` behind (case 8).
 #[test]
 fn a_full_disk_is_named_and_leaves_no_temporary() {
-    let small = slipfront::app::verify::SMALL_SCENE;
     for (kib, what) in [(300, "output: MCAP"), (120, "checkpoint: cannot write")] {
         let Some(disk) = SmallDisk::mount(&format!("full-{kib}"), kib) else {
             eprintln!("not root: the full-disk case needs a tmpfs and was not run");
             return;
         };
         let out = disk.0.join("r.mcap");
-        let mut args = vec!["run", "--backend", "cpu", "--threads", "1", "--quiet"];
-        args.extend(["--t-end", "0.01", "-o", s(&out)]);
-        let sets: Vec<String> = small
-            .iter()
-            .flat_map(|s| ["--set".to_string(), s.to_string()])
-            .collect();
-        let o = Command::new(env!("CARGO_BIN_EXE_slipfront"))
-            .args(&args)
-            .args(&sets)
-            .output()
-            .unwrap();
+        let o = small_command(&out, "0.01", &[]).output().unwrap();
         let err = String::from_utf8_lossy(&o.stderr);
         assert_eq!(o.status.code(), Some(2), "{err}");
         assert!(err.contains(what), "{kib} KiB: {err}");
@@ -878,18 +874,8 @@ fn a_full_disk_is_named_and_leaves_no_temporary() {
 fn without_a_normal_load_the_drive_ratio_is_documented_not_invented() {
     let d = dir("no-normal-load");
     let out = d.join("r.mcap");
-    let mut args = vec!["run", "--backend", "cpu", "--threads", "1"];
-    args.extend(["--t-end", "2e-3", "-o", s(&out)]);
-    let sets: Vec<String> = slipfront::app::verify::SMALL_SCENE
-        .iter()
-        .chain(&["loading.normal.force=0", "loading.drive.velocity=0.4"])
-        .flat_map(|s| ["--set".to_string(), s.to_string()])
-        .collect();
-    let o = Command::new(env!("CARGO_BIN_EXE_slipfront"))
-        .args(&args)
-        .args(&sets)
-        .output()
-        .unwrap();
+    let extra = ["loading.normal.force=0", "loading.drive.velocity=0.4"];
+    let o = small_command(&out, "2e-3", &extra).output().unwrap();
     let text = String::from_utf8_lossy(&o.stdout);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     assert!(text.contains("none: no normal load (F_N = 0)"), "{text}");

@@ -2,9 +2,9 @@
 //! against the exact piecewise solution (thesis Appendix A, Fig. A.3): the
 //! leapfrog error in position is O(dt).
 
-use super::{bare_scene, scene_model, CaseResult, EngineFactory, VerifyError};
+use super::{scene_model, spring_block, CaseResult, EngineFactory, VerifyError};
 use crate::engines::advance_to;
-use crate::model::scenario::{Drive, DriveMode, FrictionLaw};
+use crate::model::scenario::FrictionLaw;
 
 /// Parameters of the exact solution.
 #[derive(Debug, Clone, Copy)]
@@ -64,33 +64,16 @@ fn coulomb_error(
     fraction: f64,
     speed_factor: f64,
 ) -> Result<f64, VerifyError> {
-    let mut s = bare_scene("coulomb_block");
-    s.geometry.nx = 1;
-    s.geometry.nz = 1;
-    s.geometry.length = 2.5e-3;
-    s.geometry.height = 2.5e-3;
-    s.foundation.stiffness_ratio = 0.5;
-    s.friction.law = FrictionLaw::Coulomb;
-    s.time.dt_fraction = Some(fraction);
+    let mut s = spring_block("coulomb_block", NORMAL_FORCE, DRIVE_STIFFNESS, 0.0, |s| {
+        s.friction.law = FrictionLaw::Coulomb;
+        s.time.dt_fraction = Some(fraction);
+    })?;
     let probe = scene_model(&s)?;
-    let mass = probe.mass;
-    // Times scale with the block: slip lasts π√(m/K); the foundation rings at √(k_f/m).
-    let slip_time = std::f64::consts::PI * (mass / DRIVE_STIFFNESS).sqrt();
-    let foundation_time = (mass / probe.k_foundation).sqrt();
+    // Times scale with the block: slip lasts π√(m/K).
+    let slip_time = std::f64::consts::PI * (probe.mass / DRIVE_STIFFNESS).sqrt();
     let mu_s = s.friction.static_coefficient;
     let speed = speed_factor * mu_s * NORMAL_FORCE / (DRIVE_STIFFNESS * 5.0 * slip_time);
-    s.loading.normal.force = NORMAL_FORCE;
-    s.loading.normal.ramp_time = 10.0 * foundation_time;
-    s.loading.normal.relax_time = 40.0 * foundation_time;
-    // Critical damping of the block on its foundation: √(k_f/k) of 2√(km).
-    s.loading.normal.relax_damping_ratio = 0.5f64.sqrt();
-    s.loading.drive = Drive {
-        mode: DriveMode::SideSpring,
-        stiffness: Some(DRIVE_STIFFNESS),
-        height: Some(0.0),
-        velocity: Some(speed),
-        force_rate: None,
-    };
+    s.loading.drive.velocity = Some(speed);
     s.time.end = 9.0 * slip_time;
     let model = scene_model(&s)?;
     let mut engine = factory(&model)?;

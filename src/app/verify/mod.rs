@@ -180,6 +180,44 @@ pub fn bare_scene(name: &str) -> Scenario {
     s
 }
 
+/// One 2.5 mm block on its foundation (k_f = k/2), pressed by
+/// `normal_force` over a ramp and a critically damped relaxation (10 and
+/// 40 times √(m/k_f): the times scale with the block), then pulled from
+/// its side, at its own height, by a spring of `stiffness` at `velocity`:
+/// the single-block scene of the friction-law cases. `friction` sets the
+/// law (and anything else of the scene) first.
+pub fn spring_block(
+    name: &str,
+    normal_force: f64,
+    stiffness: f64,
+    velocity: f64,
+    friction: impl FnOnce(&mut Scenario),
+) -> Result<Scenario, VerifyError> {
+    use crate::model::scenario::{Drive, DriveMode};
+    let mut s = bare_scene(name);
+    s.geometry.nx = 1;
+    s.geometry.nz = 1;
+    s.geometry.length = 2.5e-3;
+    s.geometry.height = 2.5e-3;
+    s.foundation.stiffness_ratio = 0.5;
+    friction(&mut s);
+    let probe = scene_model(&s)?;
+    let foundation_time = (probe.mass / probe.k_foundation).sqrt();
+    s.loading.normal.force = normal_force;
+    s.loading.normal.ramp_time = 10.0 * foundation_time;
+    s.loading.normal.relax_time = 40.0 * foundation_time;
+    // Critical damping of the block on its foundation: √(k_f/k) of 2√(km).
+    s.loading.normal.relax_damping_ratio = 0.5f64.sqrt();
+    s.loading.drive = Drive {
+        mode: DriveMode::SideSpring,
+        stiffness: Some(stiffness),
+        height: Some(0.0),
+        velocity: Some(velocity),
+        force_rate: None,
+    };
+    Ok(s)
+}
+
 /// Model of a verification scene (validated like a user's scenario).
 pub fn scene_model(s: &Scenario) -> Result<Model, VerifyError> {
     let text = s.to_toml();

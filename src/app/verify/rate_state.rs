@@ -9,10 +9,10 @@
 //!   excess is b·ln(1 + 9·e^(−δ/Dc)) over slip δ, so ln(e^(excess/b) − 1)
 //!   falls with slope −1/Dc: the fitted length is the evolution distance.
 
-use super::{bare_scene, scene_model, CaseResult, EngineFactory, VerifyError};
+use super::{scene_model, spring_block, CaseResult, EngineFactory, VerifyError};
 use crate::engines::step_params::{step_params, Consts};
 use crate::engines::{advance_to, Engine};
-use crate::model::scenario::{Drive, DriveMode, FrictionLaw, RateStateTable, StateEvolution};
+use crate::model::scenario::{FrictionLaw, RateStateTable, StateEvolution};
 use crate::model::Model;
 
 const NORMAL_FORCE: f64 = 10.0;
@@ -49,36 +49,25 @@ pub fn law(perturb: f64) -> RateStateTable {
 /// The block at drive speed `speed` for `end` s of driving, starting at
 /// the state of steady sliding at that speed.
 fn block_scene(table: &RateStateTable, speed: f64, end: f64) -> Result<Model, VerifyError> {
-    let mut s = bare_scene("rate_state_block");
-    s.geometry.nx = 1;
-    s.geometry.nz = 1;
-    s.geometry.length = 2.5e-3;
-    s.geometry.height = 2.5e-3;
-    s.foundation.stiffness_ratio = 0.5;
-    s.friction.law = FrictionLaw::RateState;
-    s.friction.static_coefficient = MU0;
-    s.friction.dynamic_coefficient = MU0;
-    s.friction.rate_state = Some(RateStateTable {
-        initial_state: DC / speed,
-        ..table.clone()
-    });
-    // A dashpot against the track damps the block's ringing on the spring
-    // about critically (its force is not friction; the cases read friction
-    // itself).
-    s.damping.absolute_ratio = 5.0;
-    let probe = scene_model(&s)?;
-    let foundation_time = (probe.mass / probe.k_foundation).sqrt();
-    s.loading.normal.force = NORMAL_FORCE;
-    s.loading.normal.ramp_time = 10.0 * foundation_time;
-    s.loading.normal.relax_time = 40.0 * foundation_time;
-    s.loading.normal.relax_damping_ratio = 0.5f64.sqrt();
-    s.loading.drive = Drive {
-        mode: DriveMode::SideSpring,
-        stiffness: Some(DRIVE_STIFFNESS),
-        height: Some(0.0),
-        velocity: Some(speed),
-        force_rate: None,
-    };
+    let mut s = spring_block(
+        "rate_state_block",
+        NORMAL_FORCE,
+        DRIVE_STIFFNESS,
+        speed,
+        |s| {
+            s.friction.law = FrictionLaw::RateState;
+            s.friction.static_coefficient = MU0;
+            s.friction.dynamic_coefficient = MU0;
+            s.friction.rate_state = Some(RateStateTable {
+                initial_state: DC / speed,
+                ..table.clone()
+            });
+            // A dashpot against the track damps the block's ringing on the
+            // spring about critically (its force is not friction; the cases
+            // read friction itself).
+            s.damping.absolute_ratio = 5.0;
+        },
+    )?;
     s.time.end = end;
     scene_model(&s)
 }

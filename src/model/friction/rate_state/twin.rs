@@ -209,14 +209,8 @@ mod tests {
 
     fn table(evolution: StateEvolution) -> RateStateTable {
         RateStateTable {
-            direct_effect: 0.01,
-            evolution_effect: 0.015,
-            reference_coefficient: 0.6,
-            reference_velocity: 1e-6,
-            characteristic_slip: 1e-5,
             state_evolution: evolution,
-            initial_state: 10.0,
-            slip_velocity: 1e-3,
+            ..crate::model::friction::rate_state::tests::table()
         }
     }
 
