@@ -819,8 +819,9 @@ fn two_resumes_of_one_file_leave_it_whole() {
 struct SmallDisk(PathBuf);
 
 impl SmallDisk {
-    /// None when this process may not mount (not root): the full-disk
-    /// cases need a real full file system, which only root can make here.
+    /// None when this process may not mount (it needs root, and a
+    /// container may withhold the capability): the full-disk cases need a
+    /// real full file system.
     fn mount(name: &str, kib: u32) -> Option<SmallDisk> {
         let d = dir(name);
         let ok = Command::new("mount")
@@ -828,8 +829,7 @@ impl SmallDisk {
             .status()
             .is_ok_and(|st| st.success());
         if !ok {
-            // SAFETY: getuid has no preconditions.
-            assert_ne!(unsafe { libc::getuid() }, 0, "root could not mount a tmpfs");
+            let _ = std::fs::remove_dir(&d);
             return None;
         }
         Some(SmallDisk(d))
@@ -849,7 +849,7 @@ impl Drop for SmallDisk {
 fn a_full_disk_is_named_and_leaves_no_temporary() {
     for (kib, what) in [(300, "output: MCAP"), (120, "checkpoint: cannot write")] {
         let Some(disk) = SmallDisk::mount(&format!("full-{kib}"), kib) else {
-            eprintln!("not root: the full-disk case needs a tmpfs and was not run");
+            eprintln!("cannot mount a tmpfs here: the full-disk case was not run");
             return;
         };
         let out = disk.0.join("r.mcap");
