@@ -10,12 +10,11 @@ pub use fast::SweepEngine;
 
 use crate::engines::kernels::bulk_forces::{bond_consts, Blocks, BondConsts};
 use crate::engines::kernels::junctions::JunctionSlots;
-use crate::engines::kernels::{bulk_forces, junctions, verlet};
+use crate::engines::kernels::{block_laws, bulk_forces, junctions, verlet};
 use crate::engines::step_params::{step_params, Consts};
 use crate::engines::{
     blow_up, Engine, EngineError, EngineState, FrictionState, Snapshot, StateArrays,
 };
-use crate::model::friction::{block_law_friction, BlockContact};
 use crate::model::lattice::{block_flags, initial_displacement};
 use crate::model::real::{precision_name, Coordinate, Real};
 use crate::model::scenario::FrictionLaw;
@@ -132,23 +131,16 @@ impl<T: Real, C: Coordinate<T>> CpuEngine<T, C> {
             law if law.is_per_block() => {
                 let words = law.declaration().block_state_words;
                 for ix in 0..nx {
-                    let normal = junctions::foundation_normal(c, self.disp[ix][1].value());
-                    let contact = BlockContact {
-                        mass: c.mass,
-                        dt: c.dt,
-                        normal,
-                        velocity: self.vel[ix][0],
-                        other_force: self.force[ix][0],
-                        preparing: p.preparing,
-                    };
-                    let f = block_law_friction(
+                    self.contact[ix] = block_laws::block_law(
+                        c,
+                        &p,
                         law,
-                        &c.law,
-                        &contact,
+                        self.disp[ix][1],
+                        self.vel[ix][0],
+                        self.force[ix][0],
                         &mut self.friction.slide[ix],
                         &mut self.friction.law_state[ix * words..(ix + 1) * words],
                     );
-                    self.contact[ix] = [f, normal];
                 }
             }
             FrictionLaw::Junctions | FrictionLaw::SingleJunction => {

@@ -39,7 +39,7 @@ impl<T: GpuReal> GpuEngine<T> {
             ..
         } = self.shape;
         let b = &self.buffers;
-        let mut ranges = vec![
+        let ranges = [
             self.slice(&b.disp[self.current], k, n, Self::DISP_BYTES),
             self.slice(&b.vel[self.current], k, n, Self::REAL_PAIR_BYTES),
             self.slice(&b.force, k, n, Self::REAL_PAIR_BYTES),
@@ -47,10 +47,8 @@ impl<T: GpuReal> GpuEngine<T> {
             self.slice(&b.junction_spring, k, nj, Self::SPRING_BYTES),
             self.slice(&b.junction_state, k, nj, WORD_PAIR_BYTES),
             self.slice(&b.slide, k, nx, WORD_PAIR_BYTES),
+            self.slice(&b.law_state, k, law_words, Self::PACKED_BYTES),
         ];
-        if law_words > 0 {
-            ranges.push(self.slice(&b.law_state, k, law_words, Self::PACKED_BYTES));
-        }
         let raw = read_ranges(&self.ctx, &ranges)?;
         Ok(RawState {
             disp: cast_prefix(&raw[0], n),
@@ -64,12 +62,10 @@ impl<T: GpuReal> GpuEngine<T> {
                     .collect(),
                 junction_state: cast_prefix(&raw[5], nj),
                 slide: cast_prefix(&raw[6], nx),
-                law_state: raw.get(7).map_or(Vec::new(), |r| {
-                    cast_prefix::<Packed<T>>(r, law_words)
-                        .into_iter()
-                        .map(T::unpack)
-                        .collect()
-                }),
+                law_state: cast_prefix::<Packed<T>>(&raw[7], law_words)
+                    .into_iter()
+                    .map(T::unpack)
+                    .collect(),
             },
         })
     }

@@ -142,7 +142,7 @@ pub fn validate(s: &Scenario, text: &str, overridden: &[&str]) -> Vec<String> {
             c.problems.push(format!(
                 "[loading.trigger] sets junction forces, but friction.law = \"{}\" has no \
                  junctions (allowed with: junctions, single_junction)",
-                law_name(f.law)
+                f.law.name()
             ));
         }
     }
@@ -181,7 +181,7 @@ pub fn validate(s: &Scenario, text: &str, overridden: &[&str]) -> Vec<String> {
         c.problems.push(format!(
             "time.fast_forward = true needs friction.law = \"junctions\" or \"single_junction\" \
              (got \"{}\": the quasi-static path of other laws is not built)",
-            law_name(s.friction.law)
+            s.friction.law.name()
         ));
     }
     let o = &s.output;
@@ -240,7 +240,7 @@ fn validate_prestress(c: &mut Checker<'_>, s: &Scenario, p: &super::Prestress) {
             "[loading.prestress] is scaled between the dynamic and static friction levels, but \
              friction.law = \"{}\" with static_coefficient = {} and dynamic_coefficient = {} \
              has no gap between them (allowed: a friction law with static > dynamic)",
-            law_name(f.law),
+            f.law.name(),
             f.static_coefficient,
             f.dynamic_coefficient
         ));
@@ -252,10 +252,6 @@ fn validate_prestress(c: &mut Checker<'_>, s: &Scenario, p: &super::Prestress) {
                 .into(),
         );
     }
-}
-
-fn law_name(l: FrictionLaw) -> &'static str {
-    l.name()
 }
 
 fn drive_name(m: DriveMode) -> &'static str {

@@ -11,9 +11,9 @@
 use super::rows::RowView;
 use super::step::{Interface, Shared};
 use crate::engines::cpu::{JunctionSpring, PINNED};
+use crate::engines::kernels::block_laws::block_law;
 use crate::engines::kernels::junctions::{self, JunctionBlock, JUNCTION_LANES};
 use crate::engines::precision_probe::JUNCTIONS;
-use crate::model::friction::{block_law_friction, BlockContact};
 use crate::model::real::{Coordinate, ForceSum, Real};
 use crate::model::scenario::FrictionLaw;
 
@@ -47,17 +47,10 @@ pub fn interface_row<T: Real, C: Coordinate<T>>(
             let words = law.declaration().block_state_words;
             let blocks = out.contact.iter_mut().zip(&mut *out.slide);
             for (ix, (contact, slide)) in blocks.enumerate() {
-                let normal = junctions::foundation_normal(c, row.uz[ix].value());
-                let b = BlockContact {
-                    mass: c.mass,
-                    dt: c.dt,
-                    normal,
-                    velocity: row.vx[ix],
-                    other_force: fx[ix],
-                    preparing: s.after.preparing,
-                };
                 let state = &mut out.law_state[ix * words..(ix + 1) * words];
-                *contact = [block_law_friction(law, &c.law, &b, slide, state), normal];
+                *contact = block_law(
+                    c, &s.after, law, row.uz[ix], row.vx[ix], fx[ix], slide, state,
+                );
             }
         }
         FrictionLaw::Junctions | FrictionLaw::SingleJunction => {
