@@ -71,7 +71,7 @@ fn kernels(c: &mut Criterion) {
                     spring: &mut spring[s.clone()],
                     state: &mut state[s],
                 };
-                black_box(junctions(&consts, &p, ix, disp[ix], vel[ix], slots));
+                black_box(junctions(&consts, &p, ix, disp[ix], vel[ix], 0.0, slots));
             }
         })
     });

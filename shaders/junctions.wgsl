@@ -1,9 +1,11 @@
 // Junction friction: the Ns micro-junctions of each interface block pin,
 // break at mu_s f_N, slip at mu_d f_N for a drawn time and re-pin. A
 // slipping junction counts its slip steps down (no global step count).
-// Lane l of block ix handles junctions l, l + JUNCTION_LANES, ...; the
-// caller adds the lane sums in lane order.
-// CPU twin: src/engines/kernels/junctions.rs junction_lane.
+// Lane l of block ix handles junctions l, l + JUNCTION_LANES, ...: it sums
+// the pinned junctions' forces and counts the slipping ones (a LaneSum);
+// the caller merges the lane sums in lane order and junction_friction adds
+// the slipping junctions' force, which can hold the block at rest.
+// CPU twin: src/engines/kernels/junctions.rs junction_lane, junction_friction.
 // import: common, coordinates, rng, scene, state
 
 fn junction_stiffness(f_n: real) -> real {
@@ -13,28 +15,57 @@ fn junction_stiffness(f_n: real) -> real {
     return c.junction_stiffness_value;
 }
 
-// What every junction of interface block ix needs this step.
+// What every junction of interface block ix needs this step: u_x, the
+// normal force per junction, the break threshold and one slipping
+// junction's force mu_d f_N.
 struct JunctionBlock {
     ux: coord,
     f_n: real,
     threshold: real,
-    sliding: real,
+    slipping_force: real,
 }
 
 fn junction_block(ix: u32) -> JunctionBlock {
     let u = load_disp(ix);
     let f_n = foundation_normal(coord_value(u.z)) / real(c.junction_count);
-    return JunctionBlock(u.x, f_n, c.mu_s * f_n, -c.mu_d * f_n * sign(load_vel(ix).x));
+    return JunctionBlock(u.x, f_n, c.mu_s * f_n, c.mu_d * f_n);
+}
+
+fn lane_sum_zero() -> LaneSum {
+    return LaneSum(force_sum_zero(), 0u, 0u);
+}
+
+fn lane_sum_merge(a: LaneSum, b: LaneSum) -> LaneSum {
+    return LaneSum(force_sum_merge(a.pinned, b.pinned), a.slipping + b.slipping, 0u);
+}
+
+// The friction on interface block ix from its merged lane sums, its other
+// force along x and its velocity v(n-1/2): the pinned junctions' force plus
+// the slipping junctions' n mu_d f_N, which under the at-rest rule `hold`
+// (c.law0 != 0) stops the block this step when that bound allows, and
+// under `sign` pushes against v (the thesis's rule).
+fn junction_friction(ix: u32, jb: JunctionBlock, total: LaneSum, other: real) -> real {
+    let pinned = force_sum_value(total.pinned);
+    if total.slipping == 0u {
+        return pinned;
+    }
+    let capacity = real(total.slipping) * jb.slipping_force;
+    let vx = load_vel(ix).x;
+    if c.law0 != 0.0 {
+        // The friction that brings the block to rest this step.
+        let stop = -(other + pinned) - c.mass * vx / c.dt;
+        return pinned + min(max(stop, -capacity), capacity);
+    }
+    return pinned + -capacity * sign(vx);
 }
 
 // The lane's sum is a force_sum: compensated in mixed precision, since an
 // f32 running sum of a block's alike junction forces rounded the friction
 // coherently across the interface (CPU twin's doc says more).
-fn junction_lane(ix: u32, lane: u32, jb: JunctionBlock, ld: Loads) -> force_sum {
+fn junction_lane(ix: u32, lane: u32, jb: JunctionBlock, ld: Loads) -> LaneSum {
     let f_n = jb.f_n;
     let threshold = jb.threshold;
-    let sliding = jb.sliding;
-    var total = force_sum_zero();
+    var total = lane_sum_zero();
     for (var j = lane; j < c.junction_count; j += JUNCTION_LANES) {
         let idx = junction_base() + ix * c.junction_count + j;
         var spring = junction_spring[idx];
@@ -47,25 +78,29 @@ fn junction_lane(ix: u32, lane: u32, jb: JunctionBlock, ld: Loads) -> force_sum 
                 state.x = PINNED;
             }
         }
-        var f = sliding;
-        if state.x == PINNED {
+        var pinned = state.x == PINNED;
+        if pinned {
             if ld.preparing {
                 // While the normal load is applied, attachment is continuous.
                 spring.stiffness = junction_stiffness(f_n);
             }
-            f = -spring.stiffness * coord_diff(jb.ux, coord_unpack(spring.anchor));
+            let f = -spring.stiffness * coord_diff(jb.ux, coord_unpack(spring.anchor));
             if !ld.preparing && abs(f) > threshold {
                 let count = state.y + 1u;
                 state.y = count;
                 let n = slip_steps(c.seed, ix, j, count, c.slip_mean_steps, c.slip_std_steps);
                 // PINNED - 1 at most: a countdown never reads as pinned.
                 state.x = min(n, PINNED - 1u);
-                f = sliding;
+                pinned = false;
+            } else {
+                total.pinned = force_sum_add(total.pinned, f);
             }
+        }
+        if !pinned {
+            total.slipping += 1u;
         }
         junction_spring[idx] = spring;
         junction_state[idx] = state;
-        total = force_sum_add(total, f);
     }
     return total;
 }

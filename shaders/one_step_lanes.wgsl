@@ -8,7 +8,7 @@
 // CPU twin: src/engines/cpu/mod.rs CpuEngine::one_step (force pass and update).
 // import: bulk_forces, common, coordinates, junctions, scene, state, step_forces, verlet
 
-var<workgroup> lane_sum: array<force_sum, JUNCTION_LANES>;
+var<workgroup> lane_sum: array<LaneSum, JUNCTION_LANES>;
 
 @compute @workgroup_size(WORKGROUP)
 fn one_step_lanes(
@@ -39,11 +39,11 @@ fn one_step_lanes(
                 friction = contact[interface_base() + w].x;
             } else {
                 f = bulk_force(w, ld);
-                var friction_sum = force_sum_zero();
+                var lane_sums = lane_sum_zero();
                 for (var l = 0u; l < lanes; l++) {
-                    friction_sum = force_sum_merge(friction_sum, lane_sum[l]);
+                    lane_sums = lane_sum_merge(lane_sums, lane_sum[l]);
                 }
-                friction = force_sum_value(friction_sum);
+                friction = junction_friction(w, junction_block(w), lane_sums, f.x);
                 force[block_base() + w] = f;
                 contact[interface_base() + w] = vec2<real>(friction, foundation_normal(coord_value(load_disp(w).z)));
             }

@@ -96,11 +96,11 @@ fn persistent_steps(
             var friction: real = 0.0;
             if FRICTION_LAW != LAW_NONE && i < c.nx {
                 if FRICTION_LAW == LAW_JUNCTIONS && !ready {
-                    var friction_sum = force_sum_zero();
+                    var lane_sums = lane_sum_zero();
                     for (var l = 0u; l < lanes; l++) {
-                        friction_sum = force_sum_merge(friction_sum, lane_partial[lane_base() + i * lanes + l]);
+                        lane_sums = lane_sum_merge(lane_sums, lane_partial[lane_base() + i * lanes + l]);
                     }
-                    friction = force_sum_value(friction_sum);
+                    friction = junction_friction(i, junction_block(i), lane_sums, force[block_base() + i].x);
                     contact[interface_base() + i] = vec2<real>(friction, foundation_normal(coord_value(load_disp(i).z)));
                 } else {
                     friction = contact[interface_base() + i].x;

@@ -7,7 +7,7 @@
 
 @group(0) @binding(1) var<storage, read_write> disp: array<Disp>;
 @group(0) @binding(2) var<storage, read_write> vel: array<vec2<real>>;
-@group(0) @binding(12) var<storage, read_write> lane_partial: array<force_sum>;
+@group(0) @binding(12) var<storage, read_write> lane_partial: array<LaneSum>;
 
 fn load_disp(i: u32) -> Disp {
     return disp[block_base() + i];

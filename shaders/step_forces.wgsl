@@ -24,11 +24,11 @@ fn block_forces(i: u32, ld: Loads, ready: bool) -> vec3<real> {
     if FRICTION_LAW == LAW_JUNCTIONS && i < c.nx {
         let lanes = min(JUNCTION_LANES, c.junction_count);
         let jb = junction_block(i);
-        var friction_sum = force_sum_zero();
+        var lane_sums = lane_sum_zero();
         for (var l = 0u; l < lanes; l++) {
-            friction_sum = force_sum_merge(friction_sum, junction_lane(i, l, jb, ld));
+            lane_sums = lane_sum_merge(lane_sums, junction_lane(i, l, jb, ld));
         }
-        friction = force_sum_value(friction_sum);
+        friction = junction_friction(i, jb, lane_sums, f.x);
         contact[interface_base() + i] = vec2<real>(friction, foundation_normal(coord_value(load_disp(i).z)));
     }
     return vec3<real>(f, friction);

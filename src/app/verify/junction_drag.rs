@@ -44,6 +44,7 @@ pub(super) fn dragged_block(
         stiffness_ratio: None,
         slip_time_mean: slip_mean,
         slip_time_std: slip_std,
+        at_rest: Default::default(),
     });
     s.loading.normal.force = NORMAL;
     // Ramp and relax over many periods of the block on its foundation.

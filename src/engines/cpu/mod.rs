@@ -145,13 +145,14 @@ impl<T: Real, C: Coordinate<T>> CpuEngine<T, C> {
             }
             FrictionLaw::Junctions | FrictionLaw::SingleJunction => {
                 let ns = c.junction_count;
-                let (disp, vel) = (&self.disp, &self.vel);
+                let (disp, vel, force) = (&self.disp, &self.vel, &self.force);
                 let run = |ix: usize,
                            out: &mut [T; 2],
                            spring: &mut [JunctionSpring<C, T>],
                            state: &mut [[u32; 2]]| {
                     let slots = JunctionSlots { spring, state };
-                    let (f, p_n) = junctions::junctions(c, &p, ix, disp[ix], vel[ix], slots);
+                    let (f, p_n) =
+                        junctions::junctions(c, &p, ix, disp[ix], vel[ix], force[ix][0], slots);
                     *out = [f, p_n];
                 };
                 match &self.pool {

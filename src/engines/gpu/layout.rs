@@ -220,6 +220,18 @@ gpu_struct! {
 }
 
 gpu_struct! {
+    /// What the junction lanes of a block hand back: the pinned junctions'
+    /// force sum (a WGSL `force_sum`) and the count of slipping junctions
+    /// (the CPU twin's `kernels::junctions::LaneSum`).
+    pub struct GpuLaneSum<T> as "LaneSum" {
+        pub pinned: Coord<T>,
+        pub slipping: u32,
+        /// Unused: keeps both precisions free of padding.
+        pub reserved: u32,
+    }
+}
+
+gpu_struct! {
     /// The first blow-up of a batch, written by the kernel that saw it
     /// (non-finite or faster than c_p): read back after every batch.
     /// Its values are f32 in either precision (diagnostics).
@@ -394,6 +406,7 @@ pub fn wgsl_prelude<T: GpuReal>() -> String {
         GpuBatch::<T>::wgsl(),
         GpuDisp::<T>::wgsl(),
         GpuJunctionSpring::<T>::wgsl(),
+        GpuLaneSum::<T>::wgsl(),
         GpuStatus::wgsl(),
         GpuRecordPlan::<T>::wgsl(),
         GpuRecordEntry::wgsl(),
@@ -628,6 +641,11 @@ mod tests {
             "JunctionSpring",
             size_of::<GpuJunctionSpring<T>>(),
             GpuJunctionSpring::<T>::fields(),
+        );
+        check(
+            "LaneSum",
+            size_of::<GpuLaneSum<T>>(),
+            GpuLaneSum::<T>::fields(),
         );
         check("Status", size_of::<GpuStatus>(), GpuStatus::fields());
         check(

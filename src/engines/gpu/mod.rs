@@ -42,7 +42,7 @@ use crate::model::scenario::FrictionLaw;
 use crate::model::{Driver, Model};
 use bytemuck::Zeroable;
 use context::GpuContext;
-use layout::{GpuBatch, GpuConsts, GpuJunctionSpring, GpuStatus, WORKGROUP};
+use layout::{GpuBatch, GpuConsts, GpuJunctionSpring, GpuLaneSum, GpuStatus, WORKGROUP};
 use options::*;
 pub use options::{GpuOptions, GpuOutput, GpuPath, PERSISTENT_THREADS};
 pub use precision::GpuReal;
@@ -431,9 +431,8 @@ impl<T: GpuReal> GpuEngine<T> {
             ),
             lane_partial: storage(
                 "lane partial sums",
-                // One WGSL `force_sum` per lane: laid out as a coordinate
-                // ((sum, error) in mixed precision).
-                bytemuck::cast_slice(&vec![Coord::<T>::from_f64(0.0); s * shape.nx * shape.lanes]),
+                // One WGSL `LaneSum` per lane.
+                bytemuck::cast_slice(&vec![GpuLaneSum::<T>::zeroed(); s * shape.nx * shape.lanes]),
             ),
             // One element of the largest record struct in this precision.
             record_placeholders: std::array::from_fn(|_| {

@@ -1,7 +1,10 @@
 //! CPU twin of `shaders/junctions.wgsl`: the Ns micro-junctions of one
 //! interface block pin, break at μs·f_N, slip for a drawn time at μd·f_N and
-//! re-pin with zero stretch. The law's table, parameters and break
-//! threshold are in `crate::model::friction::junctions`. A slipping junction counts down the steps left
+//! re-pin with zero stretch. The law's table, parameters, break threshold
+//! and at-rest rule are in `crate::model::friction::junctions`. The lanes
+//! sum the pinned junctions' forces and count the slipping ones; the
+//! slipping junctions then act together (`junction_friction`), so that they
+//! can hold a block at rest. A slipping junction counts down the steps left
 //! of its slip, so nothing here depends on the global step count (runs of
 //! any length, and fast-forward, never wrap it).
 //!
@@ -15,7 +18,7 @@
 
 use crate::engines::precision_probe::{hold, DRAWS, JUNCTIONS};
 use crate::engines::step_params::{Consts, StepParams};
-use crate::model::friction::junctions::break_threshold;
+use crate::model::friction::junctions::{break_threshold, slipping_friction};
 use crate::model::real::{Coordinate, ForceSum, Real};
 use crate::model::rng::slip_steps;
 
@@ -35,30 +38,22 @@ pub fn foundation_normal<T: Real>(c: &Consts<T>, uz: T) -> T {
     crate::model::laws::foundation_normal(c.k_foundation, uz)
 }
 
-/// Sign of the block velocity, 0 when it is exactly zero.
-#[inline]
-pub fn velocity_sign<T: Real>(v: T) -> T {
-    if v > T::zero() {
-        T::one()
-    } else if v < T::zero() {
-        -T::one()
-    } else {
-        T::zero()
-    }
-}
-
 /// Advances the junctions of interface block `ix` by one step and returns
-/// (friction force on the block along x, normal force p).
+/// (friction force on the block along x, normal force p); `other` is the
+/// block's other force along x (bulk springs, dashpots, loads), which the
+/// slipping junctions may hold (`junction_friction`).
+#[allow(clippy::too_many_arguments)]
 pub fn junctions<T: Real, C: Coordinate<T>>(
     c: &Consts<T>,
     p: &StepParams<T>,
     ix: usize,
     u: [C; 2],
     v: [T; 2],
+    other: T,
     slots: JunctionSlots<'_, T, C>,
 ) -> (T, T) {
-    let jb = junction_block(c, u, v);
-    let mut total = C::Sum::default();
+    let jb = junction_block(c, u);
+    let mut total = LaneSum::<C::Sum>::default();
     for lane in 0..JUNCTION_LANES.min(c.junction_count) {
         let slots = JunctionSlots {
             spring: &mut *slots.spring,
@@ -66,25 +61,24 @@ pub fn junctions<T: Real, C: Coordinate<T>>(
         };
         total = total.merge(junction_lane(c, p, ix, lane, &jb, slots));
     }
-    (total.value(), foundation_normal(c, u[1].value()))
+    (
+        junction_friction(c, jb.slipping_force, total, other, v[0]),
+        foundation_normal(c, u[1].value()),
+    )
 }
 
 /// What every junction of one interface block needs this step (twin of the
 /// WGSL `JunctionBlock`): the block's u_x, the normal force per junction,
-/// the break threshold μs·f_N and the sliding force.
+/// the break threshold μs·f_N and one slipping junction's force μd·f_N.
 pub struct JunctionBlock<T, C> {
     pub ux: C,
     pub f_n: T,
     pub threshold: T,
-    pub sliding: T,
+    pub slipping_force: T,
 }
 
 /// Twin of the WGSL `junction_block`.
-pub fn junction_block<T: Real, C: Coordinate<T>>(
-    c: &Consts<T>,
-    u: [C; 2],
-    v: [T; 2],
-) -> JunctionBlock<T, C> {
+pub fn junction_block<T: Real, C: Coordinate<T>>(c: &Consts<T>, u: [C; 2]) -> JunctionBlock<T, C> {
     let probe = c.f32_probe;
     let f_n = hold(
         probe,
@@ -95,13 +89,62 @@ pub fn junction_block<T: Real, C: Coordinate<T>>(
         ux: u[0],
         f_n,
         threshold: hold(probe, JUNCTIONS, break_threshold(c.mu_s, f_n)),
-        sliding: hold(probe, JUNCTIONS, -c.mu_d * f_n * velocity_sign(v[0])),
+        slipping_force: hold(probe, JUNCTIONS, c.mu_d * f_n),
     }
 }
 
+/// What the junction lanes of a block hand back (twin of the WGSL
+/// `LaneSum`, laid out as `GpuLaneSum`): the sum of the pinned junctions'
+/// forces and how many junctions slip.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct LaneSum<S> {
+    pub pinned: S,
+    pub slipping: u32,
+}
+
+impl<S> LaneSum<S> {
+    /// Twin of the WGSL `lane_sum_merge`.
+    #[inline]
+    pub fn merge<T: Real>(self, other: LaneSum<S>) -> LaneSum<S>
+    where
+        S: ForceSum<T>,
+    {
+        LaneSum {
+            pinned: self.pinned.merge(other.pinned),
+            slipping: self.slipping + other.slipping,
+        }
+    }
+}
+
+/// Twin of the WGSL `junction_friction`: the friction on a block from its
+/// lanes' sums `total`, one slipping junction's force `slipping_force`
+/// (μd·f_N), its other force along x `other` and its velocity `vx`
+/// (v(n−½)). The slipping junctions add n_slipping·μd·f_N under the
+/// scenario's at-rest rule (`model::friction::junctions::SlipAtRest`):
+/// `hold` stops the block this step when that bound allows, `sign` pushes
+/// against v.
+#[inline]
+pub fn junction_friction<T: Real, S: ForceSum<T>>(
+    c: &Consts<T>,
+    slipping_force: T,
+    total: LaneSum<S>,
+    other: T,
+    vx: T,
+) -> T {
+    let pinned = total.pinned.value();
+    if total.slipping == 0 {
+        return pinned;
+    }
+    let capacity = T::from_f64(total.slipping as f64) * slipping_force;
+    // The friction that brings the block to rest this step.
+    let stop = -(other + pinned) - c.mass * vx / c.dt;
+    pinned + slipping_friction(c.law[0] != T::zero(), capacity, stop, vx)
+}
+
 /// Twin of the WGSL `junction_lane`: advances junctions `lane`,
-/// `lane + JUNCTION_LANES`, ... of block `ix` by one step and returns the
-/// sum of their forces on the block along x.
+/// `lane + JUNCTION_LANES`, ... of block `ix` by one step and returns
+/// the sum of the pinned ones' forces on the block along x and the count
+/// of the slipping ones.
 ///
 /// The sum is the precision's `ForceSum`: compensated in mixed f32. A
 /// block's Ns junction forces are alike in size, and an f32 running sum of
@@ -115,24 +158,22 @@ pub fn junction_lane<T: Real, C: Coordinate<T>>(
     lane: usize,
     jb: &JunctionBlock<T, C>,
     slots: JunctionSlots<'_, T, C>,
-) -> C::Sum {
-    let mut total = C::Sum::default();
+) -> LaneSum<C::Sum> {
+    let mut total = LaneSum::<C::Sum>::default();
     for j in (lane..c.junction_count).step_by(JUNCTION_LANES) {
-        total = total.add(junction(
-            c,
-            p,
-            ix,
-            j,
-            jb,
-            &mut slots.spring[j],
-            &mut slots.state[j],
-        ));
+        let state = &mut slots.state[j];
+        match junction(c, p, ix, j, jb, &mut slots.spring[j], state) {
+            Some(f) => total.pinned = total.pinned.add(f),
+            None => total.slipping += 1,
+        }
     }
     total
 }
 
 /// One junction `j` of block `ix` advanced by one step; returns its force
-/// on the block along x. Every junction is independent of the others (its
+/// on the block along x if it is pinned after the step, None if it slips
+/// (the block's slipping junctions act together, `junction_friction`).
+/// Every junction is independent of the others (its
 /// slip time is drawn from its own key), so the sweep engine calls this in
 /// any order and gets the same bits.
 #[inline(always)]
@@ -144,8 +185,8 @@ pub fn junction<T: Real, C: Coordinate<T>>(
     jb: &JunctionBlock<T, C>,
     spring: &mut JunctionSpring<C, T>,
     state: &mut [u32; 2],
-) -> T {
-    let (f_n, threshold, sliding) = (jb.f_n, jb.threshold, jb.sliding);
+) -> Option<T> {
+    let (f_n, threshold) = (jb.f_n, jb.threshold);
     if state[0] != PINNED {
         state[0] = state[0].saturating_sub(1);
         if state[0] == 0 && f_n > T::zero() {
@@ -156,45 +197,45 @@ pub fn junction<T: Real, C: Coordinate<T>>(
             state[0] = PINNED;
         }
     }
-    let mut f = sliding;
-    if state[0] == PINNED {
-        if p.preparing {
-            // While the normal load is applied, attachment is continuous.
-            spring.stiffness = hold(c.f32_probe, JUNCTIONS, c.junction_stiffness(f_n));
-        }
-        f = hold(
-            c.f32_probe,
-            JUNCTIONS,
-            -spring.stiffness * jb.ux.diff(spring.anchor),
-        );
-        if !p.preparing && f.abs() > threshold {
-            let count = state[1].wrapping_add(1);
-            state[1] = count;
-            let n = if c.f32_probe & DRAWS != 0 {
-                slip_steps(
-                    c.seed,
-                    ix as u32,
-                    j as u32,
-                    count,
-                    c.slip_mean_steps.as_f64() as f32,
-                    c.slip_std_steps.as_f64() as f32,
-                )
-            } else {
-                slip_steps(
-                    c.seed,
-                    ix as u32,
-                    j as u32,
-                    count,
-                    c.slip_mean_steps,
-                    c.slip_std_steps,
-                )
-            };
-            // PINNED − 1 at most: a countdown never reads as pinned.
-            state[0] = n.min(PINNED - 1);
-            f = sliding;
-        }
+    if state[0] != PINNED {
+        return None;
     }
-    f
+    if p.preparing {
+        // While the normal load is applied, attachment is continuous.
+        spring.stiffness = hold(c.f32_probe, JUNCTIONS, c.junction_stiffness(f_n));
+    }
+    let f = hold(
+        c.f32_probe,
+        JUNCTIONS,
+        -spring.stiffness * jb.ux.diff(spring.anchor),
+    );
+    if !p.preparing && f.abs() > threshold {
+        let count = state[1].wrapping_add(1);
+        state[1] = count;
+        let n = if c.f32_probe & DRAWS != 0 {
+            slip_steps(
+                c.seed,
+                ix as u32,
+                j as u32,
+                count,
+                c.slip_mean_steps.as_f64() as f32,
+                c.slip_std_steps.as_f64() as f32,
+            )
+        } else {
+            slip_steps(
+                c.seed,
+                ix as u32,
+                j as u32,
+                count,
+                c.slip_mean_steps,
+                c.slip_std_steps,
+            )
+        };
+        // PINNED − 1 at most: a countdown never reads as pinned.
+        state[0] = n.min(PINNED - 1);
+        return None;
+    }
+    Some(f)
 }
 
 #[cfg(test)]
@@ -240,7 +281,7 @@ mod tests {
                 spring: &mut spring,
                 state: &mut state,
             };
-            junctions(&c, &p, 0, [ux, u[1]], [0.0; 2], slots);
+            junctions(&c, &p, 0, [ux, u[1]], [0.0; 2], 0.0, slots);
             for (j, s) in state.iter().enumerate() {
                 if s[0] == PINNED && pinned_at[j].is_none() {
                     pinned_at[j] = Some(step);
@@ -270,7 +311,15 @@ mod tests {
                    spring: &mut [JunctionSpring<f64, f64>],
                    state: &mut [[u32; 2]]| {
             let slots = JunctionSlots { spring, state };
-            junctions(&c, &step_params(&c, step), 0, [ux, uz], [0.0; 2], slots)
+            junctions(
+                &c,
+                &step_params(&c, step),
+                0,
+                [ux, uz],
+                [0.0; 2],
+                0.0,
+                slots,
+            )
         };
         // Break them all, then lift the block for longer than any slip.
         run(step0, 1.0e-3, pressed, &mut spring, &mut state);

@@ -15,6 +15,7 @@ use super::tangent::Tangent;
 use crate::engines::kernels::bulk_forces::{bond_consts, bulk_force, Blocks};
 use crate::engines::step_params::{step_params, Consts};
 use crate::engines::Snapshot;
+use crate::model::friction::junctions::{slipping_friction, SlipAtRest};
 use crate::model::junction::PINNED;
 use crate::model::lattice::{block_flags, FLAG_PRESCRIBED_X};
 use crate::model::{Driver, Model};
@@ -147,7 +148,7 @@ impl Solver {
 /// Forces on every block at a state (DOF-indexed, 0 on held degrees of
 /// freedom): bulk springs, dashpots at velocity `vel`, foundation, loads of
 /// step `step`, and the junctions' forces (pinned: their springs; slipping:
-/// μd·f_N against `vel`).
+/// up to μd·f_N each, by the scenario's at-rest rule).
 pub fn residual(
     model: &Model,
     snap: &Snapshot,
@@ -175,23 +176,27 @@ pub fn residual(
         r[d.index(i, 1)] = f[1];
     }
     let ns = snap.slip_steps_left.len() / model.nx.max(1);
+    let hold = model
+        .junctions
+        .is_some_and(|j| j.at_rest == SlipAtRest::Hold);
     for ix in 0..model.nx {
-        // Slipping junctions pull at μd·f_N against the block's motion
-        // (the quasi-static velocity), as in the junction kernel.
         let f_n =
             crate::model::laws::foundation_normal(model.k_foundation, disp[ix][1]) / ns as f64;
-        let sliding =
-            -model.mu_d * f_n * crate::engines::kernels::junctions::velocity_sign(vel[ix][0]);
-        let friction: f64 = (ix * ns..(ix + 1) * ns)
-            .map(|j| {
-                if snap.slip_steps_left[j] == PINNED {
-                    -snap.junction_stiffness[j] * (disp[ix][0] - snap.anchor[j])
-                } else {
-                    sliding
-                }
-            })
-            .sum();
-        r[d.index(ix, 0)] += friction;
+        let (mut pinned, mut slipping) = (0.0, 0usize);
+        for j in ix * ns..(ix + 1) * ns {
+            if snap.slip_steps_left[j] == PINNED {
+                pinned += -snap.junction_stiffness[j] * (disp[ix][0] - snap.anchor[j]);
+            } else {
+                slipping += 1;
+            }
+        }
+        // The slipping junctions act as in the junction kernel: at rest
+        // (equilibrium) they hold up to n·μd·f_N under `hold`, or pull
+        // against the block's quasi-static velocity under `sign`.
+        let other = r[d.index(ix, 0)];
+        let capacity = slipping as f64 * model.mu_d * f_n;
+        r[d.index(ix, 0)] +=
+            pinned + slipping_friction(hold, capacity, -(other + pinned), vel[ix][0]);
     }
     for (v, &h) in r.iter_mut().zip(&k.held) {
         if h {

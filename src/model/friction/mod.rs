@@ -136,7 +136,12 @@ pub fn constants(law: FrictionLaw, mu_s: f64, mu_d: f64, t: &LawTables) -> [f64;
                 k[..rate_state::CONSTANTS].copy_from_slice(&r.constants());
             }
         }
-        FrictionLaw::Junctions | FrictionLaw::SingleJunction | FrictionLaw::None => {}
+        FrictionLaw::Junctions | FrictionLaw::SingleJunction => {
+            if let Some(j) = &t.junctions {
+                k[..1].copy_from_slice(&junctions::constants(j));
+            }
+        }
+        FrictionLaw::None => {}
     }
     k
 }

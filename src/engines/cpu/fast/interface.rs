@@ -12,7 +12,7 @@ use super::rows::RowView;
 use super::step::{Interface, Shared};
 use crate::engines::cpu::{JunctionSpring, PINNED};
 use crate::engines::kernels::block_laws::block_law;
-use crate::engines::kernels::junctions::{self, JunctionBlock, JUNCTION_LANES};
+use crate::engines::kernels::junctions::{self, JunctionBlock, LaneSum, JUNCTION_LANES};
 use crate::engines::precision_probe::JUNCTIONS;
 use crate::model::real::{Coordinate, ForceSum, Real};
 use crate::model::scenario::FrictionLaw;
@@ -26,6 +26,8 @@ pub struct JunctionScratch<T, S> {
     /// `lanes[ix * JUNCTION_LANES + lane]`.
     lanes: Vec<S>,
     total: Vec<S>,
+    /// Per block: slipping junctions and one slipping junction's force.
+    slipping: Vec<(u32, T)>,
     /// Junctions of one block left to the reference's `junction`.
     rare: Vec<bool>,
 }
@@ -54,7 +56,7 @@ pub fn interface_row<T: Real, C: Coordinate<T>>(
             }
         }
         FrictionLaw::Junctions | FrictionLaw::SingleJunction => {
-            junction_row(s, row, out, scratch);
+            junction_row(s, row, fx, out, scratch);
         }
         // Every law is per-block or a junction law (`model::friction::Law`).
         law => unreachable!("{law:?} has no engine path"),
@@ -65,6 +67,7 @@ pub fn interface_row<T: Real, C: Coordinate<T>>(
 fn junction_row<T: Real, C: Coordinate<T>>(
     s: &Shared<'_, T, C>,
     row: RowView<'_, T, C>,
+    fx: &[T],
     out: &mut Interface<'_, T, C>,
     scratch: &mut JunctionScratch<T, C::Sum>,
 ) {
@@ -74,16 +77,18 @@ fn junction_row<T: Real, C: Coordinate<T>>(
     scratch.force.resize(ns, T::zero());
     scratch.lanes.resize(nx * JUNCTION_LANES, C::Sum::default());
     scratch.total.resize(nx, C::Sum::default());
+    scratch.slipping.resize(nx, (0, T::zero()));
     scratch.rare.resize(ns, false);
     let JunctionScratch {
         force,
         lanes,
         total,
+        slipping,
         rare,
     } = scratch;
     for ix in 0..nx {
         let u = [row.ux[ix], row.uz[ix]];
-        let jb = junctions::junction_block(c, u, [row.vx[ix], row.vz[ix]]);
+        let jb = junctions::junction_block(c, u);
         let spring = &mut out.spring[ix * ns..(ix + 1) * ns];
         let state = &mut out.state[ix * ns..(ix + 1) * ns];
         let lane_sums = &mut lanes[ix * JUNCTION_LANES..ix * JUNCTION_LANES + lanes_used];
@@ -91,16 +96,25 @@ fn junction_row<T: Real, C: Coordinate<T>>(
             // While the normal load is applied every pinned junction's
             // stiffness follows it, and the precision probe rounds junction
             // values: the reference's path for all.
-            for (j, ((f, spring), state)) in force.iter_mut().zip(spring).zip(state).enumerate() {
-                *f = junctions::junction(c, &s.after, ix, j, &jb, spring, state);
+            let each = force.iter_mut().zip(&mut *spring).zip(&mut *state);
+            for (j, ((f, spring), state)) in each.enumerate() {
+                *f = pinned_force(junctions::junction(c, &s.after, ix, j, &jb, spring, state));
             }
-        } else if !pinned_forces(&jb, spring, state, force)
-            && common_junctions(&jb, spring, state, force, rare)
-        {
-            let each = force.iter_mut().zip(spring).zip(state).zip(&*rare);
-            for (j, (((f, spring), state), _)) in each.enumerate().filter(|(_, x)| *x.1) {
-                *f = junctions::junction(c, &s.after, ix, j, &jb, spring, state);
+            slipping[ix] = (count_slipping(state), jb.slipping_force);
+        } else if pinned_forces(&jb, spring, state, force) {
+            slipping[ix] = (0, jb.slipping_force);
+        } else {
+            if common_junctions(spring, state, force, rare, &jb) {
+                let each = force
+                    .iter_mut()
+                    .zip(&mut *spring)
+                    .zip(&mut *state)
+                    .zip(&*rare);
+                for (j, (((f, spring), state), _)) in each.enumerate().filter(|(_, x)| *x.1) {
+                    *f = pinned_force(junctions::junction(c, &s.after, ix, j, &jb, spring, state));
+                }
             }
+            slipping[ix] = (count_slipping(state), jb.slipping_force);
         }
         sum_lanes(force, lane_sums);
     }
@@ -111,12 +125,30 @@ fn junction_row<T: Real, C: Coordinate<T>>(
             *t = t.merge(lanes[ix * JUNCTION_LANES + lane]);
         }
     }
-    for ((contact, friction), uz) in out.contact.iter_mut().zip(&*total).zip(row.uz) {
+    for (ix, contact) in out.contact.iter_mut().enumerate() {
+        let (count, slipping_force) = slipping[ix];
+        let sums = LaneSum {
+            pinned: total[ix],
+            slipping: count,
+        };
         *contact = [
-            friction.value(),
-            junctions::foundation_normal(c, uz.value()),
+            junctions::junction_friction(c, slipping_force, sums, fx[ix], row.vx[ix]),
+            junctions::foundation_normal(c, row.uz[ix].value()),
         ];
     }
+}
+
+/// A junction's term of its lane's pinned sum: its force if pinned, 0 if
+/// it slips (adding 0 leaves the reference's sum unchanged).
+#[inline(always)]
+fn pinned_force<T: Real>(force: Option<T>) -> T {
+    force.unwrap_or(T::zero())
+}
+
+/// Junctions of one block slipping after its step.
+#[inline(always)]
+fn count_slipping(state: &[[u32; 2]]) -> u32 {
+    state.iter().map(|s| (s[0] != PINNED) as u32).sum()
 }
 
 /// The forces of a block's junctions if every one is pinned and none
@@ -149,17 +181,17 @@ fn pinned_forces<T: Real, C: Coordinate<T>>(
 
 /// The junctions of a block in the common cases, vectorised: pinned under
 /// threshold (force −k_j (u_x − anchor), no change) and slipping with
-/// steps left after this one (countdown, sliding force). Marks in `rare`
+/// steps left after this one (countdown, 0 in the pinned sum). Marks in `rare`
 /// the others — a pinned junction over threshold breaks, a countdown that
 /// ends re-pins or waits — and leaves them untouched for the reference's
 /// `junction`; returns whether there are any.
 #[inline(always)]
 fn common_junctions<T: Real, C: Coordinate<T>>(
-    jb: &JunctionBlock<T, C>,
     spring: &[JunctionSpring<C, T>],
     state: &mut [[u32; 2]],
     force: &mut [T],
     rare: &mut [bool],
+    jb: &JunctionBlock<T, C>,
 ) -> bool {
     let n = force.len();
     let (spring, state, rare) = (&spring[..n], &mut state[..n], &mut rare[..n]);
@@ -176,7 +208,7 @@ fn common_junctions<T: Real, C: Coordinate<T>>(
         };
         rare[j] = is_rare;
         any |= is_rare;
-        force[j] = if pinned { held } else { jb.sliding };
+        force[j] = if pinned { held } else { T::zero() };
         state[j][0] = if pinned || is_rare { left } else { next_left };
     }
     any

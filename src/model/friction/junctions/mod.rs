@@ -62,6 +62,76 @@ pub struct Junctions {
     pub slip_time_mean: f64,
     /// σ_R (s).
     pub slip_time_std: f64,
+    /// What the slipping junctions of a block do when it is at rest
+    /// (`SlipAtRest`; `hold` unless the scenario says otherwise).
+    #[serde(default)]
+    pub at_rest: SlipAtRest,
+}
+
+/// The force of a block's slipping junctions, μd·f_N each, when the block
+/// is at rest or about to reverse.
+///
+/// The thesis writes it −μd·f_N·sign(v). That force vanishes only at v
+/// exactly 0, so a block that should stay at rest is kicked by ±μd·f_N
+/// every step and drifts at a speed set by dt (the dt-convergence study in
+/// `results/slow_slip_dt.md` measures it). `hold` treats the slipping
+/// junctions as the Coulomb law treats a stuck block: together they supply
+/// any force up to n_slipping·μd·f_N that stops the block this step, and
+/// push with that bound against the motion otherwise. While the block
+/// moves on, both rules give the same force.
+#[derive(Debug, Clone, Copy, Default, Serialize, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum SlipAtRest {
+    /// Up to n_slipping·μd·f_N of friction that brings the block to rest.
+    #[default]
+    Hold,
+    /// −n_slipping·μd·f_N·sign(v): the thesis's rule, kept to compare.
+    Sign,
+}
+
+impl SlipAtRest {
+    /// Its code in the run constants (`c.law0`; `JUNCTION_HOLD` in WGSL).
+    pub fn code(self) -> f64 {
+        match self {
+            SlipAtRest::Hold => JUNCTION_HOLD,
+            SlipAtRest::Sign => 0.0,
+        }
+    }
+}
+
+/// `c.law0` of the junction laws when slipping junctions hold a block at
+/// rest (`SlipAtRest::Hold`).
+pub const JUNCTION_HOLD: f64 = 1.0;
+
+/// The junction laws' constants: the at-rest rule's code.
+pub fn constants(j: &Junctions) -> [f64; 1] {
+    [j.at_rest.code()]
+}
+
+/// The friction of a block's slipping junctions, `capacity` =
+/// n_slipping·μd·f_N: under `hold`, the force `stop` that brings the block
+/// to rest, bounded by ±capacity; under `sign`, −capacity·sign(v). The
+/// kernels' twin (`engines::kernels::junctions::junction_friction`) and
+/// the quasi-static residual both call this.
+#[inline]
+pub fn slipping_friction<T: Real>(hold: bool, capacity: T, stop: T, velocity: T) -> T {
+    if hold {
+        stop.max(-capacity).min(capacity)
+    } else {
+        -capacity * velocity_sign(velocity)
+    }
+}
+
+/// Sign of a block velocity, 0 when it is exactly zero.
+#[inline]
+pub fn velocity_sign<T: Real>(v: T) -> T {
+    if v > T::zero() {
+        T::one()
+    } else if v < T::zero() {
+        -T::one()
+    } else {
+        T::zero()
+    }
 }
 
 /// Junction parameters resolved from the scenario.
@@ -74,6 +144,7 @@ pub struct JunctionModel {
     pub stiffness_value: f64,
     pub slip_time_mean: f64,
     pub slip_time_std: f64,
+    pub at_rest: SlipAtRest,
 }
 
 impl JunctionModel {
@@ -94,6 +165,7 @@ impl JunctionModel {
             },
             slip_time_mean: j.slip_time_mean,
             slip_time_std: j.slip_time_std,
+            at_rest: j.at_rest,
         }
     }
 }
