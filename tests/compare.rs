@@ -243,3 +243,62 @@ fn bad_input_exits_2_naming_the_path() {
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains(".png or .svg"));
 }
+
+/// Rewrites column `name` of `dir`'s table, row k to `value(k)`, or
+/// drops the column with None.
+fn set_column(dir: &Path, name: &str, value: Option<&dyn Fn(usize) -> String>) {
+    let path = dir.join("summary.csv");
+    let text = std::fs::read_to_string(&path).unwrap();
+    let mut lines = text.lines();
+    let header = table::split(lines.next().unwrap());
+    let c = header.iter().position(|h| h == name).unwrap();
+    let edit = |mut fields: Vec<String>, k: Option<usize>| {
+        match (value, k) {
+            (Some(v), Some(k)) => fields[c] = v(k),
+            (Some(_), None) => {}
+            (None, _) => {
+                fields.remove(c);
+            }
+        }
+        table::line(&fields)
+    };
+    let mut out = edit(header.clone(), None);
+    for (k, l) in lines.enumerate() {
+        out.push_str(&edit(table::split(l), Some(k)));
+    }
+    std::fs::write(path, out).unwrap();
+}
+
+#[test]
+fn slow_front_speeds_are_compared_and_tables_without_them_still_read() {
+    let (a, b) = (dir("slow-a"), dir("slow-b"));
+    write_sweep(&a, &ensemble(40, 1.0));
+    write_sweep(&b, &ensemble(40, 1.0));
+    let speed = |base: f64| move |k: usize| format!("{:e}", base + 0.05 * (k % 10) as f64);
+    set_column(&a, "slow_front_speed_m_per_s", Some(&speed(10.0)));
+    set_column(&b, "slow_front_speed_m_per_s", Some(&speed(10.0)));
+    let same = compare_tables(&a, &b).unwrap();
+    assert!(!same.differs(0.01), "{:?}", same.differing(0.01));
+    // Slow fronts 10 % faster on one side: flagged.
+    set_column(&b, "slow_front_speed_m_per_s", Some(&speed(11.0)));
+    let c = compare_tables(&a, &b).unwrap();
+    let flagged: Vec<&str> = c.differing(0.01).iter().map(|p| p.outcome).collect();
+    assert_eq!(
+        flagged.first(),
+        Some(&"slow_front_speed_m_per_s"),
+        "{flagged:?}"
+    );
+    // A table written before these columns existed reads, without them.
+    for name in [
+        "first_event_time_s",
+        "first_event_length_m",
+        "slow_front_speed_m_per_s",
+        "slow_slip_speed_m_per_s",
+    ] {
+        set_column(&a, name, None);
+        set_column(&b, name, None);
+    }
+    let old = compare_tables(&a, &b).unwrap();
+    assert!(old.continuous.iter().all(|o| !o.name.starts_with("slow_")));
+    assert!(!old.differs(0.01), "{:?}", old.differing(0.01));
+}

@@ -191,33 +191,64 @@ struct ContinuousSpec {
     name: &'static str,
     missing_label: Option<&'static str>,
     values: fn(&RunOutcomes) -> Vec<Option<f64>>,
+    /// A column later tables added (`outcome_rows::OPTIONAL`).
+    later: bool,
 }
 
-const CONTINUOUS: [ContinuousSpec; 5] = [
+const CONTINUOUS: [ContinuousSpec; 9] = [
     ContinuousSpec {
         name: "first_full_time_s",
         missing_label: Some("no full event"),
         values: |r| vec![r.first_full_time_s],
+        later: false,
     },
     ContinuousSpec {
         name: "first_full_drive_ratio",
         missing_label: Some("no full event"),
         values: |r| vec![r.first_full_drive_ratio],
+        later: false,
     },
     ContinuousSpec {
         name: "precursor_lengths_m",
         missing_label: None,
         values: |r| r.precursor_lengths_m.iter().map(|&v| Some(v)).collect(),
+        later: false,
     },
     ContinuousSpec {
         name: "precursor_max_length_m",
         missing_label: Some("no precursor"),
         values: |r| vec![r.precursor_max_length_m],
+        later: false,
     },
     ContinuousSpec {
         name: "mean_slip_m",
         missing_label: Some("no event"),
         values: |r| vec![r.mean_slip_m],
+        later: false,
+    },
+    ContinuousSpec {
+        name: "first_event_time_s",
+        missing_label: Some("no event"),
+        values: |r| vec![r.first_event_time_s],
+        later: true,
+    },
+    ContinuousSpec {
+        name: "first_event_length_m",
+        missing_label: Some("no event"),
+        values: |r| vec![r.first_event_length_m],
+        later: true,
+    },
+    ContinuousSpec {
+        name: "slow_front_speed_m_per_s",
+        missing_label: Some("no slow front"),
+        values: |r| vec![r.slow_front_speed_m_per_s],
+        later: true,
+    },
+    ContinuousSpec {
+        name: "slow_slip_speed_m_per_s",
+        missing_label: Some("no slow front"),
+        values: |r| vec![r.slow_slip_speed_m_per_s],
+        later: true,
     },
 ];
 
@@ -265,7 +296,14 @@ pub fn compare_outcomes(
         runs_b: b.len(),
         dropped_a: BTreeMap::new(),
         dropped_b: BTreeMap::new(),
-        continuous: CONTINUOUS.iter().map(|s| continuous(s, a, b)).collect(),
+        // A later column no run on either side has (older tables lack
+        // it, or no slow front anywhere) is left out.
+        continuous: CONTINUOUS
+            .iter()
+            .map(|s| (s.later, continuous(s, a, b)))
+            .filter(|(later, c)| !(*later && c.a.values.is_empty() && c.b.values.is_empty()))
+            .map(|(_, c)| c)
+            .collect(),
         counts: COUNTS
             .iter()
             .map(|&(name, of)| count(name, of, a, b))
@@ -394,7 +432,7 @@ mod tests {
             precursor_max_length_m: lengths.last().copied(),
             precursor_lengths_m: lengths,
             mean_slip_m: (events > 0).then_some(1e-6 * events as f64),
-            perturbation: None,
+            ..RunOutcomes::default()
         }
     }
 

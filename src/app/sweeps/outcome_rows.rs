@@ -20,6 +20,13 @@ pub struct RunOutcomes {
     pub precursor_max_length_m: Option<f64>,
     /// None: no event.
     pub mean_slip_m: Option<f64>,
+    /// Columns later tables have (None where a table lacks them): the
+    /// first event's start and length (None: no event), the median slow
+    /// front speed and slip speed behind the tip (None: no slow front).
+    pub first_event_time_s: Option<f64>,
+    pub first_event_length_m: Option<f64>,
+    pub slow_front_speed_m_per_s: Option<f64>,
+    pub slow_slip_speed_m_per_s: Option<f64>,
     /// The run's relative perturbation (a `perturb(KEY)` column), if the
     /// sweep had one.
     pub perturbation: Option<f64>,
@@ -46,6 +53,14 @@ const NEEDED: [&str; 8] = [
     "precursor_lengths_m",
     "precursor_max_length_m",
     "mean_slip_m",
+];
+
+/// Columns read where a table has them (older tables do not).
+const OPTIONAL: [&str; 4] = [
+    "first_event_time_s",
+    "first_event_length_m",
+    "slow_front_speed_m_per_s",
+    "slow_slip_speed_m_per_s",
 ];
 
 /// `path`'s table: `path/summary.csv` for a folder, else the file itself.
@@ -83,6 +98,10 @@ pub fn read_ensemble(path: &Path) -> Result<Ensemble, String> {
     let status = column("status")?;
     let columns: Vec<usize> = NEEDED.iter().map(|n| column(n)).collect::<Result<_, _>>()?;
     let perturbation = header.iter().position(|h| h.starts_with("perturb("));
+    let optional: Vec<Option<usize>> = OPTIONAL
+        .iter()
+        .map(|n| header.iter().position(|h| h == n))
+        .collect();
     let mut runs = Vec::new();
     let mut dropped = BTreeMap::new();
     for (k, line) in lines.enumerate().filter(|(_, l)| !l.trim().is_empty()) {
@@ -96,6 +115,26 @@ pub fn read_ensemble(path: &Path) -> Result<Ensemble, String> {
             let mut row = parse_row(&needed)
                 .map_err(|e| format!("`{}` line {}: {e}", file.display(), k + 2))?;
             row.perturbation = perturbation.and_then(|c| fields[c].trim().parse::<f64>().ok());
+            let value = |o: usize| -> Result<Option<f64>, String> {
+                let Some(c) = optional[o] else {
+                    return Ok(None);
+                };
+                let s = fields[c].trim();
+                match s.parse::<f64>() {
+                    _ if s.is_empty() => Ok(None),
+                    Ok(v) if v.is_finite() => Ok(Some(v)),
+                    _ => Err(format!(
+                        "`{}` line {}: {} = `{s}` is not a finite number",
+                        file.display(),
+                        k + 2,
+                        OPTIONAL[o]
+                    )),
+                }
+            };
+            row.first_event_time_s = value(0)?;
+            row.first_event_length_m = value(1)?;
+            row.slow_front_speed_m_per_s = value(2)?;
+            row.slow_slip_speed_m_per_s = value(3)?;
             runs.push(row);
             continue;
         };
@@ -158,6 +197,6 @@ fn parse_row(fields: &[&str]) -> Result<RunOutcomes, String> {
         precursor_lengths_m: lengths,
         precursor_max_length_m: number(6)?,
         mean_slip_m: number(7)?,
-        perturbation: None,
+        ..RunOutcomes::default()
     })
 }

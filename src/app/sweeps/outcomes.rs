@@ -1,8 +1,11 @@
 //! What a sweep records of each run: the event analysis of its output
-//! (first full event, precursors, events, fronts, slip), as table fields.
+//! (first full event, precursors, events, fronts, slip; the first event;
+//! the median speed of the slow front windows, below `SLOW_FRONT`, and of
+//! the slip behind their tips), as table fields.
 
-use crate::analysis::events::{FrontKind, DEFAULT_QUIET_GAP};
+use crate::analysis::events::{FrontKind, DEFAULT_QUIET_GAP, SLOW_FRONT};
 use crate::analysis::precursors::PrecursorSequence;
+use crate::analysis::stats::Quartiles;
 use crate::io::output::reader::RunFile;
 
 /// Blocks per front-speed window (as `info`).
@@ -18,8 +21,19 @@ pub fn analyse(run: &RunFile) -> Vec<String> {
     let first_full = events.iter().find(|e| e.full);
     let mut speeds = Vec::new();
     let mut kinds = [0usize; 4];
+    // (front speed, slip speed behind the tip) on the slow windows.
+    let mut slow = Vec::new();
     for e in &events {
         speeds.extend(series.resolved_front_speeds(e, FRONT_WINDOW).0);
+        let fronts = series.front_speed(e, FRONT_WINDOW);
+        let slips = series.slip_speed_behind_tip(e, FRONT_WINDOW);
+        slow.extend(
+            fronts
+                .iter()
+                .zip(&slips)
+                .filter(|(f, _)| f.1 < SLOW_FRONT)
+                .map(|(f, s)| (f.1, s.1)),
+        );
         kinds[match series.front_kind(e, FRONT_WINDOW) {
             FrontKind::Fast => 0,
             FrontKind::Slow => 1,
@@ -55,5 +69,11 @@ pub fn analyse(run: &RunFile) -> Vec<String> {
     ];
     out.extend(kinds.iter().map(|k| k.to_string()));
     out.push(number(mean(&slips)));
+    let first = events.first();
+    out.push(number(first.map(|e| e.start)));
+    out.push(number(first.map(|e| e.rupture_length)));
+    let median = |v: Vec<f64>| Quartiles::of(&v).map(|q| q.median);
+    out.push(number(median(slow.iter().map(|p| p.0).collect())));
+    out.push(number(median(slow.iter().map(|p| p.1).collect())));
     out
 }

@@ -10,7 +10,7 @@ use std::path::{Path, PathBuf};
 pub const LEAD: [&str; 3] = ["point", "id", "seed"];
 
 /// Outcome columns after the axes.
-pub const OUTCOMES: [&str; 20] = [
+pub const OUTCOMES: [&str; 24] = [
     "status",
     "message",
     "first_full_time_s",
@@ -28,6 +28,10 @@ pub const OUTCOMES: [&str; 20] = [
     "fronts_fast_slow",
     "fronts_fast_slow_fast",
     "mean_slip_m",
+    "first_event_time_s",
+    "first_event_length_m",
+    "slow_front_speed_m_per_s",
+    "slow_slip_speed_m_per_s",
     "peak_drive_ratio",
     "steps",
     "wall_s",
