@@ -319,6 +319,21 @@ fn a_single_block_pulled_through_a_spring_checks_its_stability_limit() {
         .to_string();
     assert!(e.contains("above the stability limit"), "{e}");
     SingleBlockScene::parse(&spring(1e-3), "heavy.toml").unwrap();
+    // A dashpot and an at-rest rule: read, and a negative damping refused.
+    let damped = |ratio: &str| {
+        spring(1e-3).replace(
+            "duration = 1.0e-3\n",
+            &format!("duration = 1.0e-3\ndamping_ratio = {ratio}\nat_rest = \"sign\"\n"),
+        )
+    };
+    SingleBlockScene::parse(&damped("1.0"), "damped.toml").unwrap();
+    let e = SingleBlockScene::parse(&damped("-1.0"), "negative.toml")
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("motion.damping_ratio = -1 is out of range"),
+        "{e}"
+    );
 }
 
 /// Rate-and-state friction needs its own table, and its table is refused

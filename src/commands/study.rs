@@ -2,8 +2,9 @@
 
 use anyhow::Context;
 use rayon::prelude::*;
-use slipfront::app::studies::{coulomb_precursors, front_1d, junction_laws};
+use slipfront::app::studies::{coulomb_precursors, front_1d, junction_laws, slow_slip};
 use slipfront::engines::backend::{Backend, Precision};
+use slipfront::model::friction::junctions::SlipAtRest;
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Instant;
@@ -211,33 +212,24 @@ fn single_block_study(a: &StudyArgs) -> anyhow::Result<()> {
             .collect()
     };
     let thresholds = junction_laws::threshold_vs_deceleration(&scene, &decelerations);
-    let pulled = junction_laws::PulledBlock::study(&scene.law);
-    let (events, trace) = junction_laws::slow_slip(
-        &scene.law,
-        if a.quick { 100 } else { 400 },
-        scene.seed,
-        &pulled,
-    );
-    let search_duration = if a.quick { 0.05 } else { 0.25 };
-    let search = junction_laws::slow_slip_search(
-        &scene.law,
-        if a.quick { 100 } else { 400 },
-        scene.seed,
-        search_duration,
-    );
+    let count = if a.quick { 100 } else { 1000 };
+    let mut slow = Vec::new();
+    for rule in [SlipAtRest::Hold, SlipAtRest::Sign] {
+        slow.extend(slow_slip::cases(
+            "constant μd",
+            &scene.law,
+            rule,
+            count,
+            scene.seed,
+        ));
+    }
     let wall = started.elapsed().as_secs_f64();
     let how = format!(
         "slipfront study single-block{}",
         if a.quick { " --quick" } else { "" }
     );
     let mut notes = junction_laws::report(&laws, &points, &thresholds, &scene, &how);
-    notes.push_str(&junction_laws::slow_slip_report(
-        &scene.law, &pulled, &events,
-    ));
-    notes.push_str(&junction_laws::slow_slip_search_report(
-        &search,
-        search_duration,
-    ));
+    notes.push_str(&slow_slip::report(&slow, count));
     notes.push_str(&format!(
         "\nWall time {wall:.0} s on {} threads ({}); the single-block model runs on the CPU only (one \
          block has no parallel work for a GPU).\n",
@@ -259,7 +251,7 @@ fn single_block_study(a: &StudyArgs) -> anyhow::Result<()> {
     write("thogersen2014_threshold_vs_deceleration.csv", t)?;
     write("thogersen2014_single_block.md", notes)?;
     let mut figures = junction_laws::write_figures(&laws, &points, &thresholds, &a.out_dir)?;
-    figures.extend(junction_laws::write_slow_slip_figure(&trace, &a.out_dir)?);
+    figures.extend(slow_slip::write_figures(&slow, &a.out_dir)?);
     eprintln!(
         "single-block: notes, 2 tables and {} figure(s) in {} in {wall:.0} s",
         figures.len(),

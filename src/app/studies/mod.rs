@@ -4,3 +4,4 @@
 pub mod coulomb_precursors;
 pub mod front_1d;
 pub mod junction_laws;
+pub mod slow_slip;

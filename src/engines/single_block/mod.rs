@@ -7,6 +7,7 @@
 pub mod law;
 pub mod sim;
 
+use crate::model::friction::junctions::SlipAtRest;
 use law::JunctionLaw;
 use serde::{Deserialize, Serialize};
 use sim::{Junctions, Motion, Sample};
@@ -42,12 +43,21 @@ pub enum MotionSpec {
         reload_speed: f64,
         reload_time: f64,
     },
-    /// Pulled through a spring (per unit normal force) moved at `speed`.
+    /// Pulled through a spring (per unit normal force) moved at `speed`,
+    /// from rest with every junction pinned unstretched.
     Spring {
         mass_per_normal_force: f64,
         stiffness_per_normal_force: f64,
         speed: f64,
         duration: f64,
+        /// A dashpot on the block of this ratio of critical damping on its
+        /// spring (0 when absent).
+        #[serde(default)]
+        damping_ratio: f64,
+        /// What the slipping junctions do while the block is at rest, as in
+        /// the 2D model (`hold` when absent).
+        #[serde(default)]
+        at_rest: SlipAtRest,
     },
 }
 
@@ -119,6 +129,7 @@ impl SingleBlockScene {
                 stiffness_per_normal_force,
                 speed,
                 duration,
+                ..
             } => {
                 positive("motion.mass_per_normal_force", mass_per_normal_force);
                 positive(
@@ -127,6 +138,14 @@ impl SingleBlockScene {
                 );
                 positive("motion.speed", speed);
                 positive("motion.duration", duration);
+            }
+        }
+        if let MotionSpec::Spring { damping_ratio, .. } = self.motion {
+            if !(damping_ratio.is_finite() && damping_ratio >= 0.0) {
+                p.push(format!(
+                    "motion.damping_ratio = {damping_ratio} is out of range (allowed: a finite \
+                     value >= 0)"
+                ));
             }
         }
         if !(1..=1 << 22).contains(&self.junctions) {
@@ -200,19 +219,23 @@ impl SingleBlockScene {
                 sim::follow(&mut j, &m, self.dt, &mut thin);
             }
             MotionSpec::Spring {
-                mass_per_normal_force,
-                stiffness_per_normal_force,
+                mass_per_normal_force: mass,
+                stiffness_per_normal_force: stiffness,
                 speed,
                 duration,
-            } => sim::pull(
-                &mut j,
-                mass_per_normal_force,
-                stiffness_per_normal_force,
-                speed,
-                duration,
-                self.dt,
-                &mut thin,
-            ),
+                damping_ratio,
+                at_rest,
+            } => {
+                let pull = sim::Pull {
+                    mass,
+                    stiffness,
+                    damping: sim::Pull::damping_for(mass, stiffness, damping_ratio),
+                    speed,
+                    preload: 0.0,
+                    at_rest,
+                };
+                sim::pull_from(&mut j, &pull, 0.0, duration, self.dt, &mut thin)
+            }
         }
     }
 }

@@ -4,6 +4,7 @@
 //! f_N/Ns, i.e. a friction coefficient).
 
 use super::law::JunctionLaw;
+use crate::model::friction::junctions::{slipping_friction, SlipAtRest};
 use crate::model::rng::{draw_key, pcg_hash, unit_from_bits};
 
 /// The junctions of one block.
@@ -66,40 +67,53 @@ impl Junctions {
 
     /// Advances every junction to time `t` with the block at `x` moving at
     /// `v` and returns the friction (mean junction force opposing the
-    /// motion, in units of f_N/Ns; positive opposes +x).
+    /// motion, in units of f_N/Ns; positive opposes +x), the slipping
+    /// junctions pulling against v (a prescribed motion: nothing to hold).
     pub fn friction(&mut self, t: f64, x: f64, v: f64) -> f64 {
+        let f = self.forces(t, x, v);
+        f.pinned + f.slipping * crate::model::friction::junctions::velocity_sign(v)
+    }
+
+    /// Advances every junction to time `t` with the block at `x` moving at
+    /// `v`: the pinned junctions' mean force (positive opposes +x) and the
+    /// slipping ones' mean strength (≥ 0), which the caller applies by the
+    /// at-rest rule.
+    pub fn forces(&mut self, t: f64, x: f64, v: f64) -> JunctionForces {
         let law = self.law;
         let k = law.threshold / law.break_stretch;
-        let direction = if v > 0.0 {
-            1.0
-        } else if v < 0.0 {
-            -1.0
-        } else {
-            0.0
-        };
-        let mut total = 0.0;
+        let (mut pinned, mut slipping) = (0.0, 0.0);
         for i in 0..self.count() {
             if !self.broke_at[i].is_nan() && t >= self.repin_at[i] {
                 self.anchor[i] = x;
                 self.broke_at[i] = f64::NAN;
             }
-            let force = if self.broke_at[i].is_nan() {
+            if self.broke_at[i].is_nan() {
                 let f = k * (x - self.anchor[i]);
                 if f.abs() < law.threshold {
-                    f
-                } else {
-                    self.ruptures[i] += 1;
-                    let slip = law.slip_time.draw(self.seed, i as u32, self.ruptures[i]);
-                    self.broke_at[i] = t;
-                    self.repin_at[i] = t + slip;
-                    direction * (law.slip_force.at(0.0) + law.drag * v.abs())
+                    pinned += f;
+                    continue;
                 }
-            } else {
-                direction * (law.slip_force.at(t - self.broke_at[i]) + law.drag * v.abs())
-            };
-            total += force;
+                self.ruptures[i] += 1;
+                let slip = law.slip_time.draw(self.seed, i as u32, self.ruptures[i]);
+                self.broke_at[i] = t;
+                self.repin_at[i] = t + slip;
+            }
+            slipping += law.slip_force.at(t - self.broke_at[i]) + law.drag * v.abs();
         }
-        total / self.count() as f64
+        let n = self.count() as f64;
+        JunctionForces {
+            pinned: pinned / n,
+            slipping: slipping / n,
+        }
+    }
+
+    /// A block pinned at its junctions' threshold: every junction pinned at
+    /// anchor 0 with the block at `x`, just past the break stretch.
+    pub fn at_threshold(law: JunctionLaw, count: usize, seed: u32) -> (Junctions, f64) {
+        (
+            Junctions::pinned(law, count, seed),
+            law.break_stretch * (1.0 + 1e-9),
+        )
     }
 
     /// Share of the junctions pinned.
@@ -187,6 +201,16 @@ impl Motion {
     }
 }
 
+/// The junctions' forces on a block at one instant (units of f_N/Ns).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct JunctionForces {
+    /// Mean force of the pinned junctions (positive opposes +x).
+    pub pinned: f64,
+    /// Mean strength of the slipping junctions (≥ 0): their force against
+    /// the motion, or what holds the block at rest under `hold`.
+    pub slipping: f64,
+}
+
 /// One output sample.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Sample {
@@ -228,32 +252,57 @@ pub fn follow_between(
     }
 }
 
-/// A block of `mass` per unit normal force (kg/N) pulled through a spring
-/// of `stiffness` per unit normal force (1/m) whose end moves at `speed`;
-/// symplectic Euler with step `dt` for `duration`.
-pub fn pull(
+/// A block pulled through a spring (all per unit normal force): mass
+/// (kg/N), spring stiffness (1/m), a dashpot on the block's velocity
+/// (kg/(N·s)), the spring's far end at `preload + speed·t` (m).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Pull {
+    pub mass: f64,
+    pub stiffness: f64,
+    pub damping: f64,
+    pub speed: f64,
+    pub preload: f64,
+    /// What the slipping junctions do at rest.
+    pub at_rest: SlipAtRest,
+}
+
+impl Pull {
+    /// The dashpot of damping ratio `ratio` on the block and its spring:
+    /// ratio·2√(m·K).
+    pub fn damping_for(mass: f64, stiffness: f64, ratio: f64) -> f64 {
+        ratio * 2.0 * (mass * stiffness).sqrt()
+    }
+}
+
+/// Runs the pulled block from `x0` at rest for `duration`, symplectic
+/// Euler with step `dt`, calling `sample` at every step. The slipping
+/// junctions act by the at-rest rule, as in the 2D model
+/// (`model::friction::junctions::slipping_friction`): under `hold` they
+/// stop the block when their strength allows.
+pub fn pull_from(
     junctions: &mut Junctions,
-    mass: f64,
-    stiffness: f64,
-    speed: f64,
+    p: &Pull,
+    x0: f64,
     duration: f64,
     dt: f64,
     mut sample: impl FnMut(Sample),
 ) {
-    let (mut x, mut v) = (0.0, 0.0);
+    let (mut x, mut v) = (x0, 0.0);
     let steps = (duration / dt).ceil() as u64;
+    let hold = p.at_rest == SlipAtRest::Hold;
     for n in 0..=steps {
         let t = n as f64 * dt;
-        let friction = junctions.friction(t, x, v);
+        let f = junctions.forces(t, x, v);
+        let other = p.stiffness * (p.preload + p.speed * t - x) - p.damping * v - f.pinned;
+        let slipping = slipping_friction(hold, f.slipping, -other - p.mass * v / dt, v);
         sample(Sample {
             time: t,
             position: x,
             velocity: v,
-            friction,
+            friction: f.pinned - slipping,
             pinned: junctions.pinned_fraction(),
         });
-        let force = stiffness * (speed * t - x) - friction;
-        v += dt * force / mass;
+        v += dt * (other + slipping) / p.mass;
         x += dt * v;
     }
 }
