@@ -321,8 +321,17 @@ pub fn report(cases: &[SlowSlipCase], count: usize) -> String {
         .map(|c| c.summaries()[0].1.end);
     let _ = writeln!(
         md,
-        "
-**What matches**: slow slip appears on its own after the fast slip, as Publication 2          reports: the block slides on its inertial time, stops held by its slipping junctions,          then creeps as they re-pin. Under `hold` the δ/δ_tot curves of masses 100× apart          collapse after the inertial phase (largest gap {collapse_lo:.3}–{collapse_hi:.3}), the          Gaussian creep ends in a kink at {} ⟨t_R⟩ (the slip times' ⟨t_R⟩ + ~2σ_R), the          exponential one decays smoothly, and the creep speed moves by {:.1}–{:.1} % from dt to          dt/2. **What does not**: under the thesis's sign(v) rule the same creep moves by          {:.1}–{:.1} % from dt to dt/2: a block held by slipping junctions chatters, and its          slow slip is partly the time step's. The paper's own parameters (masses, spring,          damping, junction count) are not in the sources this project has; these are the          project's choices, listed above.",
+        "\n**What matches**: slow slip appears on its own after the fast slip, as Publication 2 \
+         reports: the block slides on its inertial time, stops held by its slipping junctions, \
+         then creeps as they re-pin. Under `hold` the δ/δ_tot curves of masses 100× apart \
+         collapse after the inertial phase (largest gap {collapse_lo:.3}–{collapse_hi:.3}), the \
+         Gaussian creep ends in a kink at {} ⟨t_R⟩ (the slip times' ⟨t_R⟩ + ~2σ_R), the \
+         exponential one decays smoothly, and the creep speed moves by {:.1}–{:.1} % from dt to \
+         dt/2. **What does not**: under the thesis's sign(v) rule the same creep moves by \
+         {:.1}–{:.1} % from dt to dt/2: a block held by slipping junctions chatters, and its \
+         slow slip is partly the time step's. The paper's own parameters (masses, spring, \
+         damping, junction count) are not in the sources this project has; these are the \
+         project's choices, listed above.",
         kink.map_or("—".to_string(), |k| format!("{k:.2}")),
         100.0 * dt_lo,
         100.0 * dt_hi,
