@@ -333,6 +333,53 @@ impl InterfaceSeries {
     }
 }
 
+/// What a triggered front did, the classes of the PRE 2015
+/// strength–prestress diagram.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum FrontClass {
+    /// Stopped without a slow stretch (or never ran).
+    Arrest,
+    /// Went on slowly after its fast part: at least `SLOW_WINDOWS` front
+    /// windows below `SLOW_FRONT`, not fast again.
+    Slow,
+    /// Fast, slow, then fast again.
+    FastSlowFast,
+    /// Fast to the far edge.
+    Fast,
+}
+
+/// Front windows below `SLOW_FRONT` that make a slow front: one window is
+/// what a dying front leaves as it stops.
+pub const SLOW_WINDOWS: usize = 2;
+
+impl FrontClass {
+    pub fn name(self) -> &'static str {
+        match self {
+            FrontClass::Arrest => "arrest",
+            FrontClass::Slow => "slow",
+            FrontClass::FastSlowFast => "fast_slow_fast",
+            FrontClass::Fast => "fast",
+        }
+    }
+}
+
+impl InterfaceSeries {
+    /// The class of event `e`'s front (windows of `w` blocks).
+    pub fn front_class(&self, e: &Event, w: usize) -> FrontClass {
+        let slow = self
+            .front_speed(e, w)
+            .iter()
+            .filter(|p| p.1 < SLOW_FRONT)
+            .count();
+        match self.front_kind(e, w) {
+            FrontKind::FastSlowFast => FrontClass::FastSlowFast,
+            FrontKind::Fast if e.full => FrontClass::Fast,
+            FrontKind::FastSlow | FrontKind::Slow if slow >= SLOW_WINDOWS => FrontClass::Slow,
+            _ => FrontClass::Arrest,
+        }
+    }
+}
+
 /// How slip speed follows front speed over (front speed, slip speed)
 /// pairs, in log space.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -620,6 +667,49 @@ mod tests {
             rupture_time: times,
         };
         assert_eq!(s.front_kind(&e, 3), FrontKind::FastSlowFast);
+        assert_eq!(s.front_class(&e, 3), FrontClass::FastSlowFast);
+    }
+
+    /// An event whose front runs at 1000 m/s over `fast` blocks, then at
+    /// 5 m/s over `slow` blocks, and stops there (`full`: it reached the
+    /// far edge).
+    fn front(fast: usize, slow: usize, full: bool) -> Event {
+        let mut t = 0.0;
+        let mut times = Vec::new();
+        for ix in 0..50 {
+            if ix > fast + slow {
+                times.push(None);
+                continue;
+            }
+            times.push(Some(t));
+            t += 1e-3 / if ix < fast { 1000.0 } else { 5.0 };
+        }
+        Event {
+            first: 0,
+            last: 0,
+            start: 0.0,
+            end: t,
+            full,
+            rupture_length: 1e-3 * (fast + slow) as f64,
+            slip: 0.0,
+            rupture_time: times,
+        }
+    }
+
+    #[test]
+    fn triggered_fronts_are_classed_as_in_the_strength_prestress_diagram() {
+        let s = InterfaceSeries {
+            spacing: 1e-3,
+            ..Default::default()
+        };
+        assert_eq!(s.front_class(&front(49, 0, true), 3), FrontClass::Fast);
+        // Fast, then slow over 10 blocks before it stops: a slow front.
+        assert_eq!(s.front_class(&front(20, 10, false), 3), FrontClass::Slow);
+        // Fast, then dying within a block: one slow window, an arrest.
+        assert_eq!(s.front_class(&front(20, 1, false), 3), FrontClass::Arrest);
+        // Fast but not to the edge: an arrest.
+        assert_eq!(s.front_class(&front(20, 0, false), 3), FrontClass::Arrest);
+        assert_eq!(FrontClass::FastSlowFast.name(), "fast_slow_fast");
     }
 
     #[test]

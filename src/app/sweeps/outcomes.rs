@@ -1,7 +1,7 @@
 //! What a sweep records of each run: the event analysis of its output
 //! (first full event, precursors, events, fronts, slip; the first event;
 //! the median speed of the slow front windows, below `SLOW_FRONT`, and of
-//! the slip behind their tips), as table fields.
+//! the slip behind their tips; the first front's class), as table fields.
 
 use crate::analysis::events::{FrontKind, DEFAULT_QUIET_GAP, SLOW_FRONT};
 use crate::analysis::precursors::PrecursorSequence;
@@ -75,5 +75,8 @@ pub fn analyse(run: &RunFile) -> Vec<String> {
     let median = |v: Vec<f64>| Quartiles::of(&v).map(|q| q.median);
     out.push(number(median(slow.iter().map(|p| p.0).collect())));
     out.push(number(median(slow.iter().map(|p| p.1).collect())));
+    out.push(first.map_or(String::new(), |e| {
+        series.front_class(e, FRONT_WINDOW).name().to_string()
+    }));
     out
 }

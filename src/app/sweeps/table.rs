@@ -10,7 +10,7 @@ use std::path::{Path, PathBuf};
 pub const LEAD: [&str; 3] = ["point", "id", "seed"];
 
 /// Outcome columns after the axes.
-pub const OUTCOMES: [&str; 24] = [
+pub const OUTCOMES: [&str; 25] = [
     "status",
     "message",
     "first_full_time_s",
@@ -32,6 +32,7 @@ pub const OUTCOMES: [&str; 24] = [
     "first_event_length_m",
     "slow_front_speed_m_per_s",
     "slow_slip_speed_m_per_s",
+    "first_front_class",
     "peak_drive_ratio",
     "steps",
     "wall_s",
