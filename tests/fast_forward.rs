@@ -14,6 +14,10 @@ use slipfront::Model;
 use std::path::PathBuf;
 
 fn scene() -> Scenario {
+    scene_with(&[])
+}
+
+fn scene_with(extra: &[&str]) -> Scenario {
     let set: Vec<String> = [
         "time.end=0.03",
         "loading.drive.velocity=4e-3",
@@ -23,13 +27,18 @@ fn scene() -> Scenario {
         "output.fast_interval=0",
     ]
     .iter()
+    .chain(extra)
     .map(|s| s.to_string())
     .collect();
     Scenario::parse(DEFAULT_SCENARIO, "fast-forward test", &set).unwrap()
 }
 
 fn run(name: &str, ff: Option<FastForwardSettings>) -> (RunSummary, RunFile) {
-    let scenario = scene();
+    run_with(name, ff, &[])
+}
+
+fn run_with(name: &str, ff: Option<FastForwardSettings>, extra: &[&str]) -> (RunSummary, RunFile) {
+    let scenario = scene_with(extra);
     let model = Model::from_scenario(&scenario, false).unwrap();
     let dir = std::env::temp_dir().join(format!("slipfront-ff-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
@@ -287,7 +296,15 @@ fn junction_events_on_the_path_keep_the_ledger() {
         quasi_static_ruptures: true,
         ..FastForwardSettings::from_scenario(&scene())
     };
-    let (summary, ff) = run("events", Some(settings));
+    // The path carries slipping junctions at μd·f_N against its velocity,
+    // the sign rule's force; under `hold` a block they hold at rest is off
+    // the linear path (its ring-down against the path's w never gets
+    // quiet), so no jump carries junction events there (docs/model.md).
+    let (summary, ff) = run_with(
+        "events",
+        Some(settings),
+        &["friction.junctions.at_rest=\"sign\""],
+    );
     let stats = summary.fast_forward.unwrap();
     eprintln!("{stats:?}");
     assert!(stats.path_ruptures > 0, "{stats:?}");

@@ -148,7 +148,8 @@ impl Solver {
 /// Forces on every block at a state (DOF-indexed, 0 on held degrees of
 /// freedom): bulk springs, dashpots at velocity `vel`, foundation, loads of
 /// step `step`, and the junctions' forces (pinned: their springs; slipping:
-/// up to μd·f_N each, by the scenario's at-rest rule).
+/// μd·f_N each against `vel`, or holding a block at rest under the
+/// scenario's at-rest rule `hold`).
 pub fn residual(
     model: &Model,
     snap: &Snapshot,
@@ -190,13 +191,15 @@ pub fn residual(
                 slipping += 1;
             }
         }
-        // The slipping junctions act as in the junction kernel: at rest
-        // (equilibrium) they hold up to n·μd·f_N under `hold`, or pull
-        // against the block's quasi-static velocity under `sign`.
+        // The slipping junctions act as in the junction kernel: a block
+        // that moves with the quasi-static path slides on them, n·μd·f_N
+        // against its velocity, under either rule (the path is linear in
+        // that force); a block at rest is held up to n·μd·f_N under `hold`.
         let other = r[d.index(ix, 0)];
         let capacity = slipping as f64 * model.mu_d * f_n;
+        let held = hold && vel[ix][0] == 0.0;
         r[d.index(ix, 0)] +=
-            pinned + slipping_friction(hold, capacity, -(other + pinned), vel[ix][0]);
+            pinned + slipping_friction(held, capacity, -(other + pinned), vel[ix][0]);
     }
     for (v, &h) in r.iter_mut().zip(&k.held) {
         if h {
