@@ -333,6 +333,61 @@ impl InterfaceSeries {
     }
 }
 
+impl InterfaceSeries {
+    /// Where the front of `e` turns fast again after its slow stretch: the
+    /// centre of the first window above `FAST_FRONT` after the first one
+    /// below `SLOW_FRONT` that follows a fast one (None unless the front is
+    /// fast–slow–fast).
+    pub fn slow_to_fast_at(&self, e: &Event, w: usize) -> Option<f64> {
+        let v = self.front_speed(e, w);
+        let fast = v.iter().position(|p| p.1 > FAST_FRONT)?;
+        let slow = fast + v[fast..].iter().position(|p| p.1 < SLOW_FRONT)?;
+        v[slow..].iter().find(|p| p.1 > FAST_FRONT).map(|p| p.0)
+    }
+
+    /// The far end of `e`'s rupture from the trailing edge: the centre of
+    /// its farthest ruptured block, where a partial event from the
+    /// trailing edge arrested.
+    pub fn arrest_at(&self, e: &Event) -> Option<f64> {
+        e.rupture_time
+            .iter()
+            .rposition(|t| t.is_some())
+            .map(|ix| ix as f64 * self.spacing)
+    }
+
+    /// Each fast–slow–fast event's slow-to-fast position beside where the
+    /// last precursor before it arrested (PNAS 2014: the transition happens
+    /// at the previous arrest point): (event index, transition x, arrest
+    /// x). The precursor is the last partial event from the trailing edge
+    /// (starting within `TRAILING_EDGE_BLOCKS` of it) since the last full
+    /// event; None when there is none.
+    pub fn transitions_at_previous_arrest(
+        &self,
+        events: &[Event],
+        w: usize,
+    ) -> Vec<(usize, f64, Option<f64>)> {
+        let edge = TRAILING_EDGE_BLOCKS as f64 * self.spacing;
+        events
+            .iter()
+            .enumerate()
+            .filter_map(|(n, e)| {
+                let x = self.slow_to_fast_at(e, w)?;
+                let arrest = events[..n]
+                    .iter()
+                    .rev()
+                    .take_while(|p| !p.full)
+                    .find(|p| p.origin(self.spacing) <= edge)
+                    .and_then(|p| self.arrest_at(p));
+                Some((n, x, arrest))
+            })
+            .collect()
+    }
+}
+
+/// Blocks from the trailing edge within which an event counts as starting
+/// there.
+pub const TRAILING_EDGE_BLOCKS: usize = 3;
+
 /// What a triggered front did, the classes of the PRE 2015
 /// strength–prestress diagram.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -668,6 +723,22 @@ mod tests {
         };
         assert_eq!(s.front_kind(&e, 3), FrontKind::FastSlowFast);
         assert_eq!(s.front_class(&e, 3), FrontClass::FastSlowFast);
+        // It turns fast again at block 30: the first fast window after the
+        // slow stretch spans blocks 30..33, centred at 31.5 mm.
+        let x = s.slow_to_fast_at(&e, 3).unwrap();
+        assert!((x - 31.5e-3).abs() < 1e-12, "{x}");
+        // An event that arrested at block 29 before it: 1.5 mm apart.
+        let mut before = e.clone();
+        before.full = false;
+        for t in &mut before.rupture_time[30..] {
+            *t = None;
+        }
+        assert_eq!(s.arrest_at(&before), Some(29e-3));
+        let pairs = s.transitions_at_previous_arrest(&[before.clone(), e], 3);
+        assert_eq!(pairs.len(), 1);
+        assert_eq!((pairs[0].0, pairs[0].2), (1, Some(29e-3)));
+        // A front that is never slow has no transition.
+        assert_eq!(s.slow_to_fast_at(&before, 3), None);
     }
 
     /// An event whose front runs at 1000 m/s over `fast` blocks, then at

@@ -1,5 +1,5 @@
 use super::printable;
-use slipfront::analysis::events::{Event, FRONT_WINDOW};
+use slipfront::analysis::events::{Event, InterfaceSeries, FRONT_WINDOW};
 use slipfront::analysis::precursors::PrecursorSequence;
 use slipfront::io::output::reader::RunFile;
 use std::path::Path;
@@ -83,6 +83,7 @@ pub fn info(path: &Path, quiet_gap: f64) -> anyhow::Result<ExitCode> {
         &PrecursorSequence::from_events(&events, series.spacing, |e| ratio_at(e.start)),
         series.spacing,
     );
+    print_sequence(&series, &events);
     let pairs = series.slip_front_pairs(&events, FRONT_WINDOW);
     if let Some(fit) = slipfront::analysis::events::slip_front_relation(&pairs) {
         println!(
@@ -98,6 +99,50 @@ pub fn info(path: &Path, quiet_gap: f64) -> anyhow::Result<ExitCode> {
         }
     }
     Ok(ExitCode::SUCCESS)
+}
+
+/// The event sequence as PNAS 2014 reads it: front kinds, whether partial
+/// and full events alternate, and whether each slow-to-fast transition
+/// starts where the event before it arrested.
+fn print_sequence(series: &InterfaceSeries, events: &[Event]) {
+    if events.is_empty() {
+        return;
+    }
+    let mut kinds = std::collections::BTreeMap::new();
+    for e in events {
+        *kinds
+            .entry(format!("{:?}", series.front_kind(e, FRONT_WINDOW)))
+            .or_insert(0usize) += 1;
+    }
+    let kinds: Vec<String> = kinds.iter().map(|(k, n)| format!("{n} {k}")).collect();
+    let pattern: String = events
+        .iter()
+        .map(|e| if e.full { 'F' } else { 'p' })
+        .collect();
+    let changes = pattern
+        .as_bytes()
+        .windows(2)
+        .filter(|w| w[0] != w[1])
+        .count();
+    println!(
+        "sequence    fronts: {}; partial (p) and full (F): {pattern} ({changes} changes in {} \
+         neighbours)",
+        kinds.join(", "),
+        events.len().saturating_sub(1)
+    );
+    for (n, x, before) in series.transitions_at_previous_arrest(events, FRONT_WINDOW) {
+        match before {
+            Some(a) => println!(
+                "  event {n}: slow to fast at x = {x:.4e} m; the last trailing-edge \
+                 precursor arrested at {a:.4e} m ({:+.1} mm)",
+                1e3 * (x - a)
+            ),
+            None => println!(
+                "  event {n}: slow to fast at x = {x:.4e} m (no trailing-edge precursor since \
+                 the last full event)"
+            ),
+        }
+    }
 }
 
 /// One event as `info` reports it.
