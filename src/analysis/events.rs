@@ -334,6 +334,19 @@ impl InterfaceSeries {
 }
 
 impl InterfaceSeries {
+    /// The slow windows of `e`'s front: (front speed, slip speed behind
+    /// the tip) where the front runs below `SLOW_FRONT`.
+    pub fn slow_windows(&self, e: &Event, w: usize) -> Vec<(f64, f64)> {
+        let fronts = self.front_speed(e, w);
+        let slips = self.slip_speed_behind_tip(e, w);
+        fronts
+            .iter()
+            .zip(&slips)
+            .filter(|(f, _)| f.1 < SLOW_FRONT)
+            .map(|(f, s)| (f.1, s.1))
+            .collect()
+    }
+
     /// Where the front of `e` turns fast again after its slow stretch: the
     /// centre of the first window above `FAST_FRONT` after the first one
     /// below `SLOW_FRONT` that follows a fast one (None unless the front is

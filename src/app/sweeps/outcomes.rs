@@ -3,7 +3,7 @@
 //! the median speed of the slow front windows, below `SLOW_FRONT`, and of
 //! the slip behind their tips; the first front's class), as table fields.
 
-use crate::analysis::events::{FrontKind, DEFAULT_QUIET_GAP, SLOW_FRONT};
+use crate::analysis::events::{FrontKind, DEFAULT_QUIET_GAP};
 use crate::analysis::precursors::PrecursorSequence;
 use crate::analysis::stats::Quartiles;
 use crate::io::output::reader::RunFile;
@@ -25,15 +25,7 @@ pub fn analyse(run: &RunFile) -> Vec<String> {
     let mut slow = Vec::new();
     for e in &events {
         speeds.extend(series.resolved_front_speeds(e, FRONT_WINDOW).0);
-        let fronts = series.front_speed(e, FRONT_WINDOW);
-        let slips = series.slip_speed_behind_tip(e, FRONT_WINDOW);
-        slow.extend(
-            fronts
-                .iter()
-                .zip(&slips)
-                .filter(|(f, _)| f.1 < SLOW_FRONT)
-                .map(|(f, s)| (f.1, s.1)),
-        );
+        slow.extend(series.slow_windows(e, FRONT_WINDOW));
         kinds[match series.front_kind(e, FRONT_WINDOW) {
             FrontKind::Fast => 0,
             FrontKind::Slow => 1,
