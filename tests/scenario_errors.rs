@@ -376,3 +376,26 @@ fn the_rate_state_table_is_required_by_its_law_only_and_checked() {
     );
     assert!(slip.is_ok());
 }
+
+/// The at-rest rule of slipping junctions: `hold` by default, `sign` when
+/// asked; anything else is refused with its line and the allowed values.
+#[test]
+fn the_junctions_at_rest_rule_defaults_to_hold_and_refuses_other_values() {
+    let s = Scenario::parse(DEFAULT_SCENARIO, "default", &[]).unwrap();
+    let j = s.friction.junctions.as_ref().unwrap();
+    assert_eq!(
+        j.at_rest,
+        slipfront::model::friction::junctions::SlipAtRest::Hold
+    );
+    let set = ["friction.junctions.at_rest=\"sign\"".to_string()];
+    let sign = Scenario::parse(DEFAULT_SCENARIO, "sign", &set).unwrap();
+    assert_eq!(
+        sign.friction.junctions.unwrap().at_rest,
+        slipfront::model::friction::junctions::SlipAtRest::Sign
+    );
+    let text =
+        DEFAULT_SCENARIO.replace("slip_time_std = ", "at_rest = \"stick\"\nslip_time_std = ");
+    let e = parse_err(&text, &[]);
+    assert!(e.contains("line") && e.contains("at_rest"), "{e}");
+    assert!(e.contains("expected `hold` or `sign`"), "{e}");
+}
