@@ -177,6 +177,8 @@ pub fn slip_times(base: &JunctionLaw) -> Vec<(&'static str, SlipTime)> {
 pub struct SlowSlipCase {
     pub law_name: &'static str,
     pub distribution: &'static str,
+    /// The spring's (and the pinned junctions') stiffness, 1/m.
+    pub stiffness: f64,
     pub at_rest: SlipAtRest,
     pub mean_slip_time: f64,
     pub traces: Vec<(f64, SlipTrace)>,
@@ -242,6 +244,7 @@ pub fn cases(
             SlowSlipCase {
                 law_name,
                 distribution,
+                stiffness: block(MASSES[0], 1.0).stiffness(),
                 at_rest,
                 mean_slip_time: mean,
                 traces,
@@ -261,6 +264,7 @@ fn rule_name(r: SlipAtRest) -> &'static str {
 /// The section of the notes: one row per case and mass.
 pub fn report(cases: &[SlowSlipCase], count: usize) -> String {
     let mut md = String::new();
+    let stiffness = cases.first().map_or(f64::NAN, |c| c.stiffness);
     let _ = writeln!(
         md,
         "\n## Slow slip after a triggered rupture (Publication 2's protocol)\n\n\
@@ -275,8 +279,8 @@ pub fn report(cases: &[SlowSlipCase], count: usize) -> String {
          the masses after {INERTIAL_END}⟨t_R⟩; \"dt/2\" the change of the lightest block's creep \
          speed at half the step.\n",
         MASSES.map(|m| format!("{m:e}")).join(", "),
-        1e6 * (MASSES[0] / 4e6f64).sqrt(),
-        1e6 * (MASSES[2] / 4e6f64).sqrt(),
+        1e6 * (MASSES[0] / stiffness).sqrt(),
+        1e6 * (MASSES[2] / stiffness).sqrt(),
     );
     let _ = writeln!(
         md,

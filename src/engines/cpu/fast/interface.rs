@@ -92,7 +92,8 @@ fn junction_row<T: Real, C: Coordinate<T>>(
         let spring = &mut out.spring[ix * ns..(ix + 1) * ns];
         let state = &mut out.state[ix * ns..(ix + 1) * ns];
         let lane_sums = &mut lanes[ix * JUNCTION_LANES..ix * JUNCTION_LANES + lanes_used];
-        if s.after.preparing || c.f32_probe & JUNCTIONS != 0 {
+        let reference_path = s.after.preparing || c.f32_probe & JUNCTIONS != 0;
+        if reference_path {
             // While the normal load is applied every pinned junction's
             // stiffness follows it, and the precision probe rounds junction
             // values: the reference's path for all.
@@ -100,22 +101,20 @@ fn junction_row<T: Real, C: Coordinate<T>>(
             for (j, ((f, spring), state)) in each.enumerate() {
                 *f = pinned_force(junctions::junction(c, &s.after, ix, j, &jb, spring, state));
             }
-            slipping[ix] = (count_slipping(state), jb.slipping_force);
-        } else if pinned_forces(&jb, spring, state, force) {
-            slipping[ix] = (0, jb.slipping_force);
-        } else {
-            if common_junctions(spring, state, force, rare, &jb) {
-                let each = force
-                    .iter_mut()
-                    .zip(&mut *spring)
-                    .zip(&mut *state)
-                    .zip(&*rare);
-                for (j, (((f, spring), state), _)) in each.enumerate().filter(|(_, x)| *x.1) {
-                    *f = pinned_force(junctions::junction(c, &s.after, ix, j, &jb, spring, state));
-                }
-            }
-            slipping[ix] = (count_slipping(state), jb.slipping_force);
         }
+        let all_pinned = !reference_path && pinned_forces(&jb, spring, state, force);
+        if !reference_path && !all_pinned && common_junctions(&jb, spring, state, force, rare) {
+            let each = force
+                .iter_mut()
+                .zip(&mut *spring)
+                .zip(&mut *state)
+                .zip(&*rare);
+            for (j, (((f, spring), state), _)) in each.enumerate().filter(|(_, x)| *x.1) {
+                *f = pinned_force(junctions::junction(c, &s.after, ix, j, &jb, spring, state));
+            }
+        }
+        let count = if all_pinned { 0 } else { count_slipping(state) };
+        slipping[ix] = (count, jb.slipping_force);
         sum_lanes(force, lane_sums);
     }
     // The reference's final sum, lane by lane, every block at once.
@@ -187,11 +186,11 @@ fn pinned_forces<T: Real, C: Coordinate<T>>(
 /// `junction`; returns whether there are any.
 #[inline(always)]
 fn common_junctions<T: Real, C: Coordinate<T>>(
+    jb: &JunctionBlock<T, C>,
     spring: &[JunctionSpring<C, T>],
     state: &mut [[u32; 2]],
     force: &mut [T],
     rare: &mut [bool],
-    jb: &JunctionBlock<T, C>,
 ) -> bool {
     let n = force.len();
     let (spring, state, rare) = (&spring[..n], &mut state[..n], &mut rare[..n]);
