@@ -5,8 +5,8 @@
 // import: scene, coordinates
 
 // The run constants `c` and the batch `batch` of the scene a thread steps
-// are declared by the scene snippet (scene_single.wgsl or
-// scene_ensemble.wgsl), with the offsets of that scene in every buffer.
+// are declared by the scene snippet (scene.wgsl), with the offsets of that
+// scene in every buffer.
 // Force on each block from everything but friction, at the state the step
 // starts from.
 @group(0) @binding(5) var<storage, read_write> force: array<vec2<real>>;
@@ -26,6 +26,12 @@
 // The first blow-up of each scene, as GpuStatus (flag, step, block, ux,
 // uz, vx, vz, persistent steps run): 8 words per scene.
 @group(0) @binding(11) var<storage, read_write> status: array<atomic<u32>>;
+
+// A scene that blew up is left as it is (its status keeps the first
+// blow-up) while the others go on.
+fn scene_stopped() -> bool {
+    return atomicLoad(&status[status_base()]) != 0u;
+}
 // The step offset of this dispatch in its batch (one-step kernel: a
 // dynamic offset into a fixed table). The batch (binding 1) is storage, not
 // uniform: lavapipe specialises shaders on uniform contents and would

@@ -82,6 +82,7 @@ fn end_whole_sample(local: u32, s: SampleSums) {
 // dispatch of one workgroup.
 @compute @workgroup_size(RECORD_THREADS)
 fn record_small(@builtin(local_invocation_index) local: u32) {
+    enter_scene_consts(0u);
     if !begin_whole_sample(local) {
         return;
     }
@@ -100,6 +101,7 @@ fn record_sample(
     @builtin(workgroup_id) wid: vec3<u32>,
     @builtin(num_workgroups) groups: vec3<u32>,
 ) {
+    enter_scene_consts(0u);
     if !begin_sample(local) {
         return;
     }
@@ -119,6 +121,7 @@ fn record_sample(
 // Larger lattices, second dispatch: one workgroup adds the partials.
 @compute @workgroup_size(RECORD_THREADS)
 fn record_finish(@builtin(local_invocation_index) local: u32) {
+    enter_scene_consts(0u);
     if !begin_whole_sample(local) {
         return;
     }

@@ -18,7 +18,9 @@ pub struct RunArgs {
     pub backend: Backend,
     /// GPU kernel: one-step (1 dispatch per step), one-step-lanes
     /// (junction lanes in parallel), persistent (many steps per
-    /// dispatch, small lattices) or auto.
+    /// dispatch, small lattices), auto (on a hardware GPU the fastest,
+    /// timed on this scene at start-up and cached per adapter and
+    /// lattice) or measure (time them now, on any adapter).
     #[arg(long, value_enum, default_value = "auto")]
     pub gpu_path: GpuPath,
     /// Where a GPU run's output samples are made: device (only the

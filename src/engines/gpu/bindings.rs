@@ -151,10 +151,10 @@ mod tests {
     /// constants, read-write state).
     #[test]
     fn reflected_bindings_follow_the_declarations() {
-        let one_step = Bindings::reflect(&Kernel::OneStep.source::<f32>(false)).unwrap();
+        let one_step = Bindings::reflect(&Kernel::OneStep.source::<f32>()).unwrap();
         let numbers: Vec<u32> = one_step.layout(0, &[]).iter().map(|e| e.binding).collect();
         assert_eq!(numbers, [0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 17]);
-        let persistent = Bindings::reflect(&Kernel::Persistent.source::<f32>(true)).unwrap();
+        let persistent = Bindings::reflect(&Kernel::Persistent.source::<f32>()).unwrap();
         let numbers: Vec<u32> = persistent
             .layout(0, &[])
             .iter()
@@ -169,7 +169,11 @@ mod tests {
             wgpu::BindingType::Buffer { ty, .. } => ty,
             _ => unreachable!(),
         };
-        assert_eq!(ty(&one_step, 0), wgpu::BufferBindingType::Uniform);
+        // The constants: one record per scene (a solo run is an ensemble of one).
+        assert_eq!(
+            ty(&one_step, 0),
+            wgpu::BufferBindingType::Storage { read_only: true }
+        );
         assert_eq!(
             ty(&persistent, 0),
             wgpu::BufferBindingType::Storage { read_only: true }

@@ -20,9 +20,9 @@ pub struct GpuContext {
     pub limits: wgpu::Limits,
     /// The first uncaptured device error, if any (checked after submits).
     pub error: Arc<Mutex<Option<String>>>,
-    /// Group 0 of each kernel, for one scene and for an ensemble (their
-    /// state bindings and their constants' binding differ).
-    layouts: Arc<[KernelLayout; 4]>,
+    /// Group 0 of the one-step kernels and of the persistent kernel (their
+    /// state bindings differ).
+    layouts: Arc<[KernelLayout; 2]>,
     /// Group 1: the step offset (dynamic) and the batch (or the batches).
     pub batch_layout: wgpu::BindGroupLayout,
     pipelines: Arc<Mutex<HashMap<String, wgpu::ComputePipeline>>>,
@@ -46,10 +46,9 @@ pub fn shared() -> Result<GpuContext, EngineError> {
         .map_err(EngineError::Gpu)
 }
 
-/// Storage bindings the persistent kernel uses (the most of them: its
-/// record buffers and the law state); an ensemble's constants take one more.
-const STORAGE_BINDINGS: u32 = 17;
-pub const ENSEMBLE_STORAGE_BINDINGS: u32 = STORAGE_BINDINGS + 1;
+/// Storage bindings the persistent kernel uses (the most of them: the
+/// scenes' constants, its record buffers and the law state).
+const STORAGE_BINDINGS: u32 = 18;
 
 /// Group 0's layout of one kernel family and the pipeline layout using it.
 struct KernelLayout {
@@ -63,9 +62,8 @@ struct KernelLayout {
 pub const STEP_OFFSET: &str = "step_offset";
 
 /// Index in `GpuContext::layouts`.
-fn layout_index(kernel: Kernel, ensemble: bool) -> usize {
-    let persistent = kernel == Kernel::Persistent;
-    persistent as usize + 2 * ensemble as usize
+fn layout_index(kernel: Kernel) -> usize {
+    (kernel == Kernel::Persistent) as usize
 }
 
 /// Lists the adapters with Vulkan/Metal/DX12 support, hardware first.
@@ -132,23 +130,21 @@ impl GpuContext {
         };
         // Group 1 (the step offset, with a dynamic offset per dispatch, and
         // the batch) is the same in every kernel.
-        let reflect = |kernel: Kernel, ensemble: bool| {
-            Bindings::reflect(&kernel.source::<f32>(ensemble))
+        let reflect = |kernel: Kernel| {
+            Bindings::reflect(&kernel.source::<f32>())
                 .expect("the kernels parse (tested with naga)")
         };
-        let batch_layout = layout(
-            "batch",
-            &reflect(Kernel::OneStep, false).layout(1, &[STEP_OFFSET]),
-        );
-        let kernel_layout = |kernel: Kernel, ensemble: bool| {
-            // Group 0 as the kernel's module declares it: the constants (a
-            // uniform block, or one record per scene), the state, and the
-            // persistent kernel's record buffers.
-            // The one-step kernels share a layout: what either uses.
+        let batch_layout = layout("batch", &reflect(Kernel::OneStep).layout(1, &[STEP_OFFSET]));
+        let kernel_layout = |kernel: Kernel| {
+            // Group 0 as the kernel's module declares it: the constants (one
+            // record per scene), the state, and the persistent kernel's
+            // record buffers. The one-step kernels share a layout: what
+            // either uses.
             let bindings = match kernel {
-                Kernel::OneStep | Kernel::OneStepLanes => reflect(Kernel::OneStep, ensemble)
-                    .union(reflect(Kernel::OneStepLanes, ensemble)),
-                Kernel::Persistent => reflect(kernel, ensemble),
+                Kernel::OneStep | Kernel::OneStepLanes => {
+                    reflect(Kernel::OneStep).union(reflect(Kernel::OneStepLanes))
+                }
+                Kernel::Persistent => reflect(kernel),
             };
             let group = layout(kernel.entry_point(), &bindings.layout(0, &[]));
             let pipeline = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
@@ -163,10 +159,8 @@ impl GpuContext {
             }
         };
         let layouts = Arc::new([
-            kernel_layout(Kernel::OneStep, false),
-            kernel_layout(Kernel::Persistent, false),
-            kernel_layout(Kernel::OneStep, true),
-            kernel_layout(Kernel::Persistent, true),
+            kernel_layout(Kernel::OneStep),
+            kernel_layout(Kernel::Persistent),
         ]);
         Ok(GpuContext {
             device,
@@ -181,14 +175,14 @@ impl GpuContext {
         })
     }
 
-    /// Group 0's layout of `kernel` (for an ensemble or one scene).
-    pub fn state_layout(&self, kernel: Kernel, ensemble: bool) -> &wgpu::BindGroupLayout {
-        &self.layouts[layout_index(kernel, ensemble)].group
+    /// Group 0's layout of `kernel`.
+    pub fn state_layout(&self, kernel: Kernel) -> &wgpu::BindGroupLayout {
+        &self.layouts[layout_index(kernel)].group
     }
 
     /// The bindings the kernels of `kernel`'s family declare.
-    pub fn bindings(&self, kernel: Kernel, ensemble: bool) -> &Bindings {
-        &self.layouts[layout_index(kernel, ensemble)].bindings
+    pub fn bindings(&self, kernel: Kernel) -> &Bindings {
+        &self.layouts[layout_index(kernel)].bindings
     }
 
     /// The pipeline of `kernel` in precision `T` with `constants`, compiled
@@ -196,11 +190,10 @@ impl GpuContext {
     pub fn pipeline<T: GpuReal>(
         &self,
         kernel: Kernel,
-        ensemble: bool,
         constants: &[(&str, f64)],
     ) -> wgpu::ComputePipeline {
-        let layout = &self.layouts[layout_index(kernel, ensemble)].pipeline;
-        let key = format!("{}{}{ensemble}{constants:?}", T::NAME, kernel.entry_point());
+        let layout = &self.layouts[layout_index(kernel)].pipeline;
+        let key = format!("{}{}{constants:?}", T::NAME, kernel.entry_point());
         let mut cache = self.pipelines.lock().expect("pipeline cache");
         cache
             .entry(key)
@@ -209,7 +202,7 @@ impl GpuContext {
                     .device
                     .create_shader_module(wgpu::ShaderModuleDescriptor {
                         label: Some(kernel.entry_point()),
-                        source: wgpu::ShaderSource::Wgsl(kernel.source::<T>(ensemble).into()),
+                        source: wgpu::ShaderSource::Wgsl(kernel.source::<T>().into()),
                     });
                 self.device
                     .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {

@@ -1,6 +1,6 @@
 //! Ensembles: many scenes of one lattice shape stepped together on the GPU,
 //! one dispatch for all of them (workgroup row z of a dispatch is scene z,
-//! `shaders/scene_ensemble.wgsl`). The scenes may differ in anything that
+//! `shaders/scene.wgsl`). The scenes may differ in anything that
 //! is a run constant (loads, prestress, friction, seed, stiffnesses), not
 //! in the lattice, the terms compiled in or the time schedule. A scene that
 //! blows up stops alone: its error is kept and the others go on.

@@ -19,11 +19,13 @@
 //! The same engine steps an ensemble (`ensemble`): many scenes of one
 //! lattice shape in one dispatch, each with its own constants, batch and
 //! slice of every buffer (`scene_state`); `lockstep` hands its scenes to
-//! separate runners.
+//! separate runners. A solo run is an ensemble of one: the same compiled
+//! kernels, so a scene's bits do not depend on the scenes beside it.
 
 mod bindings;
 pub mod context;
 pub mod ensemble;
+pub mod kernel_choice;
 pub mod layout;
 pub mod lockstep;
 pub mod options;
@@ -56,7 +58,7 @@ use std::sync::mpsc;
 use wgpu::util::DeviceExt;
 
 struct Buffers {
-    /// The run constants: a uniform block (one scene) or one record per scene.
+    /// The run constants: one record per scene.
     consts: wgpu::Buffer,
     /// Two copies of u and v: the one-step kernel reads one, writes the other.
     disp: [wgpu::Buffer; 2],
@@ -83,13 +85,11 @@ struct Buffers {
 fn state_group(
     ctx: &GpuContext,
     kernel: Kernel,
-    ensemble: bool,
     b: &Buffers,
     records: [&wgpu::Buffer; 4],
 ) -> wgpu::BindGroup {
     let [plan, sums, rows, entries] = records;
     let resources = [
-        ("c", &b.consts),
         ("scene_consts", &b.consts),
         // The one-step kernels' ping-pong copies; the persistent kernel's
         // state in place.
@@ -116,13 +116,13 @@ fn state_group(
     .map(|(name, buffer)| (name, buffer.as_entire_binding()));
     ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
         label: Some(kernel.entry_point()),
-        layout: ctx.state_layout(kernel, ensemble),
-        entries: &ctx.bindings(kernel, ensemble).entries(0, &resources),
+        layout: ctx.state_layout(kernel),
+        entries: &ctx.bindings(kernel).entries(0, &resources),
     })
 }
 
 /// Elements of one scene in each buffer; scene s's slice starts at s times
-/// these (scene-major, `shaders/scene_ensemble.wgsl`).
+/// these (scene-major, `shaders/scene.wgsl`).
 #[derive(Debug, Clone, Copy, PartialEq)]
 struct Shape {
     blocks: usize,
@@ -186,7 +186,8 @@ struct InFlight {
 /// computing in `T`: f32 (mixed, double-single coordinates) or f64.
 pub struct GpuEngine<T: GpuReal = f32> {
     scenes: Vec<Scene<T>>,
-    /// Built from the ensemble kernels (per-scene constants in storage).
+    /// Steps an ensemble: a scene's blow-up stops only that scene, and
+    /// output samples come from host snapshots.
     ensemble: bool,
     shape: Shape,
     ctx: GpuContext,
@@ -222,6 +223,8 @@ pub struct GpuEngine<T: GpuReal = f32> {
     recorder: Option<recorder::Recorder>,
     /// Samples read back and not yet taken.
     samples: Vec<Sample>,
+    /// Why `auto` took this kernel, when it measured.
+    choice: Option<kernel_choice::KernelChoice>,
 }
 
 pub(crate) fn groups_for(workgroups: u32) -> (u32, u32) {
@@ -246,7 +249,7 @@ impl GpuEngine {
         ctx: GpuContext,
         opts: GpuOptions,
     ) -> Result<GpuEngine, EngineError> {
-        GpuEngine::build(std::slice::from_ref(model), ctx, opts, false)
+        GpuEngine::with_precision_and_context(model, ctx, opts)
     }
 }
 
@@ -263,17 +266,30 @@ impl<T: GpuReal> GpuEngine<T> {
         GpuEngine::with_precision_and_context(model, context::shared()?, opts)
     }
 
+    /// The engine of one scene; `auto` on a hardware adapter (and
+    /// `measure` anywhere) first times the kernels on this scene
+    /// (`kernel_choice`).
     pub fn with_precision_and_context(
         model: &Model,
         ctx: GpuContext,
         opts: GpuOptions,
     ) -> Result<GpuEngine<T>, EngineError> {
-        GpuEngine::build(std::slice::from_ref(model), ctx, opts, false)
+        ctx.check_precision::<T>()?;
+        let cache = kernel_choice::ChoiceCache::default_location();
+        let (opts, choice) = kernel_choice::resolve::<T>(model, &ctx, opts, &cache)?;
+        let mut engine = GpuEngine::build(std::slice::from_ref(model), ctx, opts, false)?;
+        engine.choice = choice;
+        Ok(engine)
+    }
+
+    /// The measured choice behind this engine's kernel, if `auto` measured.
+    pub fn kernel_choice(&self) -> Option<&kernel_choice::KernelChoice> {
+        self.choice.as_ref()
     }
 
     /// The engine over `models`, which share one lattice shape and time
-    /// schedule (checked by the caller); `ensemble` selects the kernels
-    /// that address a scene's slice of each buffer.
+    /// schedule (checked by the caller), with the same kernels for one
+    /// scene or many; `ensemble`: a blow-up stops only its scene.
     fn build(
         models: &[Model],
         ctx: GpuContext,
@@ -315,16 +331,6 @@ impl<T: GpuReal> GpuEngine<T> {
                     }
                 )));
             }
-        }
-        if ensemble
-            && ctx.limits.max_storage_buffers_per_shader_stage < context::ENSEMBLE_STORAGE_BINDINGS
-        {
-            return Err(EngineError::Gpu(format!(
-                "{} allows {} storage buffers per shader stage; an ensemble needs {}",
-                ctx.info.name,
-                ctx.limits.max_storage_buffers_per_shader_stage,
-                context::ENSEMBLE_STORAGE_BINDINGS
-            )));
         }
         let max_groups = ctx.limits.max_compute_workgroups_per_dimension as usize;
         if scene_count > max_groups {
@@ -371,17 +377,8 @@ impl<T: GpuReal> GpuEngine<T> {
                 GpuConsts::new(&Consts::<T>::new(m), speed_limit)
             })
             .collect();
-        let consts_buffer = if ensemble {
-            storage("scene consts", bytemuck::cast_slice(&gpu_consts))
-        } else {
-            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("consts"),
-                contents: bytemuck::bytes_of(&gpu_consts[0]),
-                usage: wgpu::BufferUsages::UNIFORM,
-            })
-        };
         let buffers = Buffers {
-            consts: consts_buffer,
+            consts: storage("scene consts", bytemuck::cast_slice(&gpu_consts)),
             disp: [
                 storage("disp 0", bytemuck::cast_slice(&disp)),
                 storage("disp 1", bytemuck::cast_slice(&disp)),
@@ -461,11 +458,11 @@ impl<T: GpuReal> GpuEngine<T> {
             mapped_at_creation: false,
         });
         let placeholders = buffers.record_placeholders.each_ref();
-        let state_group = state_group(&ctx, kernel, ensemble, &buffers, placeholders);
+        let state_group = state_group(&ctx, kernel, &buffers, placeholders);
         let batch_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("batch"),
             layout: &ctx.batch_layout,
-            entries: &ctx.bindings(kernel, ensemble).entries(
+            entries: &ctx.bindings(kernel).entries(
                 1,
                 &[
                     (
@@ -486,7 +483,7 @@ impl<T: GpuReal> GpuEngine<T> {
         if kernel == Kernel::Persistent {
             constants.push(("PERSISTENT_THREADS", persistent_threads as f64));
         }
-        let pipeline = ctx.pipeline::<T>(kernel, ensemble, &constants);
+        let pipeline = ctx.pipeline::<T>(kernel, &constants);
         let junction_groups = match (kernel, model.law) {
             (Kernel::OneStepLanes, FrictionLaw::Junctions | FrictionLaw::SingleJunction) => {
                 model.nx as u32
@@ -538,6 +535,7 @@ impl<T: GpuReal> GpuEngine<T> {
             output: opts.output,
             recorder: None,
             samples: Vec::new(),
+            choice: None,
         };
         if model.prep_steps == 0 {
             engine.begin_driving()?;
@@ -874,6 +872,14 @@ impl<T: GpuReal> GpuEngine<T> {
     }
 
     fn kernel_description(&self) -> String {
+        let kernel = self.kernel_alone();
+        match &self.choice {
+            Some(choice) => format!("{kernel}; auto {}", choice.describe()),
+            None => kernel,
+        }
+    }
+
+    fn kernel_alone(&self) -> String {
         match self.kernel {
             Kernel::OneStep => "one-step kernel, 1 dispatch per step".to_string(),
             Kernel::OneStepLanes => {
@@ -990,8 +996,7 @@ impl<T: GpuReal> Engine for GpuEngine<T> {
                 rec.recorded_through = Some(self.step.max(model.prep_steps));
                 if persistent {
                     let records = rec.persistent_bindings();
-                    self.state_group =
-                        state_group(&self.ctx, self.kernel, false, &self.buffers, records);
+                    self.state_group = state_group(&self.ctx, self.kernel, &self.buffers, records);
                 }
                 self.recorder = Some(rec);
                 Ok(true)

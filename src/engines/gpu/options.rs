@@ -18,9 +18,13 @@ pub const PERSISTENT_THREADS: u32 = 256;
 /// Which kernel steps the lattice.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
 pub enum GpuPath {
-    /// Hardware: one step per dispatch with parallel junction lanes.
-    /// Software adapters: one step per dispatch, one thread per block.
+    /// Hardware: the fastest kernel on this scene, timed at start-up and
+    /// cached per adapter and lattice (`kernel_choice`). Software adapters:
+    /// one step per dispatch, one thread per block (the measured rule).
     Auto,
+    /// Time every kernel that fits on this scene now, on any adapter, take
+    /// the fastest and refresh the cache.
+    Measure,
     /// One dispatch per step, one thread per block.
     OneStep,
     /// One dispatch per step, a workgroup per interface block's junctions.
@@ -87,7 +91,9 @@ pub fn persistent_steps_per_dispatch(model: &Model, threads: u32, software: bool
     (32_768 / per_step as u64).clamp(1, PERSISTENT_BATCH)
 }
 
-/// The kernel for `path` on a lattice of `n_blocks`.
+/// The kernel for `path` without measuring: what an ensemble runs, and a
+/// solo run on a software adapter (a solo run on hardware measures,
+/// `kernel_choice::resolve`).
 pub fn choose_kernel(path: GpuPath, software: bool) -> Kernel {
     match path {
         GpuPath::OneStep => Kernel::OneStep,
@@ -96,12 +102,12 @@ pub fn choose_kernel(path: GpuPath, software: bool) -> Kernel {
         // Measured on lavapipe (BENCHMARKS.md): barriers cost more than
         // dispatches there, so neither the lanes nor the persistent kernel
         // pays.
-        GpuPath::Auto if software => Kernel::OneStep,
+        GpuPath::Auto | GpuPath::Measure if software => Kernel::OneStep,
         // Measured on an H100 and an H200 (BENCHMARKS.md): the lanes kernel
         // is the fastest at every size measured, Table S1 included (11.5
         // against 36 µs per step for the persistent kernel on the H200), and
         // it makes its output samples on the device.
-        GpuPath::Auto => Kernel::OneStepLanes,
+        GpuPath::Auto | GpuPath::Measure => Kernel::OneStepLanes,
     }
 }
 

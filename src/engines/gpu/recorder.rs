@@ -163,7 +163,7 @@ impl Recorder {
             entries: &pipelines.bindings.entries(
                 0,
                 &[
-                    ("c", state.consts),
+                    ("scene_consts", state.consts),
                     ("disp_a", &state.disp[0]),
                     ("vel_a", &state.vel[0]),
                     ("disp_b", &state.disp[1]),

@@ -3,8 +3,7 @@
 //!
 //! Every file of `shaders/` says what it uses in an `// import:` line: other
 //! files by name, or a slot that each module fills with one file of its
-//! choice: `scene` (one scene or an ensemble of scenes per dispatch),
-//! `state` (the one-step kernels' ping-pong state, or the persistent
+//! choice: `state` (the one-step kernels' ping-pong state, or the persistent
 //! kernel's), `coordinates` (double-single or f64: the precision) and
 //! `bindings` (where the output code finds the state buffers: the
 //! kernels' common.wgsl, or the output module's read-only views). A module
@@ -43,8 +42,7 @@ wgsl_files!(
     "record_buffers",
     "record_common",
     "rng",
-    "scene_ensemble",
-    "scene_single",
+    "scene",
     "state_one_step",
     "state_persistent",
     "step_forces",
@@ -99,22 +97,16 @@ pub fn imports(text: &str) -> Result<Vec<&str>, String> {
 /// The file each slot stands for in one module.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Slots {
-    pub scene: &'static str,
     pub state: &'static str,
     pub coordinates: &'static str,
     pub bindings: &'static str,
 }
 
 impl Slots {
-    /// A kernel's slots: one scene or an ensemble, its state, `T`'s
-    /// coordinates, the kernels' bindings.
-    pub fn kernel<T: GpuReal>(ensemble: bool, state: &'static str) -> Slots {
+    /// A kernel's slots: its state, `T`'s coordinates, the kernels'
+    /// bindings.
+    pub fn kernel<T: GpuReal>(state: &'static str) -> Slots {
         Slots {
-            scene: if ensemble {
-                "scene_ensemble"
-            } else {
-                "scene_single"
-            },
             state,
             coordinates: T::COORDINATES,
             bindings: "common",
@@ -123,7 +115,6 @@ impl Slots {
 
     fn resolve<'a>(&self, name: &'a str) -> &'a str {
         match name {
-            "scene" => self.scene,
             "state" => self.state,
             "coordinates" => self.coordinates,
             "bindings" => self.bindings,
@@ -156,11 +147,11 @@ pub fn compose(prelude: &str, entry: &str, slots: &Slots) -> Result<String, Stri
 }
 
 /// The output kernels' module (`record_small`, `record_sample`,
-/// `record_finish`): one scene, no override constants.
+/// `record_finish`): scene 0 of the state buffers, no override constants.
 pub fn record_source<T: GpuReal>() -> String {
     let slots = Slots {
         bindings: "record",
-        ..Slots::kernel::<T>(false, "state_one_step")
+        ..Slots::kernel::<T>("state_one_step")
     };
     compose(&super::layout::wgsl_prelude::<T>(), "record", &slots)
         .expect("the shader files' imports resolve (tested)")
@@ -206,15 +197,15 @@ impl Kernel {
         }
     }
 
-    /// The full WGSL module of this kernel, for one scene or an ensemble
-    /// (many scenes of one lattice shape per dispatch).
-    pub fn source<T: GpuReal>(self, ensemble: bool) -> String {
+    /// The full WGSL module of this kernel: it steps the scenes of one
+    /// lattice shape, one or many, per dispatch (`shaders/scene.wgsl`).
+    pub fn source<T: GpuReal>(self) -> String {
         let (state, entry) = match self {
             Kernel::OneStep => ("state_one_step", "one_step"),
             Kernel::OneStepLanes => ("state_one_step", "one_step_lanes"),
             Kernel::Persistent => ("state_persistent", "persistent"),
         };
-        let slots = Slots::kernel::<T>(ensemble, state);
+        let slots = Slots::kernel::<T>(state);
         compose(&super::layout::wgsl_prelude::<T>(), entry, &slots)
             .expect("the shader files' imports resolve (tested)")
     }
@@ -273,8 +264,8 @@ impl Variant {
 }
 
 /// Parses and validates a kernel's module with naga (no adapter needed).
-pub fn validate_kernel<T: GpuReal>(phase: Kernel, ensemble: bool) -> Result<naga::Module, String> {
-    let src = phase.source::<T>(ensemble);
+pub fn validate_kernel<T: GpuReal>(phase: Kernel) -> Result<naga::Module, String> {
+    let src = phase.source::<T>();
     let module = naga::front::wgsl::parse_str(&src)
         .map_err(|e| format!("{}: {}", phase.entry_point(), e.emit_to_string(&src)))?;
     naga::valid::Validator::new(naga::valid::ValidationFlags::all(), T::CAPABILITIES)
@@ -342,9 +333,8 @@ mod tests {
 
     /// The slots a file stands for: composed alone, it fills them itself.
     fn slots_for<T: GpuReal>(name: &'static str) -> Slots {
-        let mut slots = Slots::kernel::<T>(false, "state_one_step");
+        let mut slots = Slots::kernel::<T>("state_one_step");
         match name {
-            "scene_single" | "scene_ensemble" => slots.scene = name,
             "state_one_step" | "state_persistent" => slots.state = name,
             "persistent" => slots.state = "state_persistent",
             "double_single" | "coord_f64" => slots.coordinates = name,
@@ -435,12 +425,11 @@ mod tests {
         for (name, text) in all_files() {
             let wanted = imports(text).unwrap_or_else(|e| panic!("{name}: {e}"));
             for w in wanted {
-                let known =
-                    file(w).is_some() || ["scene", "state", "coordinates", "bindings"].contains(&w);
+                let known = file(w).is_some() || ["state", "coordinates", "bindings"].contains(&w);
                 assert!(known, "{name}.wgsl imports unknown {w}");
             }
         }
-        let slots = Slots::kernel::<f32>(false, "state_one_step");
+        let slots = Slots::kernel::<f32>("state_one_step");
         assert!(compose("", "no_such_file", &slots).is_err());
     }
 
@@ -456,7 +445,7 @@ mod tests {
             .filter(|p| p.extension().is_some_and(|x| x == "wgsl"))
             .collect();
         files.sort();
-        assert!(files.len() >= 20, "{files:?}");
+        assert!(files.len() >= 19, "{files:?}");
         let mut errors: Vec<String> = files
             .iter()
             .flat_map(|p| {
@@ -484,10 +473,7 @@ mod tests {
 
     fn validate_all<T: GpuReal>() {
         for kernel in Kernel::ALL {
-            for ensemble in [false, true] {
-                validate_kernel::<T>(kernel, ensemble)
-                    .unwrap_or_else(|e| panic!("{}: {e}", T::NAME));
-            }
+            validate_kernel::<T>(kernel).unwrap_or_else(|e| panic!("{}: {e}", T::NAME));
         }
         validate_record::<T>().unwrap_or_else(|e| panic!("{}: {e}", T::NAME));
     }
@@ -507,7 +493,7 @@ mod tests {
     #[test]
     fn f64_kernels_need_the_float64_capability() {
         let one_step = |caps| {
-            let src = Kernel::OneStep.source::<f64>(false);
+            let src = Kernel::OneStep.source::<f64>();
             let module = naga::front::wgsl::parse_str(&src).unwrap();
             naga::valid::Validator::new(naga::valid::ValidationFlags::all(), caps)
                 .validate(&module)

@@ -1,5 +1,8 @@
-// Many scenes of one lattice shape per dispatch (an ensemble): workgroup
-// row z of the dispatch steps scene z. Each scene has its own constants
+// The scenes a dispatch steps: workgroup row z steps scene z. One scene is
+// an ensemble of one: a solo run and an ensemble run the same module and
+// the same code, so a scene's bits never depend on how many scenes ran
+// beside it (a separate solo module with uniform constants compiled to
+// other bits on NVIDIA). Each scene has its own constants
 // and batch (its loads, seed, friction, prestress) and its own slice of
 // every state buffer, scene-major: scene s's block i is at s·n_blocks + i.
 // The block flags are shared (one lattice). Private copies of the scene's
@@ -7,7 +10,7 @@
 // they are not uniform to the uniformity analysis, so the kernels with
 // barriers take their loop bounds through workgroupUniformLoad.
 // CPU twin: src/engines/gpu/layout.rs GpuConsts, GpuBatch (one of each per scene).
-// import: common
+// import: (none)
 
 @group(0) @binding(0) var<storage, read> scene_consts: array<Consts>;
 @group(1) @binding(1) var<storage, read> scene_batches: array<Batch>;
@@ -17,15 +20,14 @@ var<private> batch: Batch;
 var<private> scene: u32;
 
 fn enter_scene(s: u32) {
-    scene = s;
-    c = scene_consts[s];
+    enter_scene_consts(s);
     batch = scene_batches[s];
 }
 
-// A scene that blew up is left as it is (its status keeps the first
-// blow-up) while the others go on.
-fn scene_stopped() -> bool {
-    return atomicLoad(&status[status_base()]) != 0u;
+// The output kernels read a scene's constants and state, not its batch.
+fn enter_scene_consts(s: u32) {
+    scene = s;
+    c = scene_consts[s];
 }
 
 fn block_base() -> u32 {

@@ -1,0 +1,346 @@
+//! `--gpu-path auto` on a hardware adapter: every kernel that fits the
+//! scene is timed on the scene itself for a few hundred steps, and the
+//! fastest steps the run. The choice and its figures are cached per
+//! adapter, driver, precision, lattice, compiled terms and kernel sources,
+//! so a second run of the same shape starts at once.
+//!
+//! Why measure: the fixed rule picked a kernel 3.3× slower than the best
+//! on an H100 for Table S1 (BENCHMARKS.md), and which kernel wins depends
+//! on the lattice, the junction count, the precision and the GPU.
+//! Software adapters (lavapipe) keep the measured rule of
+//! `options::choose_kernel`: there pipelines take seconds to compile, and
+//! runs must stay deterministic in CI. `--gpu-path measure` times the
+//! kernels anyway, on any adapter, and refreshes the cache.
+
+use super::context::GpuContext;
+use super::options::{GpuOptions, GpuPath};
+use super::precision::GpuReal;
+use super::shaders::{Kernel, Variant};
+use super::GpuEngine;
+use crate::engines::EngineError;
+use crate::model::scenario::FrictionLaw;
+use crate::model::Model;
+use std::hash::{Hash, Hasher};
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// The persistent kernel steps a lattice with one workgroup: it is timed
+/// only up to this many blocks (at 1024×256 it ran 150× slower than the
+/// lanes kernel on an H100).
+pub const PERSISTENT_MEASURE_MAX_BLOCKS: usize = 16_384;
+/// Steps run before timing: the pipeline is compiled and warm.
+const WARM_UP_STEPS: u64 = 32;
+/// Timed repeats per kernel; the fastest counts (others share the GPU).
+const REPEATS: usize = 3;
+/// Steps per timed repeat at most, and the wall time one repeat aims at
+/// (a large lattice is timed over fewer steps).
+const MAX_TIMED_STEPS: u64 = 256;
+const TARGET_REPEAT_SECONDS: f64 = 0.05;
+/// The cache file in the cache directory.
+pub const CACHE_FILE: &str = "gpu-kernels.tsv";
+
+/// Where a choice came from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ChoiceSource {
+    /// Timed now on this scene.
+    Measured,
+    /// Timed earlier on this adapter for this lattice (the cache).
+    Cached,
+}
+
+/// The kernel that steps a run, and the figures behind it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct KernelChoice {
+    pub kernel: Kernel,
+    /// Each kernel timed, with its wall time per step in seconds.
+    pub timings: Vec<(Kernel, f64)>,
+    pub source: ChoiceSource,
+    /// Candidates that could not be timed, and why.
+    pub skipped: Vec<(Kernel, String)>,
+}
+
+impl KernelChoice {
+    /// `chose one-step-lanes: one-step 45.1, one-step-lanes 8.7,
+    /// persistent 29.0 µs/step, measured now on this scene`.
+    pub fn describe(&self) -> String {
+        let figures: Vec<String> = self
+            .timings
+            .iter()
+            .map(|(k, s)| format!("{} {:.1}", path_name(*k), s * 1e6))
+            .collect();
+        let source = match self.source {
+            ChoiceSource::Measured => "measured now on this scene",
+            ChoiceSource::Cached => "measured earlier on this adapter for this lattice",
+        };
+        let mut text = format!(
+            "chose {}: {} µs/step, {source}",
+            path_name(self.kernel),
+            figures.join(", ")
+        );
+        for (k, why) in &self.skipped {
+            text += &format!("; {} not timed: {why}", path_name(*k));
+        }
+        text
+    }
+}
+
+/// The `--gpu-path` value of `kernel`.
+pub fn path_name(kernel: Kernel) -> &'static str {
+    match kernel {
+        Kernel::OneStep => "one-step",
+        Kernel::OneStepLanes => "one-step-lanes",
+        Kernel::Persistent => "persistent",
+    }
+}
+
+fn path_of(kernel: Kernel) -> GpuPath {
+    match kernel {
+        Kernel::OneStep => GpuPath::OneStep,
+        Kernel::OneStepLanes => GpuPath::OneStepLanes,
+        Kernel::Persistent => GpuPath::Persistent,
+    }
+}
+
+fn kernel_named(name: &str) -> Option<Kernel> {
+    Kernel::ALL.into_iter().find(|k| path_name(*k) == name)
+}
+
+/// The kernels worth timing on `model`: the lanes kernel only where
+/// junctions give it lanes, the persistent kernel only on small lattices.
+pub fn candidates(model: &Model) -> Vec<Kernel> {
+    let junctions = matches!(
+        model.law,
+        FrictionLaw::Junctions | FrictionLaw::SingleJunction
+    ) && model.junctions.is_some_and(|j| j.count > 1);
+    Kernel::ALL
+        .into_iter()
+        .filter(|k| match k {
+            Kernel::OneStep => true,
+            Kernel::OneStepLanes => junctions,
+            Kernel::Persistent => model.n_blocks() <= PERSISTENT_MEASURE_MAX_BLOCKS,
+        })
+        .collect()
+}
+
+/// Wall time per step of `kernel` on `model` from its initial state: a
+/// warm-up, then the fastest of a few repeats (each an `advance`, which
+/// returns when its steps have run on the device).
+pub fn time_kernel<T: GpuReal>(
+    model: &Model,
+    ctx: &GpuContext,
+    opts: GpuOptions,
+    kernel: Kernel,
+) -> Result<f64, EngineError> {
+    let opts = GpuOptions {
+        path: path_of(kernel),
+        ..opts
+    };
+    let mut engine = GpuEngine::<T>::build(std::slice::from_ref(model), ctx.clone(), opts, false)?;
+    let started = Instant::now();
+    engine.advance_steps(WARM_UP_STEPS)?;
+    let rough = started.elapsed().as_secs_f64() / WARM_UP_STEPS as f64;
+    let steps = ((TARGET_REPEAT_SECONDS / rough.max(1e-9)) as u64).clamp(8, MAX_TIMED_STEPS);
+    let mut best = f64::INFINITY;
+    for _ in 0..REPEATS {
+        let t = Instant::now();
+        engine.advance_steps(steps)?;
+        best = best.min(t.elapsed().as_secs_f64() / steps as f64);
+    }
+    Ok(best)
+}
+
+/// Times every candidate kernel on `model` and takes the fastest. A
+/// candidate that cannot be built (a buffer too large, a device error) is
+/// skipped with its reason; if none can, the first error is returned.
+pub fn measure<T: GpuReal>(
+    model: &Model,
+    ctx: &GpuContext,
+    opts: GpuOptions,
+) -> Result<KernelChoice, EngineError> {
+    let mut timings = Vec::new();
+    let mut skipped = Vec::new();
+    let mut first_error = None;
+    for kernel in candidates(model) {
+        match time_kernel::<T>(model, ctx, opts, kernel) {
+            Ok(s) => timings.push((kernel, s)),
+            Err(e) => {
+                skipped.push((kernel, e.to_string()));
+                first_error.get_or_insert(e);
+            }
+        }
+    }
+    let Some(&(kernel, _)) = timings.iter().min_by(|a, b| a.1.total_cmp(&b.1)) else {
+        return Err(first_error.expect("at least one candidate (one-step always is)"));
+    };
+    Ok(KernelChoice {
+        kernel,
+        timings,
+        source: ChoiceSource::Measured,
+        skipped,
+    })
+}
+
+/// The measured choices of this machine, one line per adapter and lattice:
+/// `key <TAB> kernel <TAB> name=seconds,...`.
+#[derive(Debug, Clone)]
+pub struct ChoiceCache {
+    /// None: no cache directory could be found (nothing is kept).
+    dir: Option<PathBuf>,
+}
+
+impl ChoiceCache {
+    /// `$SLIPFRONT_CACHE_DIR`, else `$XDG_CACHE_HOME/slipfront`, else
+    /// `~/.cache/slipfront`.
+    pub fn default_location() -> ChoiceCache {
+        let env = |k: &str| {
+            std::env::var_os(k)
+                .filter(|v| !v.is_empty())
+                .map(PathBuf::from)
+        };
+        let dir = env("SLIPFRONT_CACHE_DIR")
+            .or_else(|| env("XDG_CACHE_HOME").map(|d| d.join("slipfront")))
+            .or_else(|| env("HOME").map(|d| d.join(".cache").join("slipfront")));
+        ChoiceCache { dir }
+    }
+
+    pub fn at(dir: &Path) -> ChoiceCache {
+        ChoiceCache {
+            dir: Some(dir.to_path_buf()),
+        }
+    }
+
+    pub fn file(&self) -> Option<PathBuf> {
+        self.dir.as_ref().map(|d| d.join(CACHE_FILE))
+    }
+
+    fn lines(&self) -> Vec<String> {
+        self.file()
+            .and_then(|f| std::fs::read_to_string(f).ok())
+            .map(|text| text.lines().map(str::to_string).collect())
+            .unwrap_or_default()
+    }
+
+    /// The choice stored under `key`; a line that does not parse is
+    /// ignored (measured again).
+    pub fn lookup(&self, key: &str) -> Option<KernelChoice> {
+        self.lines().iter().find_map(|line| {
+            let mut fields = line.split('\t');
+            if fields.next()? != key {
+                return None;
+            }
+            let kernel = kernel_named(fields.next()?)?;
+            let timings = fields
+                .next()?
+                .split(',')
+                .map(|pair| {
+                    let (name, seconds) = pair.split_once('=')?;
+                    let seconds: f64 = seconds.parse().ok()?;
+                    (seconds.is_finite() && seconds > 0.0).then_some((kernel_named(name)?, seconds))
+                })
+                .collect::<Option<Vec<_>>>()?;
+            timings
+                .iter()
+                .any(|(k, _)| *k == kernel)
+                .then_some(KernelChoice {
+                    kernel,
+                    timings,
+                    source: ChoiceSource::Cached,
+                    skipped: Vec::new(),
+                })
+        })
+    }
+
+    /// Stores `choice` under `key`, replacing an older line. The file is
+    /// written whole and renamed into place, so a reader never sees half
+    /// of it. Failing to write only loses the cache: returns why.
+    pub fn store(&self, key: &str, choice: &KernelChoice) -> Result<(), String> {
+        let (Some(dir), Some(file)) = (&self.dir, self.file()) else {
+            return Err("no cache directory (set SLIPFRONT_CACHE_DIR)".into());
+        };
+        let mut lines: Vec<String> = self
+            .lines()
+            .into_iter()
+            .filter(|l| l.split('\t').next() != Some(key))
+            .collect();
+        let figures: Vec<String> = choice
+            .timings
+            .iter()
+            .map(|(k, s)| format!("{}={s:e}", path_name(*k)))
+            .collect();
+        lines.push(format!(
+            "{key}\t{}\t{}",
+            path_name(choice.kernel),
+            figures.join(",")
+        ));
+        let write = || -> std::io::Result<()> {
+            std::fs::create_dir_all(dir)?;
+            let tmp = dir.join(format!("{CACHE_FILE}.{}.tmp", std::process::id()));
+            std::fs::write(&tmp, lines.join("\n") + "\n")?;
+            std::fs::rename(&tmp, &file)
+        };
+        write().map_err(|e| format!("cannot write {}: {e}", file.display()))
+    }
+}
+
+/// What a measured choice depends on: the adapter and its driver, the
+/// precision, the lattice and junction count, the terms compiled in, the
+/// persistent kernel's threads and the kernels' sources (a new version of
+/// slipfront measures again).
+pub fn cache_key<T: GpuReal>(model: &Model, ctx: &GpuContext, opts: GpuOptions) -> String {
+    let mut sources = std::collections::hash_map::DefaultHasher::new();
+    for kernel in Kernel::ALL {
+        kernel.source::<T>().hash(&mut sources);
+    }
+    let info = &ctx.info;
+    format!(
+        "{} | {:?} | {} {} | {} | {}x{} | junctions {} | {} | threads {} | kernels {:016x}",
+        info.name,
+        info.backend,
+        info.driver,
+        info.driver_info,
+        T::NAME,
+        model.nx,
+        model.nz,
+        model.n_junctions(),
+        Variant::for_model(model).describe(),
+        opts.persistent_threads,
+        sources.finish()
+    )
+    .replace(['\t', '\n'], " ")
+}
+
+/// The options a solo run is built with, and the measured choice behind
+/// them: `auto` on a hardware adapter takes the cached choice or measures
+/// and caches one; `measure` always measures (and caches); any other path
+/// (and `auto` on a software adapter, by the rule) is kept as it is.
+pub fn resolve<T: GpuReal>(
+    model: &Model,
+    ctx: &GpuContext,
+    opts: GpuOptions,
+    cache: &ChoiceCache,
+) -> Result<(GpuOptions, Option<KernelChoice>), EngineError> {
+    let use_cache = match opts.path {
+        GpuPath::Auto if !ctx.is_software() => true,
+        GpuPath::Measure => false,
+        _ => return Ok((opts, None)),
+    };
+    let key = cache_key::<T>(model, ctx, opts);
+    let cached = if use_cache { cache.lookup(&key) } else { None };
+    let choice = match cached {
+        Some(c) => c,
+        None => {
+            let c = measure::<T>(model, ctx, opts)?;
+            // A cache that cannot be written costs only the next run's
+            // measurement.
+            let _ = cache.store(&key, &c);
+            c
+        }
+    };
+    Ok((
+        GpuOptions {
+            path: path_of(choice.kernel),
+            ..opts
+        },
+        Some(choice),
+    ))
+}

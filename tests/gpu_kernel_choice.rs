@@ -1,0 +1,189 @@
+//! `--gpu-path auto` chooses by measurement on hardware; `measure` times
+//! the kernels on any adapter. Here (lavapipe in CI) `measure` is timed
+//! for real, the cache is written and read back, and the run header shows
+//! the figures. These tests fail, never skip, when no adapter exists.
+
+use slipfront::engines::gpu::context::{self, GpuContext};
+use slipfront::engines::gpu::kernel_choice::{
+    cache_key, candidates, resolve, ChoiceCache, ChoiceSource, CACHE_FILE,
+};
+use slipfront::engines::gpu::shaders::Kernel;
+use slipfront::engines::gpu::{GpuEngine, GpuOptions, GpuPath};
+use slipfront::Model;
+use std::path::PathBuf;
+
+fn ctx() -> GpuContext {
+    context::shared().unwrap_or_else(|e| panic!("a GPU adapter is required (lavapipe in CI): {e}"))
+}
+
+fn small(extra: &[&str]) -> Model {
+    let s = slipfront::app::verify::small_scene(extra).unwrap();
+    Model::from_scenario(&s, false).unwrap()
+}
+
+fn scratch(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("slipfront-choice-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    d
+}
+
+fn options(path: GpuPath) -> GpuOptions {
+    GpuOptions {
+        path,
+        ..GpuOptions::default()
+    }
+}
+
+/// `measure` times every kernel that fits this scene, takes the fastest,
+/// and caches it; the cached line is read back as the same choice with the
+/// same figures. The engine it builds runs the chosen kernel.
+#[test]
+fn measure_times_every_candidate_takes_the_fastest_and_caches_it() {
+    let ctx = ctx();
+    let m = small(&[]);
+    let dir = scratch("measure");
+    let cache = ChoiceCache::at(&dir);
+    let (opts, choice) = resolve::<f32>(&m, &ctx, options(GpuPath::Measure), &cache).unwrap();
+    let choice = choice.expect("measure always measures");
+    assert_eq!(choice.source, ChoiceSource::Measured);
+    let timed: Vec<Kernel> = choice.timings.iter().map(|t| t.0).collect();
+    assert_eq!(timed, candidates(&m));
+    assert_eq!(timed.len(), 3, "all three kernels fit a 29 × 16 scene");
+    for (k, s) in &choice.timings {
+        // lavapipe: 10 µs .. 100 ms per step of 464 blocks.
+        assert!(*s > 1e-5 && *s < 0.1, "{k:?}: {s} s/step");
+    }
+    let fastest = choice
+        .timings
+        .iter()
+        .min_by(|a, b| a.1.total_cmp(&b.1))
+        .unwrap()
+        .0;
+    assert_eq!(choice.kernel, fastest);
+    assert!(
+        choice.describe().contains("µs/step"),
+        "{}",
+        choice.describe()
+    );
+    // The options now name the kernel.
+    let engine = GpuEngine::with_options(&m, opts).unwrap();
+    assert_eq!(engine.kernel(), choice.kernel);
+
+    // The cache holds it, and reads back the same choice.
+    let key = cache_key::<f32>(&m, &ctx, options(GpuPath::Measure));
+    let text = std::fs::read_to_string(dir.join(CACHE_FILE)).unwrap();
+    assert!(text.starts_with(&key), "{text}");
+    let cached = cache.lookup(&key).expect("stored");
+    assert_eq!(cached.source, ChoiceSource::Cached);
+    assert_eq!(cached.kernel, choice.kernel);
+    assert_eq!(cached.timings, choice.timings);
+
+    // Another seed is the same shape (the same choice); controls: other
+    // junction counts, another precision and damaged lines are not.
+    let reseeded = small(&["time.seed=9"]);
+    assert_eq!(cache_key::<f32>(&reseeded, &ctx, options(GpuPath::Measure)), key);
+    let fewer = small(&["friction.junctions.count=50"]);
+    assert_eq!(
+        cache.lookup(&cache_key::<f32>(&fewer, &ctx, options(GpuPath::Measure))),
+        None
+    );
+    if ctx.check_precision::<f64>().is_ok() {
+        assert_ne!(cache_key::<f64>(&m, &ctx, options(GpuPath::Measure)), key);
+    }
+    std::fs::write(
+        dir.join(CACHE_FILE),
+        format!("{key}\tone-step\tone-step=oops\n"),
+    )
+    .unwrap();
+    assert_eq!(cache.lookup(&key), None);
+    std::fs::write(
+        dir.join(CACHE_FILE),
+        format!("{key}\twarp\tone-step=1e-4\n"),
+    )
+    .unwrap();
+    assert_eq!(cache.lookup(&key), None);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// `auto` on a software adapter keeps the measured rule (no timing, no
+/// cache); an explicit kernel is never measured.
+#[test]
+fn auto_on_a_software_adapter_and_explicit_kernels_do_not_measure() {
+    let ctx = ctx();
+    let m = small(&[]);
+    let dir = scratch("rule");
+    let cache = ChoiceCache::at(&dir);
+    let (opts, choice) = resolve::<f32>(&m, &ctx, options(GpuPath::OneStepLanes), &cache).unwrap();
+    assert_eq!((opts.path, choice), (GpuPath::OneStepLanes, None));
+    if ctx.is_software() {
+        let (opts, choice) = resolve::<f32>(&m, &ctx, options(GpuPath::Auto), &cache).unwrap();
+        assert_eq!((opts.path, choice), (GpuPath::Auto, None));
+        assert!(!dir.join(CACHE_FILE).exists());
+    }
+}
+
+/// `auto` with a cached choice takes it without timing anything: a cache
+/// line naming the persistent kernel (not what lavapipe's rule picks) is
+/// obeyed when the adapter measures (`auto` on hardware), and `measure`
+/// replaces it with its own figures.
+#[test]
+fn a_cached_choice_is_taken_and_measure_refreshes_it() {
+    let ctx = ctx();
+    let m = small(&[]);
+    let dir = scratch("cached");
+    let cache = ChoiceCache::at(&dir);
+    let key = cache_key::<f32>(&m, &ctx, options(GpuPath::Auto));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(
+        dir.join(CACHE_FILE),
+        format!("other key\tone-step\tone-step=1e-3\n{key}\tpersistent\tone-step=2e-3,persistent=1e-3\n"),
+    )
+    .unwrap();
+    let cached = cache.lookup(&key).unwrap();
+    assert_eq!(cached.kernel, Kernel::Persistent);
+    if !ctx.is_software() {
+        let (opts, choice) = resolve::<f32>(&m, &ctx, options(GpuPath::Auto), &cache).unwrap();
+        assert_eq!(opts.path, GpuPath::Persistent);
+        assert_eq!(choice.unwrap().source, ChoiceSource::Cached);
+    }
+    let (_, fresh) = resolve::<f32>(&m, &ctx, options(GpuPath::Measure), &cache).unwrap();
+    let fresh = fresh.unwrap();
+    assert_eq!(fresh.source, ChoiceSource::Measured);
+    let text = std::fs::read_to_string(dir.join(CACHE_FILE)).unwrap();
+    assert!(text.contains("other key\t"), "other lines kept: {text}");
+    assert_eq!(text.lines().filter(|l| l.starts_with(&key)).count(), 1);
+    assert_eq!(cache.lookup(&key).unwrap().timings, fresh.timings);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// The run header shows the figures behind the choice.
+#[test]
+fn a_run_with_gpu_path_measure_prints_the_figures() {
+    let dir = scratch("cli");
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_slipfront"))
+        .args([
+            "run",
+            "--backend",
+            "gpu",
+            "--gpu-path",
+            "measure",
+            "--precision",
+            "f32",
+            "--t-end",
+            "1e-5",
+        ])
+        .args(
+            slipfront::app::verify::SMALL_SCENE
+                .iter()
+                .flat_map(|s| ["--set", s]),
+        )
+        .env("SLIPFRONT_CACHE_DIR", &dir)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    assert!(err.contains("; auto chose "), "{err}");
+    assert!(err.contains("one-step-lanes "), "{err}");
+    assert!(dir.join(CACHE_FILE).exists());
+    let _ = std::fs::remove_dir_all(&dir);
+}
