@@ -87,7 +87,7 @@ fn sweep_on(
             progress: false,
             share_loading: share,
             ensemble,
-            gpu_alone: slipfront::app::sweeps::default_gpu_alone(),
+            gpu: slipfront::app::sweeps::default_gpu(),
         },
     )
     .unwrap();

@@ -88,7 +88,7 @@ fn persistent_steps(
                 next_sample++;
                 sampling = state == 2u;
                 if !sampling && t == 0u {
-                    sums[e.sums_slot].recorded = 0u;
+                    sums[sums_slot(e)].recorded = 0u;
                 }
             }
         }

@@ -9,7 +9,8 @@
 // thread per block, writes the interface row and the bulk field if due and
 // reduces each workgroup's sums to a partial, then record_finish adds the
 // partials. The sample's sums also decide the fast interface cadence for
-// the next samples.
+// the next samples. Workgroup row z of every dispatch records scene z (all
+// scenes of an ensemble at once, in their own regions of the buffers).
 // The shared part is record_common.wgsl. CPU twin: src/engines/sample.rs record_sample.
 // import: coordinates, record_buffers, record_common, scene
 
@@ -33,18 +34,19 @@ override RECORD_THREADS: u32 = 256u;
 fn block_of_entry(i: u32) -> SampleSums {
     var u: Disp;
     var v_half: vec2<real>;
+    let b = block_base() + i;
     if entry.copy == 1u {
-        u = disp_b[i];
-        v_half = vel_b[i];
+        u = disp_b[b];
+        v_half = vel_b[b];
     } else {
-        u = disp_a[i];
-        v_half = vel_a[i];
+        u = disp_a[b];
+        v_half = vel_a[b];
     }
     var contact_i = vec2<real>(0.0, 0.0);
     if i < c.nx {
-        contact_i = contact[i];
+        contact_i = contact[interface_base() + i];
     }
-    return block_sample(i, entry, u, v_half, force[i], contact_i.x, contact_i.y);
+    return block_sample(i, entry, u, v_half, force[b], contact_i.x, contact_i.y);
 }
 
 // Whether the sample is due, made uniform across the workgroup (thread 0
@@ -61,7 +63,7 @@ fn begin_sample(local: u32) -> bool {
 fn begin_whole_sample(local: u32) -> bool {
     if !begin_sample(local) {
         if local == 0u {
-            sums[entry.sums_slot].recorded = 0u;
+            sums[sums_slot(entry)].recorded = 0u;
         }
         return false;
     }
@@ -81,8 +83,11 @@ fn end_whole_sample(local: u32, s: SampleSums) {
 // Lattices of up to RECORD_SMALL_BLOCKS blocks: the whole sample in one
 // dispatch of one workgroup.
 @compute @workgroup_size(RECORD_THREADS)
-fn record_small(@builtin(local_invocation_index) local: u32) {
-    enter_scene_consts(0u);
+fn record_small(
+    @builtin(local_invocation_index) local: u32,
+    @builtin(workgroup_id) wid: vec3<u32>,
+) {
+    enter_scene_consts(wid.z);
     if !begin_whole_sample(local) {
         return;
     }
@@ -101,7 +106,7 @@ fn record_sample(
     @builtin(workgroup_id) wid: vec3<u32>,
     @builtin(num_workgroups) groups: vec3<u32>,
 ) {
-    enter_scene_consts(0u);
+    enter_scene_consts(wid.z);
     if !begin_sample(local) {
         return;
     }
@@ -114,20 +119,25 @@ fn record_sample(
     wg_sums[local] = s;
     reduce_workgroup(local, WORKGROUP);
     if local == 0u {
-        sums[plan.partials_offset + g] = wg_sums[0];
+        sums[plans[scene].partials_offset + g] = wg_sums[0];
     }
 }
 
 // Larger lattices, second dispatch: one workgroup adds the partials.
 @compute @workgroup_size(RECORD_THREADS)
-fn record_finish(@builtin(local_invocation_index) local: u32) {
-    enter_scene_consts(0u);
+fn record_finish(
+    @builtin(local_invocation_index) local: u32,
+    @builtin(workgroup_id) wid: vec3<u32>,
+) {
+    enter_scene_consts(wid.z);
     if !begin_whole_sample(local) {
         return;
     }
     var s = no_sums();
-    for (var g = local; g < plan.partials; g += RECORD_THREADS) {
-        s = combine(s, sums[plan.partials_offset + g]);
+    let partials = plans[scene].partials;
+    let at = plans[scene].partials_offset;
+    for (var g = local; g < partials; g += RECORD_THREADS) {
+        s = combine(s, sums[at + g]);
     }
     end_whole_sample(local, s);
 }

@@ -9,12 +9,12 @@
 // The fixed cadences make the sample due, or the fast one does and is on.
 fn sample_due(e: RecordEntry) -> bool {
     return (e.channels & RECORD_FIXED) != 0u
-        || ((e.channels & RECORD_FAST) != 0u && plan.fast != 0u);
+        || ((e.channels & RECORD_FAST) != 0u && plans[scene].fast != 0u);
 }
 
 fn interface_due(e: RecordEntry) -> bool {
     return (e.channels & RECORD_INTERFACE) != 0u
-        || ((e.channels & RECORD_FAST) != 0u && plan.fast != 0u);
+        || ((e.channels & RECORD_FAST) != 0u && plans[scene].fast != 0u);
 }
 
 fn no_sums() -> SampleSums {
@@ -38,6 +38,11 @@ fn combine(a: SampleSums, b: SampleSums) -> SampleSums {
     s.driven_ux_hi = a.driven_ux_hi + b.driven_ux_hi;
     s.driven_ux_lo = a.driven_ux_lo + b.driven_ux_lo;
     return s;
+}
+
+// The slot of a sample's sums in the current scene's region.
+fn sums_slot(e: RecordEntry) -> u32 {
+    return plans[scene].sums_offset + e.sums_slot;
 }
 
 // Block i's sums at the instant of sample e (u(s), v(s−½), the forces,
@@ -69,16 +74,17 @@ fn block_sample(
     s.kinetic = v.x * v.x + v.y * v.y;
     if i < c.nx {
         var pinned = 0u;
-        var ruptures = u32(slide[i].y);
-        let ns = plan.junctions_per_block;
+        let slide_i = slide[interface_base() + i];
+        var ruptures = u32(slide_i.y);
+        let ns = plans[scene].junctions_per_block;
         for (var j = 0u; j < ns; j++) {
-            let state = junction_state[i * ns + j];
+            let state = junction_state[junction_base() + i * ns + j];
             pinned += select(0u, 1u, state.x == PINNED);
             ruptures += state.y;
         }
         var fraction = real(pinned) / real(max(ns, 1u));
         if ns == 0u {
-            fraction = select(real(0.0), real(1.0), slide[i].x == 0);
+            fraction = select(real(0.0), real(1.0), slide_i.x == 0);
         }
         s.friction = friction;
         s.pinned = fraction;
@@ -86,7 +92,7 @@ fn block_sample(
         s.max_slip_speed = abs(v.x);
         s.ruptures_lo = ruptures;
         if interface_due(e) {
-            let at = plan.interface_offset + (e.interface_slot * c.nx + i) * RECORD_INTERFACE_WORDS;
+            let at = plans[scene].interface_offset + (e.interface_slot * c.nx + i) * RECORD_INTERFACE_WORDS;
             rows[at] = coord_hi(u.x);
             rows[at + 1u] = coord_lo(u.x);
             rows[at + 2u] = friction;
@@ -95,15 +101,15 @@ fn block_sample(
             rows[at + 5u] = v.x;
         }
     }
-    if i == plan.driven_block {
+    if i == plans[scene].driven_block {
         s.driven_ux_hi = coord_hi(u.x);
         s.driven_ux_lo = coord_lo(u.x);
     }
-    if plan.top_reaction != 0u && i >= c.n_blocks - c.nx {
+    if plans[scene].top_reaction != 0u && i >= c.n_blocks - c.nx {
         s.top_reaction = c.mass * (c.drive_velocity - v_half.x) / c.dt - f.x - friction;
     }
     if (e.channels & RECORD_BULK) != 0u {
-        let at = plan.bulk_offset + (e.bulk_slot * c.n_blocks + i) * RECORD_BULK_WORDS;
+        let at = plans[scene].bulk_offset + (e.bulk_slot * c.n_blocks + i) * RECORD_BULK_WORDS;
         // hi + lo rounded once: the displacement in the kernels' precision.
         rows[at] = coord_rounded(u.x);
         rows[at + 1u] = coord_rounded(u.z);
@@ -137,8 +143,8 @@ fn finish_sample(e: RecordEntry) {
     var out = wg_sums[0];
     out.recorded = 1u;
     out.interface_row = select(0u, 1u, interface_due(e));
-    let fast = plan.every_fast != 0u && out.max_slip_speed > plan.fast_slip_speed;
+    let fast = plans[scene].every_fast != 0u && out.max_slip_speed > plans[scene].fast_slip_speed;
     out.fast = select(0u, 1u, fast);
-    sums[e.sums_slot] = out;
-    plan.fast = out.fast;
+    sums[sums_slot(e)] = out;
+    plans[scene].fast = out.fast;
 }

@@ -225,15 +225,16 @@ struct SweepRun {
     /// of one lattice shape and time schedule); 1 runs them one at a time.
     #[arg(long, default_value_t = slipfront::app::sweeps::DEFAULT_ENSEMBLE)]
     ensemble: usize,
-    /// GPU backend, points run alone (`--ensemble 1`): the kernel, as
-    /// `run --gpu-path`.
+    /// GPU backend: the kernel, as `run --gpu-path` (an ensemble takes
+    /// the rule of `auto` for `auto` and `measure`: it does not time).
     #[arg(long, value_enum, default_value = "auto")]
     gpu_path: slipfront::engines::gpu::GpuPath,
-    /// GPU backend, points run alone: where their samples are made. `host`
-    /// (the default) makes them as an ensemble's scenes do, so the table
-    /// does not depend on --ensemble; `device` is faster with the one-step
-    /// kernels.
-    #[arg(long, value_enum, default_value = "host")]
+    /// GPU backend: where the points' samples are made, alone or as
+    /// ensembles alike (so a table does not depend on --ensemble):
+    /// `device` records every scene of an ensemble in one dispatch and
+    /// reads back only what is due; `host` takes a snapshot per sample
+    /// (the reference path).
+    #[arg(long, value_enum, default_value = "device")]
     gpu_output: slipfront::engines::gpu::GpuOutput,
 }
 
@@ -361,7 +362,7 @@ fn main() -> ExitCode {
                 quiet: run.quiet,
                 no_shared_loading: run.no_shared_loading,
                 ensemble: run.ensemble,
-                gpu_alone: slipfront::engines::gpu::GpuOptions {
+                gpu: slipfront::engines::gpu::GpuOptions {
                     path: run.gpu_path,
                     output: run.gpu_output,
                     ..Default::default()

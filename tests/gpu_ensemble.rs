@@ -4,6 +4,7 @@
 
 use slipfront::engines::gpu::ensemble::{incompatibility, GpuEnsemble};
 use slipfront::engines::gpu::{GpuEngine, GpuOptions, GpuPath};
+use slipfront::engines::SamplePlan;
 use slipfront::io::compare::{compare_snapshots, fields_over};
 use slipfront::model::scenario::{Scenario, DEFAULT_SCENARIO};
 use slipfront::{advance_to, Engine, EngineError, Model, Snapshot};
@@ -179,4 +180,106 @@ fn scenes_of_different_shapes_cannot_share_an_ensemble() {
     assert!(why.contains("normal-load phase"), "{why}");
     // Negative control: scenes that differ in run constants only are fine.
     assert_eq!(incompatibility(&three_scenes()), None);
+}
+
+/// The small triggered scene of tests/gpu_record.rs: the fast interface
+/// cadence (1 µs) switches on and off within the first 0.3 ms of driving.
+fn triggered(extra: &[&str]) -> Model {
+    let text = std::fs::read_to_string("scenarios/triggered_front.toml").unwrap();
+    let mut set: Vec<String> = slipfront::app::verify::SMALL_SCENE
+        .iter()
+        .chain(&[
+            "output.interface_interval=2e-5",
+            "output.fast_interval=1e-6",
+            "output.bulk_interval=5e-5",
+        ])
+        .map(|s| s.to_string())
+        .collect();
+    set.extend(extra.iter().map(|s| s.to_string()));
+    let s = Scenario::parse(&text, "triggered_front.toml", &set).unwrap();
+    Model::from_scenario(&s, false).unwrap()
+}
+
+fn sample_plan(m: &Model, fast: u64) -> SamplePlan {
+    let every = |t: f64| ((t / m.dt).round() as u64).max(1);
+    SamplePlan {
+        prep_steps: m.prep_steps,
+        every_global: every(1e-5),
+        every_interface: every(2e-5),
+        every_bulk: every(5e-5),
+        every_fast: fast,
+        fast_slip_speed: 1e-3,
+        fast: false,
+    }
+}
+
+/// Every scene of an ensemble records its output samples on the device,
+/// all scenes in one dispatch per sample: each scene's samples are bit for
+/// bit those of its solo run recording on the device, on every kernel,
+/// with the fast cadence switching per scene. Controls: scene 1's samples
+/// are not scene 0's solo samples, and a plan with other cadences is
+/// refused (that scene would take host snapshots).
+#[test]
+fn an_ensemble_records_every_scene_on_the_device_as_its_solo_run() {
+    let models = vec![
+        triggered(&[]),
+        triggered(&["friction.static_coefficient=0.45"]),
+        triggered(&["time.seed=11", "loading.normal.force=1800"]),
+    ];
+    let m = &models[0];
+    let plan = sample_plan(m, ((1e-6 / m.dt).round() as u64).max(1));
+    // Through the normal-load phase, then 0.3 ms of driving in chunks.
+    let chunks = [m.prep_steps, 700, 1300, 1];
+    for path in [GpuPath::OneStep, GpuPath::OneStepLanes, GpuPath::Persistent] {
+        let mut e = ensemble(&models, path);
+        let mut got = vec![Vec::new(); models.len()];
+        for (i, &n) in chunks.iter().enumerate() {
+            e.advance(n).unwrap();
+            if i == 0 {
+                for k in 0..models.len() {
+                    assert!(e.record_samples(k, &plan).unwrap(), "{path:?}");
+                }
+                let other = SamplePlan {
+                    every_bulk: plan.every_bulk + 1,
+                    ..plan
+                };
+                assert!(!e.record_samples(1, &other).unwrap(), "{path:?}");
+                assert!(e.record_samples(1, &plan).unwrap(), "{path:?}");
+            }
+            for (k, g) in got.iter_mut().enumerate() {
+                g.extend(e.take_samples(k));
+            }
+        }
+        assert!(e.output_dispatches() > 0 || path == GpuPath::Persistent);
+        let mut solos = Vec::new();
+        for (k, model) in models.iter().enumerate() {
+            let mut g = GpuEngine::with_options(model, options(path)).unwrap();
+            let mut alone = Vec::new();
+            for (i, &n) in chunks.iter().enumerate() {
+                let target = g.steps_done() + n;
+                advance_to(&mut g, target).unwrap();
+                if i == 0 {
+                    assert!(g.record_samples(&plan).unwrap());
+                }
+                alone.extend(g.take_samples());
+            }
+            let fast = alone.iter().filter(|s| s.interface.is_some()).count();
+            assert!(
+                k > 0 || fast > 2 * alone.len() / 3,
+                "{path:?} scene {k}: the fast cadence must switch on ({fast} rows in {} samples)",
+                alone.len()
+            );
+            assert!(alone.iter().any(|s| s.bulk.is_some()));
+            assert_eq!(got[k].len(), alone.len(), "{path:?} scene {k}");
+            for (a, b) in got[k].iter().zip(&alone) {
+                assert!(
+                    a == b,
+                    "{path:?} scene {k}: sample of step {} differs",
+                    b.step
+                );
+            }
+            solos.push(alone);
+        }
+        assert!(got[1] != solos[0], "{path:?}: scene 1 is not scene 0");
+    }
 }

@@ -81,7 +81,10 @@ fn measure_times_every_candidate_takes_the_fastest_and_caches_it() {
     // Another seed is the same shape (the same choice); controls: other
     // junction counts, another precision and damaged lines are not.
     let reseeded = small(&["time.seed=9"]);
-    assert_eq!(cache_key::<f32>(&reseeded, &ctx, options(GpuPath::Measure)), key);
+    assert_eq!(
+        cache_key::<f32>(&reseeded, &ctx, options(GpuPath::Measure)),
+        key
+    );
     let fewer = small(&["friction.junctions.count=50"]);
     assert_eq!(
         cache.lookup(&cache_key::<f32>(&fewer, &ctx, options(GpuPath::Measure))),

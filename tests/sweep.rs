@@ -432,12 +432,13 @@ fn gpu_ensemble_sweep_matches_points_run_alone(precision: &str) {
     assert_ne!(of("1800.0"), of("1920.0"));
 }
 
-/// GPU points run alone can use the fast solo path (`--gpu-path
-/// one-step-lanes --gpu-output device`, several at once): the table is the
-/// one whose samples were host snapshots taken one point at a time.
+/// GPU points make their samples on the device, alone (`--ensemble 1`,
+/// several at once) or as one ensemble (every scene recorded in one
+/// dispatch): the table is the one whose samples were host snapshots
+/// taken one point at a time.
 #[test]
-fn gpu_points_alone_with_device_records_give_the_host_snapshot_table() {
-    let d = dir("gpu_alone_device");
+fn gpu_points_with_device_records_alone_or_as_an_ensemble_give_the_host_snapshot_table() {
+    let d = dir("gpu_device_records");
     let file = sweep_file(&d, "");
     let run = |name: &str, extra: &[&str]| {
         let out = d.join(name);
@@ -450,8 +451,6 @@ fn gpu_points_alone_with_device_records_give_the_host_snapshot_table() {
             "gpu",
             "--precision",
             "f32",
-            "--ensemble",
-            "1",
             "--gpu-path",
             "one-step-lanes",
             "--quiet",
@@ -461,9 +460,18 @@ fn gpu_points_alone_with_device_records_give_the_host_snapshot_table() {
         assert!(text.contains("8 run now (0 not ok)"), "{text}");
         table(&out.join("summary.csv"))
     };
-    let host = run("host", &["--gpu-output", "host", "--threads", "1"]);
-    let device = run("device", &["--gpu-output", "device", "--threads", "2"]);
+    let alone = ["--ensemble", "1"];
+    let host = run(
+        "host",
+        &[&alone[..], &["--gpu-output", "host", "--threads", "1"]].concat(),
+    );
+    let device = run(
+        "device",
+        &[&alone[..], &["--gpu-output", "device", "--threads", "2"]].concat(),
+    );
     assert_eq!(host, device);
+    let ensemble = run("ensemble", &["--ensemble", "8", "--gpu-output", "device"]);
+    assert_eq!(host, ensemble);
     // Not vacuous: the points slip, and differently.
     let events = column(&host, "events");
     assert!(events.iter().any(|e| *e != "0"), "{events:?}");

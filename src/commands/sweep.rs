@@ -22,7 +22,7 @@ pub struct SweepArgs {
     pub quiet: bool,
     pub no_shared_loading: bool,
     pub ensemble: usize,
-    pub gpu_alone: slipfront::engines::gpu::GpuOptions,
+    pub gpu: slipfront::engines::gpu::GpuOptions,
 }
 
 /// `NAME.toml` → `NAME_sweep` beside it.
@@ -121,7 +121,7 @@ pub fn sweep(a: SweepArgs) -> anyhow::Result<ExitCode> {
             progress: !a.quiet,
             share_loading: !a.no_shared_loading,
             ensemble: a.ensemble,
-            gpu_alone: a.gpu_alone,
+            gpu: a.gpu,
         },
     )
     .map_err(|e| anyhow::anyhow!(e))?;

@@ -73,7 +73,12 @@ pub fn plan(todo: &[&Point], loading_of: &[Option<usize>], max: usize) -> Plan {
 /// loaded state where the points will look for it. A loading that cannot
 /// join one, or whose scene blew up, is left to be made alone on first
 /// use, with its own error. Returns the loadings made here.
-pub fn prepare_loadings(loadings: &[Loading], max: usize, precision: Precision) -> usize {
+pub fn prepare_loadings(
+    loadings: &[Loading],
+    max: usize,
+    precision: Precision,
+    gpu: GpuOptions,
+) -> usize {
     let mut models: Vec<(usize, Model)> = loadings
         .iter()
         .enumerate()
@@ -101,8 +106,8 @@ pub fn prepare_loadings(loadings: &[Loading], max: usize, precision: Precision) 
         let scenes: Vec<Model> = batch.iter().map(|(_, m)| m.clone()).collect();
         // As `Loading::state`: one step before driving starts.
         let Ok(states) = (match precision {
-            Precision::F64 => loaded_states::<f64>(&scenes, first.prep_steps - 1),
-            _ => loaded_states::<f32>(&scenes, first.prep_steps - 1),
+            Precision::F64 => loaded_states::<f64>(&scenes, first.prep_steps - 1, gpu),
+            _ => loaded_states::<f32>(&scenes, first.prep_steps - 1, gpu),
         }) else {
             continue;
         };
@@ -122,8 +127,9 @@ pub fn prepare_loadings(loadings: &[Loading], max: usize, precision: Precision) 
 fn loaded_states<T: GpuReal>(
     scenes: &[Model],
     steps: u64,
+    gpu: GpuOptions,
 ) -> Result<Vec<Option<EngineState>>, EngineError> {
-    let mut ensemble = GpuEnsemble::<T>::with_precision(scenes, GpuOptions::default())?;
+    let mut ensemble = GpuEnsemble::<T>::with_precision(scenes, gpu)?;
     ensemble.advance(steps)?;
     Ok((0..scenes.len())
         .map(|scene| {
@@ -141,8 +147,9 @@ fn loaded_states<T: GpuReal>(
 fn lockstep_engines<T: GpuReal>(
     models: &[Model],
     states: Option<&[&EngineState]>,
+    gpu: GpuOptions,
 ) -> Result<Vec<Box<dyn Engine + Send>>, String> {
-    let mut ensemble = GpuEnsemble::<T>::with_precision(models, GpuOptions::default())
+    let mut ensemble = GpuEnsemble::<T>::with_precision(models, gpu)
         .map_err(|e| format!("no ensemble of {} points: {e}", models.len()))?;
     if let Some(states) = states {
         ensemble.start_from(states).map_err(|e| e.to_string())?;
@@ -188,8 +195,8 @@ impl Run<'_> {
             None
         };
         let engines = match self.opts.precision {
-            Precision::F64 => lockstep_engines::<f64>(&models, states.as_deref())?,
-            _ => lockstep_engines::<f32>(&models, states.as_deref())?,
+            Precision::F64 => lockstep_engines::<f64>(&models, states.as_deref(), self.opts.gpu)?,
+            _ => lockstep_engines::<f32>(&models, states.as_deref(), self.opts.gpu)?,
         };
         std::thread::scope(|s| {
             for (engine, &k) in engines.into_iter().zip(members) {

@@ -90,23 +90,21 @@ pub struct SweepOptions {
     /// GPU backend: scenes stepped together in one dispatch at most (1: one
     /// point at a time).
     pub ensemble: usize,
-    /// GPU backend: how a point run alone is stepped (its kernel, and
-    /// whether its samples are made on the device or as host snapshots).
-    pub gpu_alone: crate::engines::gpu::GpuOptions,
+    /// GPU backend: how points are stepped, alone or as ensembles (the
+    /// kernel, and whether samples are made on the device or as host
+    /// snapshots).
+    pub gpu: crate::engines::gpu::GpuOptions,
 }
 
 /// Scenes per GPU ensemble by default: enough to fill a software adapter's
 /// threads and a hardware GPU's multiprocessors with small lattices.
 pub const DEFAULT_ENSEMBLE: usize = 64;
 
-/// How a GPU point alone is stepped unless asked otherwise: it makes its
-/// samples as an ensemble's scenes do (host snapshots), so the table does
-/// not depend on --ensemble.
-pub fn default_gpu_alone() -> crate::engines::gpu::GpuOptions {
-    crate::engines::gpu::GpuOptions {
-        output: crate::engines::gpu::GpuOutput::Host,
-        ..Default::default()
-    }
+/// How GPU points are stepped unless asked otherwise: the kernel `auto`
+/// picks, samples recorded on the device. Ensembles and points alone make
+/// their samples the same way, so a table does not depend on --ensemble.
+pub fn default_gpu() -> crate::engines::gpu::GpuOptions {
+    crate::engines::gpu::GpuOptions::default()
 }
 
 /// What a sweep invocation did.
@@ -240,8 +238,13 @@ fn run_point(
             .map_err(|e| RunError::Engine(EngineError::State(e.to_string())))?;
         let (mut engine, loaded): (Box<dyn Engine>, bool) = match source {
             EngineSource::Own(loaded) => {
-                let mut engine =
-                    make_engine_with(&model, opts.backend, opts.precision, 1, opts.gpu_alone)?;
+                let mut gpu = opts.gpu;
+                if opts.backend == Backend::Gpu {
+                    // The kernel an ensemble of this point would run.
+                    let software = crate::engines::gpu::context::shared()?.is_software();
+                    gpu.path = crate::engines::gpu::options::without_measuring(gpu.path, software);
+                }
+                let mut engine = make_engine_with(&model, opts.backend, opts.precision, 1, gpu)?;
                 if let Some(l) = loaded {
                     let state = l
                         .state(opts)
@@ -438,7 +441,7 @@ pub fn run_sweep(sweep: &Sweep, opts: &SweepOptions) -> Result<SweepReport, Stri
     if opts.backend == Backend::Gpu && gpu_precision && opts.ensemble > 1 {
         let plan = ensembles::plan(&todo, &group_of, opts.ensemble);
         alone = plan.alone;
-        let made = ensembles::prepare_loadings(&groups, opts.ensemble, opts.precision);
+        let made = ensembles::prepare_loadings(&groups, opts.ensemble, opts.precision, opts.gpu);
         if opts.progress && made > 0 {
             eprintln!("sweep: {made} shared normal-load phases run as GPU ensembles");
         }

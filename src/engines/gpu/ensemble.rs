@@ -3,13 +3,14 @@
 //! `shaders/scene.wgsl`). The scenes may differ in anything that
 //! is a run constant (loads, prestress, friction, seed, stiffnesses), not
 //! in the lattice, the terms compiled in or the time schedule. A scene that
-//! blows up stops alone: its error is kept and the others go on.
+//! blows up stops alone: its error is kept and the others go on. Output
+//! samples of every scene are recorded on the device together.
 
 use super::context::{self, GpuContext};
 use super::precision::GpuReal;
 use super::shaders::Variant;
 use super::{GpuEngine, GpuOptions};
-use crate::engines::{EngineError, EngineState, Snapshot};
+use crate::engines::{EngineError, EngineState, Sample, SamplePlan, Snapshot};
 use crate::model::lattice::block_flags;
 use crate::model::real::precision_name;
 use crate::model::Model;
@@ -113,6 +114,25 @@ impl<T: GpuReal> GpuEnsemble<T> {
     /// left as it was at its blow-up while the others go on.
     pub fn advance(&mut self, n: u64) -> Result<(), EngineError> {
         self.engine.advance_steps(n)
+    }
+
+    /// Scene `scene`'s output samples recorded on the device from now on
+    /// (all scenes in one dispatch per sample, read back with the
+    /// batches), at `plan`'s cadences; false if they cannot be (host
+    /// snapshots then): an adapter without the output kernels, f64, or
+    /// cadences other than those the first scene asked for.
+    pub fn record_samples(&mut self, scene: usize, plan: &SamplePlan) -> Result<bool, EngineError> {
+        self.engine.record_samples_of(scene, plan)
+    }
+
+    /// Scene `scene`'s samples recorded since the last call.
+    pub fn take_samples(&mut self, scene: usize) -> Vec<Sample> {
+        self.engine.take_samples_of(scene)
+    }
+
+    /// Dispatches of the output kernels so far (each records every scene).
+    pub fn output_dispatches(&self) -> u64 {
+        self.engine.output_dispatches
     }
 
     /// The blow-up that stopped `scene`, if it blew up.

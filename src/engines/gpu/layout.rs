@@ -271,8 +271,8 @@ gpu_struct! {
         /// Word offsets of the interface rows and the bulk fields.
         pub interface_offset: u32,
         pub bulk_offset: u32,
-        /// Unused: keeps both precisions free of padding.
-        pub reserved: u32,
+        /// Where this scene's samples' sums start in the sums buffer.
+        pub sums_offset: u32,
     }
 }
 

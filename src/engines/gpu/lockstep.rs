@@ -4,11 +4,13 @@
 //! lockstep: the ensemble advances only when every running scene has asked
 //! to, by the smallest of their requests, so a scene that is not waiting
 //! always finds the ensemble at its own step. A scene whose run ends
-//! (its engine dropped) no longer holds the others back.
+//! (its engine dropped) no longer holds the others back. Output samples
+//! are recorded on the device for all scenes at once, so the runners ask
+//! for long advances, not one per output step.
 
 use super::ensemble::GpuEnsemble;
 use super::precision::GpuReal;
-use crate::engines::{Engine, EngineError, EngineState, Snapshot};
+use crate::engines::{Engine, EngineError, EngineState, Sample, SamplePlan, Snapshot};
 use crate::model::Model;
 use std::sync::{Arc, Condvar, Mutex, MutexGuard};
 
@@ -215,6 +217,23 @@ impl<T: GpuReal> Engine for LockstepScene<T> {
 
     fn dispatches(&self) -> Option<u64> {
         Some(self.lockstep.lock().ensemble.dispatches())
+    }
+
+    fn output_dispatches(&self) -> Option<u64> {
+        Some(self.lockstep.lock().ensemble.output_dispatches())
+    }
+
+    /// The ensemble records this scene's samples on the device with every
+    /// other scene's: the runner then advances in long chunks instead of
+    /// stopping the whole ensemble at each output step for a snapshot.
+    fn record_samples(&mut self, plan: &SamplePlan) -> Result<bool, EngineError> {
+        let mut shared = self.lockstep.lock();
+        shared.check(self.scene)?;
+        shared.ensemble.record_samples(self.scene, plan)
+    }
+
+    fn take_samples(&mut self) -> Vec<Sample> {
+        self.lockstep.lock().ensemble.take_samples(self.scene)
     }
 }
 

@@ -108,7 +108,7 @@ fn state_group(
         ("law_state", &b.law_state),
         ("status", &b.status),
         ("lane_partial", &b.lane_partial),
-        ("plan", plan),
+        ("plans", plan),
         ("sums", sums),
         ("rows", rows),
         ("record_entries", entries),
@@ -219,10 +219,10 @@ pub struct GpuEngine<T: GpuReal = f32> {
     output_dispatches: u64,
     /// Where output samples are made (the option).
     output: GpuOutput,
-    /// Output samples recorded on the device (one-step kernels, one scene).
+    /// Output samples recorded on the device, scene by scene.
     recorder: Option<recorder::Recorder>,
     /// Samples read back and not yet taken.
-    samples: Vec<Sample>,
+    samples: Vec<Vec<Sample>>,
     /// Why `auto` took this kernel, when it measured.
     choice: Option<kernel_choice::KernelChoice>,
 }
@@ -534,7 +534,7 @@ impl<T: GpuReal> GpuEngine<T> {
             output_dispatches: 0,
             output: opts.output,
             recorder: None,
-            samples: Vec::new(),
+            samples: vec![Vec::new(); scene_count],
             choice: None,
         };
         if model.prep_steps == 0 {
@@ -718,14 +718,23 @@ impl<T: GpuReal> GpuEngine<T> {
                 .recv()
                 .map_err(|e| EngineError::Gpu(format!("record readback: {e}")))?
                 .map_err(|e| EngineError::Gpu(format!("record readback: {e}")))?;
-            // After a blow-up only the samples before it are kept.
-            let before = statuses
-                .first()
-                .filter(|s| s.flag != 0)
-                .map_or(u64::MAX, |s| batch.first_step + s.step as u64 + 1);
+            // After a blow-up only the samples before it are kept (a
+            // scene stopped earlier keeps none: its state stands still).
+            let before: Vec<u64> = self
+                .scenes
+                .iter()
+                .zip(&statuses)
+                .map(|(scene, s)| match scene.failure {
+                    Some(_) => 0,
+                    None if s.flag != 0 => batch.first_step + s.step as u64 + 1,
+                    None => u64::MAX,
+                })
+                .collect();
             let rec = self.recorder.as_mut().expect("records need a recorder");
-            let samples = rec.decode(pending, before).map_err(EngineError::Gpu)?;
-            self.samples.extend(samples);
+            let samples = rec.decode(pending, &before).map_err(EngineError::Gpu)?;
+            for (mine, new) in self.samples.iter_mut().zip(samples) {
+                mine.extend(new);
+            }
         }
         for (scene, status) in self.scenes.iter_mut().zip(&statuses) {
             if scene.failure.is_some() {
@@ -866,6 +875,68 @@ impl<T: GpuReal> GpuEngine<T> {
         }
     }
 
+    /// Scene `scene`'s output samples from now on recorded on the device,
+    /// at `plan`'s cadences (`Engine::record_samples`); false where they
+    /// cannot be (then the host takes snapshots). An ensemble records every
+    /// scene at the first plan asked for; a scene asking for other
+    /// cadences gets false.
+    fn record_samples_of(&mut self, scene: usize, plan: &SamplePlan) -> Result<bool, EngineError> {
+        let persistent = self.kernel == Kernel::Persistent;
+        // The persistent kernel reduces a sample across its workgroup: a
+        // power of two of at most REDUCTION_SLOTS threads
+        // (shaders/record_common.wgsl).
+        let reducible = self.persistent_threads.is_power_of_two()
+            && self.persistent_threads <= layout::reduction_slots::<T>();
+        if self.output == GpuOutput::Host || (persistent && !reducible) || !T::RECORDS_ON_DEVICE {
+            return Ok(false);
+        }
+        // The batches in flight finish first (a blow-up among them is
+        // reported here, with its step, not at the next advance).
+        self.drain()?;
+        if let Some(rec) = self.recorder.as_mut() {
+            if !rec.samples_like(plan) {
+                return Ok(false);
+            }
+            rec.set_plan(&self.ctx.queue, scene, plan);
+            return Ok(true);
+        }
+        let b = &self.buffers;
+        let state = recorder::StateBuffers {
+            consts: &b.consts,
+            disp: &b.disp,
+            vel: &b.vel,
+            force: &b.force,
+            flags: &b.flags,
+            contact: &b.contact,
+            junction_state: &b.junction_state,
+            slide: &b.slide,
+        };
+        let models: Vec<Model> = self.scenes.iter().map(|s| s.model.clone()).collect();
+        let model = &models[0];
+        let stride = (!persistent).then_some(self.offset_stride);
+        match recorder::Recorder::new(&self.ctx, &models, state, plan, stride) {
+            Ok(mut rec) => {
+                // The host has taken the samples up to here (none before
+                // driving, and none at its first step).
+                rec.recorded_through = Some(self.step.max(model.prep_steps));
+                if persistent {
+                    let records = rec.persistent_bindings();
+                    self.state_group = state_group(&self.ctx, self.kernel, &self.buffers, records);
+                }
+                self.recorder = Some(rec);
+                Ok(true)
+            }
+            // Output kernels this adapter cannot build: host snapshots,
+            // the reference path, record the same samples.
+            Err(_) => Ok(false),
+        }
+    }
+
+    /// Scene `scene`'s samples recorded on the device since the last call.
+    fn take_samples_of(&mut self, scene: usize) -> Vec<Sample> {
+        std::mem::take(&mut self.samples[scene])
+    }
+
     /// Whether output samples are recorded on the device.
     pub fn records_on_device(&self) -> bool {
         self.recorder.is_some()
@@ -956,58 +1027,10 @@ impl<T: GpuReal> Engine for GpuEngine<T> {
     }
 
     fn record_samples(&mut self, plan: &SamplePlan) -> Result<bool, EngineError> {
-        let persistent = self.kernel == Kernel::Persistent;
-        // The persistent kernel reduces a sample across its workgroup: a
-        // power of two of at most REDUCTION_SLOTS threads
-        // (shaders/record_common.wgsl).
-        let reducible = self.persistent_threads.is_power_of_two()
-            && self.persistent_threads <= layout::reduction_slots::<T>();
-        if self.output == GpuOutput::Host
-            || self.ensemble
-            || (persistent && !reducible)
-            || !T::RECORDS_ON_DEVICE
-        {
-            return Ok(false);
-        }
-        // The batches in flight finish first (a blow-up among them is
-        // reported here, with its step, not at the next advance).
-        self.drain()?;
-        if let Some(rec) = self.recorder.as_mut() {
-            rec.set_plan(&self.ctx.queue, plan);
-            return Ok(true);
-        }
-        let b = &self.buffers;
-        let state = recorder::StateBuffers {
-            consts: &b.consts,
-            disp: &b.disp,
-            vel: &b.vel,
-            force: &b.force,
-            flags: &b.flags,
-            contact: &b.contact,
-            junction_state: &b.junction_state,
-            slide: &b.slide,
-        };
-        let model = &self.scenes[0].model;
-        let stride = (!persistent).then_some(self.offset_stride);
-        match recorder::Recorder::new(&self.ctx, model, state, plan, stride) {
-            Ok(mut rec) => {
-                // The host has taken the samples up to here (none before
-                // driving, and none at its first step).
-                rec.recorded_through = Some(self.step.max(model.prep_steps));
-                if persistent {
-                    let records = rec.persistent_bindings();
-                    self.state_group = state_group(&self.ctx, self.kernel, &self.buffers, records);
-                }
-                self.recorder = Some(rec);
-                Ok(true)
-            }
-            // Output kernels this adapter cannot build: host snapshots,
-            // the reference path, record the same samples.
-            Err(_) => Ok(false),
-        }
+        self.record_samples_of(0, plan)
     }
 
     fn take_samples(&mut self) -> Vec<Sample> {
-        std::mem::take(&mut self.samples)
+        self.take_samples_of(0)
     }
 }

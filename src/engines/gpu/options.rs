@@ -91,6 +91,17 @@ pub fn persistent_steps_per_dispatch(model: &Model, threads: u32, software: bool
     (32_768 / per_step as u64).clamp(1, PERSISTENT_BATCH)
 }
 
+/// `path` with `auto` and `measure` replaced by the kernel the rule takes
+/// (`choose_kernel`): what a sweep runs alone and in ensembles alike, so
+/// its table does not depend on --ensemble.
+pub fn without_measuring(path: GpuPath, software: bool) -> GpuPath {
+    match choose_kernel(path, software) {
+        Kernel::OneStep => GpuPath::OneStep,
+        Kernel::OneStepLanes => GpuPath::OneStepLanes,
+        Kernel::Persistent => GpuPath::Persistent,
+    }
+}
+
 /// The kernel for `path` without measuring: what an ensemble runs, and a
 /// solo run on a software adapter (a solo run on hardware measures,
 /// `kernel_choice::resolve`).

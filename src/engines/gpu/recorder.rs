@@ -2,7 +2,10 @@
 //! steps of a batch are samples and where their records go, the two
 //! dispatches that write them, the copy of a batch's records into a staging
 //! buffer read back with the batch's status, and their decoding into
-//! `Sample`s. Only the channels due are written and copied.
+//! `Sample`s. Only the channels due are written and copied. An ensemble's
+//! scenes are recorded together: the same steps, one dispatch for all
+//! (workgroup row z is scene z), each scene in its own region of every
+//! record buffer (its plan says where).
 
 use super::context::GpuContext;
 use super::layout::{
@@ -41,18 +44,23 @@ pub struct Planned {
 }
 
 /// A batch's records on their way back: the staging buffer and what is
-/// where in it.
+/// where in it (each scene's records, scene after scene).
 pub struct Pending {
     staging: wgpu::Buffer,
     planned: Vec<Planned>,
     interface_slots: u32,
     bulk_slots: u32,
+    /// Bytes of one scene's records in the staging buffer.
+    scene_bytes: u64,
 }
 
-/// The output side of one GPU engine.
+/// The output side of one GPU engine: every scene's samples.
 pub struct Recorder {
+    /// The cadences every scene shares (each scene's fast flag is on the
+    /// device, in its plan).
     plan: SamplePlan,
-    model: Model,
+    /// Scene by scene.
+    models: Vec<Model>,
     pipelines: std::sync::Arc<RecordPipelines>,
     plan_buffer: wgpu::Buffer,
     sums: wgpu::Buffer,
@@ -68,7 +76,10 @@ pub struct Recorder {
     max_entries: u32,
     max_interface: u32,
     max_bulk: u32,
-    interface_offset: u64,
+    /// Each scene's region: sums (elements) and rows (bytes).
+    sums_per_scene: u64,
+    rows_per_scene: u64,
+    /// Where the bulk fields start in a scene's rows region.
     bulk_offset: u64,
     /// The last step sampled (by the device or by the host).
     pub recorded_through: Option<u64>,
@@ -80,32 +91,35 @@ fn words(bytes: u64) -> u64 {
 }
 
 impl Recorder {
-    /// The recorder of a one-scene engine, or why the device cannot hold
-    /// the records of one batch.
+    /// The recorder of an engine's scenes (`models`, one lattice), or why
+    /// the device cannot hold the records of one batch.
     /// `stride`: the dynamic-offset alignment (one-step kernels), or None
     /// for the persistent kernel, which reads the entries as an array.
     pub fn new(
         ctx: &GpuContext,
-        model: &Model,
+        models: &[Model],
         state: StateBuffers,
         plan: &SamplePlan,
         stride: Option<u64>,
     ) -> Result<Recorder, String> {
         let stride = stride.unwrap_or(size_of::<GpuRecordEntry>() as u64);
         let device = &ctx.device;
+        let model = &models[0];
+        let scenes = models.len() as u64;
         let (n, nx) = (model.n_blocks() as u64, model.nx as u64);
         let interface_bytes = nx * RECORD_INTERFACE_WORDS as u64 * 4;
         let bulk_bytes = n * RECORD_BULK_WORDS as u64 * 4;
         let max_entries = ONE_STEP_BATCH as u32 + 1;
-        let max_interface = (ROWS_BUDGET / 2 / interface_bytes).clamp(1, max_entries as u64) as u32;
+        let budget = ROWS_BUDGET / 2 / scenes;
+        let max_interface = (budget / interface_bytes).clamp(1, max_entries as u64) as u32;
         let max_bulk = if plan.every_bulk > 0 {
-            (ROWS_BUDGET / 2 / bulk_bytes).clamp(1, max_entries as u64) as u32
+            (budget / bulk_bytes).clamp(1, max_entries as u64) as u32
         } else {
             0
         };
-        let interface_offset = 0;
         let bulk_offset = max_interface as u64 * interface_bytes;
-        let rows_bytes = (bulk_offset + max_bulk as u64 * bulk_bytes).max(16);
+        let rows_per_scene = bulk_offset + max_bulk as u64 * bulk_bytes;
+        let rows_bytes = (scenes * rows_per_scene).max(16);
         let limit = ctx
             .limits
             .max_storage_buffer_binding_size
@@ -118,26 +132,37 @@ impl Recorder {
         }
         let partials = (n as u32).div_ceil(WORKGROUP);
         let groups = (model.n_blocks() > RECORD_SMALL_BLOCKS).then(|| super::groups_for(partials));
-        let sums_bytes = (max_entries + partials) as u64 * size_of::<GpuSampleSums>() as u64;
-        let gpu_plan = GpuRecordPlan {
-            fast: plan.fast as u32,
-            every_fast: plan.every_fast.min(u32::MAX as u64) as u32,
-            fast_slip_speed: plan.fast_slip_speed as f32,
-            reserved: 0,
-            driven_block: match model.driver {
-                Driver::SideSpring { row, .. } => (row * model.nx) as u32,
-                _ => u32::MAX,
-            },
-            top_reaction: matches!(model.driver, Driver::TopVelocity { .. }) as u32,
-            junctions_per_block: (model.n_junctions() / model.nx.max(1)) as u32,
-            partials,
-            partials_offset: max_entries,
-            interface_offset: words(interface_offset) as u32,
-            bulk_offset: words(bulk_offset) as u32,
-        };
+        let sums_per_scene = (max_entries + partials) as u64;
+        let sums_bytes = scenes * sums_per_scene * size_of::<GpuSampleSums>() as u64;
+        if words(rows_bytes) > u32::MAX as u64 || scenes * sums_per_scene > u32::MAX as u64 {
+            return Err("the records of one batch need more than 2^32 words".into());
+        }
+        let gpu_plans: Vec<GpuRecordPlan> = models
+            .iter()
+            .enumerate()
+            .map(|(k, m)| {
+                let k = k as u64;
+                GpuRecordPlan {
+                    fast: plan.fast as u32,
+                    every_fast: plan.every_fast.min(u32::MAX as u64) as u32,
+                    fast_slip_speed: plan.fast_slip_speed as f32,
+                    driven_block: match m.driver {
+                        Driver::SideSpring { row, .. } => (row * m.nx) as u32,
+                        _ => u32::MAX,
+                    },
+                    top_reaction: matches!(m.driver, Driver::TopVelocity { .. }) as u32,
+                    junctions_per_block: (m.n_junctions() / m.nx.max(1)) as u32,
+                    partials,
+                    sums_offset: (k * sums_per_scene) as u32,
+                    partials_offset: (k * sums_per_scene) as u32 + max_entries,
+                    interface_offset: words(k * rows_per_scene) as u32,
+                    bulk_offset: words(k * rows_per_scene + bulk_offset) as u32,
+                }
+            })
+            .collect();
         let plan_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("record plan"),
-            contents: bytemuck::bytes_of(&gpu_plan),
+            label: Some("record plans"),
+            contents: bytemuck::cast_slice(&gpu_plans),
             usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
         });
         let storage = |label: &str, size: u64, usage: wgpu::BufferUsages| {
@@ -173,7 +198,7 @@ impl Recorder {
                     ("contact", state.contact),
                     ("junction_state", state.junction_state),
                     ("slide", state.slide),
-                    ("plan", &plan_buffer),
+                    ("plans", &plan_buffer),
                     ("sums", &sums),
                     ("rows", &rows),
                 ]
@@ -197,7 +222,7 @@ impl Recorder {
         });
         Ok(Recorder {
             plan: *plan,
-            model: model.clone(),
+            models: models.to_vec(),
             pipelines,
             plan_buffer,
             sums,
@@ -210,7 +235,8 @@ impl Recorder {
             max_entries,
             max_interface,
             max_bulk,
-            interface_offset,
+            sums_per_scene,
+            rows_per_scene,
             bulk_offset,
             recorded_through: None,
             spare: Vec::new(),
@@ -223,14 +249,24 @@ impl Recorder {
         [&self.plan_buffer, &self.sums, &self.rows, &self.entries]
     }
 
-    /// Takes a new plan (the fast cadence's state above all); only between
-    /// batches (the engine has drained).
-    pub fn set_plan(&mut self, queue: &wgpu::Queue, plan: &SamplePlan) {
-        self.plan = *plan;
-        // The fast flag is the plan's first word.
+    /// Whether `plan` has the cadences this recorder samples at (its fast
+    /// flag may differ: each scene keeps its own).
+    pub fn samples_like(&self, plan: &SamplePlan) -> bool {
+        SamplePlan {
+            fast: self.plan.fast,
+            ..*plan
+        } == self.plan
+    }
+
+    /// Takes scene `scene`'s fast cadence state from `plan` (whose
+    /// cadences are this recorder's, `samples_like`); only between batches
+    /// (the engine has drained).
+    pub fn set_plan(&mut self, queue: &wgpu::Queue, scene: usize, plan: &SamplePlan) {
+        debug_assert!(self.samples_like(plan));
+        let at = scene * size_of::<GpuRecordPlan>() + std::mem::offset_of!(GpuRecordPlan, fast);
         queue.write_buffer(
             &self.plan_buffer,
-            0,
+            at as u64,
             bytemuck::bytes_of(&(plan.fast as u32)),
         );
     }
@@ -318,17 +354,18 @@ impl Recorder {
         let offset = (k as u64 * self.stride) as u32;
         pass.set_bind_group(0, &self.group, &[]);
         pass.set_bind_group(1, &self.entry_group, &[offset]);
+        let scenes = self.models.len() as u32;
         match self.groups {
             None => {
                 pass.set_pipeline(&self.pipelines.small);
-                pass.dispatch_workgroups(1, 1, 1);
+                pass.dispatch_workgroups(1, 1, scenes);
                 1
             }
             Some((x, y)) => {
                 pass.set_pipeline(&self.pipelines.sample);
-                pass.dispatch_workgroups(x, y, 1);
+                pass.dispatch_workgroups(x, y, scenes);
                 pass.set_pipeline(&self.pipelines.finish);
-                pass.dispatch_workgroups(1, 1, 1);
+                pass.dispatch_workgroups(1, 1, scenes);
                 2
             }
         }
@@ -353,10 +390,12 @@ impl Recorder {
             .iter()
             .filter(|p| p.entry.channels & RECORD_BULK != 0)
             .count() as u32;
-        let sums_bytes = planned.len() as u64 * size_of::<GpuSampleSums>() as u64;
+        let sums_size = size_of::<GpuSampleSums>() as u64;
+        let sums_bytes = planned.len() as u64 * sums_size;
         let interface_bytes = interface_slots as u64 * self.interface_bytes();
         let bulk_bytes = bulk_slots as u64 * self.bulk_bytes();
-        let size = sums_bytes + interface_bytes + bulk_bytes;
+        let scene_bytes = sums_bytes + interface_bytes + bulk_bytes;
+        let size = scene_bytes * self.models.len() as u64;
         let staging = match self.spare.iter().position(|b| b.size() >= size) {
             Some(k) => self.spare.swap_remove(k),
             None => device.create_buffer(&wgpu::BufferDescriptor {
@@ -366,39 +405,45 @@ impl Recorder {
                 mapped_at_creation: false,
             }),
         };
-        encoder.copy_buffer_to_buffer(&self.sums, 0, &staging, 0, sums_bytes);
-        if interface_bytes > 0 {
-            encoder.copy_buffer_to_buffer(
-                &self.rows,
-                self.interface_offset,
-                &staging,
-                sums_bytes,
-                interface_bytes,
-            );
-        }
-        if bulk_bytes > 0 {
-            encoder.copy_buffer_to_buffer(
-                &self.rows,
-                self.bulk_offset,
-                &staging,
-                sums_bytes + interface_bytes,
-                bulk_bytes,
-            );
+        for k in 0..self.models.len() as u64 {
+            let to = k * scene_bytes;
+            let sums_at = k * self.sums_per_scene * sums_size;
+            encoder.copy_buffer_to_buffer(&self.sums, sums_at, &staging, to, sums_bytes);
+            let rows_at = k * self.rows_per_scene;
+            if interface_bytes > 0 {
+                encoder.copy_buffer_to_buffer(
+                    &self.rows,
+                    rows_at,
+                    &staging,
+                    to + sums_bytes,
+                    interface_bytes,
+                );
+            }
+            if bulk_bytes > 0 {
+                encoder.copy_buffer_to_buffer(
+                    &self.rows,
+                    rows_at + self.bulk_offset,
+                    &staging,
+                    to + sums_bytes + interface_bytes,
+                    bulk_bytes,
+                );
+            }
         }
         Some(Pending {
             staging,
             planned,
             interface_slots,
             bulk_slots,
+            scene_bytes,
         })
     }
 
     fn interface_bytes(&self) -> u64 {
-        self.model.nx as u64 * RECORD_INTERFACE_WORDS as u64 * 4
+        self.models[0].nx as u64 * RECORD_INTERFACE_WORDS as u64 * 4
     }
 
     fn bulk_bytes(&self) -> u64 {
-        self.model.n_blocks() as u64 * RECORD_BULK_WORDS as u64 * 4
+        self.models[0].n_blocks() as u64 * RECORD_BULK_WORDS as u64 * 4
     }
 
     /// The staging buffer to map once the batch has run.
@@ -406,22 +451,47 @@ impl Recorder {
         &pending.staging
     }
 
-    /// Decodes a mapped batch's records: the samples that were due, those
-    /// before step `before` only (a blow-up's), in step order.
-    pub fn decode(&mut self, pending: Pending, before: u64) -> Result<Vec<Sample>, String> {
+    /// Decodes a mapped batch's records: each scene's samples that were
+    /// due, those before its step `before[scene]` only (a blow-up's), in
+    /// step order.
+    pub fn decode(&mut self, pending: Pending, before: &[u64]) -> Result<Vec<Vec<Sample>>, String> {
         let view = pending
             .staging
             .slice(..)
             .get_mapped_range()
             .map_err(|e| format!("record readback: {e}"))?;
+        let samples = self
+            .models
+            .iter()
+            .zip(before)
+            .enumerate()
+            .map(|(k, (m, &before))| {
+                let at = (k as u64 * pending.scene_bytes) as usize;
+                let records = &view[at..at + pending.scene_bytes as usize];
+                self.decode_scene(&pending, m, records, before)
+            })
+            .collect();
+        drop(view);
+        pending.staging.unmap();
+        self.spare.push(pending.staging);
+        Ok(samples)
+    }
+
+    /// One scene's samples from its records in the staging buffer.
+    fn decode_scene(
+        &self,
+        pending: &Pending,
+        m: &Model,
+        records: &[u8],
+        before: u64,
+    ) -> Vec<Sample> {
         let sums_bytes = pending.planned.len() * size_of::<GpuSampleSums>();
-        let sums: &[GpuSampleSums] = bytemuck::cast_slice(&view[..sums_bytes]);
-        let floats: &[f32] = bytemuck::cast_slice(&view[sums_bytes..]);
+        let sums: &[GpuSampleSums] = bytemuck::cast_slice(&records[..sums_bytes]);
+        let floats: &[f32] = bytemuck::cast_slice(&records[sums_bytes..]);
         let interface_words = self.interface_bytes() as usize / 4;
         let bulk_at = pending.interface_slots as usize * interface_words;
         let bulk_words = self.bulk_bytes() as usize / 4;
         debug_assert!(floats.len() >= bulk_at + pending.bulk_slots as usize * bulk_words);
-        let m = &self.model;
         let mut samples = Vec::new();
         for (p, s) in pending.planned.iter().zip(sums) {
             if s.recorded == 0 || p.step >= before {
@@ -479,9 +549,6 @@ impl Recorder {
                 bulk,
             });
         }
-        drop(view);
-        pending.staging.unmap();
-        self.spare.push(pending.staging);
-        Ok(samples)
+        samples
     }
 }
