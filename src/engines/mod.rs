@@ -281,6 +281,14 @@ pub trait Engine {
     fn take_samples(&mut self) -> Vec<Sample> {
         Vec::new()
     }
+    /// Steps a runner should ask for in each `advance`, where the engine
+    /// wants a fixed chunk rather than one sized by its wall time: a scene
+    /// of a lockstep ensemble waits in `advance` for every other scene, so
+    /// its wall time says nothing of its own speed (sizing by it shrank the
+    /// chunks to a step each on a 256-scene ensemble).
+    fn fixed_chunk(&self) -> Option<u64> {
+        None
+    }
 }
 
 /// Advances `engine` to global step `target` (no-op if it is there or past).

@@ -294,7 +294,8 @@ pub fn run_scene(
     let mut progress = Reporter::new(opts.progress, &model, start_step);
     // Steps per chunk: grows while chunks are quick, shrinks on big
     // lattices.
-    let mut chunk: u64 = 64;
+    let fixed_chunk = engine.fixed_chunk();
+    let mut chunk: u64 = fixed_chunk.unwrap_or(64);
     let result = (|| -> Result<(), RunError> {
         while engine.steps_done() < total {
             let s = engine.steps_done();
@@ -351,7 +352,7 @@ pub fn run_scene(
             // The next chunk from this one's speed (whole chunks only: a
             // cut-short one says little).
             let took = chunk_started.elapsed().as_secs_f64();
-            if s - s_before == chunk {
+            if fixed_chunk.is_none() && s - s_before == chunk {
                 let fit = (chunk as f64 * CHUNK_SECONDS / took.max(1e-9)) as u64;
                 chunk = fit.clamp(1, MAX_CHUNK).min(chunk.saturating_mul(2));
             }

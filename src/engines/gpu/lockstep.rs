@@ -14,6 +14,11 @@ use crate::engines::{Engine, EngineError, EngineState, Sample, SamplePlan, Snaps
 use crate::model::Model;
 use std::sync::{Arc, Condvar, Mutex, MutexGuard};
 
+/// Steps a lockstep scene's runner asks for per advance: a few batches of
+/// the one-step kernels, long enough to amortise a round of requests, short
+/// enough for progress and interrupts.
+pub const LOCKSTEP_CHUNK: u64 = 8 * super::options::ONE_STEP_BATCH;
+
 struct Shared<T: GpuReal> {
     ensemble: GpuEnsemble<T>,
     /// Steps each scene still waits for (None: not waiting).
@@ -234,6 +239,13 @@ impl<T: GpuReal> Engine for LockstepScene<T> {
 
     fn take_samples(&mut self) -> Vec<Sample> {
         self.lockstep.lock().ensemble.take_samples(self.scene)
+    }
+
+    /// Every scene asks for the same long chunks (its runner's stops, such
+    /// as output steps taken as snapshots, still cut them), so that a round
+    /// of requests is one long advance of the whole ensemble.
+    fn fixed_chunk(&self) -> Option<u64> {
+        Some(LOCKSTEP_CHUNK)
     }
 }
 
