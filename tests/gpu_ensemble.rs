@@ -182,21 +182,10 @@ fn scenes_of_different_shapes_cannot_share_an_ensemble() {
     assert_eq!(incompatibility(&three_scenes()), None);
 }
 
-/// The small triggered scene of tests/gpu_record.rs: the fast interface
-/// cadence (1 µs) switches on and off within the first 0.3 ms of driving.
+/// The small triggered scene whose fast interface cadence switches on and
+/// off within the first 0.3 ms of driving.
 fn triggered(extra: &[&str]) -> Model {
-    let text = std::fs::read_to_string("scenarios/triggered_front.toml").unwrap();
-    let mut set: Vec<String> = slipfront::app::verify::SMALL_SCENE
-        .iter()
-        .chain(&[
-            "output.interface_interval=2e-5",
-            "output.fast_interval=1e-6",
-            "output.bulk_interval=5e-5",
-        ])
-        .map(|s| s.to_string())
-        .collect();
-    set.extend(extra.iter().map(|s| s.to_string()));
-    let s = Scenario::parse(&text, "triggered_front.toml", &set).unwrap();
+    let s = slipfront::app::verify::small_triggered_scene(extra).unwrap();
     Model::from_scenario(&s, false).unwrap()
 }
 
@@ -282,4 +271,19 @@ fn an_ensemble_records_every_scene_on_the_device_as_its_solo_run() {
         }
         assert!(got[1] != solos[0], "{path:?}: scene 1 is not scene 0");
     }
+}
+
+/// A lockstep scene asks its runner for fixed long chunks (its advance
+/// waits for every other scene, so its wall time cannot size them: sized
+/// by it, a 256-scene ensemble on an H200 shrank them to one step each);
+/// a solo engine sizes its own.
+#[test]
+fn lockstep_scenes_ask_for_fixed_chunks() {
+    use slipfront::engines::gpu::lockstep::{Lockstep, LOCKSTEP_CHUNK};
+    let scenes = Lockstep::split(ensemble(&three_scenes()[..2], GpuPath::OneStep));
+    for s in &scenes {
+        assert_eq!(s.fixed_chunk(), Some(LOCKSTEP_CHUNK));
+    }
+    let alone = GpuEngine::with_options(&three_scenes()[0], options(GpuPath::OneStep)).unwrap();
+    assert_eq!(alone.fixed_chunk(), None);
 }

@@ -15,18 +15,7 @@ use std::path::PathBuf;
 /// within the first 0.3 ms, so the fast interface cadence (1 µs, against
 /// 20 µs otherwise) switches on and off.
 fn triggered(extra: &[&str]) -> Scenario {
-    let text = std::fs::read_to_string("scenarios/triggered_front.toml").unwrap();
-    let mut set: Vec<String> = slipfront::app::verify::SMALL_SCENE
-        .iter()
-        .chain(&[
-            "output.interface_interval=2e-5",
-            "output.fast_interval=1e-6",
-            "output.bulk_interval=5e-5",
-        ])
-        .map(|s| s.to_string())
-        .collect();
-    set.extend(extra.iter().map(|s| s.to_string()));
-    Scenario::parse(&text, "triggered_front.toml", &set).unwrap()
+    slipfront::app::verify::small_triggered_scene(extra).unwrap()
 }
 
 fn engine(m: &Model, path: GpuPath, output: GpuOutput) -> GpuEngine {

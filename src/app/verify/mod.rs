@@ -155,6 +155,33 @@ pub fn small_scene(extra: &[&str]) -> Result<Scenario, crate::model::scenario::S
     )
 }
 
+/// `scenarios/triggered_front.toml`, built in.
+pub const TRIGGERED_FRONT: &str = include_str!(concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/scenarios/triggered_front.toml"
+));
+
+/// The small lattice (SMALL_SCENE) with the triggered front and the output
+/// tests' cadences (interface rows every 20 µs, every 1 µs while the
+/// interface slips, bulk fields every 50 µs): the interface slips within
+/// the first 0.3 ms of driving, so the fast cadence switches on and off.
+/// `extra` overrides after these.
+pub fn small_triggered_scene(
+    extra: &[&str],
+) -> Result<Scenario, crate::model::scenario::ScenarioError> {
+    let set: Vec<String> = SMALL_SCENE
+        .iter()
+        .chain(&[
+            "output.interface_interval=2e-5",
+            "output.fast_interval=1e-6",
+            "output.bulk_interval=5e-5",
+        ])
+        .chain(extra)
+        .map(|s| s.to_string())
+        .collect();
+    Scenario::parse(TRIGGERED_FRONT, "triggered_front.toml", &set)
+}
+
 /// The Table S1 scene stripped of loads, friction and damping: the base of
 /// the verification scenes, which then set what they test.
 pub fn bare_scene(name: &str) -> Scenario {
