@@ -36,9 +36,10 @@ pub enum GpuPath {
 /// Where the output samples of a run with an output file are made.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, clap::ValueEnum)]
 pub enum GpuOutput {
-    /// On the device (`shaders/record.wgsl`): only the channels due are
-    /// read back, asynchronously with the batches (one-step kernels; the
-    /// persistent kernel and ensembles take host snapshots).
+    /// On the device (`shaders/record.wgsl`, and in the persistent
+    /// kernel's loop): only the channels due are read back, asynchronously
+    /// with the batches; an ensemble records all its scenes in one dispatch
+    /// (mixed f32; f64 runs take host snapshots).
     #[default]
     Device,
     /// A whole-state snapshot read back at every output step (the
