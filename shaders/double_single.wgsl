@@ -3,7 +3,7 @@
 // of u are kept. CPU twin: src/model/real.rs DoubleSingle::ds_add, DoubleSingle::ds_diff
 // (the same operations in the same order), CompensatedSum.
 //
-// c.one is a runtime 1.0 from the uniform block. Multiplying the partial
+// c.one is a runtime 1.0 from the scene's constants. Multiplying the partial
 // sums by it is exact but opaque to the compiler, so no driver can
 // reassociate (s - hi) - s to -hi and cancel the error terms (gpuweb #2076).
 // import: scene

@@ -93,7 +93,7 @@ macro_rules! gpu_struct {
 }
 
 gpu_struct! {
-    /// The run constants (uniform `c`).
+    /// The run constants of a scene (`c`, its copy of `scene_consts[s]`).
     pub struct GpuConsts<T> as "Consts" {
         pub nx: u32,
         pub nz: u32,
@@ -663,7 +663,7 @@ mod tests {
             size_of::<GpuSampleSums<T>>(),
             GpuSampleSums::<T>::fields(),
         );
-        // The uniform block is a whole number of 16-byte rows.
+        // A whole number of 16-byte rows (the stride of `scene_consts`).
         assert_eq!(size_of::<GpuConsts<T>>() % 16, 0);
     }
 
