@@ -85,20 +85,8 @@ impl KernelChoice {
 }
 
 /// The `--gpu-path` value of `kernel`.
-pub fn path_name(kernel: Kernel) -> &'static str {
-    match kernel {
-        Kernel::OneStep => "one-step",
-        Kernel::OneStepLanes => "one-step-lanes",
-        Kernel::Persistent => "persistent",
-    }
-}
-
-fn path_of(kernel: Kernel) -> GpuPath {
-    match kernel {
-        Kernel::OneStep => GpuPath::OneStep,
-        Kernel::OneStepLanes => GpuPath::OneStepLanes,
-        Kernel::Persistent => GpuPath::Persistent,
-    }
+pub fn path_name(kernel: Kernel) -> String {
+    GpuPath::of(kernel).name()
 }
 
 fn kernel_named(name: &str) -> Option<Kernel> {
@@ -132,7 +120,7 @@ pub fn time_kernel<T: GpuReal>(
     kernel: Kernel,
 ) -> Result<f64, EngineError> {
     let opts = GpuOptions {
-        path: path_of(kernel),
+        path: GpuPath::of(kernel),
         ..opts
     };
     let mut engine = GpuEngine::<T>::build(std::slice::from_ref(model), ctx.clone(), opts, false)?;
@@ -338,7 +326,7 @@ pub fn resolve<T: GpuReal>(
     };
     Ok((
         GpuOptions {
-            path: path_of(choice.kernel),
+            path: GpuPath::of(choice.kernel),
             ..opts
         },
         Some(choice),

@@ -92,15 +92,28 @@ pub fn persistent_steps_per_dispatch(model: &Model, threads: u32, software: bool
     (32_768 / per_step as u64).clamp(1, PERSISTENT_BATCH)
 }
 
+impl GpuPath {
+    /// The path that names `kernel`.
+    pub fn of(kernel: Kernel) -> GpuPath {
+        match kernel {
+            Kernel::OneStep => GpuPath::OneStep,
+            Kernel::OneStepLanes => GpuPath::OneStepLanes,
+            Kernel::Persistent => GpuPath::Persistent,
+        }
+    }
+
+    /// The `--gpu-path` value (as the command line spells it).
+    pub fn name(self) -> String {
+        clap::ValueEnum::to_possible_value(&self)
+            .map_or_else(|| format!("{self:?}"), |v| v.get_name().to_string())
+    }
+}
+
 /// `path` with `auto` and `measure` replaced by the kernel the rule takes
 /// (`choose_kernel`): what a sweep runs alone and in ensembles alike, so
 /// its table does not depend on --ensemble.
 pub fn without_measuring(path: GpuPath, software: bool) -> GpuPath {
-    match choose_kernel(path, software) {
-        Kernel::OneStep => GpuPath::OneStep,
-        Kernel::OneStepLanes => GpuPath::OneStepLanes,
-        Kernel::Persistent => GpuPath::Persistent,
-    }
+    GpuPath::of(choose_kernel(path, software))
 }
 
 /// The kernel for `path` without measuring: what an ensemble runs, and a
