@@ -88,6 +88,7 @@ fn sweep_on(
             share_loading: share,
             ensemble,
             gpu: slipfront::app::sweeps::default_gpu(),
+            on_point: None,
         },
     )
     .unwrap();

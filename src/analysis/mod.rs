@@ -1,8 +1,9 @@
 //! The analysis layer: events and rupture fronts in an interface series
-//! (`events`), precursors, the statistics of two samples, the energy
+//! (`events`) and their table (`event_table`), precursors, the statistics of two samples, the energy
 //! ledger, and the figures.
 
 pub mod energy;
+pub mod event_table;
 pub mod events;
 pub mod plot;
 pub mod precursors;

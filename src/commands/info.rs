@@ -1,4 +1,5 @@
 use super::printable;
+use slipfront::analysis::event_table::EventRow;
 use slipfront::analysis::events::{Event, InterfaceSeries, FRONT_WINDOW};
 use slipfront::analysis::precursors::PrecursorSequence;
 use slipfront::io::output::reader::RunFile;
@@ -141,51 +142,6 @@ fn print_sequence(series: &InterfaceSeries, events: &[Event]) {
                 "  event {n}: slow to fast at x = {x:.4e} m (no trailing-edge precursor since \
                  the last full event)"
             ),
-        }
-    }
-}
-
-/// One event as `info` reports it.
-struct EventRow {
-    kind: &'static str,
-    origin: f64,
-    drive_ratio: f64,
-    front: String,
-    /// Slowest and fastest resolved front speed (m/s).
-    speeds: Option<(f64, f64)>,
-    /// The largest lower bound of the windows the samples do not resolve
-    /// (the front crossed them between two samples).
-    bound: Option<f64>,
-}
-
-impl EventRow {
-    fn new(
-        series: &slipfront::analysis::events::InterfaceSeries,
-        e: &Event,
-        drive_ratio: f64,
-    ) -> Self {
-        let (speeds, bound) = series.resolved_front_speeds(e, FRONT_WINDOW);
-        EventRow {
-            kind: if e.full { "full" } else { "partial" },
-            origin: e.origin(series.spacing),
-            drive_ratio,
-            front: format!("{:?}", series.front_kind(e, FRONT_WINDOW)),
-            speeds: speeds.iter().fold(None, |a, &v| match a {
-                None => Some((v, v)),
-                Some((lo, hi)) => Some((f64::min(lo, v), f64::max(hi, v))),
-            }),
-            bound,
-        }
-    }
-
-    /// "1.2e2..3.4e3", "1.2e2..3.4e3, ≥4.3e3 unresolved" or "≥4.3e3".
-    fn speed_range(&self) -> String {
-        let bound = self.bound.map(|b| format!("≥{b:.3e} unresolved"));
-        match (self.speeds, bound) {
-            (Some((lo, hi)), Some(b)) => format!("{lo:.3e}..{hi:.3e}, {b}"),
-            (Some((lo, hi)), None) => format!("{lo:.3e}..{hi:.3e}"),
-            (None, Some(b)) => b,
-            (None, None) => "-".into(),
         }
     }
 }

@@ -122,6 +122,7 @@ pub fn sweep(a: SweepArgs) -> anyhow::Result<ExitCode> {
             share_loading: !a.no_shared_loading,
             ensemble: a.ensemble,
             gpu: a.gpu,
+            on_point: None,
         },
     )
     .map_err(|e| anyhow::anyhow!(e))?;

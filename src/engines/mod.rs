@@ -222,7 +222,7 @@ pub enum EngineError {
 }
 
 /// A simulation engine over one model.
-pub trait Engine {
+pub trait Engine: Send {
     fn model(&self) -> &Model;
     /// Steps done so far.
     fn steps_done(&self) -> u64;

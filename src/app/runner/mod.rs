@@ -47,6 +47,25 @@ extern "C" fn on_signal(signal: libc::c_int) {
     SIGNAL.store(signal, Ordering::SeqCst);
 }
 
+/// For a host that keeps its own signal handling (the Python package,
+/// whose Ctrl-C must stay Python's): the runner installs no handlers, and
+/// the host stops runs with [`request_stop`].
+pub fn leave_signals_to_host() {
+    HANDLER.call_once(|| {});
+}
+
+/// Asks the runs of this process to stop at their next chunk, as a SIGINT
+/// would: each writes its checkpoint and closes its file.
+pub fn request_stop() {
+    SIGNAL.store(2, Ordering::SeqCst);
+}
+
+/// Forgets a stop request, so that the next run of a long-lived host
+/// process runs.
+pub fn clear_stop() {
+    SIGNAL.store(0, Ordering::SeqCst);
+}
+
 /// Stop requests are noted (the run ends at its next chunk, closing its
 /// file and writing a checkpoint), not acted on at once.
 fn catch_stop_signals() {
@@ -72,6 +91,11 @@ const MAX_CHUNK: u64 = 20_000;
 /// lattice.
 const CHUNK_SECONDS: f64 = 0.25;
 
+/// Called after each chunk of steps with the steps done and the run's total
+/// steps: where a host reports progress and checks for its own stop
+/// requests.
+pub type ChunkHook = std::sync::Arc<dyn Fn(u64, u64) + Send + Sync>;
+
 #[derive(Default)]
 pub struct RunOptions {
     pub output: Option<PathBuf>,
@@ -84,6 +108,7 @@ pub struct RunOptions {
     /// One line per start, resume and branch of the run (metadata and
     /// checkpoints carry it on).
     pub history: Vec<String>,
+    pub on_chunk: Option<ChunkHook>,
 }
 
 /// The runner's side of a saved run, and the run file whose first
@@ -357,6 +382,9 @@ pub fn run_scene(
                 chunk = fit.clamp(1, MAX_CHUNK).min(chunk.saturating_mul(2));
             }
             progress.update(s, outputs.events());
+            if let Some(hook) = &opts.on_chunk {
+                hook(s, total);
+            }
             if s != out_step && s != check_step {
                 continue;
             }

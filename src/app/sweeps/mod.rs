@@ -94,7 +94,13 @@ pub struct SweepOptions {
     /// kernel, and whether samples are made on the device or as host
     /// snapshots).
     pub gpu: crate::engines::gpu::GpuOptions,
+    /// Called as each point finishes, with the points finished and the
+    /// points this invocation runs (a host's progress bar).
+    pub on_point: Option<PointHook>,
 }
+
+/// See [`SweepOptions::on_point`].
+pub type PointHook = std::sync::Arc<dyn Fn(usize, usize) + Send + Sync>;
 
 /// Scenes per GPU ensemble by default: enough to fill a software adapter's
 /// threads and a hardware GPU's multiprocessors with small lattices.
@@ -337,6 +343,7 @@ struct Recorder {
     /// Column of the status in a row.
     status_column: usize,
     progress: bool,
+    on_point: Option<PointHook>,
 }
 
 impl Recorder {
@@ -362,6 +369,9 @@ impl Recorder {
         }
         s.ran += 1;
         s.not_ok += (!ok) as usize;
+        if let Some(hook) = &self.on_point {
+            hook(s.ran, self.points);
+        }
         if self.progress {
             let elapsed = self.started.elapsed().as_secs_f64();
             let eta = elapsed / s.ran as f64 * (self.points - s.ran) as f64;
@@ -431,6 +441,7 @@ pub fn run_sweep(sweep: &Sweep, opts: &SweepOptions) -> Result<SweepReport, Stri
         points: todo.len(),
         status_column: 3 + sweep.axis_keys.len(),
         progress: opts.progress,
+        on_point: opts.on_point.clone(),
     };
     // GPU ensembles first (each its own dispatches), then the points left
     // to run alone.

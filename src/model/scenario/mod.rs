@@ -5,9 +5,11 @@
 //! ranges are checked by [`validate`], which names the key, the value, the
 //! allowed range and the line of the file.
 
+mod built_in;
 mod overrides;
 mod validate;
 
+pub use built_in::{built_in, BUILT_IN};
 pub use overrides::apply_override;
 pub use validate::validate;
 
