@@ -4,8 +4,7 @@ use super::outputs::Outputs;
 use super::RunError;
 use crate::engines::quasistatic::FastForward;
 use crate::engines::Engine;
-use crate::io::checkpoint::{unix_now, Checkpoint, Header};
-use crate::io::output::fnv1a;
+use crate::io::checkpoint::Checkpoint;
 use crate::model::scenario::Scenario;
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
@@ -71,40 +70,15 @@ impl Checkpointer {
         if let Some(sink) = outputs.sink.as_mut() {
             sink.sync()?;
         }
-        let model = engine.model().clone();
-        let engine_state = engine.save_state()?;
         let mut runner = outputs.save();
         runner.fast_forward = ff.map(FastForward::state);
-        let solver_factor_shape = runner
-            .fast_forward
-            .as_ref()
-            .and_then(|f| f.factor.as_ref())
-            .map(|f| {
-                let (n, band, _) = f.parts();
-                (n, band)
-            });
-        let header = Header {
-            slipfront_version: env!("CARGO_PKG_VERSION").into(),
-            created_unix: unix_now(),
-            scenario: self.scenario.clone(),
-            scenario_hash: format!("{:016x}", fnv1a(self.scenario.as_bytes())),
-            backend: engine.describe(),
-            precision: engine_state.precision.clone(),
-            step: engine_state.step,
-            time: model.time_of_step(engine_state.step),
-            total_steps: model.total_steps(),
-            blocks: model.n_blocks(),
-            nx: model.nx,
-            junctions: model.n_junctions(),
-            output: Some(self.output.clone()),
+        Checkpoint::of_engine(
+            engine,
+            self.scenario.clone(),
             runner,
-            solver_factor_shape,
-            history: self.history.clone(),
-        };
-        Checkpoint {
-            header,
-            engine: engine_state,
-        }
+            Some(self.output.clone()),
+            self.history.clone(),
+        )?
         .write(path)
         .map_err(|e| RunError::Checkpoint(e.to_string()))
     }

@@ -8,7 +8,7 @@ mod outputs;
 mod progress;
 
 pub use jump::{path_work, relaxation_drop};
-pub use outputs::{drive_force, global_of, global_sample};
+pub use outputs::{drive_force, drive_origin, global_of, global_sample};
 pub use progress::ProgressMode;
 
 use crate::engines::quasistatic::{FastForward, FastForwardSettings, FastForwardStats};
@@ -16,7 +16,6 @@ use crate::engines::{advance_to, Engine, EngineError};
 use crate::io::checkpoint::RunnerState;
 use crate::io::output::McapSink;
 use crate::model::scenario::Scenario;
-use crate::model::Driver;
 use checkpoints::Checkpointer;
 use jump::perform_jump;
 use outputs::{next_multiple, Outputs};
@@ -363,8 +362,8 @@ pub fn run_scene(
             let samples = engine.take_samples();
             if advanced.is_ok() && engine.steps_done() == model.prep_steps {
                 let snap = engine.snapshot()?;
-                if let Driver::SideSpring { row, .. } = model.driver {
-                    outputs.origin = snap.disp[row * model.nx][0];
+                if let Some(origin) = drive_origin(&model, &snap) {
+                    outputs.origin = origin;
                 }
             }
             // What was recorded before a blow-up is written all the same.

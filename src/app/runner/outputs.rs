@@ -38,6 +38,16 @@ pub fn drive_force(model: &Model, sample: &Sample, origin: f64) -> f64 {
     }
 }
 
+/// The side spring's far-end origin (m) from the snapshot at the start of
+/// driving: the driven block's x displacement then (the reported drive
+/// force is the spring's stretch from there). None for other drivers.
+pub fn drive_origin(model: &Model, snap: &Snapshot) -> Option<f64> {
+    match model.driver {
+        Driver::SideSpring { row, .. } => Some(snap.disp[row * model.nx][0]),
+        _ => None,
+    }
+}
+
 /// The global series of a sample.
 pub fn global_of(model: &Model, sample: &Sample, origin: f64) -> GlobalSample {
     let force = drive_force(model, sample, origin);

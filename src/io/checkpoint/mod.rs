@@ -113,6 +113,50 @@ fn with_suffix(path: &Path, suffix: &str) -> PathBuf {
 }
 
 impl Checkpoint {
+    /// The checkpoint of `engine` at the step it stands at: its state, the
+    /// runner's `runner` state, the run's scenario (canonical TOML), its
+    /// output file and history.
+    pub fn of_engine(
+        engine: &mut dyn crate::engines::Engine,
+        scenario: String,
+        runner: RunnerState,
+        output: Option<PathBuf>,
+        history: Vec<String>,
+    ) -> Result<Checkpoint, crate::engines::EngineError> {
+        let model = engine.model().clone();
+        let state = engine.save_state()?;
+        let solver_factor_shape = runner
+            .fast_forward
+            .as_ref()
+            .and_then(|f| f.factor.as_ref())
+            .map(|f| {
+                let (n, band, _) = f.parts();
+                (n, band)
+            });
+        let header = Header {
+            slipfront_version: env!("CARGO_PKG_VERSION").into(),
+            created_unix: unix_now(),
+            scenario_hash: format!("{:016x}", crate::io::output::fnv1a(scenario.as_bytes())),
+            scenario,
+            backend: engine.describe(),
+            precision: state.precision.clone(),
+            step: state.step,
+            time: model.time_of_step(state.step),
+            total_steps: model.total_steps(),
+            blocks: model.n_blocks(),
+            nx: model.nx,
+            junctions: model.n_junctions(),
+            output,
+            runner,
+            solver_factor_shape,
+            history,
+        };
+        Ok(Checkpoint {
+            header,
+            engine: state,
+        })
+    }
+
     /// Writes `path` atomically: the bytes go to `path.tmp`, are synced,
     /// the current checkpoint (if any) becomes `path.prev`, and the new one
     /// takes its name. A crash at any point leaves a complete checkpoint
