@@ -10,6 +10,7 @@ use crate::watch::Watcher;
 use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
+use slipfront::app::sweeps::plan::{Perturb, Seeds};
 use slipfront::app::sweeps::{self, KeepMcap, Sweep, SweepFile, SweepOptions};
 use slipfront::engines::backend::{resolve_auto, Backend, Precision};
 use slipfront::engines::gpu::{GpuOptions, GpuOutput, GpuPath};
@@ -65,11 +66,23 @@ fn sweep_file(
         }
     }
     table.insert("axes".into(), toml::Value::Table(axes));
+    // Each checked alone first, so that an error names it.
+    let mut put =
+        |name: &str, value: toml::Value, check: fn(toml::Value) -> Result<(), toml::de::Error>| {
+            check(value.clone())
+                .map_err(|e| PyValueError::new_err(format!("{name} = {value}: {}", e.message())))?;
+            table.insert(name.into(), value);
+            PyResult::Ok(())
+        };
     if let Some(seeds) = seeds {
-        table.insert("seeds".into(), to_toml("seeds", seeds)?);
+        put("seeds", to_toml("seeds", seeds)?, |v| {
+            v.try_into::<Seeds>().map(drop)
+        })?;
     }
     if let Some(perturb) = perturb {
-        table.insert("perturb".into(), to_toml("perturb", perturb.as_any())?);
+        put("perturb", to_toml("perturb", perturb.as_any())?, |v| {
+            v.try_into::<Perturb>().map(drop)
+        })?;
     }
     toml::Value::Table(table)
         .try_into::<SweepFile>()

@@ -7,11 +7,19 @@
 
 use pyo3::prelude::*;
 use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
 
 pub struct Watcher {
     progress: Option<Py<PyAny>>,
     error: Mutex<Option<PyErr>>,
+    /// When Python was last called: runs that write output stop every few
+    /// steps, and taking the GIL at each stop would make a run wait on the
+    /// Python threads (up to the 5 ms switch interval each time).
+    last: Mutex<Option<Instant>>,
 }
+
+/// Wall time between two calls into Python at least (but the last).
+const POLL_INTERVAL: Duration = Duration::from_millis(100);
 
 impl Watcher {
     pub fn new(progress: Option<Py<PyAny>>) -> Arc<Watcher> {
@@ -20,12 +28,20 @@ impl Watcher {
         Arc::new(Watcher {
             progress,
             error: Mutex::new(None),
+            last: Mutex::new(None),
         })
     }
 
     /// Checks Python's signals and reports `done` of `total`; called with
     /// the GIL released.
     pub fn poll(&self, done: u64, total: u64) {
+        {
+            let mut last = self.last.lock().expect("watcher");
+            if done < total && last.is_some_and(|t| t.elapsed() < POLL_INTERVAL) {
+                return;
+            }
+            *last = Some(Instant::now());
+        }
         Python::attach(|py| {
             let result = py.check_signals().and_then(|()| match &self.progress {
                 Some(callback) => callback.call1(py, (done, total)).map(drop),
