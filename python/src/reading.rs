@@ -3,15 +3,15 @@
 //! array per channel field; and the event table of an interface series.
 
 use numpy::{PyArray1, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2};
+use prost::Message;
 use pyo3::exceptions::{PyFileNotFoundError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use slipfront::analysis::event_table::event_rows;
 use slipfront::analysis::events::InterfaceSeries;
 use slipfront::analysis::precursors::PrecursorSequence;
-use slipfront::io::output::messages::Global;
-use slipfront::io::output::reader::RunFile;
-use std::collections::BTreeMap;
+use slipfront::io::output::messages::{Bulk, FastForwardJump, Global, Interface};
+use slipfront::io::output::reader::{memory_budget, times_go_forward, ChannelSink, RunFile};
 use std::path::PathBuf;
 
 /// One column: its numbers, and its shape (rows first).
@@ -43,41 +43,6 @@ impl Columns {
             .push((name, Column::I32(rows.iter().map(get).collect())));
     }
 
-    /// A field each row holds as a vector: one (rows × shape) array.
-    fn rows<T, V: Copy>(
-        rows: &[T],
-        shape: &[usize],
-        get: impl Fn(&T) -> &[V],
-    ) -> (Vec<V>, Vec<usize>) {
-        let mut flat = Vec::with_capacity(rows.len() * shape.iter().product::<usize>());
-        rows.iter().for_each(|r| flat.extend_from_slice(get(r)));
-        let mut dims = vec![rows.len()];
-        dims.extend_from_slice(shape);
-        (flat, dims)
-    }
-
-    fn f64_rows<T>(
-        &mut self,
-        name: &'static str,
-        rows: &[T],
-        shape: &[usize],
-        get: impl Fn(&T) -> &[f64],
-    ) {
-        let (flat, dims) = Self::rows(rows, shape, get);
-        self.0.push((name, Column::F64(flat, dims)));
-    }
-
-    fn f32_rows<T>(
-        &mut self,
-        name: &'static str,
-        rows: &[T],
-        shape: &[usize],
-        get: impl Fn(&T) -> &[f32],
-    ) {
-        let (flat, dims) = Self::rows(rows, shape, get);
-        self.0.push((name, Column::F32(flat, dims)));
-    }
-
     /// The columns as a dict of numpy arrays (the vectors move into numpy,
     /// uncopied).
     fn into_dict(self, py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
@@ -98,15 +63,106 @@ impl Columns {
     }
 }
 
-/// A run file's channels, flattened (without the GIL).
+/// The channels decoded straight into flat columns as the file is read
+/// (no message kept: one scratch message per channel, its vectors reused).
+#[derive(Default)]
+struct ColumnSink {
+    global: Vec<Global>,
+    interface_time: Vec<f64>,
+    interface_step: Vec<u64>,
+    /// shear_stress, normal_stress, pinned_fraction, slip, slip_speed.
+    interface_fields: [Vec<f64>; 5],
+    interface_nx: Option<usize>,
+    bulk_time: Vec<f64>,
+    bulk_step: Vec<u64>,
+    /// ux, uz, vx, vz.
+    bulk_fields: [Vec<f32>; 4],
+    bulk_shape: Option<(usize, usize)>,
+    jumps: Vec<FastForwardJump>,
+    scratch_interface: Interface,
+    scratch_bulk: Bulk,
+}
+
+impl ChannelSink for ColumnSink {
+    fn message(&mut self, topic: &str, data: &[u8]) -> Result<(), String> {
+        let e = |e: prost::DecodeError| e.to_string();
+        match topic {
+            "/global" => self.global.push(Global::decode(data).map_err(e)?),
+            "/fast_forward" => self.jumps.push(FastForwardJump::decode(data).map_err(e)?),
+            "/interface" => {
+                let m = &mut self.scratch_interface;
+                m.clear();
+                m.merge(data).map_err(e)?;
+                let rows = [
+                    &m.shear_stress,
+                    &m.normal_stress,
+                    &m.pinned_fraction,
+                    &m.slip,
+                    &m.slip_speed,
+                ];
+                let nx = *self.interface_nx.get_or_insert(m.slip.len());
+                if rows.iter().any(|r| r.len() != nx) {
+                    let lengths: Vec<usize> = rows.iter().map(|r| r.len()).collect();
+                    return Err(format!(
+                        "damaged: /interface message {} (t = {:e} s) has rows of lengths \
+                         {lengths:?}, the interface has {nx} blocks",
+                        self.interface_time.len(),
+                        m.time
+                    ));
+                }
+                for (column, row) in self.interface_fields.iter_mut().zip(rows) {
+                    column.extend_from_slice(row);
+                }
+                self.interface_time.push(m.time);
+                self.interface_step.push(m.step);
+            }
+            "/bulk" => {
+                let m = &mut self.scratch_bulk;
+                m.clear();
+                m.merge(data).map_err(e)?;
+                let shape = *self
+                    .bulk_shape
+                    .get_or_insert((m.nz as usize, m.nx as usize));
+                let fields = [&m.ux, &m.uz, &m.vx, &m.vz];
+                if (m.nz as usize, m.nx as usize) != shape
+                    || fields.iter().any(|f| f.len() != shape.0 * shape.1)
+                {
+                    return Err(format!(
+                        "damaged: /bulk message {} (t = {:e} s) is not a {} × {} field",
+                        self.bulk_time.len(),
+                        m.time,
+                        shape.0,
+                        shape.1
+                    ));
+                }
+                for (column, field) in self.bulk_fields.iter_mut().zip(fields) {
+                    column.extend_from_slice(field);
+                }
+                self.bulk_time.push(m.time);
+                self.bulk_step.push(m.step);
+            }
+            _ => {}
+        }
+        Ok(())
+    }
+
+    fn check(&self, nx: Option<usize>) -> Result<(), String> {
+        if let (Some(nx), Some(rows)) = (nx, self.interface_nx) {
+            if nx != rows {
+                return Err(format!(
+                    "damaged: /interface rows of {rows} blocks, the interface has {nx}"
+                ));
+            }
+        }
+        times_go_forward("/global", self.global.iter().map(|m| m.time))?;
+        times_go_forward("/interface", self.interface_time.iter().copied())?;
+        times_go_forward("/bulk", self.bulk_time.iter().copied())
+    }
+}
+
+/// A run file's channels as columns (read without the GIL).
 struct Decoded {
-    metadata: BTreeMap<String, String>,
-    scenario: Option<String>,
-    history: Vec<String>,
-    truncated: bool,
-    damage: Option<String>,
-    fast_forward_totals: BTreeMap<String, String>,
-    spacing: f64,
+    head: RunFile,
     series: Columns,
     interface: Columns,
     bulk: Columns,
@@ -115,9 +171,10 @@ struct Decoded {
 }
 
 fn decode(path: &std::path::Path) -> Result<Decoded, String> {
-    let run = RunFile::read(path).map_err(|e| e.to_string())?;
+    let mut sink = ColumnSink::default();
+    let head = RunFile::read_with(path, memory_budget(), &mut sink).map_err(|e| e.to_string())?;
     let mut series = Columns::default();
-    let g = &run.global;
+    let g = &sink.global;
     series.f64("time", g, |m| m.time);
     series.u64("step", g, |m| m.step);
     series.f64("drive_force", g, |m| m.drive_force);
@@ -127,40 +184,38 @@ fn decode(path: &std::path::Path) -> Result<Decoded, String> {
     series.f64("kinetic_energy", g, |m| m.kinetic_energy);
     series.u64("ruptures", g, |m| m.ruptures);
 
-    // (The reader has checked that every row is as long as the interface.)
-    let i = &run.interface;
-    let nx = i.first().map_or(0, |m| m.slip.len());
+    let rows = sink.interface_time.len();
+    let nx = sink.interface_nx.unwrap_or(0);
     let mut interface = Columns::default();
-    interface.f64("time", i, |m| m.time);
-    interface.u64("step", i, |m| m.step);
-    interface.f64_rows("shear_stress", i, &[nx], |m| &m.shear_stress);
-    interface.f64_rows("normal_stress", i, &[nx], |m| &m.normal_stress);
-    interface.f64_rows("pinned_fraction", i, &[nx], |m| &m.pinned_fraction);
-    interface.f64_rows("slip", i, &[nx], |m| &m.slip);
-    interface.f64_rows("slip_speed", i, &[nx], |m| &m.slip_speed);
-
-    let b = &run.bulk;
-    let bulk_shape = b.first().map(|m| (m.nz as usize, m.nx as usize));
-    let mut bulk = Columns::default();
-    if let Some((nz, nx)) = bulk_shape {
-        if let Some((k, m)) = b.iter().enumerate().find(|(_, m)| {
-            [m.ux.len(), m.uz.len(), m.vx.len(), m.vz.len()] != [nx * nz; 4]
-                || (m.nz as usize, m.nx as usize) != (nz, nx)
-        }) {
-            return Err(format!(
-                "damaged: /bulk message {k} (t = {:e} s) is not a {nz} × {nx} field",
-                m.time
-            ));
-        }
-        bulk.f64("time", b, |m| m.time);
-        bulk.u64("step", b, |m| m.step);
-        bulk.f32_rows("ux", b, &[nz, nx], |m| &m.ux);
-        bulk.f32_rows("uz", b, &[nz, nx], |m| &m.uz);
-        bulk.f32_rows("vx", b, &[nz, nx], |m| &m.vx);
-        bulk.f32_rows("vz", b, &[nz, nx], |m| &m.vz);
+    interface
+        .0
+        .push(("time", Column::F64(sink.interface_time, vec![rows])));
+    interface.0.push(("step", Column::U64(sink.interface_step)));
+    let names = [
+        "shear_stress",
+        "normal_stress",
+        "pinned_fraction",
+        "slip",
+        "slip_speed",
+    ];
+    for (name, column) in names.into_iter().zip(sink.interface_fields) {
+        interface
+            .0
+            .push((name, Column::F64(column, vec![rows, nx])));
     }
 
-    let j = &run.fast_forward;
+    let mut bulk = Columns::default();
+    if let Some((nz, nx)) = sink.bulk_shape {
+        let rows = sink.bulk_time.len();
+        bulk.0
+            .push(("time", Column::F64(sink.bulk_time, vec![rows])));
+        bulk.0.push(("step", Column::U64(sink.bulk_step)));
+        for (name, column) in ["ux", "uz", "vx", "vz"].into_iter().zip(sink.bulk_fields) {
+            bulk.0.push((name, Column::F32(column, vec![rows, nz, nx])));
+        }
+    }
+
+    let j = &sink.jumps;
     let mut jumps = Columns::default();
     jumps.f64("start_time", j, |m| m.start_time);
     jumps.f64("end_time", j, |m| m.end_time);
@@ -179,17 +234,11 @@ fn decode(path: &std::path::Path) -> Result<Decoded, String> {
     jumps.u64("repins", j, |m| m.repins);
 
     Ok(Decoded {
-        spacing: run.spacing(),
-        metadata: run.metadata,
-        scenario: run.scenario,
-        history: run.history,
-        truncated: run.truncated,
-        damage: run.damage,
-        fast_forward_totals: run.fast_forward_totals,
+        head,
         series,
         interface,
         bulk,
-        bulk_shape,
+        bulk_shape: sink.bulk_shape,
         jumps,
     })
 }
@@ -209,13 +258,13 @@ pub fn read_run(py: Python<'_>, path: PathBuf) -> PyResult<Bound<'_, PyDict>> {
     let d = py.detach(|| decode(&path)).map_err(PyValueError::new_err)?;
     let out = PyDict::new(py);
     out.set_item("path", path.display().to_string())?;
-    out.set_item("metadata", d.metadata)?;
-    out.set_item("scenario", d.scenario)?;
-    out.set_item("history", d.history)?;
-    out.set_item("truncated", d.truncated)?;
-    out.set_item("damage", d.damage)?;
-    out.set_item("fast_forward_totals", d.fast_forward_totals)?;
-    out.set_item("spacing", d.spacing)?;
+    out.set_item("spacing", d.head.spacing())?;
+    out.set_item("metadata", d.head.metadata)?;
+    out.set_item("scenario", d.head.scenario)?;
+    out.set_item("history", d.head.history)?;
+    out.set_item("truncated", d.head.truncated)?;
+    out.set_item("damage", d.head.damage)?;
+    out.set_item("fast_forward_totals", d.head.fast_forward_totals)?;
     out.set_item("series", d.series.into_dict(py)?)?;
     out.set_item("interface", d.interface.into_dict(py)?)?;
     out.set_item("bulk_shape", d.bulk_shape)?;

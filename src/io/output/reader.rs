@@ -33,6 +33,82 @@ pub struct RunFile {
     pub damage: Option<String>,
 }
 
+/// Where a read puts the messages of the channels: [`RunFile`] keeps them
+/// decoded message by message ([`Messages`]); a columnar reader (the Python
+/// package's) can decode them straight into its columns.
+pub trait ChannelSink {
+    /// One message of `topic`, its protobuf bytes; an error is why it does
+    /// not decode.
+    fn message(&mut self, topic: &str, data: &[u8]) -> Result<(), String>;
+    /// After the last message: every /interface row as long as the
+    /// interface (`nx` blocks when the metadata says), and no channel's
+    /// time going backwards. A file that breaks either is damaged.
+    fn check(&self, nx: Option<usize>) -> Result<(), String>;
+}
+
+/// The channels' messages, decoded.
+#[derive(Debug, Default, Clone)]
+pub struct Messages {
+    pub global: Vec<Global>,
+    pub interface: Vec<Interface>,
+    pub bulk: Vec<Bulk>,
+    pub fast_forward: Vec<FastForwardJump>,
+}
+
+impl ChannelSink for Messages {
+    fn message(&mut self, topic: &str, data: &[u8]) -> Result<(), String> {
+        let e = |e: prost::DecodeError| e.to_string();
+        match topic {
+            "/global" => self.global.push(Global::decode(data).map_err(e)?),
+            "/interface" => self.interface.push(Interface::decode(data).map_err(e)?),
+            "/bulk" => self.bulk.push(Bulk::decode(data).map_err(e)?),
+            "/fast_forward" => self
+                .fast_forward
+                .push(FastForwardJump::decode(data).map_err(e)?),
+            _ => {}
+        }
+        Ok(())
+    }
+
+    fn check(&self, nx: Option<usize>) -> Result<(), String> {
+        let nx = nx.or_else(|| self.interface.first().map(|m| m.pinned_fraction.len()));
+        for (k, m) in self.interface.iter().enumerate() {
+            let lengths = [
+                m.shear_stress.len(),
+                m.normal_stress.len(),
+                m.pinned_fraction.len(),
+                m.slip.len(),
+                m.slip_speed.len(),
+            ];
+            if let Some(nx) = nx.filter(|&nx| lengths.iter().any(|&l| l != nx)) {
+                return Err(format!(
+                    "damaged: /interface message {k} (t = {:e} s) has rows of lengths \
+                     {lengths:?}, the interface has {nx} blocks",
+                    m.time
+                ));
+            }
+        }
+        times_go_forward("/global", self.global.iter().map(|m| m.time))?;
+        times_go_forward("/interface", self.interface.iter().map(|m| m.time))?;
+        times_go_forward("/bulk", self.bulk.iter().map(|m| m.time))
+    }
+}
+
+/// Err naming the first message of channel `name` whose time is not
+/// finite or is before the one before it.
+pub fn times_go_forward(name: &str, times: impl Iterator<Item = f64>) -> Result<(), String> {
+    let mut last = f64::NEG_INFINITY;
+    for (k, t) in times.enumerate() {
+        if !t.is_finite() || t < last {
+            return Err(format!(
+                "damaged: {name} message {k} is at t = {t:e} s, after one at {last:e} s"
+            ));
+        }
+        last = t;
+    }
+    Ok(())
+}
+
 const GIB: f64 = (1u64 << 30) as f64;
 
 /// How many bytes of decoded messages a read may hold: SLIPFRONT_READ_MEMORY
@@ -83,6 +159,23 @@ impl RunFile {
     /// Reads `path` record by record from disk ([`super::scan`]), stopping
     /// with an error once the decoded messages would pass `budget` bytes.
     pub fn read_within(path: &Path, budget: u64) -> Result<RunFile, OutputError> {
+        let mut messages = Messages::default();
+        let mut run = RunFile::read_with(path, budget, &mut messages)?;
+        run.global = messages.global;
+        run.interface = messages.interface;
+        run.bulk = messages.bulk;
+        run.fast_forward = messages.fast_forward;
+        Ok(run)
+    }
+
+    /// Reads `path` as [`RunFile::read_within`] does, its channels' messages
+    /// going to `sink`: the RunFile returned holds the rest (metadata,
+    /// scenario, history, whether the file was cut short or damaged).
+    pub fn read_with(
+        path: &Path,
+        budget: u64,
+        sink: &mut dyn ChannelSink,
+    ) -> Result<RunFile, OutputError> {
         let fail = |why: String| OutputError::Read {
             path: path.display().to_string(),
             why,
@@ -114,8 +207,6 @@ impl RunFile {
                     run.scenario = Some(String::from_utf8_lossy(&data).into_owned())
                 }
                 Record::Message { header, data } => {
-                    let bad =
-                        |e: prost::DecodeError| fail(format!("message {}: {e}", header.sequence));
                     // Decoded, a message takes about as many bytes as it
                     // has on disk, plus its vectors' headers.
                     decoded += data.len() as u64 + 128;
@@ -128,16 +219,9 @@ impl RunFile {
                             size.len()
                         )));
                     }
-                    match topics.get(&header.channel_id).map(String::as_str) {
-                        Some("/global") => run.global.push(Global::decode(&data[..]).map_err(bad)?),
-                        Some("/interface") => run
-                            .interface
-                            .push(Interface::decode(&data[..]).map_err(bad)?),
-                        Some("/bulk") => run.bulk.push(Bulk::decode(&data[..]).map_err(bad)?),
-                        Some("/fast_forward") => run
-                            .fast_forward
-                            .push(FastForwardJump::decode(&data[..]).map_err(bad)?),
-                        _ => {}
+                    if let Some(topic) = topics.get(&header.channel_id) {
+                        sink.message(topic, &data)
+                            .map_err(|e| fail(format!("message {}: {e}", header.sequence)))?;
                     }
                 }
                 _ => {}
@@ -156,50 +240,9 @@ impl RunFile {
                     .into(),
             ));
         }
-        run.check_consistent().map_err(fail)?;
+        let nx = run.metadata.get("nx").and_then(|v| v.parse::<usize>().ok());
+        sink.check(nx).map_err(fail)?;
         Ok(run)
-    }
-
-    /// Every /interface row as long as the interface, and no channel's
-    /// time going backwards: what the analysis relies on. A file that
-    /// breaks either is damaged.
-    fn check_consistent(&self) -> Result<(), String> {
-        let nx = self
-            .metadata
-            .get("nx")
-            .and_then(|v| v.parse::<usize>().ok())
-            .or_else(|| self.interface.first().map(|m| m.pinned_fraction.len()));
-        for (k, m) in self.interface.iter().enumerate() {
-            let lengths = [
-                m.shear_stress.len(),
-                m.normal_stress.len(),
-                m.pinned_fraction.len(),
-                m.slip.len(),
-                m.slip_speed.len(),
-            ];
-            if let Some(nx) = nx.filter(|&nx| lengths.iter().any(|&l| l != nx)) {
-                return Err(format!(
-                    "damaged: /interface message {k} (t = {:e} s) has rows of lengths \
-                     {lengths:?}, the interface has {nx} blocks",
-                    m.time
-                ));
-            }
-        }
-        let backwards = |name: &str, times: &mut dyn Iterator<Item = f64>| {
-            let mut last = f64::NEG_INFINITY;
-            for (k, t) in times.enumerate() {
-                if !t.is_finite() || t < last {
-                    return Err(format!(
-                        "damaged: {name} message {k} is at t = {t:e} s, after one at {last:e} s"
-                    ));
-                }
-                last = t;
-            }
-            Ok(())
-        };
-        backwards("/global", &mut self.global.iter().map(|m| m.time))?;
-        backwards("/interface", &mut self.interface.iter().map(|m| m.time))?;
-        backwards("/bulk", &mut self.bulk.iter().map(|m| m.time))
     }
 
     /// F/F_N of the global sample nearest to time `t` (NaN without one).
