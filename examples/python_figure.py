@@ -7,7 +7,8 @@ Appendix C), run with the `slipfront` package and drawn with matplotlib.
 (b) the fraction of pinned junctions along the interface around the first
     full event (the model's counterpart of the real contact area in the
     experiments: thesis Figs. C.1 and C.2);
-(c) the precursors before it: rupture length against F/F_N at their start.
+(c) the precursors before it: rupture length against F/F_N at their start
+    (PNAS 2014: those from the trailing edge grow with the load).
 
     pip install ./python matplotlib
     python examples/python_figure.py -o stick_slip.png            # about 0.5 s of driving
@@ -32,13 +33,15 @@ def main():
     p.add_argument("--t-end", type=float, default=0.5, help="seconds of driving")
     p.add_argument("--backend", default="auto")
     p.add_argument("--open", help="draw this run file instead of running")
+    p.add_argument("--keep", help="keep the run's file here")
     p.add_argument("-o", "--output", default="stick_slip.png")
     a = p.parse_args()
 
     if a.open:
         run = slipfront.open(a.open)
     else:
-        run = slipfront.run(a.scenario, t_end=a.t_end, backend=a.backend)
+        run = slipfront.run(a.scenario, t_end=a.t_end, backend=a.backend, output=a.keep,
+                            force=a.keep is not None)
         print(f"ran {run.summary['steps']} steps on {run.summary['backend']} in "
               f"{run.summary['wall_seconds']:.1f} s")
     series, events = run.to_numpy("series"), run.to_numpy("events")
@@ -72,12 +75,17 @@ def main():
                   transform=ax_b.transAxes)
 
     pre = run.to_numpy("precursors")
-    if len(pre):
-        ax_c.plot(pre["drive_ratio"], pre["length"] * 1e3, "o-", color="tab:blue")
+    edge = pre[pre["from_trailing_edge"]]
+    inside = pre[~pre["from_trailing_edge"]]
+    ax_c.plot(edge["drive_ratio"], edge["length"] * 1e3, "o-", color="tab:blue",
+              label="from the trailing edge")
+    if len(inside):
+        ax_c.plot(inside["drive_ratio"], inside["length"] * 1e3, "o", mfc="none",
+                  color="tab:blue", label="from inside")
     if run.first_full_ratio is not None:
         ax_c.axvline(run.first_full_ratio, color="tab:red", ls="--", lw=0.8,
                      label="first full event")
-        ax_c.legend(frameon=False, loc="upper left")
+    ax_c.legend(frameon=False, loc="upper left")
     ax_c.set(xlabel="$F/F_N$ at the start", ylabel="rupture length (mm)",
              title="(c) precursors")
     fig.tight_layout()

@@ -10,6 +10,9 @@ use slipfront::model::scenario::{self as scene, DEFAULT_SCENARIO, DEFAULT_SCENAR
 use slipfront::Model;
 use std::path::Path;
 
+/// A validated scenario: a TOML file or a shipped scene by name, with
+/// overrides (`Scenario.load("triggered_front", set={"time.end": 1e-3})`).
+/// Immutable: `with_set` makes a changed copy.
 #[pyclass(module = "slipfront._core", frozen, from_py_object)]
 #[derive(Clone)]
 pub struct Scenario {

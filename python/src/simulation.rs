@@ -25,6 +25,8 @@ struct State {
     history: Vec<String>,
 }
 
+/// A scene stepped by hand (the `slipfront.Simulation` wrapper takes file
+/// names and shipped names too).
 #[pyclass(module = "slipfront._core")]
 pub struct Simulation {
     state: Mutex<State>,
