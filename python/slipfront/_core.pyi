@@ -1,5 +1,6 @@
 """Type stubs of the compiled module `slipfront._core` (python/src/*.rs)."""
 
+from os import PathLike
 from typing import Any, Callable, Optional
 
 import numpy as np
@@ -14,7 +15,7 @@ class Scenario:
 
     source: str
     @staticmethod
-    def load(path_or_name: Optional[str] = None, set: Optional[dict[str, Any]] = None) -> Scenario: ...
+    def load(path_or_name: Optional[str | PathLike[str]] = None, set: Optional[dict[str, Any]] = None) -> Scenario: ...
     @staticmethod
     def from_toml(text: str, set: Optional[dict[str, Any]] = None, name: str = "<text>") -> Scenario: ...
     def with_set(self, set: dict[str, Any]) -> Scenario: ...

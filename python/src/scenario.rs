@@ -8,7 +8,7 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use slipfront::model::scenario::{self as scene, DEFAULT_SCENARIO, DEFAULT_SCENARIO_NAME};
 use slipfront::Model;
-use std::path::Path;
+use std::path::PathBuf;
 
 /// A validated scenario: a TOML file or a shipped scene by name, with
 /// overrides (`Scenario.load("triggered_front", set={"time.end": 1e-3})`).
@@ -39,7 +39,7 @@ impl Scenario {
     /// overrides keys as `--set` does: `{"loading.drive.velocity": 4e-4}`.
     #[staticmethod]
     #[pyo3(signature = (path_or_name=None, set=None))]
-    fn load(path_or_name: Option<String>, set: Option<&Bound<'_, PyDict>>) -> PyResult<Self> {
+    fn load(path_or_name: Option<PathBuf>, set: Option<&Bound<'_, PyDict>>) -> PyResult<Self> {
         let overrides = convert::overrides(set)?;
         let Some(name) = path_or_name else {
             return Ok(Scenario {
@@ -48,7 +48,8 @@ impl Scenario {
                 source: DEFAULT_SCENARIO_NAME.into(),
             });
         };
-        let path = Path::new(&name);
+        let path = name.as_path();
+        let name = path.display().to_string();
         if path.exists() {
             return Ok(Scenario {
                 inner: scene::Scenario::load(path, &overrides).map_err(invalid)?,

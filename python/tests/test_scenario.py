@@ -15,6 +15,7 @@ def test_shipped_names_files_and_the_default_scene():
     by_name = slipfront.Scenario.load("triggered_front")
     by_file = slipfront.Scenario.load(str(REPO / "scenarios" / "triggered_front.toml"))
     assert by_name == by_file
+    assert slipfront.Scenario.load(REPO / "scenarios" / "triggered_front.toml") == by_file
     assert by_name.shape == (57, 31)
     default = slipfront.Scenario.load()
     assert default == slipfront.Scenario.load("tromborg2014_stick_slip")
