@@ -24,8 +24,9 @@ def scenarios() -> list[str]:
     return _built_in_names()
 
 
+# (`open` is slipfront.open, not in `import *`: it would hide the builtin.)
 __all__ = [
     "BlowUp", "Bulk", "DEFAULT_QUIET_GAP", "Interface", "Interrupted", "Run",
-    "Scenario", "Simulation", "__version__", "open", "run", "scenarios",
-    "set_tables", "sweep",
+    "Scenario", "Simulation", "__version__", "run", "scenarios", "set_tables",
+    "sweep",
 ]
