@@ -55,13 +55,9 @@ impl EngineChoice {
     /// The engine for `model`, refused up front when the machine has not
     /// the memory for it.
     pub fn build(&self, model: &Model, precision: Precision) -> PyResult<Box<dyn Engine>> {
-        slipfront::engines::memory::check(
-            precision.memory_bytes(model),
-            slipfront::engines::memory::available_bytes(),
-            &format!("a {} × {} lattice in {precision:?}", model.nx, model.nz),
-            "a smaller lattice, or another precision",
-        )
-        .map_err(PyValueError::new_err)?;
+        precision
+            .check_memory(model, "a smaller lattice, or another precision")
+            .map_err(PyValueError::new_err)?;
         make_engine_with(model, self.backend, precision, self.threads, self.gpu)
             .map_err(engine_error)
     }

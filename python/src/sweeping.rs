@@ -13,7 +13,6 @@ use pyo3::types::{PyDict, PyList};
 use slipfront::app::sweeps::plan::{Perturb, Seeds};
 use slipfront::app::sweeps::{self, KeepMcap, Sweep, SweepFile, SweepOptions};
 use slipfront::engines::backend::{resolve_auto, Backend, Precision};
-use slipfront::engines::gpu::{GpuOptions, GpuOutput, GpuPath};
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Arc;
@@ -153,11 +152,7 @@ pub fn run_sweep<'py>(
         progress: false,
         share_loading: true,
         ensemble,
-        gpu: GpuOptions {
-            path: GpuPath::Auto,
-            output: GpuOutput::Device,
-            ..sweeps::default_gpu()
-        },
+        gpu: sweeps::default_gpu(),
         on_point: Some({
             let (done, total) = (done.clone(), total.clone());
             Arc::new(move |d, t| {

@@ -1,5 +1,5 @@
 use super::printable;
-use slipfront::analysis::event_table::EventRow;
+use slipfront::analysis::event_table::{event_rows, EventRow};
 use slipfront::analysis::events::{Event, InterfaceSeries, FRONT_WINDOW};
 use slipfront::analysis::precursors::PrecursorSequence;
 use slipfront::io::output::reader::RunFile;
@@ -154,8 +154,8 @@ pub fn events_csv(path: &Path, quiet_gap: f64) -> anyhow::Result<ExitCode> {
         "event,start_s,end_s,kind,rupture_length_m,origin_m,mean_slip_m,drive_ratio,front,\
          v_front_min_m_per_s,v_front_max_m_per_s,v_front_unresolved_at_least_m_per_s"
     );
-    for (n, e) in series.events_separated_by(quiet_gap).iter().enumerate() {
-        let row = EventRow::new(&series, e, run.drive_ratio_at(e.start));
+    let rows = event_rows(&series, quiet_gap, |t| run.drive_ratio_at(t));
+    for (n, (e, row)) in rows.iter().enumerate() {
         let (lo, hi) = row.speeds.map_or((String::new(), String::new()), |(a, b)| {
             (format!("{a:e}"), format!("{b:e}"))
         });

@@ -142,13 +142,9 @@ impl RunArgs {
             );
         }
         if !self.no_memory_check {
-            slipfront::engines::memory::check(
-                precision.memory_bytes(model),
-                slipfront::engines::memory::available_bytes(),
-                &format!("a {} × {} lattice in {precision:?}", model.nx, model.nz),
-                "pass --no-memory-check to try anyway",
-            )
-            .map_err(anyhow::Error::msg)?;
+            precision
+                .check_memory(model, "pass --no-memory-check to try anyway")
+                .map_err(anyhow::Error::msg)?;
         }
         let gpu = GpuOptions {
             path: self.gpu_path,

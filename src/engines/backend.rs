@@ -96,6 +96,22 @@ impl Precision {
         model.memory_bytes(real, coord) as u64
     }
 
+    /// Refuses, naming the lattice and the precision, an engine for `model`
+    /// that needs more memory than the machine has available now;
+    /// `override_hint` says what to do instead.
+    pub fn check_memory(
+        self,
+        model: &crate::model::Model,
+        override_hint: &str,
+    ) -> Result<(), String> {
+        crate::engines::memory::check(
+            self.memory_bytes(model),
+            crate::engines::memory::available_bytes(),
+            &format!("a {} × {} lattice in {self:?}", model.nx, model.nz),
+            override_hint,
+        )
+    }
+
     /// The precision of a saved state (`EngineState::precision`).
     pub fn of_state(name: &str) -> Option<Precision> {
         use crate::model::real::precision_name;
