@@ -82,6 +82,25 @@ enum Command {
         #[arg(long)]
         force: bool,
     },
+    /// Serve a run file to Foxglove viewers as `run --live` serves a
+    /// running one, paced in simulated time (the whole run in a minute
+    /// unless --speed says otherwise).
+    Replay {
+        file: PathBuf,
+        /// Where to listen: HOST:PORT (default 127.0.0.1:8765; port 0
+        /// takes a free one).
+        #[arg(long, value_name = "ADDR", num_args = 0..=1,
+              default_value = slipfront::io::live::DEFAULT_LIVE_ADDRESS,
+              default_missing_value = slipfront::io::live::DEFAULT_LIVE_ADDRESS)]
+        live: slipfront::io::live::LiveAddress,
+        /// Simulated seconds per wall second (0: as fast as viewers take
+        /// them).
+        #[arg(long, value_parser = parse_speed)]
+        speed: Option<f64>,
+        /// Start once a viewer has subscribed.
+        #[arg(long)]
+        live_wait: bool,
+    },
     /// Run a single-block scene (scenarios/thogersen2014_single_block.toml
     /// by default): one block and its junctions under a prescribed slip
     /// history or pulled through a spring; writes a CSV time series.
@@ -308,6 +327,17 @@ fn main() -> ExitCode {
             json,
             figure: output,
         }),
+        Command::Replay {
+            file,
+            live,
+            speed,
+            live_wait,
+        } => commands::replay::replay(commands::replay::ReplayArgs {
+            file: &file,
+            live: &live,
+            speed,
+            wait: live_wait,
+        }),
         Command::SingleBlock { scenario, output } => {
             commands::study::single_block_run(scenario.as_deref(), &output)
         }
@@ -399,6 +429,16 @@ fn parse_quiet_gap(text: &str) -> Result<f64, String> {
         Ok(v) if v.is_finite() && v >= 0.0 => Ok(v),
         _ => Err(format!(
             "--quiet-gap = {text}: expected a time in seconds, 0 or more"
+        )),
+    }
+}
+
+fn parse_speed(text: &str) -> Result<f64, String> {
+    match text.parse::<f64>() {
+        Ok(v) if v.is_finite() && v >= 0.0 => Ok(v),
+        _ => Err(format!(
+            "--speed = {text}: expected simulated seconds per wall second, 0 or more \
+             (0: as fast as viewers take them)"
         )),
     }
 }

@@ -3,6 +3,7 @@ pub mod compare;
 pub mod info;
 pub mod plot;
 pub mod recover;
+pub mod replay;
 pub mod run;
 pub mod study;
 pub mod sweep;

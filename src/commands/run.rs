@@ -3,6 +3,7 @@ use slipfront::engines::backend::{make_engine_with, Backend, Precision};
 use slipfront::engines::gpu::{GpuOptions, GpuOutput, GpuPath};
 use slipfront::engines::Engine;
 use slipfront::io::checkpoint::{branch, path_for, Checkpoint};
+use slipfront::io::live::{LiveAddress, DEFAULT_LIVE_ADDRESS};
 use slipfront::io::output::fnv1a;
 use slipfront::io::output::lock::RunLock;
 use slipfront::model::scenario::Scenario;
@@ -71,6 +72,16 @@ pub struct RunArgs {
     /// available now.
     #[arg(long)]
     pub no_memory_check: bool,
+    /// Stream the run to Foxglove viewers over WebSocket, with or without
+    /// -o: ADDR is HOST:PORT (default 127.0.0.1:8765; 0.0.0.0:PORT to
+    /// serve other machines; port 0 takes a free one).
+    #[arg(long, value_name = "ADDR", num_args = 0..=1,
+          default_missing_value = DEFAULT_LIVE_ADDRESS)]
+    pub live: Option<LiveAddress>,
+    /// With --live: start stepping once a viewer has subscribed, so that
+    /// it sees the run from its first record.
+    #[arg(long, requires = "live")]
+    pub live_wait: bool,
 }
 
 /// The same file (both exist and resolve to one path).
@@ -195,10 +206,19 @@ fn finish(
     if a.output.is_none() {
         eprintln!("slipfront: no output file: nothing of this run is kept (-o run.mcap keeps it)");
     }
+    let live = match &a.live {
+        Some(address) => Some(super::replay::start_live(
+            address,
+            largest_record(engine.model(), scenario),
+            a.live_wait,
+        )?),
+        None => None,
+    };
     let summary = run_scene(
         engine,
         scenario,
         &RunOptions {
+            live: live.clone(),
             output: a.output.clone(),
             progress: if a.quiet {
                 ProgressMode::None
@@ -209,7 +229,11 @@ fn finish(
             start,
             ..RunOptions::default()
         },
-    )?;
+    );
+    if let Some(live) = &live {
+        live.close();
+    }
+    let summary = summary?;
     println!("{summary}");
     // 128 + the signal (130 for Ctrl-C, 143 for SIGTERM), as shells report
     // it; the file is closed and a checkpoint written by now.
@@ -218,6 +242,18 @@ fn finish(
     } else {
         ExitCode::SUCCESS
     })
+}
+
+/// Bytes of the largest record the run can send: a bulk field where bulk
+/// output is on, else an interface row.
+fn largest_record(model: &Model, scenario: &Scenario) -> usize {
+    let interface = model.nx * 5 * 8;
+    let bulk = if scenario.output.bulk_interval > 0.0 {
+        model.nx * model.nz * 4 * 4
+    } else {
+        0
+    };
+    interface.max(bulk) + 64
 }
 
 /// The file starts as a checkpoint does.

@@ -154,6 +154,8 @@ fn coulomb_precursors_study(a: &StudyArgs) -> anyhow::Result<()> {
                 from: None,
                 force: true,
                 no_memory_check: false,
+                live: None,
+                live_wait: false,
             })?;
             coulomb_precursors::analyse(loading, &output)
         })

@@ -3,4 +3,5 @@
 
 pub mod checkpoint;
 pub mod compare;
+pub mod live;
 pub mod output;

@@ -7,6 +7,7 @@ use crate::engines::cpu::fast::SweepEngine;
 use crate::engines::quasistatic::{FastForward, Jump};
 use crate::engines::step_params::{step_params, Consts};
 use crate::engines::{Engine, Snapshot};
+use crate::io::output::records::RecordBuilder;
 use crate::model::Model;
 
 /// Performs a planned quasi-static jump: writes the output samples due on
@@ -83,9 +84,7 @@ pub(super) fn perform_jump(
         record.dropped_energy += relaxation_drop(&model, &before, &before_new_law, &end, origin);
     }
     jump.record = record;
-    if let Some(sink) = outputs.sink.as_mut() {
-        sink.write_fast_forward(&jump.record)?;
-    }
+    outputs.send(RecordBuilder::fast_forward(&jump.record))?;
     engine.set_junctions(&path.end)?;
     engine.set_kinematics(s1, &path.end.disp, &path.end_w)?;
     ff.book(&model, &jump.record, path.path_error);

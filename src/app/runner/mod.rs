@@ -14,6 +14,7 @@ pub use progress::ProgressMode;
 use crate::engines::quasistatic::{FastForward, FastForwardSettings, FastForwardStats};
 use crate::engines::{advance_to, Engine, EngineError};
 use crate::io::checkpoint::RunnerState;
+use crate::io::live::LiveView;
 use crate::io::output::McapSink;
 use crate::model::scenario::Scenario;
 use checkpoints::Checkpointer;
@@ -65,6 +66,12 @@ pub fn clear_stop() {
     SIGNAL.store(0, Ordering::SeqCst);
 }
 
+/// Notes SIGINT, SIGTERM and SIGHUP from now on (see [`interrupted`]), as a
+/// run does: for commands that wait before or without a run.
+pub fn watch_stop_signals() {
+    HANDLER.call_once(catch_stop_signals);
+}
+
 /// Stop requests are noted (the run ends at its next chunk, closing its
 /// file and writing a checkpoint), not acted on at once.
 fn catch_stop_signals() {
@@ -108,6 +115,9 @@ pub struct RunOptions {
     /// checkpoints carry it on).
     pub history: Vec<String>,
     pub on_chunk: Option<ChunkHook>,
+    /// Streams the records to a live view too (its caller started it, and
+    /// closes it).
+    pub live: Option<LiveView>,
 }
 
 /// The runner's side of a saved run, and the run file whose first
@@ -284,7 +294,7 @@ pub fn run_scene(
         )?),
         (None, _) => None,
     };
-    let mut outputs = Outputs::new(&model, scenario, sink);
+    let mut outputs = Outputs::new(&model, scenario, sink, opts.live.clone());
     let mut ff = opts
         .fast_forward
         .or_else(|| {
@@ -381,6 +391,9 @@ pub fn run_scene(
                 chunk = fit.clamp(1, MAX_CHUNK).min(chunk.saturating_mul(2));
             }
             progress.update(s, outputs.events());
+            if let Some(live) = &outputs.live {
+                live.show_time(model.time_of_step(s));
+            }
             if let Some(hook) = &opts.on_chunk {
                 hook(s, total);
             }

@@ -6,6 +6,8 @@ use crate::engines::quasistatic::FastForwardStats;
 use crate::engines::step_params::{step_params, Consts};
 use crate::engines::{record_sample, Sample, SamplePlan, Snapshot};
 use crate::io::checkpoint::RunnerState;
+use crate::io::live::LiveView;
+use crate::io::output::records::{Record, RecordBuilder};
 use crate::io::output::{GlobalSample, McapSink};
 use crate::model::scenario::Scenario;
 use crate::model::{Driver, Model};
@@ -88,11 +90,15 @@ pub(super) fn next_multiple(step: u64, every: u64) -> u64 {
         .map_or(u64::MAX, |n| (n + 1) * every)
 }
 
-/// The output side of a run: cadences, the sink, and what the summary
-/// reports (peak and last F/F_N, ruptures).
+/// The output side of a run: cadences, the sinks (the run file, the live
+/// view), and what the summary reports (peak and last F/F_N, ruptures).
 pub(super) struct Outputs {
     model: Model,
     pub sink: Option<McapSink>,
+    /// Records go to the live view too; without a run file, samples are
+    /// taken only while a viewer subscribes.
+    pub live: Option<LiveView>,
+    records: RecordBuilder,
     every_global: u64,
     every_interface: u64,
     every_bulk: u64,
@@ -112,11 +118,18 @@ pub(super) struct Outputs {
 }
 
 impl Outputs {
-    pub fn new(model: &Model, scenario: &Scenario, sink: Option<McapSink>) -> Self {
+    pub fn new(
+        model: &Model,
+        scenario: &Scenario,
+        sink: Option<McapSink>,
+        live: Option<LiveView>,
+    ) -> Self {
         let o = &scenario.output;
         Outputs {
             model: model.clone(),
             sink,
+            live,
+            records: RecordBuilder::default(),
             every_global: interval_steps(model, o.global_interval),
             every_interface: interval_steps(model, o.interface_interval),
             every_bulk: interval_steps(model, o.bulk_interval),
@@ -136,7 +149,7 @@ impl Outputs {
     /// none, or nothing is written).
     pub fn next_due(&self, s: u64) -> u64 {
         let prep = self.model.prep_steps;
-        if s < prep || self.sink.is_none() {
+        if s < prep || !self.recording() {
             return u64::MAX;
         }
         let d = s - prep;
@@ -149,6 +162,11 @@ impl Outputs {
                 u64::MAX
             })
             .saturating_add(prep)
+    }
+
+    /// Records are wanted now: there is a run file, or a viewer.
+    fn recording(&self) -> bool {
+        self.sink.is_some() || self.live.as_ref().is_some_and(LiveView::wanted)
     }
 
     /// The cadences as the engines' sample plan, with the fast cadence's
@@ -190,16 +208,30 @@ impl Outputs {
             }
             self.last_slip = Some(sample.time);
         }
+        if due.global {
+            self.send(RecordBuilder::global(&g))?;
+        }
+        if let Some(row) = &sample.interface {
+            let record = self
+                .records
+                .interface(&self.model, sample.step, sample.time, row);
+            self.send(record)?;
+        }
+        if let Some(field) = &sample.bulk {
+            let record = RecordBuilder::bulk(&self.model, sample.step, sample.time, field);
+            self.send(record)?;
+        }
+        Ok(())
+    }
+
+    /// Writes a record to the run file and the live view, encoded once.
+    pub fn send(&mut self, record: Record) -> Result<(), RunError> {
+        let bytes = record.encode();
         if let Some(sink) = self.sink.as_mut() {
-            if due.global {
-                sink.write_global(&g)?;
-            }
-            if let Some(row) = &sample.interface {
-                sink.write_interface(model, sample.step, sample.time, row)?;
-            }
-            if let Some(field) = &sample.bulk {
-                sink.write_bulk(model, sample.step, sample.time, field)?;
-            }
+            sink.write(record.topic(), record.time(), &bytes)?;
+        }
+        if let Some(live) = &self.live {
+            live.publish(&record, &bytes);
         }
         Ok(())
     }
@@ -213,7 +245,8 @@ impl Outputs {
     /// The runner state's output part (the fast-forward's is added by the
     /// caller).
     pub fn save(&self) -> RunnerState {
-        let (sequence, slip_origin) = self.sink.as_ref().map_or((0, None), McapSink::state);
+        let sequence = self.sink.as_ref().map_or(0, McapSink::sequence);
+        let slip_origin = self.records.slip_origin();
         RunnerState {
             origin: self.origin,
             fast: self.fast,
@@ -237,8 +270,9 @@ impl Outputs {
         self.ruptures = r.ruptures;
         self.events = r.events;
         self.last_slip = r.last_slip;
+        self.records = RecordBuilder::restored(r.slip_origin.clone());
         if let Some(sink) = self.sink.as_mut() {
-            sink.restore(r.sequence, r.slip_origin.clone());
+            sink.restore(r.sequence);
         }
     }
 

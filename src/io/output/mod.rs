@@ -8,14 +8,13 @@
 pub mod lock;
 pub mod messages;
 pub mod reader;
+pub mod records;
 pub mod recover;
 pub mod scan;
 
-use prost::Message;
-
-use crate::engines::{BulkField, InterfaceRow};
 use crate::model::scenario::Scenario;
 use crate::model::Model;
+use records::Topic;
 use serde::Serialize;
 use std::collections::BTreeMap;
 use std::fs::File;
@@ -55,13 +54,10 @@ pub struct McapSink {
     writer: mcap::Writer<BufWriter<File>>,
     /// The same file, to sync it to disk before a checkpoint.
     file: File,
-    global: u16,
-    interface: u16,
-    bulk: u16,
-    fast_forward: u16,
+    /// Channel ids, by [`Topic::index`].
+    channels: [u16; 4],
     sequence: u32,
     last_flush: Instant,
-    slip_origin: Option<Vec<f64>>,
 }
 
 /// Opens `path` for writing as the only writer: created if missing, locked
@@ -155,25 +151,19 @@ impl McapSink {
             data: std::borrow::Cow::Owned(toml.into_bytes()),
         })?;
         let descriptor = messages::descriptor_set();
-        let g = writer.add_schema("slipfront.Global", "protobuf", &descriptor)?;
-        let i = writer.add_schema("slipfront.Interface", "protobuf", &descriptor)?;
-        let b = writer.add_schema("slipfront.Bulk", "protobuf", &descriptor)?;
         let none = BTreeMap::new();
-        let global = writer.add_channel(g, "/global", "protobuf", &none)?;
-        let interface = writer.add_channel(i, "/interface", "protobuf", &none)?;
-        let bulk = writer.add_channel(b, "/bulk", "protobuf", &none)?;
-        let f = writer.add_schema("slipfront.FastForwardJump", "protobuf", &descriptor)?;
-        let fast_forward = writer.add_channel(f, "/fast_forward", "protobuf", &none)?;
+        let mut channels = [0; 4];
+        for topic in Topic::ALL {
+            let schema = writer.add_schema(topic.schema(), "protobuf", &descriptor)?;
+            channels[topic.index()] =
+                writer.add_channel(schema, topic.name(), "protobuf", &none)?;
+        }
         Ok(McapSink {
             writer,
             file: sync_handle,
-            global,
-            interface,
-            bulk,
-            fast_forward,
+            channels,
             sequence: 0,
             last_flush: Instant::now(),
-            slip_origin: None,
         })
     }
 
@@ -229,14 +219,9 @@ impl McapSink {
         let ending = scan::scan(parent, fail, |record| {
             match record {
                 Record::Channel(c) => {
-                    let id = match c.topic.as_str() {
-                        "/global" => self.global,
-                        "/interface" => self.interface,
-                        "/bulk" => self.bulk,
-                        "/fast_forward" => self.fast_forward,
-                        other => return Err(fail(format!("unknown channel `{other}`"))),
-                    };
-                    ours.insert(c.id, id);
+                    let topic = Topic::from_name(&c.topic)
+                        .ok_or_else(|| fail(format!("unknown channel `{}`", c.topic)))?;
+                    ours.insert(c.id, self.channels[topic.index()]);
                 }
                 Record::Message { header, data } if header.sequence <= upto => {
                     let channel_id = *ours.get(&header.channel_id).ok_or_else(|| {
@@ -277,24 +262,24 @@ impl McapSink {
         })
     }
 
-    /// (messages written, interface slip origin): the sink's part of a
-    /// checkpoint.
-    pub fn state(&self) -> (u32, Option<Vec<f64>>) {
-        (self.sequence, self.slip_origin.clone())
+    /// Messages written so far: the sink's part of a checkpoint.
+    pub fn sequence(&self) -> u32 {
+        self.sequence
     }
 
-    /// Continues the numbering and the slip origin of a saved run.
-    pub fn restore(&mut self, sequence: u32, slip_origin: Option<Vec<f64>>) {
+    /// Continues the numbering of a saved run.
+    pub fn restore(&mut self, sequence: u32) {
         self.sequence = sequence;
-        self.slip_origin = slip_origin;
     }
 
-    fn write(&mut self, channel: u16, time: f64, data: &[u8]) -> Result<(), OutputError> {
-        let t = (time.max(0.0) * 1e9) as u64;
+    /// Writes one message of `topic`, its protobuf bytes, logged at
+    /// simulated time `time` (s).
+    pub fn write(&mut self, topic: Topic, time: f64, data: &[u8]) -> Result<(), OutputError> {
+        let t = records::log_time(time);
         self.sequence += 1;
         self.writer.write_to_known_channel(
             &mcap::records::MessageHeader {
-                channel_id: channel,
+                channel_id: self.channels[topic.index()],
                 sequence: self.sequence,
                 log_time: t,
                 publish_time: t,
@@ -306,96 +291,6 @@ impl McapSink {
             self.last_flush = Instant::now();
         }
         Ok(())
-    }
-
-    pub fn write_global(&mut self, g: &GlobalSample) -> Result<(), OutputError> {
-        let msg = messages::Global {
-            time: g.time,
-            step: g.step,
-            drive_force: g.drive_force,
-            drive_ratio: g.drive_ratio,
-            friction_force: g.friction_force,
-            pinned_fraction: g.pinned_fraction,
-            kinetic_energy: g.kinetic_energy,
-            ruptures: g.ruptures,
-        };
-        self.write(self.global, g.time, &msg.encode_to_vec())
-    }
-
-    /// Writes an interface row; slip is u_x from the first row written.
-    pub fn write_interface(
-        &mut self,
-        model: &Model,
-        step: u64,
-        time: f64,
-        row: &InterfaceRow,
-    ) -> Result<(), OutputError> {
-        let area = model.spacing * model.width;
-        let origin = self.slip_origin.get_or_insert_with(|| row.ux.clone());
-        let slip: Vec<f64> = row
-            .ux
-            .iter()
-            .zip(origin.iter())
-            .map(|(u, o)| u - o)
-            .collect();
-        let shear: Vec<f64> = row.friction.iter().map(|f| -f / area).collect();
-        let normal: Vec<f64> = row.normal.iter().map(|p| p / area).collect();
-        let msg = messages::Interface {
-            time,
-            step,
-            shear_stress: shear,
-            normal_stress: normal,
-            pinned_fraction: row.pinned_fraction.clone(),
-            slip,
-            slip_speed: row.slip_speed.clone(),
-        };
-        let data = msg.encode_to_vec();
-        self.write(self.interface, time, &data)
-    }
-
-    pub fn write_bulk(
-        &mut self,
-        model: &Model,
-        step: u64,
-        time: f64,
-        field: &BulkField,
-    ) -> Result<(), OutputError> {
-        let msg = messages::Bulk {
-            time,
-            step,
-            nx: model.nx as u32,
-            nz: model.nz as u32,
-            ux: field.ux.clone(),
-            uz: field.uz.clone(),
-            vx: field.vx.clone(),
-            vz: field.vz.clone(),
-        };
-        self.write(self.bulk, time, &msg.encode_to_vec())
-    }
-
-    pub fn write_fast_forward(
-        &mut self,
-        r: &crate::engines::quasistatic::JumpRecord,
-    ) -> Result<(), OutputError> {
-        let index = |v: Option<usize>| v.map_or(-1, |v| v as i32);
-        let msg = messages::FastForwardJump {
-            start_time: r.start_time,
-            end_time: r.end_time,
-            start_step: r.start_step,
-            end_step: r.end_step,
-            drive_start: r.drive_start,
-            drive_end: r.drive_end,
-            predicted_change: r.predicted_change,
-            block: index(r.block),
-            junction: index(r.junction),
-            dropped_energy: r.dropped_energy,
-            work_in: r.work_in,
-            damping: r.damping,
-            stored_change: r.stored_change,
-            ruptures: r.ruptures,
-            repins: r.repins,
-        };
-        self.write(self.fast_forward, r.end_time, &msg.encode_to_vec())
     }
 
     /// Closes the file; a fast-forwarded run adds its totals as the
