@@ -20,6 +20,9 @@ const FRAME_INTERVAL: Duration = Duration::from_millis(33);
 /// (the server counts messages: the count is this over the largest one).
 const QUEUE_BYTES: usize = 128 << 20;
 
+/// How long a closing server keeps sending to its viewers.
+const LINGER: Duration = Duration::from_secs(1);
+
 /// How long a viewer's subscriptions must stay unchanged before a run that
 /// waits for one starts (one subscribe message lands well within this).
 const SETTLE: Duration = Duration::from_millis(300);
@@ -29,6 +32,8 @@ const SETTLE: Duration = Duration::from_millis(300);
 pub struct LiveView(Arc<Inner>);
 
 struct Inner {
+    /// The server holds its context weakly: kept alive here.
+    _context: Arc<Context>,
     handle: Mutex<Option<WebSocketServerHandle>>,
     url: String,
     records: Vec<Arc<RawChannel>>,
@@ -97,8 +102,8 @@ impl LiveView {
             .iter()
             .map(|topic| context.channel_builder(*topic).build::<RawImage>())
             .collect();
-        let picture_bytes = super::pictures::HISTORY_ROWS * super::pictures::MAX_COLUMNS * 3;
-        let backlog = (QUEUE_BYTES / largest_message.max(picture_bytes)).clamp(16, 4096);
+        // Pictures come at most 30 times a second: records fill the queue.
+        let backlog = (QUEUE_BYTES / largest_message.max(1)).clamp(16, 16384);
         let watch = Arc::new(Subscriptions::default());
         let handle = context
             .websocket_server()
@@ -117,6 +122,7 @@ impl LiveView {
             ..address.clone()
         };
         Ok(LiveView(Arc::new(Inner {
+            _context: context,
             handle: Mutex::new(Some(handle)),
             url: format!("ws://{shown}"),
             records,
@@ -233,9 +239,13 @@ impl LiveView {
         }
     }
 
-    /// Closes the server: viewers get a close message. A viewer that does
-    /// not read is given up on after a second.
+    /// Closes the server: viewers get the last pictures and what is queued for them (for up to
+    /// [`LINGER`]: the server cannot say when a queue is empty, and
+    /// stopping drops what is left), then a close message. A viewer that
+    /// does not read is given up on after another second.
     pub fn close(&self) {
+        // The last pictures, whatever the frame rate allowed.
+        self.draw(&mut self.0.drawing.lock().unwrap_or_else(|e| e.into_inner()));
         let handle = self
             .0
             .handle
@@ -243,6 +253,9 @@ impl LiveView {
             .unwrap_or_else(|e| e.into_inner())
             .take();
         if let Some(handle) = handle {
+            if handle.client_count() > 0 {
+                std::thread::sleep(LINGER);
+            }
             let shutdown = handle.stop();
             let (done, wait) = std::sync::mpsc::channel();
             std::thread::spawn(move || {
