@@ -5,6 +5,8 @@
 //! that stops reading must not stall the run, a bad address is refused
 //! clearly, and Ctrl-C closes the server and the file.
 
+#![cfg(feature = "live")]
+
 #[path = "support/live_client.rs"]
 mod live_client;
 
@@ -235,7 +237,7 @@ fn check_pictures(client: &LiveClient, live: &BTreeMap<String, Vec<Received>>, n
             field("height").as_u32().unwrap(),
         );
         assert_eq!(w as u64, nx, "{topic}: a column per block");
-        assert!(h >= 1 && h <= 256, "{topic}: {h} rows");
+        assert!((1..=256).contains(&h), "{topic}: {h} rows");
         assert_eq!(field("encoding").as_str(), Some("rgb8"));
         assert_eq!(field("data").as_bytes().unwrap().len() as u32, 3 * w * h);
     }
@@ -505,4 +507,62 @@ fn ctrl_c_closes_the_server_and_the_file() {
     assert!(info.status.success() && text.contains("/global"), "{text}");
     assert!(!text.contains("cut short"), "{text}");
     assert!(!file_messages(&file).by_topic["/global"].is_empty());
+}
+
+/// Every panel of the shipped Foxglove layout shows a channel the live
+/// view serves: plot paths name a field of the channel's schema, image
+/// panels an image channel.
+#[test]
+fn the_layout_names_only_channels_and_fields_that_exist() {
+    let text = std::fs::read_to_string(format!(
+        "{}/docs/foxglove-layout.json",
+        env!("CARGO_MANIFEST_DIR")
+    ))
+    .unwrap();
+    let layout: serde_json::Value = serde_json::from_str(&text).expect("JSON");
+    let pool = prost_reflect::DescriptorPool::decode(
+        &slipfront::io::output::messages::descriptor_set()[..],
+    )
+    .unwrap();
+    let schema_of = |topic: &str| match topic {
+        "/global" => "slipfront.Global",
+        "/interface" => "slipfront.Interface",
+        "/bulk" => "slipfront.Bulk",
+        "/fast_forward" => "slipfront.FastForwardJump",
+        other => panic!("the layout plots `{other}`, which is not a record channel"),
+    };
+    let check = |path: &str| -> Result<(), String> {
+        let (topic, field) = path.split_once('.').ok_or(format!("`{path}`: no field"))?;
+        let message = pool.get_message_by_name(schema_of(topic)).unwrap();
+        message.get_field_by_name(field).map(|_| ()).ok_or(format!(
+            "`{path}`: {} has no field `{field}`",
+            message.full_name()
+        ))
+    };
+    let panels = layout["configById"].as_object().unwrap();
+    let (mut plots, mut images) = (0, Vec::new());
+    for (id, config) in panels {
+        if id.starts_with("Plot!") {
+            for p in config["paths"].as_array().unwrap() {
+                check(p["value"].as_str().unwrap()).unwrap();
+                plots += 1;
+            }
+        } else if id.starts_with("Image!") {
+            let topic = config["imageMode"]["imageTopic"].as_str().unwrap();
+            assert!(IMAGE_TOPICS.contains(&topic), "{id}: {topic}");
+            images.push(topic);
+        }
+        assert!(
+            text.matches(&format!("\"{id}\"")).count() == 2,
+            "{id} is not placed"
+        );
+    }
+    assert!(plots >= 3);
+    images.sort();
+    let mut all = IMAGE_TOPICS.to_vec();
+    all.sort();
+    assert_eq!(images, all, "an image panel per picture");
+    // Negative controls: the check flags a misspelt field and channel.
+    assert!(check("/global.drive_ration").is_err());
+    assert!(std::panic::catch_unwind(|| check("/globl.drive_ratio")).is_err());
 }

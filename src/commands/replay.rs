@@ -3,7 +3,7 @@
 //! time; and the start of a live view, shared with `run`.
 
 use slipfront::app::runner::{interrupted, stopping_signal, watch_stop_signals};
-use slipfront::io::live::{LiveAddress, LiveView};
+use slipfront::io::live::{largest_record, LiveAddress, LiveView};
 use slipfront::io::output::reader::RunFile;
 use slipfront::io::output::records::{Record, Topic};
 use slipfront::io::output::scan::{scan, Ending, Flow};
@@ -26,7 +26,7 @@ pub fn start_live(
     let live = LiveView::start(address, largest_record)?;
     eprintln!(
         "slipfront: live view at {} (Foxglove: Open connection → Foxglove WebSocket; \
-         layout foxglove/slipfront-layout.json)",
+         layout docs/foxglove-layout.json)",
         live.url()
     );
     if wait {
@@ -61,7 +61,7 @@ pub fn replay(a: ReplayArgs) -> anyhow::Result<ExitCode> {
         .and_then(|text| Scenario::parse(text, "the run file's scenario", &[]).ok())
         .map_or(1.0, |s| s.time.end);
     let speed = a.speed.unwrap_or(span / DEFAULT_REPLAY_SECONDS);
-    let live = start_live(a.live, (nx * nz * 16).max(nx * 40) + 64, a.wait)?;
+    let live = start_live(a.live, largest_record(nx, nz, true), a.wait)?;
     if speed > 0.0 {
         eprintln!(
             "slipfront: replaying `{}` at {speed:.3e} s of simulated time per second \

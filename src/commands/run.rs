@@ -3,7 +3,7 @@ use slipfront::engines::backend::{make_engine_with, Backend, Precision};
 use slipfront::engines::gpu::{GpuOptions, GpuOutput, GpuPath};
 use slipfront::engines::Engine;
 use slipfront::io::checkpoint::{branch, path_for, Checkpoint};
-use slipfront::io::live::{LiveAddress, DEFAULT_LIVE_ADDRESS};
+use slipfront::io::live::{largest_record, LiveAddress, DEFAULT_LIVE_ADDRESS};
 use slipfront::io::output::fnv1a;
 use slipfront::io::output::lock::RunLock;
 use slipfront::model::scenario::Scenario;
@@ -209,7 +209,11 @@ fn finish(
     let live = match &a.live {
         Some(address) => Some(super::replay::start_live(
             address,
-            largest_record(engine.model(), scenario),
+            largest_record(
+                engine.model().nx,
+                engine.model().nz,
+                scenario.output.bulk_interval > 0.0,
+            ),
             a.live_wait,
         )?),
         None => None,
@@ -242,18 +246,6 @@ fn finish(
     } else {
         ExitCode::SUCCESS
     })
-}
-
-/// Bytes of the largest record the run can send: a bulk field where bulk
-/// output is on, else an interface row.
-fn largest_record(model: &Model, scenario: &Scenario) -> usize {
-    let interface = model.nx * 5 * 8;
-    let bulk = if scenario.output.bulk_interval > 0.0 {
-        model.nx * model.nz * 4 * 4
-    } else {
-        0
-    };
-    interface.max(bulk) + 64
 }
 
 /// The file starts as a checkpoint does.

@@ -28,6 +28,15 @@ pub const IMAGE_TOPICS: [&str; 4] = [
     "/live/bulk_speed",
 ];
 
+/// Bytes of the largest record a run of an `nx` × `nz` lattice sends: a
+/// bulk field where `bulk` output is on, else an interface row (each
+/// viewer's queue is sized by it).
+pub fn largest_record(nx: usize, nz: usize, bulk: bool) -> usize {
+    let interface = nx * 5 * 8;
+    let field = if bulk { nx * nz * 4 * 4 } else { 0 };
+    interface.max(field) + 64
+}
+
 #[derive(Debug, thiserror::Error)]
 pub enum LiveError {
     #[error(
