@@ -141,29 +141,22 @@ impl InterfaceHistory {
 
     /// τ/p, from the window's lowest to its highest value.
     pub fn stress_ratio(&self) -> Picture {
-        let values: Vec<f32> = self.stress_ratio.iter().flatten().copied().collect();
-        let (lo, hi) = finite_range(&values);
-        draw(
-            &values,
-            self.columns,
-            lo,
-            hi,
-            format!("tau/p {lo:.3} .. {hi:.3}"),
-        )
+        self.linear(&self.stress_ratio, |lo, hi| {
+            format!("tau/p {lo:.3} .. {hi:.3}")
+        })
     }
 
     /// Slip since the start of driving (m), from the window's lowest to its
     /// highest value.
     pub fn slip(&self) -> Picture {
-        let values: Vec<f32> = self.slip.iter().flatten().copied().collect();
+        self.linear(&self.slip, |lo, hi| format!("slip {lo:.3e} .. {hi:.3e} m"))
+    }
+
+    /// `rows` on a linear scale from their lowest to their highest value.
+    fn linear(&self, rows: &VecDeque<Vec<f32>>, scale: impl Fn(f32, f32) -> String) -> Picture {
+        let values: Vec<f32> = rows.iter().flatten().copied().collect();
         let (lo, hi) = finite_range(&values);
-        draw(
-            &values,
-            self.columns,
-            lo,
-            hi,
-            format!("slip {lo:.3e} .. {hi:.3e} m"),
-        )
+        draw(&values, self.columns, lo, hi, scale(lo, hi))
     }
 
     /// Slip speed, logarithmic: [`SPEED_DECADES`] below the window's
