@@ -434,8 +434,9 @@ fn a_bad_or_taken_address_is_refused_clearly() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(!out.status.success());
     assert!(
-        err.contains(&format!("--live 127.0.0.1:{port}: cannot listen there"))
-            && err.contains("in use"),
+        err.contains(&format!(
+            "live view at 127.0.0.1:{port}: cannot listen there"
+        )) && err.contains("in use"),
         "{err}"
     );
     for bad in ["localhost:http", "127.0.0.1:99999"] {

@@ -218,7 +218,8 @@ def run(scenario: ScenarioLike = None, *, backend: str = "auto",
         output: Optional[PathLike] = None, progress: Progress = True,
         set: Optional[dict] = None, threads: int = 0, gpu_path: str = "auto",
         gpu_output: str = "device", force: bool = False,
-        allow_unstable: bool = False) -> Run:
+        allow_unstable: bool = False, live: Optional[str] = None,
+        live_wait: bool = False) -> Run:
     """Runs a scene to its end and returns its records as a `Run`.
 
     scenario: a `Scenario`, a scenario file, a shipped scene's name, or
@@ -228,7 +229,10 @@ def run(scenario: ScenarioLike = None, *, backend: str = "auto",
     time.end). output: the run file to keep (None: the records are read
     into memory and the file removed). progress: True (tqdm if installed),
     False, or a callable(done_steps, total_steps). The GIL is released
-    while the scene steps.
+    while the scene steps. live: stream the run to Foxglove viewers over
+    WebSocket at "HOST:PORT" (as `slipfront run --live`; port 0 takes a
+    free one, and `summary["live"]` says where); live_wait: start once a
+    viewer has subscribed.
 
     Ctrl-C stops the run at its next chunk; with an output file its
     checkpoint is written, then `Interrupted` (a KeyboardInterrupt) is
@@ -247,7 +251,8 @@ def run(scenario: ScenarioLike = None, *, backend: str = "auto",
             summary, stopped_by = _core.run_scene(
                 sc, path, backend=backend, precision=precision, threads=threads,
                 gpu_path=gpu_path, gpu_output=gpu_output,
-                allow_unstable=allow_unstable, force=force, progress=callback)
+                allow_unstable=allow_unstable, force=force, progress=callback,
+                live=live, live_wait=live_wait)
         finally:
             close()
         result = Run(_core.read_run(path), summary=summary)

@@ -4,13 +4,14 @@
 use crate::scenario::Scenario;
 use crate::watch::Watcher;
 use crate::{choice, engine_error};
-use pyo3::exceptions::{PyFileExistsError, PyRuntimeError, PyValueError};
+use pyo3::exceptions::{PyFileExistsError, PyOSError, PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use slipfront::app::runner::{self, ProgressMode, RunError, RunOptions, RunSummary};
 use slipfront::engines::backend::{make_engine_with, Backend, Precision};
 use slipfront::engines::gpu::{GpuOptions, GpuOutput, GpuPath};
 use slipfront::io::checkpoint::Checkpoint;
+use slipfront::io::live::{largest_record, LiveAddress, LiveError, LiveView};
 use slipfront::io::output::fnv1a;
 use slipfront::io::output::lock::RunLock;
 use slipfront::{Engine, Model};
@@ -86,6 +87,48 @@ fn summary_dict<'py>(py: Python<'py>, s: &RunSummary) -> PyResult<Bound<'py, PyD
     Ok(d)
 }
 
+/// Starts the run's live view at `address` and says where on Python's
+/// stderr; with `wait`, returns once a viewer has subscribed (Ctrl-C
+/// gives up waiting and raises KeyboardInterrupt).
+fn start_live(
+    py: Python<'_>,
+    address: &str,
+    model: &Model,
+    sc: &slipfront::Scenario,
+    wait: bool,
+) -> PyResult<LiveView> {
+    let address: LiveAddress = address
+        .parse()
+        .map_err(|e: String| PyValueError::new_err(format!("live: {e}")))?;
+    let largest = largest_record(model.nx, model.nz, sc.output.bulk_interval > 0.0);
+    let view = LiveView::start(&address, largest).map_err(|e| match e {
+        LiveError::Bind { .. } => PyOSError::new_err(e.to_string()),
+        e => PyRuntimeError::new_err(e.to_string()),
+    })?;
+    let say = format!(
+        "slipfront: live view at {} (Foxglove: Open connection → Foxglove WebSocket)\n",
+        view.url()
+    );
+    py.import("sys")?
+        .getattr("stderr")?
+        .call_method1("write", (say,))?;
+    if wait {
+        let caught = std::sync::Mutex::new(None);
+        py.detach(|| {
+            view.wait_for_viewer(&|| {
+                Python::attach(|py| py.check_signals())
+                    .map_err(|e| *caught.lock().unwrap_or_else(|p| p.into_inner()) = Some(e))
+                    .is_err()
+            })
+        });
+        if let Some(e) = caught.into_inner().unwrap_or_else(|p| p.into_inner()) {
+            view.close();
+            return Err(e);
+        }
+    }
+    Ok(view)
+}
+
 /// Runs `scenario` to its end into the run file `output`. Returns the run
 /// summary, and the exception that stopped the run early (Ctrl-C's
 /// KeyboardInterrupt, or one raised by `progress`), if one did: the run
@@ -93,7 +136,7 @@ fn summary_dict<'py>(py: Python<'py>, s: &RunSummary) -> PyResult<Bound<'py, PyD
 #[pyfunction]
 #[pyo3(signature = (scenario, output, backend="auto", precision=None, threads=0,
                     gpu_path="auto", gpu_output="device", allow_unstable=false,
-                    force=false, progress=None))]
+                    force=false, progress=None, live=None, live_wait=false))]
 #[allow(clippy::too_many_arguments)]
 pub fn run_scene<'py>(
     py: Python<'py>,
@@ -107,6 +150,8 @@ pub fn run_scene<'py>(
     allow_unstable: bool,
     force: bool,
     progress: Option<Py<PyAny>>,
+    live: Option<&str>,
+    live_wait: bool,
 ) -> PyResult<(Bound<'py, PyDict>, Option<PyErr>)> {
     let choice = EngineChoice::parse(backend, precision, threads, gpu_path, gpu_output)?;
     let sc = &scenario.inner;
@@ -134,6 +179,9 @@ pub fn run_scene<'py>(
         fnv1a(sc.to_toml().as_bytes()),
         engine.describe()
     )];
+    let live = live
+        .map(|address| start_live(py, address, &model, sc, live_wait))
+        .transpose()?;
     let watcher = Watcher::new(progress);
     let hook = {
         let w = watcher.clone();
@@ -144,12 +192,23 @@ pub fn run_scene<'py>(
         progress: ProgressMode::None,
         history,
         on_chunk: Some(hook),
+        live: live.clone(),
         ..RunOptions::default()
     };
-    let result = py.detach(|| runner::run_scene(engine.as_mut(), sc, &opts));
+    let result = py.detach(|| {
+        let result = runner::run_scene(engine.as_mut(), sc, &opts);
+        if let Some(live) = &live {
+            live.close();
+        }
+        result
+    });
     let stopped_by = watcher.take_error();
     match result {
-        Ok(summary) => Ok((summary_dict(py, &summary)?, stopped_by)),
+        Ok(summary) => {
+            let d = summary_dict(py, &summary)?;
+            d.set_item("live", live.as_ref().map(LiveView::url))?;
+            Ok((d, stopped_by))
+        }
         Err(RunError::Engine(e)) => Err(engine_error(e)),
         Err(e) => Err(PyRuntimeError::new_err(e.to_string())),
     }

@@ -40,8 +40,8 @@ pub fn largest_record(nx: usize, nz: usize, bulk: bool) -> usize {
 #[derive(Debug, thiserror::Error)]
 pub enum LiveError {
     #[error(
-        "--live {address}: cannot listen there: {why} (pick another port with \
-         --live HOST:PORT, or port 0 for a free one)"
+        "live view at {address}: cannot listen there: {why} (pick another port, or \
+         port 0 for a free one)"
     )]
     Bind { address: String, why: String },
     #[error(
