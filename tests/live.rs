@@ -448,6 +448,18 @@ fn a_bad_or_taken_address_is_refused_clearly() {
             "{err}"
         );
     }
+    for speed in ["--speed=-1", "--speed=nan", "--speed=fast"] {
+        let out = Command::new(env!("CARGO_BIN_EXE_slipfront"))
+            .args(["replay", "run.mcap", speed])
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{err}");
+        assert!(
+            err.contains("--speed = ") && err.contains("0 or more"),
+            "{err}"
+        );
+    }
     let out = Command::new(env!("CARGO_BIN_EXE_slipfront"))
         .args(["replay", "/nonexistent/run.mcap", "--live", ":0"])
         .output()

@@ -12,6 +12,7 @@ use slipfront::analysis::events::InterfaceSeries;
 use slipfront::analysis::precursors::PrecursorSequence;
 use slipfront::io::output::messages::{Bulk, FastForwardJump, Global, Interface};
 use slipfront::io::output::reader::{memory_budget, times_go_forward, ChannelSink, RunFile};
+use slipfront::io::output::records::Topic;
 use std::path::PathBuf;
 
 /// One column: its numbers, and its shape (rows first).
@@ -84,12 +85,12 @@ struct ColumnSink {
 }
 
 impl ChannelSink for ColumnSink {
-    fn message(&mut self, topic: &str, data: &[u8]) -> Result<(), String> {
+    fn message(&mut self, topic: Topic, data: &[u8]) -> Result<(), String> {
         let e = |e: prost::DecodeError| e.to_string();
         match topic {
-            "/global" => self.global.push(Global::decode(data).map_err(e)?),
-            "/fast_forward" => self.jumps.push(FastForwardJump::decode(data).map_err(e)?),
-            "/interface" => {
+            Topic::Global => self.global.push(Global::decode(data).map_err(e)?),
+            Topic::FastForward => self.jumps.push(FastForwardJump::decode(data).map_err(e)?),
+            Topic::Interface => {
                 let m = &mut self.scratch_interface;
                 m.clear();
                 m.merge(data).map_err(e)?;
@@ -116,7 +117,7 @@ impl ChannelSink for ColumnSink {
                 self.interface_time.push(m.time);
                 self.interface_step.push(m.step);
             }
-            "/bulk" => {
+            Topic::Bulk => {
                 let m = &mut self.scratch_bulk;
                 m.clear();
                 m.merge(data).map_err(e)?;
@@ -141,7 +142,6 @@ impl ChannelSink for ColumnSink {
                 self.bulk_time.push(m.time);
                 self.bulk_step.push(m.step);
             }
-            _ => {}
         }
         Ok(())
     }

@@ -3,11 +3,11 @@
 //! everything up to its last complete chunk.
 
 use super::messages::{Bulk, FastForwardJump, Global, Interface};
+use super::records::{Record as ChannelRecord, Topic};
 use super::scan::{scan, Ending, Flow};
 use super::OutputError;
 use crate::analysis::events::InterfaceSeries;
 use mcap::records::Record;
-use prost::Message;
 use std::collections::{BTreeMap, HashMap};
 use std::path::Path;
 
@@ -38,8 +38,8 @@ pub struct RunFile {
 /// package's) can decode them straight into its columns.
 pub trait ChannelSink {
     /// One message of `topic`, its protobuf bytes; an error is why it does
-    /// not decode.
-    fn message(&mut self, topic: &str, data: &[u8]) -> Result<(), String>;
+    /// not decode. (Channels of other names are not read.)
+    fn message(&mut self, topic: Topic, data: &[u8]) -> Result<(), String>;
     /// After the last message: every /interface row as long as the
     /// interface (`nx` blocks when the metadata says), and no channel's
     /// time going backwards. A file that breaks either is damaged.
@@ -56,16 +56,12 @@ pub struct Messages {
 }
 
 impl ChannelSink for Messages {
-    fn message(&mut self, topic: &str, data: &[u8]) -> Result<(), String> {
-        let e = |e: prost::DecodeError| e.to_string();
-        match topic {
-            "/global" => self.global.push(Global::decode(data).map_err(e)?),
-            "/interface" => self.interface.push(Interface::decode(data).map_err(e)?),
-            "/bulk" => self.bulk.push(Bulk::decode(data).map_err(e)?),
-            "/fast_forward" => self
-                .fast_forward
-                .push(FastForwardJump::decode(data).map_err(e)?),
-            _ => {}
+    fn message(&mut self, topic: Topic, data: &[u8]) -> Result<(), String> {
+        match ChannelRecord::decode(topic, data).map_err(|e| e.to_string())? {
+            ChannelRecord::Global(m) => self.global.push(m),
+            ChannelRecord::Interface(m) => self.interface.push(m),
+            ChannelRecord::Bulk(m) => self.bulk.push(m),
+            ChannelRecord::FastForward(m) => self.fast_forward.push(m),
         }
         Ok(())
     }
@@ -185,13 +181,15 @@ impl RunFile {
             return Err(fail("not a regular file".into()));
         }
         let mut run = RunFile::default();
-        let mut topics: HashMap<u16, String> = HashMap::new();
+        let mut topics: HashMap<u16, Topic> = HashMap::new();
         let mut saw_slipfront = false;
         let mut decoded: u64 = 0;
         let ending = scan(path, fail, |record| {
             match record {
                 Record::Channel(c) => {
-                    topics.insert(c.id, c.topic);
+                    if let Some(topic) = Topic::from_name(&c.topic) {
+                        topics.insert(c.id, topic);
+                    }
                 }
                 Record::Metadata(m) if m.name == "slipfront" => {
                     saw_slipfront = true;
@@ -219,7 +217,7 @@ impl RunFile {
                             size.len()
                         )));
                     }
-                    if let Some(topic) = topics.get(&header.channel_id) {
+                    if let Some(&topic) = topics.get(&header.channel_id) {
                         sink.message(topic, &data)
                             .map_err(|e| fail(format!("message {}: {e}", header.sequence)))?;
                     }
