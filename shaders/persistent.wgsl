@@ -5,6 +5,10 @@
 // place, then waits at a barrier again. The thread that updates block ix
 // is the one that adds its lane sums, so no third barrier is needed.
 // Same phase functions, in the same order, as the one-step kernel.
+// Where u and v live during the dispatch is the state slot's: storage
+// (state_persistent.wgsl), or workgroup memory, loaded at the dispatch's
+// start and written back at its end (state_resident.wgsl: the resident
+// kernel, for lattices that fit). Both run this same loop.
 // CPU twin: src/engines/cpu/mod.rs CpuEngine::one_step (one step of its loop).
 // import: bulk_forces, common, coordinates, friction_law, junctions, record_buffers, record_common, scene, state, verlet
 
@@ -51,6 +55,7 @@ fn persistent_steps(
     if workgroupUniformLoad(&stop) != 0u {
         return;
     }
+    state_enter(t, PERSISTENT_THREADS);
     for (var s = steps.x; s < steps.y; s++) {
         let ld = loads_at(s);
         let ready = batch.forces_ready != 0u && s == 0u;
@@ -69,7 +74,7 @@ fn persistent_steps(
                 }
             }
         }
-        storageBarrier();
+        state_barrier();
         // Is step s a sample (1), and is it due (2)?
         var sampling = false;
         var e: RecordEntry;
@@ -119,14 +124,13 @@ fn persistent_steps(
             }
         }
         if sampling {
-            wg_sums[t] = acc;
-            reduce_workgroup(t, PERSISTENT_THREADS);
+            reduce_threads(t, PERSISTENT_THREADS, acc);
             if t == 0u {
                 finish_sample(e);
             }
         }
         ran = ran + 1u;
-        storageBarrier();
+        state_barrier();
         // Stop at a blow-up (checked every 16 steps: each check costs a barrier).
         if (s & 15u) == 15u {
             if t == 0u {
@@ -137,6 +141,7 @@ fn persistent_steps(
             }
         }
     }
+    state_leave(t, PERSISTENT_THREADS);
     // Steps run, summed over dispatches: the host checks that no driver
     // cut a dispatch short (llvmpipe ends a shader's loops after 65535
     // iterations in all, silently).

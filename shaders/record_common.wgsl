@@ -120,8 +120,10 @@ fn block_sample(
 }
 
 // REDUCTION_SLOTS (prelude): 256 in mixed precision, fewer in f64, whose
-// sums are larger (layout::reduction_slots).
-var<workgroup> wg_sums: array<SampleSums, REDUCTION_SLOTS>;
+// sums are larger (layout::reduction_slots). The resident kernel, whose
+// workgroup memory holds the lattice, takes fewer (REDUCTION_WIDTH).
+override REDUCTION_WIDTH: u32 = REDUCTION_SLOTS;
+var<workgroup> wg_sums: array<SampleSums, REDUCTION_WIDTH>;
 var<workgroup> wg_go: u32;
 
 // Reduces wg_sums[0..width] to wg_sums[0] (a fixed tree: the same bits
@@ -134,6 +136,24 @@ fn reduce_workgroup(local: u32, width: u32) {
         }
     }
     workgroupBarrier();
+}
+
+// Reduces the sums `acc` of `width` threads (a power of two) to
+// wg_sums[0]. Threads beyond REDUCTION_WIDTH first fold into the slots, one
+// block of them per round, in a fixed order (the same bits every run); with
+// width ≤ REDUCTION_WIDTH this is the tree alone.
+fn reduce_threads(local: u32, width: u32, acc: SampleSums) {
+    let slots = min(width, REDUCTION_WIDTH);
+    if local < slots {
+        wg_sums[local] = acc;
+    }
+    for (var base = slots; base < width; base += slots) {
+        workgroupBarrier();
+        if local >= base && local < base + slots {
+            wg_sums[local - base] = combine(wg_sums[local - base], acc);
+        }
+    }
+    reduce_workgroup(local, slots);
 }
 
 // Thread 0 of a workgroup whose wg_sums[0] holds the sample's sums: writes

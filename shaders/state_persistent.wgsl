@@ -21,3 +21,13 @@ fn store_block(i: u32, u: Disp, v: vec2<real>) {
     disp[block_base() + i] = u;
     vel[block_base() + i] = v;
 }
+
+// The state stays in storage: nothing to load or write back, and the
+// phases of a step meet at a storage barrier.
+fn state_enter(t: u32, threads: u32) {}
+
+fn state_leave(t: u32, threads: u32) {}
+
+fn state_barrier() {
+    storageBarrier();
+}

@@ -248,6 +248,10 @@ struct SweepRun {
     /// the rule of `auto` for `auto` and `measure`: it does not time).
     #[arg(long, value_enum, default_value = "auto")]
     gpu_path: slipfront::engines::gpu::GpuPath,
+    /// GPU backend: threads of the persistent and resident kernels'
+    /// workgroup, as `run --gpu-threads`.
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+    gpu_threads: Option<u32>,
     /// GPU backend: where the points' samples are made, alone or as
     /// ensembles alike (so a table does not depend on --ensemble):
     /// `device` records every scene of an ensemble in one dispatch and
@@ -395,6 +399,7 @@ fn main() -> ExitCode {
                 gpu: slipfront::engines::gpu::GpuOptions {
                     path: run.gpu_path,
                     output: run.gpu_output,
+                    persistent_threads: run.gpu_threads,
                     ..Default::default()
                 },
             }),

@@ -28,7 +28,12 @@ fn gpu_on(m: &Model, path: GpuPath) -> GpuEngine {
         .unwrap_or_else(|e| panic!("a GPU adapter is required (lavapipe in CI): {e}"))
 }
 
-const KERNELS: [GpuPath; 3] = [GpuPath::OneStep, GpuPath::OneStepLanes, GpuPath::Persistent];
+const KERNELS: [GpuPath; 4] = [
+    GpuPath::OneStep,
+    GpuPath::OneStepLanes,
+    GpuPath::Persistent,
+    GpuPath::Resident,
+];
 
 fn run_both(m: &Model, steps: u64, path: GpuPath) -> (Snapshot, Snapshot) {
     let mut c = cpu_engine(m, Precision::F32, 1).unwrap();
@@ -236,6 +241,68 @@ fn a_lattice_beyond_the_adapter_limits_is_refused_clearly() {
     };
     assert!(err.contains("block displacement buffer needs"), "{err}");
     assert!(err.contains("smaller lattice"), "{err}");
+}
+
+/// The resident kernel runs the persistent kernel's loop with u and v in
+/// workgroup memory: the same arithmetic in the same order, so with the
+/// same threads it matches the persistent kernel bit for bit, through
+/// junction ruptures and across dispatches (llvmpipe cuts them short, so
+/// the state goes to storage and back every few hundred steps). Negative
+/// control: V × (1 + 1e-9) differs.
+#[test]
+fn the_resident_kernel_is_the_persistent_kernel_bit_for_bit() {
+    let m = model(&[SMALL, &["loading.drive.velocity=0.4"]].concat());
+    let end = m.prep_steps + 4096 + 700;
+    let on = |m: &Model, path| {
+        let opts = GpuOptions {
+            path,
+            persistent_threads: Some(64),
+            ..GpuOptions::default()
+        };
+        let mut g = GpuEngine::with_options(m, opts).expect("a GPU adapter (lavapipe in CI)");
+        advance_to(&mut g, end).unwrap();
+        (g.describe(), g.snapshot().unwrap())
+    };
+    let (persistent_how, persistent) = on(&m, GpuPath::Persistent);
+    let (resident_how, resident) = on(&m, GpuPath::Resident);
+    assert!(resident_how.contains("resident kernel"), "{resident_how}");
+    assert!(persistent_how.contains("64 threads") && resident_how.contains("64 threads"));
+    assert!(persistent.total_ruptures() > 0, "junctions broke");
+    assert!(persistent == resident, "resident and persistent differ");
+    let mut faster = m.clone();
+    if let slipfront::model::Driver::SideSpring { velocity, .. } = &mut faster.driver {
+        *velocity *= 1.0 + 1e-9;
+    }
+    let (_, other) = on(&faster, GpuPath::Resident);
+    assert_ne!(other.disp, resident.disp, "control");
+}
+
+/// The resident kernel needs the lattice to fit the adapter's workgroup
+/// memory: a lattice that does not is refused with both sizes and the
+/// kernels that take it.
+#[test]
+fn a_lattice_beyond_workgroup_memory_is_refused_by_the_resident_kernel() {
+    let l = 0.14 / 56.0;
+    let m = model(&[
+        "geometry.nx=400",
+        "geometry.nz=100",
+        &format!("geometry.length={}", l * 399.0),
+        &format!("geometry.height={}", l * 99.0),
+    ]);
+    let opts = GpuOptions {
+        path: GpuPath::Resident,
+        ..GpuOptions::default()
+    };
+    let err = match GpuEngine::with_options(&m, opts) {
+        Ok(_) => panic!("40000 blocks in workgroup memory must be refused"),
+        Err(e) => e.to_string(),
+    };
+    assert!(err.contains("40000 blocks in f32 need"), "{err}");
+    assert!(err.contains("the adapter allows"), "{err}");
+    assert!(
+        err.contains("--gpu-path one-step-lanes or persistent"),
+        "{err}"
+    );
 }
 
 /// Amontons–Coulomb stick → slip transitions count as ruptures (they were
@@ -507,7 +574,7 @@ fn gpu_bits_do_not_depend_on_where_batches_begin() {
     if let slipfront::model::Driver::SideSpring { velocity, .. } = &mut faster.driver {
         *velocity *= 1.0 + 1e-9;
     }
-    for path in [GpuPath::OneStep, GpuPath::Persistent] {
+    for path in [GpuPath::OneStep, GpuPath::Persistent, GpuPath::Resident] {
         let mut whole = gpu_on(&m, path);
         advance_to(&mut whole, end).unwrap();
         let a = whole.snapshot().unwrap();

@@ -392,7 +392,7 @@ fn a_persistent_kernel_of_96_threads_takes_host_snapshots() {
     let m = Model::from_scenario(&s, false).unwrap();
     let opts = GpuOptions {
         path: GpuPath::Persistent,
-        persistent_threads: 96,
+        persistent_threads: Some(96),
         ..GpuOptions::default()
     };
     let mut e = GpuEngine::with_options(&m, opts).unwrap();

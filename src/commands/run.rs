@@ -19,7 +19,8 @@ pub struct RunArgs {
     pub backend: Backend,
     /// GPU kernel: one-step (1 dispatch per step), one-step-lanes
     /// (junction lanes in parallel), persistent (many steps per
-    /// dispatch, small lattices), auto (on a hardware GPU the fastest,
+    /// dispatch, small lattices), resident (persistent with the lattice
+    /// in workgroup memory, where it fits), auto (on a hardware GPU the fastest,
     /// timed on this scene at start-up and cached per adapter and
     /// lattice) or measure (time them now, on any adapter).
     #[arg(long, value_enum, default_value = "auto")]
@@ -28,6 +29,10 @@ pub struct RunArgs {
     /// channels due are read back) or host (a snapshot per sample).
     #[arg(long, value_enum, default_value = "device")]
     pub gpu_output: GpuOutput,
+    /// Threads of the persistent and resident kernels' workgroup
+    /// (default: 256 persistent, 1024 resident; at most the adapter's).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+    pub gpu_threads: Option<u32>,
     #[arg(long, value_enum)]
     pub precision: Option<Precision>,
     /// Override a scenario key: --set loading.drive.velocity=1e-3
@@ -160,6 +165,7 @@ impl RunArgs {
         let gpu = GpuOptions {
             path: self.gpu_path,
             output: self.gpu_output,
+            persistent_threads: self.gpu_threads,
             ..GpuOptions::default()
         };
         Ok(make_engine_with(

@@ -141,6 +141,7 @@ fn coulomb_precursors_study(a: &StudyArgs) -> anyhow::Result<()> {
                 backend: a.backend,
                 gpu_path: slipfront::engines::gpu::GpuPath::Auto,
                 gpu_output: slipfront::engines::gpu::GpuOutput::Device,
+                gpu_threads: None,
                 precision: Some(a.precision),
                 set: loading.overrides(),
                 t_end,

@@ -165,6 +165,9 @@ mod tests {
             [0, 1, 2, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16, 17]
         );
         assert_eq!(persistent.binding("lane_partial"), Some((0, 12)));
+        // The resident kernel shares the persistent kernel's layout.
+        let resident = Bindings::reflect(&Kernel::Resident.source::<f32>()).unwrap();
+        assert_eq!(resident.layout(0, &[]), persistent.layout(0, &[]));
         let ty = |b: &Bindings, n: u32| match b.layout(0, &[])[n as usize].ty {
             wgpu::BindingType::Buffer { ty, .. } => ty,
             _ => unreachable!(),

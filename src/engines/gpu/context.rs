@@ -63,7 +63,7 @@ pub const STEP_OFFSET: &str = "step_offset";
 
 /// Index in `GpuContext::layouts`.
 fn layout_index(kernel: Kernel) -> usize {
-    (kernel == Kernel::Persistent) as usize
+    kernel.is_persistent() as usize
 }
 
 /// Lists the adapters with Vulkan/Metal/DX12 support, hardware first.
@@ -144,7 +144,8 @@ impl GpuContext {
                 Kernel::OneStep | Kernel::OneStepLanes => {
                     reflect(Kernel::OneStep).union(reflect(Kernel::OneStepLanes))
                 }
-                Kernel::Persistent => reflect(kernel),
+                // The resident kernel declares the same bindings (tested).
+                Kernel::Persistent | Kernel::Resident => reflect(Kernel::Persistent),
             };
             let group = layout(kernel.entry_point(), &bindings.layout(0, &[]));
             let pipeline = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
@@ -193,7 +194,7 @@ impl GpuContext {
         constants: &[(&str, f64)],
     ) -> wgpu::ComputePipeline {
         let layout = &self.layouts[layout_index(kernel)].pipeline;
-        let key = format!("{}{}{constants:?}", T::NAME, kernel.entry_point());
+        let key = format!("{}{kernel:?}{constants:?}", T::NAME);
         let mut cache = self.pipelines.lock().expect("pipeline cache");
         cache
             .entry(key)

@@ -105,7 +105,11 @@ pub fn candidates(model: &Model) -> Vec<Kernel> {
         .filter(|k| match k {
             Kernel::OneStep => true,
             Kernel::OneStepLanes => junctions,
-            Kernel::Persistent => model.n_blocks() <= PERSISTENT_MEASURE_MAX_BLOCKS,
+            // The resident kernel is refused at build where the lattice
+            // does not fit workgroup memory (skipped with that reason).
+            Kernel::Persistent | Kernel::Resident => {
+                model.n_blocks() <= PERSISTENT_MEASURE_MAX_BLOCKS
+            }
         })
         .collect()
 }
@@ -291,7 +295,8 @@ pub fn cache_key<T: GpuReal>(model: &Model, ctx: &GpuContext, opts: GpuOptions) 
         model.nz,
         model.n_junctions(),
         Variant::for_model(model).describe(),
-        opts.persistent_threads,
+        opts.persistent_threads
+            .map_or_else(|| "default".to_string(), |t| t.to_string()),
         sources.finish()
     )
     .replace(['\t', '\n'], " ")

@@ -4,7 +4,9 @@
 //!   the leapfrog update fused, reading the state of step n from one buffer
 //!   pair and writing step n+1 to the other;
 //! - `persistent_steps` (small lattices): one workgroup loops over up to
-//!   4096 steps inside one dispatch, with barriers between the phases.
+//!   4096 steps inside one dispatch, with barriers between the phases; its
+//!   resident form holds u and v in workgroup memory for the whole
+//!   dispatch (lattices that fit it).
 //!
 //! Steps go in batches (one submit each) whose loads the kernels compute
 //! from the batch's first step. After each batch the kernel's blow-up
@@ -46,7 +48,7 @@ use bytemuck::Zeroable;
 use context::GpuContext;
 use layout::{GpuBatch, GpuConsts, GpuJunctionSpring, GpuLaneSum, GpuStatus, WORKGROUP};
 use options::*;
-pub use options::{GpuOptions, GpuOutput, GpuPath, PERSISTENT_THREADS};
+pub use options::{GpuOptions, GpuOutput, GpuPath, PERSISTENT_THREADS, RESIDENT_THREADS};
 pub use precision::GpuReal;
 use precision::{Coord, Packed};
 pub use record_pipelines::RECORD_SMALL_BLOCKS;
@@ -340,11 +342,15 @@ impl<T: GpuReal> GpuEngine<T> {
             )));
         }
         let kernel = choose_kernel(opts.path, ctx.is_software());
-        let persistent_threads = opts
-            .persistent_threads
-            .min(ctx.limits.max_compute_invocations_per_workgroup)
-            .min(ctx.limits.max_compute_workgroup_size_x)
-            .max(1);
+        let persistent_threads = persistent_threads(
+            kernel,
+            opts.persistent_threads,
+            &ctx.limits,
+            ctx.is_software(),
+        );
+        if kernel == Kernel::Resident {
+            resident_fit::<T>(model, &ctx.limits).map_err(EngineError::Gpu)?;
+        }
         let device = &ctx.device;
         let storage = |label: &str, bytes: &[u8]| {
             // Zero-sized bindings are invalid: pad empty arrays to one element.
@@ -480,8 +486,12 @@ impl<T: GpuReal> GpuEngine<T> {
         });
         let variant = Variant::for_model(model);
         let mut constants = variant.constants.clone();
-        if kernel == Kernel::Persistent {
+        if kernel.is_persistent() {
             constants.push(("PERSISTENT_THREADS", persistent_threads as f64));
+        }
+        if kernel == Kernel::Resident {
+            constants.push(("RESIDENT_BLOCKS", n as f64));
+            constants.push(("REDUCTION_WIDTH", resident_reduction_width::<T>() as f64));
         }
         let pipeline = ctx.pipeline::<T>(kernel, &constants);
         let junction_groups = match (kernel, model.law) {
@@ -495,7 +505,7 @@ impl<T: GpuReal> GpuEngine<T> {
         let steps_per_dispatch = opts
             .steps_per_dispatch
             .unwrap_or_else(|| {
-                persistent_steps_per_dispatch(model, persistent_threads, ctx.is_software())
+                persistent_steps_per_dispatch(model, kernel, persistent_threads, ctx.is_software())
             })
             .clamp(1, PERSISTENT_BATCH);
         ctx.check()?;
@@ -579,7 +589,7 @@ impl<T: GpuReal> GpuEngine<T> {
                 batch.forces_only = forces_only as u32;
                 batch.steps_per_dispatch = self.steps_per_dispatch as u32;
                 batch.parity = self.current as u32;
-                if self.kernel == Kernel::Persistent {
+                if self.kernel.is_persistent() {
                     batch.records = planned.len() as u32;
                 }
                 batch
@@ -623,7 +633,7 @@ impl<T: GpuReal> GpuEngine<T> {
                     }
                     self.dispatches += steps;
                 }
-                Kernel::Persistent => {
+                Kernel::Persistent | Kernel::Resident => {
                     for d in 0..steps.div_ceil(self.steps_per_dispatch) {
                         let offset = (d * self.offset_stride) as u32;
                         pass.set_bind_group(1, &self.batch_group, &[offset]);
@@ -740,7 +750,7 @@ impl<T: GpuReal> GpuEngine<T> {
             if scene.failure.is_some() {
                 continue;
             }
-            if self.kernel == Kernel::Persistent
+            if self.kernel.is_persistent()
                 && status.flag == 0
                 && status.persistent_steps != batch.persistent_steps
             {
@@ -813,7 +823,9 @@ impl<T: GpuReal> GpuEngine<T> {
         );
         let max_batch = match self.kernel {
             Kernel::OneStep | Kernel::OneStepLanes => ONE_STEP_BATCH,
-            Kernel::Persistent => PERSISTENT_BATCH.min(self.steps_per_dispatch * ONE_STEP_BATCH),
+            Kernel::Persistent | Kernel::Resident => {
+                PERSISTENT_BATCH.min(self.steps_per_dispatch * ONE_STEP_BATCH)
+            }
         };
         let mut left = n;
         while left > 0 {
@@ -881,12 +893,10 @@ impl<T: GpuReal> GpuEngine<T> {
     /// scene at the first plan asked for; a scene asking for other
     /// cadences gets false.
     fn record_samples_of(&mut self, scene: usize, plan: &SamplePlan) -> Result<bool, EngineError> {
-        let persistent = self.kernel == Kernel::Persistent;
-        // The persistent kernel reduces a sample across its workgroup: a
-        // power of two of at most REDUCTION_SLOTS threads
-        // (shaders/record_common.wgsl).
-        let reducible = self.persistent_threads.is_power_of_two()
-            && self.persistent_threads <= layout::reduction_slots::<T>();
+        let persistent = self.kernel.is_persistent();
+        // The persistent kernels reduce a sample across the workgroup: a
+        // power of two of threads (shaders/record_common.wgsl).
+        let reducible = self.persistent_threads.is_power_of_two();
         if self.output == GpuOutput::Host || (persistent && !reducible) || !T::RECORDS_ON_DEVICE {
             return Ok(false);
         }
@@ -959,6 +969,13 @@ impl<T: GpuReal> GpuEngine<T> {
             Kernel::Persistent => format!(
                 "persistent kernel, 1 dispatch per {} steps, {} threads",
                 self.steps_per_dispatch, self.persistent_threads
+            ),
+            Kernel::Resident => format!(
+                "resident kernel (u and v in {} bytes of workgroup memory), 1 dispatch per {} \
+                 steps, {} threads",
+                resident_fit::<T>(&self.scenes[0].model, &self.ctx.limits).unwrap_or(0),
+                self.steps_per_dispatch,
+                self.persistent_threads
             ),
         }
     }

@@ -1,6 +1,8 @@
 //! The choices of the GPU engine: which kernel steps a scene, with how many
 //! threads and steps per dispatch, and how many steps go in a batch.
 
+use super::layout;
+use super::precision::{Coord, GpuReal};
 use super::shaders::Kernel;
 use crate::model::scenario::FrictionLaw;
 use crate::model::Model;
@@ -14,6 +16,22 @@ pub const ONE_STEP_BATCH: u64 = 1024;
 pub const IN_FLIGHT: usize = 2;
 /// Threads of the persistent kernel's workgroup by default.
 pub const PERSISTENT_THREADS: u32 = 256;
+/// Threads of the resident kernel's workgroup by default on hardware
+/// (fewer where the adapter allows fewer): with its state on chip, the
+/// workgroup is the whole engine, so it takes the largest that WGSL
+/// hardware offers.
+pub const RESIDENT_THREADS: u32 = 1024;
+/// ... and on software adapters: llvmpipe runs a workgroup's invocations
+/// as coroutines on one core, switching them at every barrier (measured on
+/// small_stick_slip, 0.01 s: 1.0 s with 64 threads, 1.7 s with 256, 6.8 s
+/// with 1024).
+pub const RESIDENT_THREADS_SOFTWARE: u32 = 64;
+/// Reduction slots of the resident kernel's output samples (its threads
+/// fold into them first): its workgroup memory holds the lattice.
+pub const RESIDENT_REDUCTION_WIDTH: u32 = 64;
+/// The resident kernel's own workgroup words (its step span, stop and
+/// sample flags), rounded up.
+const RESIDENT_OWN_BYTES: u64 = 64;
 
 /// Which kernel steps the lattice.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
@@ -31,6 +49,10 @@ pub enum GpuPath {
     OneStepLanes,
     /// One workgroup, many steps per dispatch (any lattice: slow for large ones).
     Persistent,
+    /// The persistent kernel with the lattice held in workgroup memory for
+    /// the whole dispatch (lattices that fit the adapter's workgroup memory:
+    /// Table S1 needs 46 KB in mixed f32).
+    Resident,
 }
 
 /// Where the output samples of a run with an output file are made.
@@ -51,7 +73,9 @@ pub enum GpuOutput {
 pub struct GpuOptions {
     pub path: GpuPath,
     pub output: GpuOutput,
-    pub persistent_threads: u32,
+    /// Threads of the persistent and resident kernels' workgroup; None:
+    /// the kernel's default (`PERSISTENT_THREADS`, `RESIDENT_THREADS`).
+    pub persistent_threads: Option<u32>,
     /// Steps per persistent dispatch instead of the adapter's safe default.
     pub steps_per_dispatch: Option<u64>,
 }
@@ -61,7 +85,7 @@ impl Default for GpuOptions {
         GpuOptions {
             path: GpuPath::Auto,
             output: GpuOutput::Device,
-            persistent_threads: PERSISTENT_THREADS,
+            persistent_threads: None,
             steps_per_dispatch: None,
         }
     }
@@ -73,8 +97,15 @@ impl Default for GpuOptions {
 /// half that many loop iterations, counted here per step for the busiest
 /// invocation: its blocks (8 bonds each) in both phases, its junction
 /// lanes (each with its junctions), one lane sum, the step loop and its
-/// interface blocks' per-block friction law (`Law::block_loop_iterations`).
-pub fn persistent_steps_per_dispatch(model: &Model, threads: u32, software: bool) -> u64 {
+/// interface blocks' per-block friction law (`Law::block_loop_iterations`);
+/// the resident kernel adds its samples' folding rounds to each step and
+/// its loading and writing back to each dispatch.
+pub fn persistent_steps_per_dispatch(
+    model: &Model,
+    kernel: Kernel,
+    threads: u32,
+    software: bool,
+) -> u64 {
     if !software {
         return PERSISTENT_BATCH;
     }
@@ -88,8 +119,62 @@ pub fn persistent_steps_per_dispatch(model: &Model, threads: u32, software: bool
     let blocks = model.n_blocks().div_ceil(t);
     let items = (model.nx * lanes).div_ceil(t);
     let friction = model.nx.div_ceil(t) * model.law.declaration().block_loop_iterations;
-    let per_step = 3 + blocks * 10 + items * (1 + ns.div_ceil(lanes.max(1))) + lanes + friction;
-    (32_768 / per_step as u64).clamp(1, PERSISTENT_BATCH)
+    let mut per_step = 3 + blocks * 10 + items * (1 + ns.div_ceil(lanes.max(1))) + lanes + friction;
+    let mut budget = 32_768;
+    if kernel == Kernel::Resident {
+        let slots = RESIDENT_REDUCTION_WIDTH as usize;
+        per_step += t.div_ceil(slots) + slots.ilog2() as usize;
+        budget -= 2 * blocks;
+    }
+    (budget as u64 / per_step as u64).clamp(1, PERSISTENT_BATCH)
+}
+
+/// Threads of `kernel`'s workgroup: the option, else the kernel's default,
+/// within the adapter's limits.
+pub fn persistent_threads(
+    kernel: Kernel,
+    asked: Option<u32>,
+    limits: &wgpu::Limits,
+    software: bool,
+) -> u32 {
+    let default = match kernel {
+        Kernel::Resident if software => RESIDENT_THREADS_SOFTWARE,
+        Kernel::Resident => RESIDENT_THREADS,
+        _ => PERSISTENT_THREADS,
+    };
+    asked
+        .unwrap_or(default)
+        .min(limits.max_compute_invocations_per_workgroup)
+        .min(limits.max_compute_workgroup_size_x)
+        .max(1)
+}
+
+/// Bytes of workgroup memory the resident kernel needs for `model` in
+/// precision `T`: the lattice's u and v, the sample reduction's slots and
+/// its own words; an error naming both sizes where the adapter allows
+/// less.
+pub fn resident_fit<T: GpuReal>(model: &Model, limits: &wgpu::Limits) -> Result<u64, String> {
+    let per_block = std::mem::size_of::<[Coord<T>; 2]>() + std::mem::size_of::<[T; 2]>();
+    let slots = resident_reduction_width::<T>() as usize;
+    let bytes = (model.n_blocks() * per_block
+        + slots * std::mem::size_of::<layout::GpuSampleSums<T>>()) as u64
+        + RESIDENT_OWN_BYTES;
+    let allowed = limits.max_compute_workgroup_storage_size as u64;
+    if bytes > allowed {
+        return Err(format!(
+            "the resident kernel holds the lattice in workgroup memory: {} blocks in {} need \
+             {bytes} bytes, the adapter allows {allowed}: use --gpu-path one-step-lanes or \
+             persistent",
+            model.n_blocks(),
+            T::NAME
+        ));
+    }
+    Ok(bytes)
+}
+
+/// The resident kernel's reduction slots in precision `T`.
+pub fn resident_reduction_width<T: GpuReal>() -> u32 {
+    RESIDENT_REDUCTION_WIDTH.min(layout::reduction_slots::<T>())
 }
 
 impl GpuPath {
@@ -99,6 +184,7 @@ impl GpuPath {
             Kernel::OneStep => GpuPath::OneStep,
             Kernel::OneStepLanes => GpuPath::OneStepLanes,
             Kernel::Persistent => GpuPath::Persistent,
+            Kernel::Resident => GpuPath::Resident,
         }
     }
 
@@ -124,6 +210,7 @@ pub fn choose_kernel(path: GpuPath, software: bool) -> Kernel {
         GpuPath::OneStep => Kernel::OneStep,
         GpuPath::OneStepLanes => Kernel::OneStepLanes,
         GpuPath::Persistent => Kernel::Persistent,
+        GpuPath::Resident => Kernel::Resident,
         // Measured on lavapipe (BENCHMARKS.md): barriers cost more than
         // dispatches there, so neither the lanes nor the persistent kernel
         // pays.
@@ -156,11 +243,14 @@ mod tests {
     fn software_dispatches_stay_within_half_the_loop_limit() {
         let s = Scenario::parse(DEFAULT_SCENARIO, "test", &[]).unwrap();
         let m = Model::from_scenario(&s, false).unwrap();
-        let k = persistent_steps_per_dispatch(&m, 256, true);
+        let k = persistent_steps_per_dispatch(&m, Kernel::Persistent, 256, true);
         assert_eq!(k, 180);
         assert_eq!(
-            persistent_steps_per_dispatch(&m, 256, false),
+            persistent_steps_per_dispatch(&m, Kernel::Persistent, 256, false),
             PERSISTENT_BATCH
         );
+        // The resident kernel's sample folding and state copies count too.
+        let resident = persistent_steps_per_dispatch(&m, Kernel::Resident, 256, true);
+        assert!(resident < k && resident > k / 2, "{resident}");
     }
 }

@@ -3,8 +3,8 @@
 //!
 //! Every file of `shaders/` says what it uses in an `// import:` line: other
 //! files by name, or a slot that each module fills with one file of its
-//! choice: `state` (the one-step kernels' ping-pong state, or the persistent
-//! kernel's), `coordinates` (double-single or f64: the precision) and
+//! choice: `state` (the one-step kernels' ping-pong state, the persistent
+//! kernel's in storage, or the resident kernel's in workgroup memory), `coordinates` (double-single or f64: the precision) and
 //! `bindings` (where the output code finds the state buffers: the
 //! kernels' common.wgsl, or the output module's read-only views). A module
 //! is the generated prelude of `layout.rs` and the closure of its entry
@@ -45,6 +45,7 @@ wgsl_files!(
     "scene",
     "state_one_step",
     "state_persistent",
+    "state_resident",
     "step_forces",
     "verlet",
 );
@@ -182,19 +183,35 @@ pub enum Kernel {
     /// The same with the junction lanes of each interface block in parallel
     /// (a workgroup per interface block).
     OneStepLanes,
-    /// Many steps of a small lattice per dispatch, one workgroup.
+    /// Many steps of a small lattice per dispatch, one workgroup per
+    /// scene, the state in storage.
     Persistent,
+    /// The persistent kernel's loop with each scene's u and v in its
+    /// workgroup's memory for the whole dispatch (lattices that fit).
+    Resident,
 }
 
 impl Kernel {
-    pub const ALL: [Kernel; 3] = [Kernel::OneStep, Kernel::OneStepLanes, Kernel::Persistent];
+    pub const ALL: [Kernel; 4] = [
+        Kernel::OneStep,
+        Kernel::OneStepLanes,
+        Kernel::Persistent,
+        Kernel::Resident,
+    ];
 
     pub fn entry_point(self) -> &'static str {
         match self {
             Kernel::OneStep => "one_step",
             Kernel::OneStepLanes => "one_step_lanes",
-            Kernel::Persistent => "persistent_steps",
+            // One loop (persistent.wgsl), two places for the state.
+            Kernel::Persistent | Kernel::Resident => "persistent_steps",
         }
+    }
+
+    /// Many steps per dispatch, one workgroup per scene: the persistent
+    /// kernel's loop, with its state in storage or workgroup memory.
+    pub fn is_persistent(self) -> bool {
+        matches!(self, Kernel::Persistent | Kernel::Resident)
     }
 
     /// The full WGSL module of this kernel: it steps the scenes of one
@@ -204,6 +221,7 @@ impl Kernel {
             Kernel::OneStep => ("state_one_step", "one_step"),
             Kernel::OneStepLanes => ("state_one_step", "one_step_lanes"),
             Kernel::Persistent => ("state_persistent", "persistent"),
+            Kernel::Resident => ("state_resident", "persistent"),
         };
         let slots = Slots::kernel::<T>(state);
         compose(&super::layout::wgsl_prelude::<T>(), entry, &slots)
@@ -335,7 +353,7 @@ mod tests {
     fn slots_for<T: GpuReal>(name: &'static str) -> Slots {
         let mut slots = Slots::kernel::<T>("state_one_step");
         match name {
-            "state_one_step" | "state_persistent" => slots.state = name,
+            "state_one_step" | "state_persistent" | "state_resident" => slots.state = name,
             "persistent" => slots.state = "state_persistent",
             "double_single" | "coord_f64" => slots.coordinates = name,
             "common" | "record" => slots.bindings = name,
