@@ -123,6 +123,7 @@ fn main() {
                     Some(GpuPath::OneStep),
                     Some(GpuPath::OneStepLanes),
                     Some(GpuPath::Persistent),
+                    Some(GpuPath::Resident),
                 ]
             } else {
                 vec![None]

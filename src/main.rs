@@ -244,8 +244,10 @@ struct SweepRun {
     /// of one lattice shape and time schedule); 1 runs them one at a time.
     #[arg(long, default_value_t = slipfront::app::sweeps::DEFAULT_ENSEMBLE)]
     ensemble: usize,
-    /// GPU backend: the kernel, as `run --gpu-path` (an ensemble takes
-    /// the rule of `auto` for `auto` and `measure`: it does not time).
+    /// GPU backend: the kernel, as `run --gpu-path`. `auto` on a hardware
+    /// GPU and `measure` time the kernels once per lattice shape on an
+    /// ensemble of the sweep's own points (64, or as many as it has) and
+    /// run every point of that shape on the fastest, alone or in ensembles.
     #[arg(long, value_enum, default_value = "auto")]
     gpu_path: slipfront::engines::gpu::GpuPath,
     /// GPU backend: threads of the persistent and resident kernels'

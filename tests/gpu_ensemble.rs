@@ -76,7 +76,12 @@ fn same_run(ensemble: &Snapshot, alone: &Snapshot) -> Result<(), String> {
 fn each_scene_of_an_ensemble_matches_its_solo_run() {
     let models = three_scenes();
     let steps = models[0].prep_steps + 3000;
-    for path in [GpuPath::OneStep, GpuPath::OneStepLanes, GpuPath::Persistent] {
+    for path in [
+        GpuPath::OneStep,
+        GpuPath::OneStepLanes,
+        GpuPath::Persistent,
+        GpuPath::Resident,
+    ] {
         let mut e = ensemble(&models, path);
         e.advance(steps).unwrap();
         assert_eq!(e.steps_done(), steps);
@@ -137,7 +142,7 @@ fn a_blow_up_stops_only_its_scene() {
     ]);
     let models = vec![stable.clone(), unstable.clone(), stable.clone()];
     let end = stable.total_steps();
-    for path in [GpuPath::OneStep, GpuPath::Persistent] {
+    for path in [GpuPath::OneStep, GpuPath::Persistent, GpuPath::Resident] {
         let Err(EngineError::BlowUp { step: alone_at, .. }) = solo(&unstable, path, end) else {
             panic!("{path:?}: the unstable scene must blow up alone");
         };
@@ -219,7 +224,12 @@ fn an_ensemble_records_every_scene_on_the_device_as_its_solo_run() {
     let plan = sample_plan(m, ((1e-6 / m.dt).round() as u64).max(1));
     // Through the normal-load phase, then 0.3 ms of driving in chunks.
     let chunks = [m.prep_steps, 700, 1300, 1];
-    for path in [GpuPath::OneStep, GpuPath::OneStepLanes, GpuPath::Persistent] {
+    for path in [
+        GpuPath::OneStep,
+        GpuPath::OneStepLanes,
+        GpuPath::Persistent,
+        GpuPath::Resident,
+    ] {
         let mut e = ensemble(&models, path);
         let mut got = vec![Vec::new(); models.len()];
         for (i, &n) in chunks.iter().enumerate() {
@@ -239,7 +249,9 @@ fn an_ensemble_records_every_scene_on_the_device_as_its_solo_run() {
                 g.extend(e.take_samples(k));
             }
         }
-        assert!(e.output_dispatches() > 0 || path == GpuPath::Persistent);
+        assert!(
+            e.output_dispatches() > 0 || matches!(path, GpuPath::Persistent | GpuPath::Resident)
+        );
         let mut solos = Vec::new();
         for (k, model) in models.iter().enumerate() {
             let mut g = GpuEngine::with_options(model, options(path)).unwrap();

@@ -56,7 +56,12 @@ fn gpu_f64_matches_cpu_f64_through_junction_ruptures_on_every_kernel() {
         reference.total_ruptures()
     );
     let mut one_step = None;
-    for path in [GpuPath::OneStep, GpuPath::OneStepLanes, GpuPath::Persistent] {
+    for path in [
+        GpuPath::OneStep,
+        GpuPath::OneStepLanes,
+        GpuPath::Persistent,
+        GpuPath::Resident,
+    ] {
         let mut g = gpu_f64(&m, path);
         assert!(g.describe().starts_with("gpu f64, "), "{}", g.describe());
         let started = std::time::Instant::now();
@@ -189,7 +194,12 @@ fn gpu_f64_rate_state_matches_cpu_f64_on_every_kernel() {
     let reference = snapshot_at(&mut cpu, end);
     let slips: u32 = reference.slips.iter().sum();
     assert!(slips > 0, "the window must contain slips");
-    for path in [GpuPath::OneStep, GpuPath::OneStepLanes, GpuPath::Persistent] {
+    for path in [
+        GpuPath::OneStep,
+        GpuPath::OneStepLanes,
+        GpuPath::Persistent,
+        GpuPath::Resident,
+    ] {
         let mut g = gpu_f64(&m, path);
         let got = snapshot_at(&mut g, end);
         let errors = compare_snapshots(&reference, &got);

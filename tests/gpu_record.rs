@@ -19,9 +19,19 @@ fn triggered(extra: &[&str]) -> Scenario {
 }
 
 fn engine(m: &Model, path: GpuPath, output: GpuOutput) -> GpuEngine {
+    engine_with_threads(m, path, output, None)
+}
+
+fn engine_with_threads(
+    m: &Model,
+    path: GpuPath,
+    output: GpuOutput,
+    threads: Option<u32>,
+) -> GpuEngine {
     let opts = GpuOptions {
         path,
         output,
+        persistent_threads: threads,
         ..GpuOptions::default()
     };
     GpuEngine::with_options(m, opts)
@@ -139,8 +149,18 @@ fn device_samples_match_the_cpu_twin_on_host_snapshots() {
     let s = triggered(&["time.end=6e-4"]);
     let m = Model::from_scenario(&s, false).unwrap();
     let plan = plan(&m, &s);
-    for path in [GpuPath::OneStep, GpuPath::OneStepLanes, GpuPath::Persistent] {
-        let mut dev = engine(&m, path, GpuOutput::Device);
+    // The resident kernel of 256 threads (its default on software
+    // adapters) folds them into its 64 reduction slots before the tree
+    // (shaders/record_common.wgsl reduce_threads); of 64, the tree alone.
+    let kernels = [
+        (GpuPath::OneStep, None),
+        (GpuPath::OneStepLanes, None),
+        (GpuPath::Persistent, None),
+        (GpuPath::Resident, Some(256)),
+        (GpuPath::Resident, Some(64)),
+    ];
+    for (path, threads) in kernels {
+        let mut dev = engine_with_threads(&m, path, GpuOutput::Device, threads);
         assert!(
             dev.record_samples(&plan).unwrap(),
             "{path:?} records on the device"

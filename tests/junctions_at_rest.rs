@@ -48,7 +48,12 @@ fn engines(m: &Model) -> Vec<(String, Precision, Box<dyn Engine>)> {
         let reference = cpu_reference_engine(m, p, 1).unwrap();
         out.push((format!("cpu-reference {p:?}"), p, reference));
     }
-    for path in [GpuPath::OneStep, GpuPath::OneStepLanes, GpuPath::Persistent] {
+    for path in [
+        GpuPath::OneStep,
+        GpuPath::OneStepLanes,
+        GpuPath::Persistent,
+        GpuPath::Resident,
+    ] {
         let opts = GpuOptions {
             path,
             ..GpuOptions::default()

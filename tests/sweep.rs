@@ -432,6 +432,73 @@ fn gpu_ensemble_sweep_matches_points_run_alone(precision: &str) {
     assert_ne!(of("1800.0"), of("1920.0"));
 }
 
+/// `--gpu-path measure` (and `auto` on hardware) times the kernels on an
+/// ensemble of the sweep's own lattice, once, caches the choice under the
+/// ensemble's key and runs every point on it: the table is the one of the
+/// same sweep naming that kernel with its points run one at a time. The
+/// timed ensemble does not follow --ensemble (so neither does the table).
+#[test]
+fn a_measured_sweep_runs_every_point_on_the_kernel_timed_on_its_ensemble() {
+    let d = dir("gpu_measure");
+    let file = sweep_file(&d, "");
+    let cache = d.join("cache");
+    let run = |name: &str, extra: &[&str]| {
+        let out = d.join(name);
+        let mut args = vec![
+            "sweep",
+            s(&file),
+            "-o",
+            s(&out),
+            "--backend",
+            "gpu",
+            "--precision",
+            "f32",
+        ];
+        args.extend(extra);
+        let got = Command::new(env!("CARGO_BIN_EXE_slipfront"))
+            .args(&args)
+            .env("SLIPFRONT_CACHE_DIR", &cache)
+            .output()
+            .unwrap();
+        let text = format!(
+            "{}{}",
+            String::from_utf8_lossy(&got.stdout),
+            String::from_utf8_lossy(&got.stderr)
+        );
+        assert!(got.status.success(), "{text}");
+        assert!(text.contains("8 run now (0 not ok)"), "{text}");
+        (table(&out.join("summary.csv")), text)
+    };
+    let (measured, text) = run("measured", &["--gpu-path", "measure", "--ensemble", "4"]);
+    let line = text
+        .lines()
+        .find(|l| l.starts_with("sweep: GPU kernel for 29x16"))
+        .unwrap_or_else(|| panic!("the choice is printed: {text}"));
+    assert!(
+        line.contains("measured now on an ensemble of 8 scenes"),
+        "{line}"
+    );
+    let chosen = line
+        .split("chose ")
+        .nth(1)
+        .and_then(|rest| rest.split(':').next())
+        .unwrap()
+        .to_string();
+    for kernel in ["one-step ", "one-step-lanes ", "persistent ", "resident "] {
+        assert!(line.contains(kernel), "{kernel} timed: {line}");
+    }
+    let cached = std::fs::read_to_string(cache.join("gpu-kernels.tsv")).unwrap();
+    assert!(cached.contains("| ensemble of 8 |"), "{cached}");
+    let (named, _) = run(
+        "named",
+        &["--gpu-path", &chosen, "--ensemble", "1", "--quiet"],
+    );
+    assert_eq!(measured, named, "every point ran {chosen}");
+    // Not vacuous: the points differ.
+    let first = column(&named, "first_full_time_s");
+    assert!(first.iter().any(|t| *t != first[0]), "{first:?}");
+}
+
 /// GPU points make their samples on the device, alone (`--ensemble 1`,
 /// several at once) or as one ensemble (every scene recorded in one
 /// dispatch): the table is the one whose samples were host snapshots

@@ -2,6 +2,7 @@
 //! time schedule are stepped together, one dispatch for all, each on its
 //! own thread running the ordinary runner (`gpu::lockstep`).
 
+use super::kernels::SweepKernels;
 use super::{run_point, EngineSource, Loading, Point, Recorder, SweepOptions};
 use crate::engines::backend::Precision;
 use crate::engines::gpu::ensemble::{incompatibility, GpuEnsemble};
@@ -75,10 +76,10 @@ pub fn plan(todo: &[&Point], loading_of: &[Option<usize>], max: usize) -> Plan {
 /// use, with its own error. Returns the loadings made here.
 pub fn prepare_loadings(
     loadings: &[Loading],
-    max: usize,
-    precision: Precision,
-    gpu: GpuOptions,
+    opts: &SweepOptions,
+    kernels: &SweepKernels,
 ) -> usize {
+    let (max, precision) = (opts.ensemble, opts.precision);
     let mut models: Vec<(usize, Model)> = loadings
         .iter()
         .enumerate()
@@ -104,6 +105,7 @@ pub fn prepare_loadings(
             continue;
         }
         let scenes: Vec<Model> = batch.iter().map(|(_, m)| m.clone()).collect();
+        let gpu = kernels.options(&first, opts.gpu);
         // As `Loading::state`: one step before driving starts.
         let Ok(states) = (match precision {
             Precision::F64 => loaded_states::<f64>(&scenes, first.prep_steps - 1, gpu),
@@ -166,6 +168,7 @@ pub struct Run<'a> {
     pub loadings: &'a [Loading<'a>],
     pub group_of: &'a [Option<usize>],
     pub opts: &'a SweepOptions,
+    pub kernels: &'a SweepKernels,
     pub header_len: usize,
     pub recorder: &'a Recorder,
 }
@@ -187,16 +190,17 @@ impl Run<'_> {
                     .iter()
                     .map(|&k| {
                         let g = self.group_of[k].expect("members all start loaded");
-                        self.loadings[g].state(self.opts)
+                        self.loadings[g].state(self.opts, self.kernels)
                     })
                     .collect::<Result<Vec<&EngineState>, String>>()?,
             )
         } else {
             None
         };
+        let gpu = self.kernels.options(&models[0], self.opts.gpu);
         let engines = match self.opts.precision {
-            Precision::F64 => lockstep_engines::<f64>(&models, states.as_deref(), self.opts.gpu)?,
-            _ => lockstep_engines::<f32>(&models, states.as_deref(), self.opts.gpu)?,
+            Precision::F64 => lockstep_engines::<f64>(&models, states.as_deref(), gpu)?,
+            _ => lockstep_engines::<f32>(&models, states.as_deref(), gpu)?,
         };
         std::thread::scope(|s| {
             for (engine, &k) in engines.into_iter().zip(members) {
@@ -209,7 +213,7 @@ impl Run<'_> {
                         return;
                     }
                     let source = EngineSource::Ensemble { engine, loaded };
-                    let row = run_point(p, self.opts, self.header_len, source);
+                    let row = run_point(p, self.opts, self.kernels, self.header_len, source);
                     self.recorder.record(p, row, started);
                 });
             }

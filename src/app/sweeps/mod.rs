@@ -7,6 +7,7 @@
 
 pub mod compare;
 mod ensembles;
+mod kernels;
 pub mod modes;
 pub mod outcome_rows;
 pub mod outcomes;
@@ -17,11 +18,12 @@ pub mod table;
 pub use plan::{Point, Sweep, SweepFile};
 
 use crate::app::runner::{run_scene, RunError, RunOptions, StartFrom};
-use crate::engines::backend::{make_engine, make_engine_with, Backend, Precision};
+use crate::engines::backend::{make_engine_with, Backend, Precision};
 use crate::engines::{Engine, EngineError, EngineState};
 use crate::io::checkpoint::RunnerState;
 use crate::io::output::reader::RunFile;
 use crate::model::Model;
+use kernels::SweepKernels;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
@@ -139,12 +141,13 @@ struct Loading<'a> {
 }
 
 impl Loading<'_> {
-    fn state(&self, opts: &SweepOptions) -> Result<&EngineState, String> {
+    fn state(&self, opts: &SweepOptions, kernels: &SweepKernels) -> Result<&EngineState, String> {
         self.state
             .get_or_init(|| {
                 let model = Model::from_scenario(&self.leader.scenario, false)
                     .map_err(|e| e.to_string())?;
-                let mut e = make_engine(&model, opts.backend, opts.precision, 1)
+                let gpu = kernels.options(&model, opts.gpu);
+                let mut e = make_engine_with(&model, opts.backend, opts.precision, 1, gpu)
                     .map_err(|e| e.to_string())?;
                 e.advance(model.prep_steps - 1).map_err(|e| e.to_string())?;
                 e.save_state().map_err(|e| e.to_string())
@@ -222,6 +225,7 @@ enum EngineSource<'a> {
 fn run_point(
     p: &Point,
     opts: &SweepOptions,
+    kernels: &SweepKernels,
     header_len: usize,
     source: EngineSource,
 ) -> Option<Vec<String>> {
@@ -244,16 +248,12 @@ fn run_point(
             .map_err(|e| RunError::Engine(EngineError::State(e.to_string())))?;
         let (mut engine, loaded): (Box<dyn Engine>, bool) = match source {
             EngineSource::Own(loaded) => {
-                let mut gpu = opts.gpu;
-                if opts.backend == Backend::Gpu {
-                    // The kernel an ensemble of this point would run.
-                    let software = crate::engines::gpu::context::shared()?.is_software();
-                    gpu.path = crate::engines::gpu::options::without_measuring(gpu.path, software);
-                }
+                // The kernel an ensemble of this point would run.
+                let gpu = kernels.options(&model, opts.gpu);
                 let mut engine = make_engine_with(&model, opts.backend, opts.precision, 1, gpu)?;
                 if let Some(l) = loaded {
                     let state = l
-                        .state(opts)
+                        .state(opts, kernels)
                         .map_err(|e| RunError::Engine(EngineError::State(e)))?;
                     engine.load_state(state)?;
                 }
@@ -424,6 +424,18 @@ pub fn run_sweep(sweep: &Sweep, opts: &SweepOptions) -> Result<SweepReport, Stri
         .filter(|p| !done.contains_key(&p.index))
         .collect();
     let skipped = mine.len() - todo.len();
+    // The kernel of each lattice shape, from all the sweep's points (the
+    // same on a rerun that skips the finished ones).
+    let kernels = if todo.is_empty() {
+        SweepKernels::default()
+    } else {
+        SweepKernels::choose(&sweep.points, opts)?
+    };
+    if opts.progress {
+        for line in &kernels.report {
+            eprintln!("sweep: {line}");
+        }
+    }
     let (groups, group_of) = if opts.share_loading {
         loading_groups(&todo)
     } else {
@@ -452,7 +464,7 @@ pub fn run_sweep(sweep: &Sweep, opts: &SweepOptions) -> Result<SweepReport, Stri
     if opts.backend == Backend::Gpu && gpu_precision && opts.ensemble > 1 {
         let plan = ensembles::plan(&todo, &group_of, opts.ensemble);
         alone = plan.alone;
-        let made = ensembles::prepare_loadings(&groups, opts.ensemble, opts.precision, opts.gpu);
+        let made = ensembles::prepare_loadings(&groups, opts, &kernels);
         if opts.progress && made > 0 {
             eprintln!("sweep: {made} shared normal-load phases run as GPU ensembles");
         }
@@ -465,6 +477,7 @@ pub fn run_sweep(sweep: &Sweep, opts: &SweepOptions) -> Result<SweepReport, Stri
                 loadings: &groups,
                 group_of: &group_of,
                 opts,
+                kernels: &kernels,
                 header_len: header.len(),
                 recorder: &recorder,
             };
@@ -500,7 +513,7 @@ pub fn run_sweep(sweep: &Sweep, opts: &SweepOptions) -> Result<SweepReport, Stri
             let p = todo[k];
             let point_started = Instant::now();
             let loaded = group_of[k].map(|g| &groups[g]);
-            let row = run_point(p, opts, header.len(), EngineSource::Own(loaded));
+            let row = run_point(p, opts, &kernels, header.len(), EngineSource::Own(loaded));
             recorder.record(p, row, point_started);
         })
     });

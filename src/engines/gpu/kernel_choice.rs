@@ -57,6 +57,8 @@ pub struct KernelChoice {
     pub source: ChoiceSource,
     /// Candidates that could not be timed, and why.
     pub skipped: Vec<(Kernel, String)>,
+    /// Scenes stepped together while timed (1: a solo run's choice).
+    pub scenes: usize,
 }
 
 impl KernelChoice {
@@ -68,12 +70,23 @@ impl KernelChoice {
             .iter()
             .map(|(k, s)| format!("{} {:.1}", path_name(*k), s * 1e6))
             .collect();
-        let source = match self.source {
-            ChoiceSource::Measured => "measured now on this scene",
-            ChoiceSource::Cached => "measured earlier on this adapter for this lattice",
+        let source = match (self.source, self.scenes) {
+            (ChoiceSource::Measured, 1) => "measured now on this scene".to_string(),
+            (ChoiceSource::Measured, n) => format!("measured now on an ensemble of {n} scenes"),
+            (ChoiceSource::Cached, 1) => {
+                "measured earlier on this adapter for this lattice".to_string()
+            }
+            (ChoiceSource::Cached, n) => {
+                format!("measured earlier on this adapter for ensembles of {n} of this lattice")
+            }
+        };
+        let unit = if self.scenes > 1 {
+            "µs per step of the ensemble"
+        } else {
+            "µs/step"
         };
         let mut text = format!(
-            "chose {}: {} µs/step, {source}",
+            "chose {}: {} {unit}, {source}",
             path_name(self.kernel),
             figures.join(", ")
         );
@@ -114,11 +127,12 @@ pub fn candidates(model: &Model) -> Vec<Kernel> {
         .collect()
 }
 
-/// Wall time per step of `kernel` on `model` from its initial state: a
-/// warm-up, then the fastest of a few repeats (each an `advance`, which
-/// returns when its steps have run on the device).
+/// Wall time per step of `kernel` on the scenes `models` (one, or an
+/// ensemble stepped in one dispatch) from their initial state: a warm-up,
+/// then the fastest of a few repeats (each an `advance`, which returns when
+/// its steps have run on the device).
 pub fn time_kernel<T: GpuReal>(
-    model: &Model,
+    models: &[Model],
     ctx: &GpuContext,
     opts: GpuOptions,
     kernel: Kernel,
@@ -127,7 +141,7 @@ pub fn time_kernel<T: GpuReal>(
         path: GpuPath::of(kernel),
         ..opts
     };
-    let mut engine = GpuEngine::<T>::build(std::slice::from_ref(model), ctx.clone(), opts, false)?;
+    let mut engine = GpuEngine::<T>::build(models, ctx.clone(), opts, models.len() > 1)?;
     let started = Instant::now();
     engine.advance_steps(WARM_UP_STEPS)?;
     let rough = started.elapsed().as_secs_f64() / WARM_UP_STEPS as f64;
@@ -141,19 +155,21 @@ pub fn time_kernel<T: GpuReal>(
     Ok(best)
 }
 
-/// Times every candidate kernel on `model` and takes the fastest. A
-/// candidate that cannot be built (a buffer too large, a device error) is
-/// skipped with its reason; if none can, the first error is returned.
+/// Times every candidate kernel on the scenes `models` (one, or an ensemble
+/// of one lattice shape) and takes the fastest. A candidate that cannot be
+/// built (a buffer too large, a lattice beyond workgroup memory, a device
+/// error) is skipped with its reason; if none can, the first error is
+/// returned.
 pub fn measure<T: GpuReal>(
-    model: &Model,
+    models: &[Model],
     ctx: &GpuContext,
     opts: GpuOptions,
 ) -> Result<KernelChoice, EngineError> {
     let mut timings = Vec::new();
     let mut skipped = Vec::new();
     let mut first_error = None;
-    for kernel in candidates(model) {
-        match time_kernel::<T>(model, ctx, opts, kernel) {
+    for kernel in candidates(&models[0]) {
+        match time_kernel::<T>(models, ctx, opts, kernel) {
             Ok(s) => timings.push((kernel, s)),
             Err(e) => {
                 skipped.push((kernel, e.to_string()));
@@ -169,6 +185,7 @@ pub fn measure<T: GpuReal>(
         timings,
         source: ChoiceSource::Measured,
         skipped,
+        scenes: models.len(),
     })
 }
 
@@ -238,6 +255,7 @@ impl ChoiceCache {
                     timings,
                     source: ChoiceSource::Cached,
                     skipped: Vec::new(),
+                    scenes: 1,
                 })
         })
     }
@@ -275,26 +293,50 @@ impl ChoiceCache {
 }
 
 /// What a measured choice depends on: the adapter and its driver, the
-/// precision, the lattice and junction count, the terms compiled in, the
-/// persistent kernel's threads and the kernels' sources (a new version of
-/// slipfront measures again).
+/// precision, the lattice (`lattice_key`), the persistent kernels' threads
+/// and the kernels' sources (a new version of slipfront measures again).
 pub fn cache_key<T: GpuReal>(model: &Model, ctx: &GpuContext, opts: GpuOptions) -> String {
+    scenes_cache_key::<T>(model, 1, ctx, opts)
+}
+
+/// The lattice a choice is for: its shape, junction count and compiled
+/// terms (scenes alike in these step at the same speed).
+pub fn lattice_key(model: &Model) -> String {
+    format!(
+        "{}x{} | junctions {} | {}",
+        model.nx,
+        model.nz,
+        model.n_junctions(),
+        Variant::for_model(model).describe()
+    )
+}
+
+/// `cache_key` of an ensemble of `scenes` scenes like `model` (one scene:
+/// the solo key).
+pub fn scenes_cache_key<T: GpuReal>(
+    model: &Model,
+    scenes: usize,
+    ctx: &GpuContext,
+    opts: GpuOptions,
+) -> String {
     let mut sources = std::collections::hash_map::DefaultHasher::new();
     for kernel in Kernel::ALL {
         kernel.source::<T>().hash(&mut sources);
     }
     let info = &ctx.info;
+    let ensemble = if scenes > 1 {
+        format!(" | ensemble of {scenes}")
+    } else {
+        String::new()
+    };
     format!(
-        "{} | {:?} | {} {} | {} | {}x{} | junctions {} | {} | threads {} | kernels {:016x}",
+        "{} | {:?} | {} {} | {} | {}{ensemble} | threads {} | kernels {:016x}",
         info.name,
         info.backend,
         info.driver,
         info.driver_info,
         T::NAME,
-        model.nx,
-        model.nz,
-        model.n_junctions(),
-        Variant::for_model(model).describe(),
+        lattice_key(model),
         opts.persistent_threads
             .map_or_else(|| "default".to_string(), |t| t.to_string()),
         sources.finish()
@@ -312,17 +354,30 @@ pub fn resolve<T: GpuReal>(
     opts: GpuOptions,
     cache: &ChoiceCache,
 ) -> Result<(GpuOptions, Option<KernelChoice>), EngineError> {
+    resolve_scenes::<T>(model, 1, ctx, opts, cache)
+}
+
+/// `resolve` for `scenes` scenes like `model` stepped as one ensemble: the
+/// candidates are timed on such an ensemble (a sweep's kernel: which
+/// kernel fills the GPU best depends on how many scenes share it).
+pub fn resolve_scenes<T: GpuReal>(
+    model: &Model,
+    scenes: usize,
+    ctx: &GpuContext,
+    opts: GpuOptions,
+    cache: &ChoiceCache,
+) -> Result<(GpuOptions, Option<KernelChoice>), EngineError> {
     let use_cache = match opts.path {
         GpuPath::Auto if !ctx.is_software() => true,
         GpuPath::Measure => false,
         _ => return Ok((opts, None)),
     };
-    let key = cache_key::<T>(model, ctx, opts);
+    let key = scenes_cache_key::<T>(model, scenes, ctx, opts);
     let cached = if use_cache { cache.lookup(&key) } else { None };
     let choice = match cached {
-        Some(c) => c,
+        Some(c) => KernelChoice { scenes, ..c },
         None => {
-            let c = measure::<T>(model, ctx, opts)?;
+            let c = measure::<T>(&vec![model.clone(); scenes.max(1)], ctx, opts)?;
             // A cache that cannot be written costs only the next run's
             // measurement.
             let _ = cache.store(&key, &c);

@@ -21,11 +21,13 @@ pub const PERSISTENT_THREADS: u32 = 256;
 /// workgroup is the whole engine, so it takes the largest that WGSL
 /// hardware offers.
 pub const RESIDENT_THREADS: u32 = 1024;
-/// ... and on software adapters: llvmpipe runs a workgroup's invocations
-/// as coroutines on one core, switching them at every barrier (measured on
-/// small_stick_slip, 0.01 s: 1.0 s with 64 threads, 1.7 s with 256, 6.8 s
-/// with 1024).
-pub const RESIDENT_THREADS_SOFTWARE: u32 = 64;
+/// ... and on software adapters, the persistent kernel's: llvmpipe runs a
+/// workgroup's invocations as coroutines on one core, switching them at
+/// every barrier (small_stick_slip, 0.01 s: 1.0 s with 64 threads, 1.7 s
+/// with 256, 6.8 s with 1024), and its loop limit is calibrated at 256
+/// (`persistent_steps_per_dispatch`: with 64 threads the f64 RNG's loops
+/// at a burst of ruptures overrun it).
+pub const RESIDENT_THREADS_SOFTWARE: u32 = PERSISTENT_THREADS;
 /// Reduction slots of the resident kernel's output samples (its threads
 /// fold into them first): its workgroup memory holds the lattice.
 pub const RESIDENT_REDUCTION_WIDTH: u32 = 64;
@@ -196,15 +198,16 @@ impl GpuPath {
 }
 
 /// `path` with `auto` and `measure` replaced by the kernel the rule takes
-/// (`choose_kernel`): what a sweep runs alone and in ensembles alike, so
-/// its table does not depend on --ensemble.
+/// (`choose_kernel`): what a sweep runs, alone and in ensembles alike,
+/// where it does not measure (`app::sweeps::kernels`).
 pub fn without_measuring(path: GpuPath, software: bool) -> GpuPath {
     GpuPath::of(choose_kernel(path, software))
 }
 
-/// The kernel for `path` without measuring: what an ensemble runs, and a
-/// solo run on a software adapter (a solo run on hardware measures,
-/// `kernel_choice::resolve`).
+/// The kernel for `path` without measuring: what an engine built with
+/// `auto` runs where nothing measured (software adapters; a solo run on
+/// hardware measures first, `kernel_choice::resolve`, and a sweep once per
+/// lattice shape, `kernel_choice::resolve_scenes`).
 pub fn choose_kernel(path: GpuPath, software: bool) -> Kernel {
     match path {
         GpuPath::OneStep => Kernel::OneStep,

@@ -1,0 +1,250 @@
+//! The GPU table in one command, for anyone with a GPU:
+//!
+//!     cargo bench --bench gpu_table
+//!
+//! (on the lent GPU machine: the packed `gpu_table` binary). It prints, as
+//! Markdown, in mixed f32:
+//!
+//! 1. every kernel against lattice size (Table S1 to 8192×4096): µs per
+//!    step and block-steps/s, each kernel on the scene alone;
+//! 2. what `auto` chooses on Table S1 (timed now, as `--gpu-path measure`);
+//! 3. ensembles of 1 to 1024 Table S1 scenes (the precursors scene, a seed
+//!    each) in one dispatch, per kernel: aggregate block-steps/s and the
+//!    speed-up over running the scenes one at a time;
+//! 4. what an output file at the default cadences costs (device records),
+//!    against the same steps without one;
+//! 5. the CPU engine on all cores of the same machine, and the GPU's best
+//!    over it.
+//!
+//! Every figure is timed after a warm-up, over at least `SECONDS` of wall
+//! time (doubling the steps until then); the device is waited for at the
+//! end of each advance, and nothing is read back in the timed span.
+//! SLIPFRONT_GPU_TABLE_QUICK=1 keeps to small lattices and ensembles of up
+//! to 16 (software adapters: lavapipe runs the full table for hours).
+
+use slipfront::app::runner::{run_scene, ProgressMode, RunOptions};
+use slipfront::engines::backend::{make_engine, Backend, Precision};
+use slipfront::engines::gpu::ensemble::GpuEnsemble;
+use slipfront::engines::gpu::kernel_choice::{candidates, measure};
+use slipfront::engines::gpu::shaders::Kernel;
+use slipfront::engines::gpu::{context, GpuEngine, GpuOptions, GpuOutput, GpuPath};
+use slipfront::model::scenario::built_in;
+use slipfront::{advance_to, Engine, EngineError, Model, Scenario};
+use std::time::Instant;
+
+#[path = "support/bench_scene.rs"]
+mod bench_scene;
+
+/// Wall seconds of `advance(steps)` calls, doubling `steps` until one takes
+/// at least `min_seconds`: (seconds, steps) of that last one.
+fn timed_advance(
+    mut advance: impl FnMut(u64) -> Result<(), EngineError>,
+    min_seconds: f64,
+) -> Result<(f64, u64), EngineError> {
+    let mut steps = 16u64;
+    loop {
+        let t0 = Instant::now();
+        advance(steps)?;
+        let dt = t0.elapsed().as_secs_f64();
+        if dt >= min_seconds || steps >= 1 << 24 {
+            return Ok((dt, steps));
+        }
+        steps *= if dt < min_seconds / 8.0 { 8 } else { 2 };
+    }
+}
+
+fn options(kernel: Kernel) -> GpuOptions {
+    GpuOptions {
+        path: GpuPath::of(kernel),
+        ..GpuOptions::default()
+    }
+}
+
+fn path_name(kernel: Kernel) -> String {
+    GpuPath::of(kernel).name()
+}
+
+/// Seconds per step of `kernel` on `model` alone, past its normal-load
+/// phase.
+fn solo_step_seconds(model: &Model, kernel: Kernel, min_seconds: f64) -> Result<f64, String> {
+    let mut e = GpuEngine::with_options(model, options(kernel)).map_err(|e| e.to_string())?;
+    advance_to(&mut e, model.prep_steps + 16).map_err(|e| e.to_string())?;
+    let (dt, steps) = timed_advance(|n| e.advance(n), min_seconds).map_err(|e| e.to_string())?;
+    Ok(dt / steps as f64)
+}
+
+/// The precursors scene (Table S1, Ns = 100) with seed `seed`.
+fn table_s1(seed: usize) -> Model {
+    let text = built_in("tromborg2014_precursors").expect("shipped scene");
+    let s = Scenario::parse(text, "table S1", &[format!("time.seed={seed}")]).expect("scene");
+    Model::from_scenario(&s, false).expect("model")
+}
+
+fn main() {
+    let quick = std::env::var("SLIPFRONT_GPU_TABLE_QUICK").is_ok();
+    let min_seconds = if quick { 0.3 } else { 1.0 };
+    let ctx = context::shared().expect("a GPU adapter (lavapipe counts)");
+    println!("# GPU table: {}\n", ctx.describe());
+    println!("Mixed f32; each figure timed over at least {min_seconds} s of wall time.\n");
+
+    // 1. Kernels against lattice size.
+    let sizes: &[(u32, u32)] = if quick {
+        &[(57, 31), (256, 64)]
+    } else {
+        &[
+            (57, 31),
+            (256, 64),
+            (1024, 256),
+            (2048, 1024),
+            (4096, 2048),
+            (8192, 4096),
+        ]
+    };
+    println!("## 1. Kernels against lattice size (each scene alone)\n");
+    println!("| lattice | kernel | µs/step | block-steps/s |");
+    println!("| --- | --- | ---: | ---: |");
+    let mut best_gpu = Vec::new();
+    for &(nx, nz) in sizes {
+        let model = bench_scene::scene(nx, nz);
+        let mut best = f64::INFINITY;
+        for kernel in candidates(&model) {
+            match solo_step_seconds(&model, kernel, min_seconds) {
+                Ok(s) => {
+                    best = best.min(s);
+                    println!(
+                        "| {nx}×{nz} | {} | {:.2} | {:.3e} |",
+                        path_name(kernel),
+                        s * 1e6,
+                        model.n_blocks() as f64 / s
+                    );
+                }
+                Err(e) => println!("| {nx}×{nz} | {} | not run: {e} | |", path_name(kernel)),
+            }
+        }
+        best_gpu.push(((nx, nz), model.n_blocks() as f64 / best));
+    }
+
+    // 2. The auto choice on Table S1.
+    println!("\n## 2. What `auto` chooses on Table S1 (the precursors scene)\n");
+    let s1 = table_s1(1);
+    match measure::<f32>(std::slice::from_ref(&s1), &ctx, GpuOptions::default()) {
+        Ok(choice) => println!("{}\n", choice.describe()),
+        Err(e) => println!("not measured: {e}\n"),
+    }
+
+    // 3. Ensembles of Table S1 scenes.
+    let counts: &[usize] = if quick {
+        &[1, 4, 16]
+    } else {
+        &[1, 4, 16, 64, 256, 1024]
+    };
+    println!("## 3. Ensembles of Table S1 scenes in one dispatch\n");
+    println!(
+        "Speed-up: the ensemble's aggregate rate over the same kernel's rate for one scene \
+         alone (what running the scenes one at a time gets).\n"
+    );
+    println!("| scenes | kernel | µs per ensemble step | aggregate block-steps/s | speed-up |");
+    println!("| ---: | --- | ---: | ---: | ---: |");
+    let blocks = s1.n_blocks() as f64;
+    for kernel in candidates(&s1) {
+        let mut alone = None;
+        for &n in counts {
+            let models: Vec<Model> = (1..=n).map(table_s1).collect();
+            let result = GpuEnsemble::new(&models, options(kernel))
+                .map_err(|e| e.to_string())
+                .and_then(|mut e| {
+                    e.advance(s1.prep_steps + 16).map_err(|e| e.to_string())?;
+                    timed_advance(|k| e.advance(k), min_seconds).map_err(|e| e.to_string())
+                });
+            match result {
+                Ok((dt, steps)) => {
+                    let per_step = dt / steps as f64;
+                    let rate = n as f64 * blocks / per_step;
+                    let one = *alone.get_or_insert(blocks / per_step);
+                    println!(
+                        "| {n} | {} | {:.2} | {rate:.3e} | {:.1}× |",
+                        path_name(kernel),
+                        per_step * 1e6,
+                        rate / one
+                    );
+                }
+                Err(e) => println!("| {n} | {} | not run: {e} | | |", path_name(kernel)),
+            }
+        }
+    }
+
+    // 4. Output cost at the default cadences.
+    println!("\n## 4. An output file at the default cadences (device records) against none\n");
+    println!("| lattice | kernel | steps | wall without | wall with -o | ratio |");
+    println!("| --- | --- | ---: | ---: | ---: | ---: |");
+    let output_sizes: &[(u32, u32, u64)] = if quick {
+        &[(57, 31, 2000)]
+    } else {
+        &[(57, 31, 40_000), (1024, 512, 4000)]
+    };
+    let dir = std::env::temp_dir().join(format!("slipfront-gpu-table-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    for &(nx, nz, steps) in output_sizes {
+        let model = bench_scene::scene(nx, nz);
+        let t_end = steps as f64 * model.dt;
+        let scenario = bench_scene::scenario(nx, nz, &[&format!("time.end={t_end:e}")]);
+        let file = dir.join("run.mcap");
+        let wall = |output: Option<&std::path::Path>| -> Result<(f64, String), String> {
+            let model = Model::from_scenario(&scenario, false).map_err(|e| e.to_string())?;
+            let opts = GpuOptions {
+                output: GpuOutput::Device,
+                ..GpuOptions::default()
+            };
+            let mut e = GpuEngine::with_options(&model, opts).map_err(|e| e.to_string())?;
+            advance_to(&mut e, model.prep_steps).map_err(|e| e.to_string())?;
+            if let Some(p) = output {
+                let _ = std::fs::remove_file(p);
+                let _ = std::fs::remove_file(slipfront::io::checkpoint::path_for(p));
+            }
+            let run = RunOptions {
+                output: output.map(|p| p.to_path_buf()),
+                progress: ProgressMode::None,
+                ..RunOptions::default()
+            };
+            let t0 = Instant::now();
+            run_scene(&mut e, &scenario, &run).map_err(|e| e.to_string())?;
+            Ok((t0.elapsed().as_secs_f64(), e.describe()))
+        };
+        match (wall(None), wall(Some(&file))) {
+            (Ok((without, how)), Ok((with, _))) => {
+                let kernel = how.split(", ").nth(1).unwrap_or(&how).to_string();
+                println!(
+                    "| {nx}×{nz} | {kernel} | {steps} | {without:.3} s | {with:.3} s | {:.2} |",
+                    with / without
+                );
+            }
+            (a, b) => println!("| {nx}×{nz} | not run: {a:?} {b:?} | | | | |"),
+        }
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+
+    // 5. The CPU on all cores, and the GPU's best over it.
+    println!("\n## 5. The CPU engine on all cores of this machine (mixed f32)\n");
+    println!("| lattice | CPU block-steps/s | GPU best block-steps/s | GPU/CPU |");
+    println!("| --- | ---: | ---: | ---: |");
+    for ((nx, nz), gpu_rate) in best_gpu {
+        if nx as usize * nz as usize > 1024 * 256 {
+            continue;
+        }
+        let model = bench_scene::scene(nx, nz);
+        let result = make_engine(&model, Backend::Cpu, Precision::F32, 0).and_then(|mut e| {
+            advance_to(e.as_mut(), model.prep_steps + 16)?;
+            timed_advance(|n| e.advance(n), min_seconds)
+        });
+        match result {
+            Ok((dt, steps)) => {
+                let cpu = model.n_blocks() as f64 * steps as f64 / dt;
+                println!(
+                    "| {nx}×{nz} | {cpu:.3e} | {gpu_rate:.3e} | {:.1}× |",
+                    gpu_rate / cpu
+                );
+            }
+            Err(e) => println!("| {nx}×{nz} | not run: {e} | | |"),
+        }
+    }
+}

@@ -1,0 +1,90 @@
+//! The GPU kernel a sweep steps its points with. `auto` on a hardware
+//! adapter (and `measure` anywhere) times the kernels on an ensemble of the
+//! sweep's own lattice, once per lattice shape (and caches the choice, as a
+//! run does): which kernel fills the GPU best depends on how many scenes
+//! share it, so the solo choice of `run` would not do. Every point of that
+//! shape then runs that kernel, alone or in an ensemble alike, so a table
+//! does not depend on --ensemble: the ensemble timed is
+//! `DEFAULT_ENSEMBLE` scenes (fewer if the sweep has fewer points of the
+//! shape), whatever --ensemble says. Elsewhere (`auto` on a software
+//! adapter, or a kernel named) the rule of `options::choose_kernel` holds.
+
+use super::{Point, SweepOptions, DEFAULT_ENSEMBLE};
+use crate::engines::backend::{Backend, Precision};
+use crate::engines::gpu::kernel_choice::{lattice_key, resolve_scenes, ChoiceCache};
+use crate::engines::gpu::options::without_measuring;
+use crate::engines::gpu::{context, GpuOptions, GpuPath};
+use crate::model::Model;
+
+/// The measured kernel of each lattice shape of a sweep.
+#[derive(Debug, Default)]
+pub struct SweepKernels {
+    /// (`lattice_key`, kernel) per shape measured.
+    chosen: Vec<(String, GpuPath)>,
+    software: bool,
+    /// What was measured, a line per shape (for the sweep's log).
+    pub report: Vec<String>,
+}
+
+impl SweepKernels {
+    /// Chooses the kernel of each lattice shape among `points` where the
+    /// options ask for a measured choice; none otherwise. A shape whose
+    /// candidates all fail to build keeps the rule (its points then say
+    /// what fails).
+    pub fn choose(points: &[Point], opts: &SweepOptions) -> Result<SweepKernels, String> {
+        let gpu_precision = matches!(opts.precision, Precision::F32 | Precision::F64);
+        let measured = matches!(opts.gpu.path, GpuPath::Auto | GpuPath::Measure);
+        if opts.backend != Backend::Gpu || !gpu_precision || !measured {
+            return Ok(SweepKernels::default());
+        }
+        let ctx = context::shared().map_err(|e| e.to_string())?;
+        let mut kernels = SweepKernels {
+            software: ctx.is_software(),
+            ..SweepKernels::default()
+        };
+        if opts.gpu.path == GpuPath::Auto && kernels.software {
+            return Ok(kernels);
+        }
+        let models: Vec<Model> = points
+            .iter()
+            .filter_map(|p| Model::from_scenario(&p.scenario, false).ok())
+            .collect();
+        let cache = ChoiceCache::default_location();
+        let mut shapes: Vec<(String, &Model, usize)> = Vec::new();
+        for m in &models {
+            let key = lattice_key(m);
+            match shapes.iter_mut().find(|(k, _, _)| *k == key) {
+                Some(shape) => shape.2 += 1,
+                None => shapes.push((key, m, 1)),
+            }
+        }
+        for (key, model, count) in shapes {
+            let scenes = count.min(DEFAULT_ENSEMBLE);
+            let resolved = match opts.precision {
+                Precision::F64 => resolve_scenes::<f64>(model, scenes, &ctx, opts.gpu, &cache),
+                _ => resolve_scenes::<f32>(model, scenes, &ctx, opts.gpu, &cache),
+            };
+            let line = match resolved {
+                Ok((gpu, Some(choice))) => {
+                    kernels.chosen.push((key.clone(), gpu.path));
+                    choice.describe()
+                }
+                Ok((_, None)) => continue,
+                Err(e) => format!("not measured ({e}): the rule's kernel runs"),
+            };
+            kernels.report.push(format!("GPU kernel for {key}: {line}"));
+        }
+        Ok(kernels)
+    }
+
+    /// The options a point of `model` runs with, alone or in an ensemble:
+    /// its shape's measured kernel, else the rule's for `gpu.path`.
+    pub fn options(&self, model: &Model, gpu: GpuOptions) -> GpuOptions {
+        let key = lattice_key(model);
+        let path = match self.chosen.iter().find(|(k, _)| *k == key) {
+            Some(&(_, path)) => path,
+            None => without_measuring(gpu.path, self.software),
+        };
+        GpuOptions { path, ..gpu }
+    }
+}
