@@ -66,6 +66,20 @@ fn s(p: &Path) -> &str {
 }
 
 /// The table without its wall-time column (the only one that may differ).
+/// `sweep FILE -o OUT --backend gpu --precision f32`.
+fn gpu_f32_sweep<'a>(file: &'a Path, out: &'a Path) -> Vec<&'a str> {
+    vec![
+        "sweep",
+        s(file),
+        "-o",
+        s(out),
+        "--backend",
+        "gpu",
+        "--precision",
+        "f32",
+    ]
+}
+
 fn table(path: &Path) -> Vec<Vec<String>> {
     let text = std::fs::read_to_string(path).unwrap();
     let mut rows: Vec<Vec<String>> = text
@@ -444,16 +458,7 @@ fn a_measured_sweep_runs_every_point_on_the_kernel_timed_on_its_ensemble() {
     let cache = d.join("cache");
     let run = |name: &str, extra: &[&str]| {
         let out = d.join(name);
-        let mut args = vec![
-            "sweep",
-            s(&file),
-            "-o",
-            s(&out),
-            "--backend",
-            "gpu",
-            "--precision",
-            "f32",
-        ];
+        let mut args = gpu_f32_sweep(&file, &out);
         args.extend(extra);
         let got = Command::new(env!("CARGO_BIN_EXE_slipfront"))
             .args(&args)
@@ -509,19 +514,8 @@ fn gpu_points_with_device_records_alone_or_as_an_ensemble_give_the_host_snapshot
     let file = sweep_file(&d, "");
     let run = |name: &str, extra: &[&str]| {
         let out = d.join(name);
-        let mut args = vec![
-            "sweep",
-            s(&file),
-            "-o",
-            s(&out),
-            "--backend",
-            "gpu",
-            "--precision",
-            "f32",
-            "--gpu-path",
-            "one-step-lanes",
-            "--quiet",
-        ];
+        let mut args = gpu_f32_sweep(&file, &out);
+        args.extend(["--gpu-path", "one-step-lanes", "--quiet"]);
         args.extend(extra);
         let text = ok(&args);
         assert!(text.contains("8 run now (0 not ok)"), "{text}");
