@@ -7,7 +7,9 @@
 //!
 //! 1. every kernel against lattice size (Table S1 to 8192×4096): µs per
 //!    step and block-steps/s, each kernel on the scene alone;
-//! 2. what `auto` chooses on Table S1 (timed now, as `--gpu-path measure`);
+//! 2. what `auto` chooses on Table S1 (timed now, as `--gpu-path measure`),
+//!    and the persistent and resident kernels there with 256, 512 and 1024
+//!    threads (`--gpu-threads`: more threads, fewer registers each);
 //! 3. ensembles of 1 to 1024 Table S1 scenes (the precursors scene, a seed
 //!    each) in one dispatch, per kernel: aggregate block-steps/s and the
 //!    speed-up over running the scenes one at a time;
@@ -60,14 +62,21 @@ fn options(kernel: Kernel) -> GpuOptions {
     }
 }
 
+fn with_threads(kernel: Kernel, threads: Option<u32>) -> GpuOptions {
+    GpuOptions {
+        persistent_threads: threads,
+        ..options(kernel)
+    }
+}
+
 fn path_name(kernel: Kernel) -> String {
     GpuPath::of(kernel).name()
 }
 
 /// Seconds per step of `kernel` on `model` alone, past its normal-load
 /// phase.
-fn solo_step_seconds(model: &Model, kernel: Kernel, min_seconds: f64) -> Result<f64, String> {
-    let mut e = GpuEngine::with_options(model, options(kernel)).map_err(|e| e.to_string())?;
+fn solo_step_seconds(model: &Model, opts: GpuOptions, min_seconds: f64) -> Result<f64, String> {
+    let mut e = GpuEngine::with_options(model, opts).map_err(|e| e.to_string())?;
     advance_to(&mut e, model.prep_steps + 16).map_err(|e| e.to_string())?;
     let (dt, steps) = timed_advance(|n| e.advance(n), min_seconds).map_err(|e| e.to_string())?;
     Ok(dt / steps as f64)
@@ -108,7 +117,7 @@ fn main() {
         let model = bench_scene::scene(nx, nz);
         let mut best = f64::INFINITY;
         for kernel in candidates(&model) {
-            match solo_step_seconds(&model, kernel, min_seconds) {
+            match solo_step_seconds(&model, options(kernel), min_seconds) {
                 Ok(s) => {
                     best = best.min(s);
                     println!(
@@ -131,6 +140,19 @@ fn main() {
         Ok(choice) => println!("{}\n", choice.describe()),
         Err(e) => println!("not measured: {e}\n"),
     }
+    println!("| kernel | threads | µs/step |");
+    println!("| --- | ---: | ---: |");
+    for kernel in [Kernel::Persistent, Kernel::Resident] {
+        for threads in [256, 512, 1024] {
+            let figure =
+                match solo_step_seconds(&s1, with_threads(kernel, Some(threads)), min_seconds) {
+                    Ok(s) => format!("{:.2}", s * 1e6),
+                    Err(e) => format!("not run: {e}"),
+                };
+            println!("| {} | {threads} | {figure} |", path_name(kernel));
+        }
+    }
+    println!();
 
     // 3. Ensembles of Table S1 scenes.
     let counts: &[usize] = if quick {
