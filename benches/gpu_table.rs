@@ -16,7 +16,10 @@
 //! 4. what an output file at the default cadences costs (device records),
 //!    against the same steps without one;
 //! 5. the CPU engine on all cores of the same machine, and the GPU's best
-//!    over it.
+//!    over it;
+//! 6. the issue's own figure: 64 and 256 Table S1 points (a seed each,
+//!    0.01 s of driving) as one `sweep --backend gpu` (its kernel timed on
+//!    the sweep's ensemble, as `auto` does), and the 64 one at a time.
 //!
 //! Every figure is timed after a warm-up, over at least `SECONDS` of wall
 //! time (doubling the steps until then); the device is waited for at the
@@ -25,6 +28,7 @@
 //! to 16 (software adapters: lavapipe runs the full table for hours).
 
 use slipfront::app::runner::{run_scene, ProgressMode, RunOptions};
+use slipfront::app::sweeps::{run_sweep, KeepMcap, Sweep, SweepOptions};
 use slipfront::engines::backend::{make_engine, Backend, Precision};
 use slipfront::engines::gpu::ensemble::GpuEnsemble;
 use slipfront::engines::gpu::kernel_choice::{candidates, measure};
@@ -87,6 +91,52 @@ fn table_s1(seed: usize) -> Model {
     let text = built_in("tromborg2014_precursors").expect("shipped scene");
     let s = Scenario::parse(text, "table S1", &[format!("time.seed={seed}")]).expect("scene");
     Model::from_scenario(&s, false).expect("model")
+}
+
+/// `points` seeds of the precursors scene, 0.01 s of driving each, as a
+/// sweep file in `dir`.
+fn table_s1_sweep(dir: &std::path::Path, points: usize) -> Sweep {
+    let base = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/scenarios/tromborg2014_precursors.toml"
+    );
+    let text = format!(
+        "base = \"{base}\"\nseeds = {points}\n[set]\n\"time.end\" = 0.01\n\
+         \"output.bulk_interval\" = 0.0\n"
+    );
+    let file = dir.join(format!("table_s1_{points}.toml"));
+    std::fs::write(&file, text).expect("sweep file");
+    Sweep::load(&file).expect("sweep")
+}
+
+/// Wall seconds of `sweep` on the GPU in mixed f32, `ensemble` scenes per
+/// dispatch at most (1: one point at a time).
+fn sweep_wall(dir: &std::path::Path, sweep: &Sweep, ensemble: usize) -> Result<f64, String> {
+    let out = dir.join(format!("sweep-{}-{ensemble}", sweep.points.len()));
+    let _ = std::fs::remove_dir_all(&out);
+    let t0 = Instant::now();
+    let report = run_sweep(
+        sweep,
+        &SweepOptions {
+            out_dir: out.clone(),
+            backend: Backend::Gpu,
+            precision: Precision::F32,
+            threads: 1,
+            shard: None,
+            keep_mcap: KeepMcap::None,
+            progress: false,
+            share_loading: true,
+            ensemble,
+            gpu: slipfront::app::sweeps::default_gpu(),
+            on_point: None,
+        },
+    )?;
+    let wall = t0.elapsed().as_secs_f64();
+    let _ = std::fs::remove_dir_all(&out);
+    if report.not_ok > 0 {
+        return Err(format!("{} points not ok", report.not_ok));
+    }
+    Ok(wall)
 }
 
 fn main() {
@@ -243,7 +293,6 @@ fn main() {
             (a, b) => println!("| {nx}×{nz} | not run: {a:?} {b:?} | | | | |"),
         }
     }
-    let _ = std::fs::remove_dir_all(&dir);
 
     // 5. The CPU on all cores, and the GPU's best over it.
     println!("\n## 5. The CPU engine on all cores of this machine (mixed f32)\n");
@@ -269,4 +318,41 @@ fn main() {
             Err(e) => println!("| {nx}×{nz} | not run: {e} | | |"),
         }
     }
+
+    // 6. Table S1 points as one sweep.
+    println!("\n## 6. Table S1 points as one sweep, 0.01 s of driving each\n");
+    println!("| points | how | wall (s) | aggregate block-steps/s | against one at a time |");
+    println!("| ---: | --- | ---: | ---: | ---: |");
+    let sweeps: &[usize] = if quick { &[4] } else { &[64, 256] };
+    for &n in sweeps {
+        let sweep = table_s1_sweep(&dir, n);
+        let model = Model::from_scenario(&sweep.points[0].scenario, false).expect("model");
+        let block_steps = n as f64 * model.total_steps() as f64 * model.n_blocks() as f64;
+        let together = sweep_wall(&dir, &sweep, n);
+        let alone = if n == sweeps[0] {
+            Some(sweep_wall(&dir, &sweep, 1))
+        } else {
+            None
+        };
+        for (how, wall) in [
+            ("one ensemble", Some(&together)),
+            ("one at a time", alone.as_ref()),
+        ] {
+            match wall {
+                Some(Ok(w)) => {
+                    let against = match alone.as_ref() {
+                        Some(Ok(a)) => format!("{:.1}×", a / w),
+                        _ => String::new(),
+                    };
+                    println!(
+                        "| {n} | {how} | {w:.1} | {:.3e} | {against} |",
+                        block_steps / w
+                    );
+                }
+                Some(Err(e)) => println!("| {n} | {how} | not run: {e} | | |"),
+                None => {}
+            }
+        }
+    }
+    let _ = std::fs::remove_dir_all(&dir);
 }
