@@ -143,6 +143,14 @@ fn bad_input_exits_with_a_clear_message() {
     assert_eq!(out.status.code(), Some(2));
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("--from `nope.ckpt`: no such file"), "{err}");
+    // A workgroup of no threads, on run and sweep alike.
+    for command in ["run", "sweep"] {
+        let out = slipfront(&[command, "--gpu-threads", "0"]);
+        assert_eq!(out.status.code(), Some(2));
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains("'0' for '--gpu-threads"), "{err}");
+        assert!(err.contains("not in 1.."), "{err}");
+    }
 }
 
 #[test]
