@@ -227,11 +227,11 @@ impl Outputs {
     /// Writes a record to the run file and the live view, encoded once.
     pub fn send(&mut self, record: Record) -> Result<(), RunError> {
         let bytes = record.encode();
-        if let Some(sink) = self.sink.as_mut() {
-            sink.write(record.topic(), record.time(), &bytes)?;
-        }
         if let Some(live) = &self.live {
             live.publish(&record, &bytes);
+        }
+        if let Some(sink) = self.sink.as_mut() {
+            sink.write(record.topic(), record.time(), bytes)?;
         }
         Ok(())
     }

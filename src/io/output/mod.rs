@@ -2,8 +2,8 @@
 //! attachment, and one channel per output kind. Messages are protobuf with
 //! their FileDescriptorSet as the schema (MCAP well-known encoding), so that
 //! Foxglove and the `mcap` Python reader decode numeric arrays; chunks are
-//! zstd-compressed and flushed every few seconds so that a killed run leaves
-//! a readable file.
+//! zstd-compressed on the file's own writing thread (`writer`) and flushed
+//! every second so that a killed run leaves a readable file.
 
 pub mod lock;
 pub mod messages;
@@ -11,6 +11,7 @@ pub mod reader;
 pub mod records;
 pub mod recover;
 pub mod scan;
+mod writer;
 
 use crate::model::scenario::Scenario;
 use crate::model::Model;
@@ -20,9 +21,7 @@ use std::collections::BTreeMap;
 use std::fs::File;
 use std::io::BufWriter;
 use std::path::Path;
-use std::time::{Duration, Instant};
-
-const FLUSH_EVERY: Duration = Duration::from_secs(1);
+use writer::WriterThread;
 
 #[derive(Debug, thiserror::Error)]
 pub enum OutputError {
@@ -31,10 +30,21 @@ pub enum OutputError {
         path: String,
         source: std::io::Error,
     },
-    #[error("MCAP: {0}")]
+    #[error("MCAP: {}", mcap_cause(.0))]
     Mcap(#[from] mcap::McapError),
     #[error("cannot read `{path}`: {why}")]
     Read { path: String, why: String },
+    #[error("writing the run file: {0}")]
+    Writing(String),
+}
+
+/// The MCAP error with its I/O cause ("No space left on device"), which
+/// the crate's own message leaves out.
+fn mcap_cause(e: &mcap::McapError) -> String {
+    match e {
+        mcap::McapError::Io(io) => format!("{e}: {io}"),
+        other => other.to_string(),
+    }
 }
 
 /// One sample of the global series.
@@ -50,14 +60,21 @@ pub struct GlobalSample {
     pub ruptures: u64,
 }
 
+/// The run file being written: messages go to its writing thread.
 pub struct McapSink {
-    writer: mcap::Writer<BufWriter<File>>,
-    /// The same file, to sync it to disk before a checkpoint.
-    file: File,
+    writer: WriterThread,
     /// Channel ids, by [`Topic::index`].
     channels: [u16; 4],
     sequence: u32,
-    last_flush: Instant,
+}
+
+/// A run file opened, its header written, not yet handed to its thread
+/// (a continued run first copies its parent's messages in here).
+struct Opened {
+    writer: mcap::Writer<BufWriter<File>>,
+    /// The same file, to sync it to disk before a checkpoint.
+    file: File,
+    channels: [u16; 4],
 }
 
 /// Opens `path` for writing as the only writer: created if missing, locked
@@ -92,6 +109,105 @@ impl McapSink {
     /// A new run file. `history` (one line per start, resume and branch
     /// of the run) goes to the `slipfront_history` metadata record.
     pub fn create(
+        path: &Path,
+        model: &Model,
+        scenario: &Scenario,
+        backend: &str,
+        history: &[String],
+    ) -> Result<Self, OutputError> {
+        Ok(Opened::create(path, model, scenario, backend, history)?.spawn(0))
+    }
+
+    /// A run file that continues `parent` (or, with `parent` = `path`,
+    /// the same file): its first `messages` messages are copied from
+    /// `parent` into `path.partial`, which then takes `path`'s name, so a
+    /// crash before that leaves `parent` as it was. Fails when `parent` no
+    /// longer holds them all.
+    #[allow(clippy::too_many_arguments)]
+    pub fn continue_from(
+        path: &Path,
+        parent: &Path,
+        messages: u32,
+        model: &Model,
+        scenario: &Scenario,
+        backend: &str,
+        history: &[String],
+    ) -> Result<Self, OutputError> {
+        let mut partial = path.as_os_str().to_owned();
+        partial.push(".partial");
+        let partial = std::path::PathBuf::from(partial);
+        let mut opened = Opened::create(&partial, model, scenario, backend, history)?;
+        let copied = opened.copy_messages(parent, messages)?;
+        if copied != messages {
+            let _ = std::fs::remove_file(&partial);
+            return Err(OutputError::Read {
+                path: parent.display().to_string(),
+                why: format!(
+                    "it holds {copied} of the {messages} messages written before the \
+                     checkpoint: it was damaged or replaced after it"
+                ),
+            });
+        }
+        opened.sync()?;
+        std::fs::rename(&partial, path).map_err(|source| OutputError::Create {
+            path: path.display().to_string(),
+            source,
+        })?;
+        Ok(opened.spawn(messages))
+    }
+
+    /// Everything written so far on disk: the open chunk closed, the
+    /// buffers flushed and the file synced (before a checkpoint that counts
+    /// on those messages).
+    pub fn sync(&mut self) -> Result<(), OutputError> {
+        self.writer.sync()
+    }
+
+    /// Messages written so far: the sink's part of a checkpoint.
+    pub fn sequence(&self) -> u32 {
+        self.sequence
+    }
+
+    /// Continues the numbering of a saved run.
+    pub fn restore(&mut self, sequence: u32) {
+        self.sequence = sequence;
+    }
+
+    /// Queues one message of `topic`, its protobuf bytes, logged at
+    /// simulated time `time` (s). An error of the writing thread (a full
+    /// disk) comes back from a later call.
+    pub fn write(&mut self, topic: Topic, time: f64, data: Vec<u8>) -> Result<(), OutputError> {
+        let t = records::log_time(time);
+        self.sequence += 1;
+        let header = mcap::records::MessageHeader {
+            channel_id: self.channels[topic.index()],
+            sequence: self.sequence,
+            log_time: t,
+            publish_time: t,
+        };
+        self.writer.write(header, data)
+    }
+
+    /// Closes the file, waiting for everything queued; a fast-forwarded
+    /// run adds its totals as the `slipfront_fast_forward` metadata record.
+    pub fn finish(
+        self,
+        fast_forward: Option<&crate::engines::quasistatic::FastForwardStats>,
+    ) -> Result<(), OutputError> {
+        let last = fast_forward.map(|f| {
+            let mut meta = BTreeMap::new();
+            meta.insert("jumps".into(), f.jumps.to_string());
+            meta.insert("skipped_steps".into(), f.skipped_steps.to_string());
+            meta.insert("skipped_time".into(), format!("{:e}", f.skipped_time));
+            meta.insert("dropped_energy".into(), format!("{:e}", f.dropped_energy));
+            writer::metadata("slipfront_fast_forward", meta)
+        });
+        self.writer.finish(last)
+    }
+}
+
+impl Opened {
+    fn create(
         path: &Path,
         model: &Model,
         scenario: &Scenario,
@@ -158,56 +274,38 @@ impl McapSink {
             channels[topic.index()] =
                 writer.add_channel(schema, topic.name(), "protobuf", &none)?;
         }
-        Ok(McapSink {
+        Ok(Opened {
             writer,
             file: sync_handle,
             channels,
-            sequence: 0,
-            last_flush: Instant::now(),
         })
     }
 
-    /// A run file that continues `parent` (or, with `parent` = `path`,
-    /// the same file): its first `messages` messages are copied from
-    /// `parent` into `path.partial`, which then takes `path`'s name, so a
-    /// crash before that leaves `parent` as it was. Fails when `parent` no
-    /// longer holds them all.
-    #[allow(clippy::too_many_arguments)]
-    pub fn continue_from(
-        path: &Path,
-        parent: &Path,
-        messages: u32,
-        model: &Model,
-        scenario: &Scenario,
-        backend: &str,
-        history: &[String],
-    ) -> Result<Self, OutputError> {
-        let mut partial = path.as_os_str().to_owned();
-        partial.push(".partial");
-        let partial = std::path::PathBuf::from(partial);
-        let mut sink = McapSink::create(&partial, model, scenario, backend, history)?;
-        let copied = sink.copy_messages(parent, messages)?;
-        if copied != messages {
-            let _ = std::fs::remove_file(&partial);
-            return Err(OutputError::Read {
-                path: parent.display().to_string(),
-                why: format!(
-                    "it holds {copied} of the {messages} messages written before the \
-                     checkpoint: it was damaged or replaced after it"
-                ),
-            });
+    /// Hands the file to its writing thread; `sequence`: messages in it.
+    fn spawn(self, sequence: u32) -> McapSink {
+        let file = self.file;
+        McapSink {
+            writer: WriterThread::spawn(
+                self.writer,
+                move || file.sync_data(),
+                writer::MAX_IN_FLIGHT,
+            ),
+            channels: self.channels,
+            sequence,
         }
-        sink.sync()?;
-        std::fs::rename(&partial, path).map_err(|source| OutputError::Create {
-            path: path.display().to_string(),
-            source,
-        })?;
-        Ok(sink)
+    }
+
+    /// Closes the open chunk, flushes and syncs the file to disk.
+    fn sync(&mut self) -> Result<(), OutputError> {
+        self.writer.flush()?;
+        self.file
+            .sync_data()
+            .map_err(|e| OutputError::Writing(format!("cannot sync it to disk: {e}")))
     }
 
     /// Copies the messages with sequence numbers 1..=`upto` of `parent`
-    /// (record by record: a file cut short gives what it holds) and
-    /// continues the numbering after them. Returns how many it copied.
+    /// (record by record: a file cut short gives what it holds). Returns
+    /// how many it copied.
     fn copy_messages(&mut self, parent: &Path, upto: u32) -> Result<u32, OutputError> {
         use mcap::records::Record;
         let fail = |why: String| OutputError::Read {
@@ -246,72 +344,7 @@ impl McapSink {
                 "it is damaged ({why}); run `slipfront recover` on it first"
             )));
         }
-        self.sequence = upto;
         Ok(copied)
-    }
-
-    /// Everything written so far on disk: the open chunk closed, the
-    /// buffers flushed and the file synced (before a checkpoint that counts
-    /// on those messages).
-    pub fn sync(&mut self) -> Result<(), OutputError> {
-        self.writer.flush()?;
-        self.last_flush = Instant::now();
-        self.file.sync_data().map_err(|e| OutputError::Read {
-            path: "the run file".into(),
-            why: format!("cannot sync it to disk: {e}"),
-        })
-    }
-
-    /// Messages written so far: the sink's part of a checkpoint.
-    pub fn sequence(&self) -> u32 {
-        self.sequence
-    }
-
-    /// Continues the numbering of a saved run.
-    pub fn restore(&mut self, sequence: u32) {
-        self.sequence = sequence;
-    }
-
-    /// Writes one message of `topic`, its protobuf bytes, logged at
-    /// simulated time `time` (s).
-    pub fn write(&mut self, topic: Topic, time: f64, data: &[u8]) -> Result<(), OutputError> {
-        let t = records::log_time(time);
-        self.sequence += 1;
-        self.writer.write_to_known_channel(
-            &mcap::records::MessageHeader {
-                channel_id: self.channels[topic.index()],
-                sequence: self.sequence,
-                log_time: t,
-                publish_time: t,
-            },
-            data,
-        )?;
-        if self.last_flush.elapsed() > FLUSH_EVERY {
-            self.writer.flush()?;
-            self.last_flush = Instant::now();
-        }
-        Ok(())
-    }
-
-    /// Closes the file; a fast-forwarded run adds its totals as the
-    /// `slipfront_fast_forward` metadata record.
-    pub fn finish(
-        mut self,
-        fast_forward: Option<&crate::engines::quasistatic::FastForwardStats>,
-    ) -> Result<(), OutputError> {
-        if let Some(f) = fast_forward {
-            let mut meta = BTreeMap::new();
-            meta.insert("jumps".into(), f.jumps.to_string());
-            meta.insert("skipped_steps".into(), f.skipped_steps.to_string());
-            meta.insert("skipped_time".into(), format!("{:e}", f.skipped_time));
-            meta.insert("dropped_energy".into(), format!("{:e}", f.dropped_energy));
-            self.writer.write_metadata(&mcap::records::Metadata {
-                name: "slipfront_fast_forward".into(),
-                metadata: meta,
-            })?;
-        }
-        self.writer.finish()?;
-        Ok(())
     }
 }
 
