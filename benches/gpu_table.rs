@@ -21,11 +21,17 @@
 //!    0.01 s of driving) as one `sweep --backend gpu` (its kernel timed on
 //!    the sweep's ensemble, as `auto` does), and the 64 one at a time.
 //!
+//! Sections 1–3 also print the host's CPU time per wall second of each
+//! timed span: it says whether the host (encoding dispatches, waiting) or
+//! the device is what a figure measures.
+//!
 //! Every figure is timed after a warm-up, over at least `SECONDS` of wall
 //! time (doubling the steps until then); the device is waited for at the
 //! end of each advance, and nothing is read back in the timed span.
 //! SLIPFRONT_GPU_TABLE_QUICK=1 keeps to small lattices and ensembles of up
 //! to 16 (software adapters: lavapipe runs the full table for hours).
+//! SLIPFRONT_GPU_TABLE_SECTIONS=1,3,6 runs only those sections (a short
+//! loan of a GPU can take the table in parts); each prints its wall time.
 
 use slipfront::app::runner::{run_scene, ProgressMode, RunOptions};
 use slipfront::app::sweeps::{run_sweep, KeepMcap, Sweep, SweepOptions};
@@ -41,19 +47,42 @@ use std::time::Instant;
 #[path = "support/bench_scene.rs"]
 mod bench_scene;
 
+/// CPU seconds used so far by every thread of this process (the driver's
+/// included).
+fn process_cpu_seconds() -> f64 {
+    let mut t = libc::timespec {
+        tv_sec: 0,
+        tv_nsec: 0,
+    };
+    // SAFETY: clock_gettime writes the timespec it is given.
+    unsafe { libc::clock_gettime(libc::CLOCK_PROCESS_CPUTIME_ID, &mut t) };
+    t.tv_sec as f64 + t.tv_nsec as f64 * 1e-9
+}
+
 /// Wall seconds of `advance(steps)` calls, doubling `steps` until one takes
 /// at least `min_seconds`: (seconds, steps) of that last one.
 fn timed_advance(
-    mut advance: impl FnMut(u64) -> Result<(), EngineError>,
+    advance: impl FnMut(u64) -> Result<(), EngineError>,
     min_seconds: f64,
 ) -> Result<(f64, u64), EngineError> {
+    timed_with_cpu(advance, min_seconds).map(|t| (t.0, t.1))
+}
+
+/// As `timed_advance`, with the host CPU seconds of the same span: a
+/// share of the wall time near 1 (or above, with threads) says the host
+/// is the limit; near 0, the device (on a hardware adapter).
+fn timed_with_cpu(
+    mut advance: impl FnMut(u64) -> Result<(), EngineError>,
+    min_seconds: f64,
+) -> Result<(f64, u64, f64), EngineError> {
     let mut steps = 16u64;
     loop {
-        let t0 = Instant::now();
+        let (t0, cpu0) = (Instant::now(), process_cpu_seconds());
         advance(steps)?;
         let dt = t0.elapsed().as_secs_f64();
+        let cpu = process_cpu_seconds() - cpu0;
         if dt >= min_seconds || steps >= 1 << 24 {
-            return Ok((dt, steps));
+            return Ok((dt, steps, cpu));
         }
         steps *= if dt < min_seconds / 8.0 { 8 } else { 2 };
     }
@@ -78,12 +107,17 @@ fn path_name(kernel: Kernel) -> String {
 }
 
 /// Seconds per step of `kernel` on `model` alone, past its normal-load
-/// phase.
-fn solo_step_seconds(model: &Model, opts: GpuOptions, min_seconds: f64) -> Result<f64, String> {
+/// phase, and the host CPU seconds per wall second of the same span.
+fn solo_step_seconds(
+    model: &Model,
+    opts: GpuOptions,
+    min_seconds: f64,
+) -> Result<(f64, f64), String> {
     let mut e = GpuEngine::with_options(model, opts).map_err(|e| e.to_string())?;
     advance_to(&mut e, model.prep_steps + 16).map_err(|e| e.to_string())?;
-    let (dt, steps) = timed_advance(|n| e.advance(n), min_seconds).map_err(|e| e.to_string())?;
-    Ok(dt / steps as f64)
+    let (dt, steps, cpu) =
+        timed_with_cpu(|n| e.advance(n), min_seconds).map_err(|e| e.to_string())?;
+    Ok((dt / steps as f64, cpu / dt))
 }
 
 /// The precursors scene (Table S1, Ns = 100) with seed `seed`.
@@ -139,6 +173,46 @@ fn sweep_wall(dir: &std::path::Path, sweep: &Sweep, ensemble: usize) -> Result<f
     Ok(wall)
 }
 
+/// Which sections to run (`SLIPFRONT_GPU_TABLE_SECTIONS=1,3,6`; all by
+/// default), so that a short loan of a GPU can run the table in parts;
+/// each section's own wall time is printed after it.
+struct Sections(Vec<u32>);
+
+/// Prints a section's wall time when dropped.
+struct SectionTimer(u32, Instant);
+
+impl Drop for SectionTimer {
+    fn drop(&mut self) {
+        println!(
+            "\n(section {} took {:.1} s of wall time)\n",
+            self.0,
+            self.1.elapsed().as_secs_f64()
+        );
+    }
+}
+
+impl Sections {
+    fn from_env() -> Self {
+        let all = (1..=6).collect();
+        match std::env::var("SLIPFRONT_GPU_TABLE_SECTIONS") {
+            Ok(list) => Sections(
+                list.split(',')
+                    .map(|s| {
+                        s.trim().parse().unwrap_or_else(|_| {
+                            panic!("SLIPFRONT_GPU_TABLE_SECTIONS: `{s}` is not a section 1-6")
+                        })
+                    })
+                    .collect(),
+            ),
+            Err(_) => Sections(all),
+        }
+    }
+
+    fn start(&self, n: u32) -> Option<SectionTimer> {
+        self.0.contains(&n).then(|| SectionTimer(n, Instant::now()))
+    }
+}
+
 fn main() {
     let quick = std::env::var("SLIPFRONT_GPU_TABLE_QUICK").is_ok();
     let min_seconds = if quick { 0.3 } else { 1.0 };
@@ -146,7 +220,9 @@ fn main() {
     println!("# GPU table: {}\n", ctx.describe());
     println!("Mixed f32; each figure timed over at least {min_seconds} s of wall time.\n");
 
-    // 1. Kernels against lattice size.
+    let dir = std::env::temp_dir().join(format!("slipfront-gpu-table-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let sections = Sections::from_env();
     let sizes: &[(u32, u32)] = if quick {
         &[(57, 31), (256, 64)]
     } else {
@@ -159,198 +235,224 @@ fn main() {
             (8192, 4096),
         ]
     };
-    println!("## 1. Kernels against lattice size (each scene alone)\n");
-    println!("| lattice | kernel | µs/step | block-steps/s |");
-    println!("| --- | --- | ---: | ---: |");
+    let s1 = table_s1(1);
     let mut best_gpu = Vec::new();
-    for &(nx, nz) in sizes {
-        let model = bench_scene::scene(nx, nz);
-        let mut best = f64::INFINITY;
-        for kernel in candidates(&model) {
-            match solo_step_seconds(&model, options(kernel), min_seconds) {
-                Ok(s) => {
-                    best = best.min(s);
-                    println!(
-                        "| {nx}×{nz} | {} | {:.2} | {:.3e} |",
-                        path_name(kernel),
-                        s * 1e6,
-                        model.n_blocks() as f64 / s
-                    );
+    if let Some(_timer) = sections.start(1) {
+        // 1. Kernels against lattice size.
+        println!("## 1. Kernels against lattice size (each scene alone)\n");
+        println!(
+            "Host CPU / wall: CPU seconds of every thread of the process per wall second of the \
+             timed span (near 1 or above: the host is the limit; near 0 on a hardware GPU: the \
+             device).\n"
+        );
+        println!("| lattice | kernel | µs/step | block-steps/s | host CPU / wall |");
+        println!("| --- | --- | ---: | ---: | ---: |");
+        for &(nx, nz) in sizes {
+            let model = bench_scene::scene(nx, nz);
+            let mut best = f64::INFINITY;
+            for kernel in candidates(&model) {
+                match solo_step_seconds(&model, options(kernel), min_seconds) {
+                    Ok((s, host)) => {
+                        best = best.min(s);
+                        println!(
+                            "| {nx}×{nz} | {} | {:.2} | {:.3e} | {host:.2} |",
+                            path_name(kernel),
+                            s * 1e6,
+                            model.n_blocks() as f64 / s
+                        );
+                    }
+                    Err(e) => println!("| {nx}×{nz} | {} | not run: {e} | | |", path_name(kernel)),
                 }
-                Err(e) => println!("| {nx}×{nz} | {} | not run: {e} | |", path_name(kernel)),
+            }
+            best_gpu.push(((nx, nz), model.n_blocks() as f64 / best));
+        }
+    }
+    if let Some(_timer) = sections.start(2) {
+        // 2. The auto choice on Table S1.
+        println!("\n## 2. What `auto` chooses on Table S1 (the precursors scene)\n");
+        match measure::<f32>(std::slice::from_ref(&s1), &ctx, GpuOptions::default()) {
+            Ok(choice) => println!("{}\n", choice.describe()),
+            Err(e) => println!("not measured: {e}\n"),
+        }
+        println!("| kernel | threads | µs/step | host CPU / wall |");
+        println!("| --- | ---: | ---: | ---: |");
+        for kernel in [Kernel::Persistent, Kernel::Resident] {
+            for threads in [256, 512, 1024] {
+                let figure = match solo_step_seconds(
+                    &s1,
+                    with_threads(kernel, Some(threads)),
+                    min_seconds,
+                ) {
+                    Ok((s, host)) => format!("{:.2} | {host:.2}", s * 1e6),
+                    Err(e) => format!("not run: {e} |"),
+                };
+                println!("| {} | {threads} | {figure} |", path_name(kernel));
             }
         }
-        best_gpu.push(((nx, nz), model.n_blocks() as f64 / best));
+        println!();
     }
-
-    // 2. The auto choice on Table S1.
-    println!("\n## 2. What `auto` chooses on Table S1 (the precursors scene)\n");
-    let s1 = table_s1(1);
-    match measure::<f32>(std::slice::from_ref(&s1), &ctx, GpuOptions::default()) {
-        Ok(choice) => println!("{}\n", choice.describe()),
-        Err(e) => println!("not measured: {e}\n"),
-    }
-    println!("| kernel | threads | µs/step |");
-    println!("| --- | ---: | ---: |");
-    for kernel in [Kernel::Persistent, Kernel::Resident] {
-        for threads in [256, 512, 1024] {
-            let figure =
-                match solo_step_seconds(&s1, with_threads(kernel, Some(threads)), min_seconds) {
-                    Ok(s) => format!("{:.2}", s * 1e6),
-                    Err(e) => format!("not run: {e}"),
-                };
-            println!("| {} | {threads} | {figure} |", path_name(kernel));
+    if let Some(_timer) = sections.start(3) {
+        // 3. Ensembles of Table S1 scenes.
+        let counts: &[usize] = if quick {
+            &[1, 4, 16]
+        } else {
+            &[1, 4, 16, 64, 256, 1024]
+        };
+        println!("## 3. Ensembles of Table S1 scenes in one dispatch\n");
+        println!(
+            "Speed-up: the ensemble's aggregate rate over the same kernel's rate for one scene \
+         alone (what running the scenes one at a time gets).\n"
+        );
+        println!("Host CPU / wall: as in section 1.\n");
+        println!(
+            "| scenes | kernel | µs per ensemble step | aggregate block-steps/s | speed-up | \
+             host CPU / wall |"
+        );
+        println!("| ---: | --- | ---: | ---: | ---: | ---: |");
+        let blocks = s1.n_blocks() as f64;
+        for kernel in candidates(&s1) {
+            let mut alone = None;
+            for &n in counts {
+                let models: Vec<Model> = (1..=n).map(table_s1).collect();
+                let result = GpuEnsemble::new(&models, options(kernel))
+                    .map_err(|e| e.to_string())
+                    .and_then(|mut e| {
+                        e.advance(s1.prep_steps + 16).map_err(|e| e.to_string())?;
+                        timed_with_cpu(|k| e.advance(k), min_seconds).map_err(|e| e.to_string())
+                    });
+                match result {
+                    Ok((dt, steps, cpu)) => {
+                        let per_step = dt / steps as f64;
+                        let rate = n as f64 * blocks / per_step;
+                        let one = *alone.get_or_insert(blocks / per_step);
+                        println!(
+                            "| {n} | {} | {:.2} | {rate:.3e} | {:.1}× | {:.2} |",
+                            path_name(kernel),
+                            per_step * 1e6,
+                            rate / one,
+                            cpu / dt
+                        );
+                    }
+                    Err(e) => println!("| {n} | {} | not run: {e} | | | |", path_name(kernel)),
+                }
+            }
         }
     }
-    println!();
-
-    // 3. Ensembles of Table S1 scenes.
-    let counts: &[usize] = if quick {
-        &[1, 4, 16]
-    } else {
-        &[1, 4, 16, 64, 256, 1024]
-    };
-    println!("## 3. Ensembles of Table S1 scenes in one dispatch\n");
-    println!(
-        "Speed-up: the ensemble's aggregate rate over the same kernel's rate for one scene \
-         alone (what running the scenes one at a time gets).\n"
-    );
-    println!("| scenes | kernel | µs per ensemble step | aggregate block-steps/s | speed-up |");
-    println!("| ---: | --- | ---: | ---: | ---: |");
-    let blocks = s1.n_blocks() as f64;
-    for kernel in candidates(&s1) {
-        let mut alone = None;
-        for &n in counts {
-            let models: Vec<Model> = (1..=n).map(table_s1).collect();
-            let result = GpuEnsemble::new(&models, options(kernel))
-                .map_err(|e| e.to_string())
-                .and_then(|mut e| {
-                    e.advance(s1.prep_steps + 16).map_err(|e| e.to_string())?;
-                    timed_advance(|k| e.advance(k), min_seconds).map_err(|e| e.to_string())
-                });
+    if let Some(_timer) = sections.start(4) {
+        // 4. Output cost at the default cadences.
+        println!("\n## 4. An output file at the default cadences (device records) against none\n");
+        println!("| lattice | kernel | steps | wall without | wall with -o | ratio |");
+        println!("| --- | --- | ---: | ---: | ---: | ---: |");
+        let output_sizes: &[(u32, u32, u64)] = if quick {
+            &[(57, 31, 2000)]
+        } else {
+            &[(57, 31, 40_000), (1024, 512, 4000)]
+        };
+        for &(nx, nz, steps) in output_sizes {
+            let model = bench_scene::scene(nx, nz);
+            let t_end = steps as f64 * model.dt;
+            let scenario = bench_scene::scenario(nx, nz, &[&format!("time.end={t_end:e}")]);
+            let file = dir.join("run.mcap");
+            let wall = |output: Option<&std::path::Path>| -> Result<(f64, String), String> {
+                let model = Model::from_scenario(&scenario, false).map_err(|e| e.to_string())?;
+                let opts = GpuOptions {
+                    output: GpuOutput::Device,
+                    ..GpuOptions::default()
+                };
+                let mut e = GpuEngine::with_options(&model, opts).map_err(|e| e.to_string())?;
+                advance_to(&mut e, model.prep_steps).map_err(|e| e.to_string())?;
+                if let Some(p) = output {
+                    let _ = std::fs::remove_file(p);
+                    let _ = std::fs::remove_file(slipfront::io::checkpoint::path_for(p));
+                }
+                let run = RunOptions {
+                    output: output.map(|p| p.to_path_buf()),
+                    progress: ProgressMode::None,
+                    ..RunOptions::default()
+                };
+                let t0 = Instant::now();
+                run_scene(&mut e, &scenario, &run).map_err(|e| e.to_string())?;
+                Ok((t0.elapsed().as_secs_f64(), e.describe()))
+            };
+            match (wall(None), wall(Some(&file))) {
+                (Ok((without, how)), Ok((with, _))) => {
+                    let kernel = how.split(", ").nth(1).unwrap_or(&how).to_string();
+                    println!(
+                        "| {nx}×{nz} | {kernel} | {steps} | {without:.3} s | {with:.3} s | {:.2} |",
+                        with / without
+                    );
+                }
+                (a, b) => println!("| {nx}×{nz} | not run: {a:?} {b:?} | | | | |"),
+            }
+        }
+    }
+    if let Some(_timer) = sections.start(5) {
+        // 5. The CPU on all cores, and the GPU's best over it.
+        println!("\n## 5. The CPU engine on all cores of this machine (mixed f32)\n");
+        println!("| lattice | CPU block-steps/s | GPU best block-steps/s | GPU/CPU |");
+        println!("| --- | ---: | ---: | ---: |");
+        for &(nx, nz) in sizes {
+            if nx as usize * nz as usize > 1024 * 256 {
+                continue;
+            }
+            // Section 1's best kernel at this size, when it ran.
+            let gpu_rate = best_gpu
+                .iter()
+                .find(|(size, _)| *size == (nx, nz))
+                .map(|&(_, rate)| rate);
+            let model = bench_scene::scene(nx, nz);
+            let result = make_engine(&model, Backend::Cpu, Precision::F32, 0).and_then(|mut e| {
+                advance_to(e.as_mut(), model.prep_steps + 16)?;
+                timed_advance(|n| e.advance(n), min_seconds)
+            });
             match result {
                 Ok((dt, steps)) => {
-                    let per_step = dt / steps as f64;
-                    let rate = n as f64 * blocks / per_step;
-                    let one = *alone.get_or_insert(blocks / per_step);
-                    println!(
-                        "| {n} | {} | {:.2} | {rate:.3e} | {:.1}× |",
-                        path_name(kernel),
-                        per_step * 1e6,
-                        rate / one
-                    );
+                    let cpu = model.n_blocks() as f64 * steps as f64 / dt;
+                    match gpu_rate {
+                        Some(gpu) => {
+                            println!("| {nx}×{nz} | {cpu:.3e} | {gpu:.3e} | {:.1}× |", gpu / cpu)
+                        }
+                        None => println!("| {nx}×{nz} | {cpu:.3e} | (section 1 not run) | |"),
+                    }
                 }
-                Err(e) => println!("| {n} | {} | not run: {e} | | |", path_name(kernel)),
+                Err(e) => println!("| {nx}×{nz} | not run: {e} | | |"),
             }
         }
     }
-
-    // 4. Output cost at the default cadences.
-    println!("\n## 4. An output file at the default cadences (device records) against none\n");
-    println!("| lattice | kernel | steps | wall without | wall with -o | ratio |");
-    println!("| --- | --- | ---: | ---: | ---: | ---: |");
-    let output_sizes: &[(u32, u32, u64)] = if quick {
-        &[(57, 31, 2000)]
-    } else {
-        &[(57, 31, 40_000), (1024, 512, 4000)]
-    };
-    let dir = std::env::temp_dir().join(format!("slipfront-gpu-table-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).expect("temp dir");
-    for &(nx, nz, steps) in output_sizes {
-        let model = bench_scene::scene(nx, nz);
-        let t_end = steps as f64 * model.dt;
-        let scenario = bench_scene::scenario(nx, nz, &[&format!("time.end={t_end:e}")]);
-        let file = dir.join("run.mcap");
-        let wall = |output: Option<&std::path::Path>| -> Result<(f64, String), String> {
-            let model = Model::from_scenario(&scenario, false).map_err(|e| e.to_string())?;
-            let opts = GpuOptions {
-                output: GpuOutput::Device,
-                ..GpuOptions::default()
+    if let Some(_timer) = sections.start(6) {
+        // 6. Table S1 points as one sweep.
+        println!("\n## 6. Table S1 points as one sweep, 0.01 s of driving each\n");
+        println!("| points | how | wall (s) | aggregate block-steps/s | against one at a time |");
+        println!("| ---: | --- | ---: | ---: | ---: |");
+        let sweeps: &[usize] = if quick { &[4] } else { &[64, 256] };
+        for &n in sweeps {
+            let sweep = table_s1_sweep(&dir, n);
+            let model = Model::from_scenario(&sweep.points[0].scenario, false).expect("model");
+            let block_steps = n as f64 * model.total_steps() as f64 * model.n_blocks() as f64;
+            let together = sweep_wall(&dir, &sweep, n);
+            let alone = if n == sweeps[0] {
+                Some(sweep_wall(&dir, &sweep, 1))
+            } else {
+                None
             };
-            let mut e = GpuEngine::with_options(&model, opts).map_err(|e| e.to_string())?;
-            advance_to(&mut e, model.prep_steps).map_err(|e| e.to_string())?;
-            if let Some(p) = output {
-                let _ = std::fs::remove_file(p);
-                let _ = std::fs::remove_file(slipfront::io::checkpoint::path_for(p));
-            }
-            let run = RunOptions {
-                output: output.map(|p| p.to_path_buf()),
-                progress: ProgressMode::None,
-                ..RunOptions::default()
-            };
-            let t0 = Instant::now();
-            run_scene(&mut e, &scenario, &run).map_err(|e| e.to_string())?;
-            Ok((t0.elapsed().as_secs_f64(), e.describe()))
-        };
-        match (wall(None), wall(Some(&file))) {
-            (Ok((without, how)), Ok((with, _))) => {
-                let kernel = how.split(", ").nth(1).unwrap_or(&how).to_string();
-                println!(
-                    "| {nx}×{nz} | {kernel} | {steps} | {without:.3} s | {with:.3} s | {:.2} |",
-                    with / without
-                );
-            }
-            (a, b) => println!("| {nx}×{nz} | not run: {a:?} {b:?} | | | | |"),
-        }
-    }
-
-    // 5. The CPU on all cores, and the GPU's best over it.
-    println!("\n## 5. The CPU engine on all cores of this machine (mixed f32)\n");
-    println!("| lattice | CPU block-steps/s | GPU best block-steps/s | GPU/CPU |");
-    println!("| --- | ---: | ---: | ---: |");
-    for ((nx, nz), gpu_rate) in best_gpu {
-        if nx as usize * nz as usize > 1024 * 256 {
-            continue;
-        }
-        let model = bench_scene::scene(nx, nz);
-        let result = make_engine(&model, Backend::Cpu, Precision::F32, 0).and_then(|mut e| {
-            advance_to(e.as_mut(), model.prep_steps + 16)?;
-            timed_advance(|n| e.advance(n), min_seconds)
-        });
-        match result {
-            Ok((dt, steps)) => {
-                let cpu = model.n_blocks() as f64 * steps as f64 / dt;
-                println!(
-                    "| {nx}×{nz} | {cpu:.3e} | {gpu_rate:.3e} | {:.1}× |",
-                    gpu_rate / cpu
-                );
-            }
-            Err(e) => println!("| {nx}×{nz} | not run: {e} | | |"),
-        }
-    }
-
-    // 6. Table S1 points as one sweep.
-    println!("\n## 6. Table S1 points as one sweep, 0.01 s of driving each\n");
-    println!("| points | how | wall (s) | aggregate block-steps/s | against one at a time |");
-    println!("| ---: | --- | ---: | ---: | ---: |");
-    let sweeps: &[usize] = if quick { &[4] } else { &[64, 256] };
-    for &n in sweeps {
-        let sweep = table_s1_sweep(&dir, n);
-        let model = Model::from_scenario(&sweep.points[0].scenario, false).expect("model");
-        let block_steps = n as f64 * model.total_steps() as f64 * model.n_blocks() as f64;
-        let together = sweep_wall(&dir, &sweep, n);
-        let alone = if n == sweeps[0] {
-            Some(sweep_wall(&dir, &sweep, 1))
-        } else {
-            None
-        };
-        for (how, wall) in [
-            ("one ensemble", Some(&together)),
-            ("one at a time", alone.as_ref()),
-        ] {
-            match wall {
-                Some(Ok(w)) => {
-                    let against = match alone.as_ref() {
-                        Some(Ok(a)) => format!("{:.1}×", a / w),
-                        _ => String::new(),
-                    };
-                    println!(
-                        "| {n} | {how} | {w:.1} | {:.3e} | {against} |",
-                        block_steps / w
-                    );
+            for (how, wall) in [
+                ("one ensemble", Some(&together)),
+                ("one at a time", alone.as_ref()),
+            ] {
+                match wall {
+                    Some(Ok(w)) => {
+                        let against = match alone.as_ref() {
+                            Some(Ok(a)) => format!("{:.1}×", a / w),
+                            _ => String::new(),
+                        };
+                        println!(
+                            "| {n} | {how} | {w:.1} | {:.3e} | {against} |",
+                            block_steps / w
+                        );
+                    }
+                    Some(Err(e)) => println!("| {n} | {how} | not run: {e} | | |"),
+                    None => {}
                 }
-                Some(Err(e)) => println!("| {n} | {how} | not run: {e} | | |"),
-                None => {}
             }
         }
     }
