@@ -9,7 +9,8 @@
 //!    step and block-steps/s, each kernel on the scene alone;
 //! 2. what `auto` chooses on Table S1 (timed now, as `--gpu-path measure`),
 //!    and the persistent and resident kernels there with 256, 512 and 1024
-//!    threads (`--gpu-threads`: more threads, fewer registers each);
+//!    threads (`--gpu-threads`: more threads, fewer registers each); and
+//!    what the junctions cost there (Ns = 100, Ns = 16, Coulomb friction);
 //! 3. ensembles of 1 to 1024 Table S1 scenes (the precursors scene, a seed
 //!    each) in one dispatch, per kernel: aggregate block-steps/s and the
 //!    speed-up over running the scenes one at a time;
@@ -125,6 +126,39 @@ fn table_s1(seed: usize) -> Model {
     let text = built_in("tromborg2014_precursors").expect("shipped scene");
     let s = Scenario::parse(text, "table S1", &[format!("time.seed={seed}")]).expect("scene");
     Model::from_scenario(&s, false).expect("model")
+}
+
+/// What a Table S1 step costs with fewer junction lanes and with none:
+/// the same lattice with Ns = 100 (64 lanes per interface block, as
+/// shipped), Ns = 16 (16 lanes) and Coulomb friction (no junctions), per
+/// kernel at its default threads. Where the junctions' share is large, the
+/// lane sums (one thread adds a block's lanes, in order) are the step's
+/// critical path; where it is small, the stencil and the barriers are.
+fn junction_cost(min_seconds: f64) {
+    println!("What the junctions cost (Table S1 lattice, each kernel at its default threads):\n");
+    println!("| friction | kernel | µs/step | host CPU / wall |");
+    println!("| --- | --- | ---: | ---: |");
+    let text = built_in("tromborg2014_precursors").expect("shipped scene");
+    for (name, set) in [
+        ("junctions, Ns = 100 (64 lanes)", None),
+        (
+            "junctions, Ns = 16 (16 lanes)",
+            Some("friction.junctions.count=16"),
+        ),
+        ("Coulomb (no junctions)", Some("friction.law=coulomb")),
+    ] {
+        let set: Vec<String> = set.map(String::from).into_iter().collect();
+        let scenario = Scenario::parse(text, "table S1", &set).expect("a Table S1 variant");
+        let model = Model::from_scenario(&scenario, false).expect("a Table S1 variant");
+        for kernel in candidates(&model) {
+            let figure = match solo_step_seconds(&model, options(kernel), min_seconds) {
+                Ok((s, host)) => format!("{:.2} | {host:.2}", s * 1e6),
+                Err(e) => format!("not run: {e} |"),
+            };
+            println!("| {name} | {} | {figure} |", path_name(kernel));
+        }
+    }
+    println!();
 }
 
 /// `points` seeds of the precursors scene, 0.01 s of driving each, as a
@@ -290,6 +324,7 @@ fn main() {
             }
         }
         println!();
+        junction_cost(min_seconds);
     }
     if let Some(_timer) = sections.start(3) {
         // 3. Ensembles of Table S1 scenes.
