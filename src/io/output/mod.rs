@@ -200,7 +200,10 @@ impl McapSink {
             meta.insert("skipped_steps".into(), f.skipped_steps.to_string());
             meta.insert("skipped_time".into(), format!("{:e}", f.skipped_time));
             meta.insert("dropped_energy".into(), format!("{:e}", f.dropped_energy));
-            writer::metadata("slipfront_fast_forward", meta)
+            mcap::records::Metadata {
+                name: "slipfront_fast_forward".into(),
+                metadata: meta,
+            }
         });
         self.writer.finish(last)
     }
@@ -297,10 +300,8 @@ impl Opened {
 
     /// Closes the open chunk, flushes and syncs the file to disk.
     fn sync(&mut self) -> Result<(), OutputError> {
-        self.writer.flush()?;
-        self.file
-            .sync_data()
-            .map_err(|e| OutputError::Writing(format!("cannot sync it to disk: {e}")))
+        let file = &self.file;
+        writer::flush_to_disk(&mut self.writer, || file.sync_data())
     }
 
     /// Copies the messages with sequence numbers 1..=`upto` of `parent`

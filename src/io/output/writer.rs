@@ -13,14 +13,14 @@
 
 use super::OutputError;
 use mcap::records::{MessageHeader, Metadata};
-use std::collections::{BTreeMap, VecDeque};
+use std::collections::VecDeque;
 use std::io::{Seek, Write};
 use std::sync::mpsc;
 use std::sync::{Arc, Condvar, Mutex, MutexGuard};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
-pub(super) const FLUSH_EVERY: Duration = Duration::from_secs(1);
+const FLUSH_EVERY: Duration = Duration::from_secs(1);
 
 /// How long the thread lets a burst of messages gather after the first.
 const BATCH_WAIT: Duration = Duration::from_millis(5);
@@ -209,23 +209,25 @@ impl WriterThread {
     /// Writes `last` (a metadata record) and closes the file; waits for it.
     pub(super) fn finish(mut self, last: Option<Metadata>) -> Result<(), OutputError> {
         self.shared.push(Command::Finish(last), 0, self.limit);
+        self.join()
+    }
+
+    /// The thread's own error, once it has stopped.
+    fn stopped(&mut self) -> OutputError {
         self.shared.senders_gone();
+        self.join().err().unwrap_or_else(|| {
+            OutputError::Writing("its writing thread had already stopped".into())
+        })
+    }
+
+    /// Waits for the thread to end: its outcome.
+    fn join(&mut self) -> Result<(), OutputError> {
         match self.worker.take().map(JoinHandle::join) {
             Some(Ok(result)) => result,
             Some(Err(_)) => Err(OutputError::Writing("its writing thread panicked".into())),
             None => Err(OutputError::Writing(
                 "its writing thread had already stopped".into(),
             )),
-        }
-    }
-
-    /// The thread's own error, once it has stopped.
-    fn stopped(&mut self) -> OutputError {
-        self.shared.senders_gone();
-        match self.worker.take().map(JoinHandle::join) {
-            Some(Ok(Err(e))) => e,
-            Some(Err(_)) => OutputError::Writing("its writing thread panicked".into()),
-            _ => OutputError::Writing("its writing thread had already stopped".into()),
         }
     }
 }
@@ -284,11 +286,7 @@ fn work<W: Write + Seek>(
                     unflushed = true;
                 }
                 Command::Sync(answer) => {
-                    let done = writer.flush().map_err(OutputError::from).and_then(|()| {
-                        sync().map_err(|e| {
-                            OutputError::Writing(format!("cannot sync it to disk: {e}"))
-                        })
-                    });
+                    let done = flush_to_disk(&mut writer, &mut sync);
                     last_flush = Instant::now();
                     unflushed = false;
                     let failed = done.as_ref().err().map(|e| e.to_string());
@@ -330,17 +328,20 @@ fn flush_due_in(unflushed: bool, since_flush: Duration) -> Option<Duration> {
     unflushed.then(|| FLUSH_EVERY.saturating_sub(since_flush))
 }
 
-/// A metadata record from its entries.
-pub(super) fn metadata(name: &str, entries: BTreeMap<String, String>) -> Metadata {
-    Metadata {
-        name: name.into(),
-        metadata: entries,
-    }
+/// Closes the open chunk, flushes the writer and puts the file on disk
+/// (`sync`: its `sync_data`).
+pub(super) fn flush_to_disk<W: Write + Seek>(
+    writer: &mut mcap::Writer<W>,
+    mut sync: impl FnMut() -> std::io::Result<()>,
+) -> Result<(), OutputError> {
+    writer.flush()?;
+    sync().map_err(|e| OutputError::Writing(format!("cannot sync it to disk: {e}")))
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::collections::BTreeMap;
     use std::io::Cursor;
 
     /// A disk that takes `room` bytes and then fails every write.
@@ -419,7 +420,10 @@ mod tests {
         }
         thread.sync().unwrap();
         thread
-            .finish(Some(metadata("end", BTreeMap::new())))
+            .finish(Some(Metadata {
+                name: "end".into(),
+                metadata: BTreeMap::new(),
+            }))
             .unwrap();
         let bytes = std::fs::read(&path).unwrap();
         let seen: Vec<u32> = mcap::MessageStream::new(&bytes)
