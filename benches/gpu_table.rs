@@ -231,10 +231,11 @@ impl Sections {
         match std::env::var("SLIPFRONT_GPU_TABLE_SECTIONS") {
             Ok(list) => Sections(
                 list.split(',')
-                    .map(|s| {
-                        s.trim().parse().unwrap_or_else(|_| {
-                            panic!("SLIPFRONT_GPU_TABLE_SECTIONS: `{s}` is not a section 1-6")
-                        })
+                    .map(|s| match s.trim().parse() {
+                        Ok(n @ 1..=6) => n,
+                        _ => {
+                            panic!("SLIPFRONT_GPU_TABLE_SECTIONS: `{s}` is not a section (1 to 6)")
+                        }
                     })
                     .collect(),
             ),
