@@ -62,27 +62,39 @@ fn junction_friction(ix: u32, jb: JunctionBlock, total: LaneSum, other: real) ->
 // The lane's sum is a force_sum: compensated in mixed precision, since an
 // f32 running sum of a block's alike junction forces rounded the friction
 // coherently across the interface (CPU twin's doc says more).
+// A junction's spring is read only where it is pinned after its countdown,
+// and spring and state are written back only where they changed: between
+// events nearly every junction stays pinned, so a step then reads the
+// junctions and writes none of them (the same bits, less storage traffic).
 fn junction_lane(ix: u32, lane: u32, jb: JunctionBlock, ld: Loads) -> LaneSum {
     let f_n = jb.f_n;
     let threshold = jb.threshold;
     var total = lane_sum_zero();
     for (var j = lane; j < c.junction_count; j += JUNCTION_LANES) {
         let idx = junction_base() + ix * c.junction_count + j;
-        var spring = junction_spring[idx];
         var state = junction_state[idx];
-        if state.x != PINNED {
+        let was_slipping = state.x != PINNED;
+        var spring: JunctionSpring;
+        var spring_changed = false;
+        if was_slipping {
             // A lifted block (f_N = 0) keeps its junctions waiting at 0.
             state.x = max(state.x, 1u) - 1u;
             if state.x == 0u && f_n > 0.0 {
                 spring = JunctionSpring(coord_pack(jb.ux), junction_stiffness(f_n));
+                spring_changed = true;
                 state.x = PINNED;
             }
         }
         var pinned = state.x == PINNED;
+        var broke = false;
         if pinned {
+            if !spring_changed {
+                spring = junction_spring[idx];
+            }
             if ld.preparing {
                 // While the normal load is applied, attachment is continuous.
                 spring.stiffness = junction_stiffness(f_n);
+                spring_changed = true;
             }
             let f = -spring.stiffness * coord_diff(jb.ux, coord_unpack(spring.anchor));
             if !ld.preparing && abs(f) > threshold {
@@ -92,6 +104,7 @@ fn junction_lane(ix: u32, lane: u32, jb: JunctionBlock, ld: Loads) -> LaneSum {
                 // PINNED - 1 at most: a countdown never reads as pinned.
                 state.x = min(n, PINNED - 1u);
                 pinned = false;
+                broke = true;
             } else {
                 total.pinned = force_sum_add(total.pinned, f);
             }
@@ -99,8 +112,12 @@ fn junction_lane(ix: u32, lane: u32, jb: JunctionBlock, ld: Loads) -> LaneSum {
         if !pinned {
             total.slipping += 1u;
         }
-        junction_spring[idx] = spring;
-        junction_state[idx] = state;
+        if spring_changed {
+            junction_spring[idx] = spring;
+        }
+        if was_slipping || broke {
+            junction_state[idx] = state;
+        }
     }
     return total;
 }
