@@ -22,9 +22,19 @@ fn dir(name: &str) -> PathBuf {
     d
 }
 
+/// The engine most tests run on.
+const CPU: &[&str] = &["--backend", "cpu", "--threads", "1"];
+/// The GPU engine (lavapipe in CI), recording its samples on the device and
+/// running ahead of the runner while it writes them.
+const GPU: &[&str] = &["--backend", "gpu"];
+
 fn command(args: &[&str], extra: &[String]) -> Command {
+    command_on(CPU, args, extra)
+}
+
+fn command_on(backend: &[&str], args: &[&str], extra: &[String]) -> Command {
     let mut c = Command::new(env!("CARGO_BIN_EXE_slipfront"));
-    c.args(["run", "--backend", "cpu", "--threads", "1", "--quiet"]);
+    c.args(["run", "--quiet"]).args(backend);
     c.args(args).args(extra);
     c
 }
@@ -39,7 +49,11 @@ fn scene_args(more: &[&str]) -> Vec<String> {
 }
 
 fn run_ok(args: &[&str], extra: &[String]) -> String {
-    let out = command(args, extra).output().unwrap();
+    run_ok_on(CPU, args, extra)
+}
+
+fn run_ok_on(backend: &[&str], args: &[&str], extra: &[String]) -> String {
+    let out = command_on(backend, args, extra).output().unwrap();
     let text = format!(
         "{}{}",
         String::from_utf8_lossy(&out.stdout),
@@ -101,9 +115,10 @@ fn stop_midway(mut child: Child, ckpt: &Path, signal: i32) -> std::process::Outp
     out
 }
 
-fn uninterrupted(d: &Path, precision: &str, t_end: &str) -> RunFile {
+fn uninterrupted(backend: &[&str], d: &Path, precision: &str, t_end: &str) -> RunFile {
     let whole = d.join("whole.mcap");
-    run_ok(
+    run_ok_on(
+        backend,
         &["--precision", precision, "--t-end", t_end, "-o", s(&whole)],
         &scene_args(&[]),
     );
@@ -111,11 +126,15 @@ fn uninterrupted(d: &Path, precision: &str, t_end: &str) -> RunFile {
 }
 
 fn killed_and_resumed(precision: &str, signal: i32) {
-    let d = dir(&format!("{precision}-{signal}"));
-    let t_end = "0.006";
-    let whole = uninterrupted(&d, precision, t_end);
+    killed_and_resumed_on(CPU, "0.006", precision, signal);
+}
+
+fn killed_and_resumed_on(backend: &[&str], t_end: &str, precision: &str, signal: i32) {
+    let d = dir(&format!("{}-{precision}-{signal}", backend[1]));
+    let whole = uninterrupted(backend, &d, precision, t_end);
     let cut = d.join("cut.mcap");
-    let child = command(
+    let child = command_on(
+        backend,
         &["--precision", precision, "--t-end", t_end, "-o", s(&cut)],
         &scene_args(&["output.checkpoint_interval=0.05"]),
     )
@@ -145,7 +164,7 @@ fn killed_and_resumed(precision: &str, signal: i32) {
         // An interrupted run leaves a complete, readable file.
         assert!(!RunFile::read(&cut).unwrap().truncated);
     }
-    let text = run_ok(&["--resume", s(&cut)], &[]);
+    let text = run_ok_on(backend, &["--resume", s(&cut)], &[]);
     assert!(text.contains("run complete"), "{text}");
     let resumed = RunFile::read(&cut).unwrap();
     assert!(!resumed.truncated);
@@ -171,10 +190,21 @@ fn sigint_checkpoints_and_the_resume_is_exact() {
     killed_and_resumed("f64", libc::SIGINT);
 }
 
+/// The GPU engine runs ahead of its runner while the runner writes the
+/// samples recorded on the device; a checkpoint waits for those steps and
+/// writes their samples first. Stopped at a checkpoint (SIGKILL) or by
+/// SIGINT and resumed, the run file equals the uninterrupted one.
+#[test]
+fn a_gpu_run_killed_or_interrupted_midway_resumes_exactly() {
+    for signal in [libc::SIGKILL, libc::SIGINT] {
+        killed_and_resumed_on(GPU, "0.004", "f32", signal);
+    }
+}
+
 #[test]
 fn a_finished_run_extended_equals_the_longer_run() {
     let d = dir("extend");
-    let whole = uninterrupted(&d, "f64", "0.004");
+    let whole = uninterrupted(CPU, &d, "f64", "0.004");
     let short = d.join("short.mcap");
     run_ok(&["--t-end", "0.002", "-o", s(&short)], &scene_args(&[]));
     // Resuming a finished run without a new end is refused, clearly.
@@ -273,7 +303,7 @@ fn a_damaged_checkpoint_is_refused_and_the_previous_one_used() {
 #[test]
 fn a_branch_with_a_new_velocity_differs_only_after_the_branch_point() {
     let d = dir("branch");
-    let parent_whole = uninterrupted(&d, "f64", "0.004");
+    let parent_whole = uninterrupted(CPU, &d, "f64", "0.004");
     let parent = d.join("parent.mcap");
     run_ok(&["--t-end", "0.002", "-o", s(&parent)], &scene_args(&[]));
     let branch_step = Checkpoint::read(&path_for(&parent)).unwrap().header.step;

@@ -342,6 +342,78 @@ fn run_files_from_device_records_equal_those_from_host_snapshots() {
     }
 }
 
+/// Running ahead (`Engine::run_ahead`): `advance` returns with its last
+/// batches still running, and their samples come only once the engine has
+/// waited for them (`settle`); without it (`limit_run_ahead(0)`) an advance
+/// hands over every sample up to its step. Either way the samples are the
+/// same, in the same order, with the same bits.
+#[test]
+fn running_ahead_hands_over_the_same_samples_later() {
+    let s = triggered(&["time.end=6e-4"]);
+    let m = Model::from_scenario(&s, false).unwrap();
+    for path in [GpuPath::OneStep, GpuPath::Persistent] {
+        let mut taken = Vec::new();
+        for ahead in [true, false] {
+            let mut e = engine(&m, path, GpuOutput::Device);
+            assert!(e.record_samples(&plan(&m, &s)).unwrap());
+            if !ahead {
+                e.limit_run_ahead(0);
+            }
+            e.run_ahead();
+            let mut samples = Vec::new();
+            let mut late = 0;
+            while e.steps_done() < m.total_steps() - 1 {
+                let target = (e.steps_done() + 1500).min(m.total_steps() - 1);
+                advance_to(&mut e, target).unwrap();
+                samples.extend(e.take_samples());
+                e.settle().unwrap();
+                let after = e.take_samples();
+                late += after.len();
+                samples.extend(after);
+            }
+            println!(
+                "{path:?}, ahead {ahead}: {} samples, {late} late",
+                samples.len()
+            );
+            assert!(samples.len() > 100);
+            if ahead {
+                assert!(late > 0, "{path:?}: nothing was left running");
+            } else {
+                assert_eq!(late, 0, "{path:?}: an advance that waits left samples");
+            }
+            taken.push(samples);
+        }
+        assert!(taken[0] == taken[1], "{path:?}: the samples differ");
+    }
+}
+
+/// A whole run, written by a runner that lets the engine run ahead (every
+/// GPU run with an output file), equals the same run with an engine that
+/// waits at every advance, record for record and bit for bit.
+#[test]
+fn a_run_file_written_while_the_device_runs_ahead_is_the_same() {
+    let s = triggered(&["time.end=4e-4", "output.bulk_interval=1e-4"]);
+    let m = Model::from_scenario(&s, false).unwrap();
+    let mut files = Vec::new();
+    for ahead in [true, false] {
+        let mut e = engine(&m, GpuPath::OneStep, GpuOutput::Device);
+        if !ahead {
+            e.limit_run_ahead(0);
+        }
+        let path = temp(&format!("ahead-{ahead}.mcap"));
+        let opts = RunOptions {
+            output: Some(path.clone()),
+            progress: slipfront::app::runner::ProgressMode::None,
+            ..RunOptions::default()
+        };
+        run_scene(&mut e, &s, &opts).unwrap();
+        files.push(RunFile::read(&path).unwrap());
+    }
+    let (a, b) = (&files[0], &files[1]);
+    assert!(a.global.len() > 10 && a.interface.len() > 10 && !a.bulk.is_empty());
+    assert!(a.global == b.global && a.interface == b.interface && a.bulk == b.bulk);
+}
+
 /// The comparator's negative control: a run file whose interface records
 /// are one sample short, or whose drive differs by 1e-3, is flagged.
 #[test]

@@ -289,6 +289,18 @@ pub trait Engine: Send {
     fn fixed_chunk(&self) -> Option<u64> {
         None
     }
+    /// Lets `advance` return before its last steps have run where that
+    /// keeps a device busy while the caller writes the samples it has (the
+    /// GPU engine's batches). Their samples come with a later
+    /// `take_samples`, a blow-up among them with a later call; every call
+    /// that reads or writes the state waits for them first. A no-op where
+    /// `advance` cannot run ahead.
+    fn run_ahead(&mut self) {}
+    /// Waits for steps still running after `advance` (`run_ahead`), so that
+    /// `take_samples` then holds every sample up to `steps_done`.
+    fn settle(&mut self) -> Result<(), EngineError> {
+        Ok(())
+    }
 }
 
 /// Advances `engine` to global step `target` (no-op if it is there or past).

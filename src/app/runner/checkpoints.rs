@@ -67,6 +67,8 @@ impl Checkpointer {
         outputs: &mut Outputs,
         ff: Option<&FastForward>,
     ) -> Result<(), RunError> {
+        // The saved runner state must hold every sample up to the engine's step.
+        super::settle(engine, outputs)?;
         if let Some(sink) = outputs.sink.as_mut() {
             sink.sync()?;
         }

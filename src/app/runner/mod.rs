@@ -260,6 +260,18 @@ pub enum RunError {
 /// `output.checkpoint_interval` seconds of wall time, at the end, and when
 /// SIGINT or SIGTERM stops the run; the loaded slider, one step before
 /// driving starts, goes to `checkpoint::loaded_path_for`.
+/// Waits for the steps the engine runs ahead (`Engine::run_ahead`) and
+/// writes their samples, so that the output holds every sample up to the
+/// engine's step: before a checkpoint, a jump and the end. Samples before
+/// a blow-up among those steps are written before its error returns.
+fn settle(engine: &mut dyn Engine, outputs: &mut Outputs) -> Result<(), RunError> {
+    let settled = engine.settle();
+    for sample in &engine.take_samples() {
+        outputs.emit_sample(sample)?;
+    }
+    Ok(settled?)
+}
+
 pub fn run_scene(
     engine: &mut dyn Engine,
     scenario: &Scenario,
@@ -319,6 +331,10 @@ pub fn run_scene(
     // (then chunks do not stop at output steps and nothing else is read
     // back for them); otherwise each output step is a snapshot.
     let on_device = outputs.sink.is_some() && engine.record_samples(&outputs.plan())?;
+    if on_device {
+        // The device steps on while the samples it has recorded are written.
+        engine.run_ahead();
+    }
     let started = Instant::now();
     let mut interrupted = false;
     let start_step = engine.steps_done();
@@ -400,6 +416,8 @@ pub fn run_scene(
             if s != out_step && s != check_step {
                 continue;
             }
+            // A jump writes its own samples after the device's so far.
+            settle(engine, &mut outputs)?;
             let snap = engine.snapshot()?;
             if s == out_step {
                 outputs.emit(&snap)?;
@@ -423,6 +441,7 @@ pub fn run_scene(
                 }
             }
         }
+        settle(engine, &mut outputs)?;
         if let Some(c) = checkpoints.as_mut() {
             c.write(engine, &mut outputs, ff.as_ref())?;
         }

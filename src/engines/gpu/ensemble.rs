@@ -10,7 +10,7 @@ use super::context::{self, GpuContext};
 use super::precision::GpuReal;
 use super::shaders::Variant;
 use super::{GpuEngine, GpuOptions};
-use crate::engines::{EngineError, EngineState, Sample, SamplePlan, Snapshot};
+use crate::engines::{Engine, EngineError, EngineState, Sample, SamplePlan, Snapshot};
 use crate::model::lattice::block_flags;
 use crate::model::real::precision_name;
 use crate::model::Model;
@@ -123,6 +123,16 @@ impl<T: GpuReal> GpuEnsemble<T> {
     /// cadences other than those the first scene asked for.
     pub fn record_samples(&mut self, scene: usize, plan: &SamplePlan) -> Result<bool, EngineError> {
         self.engine.record_samples_of(scene, plan)
+    }
+
+    /// As `Engine::run_ahead`, for every scene.
+    pub fn run_ahead(&mut self) {
+        self.engine.run_ahead();
+    }
+
+    /// As `Engine::settle`, for every scene.
+    pub fn settle(&mut self) -> Result<(), EngineError> {
+        self.engine.settle()
     }
 
     /// Scene `scene`'s samples recorded since the last call.

@@ -247,6 +247,21 @@ impl<T: GpuReal> Engine for LockstepScene<T> {
     fn fixed_chunk(&self) -> Option<u64> {
         Some(LOCKSTEP_CHUNK)
     }
+
+    /// The whole ensemble runs ahead: while the runners write the samples
+    /// of a chunk, the device steps the last batches of it.
+    fn run_ahead(&mut self) {
+        self.lockstep.lock().ensemble.run_ahead();
+    }
+
+    fn settle(&mut self) -> Result<(), EngineError> {
+        let mut shared = self.lockstep.lock();
+        shared.check(self.scene)?;
+        if let Err(e) = shared.ensemble.settle() {
+            shared.device_error = Some(e.to_string());
+        }
+        shared.check(self.scene)
+    }
 }
 
 impl<T: GpuReal> Drop for LockstepScene<T> {

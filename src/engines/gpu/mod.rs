@@ -12,7 +12,12 @@
 //! from the batch's first step. After each batch the kernel's blow-up
 //! status is copied to a staging buffer and mapped asynchronously; at most
 //! `IN_FLIGHT` batches are queued, so a blow-up stops the run within a
-//! batch or two and `advance` returns only when its steps have run.
+//! batch or two and `advance` returns only when its steps have run. A
+//! runner that writes output asks it to run ahead (`Engine::run_ahead`):
+//! `advance` then returns with up to `RUN_AHEAD_BATCHES` batches still
+//! running, whose samples and blow-ups the next call reports, so the
+//! device works while the host writes; whatever reads or writes the state
+//! waits for them first.
 //!
 //! The engine computes in mixed f32 (`GpuEngine`, every adapter) or in f64
 //! (`GpuEngine::<f64>`, adapters with SHADER_F64): the same kernels,
@@ -214,6 +219,10 @@ pub struct GpuEngine<T: GpuReal = f32> {
     /// Steps submitted (every scene is at this step).
     step: u64,
     in_flight: VecDeque<InFlight>,
+    /// Batches `advance` may leave running (0: it waits for all).
+    lead: usize,
+    /// What `run_ahead` sets `lead` to.
+    run_ahead_batches: usize,
     spare_staging: Vec<wgpu::Buffer>,
     /// Dispatches that stepped the lattice (forces-only passes included).
     dispatches: u64,
@@ -539,6 +548,8 @@ impl<T: GpuReal> GpuEngine<T> {
             current: 0,
             step: 0,
             in_flight: VecDeque::new(),
+            lead: 0,
+            run_ahead_batches: RUN_AHEAD_BATCHES,
             spare_staging: Vec::new(),
             dispatches: 0,
             output_dispatches: 0,
@@ -576,7 +587,7 @@ impl<T: GpuReal> GpuEngine<T> {
         forces_only: bool,
         planned: Vec<recorder::Planned>,
     ) -> Result<(), EngineError> {
-        if self.in_flight.len() >= IN_FLIGHT {
+        while self.in_flight.len() >= IN_FLIGHT.max(self.lead + 1) {
             self.retire_oldest()?;
         }
         let batches: Vec<GpuBatch<T>> = self
@@ -782,10 +793,22 @@ impl<T: GpuReal> GpuEngine<T> {
 
     /// Waits for every submitted batch.
     fn drain(&mut self) -> Result<(), EngineError> {
-        while !self.in_flight.is_empty() {
+        self.retire_to(0)
+    }
+
+    /// Waits for the oldest batches until at most `left` are running.
+    fn retire_to(&mut self, left: usize) -> Result<(), EngineError> {
+        while self.in_flight.len() > left {
             self.retire_oldest()?;
         }
         Ok(())
+    }
+
+    /// Batches `advance` leaves running when the caller lets it run ahead
+    /// (`Engine::run_ahead`); 0 makes every `advance` wait for its steps.
+    pub fn limit_run_ahead(&mut self, batches: usize) {
+        self.run_ahead_batches = batches;
+        self.lead = self.lead.min(batches);
     }
 
     /// Once, when driving starts (before the forces of that step): fixes
@@ -866,7 +889,12 @@ impl<T: GpuReal> GpuEngine<T> {
                 self.submit_batch(1, true, planned)?;
             }
         }
-        self.drain()
+        // The run's last step is waited for: its caller then finishes.
+        if self.step >= self.scenes[0].model.total_steps() {
+            self.drain()
+        } else {
+            self.retire_to(self.lead)
+        }
     }
 
     /// Computes the forces of the current state of the scenes whose forces
@@ -1049,5 +1077,13 @@ impl<T: GpuReal> Engine for GpuEngine<T> {
 
     fn take_samples(&mut self) -> Vec<Sample> {
         self.take_samples_of(0)
+    }
+
+    fn run_ahead(&mut self) {
+        self.lead = self.run_ahead_batches;
+    }
+
+    fn settle(&mut self) -> Result<(), EngineError> {
+        self.drain()
     }
 }

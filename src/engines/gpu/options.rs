@@ -14,6 +14,11 @@ pub const PERSISTENT_BATCH: u64 = 4096;
 pub const ONE_STEP_BATCH: u64 = 1024;
 /// Batches queued on the device at most.
 pub const IN_FLIGHT: usize = 2;
+/// Batches an `advance` may leave running when its caller writes output
+/// meanwhile (`Engine::run_ahead`): the device keeps stepping while the
+/// runner handles the samples read back so far, instead of idling for it.
+/// Four one-step batches are 4096 steps; a lockstep chunk is eight.
+pub const RUN_AHEAD_BATCHES: usize = 4;
 /// Threads of the persistent kernel's workgroup by default.
 pub const PERSISTENT_THREADS: u32 = 256;
 /// Threads of the resident kernel's workgroup by default on hardware
