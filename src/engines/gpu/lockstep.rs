@@ -6,7 +6,9 @@
 //! always finds the ensemble at its own step. A scene whose run ends
 //! (its engine dropped) no longer holds the others back. Output samples
 //! are recorded on the device for all scenes at once, so the runners ask
-//! for long advances, not one per output step.
+//! for long advances, not one per output step; the ensemble runs ahead
+//! (`Engine::run_ahead`), so the device steps the end of one advance while
+//! the runners write the samples of the rest.
 
 use super::ensemble::GpuEnsemble;
 use super::precision::GpuReal;
