@@ -178,8 +178,14 @@ fn table_s1_sweep(dir: &std::path::Path, points: usize) -> Sweep {
 }
 
 /// Wall seconds of `sweep` on the GPU in mixed f32, `ensemble` scenes per
-/// dispatch at most (1: one point at a time).
-fn sweep_wall(dir: &std::path::Path, sweep: &Sweep, ensemble: usize) -> Result<f64, String> {
+/// dispatch at most (1: one point at a time), the device running ahead of
+/// the runners by `run_ahead` batches (0: it waits for them every chunk).
+fn sweep_wall(
+    dir: &std::path::Path,
+    sweep: &Sweep,
+    ensemble: usize,
+    run_ahead: usize,
+) -> Result<f64, String> {
     let out = dir.join(format!("sweep-{}-{ensemble}", sweep.points.len()));
     let _ = std::fs::remove_dir_all(&out);
     let t0 = Instant::now();
@@ -195,7 +201,10 @@ fn sweep_wall(dir: &std::path::Path, sweep: &Sweep, ensemble: usize) -> Result<f
             progress: false,
             share_loading: true,
             ensemble,
-            gpu: slipfront::app::sweeps::default_gpu(),
+            gpu: GpuOptions {
+                run_ahead,
+                ..slipfront::app::sweeps::default_gpu()
+            },
             on_point: None,
         },
     )?;
@@ -377,8 +386,11 @@ fn main() {
     if let Some(_timer) = sections.start(4) {
         // 4. Output cost at the default cadences.
         println!("\n## 4. An output file at the default cadences (device records) against none\n");
-        println!("| lattice | kernel | steps | wall without | wall with -o | ratio |");
-        println!("| --- | --- | ---: | ---: | ---: | ---: |");
+        println!(
+            "| lattice | kernel | steps | wall without | wall with -o | ratio | \
+             with -o, not running ahead | ratio |"
+        );
+        println!("| --- | --- | ---: | ---: | ---: | ---: | ---: | ---: |");
         let output_sizes: &[(u32, u32, u64)] = if quick {
             &[(57, 31, 2000)]
         } else {
@@ -389,10 +401,14 @@ fn main() {
             let t_end = steps as f64 * model.dt;
             let scenario = bench_scene::scenario(nx, nz, &[&format!("time.end={t_end:e}")]);
             let file = dir.join("run.mcap");
-            let wall = |output: Option<&std::path::Path>| -> Result<(f64, String), String> {
+            let ahead = GpuOptions::default().run_ahead;
+            let wall = |output: Option<&std::path::Path>,
+                        run_ahead: usize|
+             -> Result<(f64, String), String> {
                 let model = Model::from_scenario(&scenario, false).map_err(|e| e.to_string())?;
                 let opts = GpuOptions {
                     output: GpuOutput::Device,
+                    run_ahead,
                     ..GpuOptions::default()
                 };
                 let mut e = GpuEngine::with_options(&model, opts).map_err(|e| e.to_string())?;
@@ -410,15 +426,21 @@ fn main() {
                 run_scene(&mut e, &scenario, &run).map_err(|e| e.to_string())?;
                 Ok((t0.elapsed().as_secs_f64(), e.describe()))
             };
-            match (wall(None), wall(Some(&file))) {
-                (Ok((without, how)), Ok((with, _))) => {
+            match (
+                wall(None, ahead),
+                wall(Some(&file), ahead),
+                wall(Some(&file), 0),
+            ) {
+                (Ok((without, how)), Ok((with, _)), Ok((waiting, _))) => {
                     let kernel = how.split(", ").nth(1).unwrap_or(&how).to_string();
                     println!(
-                        "| {nx}×{nz} | {kernel} | {steps} | {without:.3} s | {with:.3} s | {:.2} |",
-                        with / without
+                        "| {nx}×{nz} | {kernel} | {steps} | {without:.3} s | {with:.3} s | {:.2} | \
+                         {waiting:.3} s | {:.2} |",
+                        with / without,
+                        waiting / without
                     );
                 }
-                (a, b) => println!("| {nx}×{nz} | not run: {a:?} {b:?} | | | | |"),
+                (a, b, c) => println!("| {nx}×{nz} | not run: {a:?} {b:?} {c:?} | | | | | | |"),
             }
         }
     }
@@ -465,14 +487,19 @@ fn main() {
             let sweep = table_s1_sweep(&dir, n);
             let model = Model::from_scenario(&sweep.points[0].scenario, false).expect("model");
             let block_steps = n as f64 * model.total_steps() as f64 * model.n_blocks() as f64;
-            let together = sweep_wall(&dir, &sweep, n);
+            let ahead = GpuOptions::default().run_ahead;
+            let together = sweep_wall(&dir, &sweep, n, ahead);
+            // The same without running ahead: what the device's wait for
+            // the runners costs.
+            let waiting = sweep_wall(&dir, &sweep, n, 0);
             let alone = if n == sweeps[0] {
-                Some(sweep_wall(&dir, &sweep, 1))
+                Some(sweep_wall(&dir, &sweep, 1, ahead))
             } else {
                 None
             };
             for (how, wall) in [
                 ("one ensemble", Some(&together)),
+                ("one ensemble, not running ahead", Some(&waiting)),
                 ("one at a time", alone.as_ref()),
             ] {
                 match wall {

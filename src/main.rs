@@ -261,6 +261,10 @@ struct SweepRun {
     /// (the reference path).
     #[arg(long, value_enum, default_value = "device")]
     gpu_output: slipfront::engines::gpu::GpuOutput,
+    /// GPU backend: batches the device may go on stepping while the
+    /// points' samples are written, as `run --gpu-run-ahead`.
+    #[arg(long, default_value_t = slipfront::engines::gpu::options::RUN_AHEAD_BATCHES)]
+    gpu_run_ahead: usize,
 }
 
 fn main() -> ExitCode {
@@ -402,6 +406,7 @@ fn main() -> ExitCode {
                     path: run.gpu_path,
                     output: run.gpu_output,
                     persistent_threads: run.gpu_threads,
+                    run_ahead: run.gpu_run_ahead,
                     ..Default::default()
                 },
             }),

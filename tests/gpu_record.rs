@@ -342,9 +342,26 @@ fn run_files_from_device_records_equal_those_from_host_snapshots() {
     }
 }
 
+/// An engine recording on the device that may run ahead by the default
+/// number of batches, or not at all (`GpuOptions::run_ahead` 0).
+fn engine_running_ahead(m: &Model, path: GpuPath, ahead: bool) -> GpuEngine {
+    let opts = GpuOptions {
+        path,
+        output: GpuOutput::Device,
+        run_ahead: if ahead {
+            GpuOptions::default().run_ahead
+        } else {
+            0
+        },
+        ..GpuOptions::default()
+    };
+    GpuEngine::with_options(m, opts)
+        .unwrap_or_else(|e| panic!("a GPU adapter is required (lavapipe in CI): {e}"))
+}
+
 /// Running ahead (`Engine::run_ahead`): `advance` returns with its last
 /// batches still running, and their samples come only once the engine has
-/// waited for them (`settle`); without it (`limit_run_ahead(0)`) an advance
+/// waited for them (`settle`); without it (`GpuOptions::run_ahead` 0) an advance
 /// hands over every sample up to its step. Either way the samples are the
 /// same, in the same order, with the same bits.
 #[test]
@@ -354,11 +371,8 @@ fn running_ahead_hands_over_the_same_samples_later() {
     for path in [GpuPath::OneStep, GpuPath::Persistent] {
         let mut taken = Vec::new();
         for ahead in [true, false] {
-            let mut e = engine(&m, path, GpuOutput::Device);
+            let mut e = engine_running_ahead(&m, path, ahead);
             assert!(e.record_samples(&plan(&m, &s)).unwrap());
-            if !ahead {
-                e.limit_run_ahead(0);
-            }
             e.run_ahead();
             let mut samples = Vec::new();
             let mut late = 0;
@@ -388,18 +402,15 @@ fn running_ahead_hands_over_the_same_samples_later() {
 }
 
 /// A whole run, written by a runner that lets the engine run ahead (every
-/// GPU run with an output file), equals the same run with an engine that
-/// waits at every advance, record for record and bit for bit.
+/// GPU run with an output file, by default), equals the same run with an
+/// engine that waits at every advance, record for record and bit for bit.
 #[test]
 fn a_run_file_written_while_the_device_runs_ahead_is_the_same() {
     let s = triggered(&["time.end=4e-4", "output.bulk_interval=1e-4"]);
     let m = Model::from_scenario(&s, false).unwrap();
     let mut files = Vec::new();
     for ahead in [true, false] {
-        let mut e = engine(&m, GpuPath::OneStep, GpuOutput::Device);
-        if !ahead {
-            e.limit_run_ahead(0);
-        }
+        let mut e = engine_running_ahead(&m, GpuPath::OneStep, ahead);
         let path = temp(&format!("ahead-{ahead}.mcap"));
         let opts = RunOptions {
             output: Some(path.clone()),

@@ -33,6 +33,10 @@ pub struct RunArgs {
     /// (default: 256 persistent, 1024 resident; at most the adapter's).
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
     pub gpu_threads: Option<u32>,
+    /// Batches the GPU may go on stepping while the samples it recorded
+    /// are written (0: it waits for the output at every chunk).
+    #[arg(long, default_value_t = slipfront::engines::gpu::options::RUN_AHEAD_BATCHES)]
+    pub gpu_run_ahead: usize,
     #[arg(long, value_enum)]
     pub precision: Option<Precision>,
     /// Override a scenario key: --set loading.drive.velocity=1e-3
@@ -166,6 +170,7 @@ impl RunArgs {
             path: self.gpu_path,
             output: self.gpu_output,
             persistent_threads: self.gpu_threads,
+            run_ahead: self.gpu_run_ahead,
             ..GpuOptions::default()
         };
         Ok(make_engine_with(

@@ -14,7 +14,7 @@
 //! `IN_FLIGHT` batches are queued, so a blow-up stops the run within a
 //! batch or two and `advance` returns only when its steps have run. A
 //! runner that writes output asks it to run ahead (`Engine::run_ahead`):
-//! `advance` then returns with up to `RUN_AHEAD_BATCHES` batches still
+//! `advance` then returns with up to `GpuOptions::run_ahead` batches still
 //! running, whose samples and blow-ups the next call reports, so the
 //! device works while the host writes; whatever reads or writes the state
 //! waits for them first.
@@ -221,7 +221,7 @@ pub struct GpuEngine<T: GpuReal = f32> {
     in_flight: VecDeque<InFlight>,
     /// Batches `advance` may leave running (0: it waits for all).
     lead: usize,
-    /// What `run_ahead` sets `lead` to.
+    /// What `run_ahead` sets `lead` to (`GpuOptions::run_ahead`).
     run_ahead_batches: usize,
     spare_staging: Vec<wgpu::Buffer>,
     /// Dispatches that stepped the lattice (forces-only passes included).
@@ -549,7 +549,7 @@ impl<T: GpuReal> GpuEngine<T> {
             step: 0,
             in_flight: VecDeque::new(),
             lead: 0,
-            run_ahead_batches: RUN_AHEAD_BATCHES,
+            run_ahead_batches: opts.run_ahead,
             spare_staging: Vec::new(),
             dispatches: 0,
             output_dispatches: 0,
@@ -802,13 +802,6 @@ impl<T: GpuReal> GpuEngine<T> {
             self.retire_oldest()?;
         }
         Ok(())
-    }
-
-    /// Batches `advance` leaves running when the caller lets it run ahead
-    /// (`Engine::run_ahead`); 0 makes every `advance` wait for its steps.
-    pub fn limit_run_ahead(&mut self, batches: usize) {
-        self.run_ahead_batches = batches;
-        self.lead = self.lead.min(batches);
     }
 
     /// Once, when driving starts (before the forces of that step): fixes

@@ -14,10 +14,11 @@ pub const PERSISTENT_BATCH: u64 = 4096;
 pub const ONE_STEP_BATCH: u64 = 1024;
 /// Batches queued on the device at most.
 pub const IN_FLIGHT: usize = 2;
-/// Batches an `advance` may leave running when its caller writes output
-/// meanwhile (`Engine::run_ahead`): the device keeps stepping while the
-/// runner handles the samples read back so far, instead of idling for it.
-/// Four one-step batches are 4096 steps; a lockstep chunk is eight.
+/// Batches an `advance` may leave running by default when its caller
+/// writes output meanwhile (`Engine::run_ahead`, `GpuOptions::run_ahead`):
+/// the device keeps stepping while the runner handles the samples read
+/// back so far, instead of idling for it. Four one-step batches are 4096
+/// steps; a lockstep chunk is eight.
 pub const RUN_AHEAD_BATCHES: usize = 4;
 /// Threads of the persistent kernel's workgroup by default.
 pub const PERSISTENT_THREADS: u32 = 256;
@@ -85,6 +86,9 @@ pub struct GpuOptions {
     pub persistent_threads: Option<u32>,
     /// Steps per persistent dispatch instead of the adapter's safe default.
     pub steps_per_dispatch: Option<u64>,
+    /// Batches an `advance` may leave running once its runner lets it run
+    /// ahead (`Engine::run_ahead`); 0: every advance waits for its steps.
+    pub run_ahead: usize,
 }
 
 impl Default for GpuOptions {
@@ -94,6 +98,7 @@ impl Default for GpuOptions {
             output: GpuOutput::Device,
             persistent_threads: None,
             steps_per_dispatch: None,
+            run_ahead: RUN_AHEAD_BATCHES,
         }
     }
 }
