@@ -8,8 +8,8 @@
 //!   resident form holds u and v in workgroup memory for the whole
 //!   dispatch (lattices that fit it).
 //!
-//! Steps go in batches (one submit each) whose loads the kernels compute
-//! from the batch's first step. After each batch the kernel's blow-up
+//! Steps go in batches (one submit each, `batches`) whose loads the
+//! kernels compute from the batch's first step. After each batch the kernel's blow-up
 //! status is copied to a staging buffer and mapped asynchronously; at most
 //! `IN_FLIGHT` batches are queued, so a blow-up stops the run within a
 //! batch or two and `advance` returns only when its steps have run. A
@@ -29,6 +29,7 @@
 //! separate runners. A solo run is an ensemble of one: the same compiled
 //! kernels, so a scene's bits do not depend on the scenes beside it.
 
+mod batches;
 mod bindings;
 pub mod context;
 pub mod ensemble;
@@ -44,11 +45,11 @@ mod scene_state;
 pub mod shaders;
 
 use crate::engines::step_params::Consts;
-use crate::engines::{blow_up, Engine, EngineError, EngineState, Sample, SamplePlan, Snapshot};
+use crate::engines::{Engine, EngineError, EngineState, Sample, SamplePlan, Snapshot};
 use crate::model::lattice::{block_flags, initial_displacement};
 use crate::model::real::{precision_name, Coordinate};
 use crate::model::scenario::FrictionLaw;
-use crate::model::{Driver, Model};
+use crate::model::Model;
 use bytemuck::Zeroable;
 use context::GpuContext;
 use layout::{GpuBatch, GpuConsts, GpuJunctionSpring, GpuLaneSum, GpuStatus, WORKGROUP};
@@ -61,7 +62,6 @@ pub use record_pipelines::RECORD_SMALL_BLOCKS;
 use scene_state::gpu_junction_springs;
 use shaders::{Kernel, Variant};
 use std::collections::VecDeque;
-use std::sync::mpsc;
 use wgpu::util::DeviceExt;
 
 struct Buffers {
@@ -173,21 +173,6 @@ struct Scene<T: GpuReal> {
     failure: Option<EngineError>,
 }
 
-/// A submitted batch whose status copy is being mapped.
-struct InFlight {
-    staging: wgpu::Buffer,
-    submission: wgpu::SubmissionIndex,
-    mapped: mpsc::Receiver<Result<(), wgpu::BufferAsyncError>>,
-    first_step: u64,
-    /// The persistent kernel's step counter once this batch has run.
-    persistent_steps: u32,
-    /// The batch's output records, mapped with its status.
-    records: Option<(
-        recorder::Pending,
-        mpsc::Receiver<Result<(), wgpu::BufferAsyncError>>,
-    )>,
-}
-
 /// The GPU engine over one scene (`GpuEngine::new`), or over an ensemble of
 /// scenes of one lattice shape stepped together (`ensemble::GpuEnsemble`),
 /// computing in `T`: f32 (mixed, double-single coordinates) or f64.
@@ -218,7 +203,7 @@ pub struct GpuEngine<T: GpuReal = f32> {
     current: usize,
     /// Steps submitted (every scene is at this step).
     step: u64,
-    in_flight: VecDeque<InFlight>,
+    in_flight: VecDeque<batches::InFlight>,
     /// Batches `advance` may leave running (0: it waits for all).
     lead: usize,
     /// What `run_ahead` sets `lead` to (`GpuOptions::run_ahead`).
@@ -576,329 +561,6 @@ impl<T: GpuReal> GpuEngine<T> {
 
     pub fn adapter(&self) -> String {
         self.ctx.describe()
-    }
-
-    /// Submits `steps` steps from the current one (or, with `forces_only`,
-    /// the forces of the current state where they are not ready), and the
-    /// copy of the status.
-    fn submit_batch(
-        &mut self,
-        steps: u64,
-        forces_only: bool,
-        planned: Vec<recorder::Planned>,
-    ) -> Result<(), EngineError> {
-        while self.in_flight.len() >= IN_FLIGHT.max(self.lead + 1) {
-            self.retire_oldest()?;
-        }
-        let batches: Vec<GpuBatch<T>> = self
-            .scenes
-            .iter()
-            .map(|scene| {
-                let mut batch =
-                    GpuBatch::new(&scene.consts, self.step, steps as u32, scene.drive_origin);
-                batch.forces_ready = scene.forces_ready as u32;
-                batch.forces_only = forces_only as u32;
-                batch.steps_per_dispatch = self.steps_per_dispatch as u32;
-                batch.parity = self.current as u32;
-                if self.kernel.is_persistent() {
-                    batch.records = planned.len() as u32;
-                }
-                batch
-            })
-            .collect();
-        self.ctx
-            .queue
-            .write_buffer(&self.batch_buffer, 0, bytemuck::cast_slice(&batches));
-        let mut encoder = self
-            .ctx
-            .device
-            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
-                label: Some("steps"),
-            });
-        let scene_count = self.scenes.len() as u32;
-        {
-            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("steps"),
-                timestamp_writes: None,
-            });
-            pass.set_pipeline(&self.pipeline);
-            pass.set_bind_group(0, &self.state_group, &[]);
-            match self.kernel {
-                Kernel::OneStep | Kernel::OneStepLanes => {
-                    let mut samples = planned.iter().enumerate().peekable();
-                    for i in 0..steps {
-                        let offset = (i * self.offset_stride) as u32;
-                        pass.set_bind_group(1, &self.batch_group, &[offset]);
-                        pass.dispatch_workgroups(self.groups.0, self.groups.1, scene_count);
-                        if !forces_only {
-                            self.current = 1 - self.current;
-                        }
-                        // The sample of step first + i, from the state this
-                        // dispatch read and the forces it computed.
-                        if let Some((k, _)) = samples.next_if(|(_, p)| p.offset == i) {
-                            let rec = self.recorder.as_ref().expect("samples need a recorder");
-                            self.output_dispatches += rec.encode(&mut pass, k);
-                            pass.set_pipeline(&self.pipeline);
-                            pass.set_bind_group(0, &self.state_group, &[]);
-                        }
-                    }
-                    self.dispatches += steps;
-                }
-                Kernel::Persistent | Kernel::Resident => {
-                    for d in 0..steps.div_ceil(self.steps_per_dispatch) {
-                        let offset = (d * self.offset_stride) as u32;
-                        pass.set_bind_group(1, &self.batch_group, &[offset]);
-                        pass.dispatch_workgroups(1, 1, scene_count);
-                        self.dispatches += 1;
-                    }
-                    self.persistent_steps = self.persistent_steps.wrapping_add(steps as u32);
-                }
-            }
-        }
-        let status_size = (self.scenes.len() * STATUS_BYTES) as u64;
-        let staging = self.spare_staging.pop().unwrap_or_else(|| {
-            self.ctx.device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("status readback"),
-                size: status_size,
-                usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-                mapped_at_creation: false,
-            })
-        });
-        encoder.copy_buffer_to_buffer(&self.buffers.status, 0, &staging, 0, status_size);
-        let pending = match self.recorder.as_mut() {
-            Some(rec) => rec.copy_out(&self.ctx.device, &mut encoder, planned),
-            None => None,
-        };
-        let submission = self.ctx.queue.submit([encoder.finish()]);
-        let map = |buffer: &wgpu::Buffer| {
-            let (tx, rx) = mpsc::channel();
-            buffer.slice(..).map_async(wgpu::MapMode::Read, move |r| {
-                let _ = tx.send(r);
-            });
-            rx
-        };
-        let rx = map(&staging);
-        let records = pending.map(|p| {
-            let rx = map(recorder::Recorder::staging(&p));
-            (p, rx)
-        });
-        self.in_flight.push_back(InFlight {
-            staging,
-            submission,
-            mapped: rx,
-            first_step: self.step,
-            persistent_steps: self.persistent_steps,
-            records,
-        });
-        for scene in &mut self.scenes {
-            scene.forces_ready = forces_only;
-        }
-        if !forces_only {
-            self.step += steps;
-        }
-        Ok(())
-    }
-
-    /// Waits for the oldest batch and records each scene's blow-up; one
-    /// scene's blow-up is this engine's error (an ensemble's scenes keep
-    /// theirs, `GpuEnsemble::failure`).
-    fn retire_oldest(&mut self) -> Result<(), EngineError> {
-        let Some(batch) = self.in_flight.pop_front() else {
-            return Ok(());
-        };
-        self.ctx
-            .device
-            .poll(wgpu::PollType::Wait {
-                submission_index: Some(batch.submission),
-                timeout: None,
-            })
-            // A submit the device refused (its validation error) shows as
-            // a wait on a submission that never was: report the refusal.
-            .map_err(|e| match self.ctx.check() {
-                Err(refused) => refused,
-                Ok(()) => EngineError::Gpu(format!("device lost: {e}")),
-            })?;
-        batch
-            .mapped
-            .recv()
-            .map_err(|e| EngineError::Gpu(format!("status readback: {e}")))?
-            .map_err(|e| EngineError::Gpu(format!("status readback: {e}")))?;
-        let statuses: Vec<GpuStatus> = {
-            let view = batch
-                .staging
-                .slice(..)
-                .get_mapped_range()
-                .map_err(|e| EngineError::Gpu(format!("status readback: {e}")))?;
-            bytemuck::cast_slice(&view).to_vec()
-        };
-        batch.staging.unmap();
-        self.spare_staging.push(batch.staging);
-        self.ctx.check()?;
-        if let Some((pending, mapped)) = batch.records {
-            mapped
-                .recv()
-                .map_err(|e| EngineError::Gpu(format!("record readback: {e}")))?
-                .map_err(|e| EngineError::Gpu(format!("record readback: {e}")))?;
-            // After a blow-up only the samples before it are kept (a
-            // scene stopped earlier keeps none: its state stands still).
-            let before: Vec<u64> = self
-                .scenes
-                .iter()
-                .zip(&statuses)
-                .map(|(scene, s)| match scene.failure {
-                    Some(_) => 0,
-                    None if s.flag != 0 => batch.first_step + s.step as u64 + 1,
-                    None => u64::MAX,
-                })
-                .collect();
-            let rec = self.recorder.as_mut().expect("records need a recorder");
-            let samples = rec.decode(pending, &before).map_err(EngineError::Gpu)?;
-            for (mine, new) in self.samples.iter_mut().zip(samples) {
-                mine.extend(new);
-            }
-        }
-        for (scene, status) in self.scenes.iter_mut().zip(&statuses) {
-            if scene.failure.is_some() {
-                continue;
-            }
-            if self.kernel.is_persistent()
-                && status.flag == 0
-                && status.persistent_steps != batch.persistent_steps
-            {
-                return Err(EngineError::Gpu(format!(
-                    "{} cut a persistent dispatch short ({} steps run in all, {} asked for): \
-                     use --gpu-path one-step",
-                    self.ctx.info.name, status.persistent_steps, batch.persistent_steps
-                )));
-            }
-            if status.flag != 0 {
-                // The update of step first + s led to step first + s + 1.
-                let step = batch.first_step + status.step as u64 + 1;
-                let u = [status.ux as f64, status.uz as f64];
-                let v = [status.vx as f64, status.vz as f64];
-                scene.failure = Some(blow_up(&scene.model, step, status.block as usize, u, v));
-            }
-        }
-        if !self.ensemble {
-            if let Some(e) = self.scenes[0].failure.take() {
-                self.in_flight.clear();
-                if let EngineError::BlowUp { step, .. } = e {
-                    self.step = step;
-                }
-                return Err(e);
-            }
-        }
-        Ok(())
-    }
-
-    /// Waits for every submitted batch.
-    fn drain(&mut self) -> Result<(), EngineError> {
-        self.retire_to(0)
-    }
-
-    /// Waits for the oldest batches until at most `left` are running.
-    fn retire_to(&mut self, left: usize) -> Result<(), EngineError> {
-        while self.in_flight.len() > left {
-            self.retire_oldest()?;
-        }
-        Ok(())
-    }
-
-    /// Once, when driving starts (before the forces of that step): fixes
-    /// each scene's driver origin and applies its trigger's initial
-    /// junction forces (host code shared with the CPU).
-    fn begin_driving(&mut self) -> Result<(), EngineError> {
-        for k in 0..self.scenes.len() {
-            let snap = self.read_state(k)?;
-            let scene = &mut self.scenes[k];
-            if let Driver::SideSpring { row, .. } = scene.model.driver {
-                scene.drive_origin = Coord::<T>::from_f64(snap.disp[row * scene.model.nx][0]);
-            }
-            if scene.model.sets_anchors_at_drive_start() {
-                let anchors = crate::engines::trigger::trigger_anchors(&scene.model, &snap);
-                let spring = gpu_junction_springs::<T>(&anchors, &snap.junction_stiffness);
-                let at = (k * self.shape.junctions * Self::SPRING_BYTES) as u64;
-                self.ctx.queue.write_buffer(
-                    &self.buffers.junction_spring,
-                    at,
-                    bytemuck::cast_slice(&spring),
-                );
-            }
-            // The forces of this step change with the driver: recompute them.
-            scene.forces_ready = false;
-        }
-        Ok(())
-    }
-
-    /// Advances every scene `n` steps, in batches that never cross the end
-    /// of the ramp or of the normal-load phase.
-    fn advance_steps(&mut self, n: u64) -> Result<(), EngineError> {
-        let (prep, ramp) = (
-            self.scenes[0].model.prep_steps,
-            self.scenes[0].model.ramp_steps,
-        );
-        let max_batch = match self.kernel {
-            Kernel::OneStep | Kernel::OneStepLanes => ONE_STEP_BATCH,
-            Kernel::Persistent | Kernel::Resident => {
-                PERSISTENT_BATCH.min(self.steps_per_dispatch * ONE_STEP_BATCH)
-            }
-        };
-        let mut left = n;
-        while left > 0 {
-            // A batch's loads are of one kind throughout, and while driving
-            // it does not cross an anchor of the drive (layout::drive_anchor).
-            let mut k = left.min(max_batch);
-            if self.step >= prep {
-                let consts = &self.scenes[0].consts;
-                let next = layout::drive_anchor(consts, self.step) + layout::DRIVE_ANCHOR_STEPS;
-                k = k.min(next - self.step);
-            }
-            for boundary in [ramp, prep] {
-                if self.step < boundary {
-                    k = k.min(boundary - self.step);
-                }
-            }
-            let planned = match self.recorder.as_mut() {
-                Some(rec) => {
-                    let (planned, fits) = rec.plan_batch(self.step, k, self.current);
-                    k = fits;
-                    rec.write_entries(&self.ctx.queue, &planned);
-                    planned
-                }
-                None => Vec::new(),
-            };
-            self.submit_batch(k, false, planned)?;
-            left -= k;
-            if self.step == prep {
-                self.begin_driving()?;
-            }
-        }
-        // The sample of the step reached, if it is one: after the forces
-        // of that step (which the next step then reads).
-        if let Some(rec) = self.recorder.as_mut() {
-            let planned = rec.plan_now(self.step, self.current);
-            if !planned.is_empty() {
-                rec.write_entries(&self.ctx.queue, &planned);
-                self.submit_batch(1, true, planned)?;
-            }
-        }
-        // The run's last step is waited for: its caller then finishes.
-        if self.step >= self.scenes[0].model.total_steps() {
-            self.drain()
-        } else {
-            self.retire_to(self.lead)
-        }
-    }
-
-    /// Computes the forces of the current state of the scenes whose forces
-    /// are not ready (a snapshot describes one instant).
-    fn ready_forces(&mut self) -> Result<(), EngineError> {
-        self.drain()?;
-        if self.scenes.iter().any(|s| !s.forces_ready) {
-            self.submit_batch(1, true, Vec::new())?;
-            self.drain()?;
-        }
-        Ok(())
     }
 
     /// The host has the sample of `step` (or it is not one to take).
