@@ -263,7 +263,8 @@ struct SweepRun {
     gpu_output: slipfront::engines::gpu::GpuOutput,
     /// GPU backend: batches the device may go on stepping while the
     /// points' samples are written, as `run --gpu-run-ahead`.
-    #[arg(long, default_value_t = slipfront::engines::gpu::options::RUN_AHEAD_BATCHES)]
+    #[arg(long, default_value_t = slipfront::engines::gpu::options::RUN_AHEAD_BATCHES,
+          value_parser = commands::run::run_ahead_batches)]
     gpu_run_ahead: usize,
 }
 

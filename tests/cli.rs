@@ -150,11 +150,17 @@ fn bad_input_exits_with_a_clear_message() {
         let err = String::from_utf8_lossy(&out.stderr);
         assert!(err.contains("'0' for '--gpu-threads"), "{err}");
         assert!(err.contains("not in 1.."), "{err}");
-        // Batches to run ahead: a count, not a sign.
-        let out = slipfront(&[command, "--gpu-run-ahead=-1"]);
-        assert_eq!(out.status.code(), Some(2));
-        let err = String::from_utf8_lossy(&out.stderr);
-        assert!(err.contains("'-1' for '--gpu-run-ahead"), "{err}");
+        // Batches to run ahead: a count, and a bounded one.
+        for bad in ["-1", "65", "four"] {
+            let out = slipfront(&[command, &format!("--gpu-run-ahead={bad}")]);
+            assert_eq!(out.status.code(), Some(2));
+            let err = String::from_utf8_lossy(&out.stderr);
+            assert!(
+                err.contains(&format!("'{bad}' for '--gpu-run-ahead")),
+                "{err}"
+            );
+            assert!(err.contains("from 0 to 64"), "{err}");
+        }
     }
 }
 

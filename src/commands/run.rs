@@ -34,8 +34,9 @@ pub struct RunArgs {
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
     pub gpu_threads: Option<u32>,
     /// Batches the GPU may go on stepping while the samples it recorded
-    /// are written (0: it waits for the output at every chunk).
-    #[arg(long, default_value_t = slipfront::engines::gpu::options::RUN_AHEAD_BATCHES)]
+    /// are written (0: it waits for the output at every chunk; at most 64).
+    #[arg(long, default_value_t = slipfront::engines::gpu::options::RUN_AHEAD_BATCHES,
+          value_parser = crate::commands::run::run_ahead_batches)]
     pub gpu_run_ahead: usize,
     #[arg(long, value_enum)]
     pub precision: Option<Precision>,
@@ -98,6 +99,17 @@ fn same_file(a: &Path, b: &Path) -> bool {
     match (a.canonicalize(), b.canonicalize()) {
         (Ok(x), Ok(y)) => x == y,
         _ => false,
+    }
+}
+
+/// `--gpu-run-ahead`: a count of batches from 0 to
+/// `MAX_RUN_AHEAD_BATCHES` (more would hold a long run's samples and
+/// staging buffers back without bound).
+pub fn run_ahead_batches(text: &str) -> Result<usize, String> {
+    let max = slipfront::engines::gpu::options::MAX_RUN_AHEAD_BATCHES;
+    match text.parse::<usize>() {
+        Ok(n) if n <= max => Ok(n),
+        _ => Err(format!("not a count of batches from 0 to {max}")),
     }
 }
 

@@ -20,6 +20,9 @@ pub const IN_FLIGHT: usize = 2;
 /// back so far, instead of idling for it. Four one-step batches are 4096
 /// steps; a lockstep chunk is eight.
 pub const RUN_AHEAD_BATCHES: usize = 4;
+/// The most batches a run may ask to run ahead (`--gpu-run-ahead`): each
+/// holds its staging buffers until it is retired, and its samples wait.
+pub const MAX_RUN_AHEAD_BATCHES: usize = 64;
 /// Threads of the persistent kernel's workgroup by default.
 pub const PERSISTENT_THREADS: u32 = 256;
 /// Threads of the resident kernel's workgroup by default on hardware
