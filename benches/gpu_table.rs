@@ -355,10 +355,13 @@ fn main() {
         );
         println!("| ---: | --- | ---: | ---: | ---: | ---: |");
         let blocks = s1.n_blocks() as f64;
-        for kernel in candidates(&s1) {
-            let mut alone = None;
-            for &n in counts {
-                let models: Vec<Model> = (1..=n).map(table_s1).collect();
+        // Scene counts outermost, so that a loan cut short has every
+        // kernel's row at the smaller counts before any at the largest.
+        let kernels = candidates(&s1);
+        let mut alone = vec![None; kernels.len()];
+        for &n in counts {
+            let models: Vec<Model> = (1..=n).map(table_s1).collect();
+            for (&kernel, alone) in kernels.iter().zip(alone.iter_mut()) {
                 let result = GpuEnsemble::new(&models, options(kernel))
                     .map_err(|e| e.to_string())
                     .and_then(|mut e| {
