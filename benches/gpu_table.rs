@@ -12,7 +12,8 @@
 //!    threads (`--gpu-threads`: more threads, fewer registers each); and
 //!    what the junctions cost there (Ns = 100, Ns = 16, Coulomb friction);
 //! 3. ensembles of 1 to 1024 Table S1 scenes (the precursors scene, a seed
-//!    each) in one dispatch, per kernel: aggregate block-steps/s and the
+//!    each) in one dispatch, per kernel (the persistent and resident ones
+//!    at 256, 512 and 1024 threads): aggregate block-steps/s and the
 //!    speed-up over running the scenes one at a time;
 //! 4. what an output file at the default cadences costs (device records),
 //!    against the same steps without one;
@@ -38,7 +39,7 @@ use slipfront::app::runner::{run_scene, ProgressMode, RunOptions};
 use slipfront::app::sweeps::{run_sweep, KeepMcap, Sweep, SweepOptions};
 use slipfront::engines::backend::{make_engine, Backend, Precision};
 use slipfront::engines::gpu::ensemble::GpuEnsemble;
-use slipfront::engines::gpu::kernel_choice::{candidates, measure};
+use slipfront::engines::gpu::kernel_choice::{candidates, launches, measure};
 use slipfront::engines::gpu::shaders::Kernel;
 use slipfront::engines::gpu::{context, GpuEngine, GpuOptions, GpuOutput, GpuPath};
 use slipfront::model::scenario::built_in;
@@ -356,13 +357,16 @@ fn main() {
         println!("| ---: | --- | ---: | ---: | ---: | ---: |");
         let blocks = s1.n_blocks() as f64;
         // Scene counts outermost, so that a loan cut short has every
-        // kernel's row at the smaller counts before any at the largest.
-        let kernels = candidates(&s1);
+        // kernel's row at the smaller counts before any at the largest. The
+        // single-workgroup kernels at each of ENSEMBLE_THREADS, as a
+        // sweep's measurement times them (how many scenes share an SM
+        // depends on their threads).
+        let kernels = launches(&s1, 2, GpuOptions::default(), &ctx.limits);
         let mut alone = vec![None; kernels.len()];
         for &n in counts {
             let models: Vec<Model> = (1..=n).map(table_s1).collect();
             for (&kernel, alone) in kernels.iter().zip(alone.iter_mut()) {
-                let result = GpuEnsemble::new(&models, options(kernel))
+                let result = GpuEnsemble::new(&models, kernel.options(GpuOptions::default()))
                     .map_err(|e| e.to_string())
                     .and_then(|mut e| {
                         e.advance(s1.prep_steps + 16).map_err(|e| e.to_string())?;
@@ -375,13 +379,13 @@ fn main() {
                         let one = *alone.get_or_insert(blocks / per_step);
                         println!(
                             "| {n} | {} | {:.2} | {rate:.3e} | {:.1}× | {:.2} |",
-                            path_name(kernel),
+                            kernel.name(),
                             per_step * 1e6,
                             rate / one,
                             cpu / dt
                         );
                     }
-                    Err(e) => println!("| {n} | {} | not run: {e} | | | |", path_name(kernel)),
+                    Err(e) => println!("| {n} | {} | not run: {e} | | | |", kernel.name()),
                 }
             }
         }
@@ -397,7 +401,7 @@ fn main() {
         let output_sizes: &[(u32, u32, u64)] = if quick {
             &[(57, 31, 2000)]
         } else {
-            &[(57, 31, 40_000), (1024, 512, 4000)]
+            &[(57, 31, 40_000), (1024, 512, 20_000)]
         };
         for &(nx, nz, steps) in output_sizes {
             let model = bench_scene::scene(nx, nz);

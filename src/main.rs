@@ -123,7 +123,7 @@ enum Command {
         quick: bool,
         #[arg(long, value_enum, default_value = "cpu")]
         backend: Backend,
-        /// Default: f32 (mixed) on the GPU, f64 on the CPU.
+        /// Default: f64 (mixed f32 only on a GPU without SHADER_F64).
         #[arg(long, value_enum)]
         precision: Option<Precision>,
         /// Points run at once, one thread each (0: one per core).
@@ -164,7 +164,7 @@ enum Command {
     Verify {
         #[arg(long, value_enum, default_value = "cpu")]
         backend: Backend,
-        /// Default: f32 (mixed) on the GPU, f64 on the CPU.
+        /// Default: f64 (mixed f32 only on a GPU without SHADER_F64).
         #[arg(long, value_enum)]
         precision: Option<Precision>,
         #[arg(long)]
@@ -207,7 +207,7 @@ struct SweepRun {
     /// precision asked, else the CPU's threads.
     #[arg(long, value_enum, default_value = "auto")]
     backend: Backend,
-    /// Default: f64 (mixed f32 on `--backend gpu`).
+    /// Default: f64 (mixed f32 only on a GPU without SHADER_F64).
     #[arg(long, value_enum)]
     precision: Option<Precision>,
     /// Scenes run at once, one thread each (0: one per core; on the GPU
@@ -246,7 +246,7 @@ struct SweepRun {
     ensemble: usize,
     /// GPU backend: the kernel, as `run --gpu-path`. `auto` on a hardware
     /// GPU and `measure` time the kernels once per lattice shape on an
-    /// ensemble of the sweep's own points (64, or as many as it has) and
+    /// ensemble of the sweep's own points (256, or as many as it has) and
     /// run every point of that shape on the fastest, alone or in ensembles.
     #[arg(long, value_enum, default_value = "auto")]
     gpu_path: slipfront::engines::gpu::GpuPath,

@@ -187,6 +187,53 @@ fn scenes_of_different_shapes_cannot_share_an_ensemble() {
     assert_eq!(incompatibility(&three_scenes()), None);
 }
 
+/// An ensemble holds every scene's part of a buffer in one storage
+/// binding: `scenes_that_fit` is the most scenes an adapter's binding limit
+/// takes, which is what a sweep caps its ensembles at. Here the limit is
+/// lowered to hold three scenes: three build, four are refused naming the
+/// buffer (the control: the cap is the build's own bound).
+#[test]
+fn an_ensemble_holds_as_many_scenes_as_one_binding_takes() {
+    let ctx = slipfront::engines::gpu::context::shared()
+        .unwrap_or_else(|e| panic!("a GPU adapter is required (lavapipe in CI): {e}"));
+    let m = model(&[]);
+    let real = GpuEngine::<f32>::scenes_that_fit(&m, &ctx.limits);
+    assert!(real >= 256, "a small scene: {real} scenes per binding");
+    let fit_at = |bytes: u64| {
+        let mut limits = ctx.limits.clone();
+        limits.max_storage_buffer_binding_size = bytes;
+        GpuEngine::<f32>::scenes_that_fit(&m, &limits)
+    };
+    // The smallest binding that holds three scenes (the count grows with
+    // the bytes).
+    let (mut lo, mut hi) = (0u64, 1u64 << 30);
+    while lo + 1 < hi {
+        let mid = (lo + hi) / 2;
+        if fit_at(mid) >= 3 {
+            hi = mid;
+        } else {
+            lo = mid;
+        }
+    }
+    let three = hi;
+    assert_eq!((fit_at(three - 1), fit_at(three)), (2, 3));
+    let mut tight = ctx.clone();
+    tight.limits.max_storage_buffer_binding_size = three;
+    let scenes = |n: usize| vec![m.clone(); n];
+    GpuEnsemble::with_context(&scenes(3), tight.clone(), GpuOptions::default())
+        .expect("three scenes fit");
+    let Err(err) = GpuEnsemble::with_context(&scenes(4), tight.clone(), GpuOptions::default())
+    else {
+        panic!("four scenes must not fit a binding sized for three");
+    };
+    assert!(
+        err.to_string().contains("buffer of 4 scenes needs"),
+        "{err}"
+    );
+    // A scene alone never counts as less than one.
+    assert_eq!(fit_at(16), 1);
+}
+
 /// The small triggered scene whose fast interface cadence switches on and
 /// off within the first 0.3 ms of driving.
 fn triggered(extra: &[&str]) -> Model {

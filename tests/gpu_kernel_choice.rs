@@ -5,7 +5,8 @@
 
 use slipfront::engines::gpu::context::{self, GpuContext};
 use slipfront::engines::gpu::kernel_choice::{
-    cache_key, candidates, resolve, ChoiceCache, ChoiceSource, CACHE_FILE,
+    cache_key, candidates, launches, resolve, resolve_scenes, scenes_cache_key, ChoiceCache,
+    ChoiceSource, Launch, CACHE_FILE, ENSEMBLE_THREADS,
 };
 use slipfront::engines::gpu::shaders::Kernel;
 use slipfront::engines::gpu::{GpuEngine, GpuOptions, GpuPath};
@@ -46,8 +47,10 @@ fn measure_times_every_candidate_takes_the_fastest_and_caches_it() {
     let (opts, choice) = resolve::<f32>(&m, &ctx, options(GpuPath::Measure), &cache).unwrap();
     let choice = choice.expect("measure always measures");
     assert_eq!(choice.source, ChoiceSource::Measured);
-    let timed: Vec<Kernel> = choice.timings.iter().map(|t| t.0).collect();
+    let timed: Vec<Kernel> = choice.timings.iter().map(|t| t.0.kernel).collect();
     assert_eq!(timed, candidates(&m));
+    // A scene alone is timed at each kernel's default threads.
+    assert!(choice.timings.iter().all(|t| t.0.threads.is_none()));
     assert_eq!(timed.len(), 4, "all four kernels fit a 29 × 16 scene");
     for (k, s) in &choice.timings {
         // lavapipe: 10 µs .. 100 ms per step of 464 blocks.
@@ -59,7 +62,7 @@ fn measure_times_every_candidate_takes_the_fastest_and_caches_it() {
         .min_by(|a, b| a.1.total_cmp(&b.1))
         .unwrap()
         .0;
-    assert_eq!(choice.kernel, fastest);
+    assert_eq!(choice.launch, fastest);
     assert!(
         choice.describe().contains("µs/step"),
         "{}",
@@ -67,7 +70,7 @@ fn measure_times_every_candidate_takes_the_fastest_and_caches_it() {
     );
     // The options now name the kernel.
     let engine = GpuEngine::with_options(&m, opts).unwrap();
-    assert_eq!(engine.kernel(), choice.kernel);
+    assert_eq!(engine.kernel(), choice.kernel());
 
     // The cache holds it, and reads back the same choice.
     let key = cache_key::<f32>(&m, &ctx, options(GpuPath::Measure));
@@ -75,7 +78,7 @@ fn measure_times_every_candidate_takes_the_fastest_and_caches_it() {
     assert!(text.starts_with(&key), "{text}");
     let cached = cache.lookup(&key).expect("stored");
     assert_eq!(cached.source, ChoiceSource::Cached);
-    assert_eq!(cached.kernel, choice.kernel);
+    assert_eq!(cached.launch, choice.launch);
     assert_eq!(cached.timings, choice.timings);
 
     // Another seed is the same shape (the same choice); controls: other
@@ -106,6 +109,84 @@ fn measure_times_every_candidate_takes_the_fastest_and_caches_it() {
     .unwrap();
     assert_eq!(cache.lookup(&key), None);
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// An ensemble is timed with the single-workgroup kernels at each of
+/// `ENSEMBLE_THREADS` (how many scenes share a multiprocessor depends on
+/// their threads); the choice carries its threads into the options and
+/// through the cache. `--gpu-threads` fixes them: then nothing varies.
+#[test]
+fn an_ensemble_times_the_single_workgroup_kernels_at_several_threads() {
+    let ctx = ctx();
+    let m = small(&[]);
+    let most = ctx.limits.max_compute_invocations_per_workgroup;
+    let variants: Vec<u32> = ENSEMBLE_THREADS
+        .into_iter()
+        .filter(|&t| t <= most)
+        .collect();
+    assert!(!variants.is_empty());
+    let dir = scratch("ensemble");
+    let cache = ChoiceCache::at(&dir);
+    let opts = options(GpuPath::Measure);
+    let (chosen, choice) = resolve_scenes::<f32>(&m, 3, &ctx, opts, &cache).unwrap();
+    let choice = choice.expect("measure always measures");
+    let timed: Vec<Launch> = choice.timings.iter().map(|t| t.0).collect();
+    assert_eq!(timed, launches(&m, 3, opts, &ctx.limits));
+    for kernel in [Kernel::Persistent, Kernel::Resident] {
+        let threads: Vec<Option<u32>> = timed
+            .iter()
+            .filter(|l| l.kernel == kernel)
+            .map(|l| l.threads)
+            .collect();
+        assert_eq!(
+            threads,
+            variants.iter().map(|&t| Some(t)).collect::<Vec<_>>()
+        );
+    }
+    let fastest = choice
+        .timings
+        .iter()
+        .min_by(|a, b| a.1.total_cmp(&b.1))
+        .unwrap()
+        .0;
+    assert_eq!(choice.launch, fastest);
+    assert_eq!(chosen.path, GpuPath::of(fastest.kernel));
+    assert_eq!(chosen.persistent_threads, fastest.threads);
+    let key = scenes_cache_key::<f32>(&m, 3, &ctx, opts);
+    let cached = cache.lookup(&key).expect("stored");
+    assert_eq!(
+        (cached.launch, &cached.timings),
+        (choice.launch, &choice.timings)
+    );
+    // Fixed threads, or a scene alone: each kernel once, at its threads.
+    let fixed = GpuOptions {
+        persistent_threads: Some(64),
+        ..opts
+    };
+    for (scenes, o) in [(3, fixed), (1, opts)] {
+        let plain: Vec<Launch> = candidates(&m).into_iter().map(Launch::of).collect();
+        assert_eq!(launches(&m, scenes, o, &ctx.limits), plain);
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Launch names: `resident`, `resident/512`; anything else is not one
+/// (a damaged cache line is measured again).
+#[test]
+fn launch_names_read_back() {
+    for l in [
+        Launch::of(Kernel::OneStepLanes),
+        Launch {
+            kernel: Kernel::Resident,
+            threads: Some(512),
+        },
+    ] {
+        assert_eq!(Launch::named(&l.name()), Some(l));
+    }
+    assert_eq!(Launch::of(Kernel::Resident).name(), "resident");
+    for bad in ["resident/0", "resident/x", "resident/", "warp/256", "warp"] {
+        assert_eq!(Launch::named(bad), None, "{bad}");
+    }
 }
 
 /// `auto` on a software adapter keeps the measured rule (no timing, no
@@ -143,7 +224,7 @@ fn a_cached_choice_is_taken_and_measure_refreshes_it() {
     )
     .unwrap();
     let cached = cache.lookup(&key).unwrap();
-    assert_eq!(cached.kernel, Kernel::Persistent);
+    assert_eq!(cached.kernel(), Kernel::Persistent);
     if !ctx.is_software() {
         let (opts, choice) = resolve::<f32>(&m, &ctx, options(GpuPath::Auto), &cache).unwrap();
         assert_eq!(opts.path, GpuPath::Persistent);

@@ -489,15 +489,24 @@ fn a_measured_sweep_runs_every_point_on_the_kernel_timed_on_its_ensemble() {
         .and_then(|rest| rest.split(':').next())
         .unwrap()
         .to_string();
-    for kernel in ["one-step ", "one-step-lanes ", "persistent ", "resident "] {
+    // The single-workgroup kernels are timed at several threads.
+    for kernel in [
+        "one-step ",
+        "one-step-lanes ",
+        "persistent/256 ",
+        "resident/256 ",
+    ] {
         assert!(line.contains(kernel), "{kernel} timed: {line}");
     }
     let cached = std::fs::read_to_string(cache.join("gpu-kernels.tsv")).unwrap();
     assert!(cached.contains("| ensemble of 8 |"), "{cached}");
-    let (named, _) = run(
-        "named",
-        &["--gpu-path", &chosen, "--ensemble", "1", "--quiet"],
-    );
+    // `resident/512` is `--gpu-path resident --gpu-threads 512`.
+    let mut named_args = vec!["--ensemble", "1", "--quiet", "--gpu-path"];
+    match chosen.split_once('/') {
+        Some((kernel, threads)) => named_args.extend([kernel, "--gpu-threads", threads]),
+        None => named_args.push(&chosen),
+    }
+    let (named, _) = run("named", &named_args);
     assert_eq!(measured, named, "every point ran {chosen}");
     // Not vacuous: the points differ.
     let first = column(&named, "first_full_time_s");

@@ -8,7 +8,7 @@ use crate::engines::backend::Precision;
 use crate::engines::gpu::ensemble::{incompatibility, GpuEnsemble};
 use crate::engines::gpu::lockstep::Lockstep;
 use crate::engines::gpu::precision::GpuReal;
-use crate::engines::gpu::GpuOptions;
+use crate::engines::gpu::{context, GpuEngine, GpuOptions};
 use crate::engines::EngineState;
 use crate::engines::{Engine, EngineError};
 use crate::model::Model;
@@ -23,13 +23,35 @@ pub struct Plan {
     pub alone: Vec<usize>,
 }
 
-/// Groups `todo` greedily into ensembles of at most `max` points that
-/// share a lattice shape, compiled terms and time schedule, and that all
-/// start at step 0 or all from a shared normal-load phase.
-pub fn plan(todo: &[&Point], loading_of: &[Option<usize>], max: usize) -> Plan {
+/// The most scenes like `model` one ensemble takes: `asked` (--ensemble),
+/// within what one storage binding of the adapter holds, so that a large
+/// lattice makes smaller ensembles rather than failing to build one and
+/// running its points one at a time.
+pub fn ensemble_limit(model: &Model, asked: usize, precision: Precision) -> usize {
+    let Ok(ctx) = context::shared() else {
+        return asked;
+    };
+    let fit = match precision {
+        Precision::F64 => GpuEngine::<f64>::scenes_that_fit(model, &ctx.limits),
+        _ => GpuEngine::<f32>::scenes_that_fit(model, &ctx.limits),
+    };
+    asked.min(fit)
+}
+
+/// Groups `todo` greedily into ensembles of at most `max` points (fewer
+/// where the adapter holds fewer, `ensemble_limit`) that share a lattice
+/// shape, compiled terms and time schedule, and that all start at step 0
+/// or all from a shared normal-load phase.
+pub fn plan(
+    todo: &[&Point],
+    loading_of: &[Option<usize>],
+    max: usize,
+    precision: Precision,
+) -> Plan {
     struct Open {
         first: Model,
         loaded: bool,
+        limit: usize,
         members: Vec<usize>,
     }
     let mut open: Vec<Open> = Vec::new();
@@ -45,12 +67,13 @@ pub fn plan(todo: &[&Point], loading_of: &[Option<usize>], max: usize) -> Plan {
         let loaded = loading_of[k].is_some();
         let fits = |g: &Open| {
             g.loaded == loaded
-                && g.members.len() < max
+                && g.members.len() < g.limit
                 && incompatibility(&[g.first.clone(), model.clone()]).is_none()
         };
         match open.iter_mut().find(|g| fits(g)) {
             Some(g) => g.members.push(k),
             None => open.push(Open {
+                limit: ensemble_limit(&model, max, precision),
                 first: model,
                 loaded,
                 members: vec![k],
@@ -93,8 +116,9 @@ pub fn prepare_loadings(
     while !models.is_empty() {
         let mut batch = vec![models.remove(0)];
         let first = batch[0].1.clone();
+        let limit = ensemble_limit(&first, max, precision);
         let mut k = 0;
-        while k < models.len() && batch.len() < max {
+        while k < models.len() && batch.len() < limit {
             if incompatibility(&[first.clone(), models[k].1.clone()]).is_none() {
                 batch.push(models.remove(k));
             } else {

@@ -3,12 +3,15 @@
 //! sweep's own lattice, once per lattice shape (and caches the choice, as a
 //! run does): which kernel fills the GPU best depends on how many scenes
 //! share it, so the solo choice of `run` would not do. Every point of that
-//! shape then runs that kernel, alone or in an ensemble alike, so a table
-//! does not depend on --ensemble: the ensemble timed is
+//! shape then runs that kernel, at the threads timed fastest where the
+//! single-workgroup kernels were timed at several, alone or in an ensemble
+//! alike, so a table does not depend on --ensemble: the ensemble timed is
 //! `DEFAULT_ENSEMBLE` scenes (fewer if the sweep has fewer points of the
-//! shape), whatever --ensemble says. Elsewhere (`auto` on a software
-//! adapter, or a kernel named) the rule of `options::choose_kernel` holds.
+//! shape, or the adapter holds fewer), whatever --ensemble says. Elsewhere
+//! (`auto` on a software adapter, or a kernel named) the rule of
+//! `options::choose_kernel` holds.
 
+use super::ensembles::ensemble_limit;
 use super::{Point, SweepOptions, DEFAULT_ENSEMBLE};
 use crate::engines::backend::{Backend, Precision};
 use crate::engines::gpu::kernel_choice::{lattice_key, resolve_scenes, ChoiceCache};
@@ -19,8 +22,8 @@ use crate::model::Model;
 /// The measured kernel of each lattice shape of a sweep.
 #[derive(Debug, Default)]
 pub struct SweepKernels {
-    /// (`lattice_key`, kernel) per shape measured.
-    chosen: Vec<(String, GpuPath)>,
+    /// (`lattice_key`, kernel, threads) per shape measured.
+    chosen: Vec<(String, GpuPath, Option<u32>)>,
     software: bool,
     /// What was measured, a line per shape (for the sweep's log).
     pub report: Vec<String>,
@@ -59,14 +62,16 @@ impl SweepKernels {
             }
         }
         for (key, model, count) in shapes {
-            let scenes = count.min(DEFAULT_ENSEMBLE);
+            let scenes = ensemble_limit(model, count.min(DEFAULT_ENSEMBLE), opts.precision);
             let resolved = match opts.precision {
                 Precision::F64 => resolve_scenes::<f64>(model, scenes, &ctx, opts.gpu, &cache),
                 _ => resolve_scenes::<f32>(model, scenes, &ctx, opts.gpu, &cache),
             };
             let line = match resolved {
                 Ok((gpu, Some(choice))) => {
-                    kernels.chosen.push((key.clone(), gpu.path));
+                    kernels
+                        .chosen
+                        .push((key.clone(), gpu.path, gpu.persistent_threads));
                     choice.describe()
                 }
                 Ok((_, None)) => continue,
@@ -78,13 +83,20 @@ impl SweepKernels {
     }
 
     /// The options a point of `model` runs with, alone or in an ensemble:
-    /// its shape's measured kernel, else the rule's for `gpu.path`.
+    /// its shape's measured kernel and threads, else the rule's kernel for
+    /// `gpu.path`.
     pub fn options(&self, model: &Model, gpu: GpuOptions) -> GpuOptions {
         let key = lattice_key(model);
-        let path = match self.chosen.iter().find(|(k, _)| *k == key) {
-            Some(&(_, path)) => path,
-            None => without_measuring(gpu.path, self.software),
-        };
-        GpuOptions { path, ..gpu }
+        match self.chosen.iter().find(|(k, _, _)| *k == key) {
+            Some(&(_, path, threads)) => GpuOptions {
+                path,
+                persistent_threads: threads,
+                ..gpu
+            },
+            None => GpuOptions {
+                path: without_measuring(gpu.path, self.software),
+                ..gpu
+            },
+        }
     }
 }

@@ -104,9 +104,12 @@ pub struct SweepOptions {
 /// See [`SweepOptions::on_point`].
 pub type PointHook = std::sync::Arc<dyn Fn(usize, usize) + Send + Sync>;
 
-/// Scenes per GPU ensemble by default: enough to fill a software adapter's
-/// threads and a hardware GPU's multiprocessors with small lattices.
-pub const DEFAULT_ENSEMBLE: usize = 64;
+/// Scenes per GPU ensemble by default (fewer where one storage binding
+/// holds fewer, `ensembles::ensemble_limit`). On an H200 (132 SMs) 64
+/// Table S1 scenes were one wave of workgroups on half its SMs: 256 in one
+/// dispatch ran at twice their aggregate rate, 9.0e9 against 4.5e9
+/// block-steps/s (BENCHMARKS.md, 2026-11-27).
+pub const DEFAULT_ENSEMBLE: usize = 256;
 
 /// How GPU points are stepped unless asked otherwise: the kernel `auto`
 /// picks, samples recorded on the device. Ensembles and points alone make
@@ -462,7 +465,7 @@ pub fn run_sweep(sweep: &Sweep, opts: &SweepOptions) -> Result<SweepReport, Stri
     // (Another precision than the GPU's: each point fails alone, saying so.)
     let gpu_precision = matches!(opts.precision, Precision::F32 | Precision::F64);
     if opts.backend == Backend::Gpu && gpu_precision && opts.ensemble > 1 {
-        let plan = ensembles::plan(&todo, &group_of, opts.ensemble);
+        let plan = ensembles::plan(&todo, &group_of, opts.ensemble, opts.precision);
         alone = plan.alone;
         let made = ensembles::prepare_loadings(&groups, opts, &kernels);
         if opts.progress && made > 0 {

@@ -39,6 +39,60 @@ const TARGET_REPEAT_SECONDS: f64 = 0.05;
 /// The cache file in the cache directory.
 pub const CACHE_FILE: &str = "gpu-kernels.tsv";
 
+/// Threads a workgroup of the single-workgroup kernels (persistent,
+/// resident) are timed at when an ensemble is measured: with many scenes,
+/// fewer threads a scene let several scenes share a multiprocessor (on an
+/// H200, 1024-thread resident scenes ran one per SM, in waves), while one
+/// scene alone runs fastest with the most (BENCHMARKS.md, 2026-11-27).
+pub const ENSEMBLE_THREADS: [u32; 3] = [256, 512, 1024];
+
+/// A kernel as timed: its threads a workgroup where they were chosen
+/// (None: the kernel's default, or `--gpu-threads`). Written
+/// `resident/512` (kernel/threads) in figures and in the cache.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Launch {
+    pub kernel: Kernel,
+    pub threads: Option<u32>,
+}
+
+impl Launch {
+    pub fn of(kernel: Kernel) -> Launch {
+        Launch {
+            kernel,
+            threads: None,
+        }
+    }
+
+    /// `one-step-lanes`, `resident/512`.
+    pub fn name(self) -> String {
+        match self.threads {
+            Some(t) => format!("{}/{t}", path_name(self.kernel)),
+            None => path_name(self.kernel),
+        }
+    }
+
+    /// The inverse of `name`.
+    pub fn named(name: &str) -> Option<Launch> {
+        let (kernel, threads) = match name.split_once('/') {
+            Some((k, t)) => (k, Some(t.parse().ok().filter(|&t: &u32| t > 0)?)),
+            None => (name, None),
+        };
+        Some(Launch {
+            kernel: kernel_named(kernel)?,
+            threads,
+        })
+    }
+
+    /// `opts` running this launch.
+    pub fn options(self, opts: GpuOptions) -> GpuOptions {
+        GpuOptions {
+            path: GpuPath::of(self.kernel),
+            persistent_threads: self.threads.or(opts.persistent_threads),
+            ..opts
+        }
+    }
+}
+
 /// Where a choice came from.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum ChoiceSource {
@@ -51,12 +105,12 @@ pub enum ChoiceSource {
 /// The kernel that steps a run, and the figures behind it.
 #[derive(Debug, Clone, PartialEq)]
 pub struct KernelChoice {
-    pub kernel: Kernel,
-    /// Each kernel timed, with its wall time per step in seconds.
-    pub timings: Vec<(Kernel, f64)>,
+    pub launch: Launch,
+    /// Each launch timed, with its wall time per step in seconds.
+    pub timings: Vec<(Launch, f64)>,
     pub source: ChoiceSource,
     /// Candidates that could not be timed, and why.
-    pub skipped: Vec<(Kernel, String)>,
+    pub skipped: Vec<(Launch, String)>,
     /// Scenes stepped together while timed (1: a solo run's choice).
     pub scenes: usize,
 }
@@ -68,7 +122,7 @@ impl KernelChoice {
         let figures: Vec<String> = self
             .timings
             .iter()
-            .map(|(k, s)| format!("{} {:.1}", path_name(*k), s * 1e6))
+            .map(|(l, s)| format!("{} {:.1}", l.name(), s * 1e6))
             .collect();
         let source = match (self.source, self.scenes) {
             (ChoiceSource::Measured, 1) => "measured now on this scene".to_string(),
@@ -87,13 +141,18 @@ impl KernelChoice {
         };
         let mut text = format!(
             "chose {}: {} {unit}, {source}",
-            path_name(self.kernel),
+            self.launch.name(),
             figures.join(", ")
         );
-        for (k, why) in &self.skipped {
-            text += &format!("; {} not timed: {why}", path_name(*k));
+        for (l, why) in &self.skipped {
+            text += &format!("; {} not timed: {why}", l.name());
         }
         text
+    }
+
+    /// The kernel chosen.
+    pub fn kernel(&self) -> Kernel {
+        self.launch.kernel
     }
 }
 
@@ -127,7 +186,40 @@ pub fn candidates(model: &Model) -> Vec<Kernel> {
         .collect()
 }
 
-/// Wall time per step of `kernel` on the scenes `models` (one, or an
+/// The launches to time on `scenes` scenes like `model`: every candidate
+/// kernel, and for an ensemble the single-workgroup kernels at each of
+/// `ENSEMBLE_THREADS` the adapter allows, unless `--gpu-threads` fixed
+/// them. A scene alone takes each kernel's default threads (on an H200 the
+/// most threads were fastest alone, and every variant costs a compile).
+pub fn launches(
+    model: &Model,
+    scenes: usize,
+    opts: GpuOptions,
+    limits: &wgpu::Limits,
+) -> Vec<Launch> {
+    let most = limits
+        .max_compute_invocations_per_workgroup
+        .min(limits.max_compute_workgroup_size_x);
+    let mut out = Vec::new();
+    for kernel in candidates(model) {
+        if kernel.is_persistent() && scenes > 1 && opts.persistent_threads.is_none() {
+            out.extend(
+                ENSEMBLE_THREADS
+                    .iter()
+                    .filter(|&&t| t <= most)
+                    .map(|&t| Launch {
+                        kernel,
+                        threads: Some(t),
+                    }),
+            );
+        } else {
+            out.push(Launch::of(kernel));
+        }
+    }
+    out
+}
+
+/// Wall time per step of `launch` on the scenes `models` (one, or an
 /// ensemble stepped in one dispatch) from their initial state: a warm-up,
 /// then the fastest of a few repeats (each an `advance`, which returns when
 /// its steps have run on the device).
@@ -135,12 +227,9 @@ pub fn time_kernel<T: GpuReal>(
     models: &[Model],
     ctx: &GpuContext,
     opts: GpuOptions,
-    kernel: Kernel,
+    launch: Launch,
 ) -> Result<f64, EngineError> {
-    let opts = GpuOptions {
-        path: GpuPath::of(kernel),
-        ..opts
-    };
+    let opts = launch.options(opts);
     let mut engine = GpuEngine::<T>::build(models, ctx.clone(), opts, models.len() > 1)?;
     let started = Instant::now();
     engine.advance_steps(WARM_UP_STEPS)?;
@@ -155,8 +244,8 @@ pub fn time_kernel<T: GpuReal>(
     Ok(best)
 }
 
-/// Times every candidate kernel on the scenes `models` (one, or an ensemble
-/// of one lattice shape) and takes the fastest. A candidate that cannot be
+/// Times every launch (`launches`) on the scenes `models` (one, or an
+/// ensemble of one lattice shape) and takes the fastest. A candidate that cannot be
 /// built (a buffer too large, a lattice beyond workgroup memory, a device
 /// error) is skipped with its reason; if none can, the first error is
 /// returned.
@@ -168,20 +257,20 @@ pub fn measure<T: GpuReal>(
     let mut timings = Vec::new();
     let mut skipped = Vec::new();
     let mut first_error = None;
-    for kernel in candidates(&models[0]) {
-        match time_kernel::<T>(models, ctx, opts, kernel) {
-            Ok(s) => timings.push((kernel, s)),
+    for launch in launches(&models[0], models.len(), opts, &ctx.limits) {
+        match time_kernel::<T>(models, ctx, opts, launch) {
+            Ok(s) => timings.push((launch, s)),
             Err(e) => {
-                skipped.push((kernel, e.to_string()));
+                skipped.push((launch, e.to_string()));
                 first_error.get_or_insert(e);
             }
         }
     }
-    let Some(&(kernel, _)) = timings.iter().min_by(|a, b| a.1.total_cmp(&b.1)) else {
+    let Some(&(launch, _)) = timings.iter().min_by(|a, b| a.1.total_cmp(&b.1)) else {
         return Err(first_error.expect("at least one candidate (one-step always is)"));
     };
     Ok(KernelChoice {
-        kernel,
+        launch,
         timings,
         source: ChoiceSource::Measured,
         skipped,
@@ -190,7 +279,8 @@ pub fn measure<T: GpuReal>(
 }
 
 /// The measured choices of this machine, one line per adapter and lattice:
-/// `key <TAB> kernel <TAB> name=seconds,...`.
+/// `key <TAB> launch <TAB> launch=seconds,...` (a launch: `resident`, or
+/// `resident/512` with its threads).
 #[derive(Debug, Clone)]
 pub struct ChoiceCache {
     /// None: no cache directory could be found (nothing is kept).
@@ -237,21 +327,22 @@ impl ChoiceCache {
             if fields.next()? != key {
                 return None;
             }
-            let kernel = kernel_named(fields.next()?)?;
+            let launch = Launch::named(fields.next()?)?;
             let timings = fields
                 .next()?
                 .split(',')
                 .map(|pair| {
                     let (name, seconds) = pair.split_once('=')?;
                     let seconds: f64 = seconds.parse().ok()?;
-                    (seconds.is_finite() && seconds > 0.0).then_some((kernel_named(name)?, seconds))
+                    (seconds.is_finite() && seconds > 0.0)
+                        .then_some((Launch::named(name)?, seconds))
                 })
                 .collect::<Option<Vec<_>>>()?;
             timings
                 .iter()
-                .any(|(k, _)| *k == kernel)
+                .any(|(l, _)| *l == launch)
                 .then_some(KernelChoice {
-                    kernel,
+                    launch,
                     timings,
                     source: ChoiceSource::Cached,
                     skipped: Vec::new(),
@@ -275,11 +366,11 @@ impl ChoiceCache {
         let figures: Vec<String> = choice
             .timings
             .iter()
-            .map(|(k, s)| format!("{}={s:e}", path_name(*k)))
+            .map(|(l, s)| format!("{}={s:e}", l.name()))
             .collect();
         lines.push(format!(
             "{key}\t{}\t{}",
-            path_name(choice.kernel),
+            choice.launch.name(),
             figures.join(",")
         ));
         let write = || -> std::io::Result<()> {
@@ -384,11 +475,5 @@ pub fn resolve_scenes<T: GpuReal>(
             c
         }
     };
-    Ok((
-        GpuOptions {
-            path: GpuPath::of(choice.kernel),
-            ..opts
-        },
-        Some(choice),
-    ))
+    Ok((choice.launch.options(opts), Some(choice)))
 }

@@ -256,6 +256,37 @@ impl<T: GpuReal> GpuEngine<T> {
     const SPRING_BYTES: usize = std::mem::size_of::<GpuJunctionSpring<T>>();
     const SUMS_BYTES: usize = std::mem::size_of::<layout::GpuSampleSums<T>>();
 
+    /// The buffers that grow fastest with the lattice, and their bytes per
+    /// scene: an ensemble holds every scene's part of each in one binding.
+    fn largest_buffers(model: &Model) -> [(&'static str, usize); 2] {
+        let shape = Shape::of(model);
+        [
+            ("block displacement", shape.blocks * Self::DISP_BYTES),
+            ("junction spring", shape.junctions * Self::SPRING_BYTES),
+        ]
+    }
+
+    /// The most bytes one storage binding may hold on an adapter.
+    fn binding_limit(limits: &wgpu::Limits) -> u64 {
+        limits
+            .max_storage_buffer_binding_size
+            .min(limits.max_buffer_size)
+    }
+
+    /// The most scenes like `model` that one ensemble can hold on an
+    /// adapter with `limits` (at least 1: a scene alone that does not fit
+    /// fails at build, saying which buffer).
+    pub fn scenes_that_fit(model: &Model, limits: &wgpu::Limits) -> usize {
+        let limit = Self::binding_limit(limits);
+        Self::largest_buffers(model)
+            .iter()
+            .filter(|(_, bytes)| *bytes > 0)
+            .map(|(_, bytes)| (limit / *bytes as u64) as usize)
+            .min()
+            .unwrap_or(usize::MAX)
+            .max(1)
+    }
+
     /// The engine in precision `T` (`GpuEngine::<f64>::with_precision`) on
     /// the best adapter; f64 fails on an adapter without SHADER_F64.
     pub fn with_precision(model: &Model, opts: GpuOptions) -> Result<GpuEngine<T>, EngineError> {
@@ -297,29 +328,19 @@ impl<T: GpuReal> GpuEngine<T> {
         let scene_count = models.len();
         let shape = Shape::of(model);
         let (n, nj) = (shape.blocks, shape.junctions);
-        let limit = ctx.limits.max_storage_buffer_binding_size;
-        let max_buffer = ctx.limits.max_buffer_size;
+        let limit = Self::binding_limit(&ctx.limits);
         let what = if ensemble {
             format!(" of {scene_count} scenes")
         } else {
             String::new()
         };
-        for (name, bytes) in [
-            (
-                "block displacement",
-                (scene_count * n * Self::DISP_BYTES) as u64,
-            ),
-            (
-                "junction spring",
-                (scene_count * nj * Self::SPRING_BYTES) as u64,
-            ),
-        ] {
-            if bytes > limit.min(max_buffer) {
+        for (name, per_scene) in Self::largest_buffers(model) {
+            let bytes = (scene_count * per_scene) as u64;
+            if bytes > limit {
                 return Err(EngineError::Gpu(format!(
-                    "the {name} buffer{what} needs {bytes} bytes but {} allows at most {} per \
+                    "the {name} buffer{what} needs {bytes} bytes but {} allows at most {limit} per \
                      storage binding: use a smaller lattice{}",
                     ctx.info.name,
-                    limit.min(max_buffer),
                     if ensemble {
                         ", fewer junctions or fewer scenes"
                     } else {
