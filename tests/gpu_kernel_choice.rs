@@ -6,7 +6,7 @@
 use slipfront::engines::gpu::context::{self, GpuContext};
 use slipfront::engines::gpu::kernel_choice::{
     cache_key, candidates, launches, resolve, resolve_scenes, scenes_cache_key, ChoiceCache,
-    ChoiceSource, Launch, CACHE_FILE, ENSEMBLE_THREADS,
+    ChoiceSource, KernelChoice, Launch, CACHE_FILE, ENSEMBLE_THREADS,
 };
 use slipfront::engines::gpu::shaders::Kernel;
 use slipfront::engines::gpu::{GpuEngine, GpuOptions, GpuPath};
@@ -35,6 +35,16 @@ fn options(path: GpuPath) -> GpuOptions {
     }
 }
 
+/// The launch with the least time per step among those `choice` timed.
+fn fastest(choice: &KernelChoice) -> Launch {
+    choice
+        .timings
+        .iter()
+        .min_by(|a, b| a.1.total_cmp(&b.1))
+        .unwrap()
+        .0
+}
+
 /// `measure` times every kernel that fits this scene, takes the fastest,
 /// and caches it; the cached line is read back as the same choice with the
 /// same figures. The engine it builds runs the chosen kernel.
@@ -56,12 +66,7 @@ fn measure_times_every_candidate_takes_the_fastest_and_caches_it() {
         // lavapipe: 10 µs .. 100 ms per step of 464 blocks.
         assert!(*s > 1e-5 && *s < 0.1, "{k:?}: {s} s/step");
     }
-    let fastest = choice
-        .timings
-        .iter()
-        .min_by(|a, b| a.1.total_cmp(&b.1))
-        .unwrap()
-        .0;
+    let fastest = fastest(&choice);
     assert_eq!(choice.launch, fastest);
     assert!(
         choice.describe().contains("µs/step"),
@@ -143,12 +148,7 @@ fn an_ensemble_times_the_single_workgroup_kernels_at_several_threads() {
             variants.iter().map(|&t| Some(t)).collect::<Vec<_>>()
         );
     }
-    let fastest = choice
-        .timings
-        .iter()
-        .min_by(|a, b| a.1.total_cmp(&b.1))
-        .unwrap()
-        .0;
+    let fastest = fastest(&choice);
     assert_eq!(choice.launch, fastest);
     assert_eq!(chosen.path, GpuPath::of(fastest.kernel));
     assert_eq!(chosen.persistent_threads, fastest.threads);

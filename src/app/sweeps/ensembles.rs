@@ -2,13 +2,13 @@
 //! time schedule are stepped together, one dispatch for all, each on its
 //! own thread running the ordinary runner (`gpu::lockstep`).
 
-use super::kernels::SweepKernels;
+use super::kernels::{ensemble_limit, SweepKernels};
 use super::{run_point, EngineSource, Loading, Point, Recorder, SweepOptions};
 use crate::engines::backend::Precision;
 use crate::engines::gpu::ensemble::{incompatibility, GpuEnsemble};
 use crate::engines::gpu::lockstep::Lockstep;
 use crate::engines::gpu::precision::GpuReal;
-use crate::engines::gpu::{context, GpuEngine, GpuOptions};
+use crate::engines::gpu::GpuOptions;
 use crate::engines::EngineState;
 use crate::engines::{Engine, EngineError};
 use crate::model::Model;
@@ -21,21 +21,6 @@ pub struct Plan {
     /// Points that run alone: fast-forward runs (a jump moves one scene
     /// off the others' step), invalid ones, and points that match no other.
     pub alone: Vec<usize>,
-}
-
-/// The most scenes like `model` one ensemble takes: `asked` (--ensemble),
-/// within what one storage binding of the adapter holds, so that a large
-/// lattice makes smaller ensembles rather than failing to build one and
-/// running its points one at a time.
-pub fn ensemble_limit(model: &Model, asked: usize, precision: Precision) -> usize {
-    let Ok(ctx) = context::shared() else {
-        return asked;
-    };
-    let fit = match precision {
-        Precision::F64 => GpuEngine::<f64>::scenes_that_fit(model, &ctx.limits),
-        _ => GpuEngine::<f32>::scenes_that_fit(model, &ctx.limits),
-    };
-    asked.min(fit)
 }
 
 /// Groups `todo` greedily into ensembles of at most `max` points (fewer

@@ -11,12 +11,11 @@
 //! (`auto` on a software adapter, or a kernel named) the rule of
 //! `options::choose_kernel` holds.
 
-use super::ensembles::ensemble_limit;
 use super::{Point, SweepOptions, DEFAULT_ENSEMBLE};
 use crate::engines::backend::{Backend, Precision};
 use crate::engines::gpu::kernel_choice::{lattice_key, resolve_scenes, ChoiceCache};
 use crate::engines::gpu::options::without_measuring;
-use crate::engines::gpu::{context, GpuOptions, GpuPath};
+use crate::engines::gpu::{context, GpuEngine, GpuOptions, GpuPath};
 use crate::model::Model;
 
 /// The measured kernel of each lattice shape of a sweep.
@@ -99,4 +98,19 @@ impl SweepKernels {
             },
         }
     }
+}
+
+/// The most scenes like `model` one ensemble takes: `asked` (--ensemble),
+/// within what one storage binding of the adapter holds, so that a large
+/// lattice makes smaller ensembles rather than failing to build one and
+/// running its points one at a time.
+pub fn ensemble_limit(model: &Model, asked: usize, precision: Precision) -> usize {
+    let Ok(ctx) = context::shared() else {
+        return asked;
+    };
+    let fit = match precision {
+        Precision::F64 => GpuEngine::<f64>::scenes_that_fit(model, &ctx.limits),
+        _ => GpuEngine::<f32>::scenes_that_fit(model, &ctx.limits),
+    };
+    asked.min(fit)
 }
