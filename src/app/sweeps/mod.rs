@@ -105,7 +105,7 @@ pub struct SweepOptions {
 pub type PointHook = std::sync::Arc<dyn Fn(usize, usize) + Send + Sync>;
 
 /// Scenes per GPU ensemble by default (fewer where one storage binding
-/// holds fewer, `ensembles::ensemble_limit`). On an H200 (132 SMs) 64
+/// holds fewer, `kernels::ensemble_limit`). On an H200 (132 SMs) 64
 /// Table S1 scenes were one wave of workgroups on half its SMs: 256 in one
 /// dispatch ran at twice their aggregate rate, 9.0e9 against 4.5e9
 /// block-steps/s (BENCHMARKS.md, 2026-11-27).

@@ -245,10 +245,10 @@ pub fn time_kernel<T: GpuReal>(
 }
 
 /// Times every launch (`launches`) on the scenes `models` (one, or an
-/// ensemble of one lattice shape) and takes the fastest. A candidate that cannot be
-/// built (a buffer too large, a lattice beyond workgroup memory, a device
-/// error) is skipped with its reason; if none can, the first error is
-/// returned.
+/// ensemble of one lattice shape) and takes the fastest. A launch that
+/// cannot be built (a buffer too large, a lattice beyond workgroup memory,
+/// a device error) is skipped with its reason; if none can, the first
+/// error is returned.
 pub fn measure<T: GpuReal>(
     models: &[Model],
     ctx: &GpuContext,
