@@ -60,7 +60,8 @@ def run_scene(scenario: Scenario, output: str, backend: str = "auto",
               precision: Optional[str] = None, threads: int = 0, gpu_path: str = "auto",
               gpu_output: str = "device", allow_unstable: bool = False, force: bool = False,
               progress: Optional[Callable[[int, int], None]] = None,
-              live: Optional[str] = None, live_wait: bool = False
+              live: Optional[str] = None, live_wait: bool = False,
+              gpu_run_ahead: Optional[int] = None
               ) -> tuple[dict[str, Any], Optional[BaseException]]: ...
 def run_sweep(base: Scenario, out_dir: str, points: Optional[list[dict[str, Any]]] = None,
               seeds: Any = None, perturb: Optional[dict[str, Any]] = None, backend: str = "auto",

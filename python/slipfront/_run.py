@@ -219,7 +219,7 @@ def run(scenario: ScenarioLike = None, *, backend: str = "auto",
         set: Optional[dict] = None, threads: int = 0, gpu_path: str = "auto",
         gpu_output: str = "device", force: bool = False,
         allow_unstable: bool = False, live: Optional[str] = None,
-        live_wait: bool = False) -> Run:
+        live_wait: bool = False, gpu_run_ahead: Optional[int] = None) -> Run:
     """Runs a scene to its end and returns its records as a `Run`.
 
     scenario: a `Scenario`, a scenario file, a shipped scene's name, or
@@ -232,7 +232,9 @@ def run(scenario: ScenarioLike = None, *, backend: str = "auto",
     while the scene steps. live: stream the run to Foxglove viewers over
     WebSocket at "HOST:PORT" (as `slipfront run --live`; port 0 takes a
     free one, and `summary["live"]` says where); live_wait: start once a
-    viewer has subscribed.
+    viewer has subscribed. gpu_run_ahead: batches the GPU may run ahead of
+    the output writer (as `--gpu-run-ahead`: 0 to 64, None for the
+    default 4; 0 waits for every batch).
 
     Ctrl-C stops the run at its next chunk; with an output file its
     checkpoint is written, then `Interrupted` (a KeyboardInterrupt) is
@@ -252,7 +254,7 @@ def run(scenario: ScenarioLike = None, *, backend: str = "auto",
                 sc, path, backend=backend, precision=precision, threads=threads,
                 gpu_path=gpu_path, gpu_output=gpu_output,
                 allow_unstable=allow_unstable, force=force, progress=callback,
-                live=live, live_wait=live_wait)
+                live=live, live_wait=live_wait, gpu_run_ahead=gpu_run_ahead)
         finally:
             close()
         result = Run(_core.read_run(path), summary=summary)

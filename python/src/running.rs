@@ -9,6 +9,7 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use slipfront::app::runner::{self, ProgressMode, RunError, RunOptions, RunSummary};
 use slipfront::engines::backend::{make_engine_with, Backend, Precision};
+use slipfront::engines::gpu::options::run_ahead_batches;
 use slipfront::engines::gpu::{GpuOptions, GpuOutput, GpuPath};
 use slipfront::io::checkpoint::Checkpoint;
 use slipfront::io::live::{largest_record, LiveAddress, LiveError, LiveView};
@@ -136,7 +137,8 @@ fn start_live(
 #[pyfunction]
 #[pyo3(signature = (scenario, output, backend="auto", precision=None, threads=0,
                     gpu_path="auto", gpu_output="device", allow_unstable=false,
-                    force=false, progress=None, live=None, live_wait=false))]
+                    force=false, progress=None, live=None, live_wait=false,
+                    gpu_run_ahead=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn run_scene<'py>(
     py: Python<'py>,
@@ -152,8 +154,13 @@ pub fn run_scene<'py>(
     progress: Option<Py<PyAny>>,
     live: Option<&str>,
     live_wait: bool,
+    gpu_run_ahead: Option<i64>,
 ) -> PyResult<(Bound<'py, PyDict>, Option<PyErr>)> {
-    let choice = EngineChoice::parse(backend, precision, threads, gpu_path, gpu_output)?;
+    let mut choice = EngineChoice::parse(backend, precision, threads, gpu_path, gpu_output)?;
+    if let Some(batches) = gpu_run_ahead {
+        choice.gpu.run_ahead = run_ahead_batches(batches)
+            .map_err(|why| PyValueError::new_err(format!("gpu_run_ahead = {why}")))?;
+    }
     let sc = &scenario.inner;
     let model = Model::from_scenario(sc, allow_unstable)
         .map_err(|e| PyValueError::new_err(e.to_string()))?;

@@ -63,6 +63,11 @@ def test_a_gpu_run_from_python_records_what_the_cli_records(cli, tmp_path):
     np.testing.assert_array_equal(ours.interface.shear_stress, theirs.interface.shear_stress)
     np.testing.assert_array_equal(ours.to_numpy("series")["drive_ratio"],
                                   theirs.to_numpy("series")["drive_ratio"])
+    # Waiting for every batch (no running ahead) records the same.
+    waiting = slipfront.run(scene, backend="gpu", t_end=0.01, progress=False,
+                            gpu_run_ahead=0)
+    np.testing.assert_array_equal(waiting.interface.shear_stress,
+                                  theirs.interface.shear_stress)
     # Negative control: a drive 1e-9 faster is another run, and the
     # comparison sees it.
     v = slipfront.Scenario.load(scene).get("loading.drive.velocity")
@@ -140,6 +145,9 @@ def test_options_are_checked_and_progress_is_reported():
         slipfront.run("triggered_front", backend="cuda", progress=False)
     with pytest.raises(ValueError, match="precision"):
         slipfront.run("triggered_front", precision="f16", progress=False)
+    for bad in (-1, 65):
+        with pytest.raises(ValueError, match=f"gpu_run_ahead = {bad} is not a count of batches from 0 to 64"):
+            slipfront.run("triggered_front", gpu_run_ahead=bad, progress=False)
     seen = []
     slipfront.run("triggered_front", progress=lambda done, total: seen.append((done, total)))
     assert seen and all(t == seen[0][1] for _, t in seen)

@@ -106,10 +106,12 @@ fn same_file(a: &Path, b: &Path) -> bool {
 /// `MAX_RUN_AHEAD_BATCHES` (more would hold a long run's samples and
 /// staging buffers back without bound).
 pub fn run_ahead_batches(text: &str) -> Result<usize, String> {
-    let max = slipfront::engines::gpu::options::MAX_RUN_AHEAD_BATCHES;
-    match text.parse::<usize>() {
-        Ok(n) if n <= max => Ok(n),
-        _ => Err(format!("not a count of batches from 0 to {max}")),
+    use slipfront::engines::gpu::options::{run_ahead_batches, MAX_RUN_AHEAD_BATCHES};
+    match text.parse::<i64>() {
+        Ok(n) => run_ahead_batches(n),
+        Err(_) => Err(format!(
+            "`{text}` is not a count of batches from 0 to {MAX_RUN_AHEAD_BATCHES}"
+        )),
     }
 }
 

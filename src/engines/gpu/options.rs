@@ -23,6 +23,17 @@ pub const RUN_AHEAD_BATCHES: usize = 4;
 /// The most batches a run may ask to run ahead (`--gpu-run-ahead`): each
 /// holds its staging buffers until it is retired, and its samples wait.
 pub const MAX_RUN_AHEAD_BATCHES: usize = 64;
+
+/// `batches` as a run-ahead count (`--gpu-run-ahead`, Python's
+/// `gpu_run_ahead`): 0 to `MAX_RUN_AHEAD_BATCHES`, else why not.
+pub fn run_ahead_batches(batches: i64) -> Result<usize, String> {
+    match usize::try_from(batches) {
+        Ok(n) if n <= MAX_RUN_AHEAD_BATCHES => Ok(n),
+        _ => Err(format!(
+            "{batches} is not a count of batches from 0 to {MAX_RUN_AHEAD_BATCHES}"
+        )),
+    }
+}
 /// Threads of the persistent kernel's workgroup by default.
 pub const PERSISTENT_THREADS: u32 = 256;
 /// Threads of the resident kernel's workgroup by default on hardware
