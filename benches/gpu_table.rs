@@ -361,12 +361,12 @@ fn main() {
         // single-workgroup kernels at each of ENSEMBLE_THREADS, as a
         // sweep's measurement times them (how many scenes share an SM
         // depends on their threads).
-        let kernels = launches(&s1, 2, GpuOptions::default(), &ctx.limits);
-        let mut alone = vec![None; kernels.len()];
+        let tried = launches(&s1, 2, GpuOptions::default(), &ctx.limits);
+        let mut alone = vec![None; tried.len()];
         for &n in counts {
             let models: Vec<Model> = (1..=n).map(table_s1).collect();
-            for (&kernel, alone) in kernels.iter().zip(alone.iter_mut()) {
-                let result = GpuEnsemble::new(&models, kernel.options(GpuOptions::default()))
+            for (&launch, alone) in tried.iter().zip(alone.iter_mut()) {
+                let result = GpuEnsemble::new(&models, launch.options(GpuOptions::default()))
                     .map_err(|e| e.to_string())
                     .and_then(|mut e| {
                         e.advance(s1.prep_steps + 16).map_err(|e| e.to_string())?;
@@ -379,13 +379,13 @@ fn main() {
                         let one = *alone.get_or_insert(blocks / per_step);
                         println!(
                             "| {n} | {} | {:.2} | {rate:.3e} | {:.1}× | {:.2} |",
-                            kernel.name(),
+                            launch.name(),
                             per_step * 1e6,
                             rate / one,
                             cpu / dt
                         );
                     }
-                    Err(e) => println!("| {n} | {} | not run: {e} | | | |", kernel.name()),
+                    Err(e) => println!("| {n} | {} | not run: {e} | | | |", launch.name()),
                 }
             }
         }

@@ -34,6 +34,7 @@ pub fn run_ahead_batches(batches: i64) -> Result<usize, String> {
         )),
     }
 }
+
 /// Threads of the persistent kernel's workgroup by default.
 pub const PERSISTENT_THREADS: u32 = 256;
 /// Threads of the resident kernel's workgroup by default on hardware
