@@ -77,8 +77,31 @@ fn block_sample(
         let slide_i = slide[interface_base() + i];
         var ruptures = u32(slide_i.y);
         let ns = plans[scene].junctions_per_block;
-        for (var j = 0u; j < ns; j++) {
-            let state = junction_state[junction_base() + i * ns + j];
+        let first = junction_base() + i * ns;
+        // Eight states loaded before any is used: one thread tallies a
+        // block's Ns junctions, and a load at a time made that a chain of
+        // Ns memory round trips on hardware (integer sums: any order, the
+        // same result).
+        var j = 0u;
+        for (; j + 8u <= ns; j += 8u) {
+            let s0 = junction_state[first + j];
+            let s1 = junction_state[first + j + 1u];
+            let s2 = junction_state[first + j + 2u];
+            let s3 = junction_state[first + j + 3u];
+            let s4 = junction_state[first + j + 4u];
+            let s5 = junction_state[first + j + 5u];
+            let s6 = junction_state[first + j + 6u];
+            let s7 = junction_state[first + j + 7u];
+            let x0 = vec4<u32>(s0.x, s1.x, s2.x, s3.x);
+            let x1 = vec4<u32>(s4.x, s5.x, s6.x, s7.x);
+            let one = vec4<u32>(1u);
+            let none = vec4<u32>(0u);
+            let held = select(none, one, x0 == vec4<u32>(PINNED)) + select(none, one, x1 == vec4<u32>(PINNED));
+            pinned += held.x + held.y + held.z + held.w;
+            ruptures += (s0.y + s1.y + s2.y + s3.y) + (s4.y + s5.y + s6.y + s7.y);
+        }
+        for (; j < ns; j++) {
+            let state = junction_state[first + j];
             pinned += select(0u, 1u, state.x == PINNED);
             ruptures += state.y;
         }
