@@ -342,15 +342,14 @@ fn run_files_from_device_records_equal_those_from_host_snapshots() {
     }
 }
 
-/// An engine recording on the device that may run ahead by
-/// `RUN_AHEAD_TRIED` batches, or not at all (`GpuOptions::run_ahead` 0, the
-/// default).
+/// An engine recording on the device that may run ahead by the default
+/// number of batches, or not at all (`GpuOptions::run_ahead` 0).
 fn engine_running_ahead(m: &Model, path: GpuPath, ahead: bool) -> GpuEngine {
     let opts = GpuOptions {
         path,
         output: GpuOutput::Device,
         run_ahead: if ahead {
-            slipfront::engines::gpu::options::RUN_AHEAD_TRIED
+            GpuOptions::default().run_ahead
         } else {
             0
         },

@@ -234,7 +234,7 @@ def run(scenario: ScenarioLike = None, *, backend: str = "auto",
     free one, and `summary["live"]` says where); live_wait: start once a
     viewer has subscribed. gpu_run_ahead: batches the GPU may run ahead of
     the output writer (as `--gpu-run-ahead`: 0 to 64, None for the
-    default 0, which waits for every batch).
+    default 4; 0 waits for every batch).
 
     Ctrl-C stops the run at its next chunk; with an output file its
     checkpoint is written, then `Interrupted` (a KeyboardInterrupt) is

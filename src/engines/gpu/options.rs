@@ -16,15 +16,13 @@ pub const ONE_STEP_BATCH: u64 = 1024;
 pub const IN_FLIGHT: usize = 2;
 /// Batches an `advance` may leave running by default when its caller
 /// writes output meanwhile (`Engine::run_ahead`, `GpuOptions::run_ahead`):
-/// none. Running ahead lets the device keep stepping while the runner
-/// handles the samples read back so far, but on an H200 it never paid:
-/// by 4 batches it cost 2.29× against 1.71× for an output file at 57×31,
-/// 2.19× against 1.86× at 1024×512, and 2.4 s against 2.0 s for a 64-point
-/// sweep (BENCHMARKS.md, session 15). Kept as a choice (`--gpu-run-ahead`).
-pub const RUN_AHEAD_BATCHES: usize = 0;
-/// What the GPU bench and tests run ahead by to weigh running ahead
-/// against the default: four one-step batches are 4096 steps.
-pub const RUN_AHEAD_TRIED: usize = 4;
+/// the device keeps stepping while the runner handles the samples read
+/// back so far, instead of idling for it. Four one-step batches are 4096
+/// steps; a lockstep chunk is eight. Whether it pays is not settled: the
+/// H200 figures so far put the first output run of a process at a
+/// disadvantage (BENCHMARKS.md, session 15), and the bench now warms up
+/// before it weighs the two.
+pub const RUN_AHEAD_BATCHES: usize = 4;
 /// The most batches a run may ask to run ahead (`--gpu-run-ahead`): each
 /// holds its staging buffers until it is retired, and its samples wait.
 pub const MAX_RUN_AHEAD_BATCHES: usize = 64;
