@@ -34,6 +34,8 @@
 //! to 16 (software adapters: lavapipe runs the full table for hours).
 //! SLIPFRONT_GPU_TABLE_SECTIONS=1,3,6 runs only those sections (a short
 //! loan of a GPU can take the table in parts); each prints its wall time.
+//! SLIPFRONT_GPU_TABLE_SCENES=1,256 runs section 3 at those scene counts
+//! only (two builds compared in one loan).
 
 use slipfront::app::runner::{run_scene, ProgressMode, RunOptions};
 use slipfront::app::sweeps::{run_sweep, KeepMcap, Sweep, SweepOptions};
@@ -48,6 +50,8 @@ use std::time::Instant;
 
 #[path = "support/bench_scene.rs"]
 mod bench_scene;
+#[path = "support/thread_cpu.rs"]
+mod thread_cpu;
 
 /// CPU seconds used so far by every thread of this process (the driver's
 /// included).
@@ -339,10 +343,17 @@ fn main() {
     }
     if let Some(_timer) = sections.start(3) {
         // 3. Ensembles of Table S1 scenes.
-        let counts: &[usize] = if quick {
-            &[1, 4, 16]
-        } else {
-            &[1, 4, 16, 64, 256, 1024]
+        let counts: Vec<usize> = match std::env::var("SLIPFRONT_GPU_TABLE_SCENES") {
+            Ok(list) => list
+                .split(',')
+                .map(|n| {
+                    n.trim().parse().unwrap_or_else(|_| {
+                        panic!("SLIPFRONT_GPU_TABLE_SCENES: `{n}` is not a scene count")
+                    })
+                })
+                .collect(),
+            Err(_) if quick => vec![1, 4, 16],
+            Err(_) => vec![1, 4, 16, 64, 256, 1024],
         };
         println!("## 3. Ensembles of Table S1 scenes in one dispatch\n");
         println!(
@@ -363,7 +374,7 @@ fn main() {
         // depends on their threads).
         let tried = launches(&s1, 2, GpuOptions::default(), &ctx.limits);
         let mut alone = vec![None; tried.len()];
-        for &n in counts {
+        for &n in &counts {
             let models: Vec<Model> = (1..=n).map(table_s1).collect();
             for (&launch, alone) in tried.iter().zip(alone.iter_mut()) {
                 let result = GpuEnsemble::new(&models, launch.options(GpuOptions::default()))
@@ -403,6 +414,7 @@ fn main() {
         } else {
             &[(57, 31, 40_000), (1024, 512, 20_000)]
         };
+        let mut threads_seen = Vec::new();
         for &(nx, nz, steps) in output_sizes {
             let model = bench_scene::scene(nx, nz);
             let t_end = steps as f64 * model.dt;
@@ -411,7 +423,7 @@ fn main() {
             let ahead = GpuOptions::default().run_ahead;
             let wall = |output: Option<&std::path::Path>,
                         run_ahead: usize|
-             -> Result<(f64, String, f64), String> {
+             -> Result<(f64, String, f64, String), String> {
                 let model = Model::from_scenario(&scenario, false).map_err(|e| e.to_string())?;
                 let opts = GpuOptions {
                     output: GpuOutput::Device,
@@ -429,10 +441,16 @@ fn main() {
                     progress: ProgressMode::None,
                     ..RunOptions::default()
                 };
+                let threads = thread_cpu::ThreadCpu::start();
                 let (t0, cpu0) = (Instant::now(), process_cpu_seconds());
                 run_scene(&mut e, &scenario, &run).map_err(|e| e.to_string())?;
                 let wall = t0.elapsed().as_secs_f64();
-                Ok((wall, e.describe(), (process_cpu_seconds() - cpu0) / wall))
+                let cpu = (process_cpu_seconds() - cpu0) / wall;
+                let threads = thread_cpu::per_wall(&threads.finish(), wall);
+                let megabytes = output
+                    .and_then(|p| std::fs::metadata(p).ok())
+                    .map_or(String::new(), |m| format!("; file {:.1} MB", m.len() as f64 / 1e6));
+                Ok((wall, e.describe(), cpu, format!("{threads}{megabytes}")))
             };
             // An untimed run with output first: the first one in a process
             // builds the record pipelines, which cost the first timed
@@ -443,7 +461,11 @@ fn main() {
                 wall(Some(&file), ahead),
                 wall(Some(&file), 0),
             ) {
-                (Ok((without, how, _)), Ok((with, _, host)), Ok((waiting, _, _))) => {
+                (
+                    Ok((without, how, _, quiet)),
+                    Ok((with, _, host, busy)),
+                    Ok((waiting, _, _, _)),
+                ) => {
                     let kernel = how.split(", ").nth(1).unwrap_or(&how).to_string();
                     println!(
                         "| {nx}×{nz} | {kernel} | {steps} | {without:.3} s | {with:.3} s | {:.2} | \
@@ -451,9 +473,19 @@ fn main() {
                         with / without,
                         waiting / without
                     );
+                    threads_seen.push(format!(
+                        "- {nx}×{nz}, CPU seconds per wall second by thread: without output {quiet}; \
+                         with -o {busy}"
+                    ));
                 }
                 (a, b, c) => println!("| {nx}×{nz} | not run: {a:?} {b:?} {c:?} | | | | | | | |"),
             }
+        }
+        // Which host thread the output keeps busy: the runner ("main"),
+        // the file's writing thread (slipfront-mcap) or the driver's.
+        println!();
+        for line in threads_seen {
+            println!("{line}");
         }
     }
     if let Some(_timer) = sections.start(5) {

@@ -62,10 +62,12 @@ fn junction_friction(ix: u32, jb: JunctionBlock, total: LaneSum, other: real) ->
 // The lane's sum is a force_sum: compensated in mixed precision, since an
 // f32 running sum of a block's alike junction forces rounded the friction
 // coherently across the interface (CPU twin's doc says more).
-// A junction's spring is read only where it is pinned after its countdown,
-// and spring and state are written back only where they changed: between
-// events nearly every junction stays pinned, so a step then reads the
-// junctions and writes none of them (the same bits, less storage traffic).
+// A junction's spring is loaded with its state, not after it (one round
+// trip to storage a junction instead of two on a lane's path; a slipping
+// junction's spring is then loaded for nothing, and between events nearly
+// every junction is pinned). Spring and state are written back only where
+// they changed, so a step between events writes none of them (the same
+// bits, less storage traffic).
 fn junction_lane(ix: u32, lane: u32, jb: JunctionBlock, ld: Loads) -> LaneSum {
     let f_n = jb.f_n;
     let threshold = jb.threshold;
@@ -73,8 +75,8 @@ fn junction_lane(ix: u32, lane: u32, jb: JunctionBlock, ld: Loads) -> LaneSum {
     for (var j = lane; j < c.junction_count; j += JUNCTION_LANES) {
         let idx = junction_base() + ix * c.junction_count + j;
         var state = junction_state[idx];
+        var spring = junction_spring[idx];
         let was_slipping = state.x != PINNED;
-        var spring: JunctionSpring;
         var spring_changed = false;
         if was_slipping {
             // A lifted block (f_N = 0) keeps its junctions waiting at 0.
@@ -88,9 +90,6 @@ fn junction_lane(ix: u32, lane: u32, jb: JunctionBlock, ld: Loads) -> LaneSum {
         var pinned = state.x == PINNED;
         var broke = false;
         if pinned {
-            if !spring_changed {
-                spring = junction_spring[idx];
-            }
             if ld.preparing {
                 // While the normal load is applied, attachment is continuous.
                 spring.stiffness = junction_stiffness(f_n);

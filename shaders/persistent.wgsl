@@ -21,6 +21,31 @@
 
 override PERSISTENT_THREADS: u32 = 256u;
 
+// The lane sums of one interface block, lanes first .. first + lanes of
+// lane_partial, merged in lane order (the CPU twin's order). The loads go
+// out eight at a time ahead of their merges: this thread's chain of
+// storage round trips, one per lane, was the step's critical path.
+fn merged_lane_partials(first: u32, lanes: u32) -> LaneSum {
+    var total = lane_sum_zero();
+    var l = 0u;
+    for (; l + 8u <= lanes; l += 8u) {
+        let p0 = lane_partial[first + l];
+        let p1 = lane_partial[first + l + 1u];
+        let p2 = lane_partial[first + l + 2u];
+        let p3 = lane_partial[first + l + 3u];
+        let p4 = lane_partial[first + l + 4u];
+        let p5 = lane_partial[first + l + 5u];
+        let p6 = lane_partial[first + l + 6u];
+        let p7 = lane_partial[first + l + 7u];
+        total = lane_sum_merge(lane_sum_merge(lane_sum_merge(lane_sum_merge(total, p0), p1), p2), p3);
+        total = lane_sum_merge(lane_sum_merge(lane_sum_merge(lane_sum_merge(total, p4), p5), p6), p7);
+    }
+    for (; l < lanes; l++) {
+        total = lane_sum_merge(total, lane_partial[first + l]);
+    }
+    return total;
+}
+
 var<workgroup> stop: u32;
 // First and end step of this dispatch, samples in the batch, the first
 // sample at or after the first step.
@@ -101,10 +126,7 @@ fn persistent_steps(
             var friction: real = 0.0;
             if FRICTION_LAW != LAW_NONE && i < c.nx {
                 if FRICTION_LAW == LAW_JUNCTIONS && !ready {
-                    var lane_sums = lane_sum_zero();
-                    for (var l = 0u; l < lanes; l++) {
-                        lane_sums = lane_sum_merge(lane_sums, lane_partial[lane_base() + i * lanes + l]);
-                    }
+                    let lane_sums = merged_lane_partials(lane_base() + i * lanes, lanes);
                     friction = junction_friction(i, junction_block(i), lane_sums, force[block_base() + i].x);
                     contact[interface_base() + i] = vec2<real>(friction, foundation_normal(coord_value(load_disp(i).z)));
                 } else {
