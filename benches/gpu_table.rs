@@ -267,6 +267,14 @@ fn main() {
     let min_seconds = if quick { 0.3 } else { 1.0 };
     let ctx = context::shared().expect("a GPU adapter (lavapipe counts)");
     println!("# GPU table: {}\n", ctx.describe());
+    // The limits the kernels' choices rest on (the resident kernel's fit,
+    // the ensembles' binding cap, the threads of a workgroup).
+    println!(
+        "Limits: workgroup memory {} bytes, {} threads per workgroup, storage binding {} bytes.\n",
+        ctx.limits.max_compute_workgroup_storage_size,
+        ctx.limits.max_compute_invocations_per_workgroup,
+        ctx.limits.max_storage_buffer_binding_size
+    );
     println!("Mixed f32; each figure timed over at least {min_seconds} s of wall time.\n");
 
     let dir = std::env::temp_dir().join(format!("slipfront-gpu-table-{}", std::process::id()));
@@ -415,71 +423,102 @@ fn main() {
             &[(57, 31, 40_000), (1024, 512, 20_000)]
         };
         let mut threads_seen = Vec::new();
-        for &(nx, nz, steps) in output_sizes {
-            let model = bench_scene::scene(nx, nz);
-            let t_end = steps as f64 * model.dt;
-            let scenario = bench_scene::scenario(nx, nz, &[&format!("time.end={t_end:e}")]);
-            let file = dir.join("run.mcap");
-            let ahead = GpuOptions::default().run_ahead;
-            let wall = |output: Option<&std::path::Path>,
-                        run_ahead: usize|
-             -> Result<(f64, String, f64, String), String> {
-                let model = Model::from_scenario(&scenario, false).map_err(|e| e.to_string())?;
-                let opts = GpuOptions {
-                    output: GpuOutput::Device,
-                    run_ahead,
-                    ..GpuOptions::default()
+        // Each lattice at `steps` and twice as many: what the longer run
+        // adds is the output's cost per step, without what a run pays once
+        // (the file's creation, the checkpoint at the end: 37 MB at
+        // 1024×512), which a run of a second or less weighs heavily.
+        let mut marginal = Vec::new();
+        for &(nx, nz, first) in output_sizes {
+            let mut walls = Vec::new();
+            for steps in [first, 2 * first] {
+                let model = bench_scene::scene(nx, nz);
+                let t_end = steps as f64 * model.dt;
+                let scenario = bench_scene::scenario(nx, nz, &[&format!("time.end={t_end:e}")]);
+                let file = dir.join("run.mcap");
+                let ahead = GpuOptions::default().run_ahead;
+                let wall = |output: Option<&std::path::Path>,
+                            run_ahead: usize|
+                 -> Result<(f64, String, f64, String), String> {
+                    let model =
+                        Model::from_scenario(&scenario, false).map_err(|e| e.to_string())?;
+                    let opts = GpuOptions {
+                        output: GpuOutput::Device,
+                        run_ahead,
+                        ..GpuOptions::default()
+                    };
+                    let mut e = GpuEngine::with_options(&model, opts).map_err(|e| e.to_string())?;
+                    advance_to(&mut e, model.prep_steps).map_err(|e| e.to_string())?;
+                    if let Some(p) = output {
+                        let _ = std::fs::remove_file(p);
+                        let _ = std::fs::remove_file(slipfront::io::checkpoint::path_for(p));
+                    }
+                    let run = RunOptions {
+                        output: output.map(|p| p.to_path_buf()),
+                        progress: ProgressMode::None,
+                        ..RunOptions::default()
+                    };
+                    let threads = thread_cpu::ThreadCpu::start();
+                    let (t0, cpu0) = (Instant::now(), process_cpu_seconds());
+                    run_scene(&mut e, &scenario, &run).map_err(|e| e.to_string())?;
+                    let wall = t0.elapsed().as_secs_f64();
+                    let cpu = (process_cpu_seconds() - cpu0) / wall;
+                    let threads = thread_cpu::per_wall(&threads.finish(), wall);
+                    let megabytes = output
+                        .and_then(|p| std::fs::metadata(p).ok())
+                        .map_or(String::new(), |m| {
+                            format!("; file {:.1} MB", m.len() as f64 / 1e6)
+                        });
+                    Ok((wall, e.describe(), cpu, format!("{threads}{megabytes}")))
                 };
-                let mut e = GpuEngine::with_options(&model, opts).map_err(|e| e.to_string())?;
-                advance_to(&mut e, model.prep_steps).map_err(|e| e.to_string())?;
-                if let Some(p) = output {
-                    let _ = std::fs::remove_file(p);
-                    let _ = std::fs::remove_file(slipfront::io::checkpoint::path_for(p));
+                // An untimed run with output first: the first one in a process
+                // builds the record pipelines, which cost the first timed
+                // column 0.22–0.28 s at 57×31 on an H200 (session 15).
+                if steps == first {
+                    let _ = wall(Some(&file), ahead);
                 }
-                let run = RunOptions {
-                    output: output.map(|p| p.to_path_buf()),
-                    progress: ProgressMode::None,
-                    ..RunOptions::default()
-                };
-                let threads = thread_cpu::ThreadCpu::start();
-                let (t0, cpu0) = (Instant::now(), process_cpu_seconds());
-                run_scene(&mut e, &scenario, &run).map_err(|e| e.to_string())?;
-                let wall = t0.elapsed().as_secs_f64();
-                let cpu = (process_cpu_seconds() - cpu0) / wall;
-                let threads = thread_cpu::per_wall(&threads.finish(), wall);
-                let megabytes = output
-                    .and_then(|p| std::fs::metadata(p).ok())
-                    .map_or(String::new(), |m| format!("; file {:.1} MB", m.len() as f64 / 1e6));
-                Ok((wall, e.describe(), cpu, format!("{threads}{megabytes}")))
-            };
-            // An untimed run with output first: the first one in a process
-            // builds the record pipelines, which cost the first timed
-            // column 0.22–0.28 s at 57×31 on an H200 (session 15).
-            let _ = wall(Some(&file), ahead);
-            match (
-                wall(None, ahead),
-                wall(Some(&file), ahead),
-                wall(Some(&file), 0),
-            ) {
-                (
-                    Ok((without, how, _, quiet)),
-                    Ok((with, _, host, busy)),
-                    Ok((waiting, _, _, _)),
-                ) => {
-                    let kernel = how.split(", ").nth(1).unwrap_or(&how).to_string();
-                    println!(
+                match (
+                    wall(None, ahead),
+                    wall(Some(&file), ahead),
+                    wall(Some(&file), 0),
+                ) {
+                    (
+                        Ok((without, how, _, quiet)),
+                        Ok((with, _, host, busy)),
+                        Ok((waiting, _, _, _)),
+                    ) => {
+                        let kernel = how.split(", ").nth(1).unwrap_or(&how).to_string();
+                        println!(
                         "| {nx}×{nz} | {kernel} | {steps} | {without:.3} s | {with:.3} s | {:.2} | \
                          {host:.2} | {waiting:.3} s | {:.2} |",
                         with / without,
                         waiting / without
                     );
-                    threads_seen.push(format!(
-                        "- {nx}×{nz}, CPU seconds per wall second by thread: without output {quiet}; \
-                         with -o {busy}"
-                    ));
+                        threads_seen.push(format!(
+                            "- {nx}×{nz}, {steps} steps, CPU seconds per wall second by thread: \
+                         without output {quiet}; with -o {busy}"
+                        ));
+                        walls.push((without, with, waiting));
+                    }
+                    (a, b, c) => {
+                        println!("| {nx}×{nz} | not run: {a:?} {b:?} {c:?} | | | | | | | |")
+                    }
                 }
-                (a, b, c) => println!("| {nx}×{nz} | not run: {a:?} {b:?} {c:?} | | | | | | | |"),
             }
+            if let [short, long] = walls[..] {
+                marginal.push(format!(
+                  "- {nx}×{nz}: the second {first} steps cost {:.3} s without output, {:.3} s with \
+                   -o ({:.2}×), {:.3} s with -o not running ahead ({:.2}×)",
+                  long.0 - short.0,
+                  long.1 - short.1,
+                  (long.1 - short.1) / (long.0 - short.0),
+                  long.2 - short.2,
+                  (long.2 - short.2) / (long.0 - short.0),
+              ));
+            }
+        }
+        println!("\nPer step, without what a run pays once (the longer run less the shorter):\n");
+        for line in marginal {
+            println!("{line}");
         }
         // Which host thread the output keeps busy: the runner ("main"),
         // the file's writing thread (slipfront-mcap) or the driver's.

@@ -29,63 +29,87 @@ fn normal_profile(ix: u32) -> real {
     return 1.0 + c.normal_slope * (1.0 - (x + x));
 }
 
+// Bond b of block i (at column ix, row iz) to its neighbour at offset d,
+// rest length `length` and stiffness `stiffness` (in lattice units), added
+// to the block's sums. Called once per stencil entry with constant
+// arguments (bulk_force): a loop over the stencil indexed its constant
+// tables at run time, which drivers may keep in per-thread memory.
+fn add_bond(
+    ix: i32,
+    iz: i32,
+    ui: Disp,
+    vi: vec2<real>,
+    d: vec2<i32>,
+    length: real,
+    stiffness: real,
+    fx: ptr<function, force_sum>,
+    fz: ptr<function, force_sum>,
+) {
+    let jx = ix + d.x;
+    let jz = iz + d.y;
+    if jx < 0 || jz < 0 || jx >= i32(c.nx) || jz >= i32(c.nz) {
+        return;
+    }
+    let j = u32(jz) * c.nx + u32(jx);
+    let r0 = vec2<real>(real(d.x) * c.spacing, real(d.y) * c.spacing);
+    let rest = length * c.spacing;
+    let kb = stiffness * c.k;
+    let uj = load_disp(j);
+    let du = vec2<real>(coord_diff(uj.x, ui.x), coord_diff(uj.z, ui.z));
+    let r = r0 + du;
+    let len = sqrt(r.x * r.x + r.y * r.y);
+    // Elongation without cancellation: (|r|² − l²)/(|r| + l).
+    let stretch = (2.0 * (r0.x * du.x + r0.y * du.y) + (du.x * du.x + du.y * du.y)) / (len + rest);
+    var damper = vec2<real>(0.0, 0.0);
+    let dv = load_vel(j) - vi;
+    if SPLITS_BONDS {
+        // Mixed f32: r0 + du would round du to ulp(r0), about two steps
+        // of creep, and turn the bond's direction in stairs; the force
+        // q·r is summed as q·r0 + q·du instead (CPU twin: bulk_force).
+        let q = kb * stretch / (rest + stretch);
+        if DAMPING_FORM == 2u {
+            let inv = 1.0 / (rest + stretch);
+            let n0 = vec2<real>(r0.x * inv, r0.y * inv);
+            let n1 = vec2<real>(du.x * inv, du.y * inv);
+            let along = c.eta * ((dv.x * n0.x + dv.y * n0.y) + (dv.x * n1.x + dv.y * n1.y));
+            damper = vec2<real>(along * n0.x + along * n1.x, along * n0.y + along * n1.y);
+        } else if DAMPING_FORM != 0u {
+            damper = vec2<real>(c.eta * dv.x, c.eta * dv.y);
+        }
+        *fx = force_sum_add_bond(force_sum_add(*fx, q * r0.x), q * du.x, damper.x);
+        *fz = force_sum_add_bond(force_sum_add(*fz, q * r0.y), q * du.y, damper.y);
+        return;
+    }
+    let inv_len = 1.0 / len;
+    let n = vec2<real>(r.x * inv_len, r.y * inv_len);
+    let spring = kb * stretch;
+    if DAMPING_FORM == 2u {
+        let along = c.eta * (dv.x * n.x + dv.y * n.y);
+        damper = vec2<real>(along * n.x, along * n.y);
+    } else if DAMPING_FORM != 0u {
+        damper = vec2<real>(c.eta * dv.x, c.eta * dv.y);
+    }
+    *fx = force_sum_add_bond(*fx, spring * n.x, damper.x);
+    *fz = force_sum_add_bond(*fz, spring * n.y, damper.y);
+}
+
 fn bulk_force(i: u32, ld: Loads) -> vec2<real> {
     let ix = i32(i % c.nx);
     let iz = i32(i / c.nx);
     let ui = load_disp(i);
     let vi = load_vel(i);
-    // Compensated sums in mixed precision (force_sum_add says why).
+    // Compensated sums in mixed precision (force_sum_add says why), the
+    // bonds in stencil order.
     var fx = force_sum_zero();
     var fz = force_sum_zero();
-    for (var b = 0u; b < 8u; b++) {
-        let d = STENCIL[b];
-        let jx = ix + d.x;
-        let jz = iz + d.y;
-        if jx < 0 || jz < 0 || jx >= i32(c.nx) || jz >= i32(c.nz) {
-            continue;
-        }
-        let j = u32(jz) * c.nx + u32(jx);
-        let r0 = vec2<real>(real(d.x) * c.spacing, real(d.y) * c.spacing);
-        let rest = STENCIL_LENGTH[b] * c.spacing;
-        let kb = STENCIL_STIFFNESS[b] * c.k;
-        let uj = load_disp(j);
-        let du = vec2<real>(coord_diff(uj.x, ui.x), coord_diff(uj.z, ui.z));
-        let r = r0 + du;
-        let len = sqrt(r.x * r.x + r.y * r.y);
-        // Elongation without cancellation: (|r|² − l²)/(|r| + l).
-        let stretch = (2.0 * (r0.x * du.x + r0.y * du.y) + (du.x * du.x + du.y * du.y)) / (len + rest);
-        var damper = vec2<real>(0.0, 0.0);
-        let dv = load_vel(j) - vi;
-        if SPLITS_BONDS {
-            // Mixed f32: r0 + du would round du to ulp(r0), about two steps
-            // of creep, and turn the bond's direction in stairs; the force
-            // q·r is summed as q·r0 + q·du instead (CPU twin: bulk_force).
-            let q = kb * stretch / (rest + stretch);
-            if DAMPING_FORM == 2u {
-                let inv = 1.0 / (rest + stretch);
-                let n0 = vec2<real>(r0.x * inv, r0.y * inv);
-                let n1 = vec2<real>(du.x * inv, du.y * inv);
-                let along = c.eta * ((dv.x * n0.x + dv.y * n0.y) + (dv.x * n1.x + dv.y * n1.y));
-                damper = vec2<real>(along * n0.x + along * n1.x, along * n0.y + along * n1.y);
-            } else if DAMPING_FORM != 0u {
-                damper = vec2<real>(c.eta * dv.x, c.eta * dv.y);
-            }
-            fx = force_sum_add_bond(force_sum_add(fx, q * r0.x), q * du.x, damper.x);
-            fz = force_sum_add_bond(force_sum_add(fz, q * r0.y), q * du.y, damper.y);
-            continue;
-        }
-        let inv_len = 1.0 / len;
-        let n = vec2<real>(r.x * inv_len, r.y * inv_len);
-        let spring = kb * stretch;
-        if DAMPING_FORM == 2u {
-            let along = c.eta * (dv.x * n.x + dv.y * n.y);
-            damper = vec2<real>(along * n.x, along * n.y);
-        } else if DAMPING_FORM != 0u {
-            damper = vec2<real>(c.eta * dv.x, c.eta * dv.y);
-        }
-        fx = force_sum_add_bond(fx, spring * n.x, damper.x);
-        fz = force_sum_add_bond(fz, spring * n.y, damper.y);
-    }
+    add_bond(ix, iz, ui, vi, STENCIL[0], STENCIL_LENGTH[0], STENCIL_STIFFNESS[0], &fx, &fz);
+    add_bond(ix, iz, ui, vi, STENCIL[1], STENCIL_LENGTH[1], STENCIL_STIFFNESS[1], &fx, &fz);
+    add_bond(ix, iz, ui, vi, STENCIL[2], STENCIL_LENGTH[2], STENCIL_STIFFNESS[2], &fx, &fz);
+    add_bond(ix, iz, ui, vi, STENCIL[3], STENCIL_LENGTH[3], STENCIL_STIFFNESS[3], &fx, &fz);
+    add_bond(ix, iz, ui, vi, STENCIL[4], STENCIL_LENGTH[4], STENCIL_STIFFNESS[4], &fx, &fz);
+    add_bond(ix, iz, ui, vi, STENCIL[5], STENCIL_LENGTH[5], STENCIL_STIFFNESS[5], &fx, &fz);
+    add_bond(ix, iz, ui, vi, STENCIL[6], STENCIL_LENGTH[6], STENCIL_STIFFNESS[6], &fx, &fz);
+    add_bond(ix, iz, ui, vi, STENCIL[7], STENCIL_LENGTH[7], STENCIL_STIFFNESS[7], &fx, &fz);
     let fl = flags[i];
     if USE_FOUNDATION && (fl & FLAG_INTERFACE) != 0u {
         fz = force_sum_add(fz, foundation_normal(coord_value(ui.z)));
