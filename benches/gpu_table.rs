@@ -414,9 +414,10 @@ fn main() {
         println!("\n## 4. An output file at the default cadences (device records) against none\n");
         println!(
             "| lattice | kernel | steps | wall without | wall with -o | ratio | \
-             host CPU / wall with -o | with -o, not running ahead | ratio |"
+             host CPU / wall with -o | with -o, not running ahead | ratio | \
+             device busy without | device busy with -o |"
         );
-        println!("| --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |");
+        println!("| --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |");
         let output_sizes: &[(u32, u32, u64)] = if quick {
             &[(57, 31, 2000)]
         } else {
@@ -438,7 +439,7 @@ fn main() {
                 let ahead = GpuOptions::default().run_ahead;
                 let wall = |output: Option<&std::path::Path>,
                             run_ahead: usize|
-                 -> Result<(f64, String, f64, String), String> {
+                 -> Result<(f64, String, f64, String, Option<f64>), String> {
                     let model =
                         Model::from_scenario(&scenario, false).map_err(|e| e.to_string())?;
                     let opts = GpuOptions {
@@ -458,8 +459,10 @@ fn main() {
                         ..RunOptions::default()
                     };
                     let threads = thread_cpu::ThreadCpu::start();
+                    let device0 = e.device_seconds();
                     let (t0, cpu0) = (Instant::now(), process_cpu_seconds());
                     run_scene(&mut e, &scenario, &run).map_err(|e| e.to_string())?;
+                    let device = e.device_seconds().zip(device0).map(|(b, a)| b - a);
                     let wall = t0.elapsed().as_secs_f64();
                     let cpu = (process_cpu_seconds() - cpu0) / wall;
                     let threads = thread_cpu::per_wall(&threads.finish(), wall);
@@ -468,7 +471,7 @@ fn main() {
                         .map_or(String::new(), |m| {
                             format!("; file {:.1} MB", m.len() as f64 / 1e6)
                         });
-                    Ok((wall, e.describe(), cpu, format!("{threads}{megabytes}")))
+                    Ok((wall, e.describe(), cpu, format!("{threads}{megabytes}"), device))
                 };
                 // An untimed run with output first: the first one in a process
                 // builds the record pipelines, which cost the first timed
@@ -482,38 +485,50 @@ fn main() {
                     wall(Some(&file), 0),
                 ) {
                     (
-                        Ok((without, how, _, quiet)),
-                        Ok((with, _, host, busy)),
-                        Ok((waiting, _, _, _)),
+                        Ok((without, how, _, quiet, device_without)),
+                        Ok((with, _, host, busy, device_with)),
+                        Ok((waiting, _, _, _, _)),
                     ) => {
                         let kernel = how.split(", ").nth(1).unwrap_or(&how).to_string();
+                        let device =
+                            |d: Option<f64>| d.map_or("–".to_string(), |d| format!("{d:.3} s"));
                         println!(
-                        "| {nx}×{nz} | {kernel} | {steps} | {without:.3} s | {with:.3} s | {:.2} | \
-                         {host:.2} | {waiting:.3} s | {:.2} |",
-                        with / without,
-                        waiting / without
-                    );
+                            "| {nx}×{nz} | {kernel} | {steps} | {without:.3} s | {with:.3} s | {:.2} | \
+                             {host:.2} | {waiting:.3} s | {:.2} | {} | {} |",
+                            with / without,
+                            waiting / without,
+                            device(device_without),
+                            device(device_with),
+                        );
                         threads_seen.push(format!(
                             "- {nx}×{nz}, {steps} steps, CPU seconds per wall second by thread: \
-                         without output {quiet}; with -o {busy}"
+                             without output {quiet}; with -o {busy}"
                         ));
-                        walls.push((without, with, waiting));
+                        walls.push((without, with, waiting, device_without, device_with));
                     }
                     (a, b, c) => {
-                        println!("| {nx}×{nz} | not run: {a:?} {b:?} {c:?} | | | | | | | |")
+                        println!("| {nx}×{nz} | not run: {a:?} {b:?} {c:?} | | | | | | | | | |")
                     }
                 }
             }
             if let [short, long] = walls[..] {
+                let device = match (short.3.zip(long.3), short.4.zip(long.4)) {
+                    (Some((a, b)), Some((c, d))) => format!(
+                        "; the device was busy {:.3} s of them without output, {:.3} s with -o",
+                        b - a,
+                        d - c
+                    ),
+                    _ => String::new(),
+                };
                 marginal.push(format!(
-                  "- {nx}×{nz}: the second {first} steps cost {:.3} s without output, {:.3} s with \
-                   -o ({:.2}×), {:.3} s with -o not running ahead ({:.2}×)",
-                  long.0 - short.0,
-                  long.1 - short.1,
-                  (long.1 - short.1) / (long.0 - short.0),
-                  long.2 - short.2,
-                  (long.2 - short.2) / (long.0 - short.0),
-              ));
+                    "- {nx}×{nz}: the second {first} steps cost {:.3} s without output, {:.3} s with \
+                     -o ({:.2}×), {:.3} s with -o not running ahead ({:.2}×){device}",
+                    long.0 - short.0,
+                    long.1 - short.1,
+                    (long.1 - short.1) / (long.0 - short.0),
+                    long.2 - short.2,
+                    (long.2 - short.2) / (long.0 - short.0),
+                ));
             }
         }
         println!("\nPer step, without what a run pays once (the longer run less the shorter):\n");

@@ -409,6 +409,31 @@ fn dispatches_per_step_are_one_or_one_per_batch() {
     println!("{}", persistent.describe());
 }
 
+/// The device time of the batches' passes (timestamp queries, which
+/// lavapipe has): it grows with the steps and never exceeds the wall time
+/// they took. On a software adapter the passes are the whole of the work,
+/// so it is most of the wall time too: a timestamp period misread (ticks
+/// for nanoseconds, microseconds for nanoseconds) fails one bound or the other.
+#[test]
+fn the_device_time_of_the_steps_is_measured_and_bounded_by_the_wall_time() {
+    let m = model(SMALL);
+    let mut e = gpu_on(&m, GpuPath::OneStep);
+    let Some(start) = e.device_seconds() else {
+        panic!("{}: no timestamp queries", e.describe());
+    };
+    assert_eq!(start, 0.0);
+    let t0 = std::time::Instant::now();
+    advance_to(&mut e, 1500).unwrap();
+    let wall = t0.elapsed().as_secs_f64();
+    let device = e.device_seconds().unwrap();
+    assert!(device > 0.0 && device <= wall * 1.02 + 1e-3, "device {device} s, wall {wall} s");
+    if e.describe().contains("Cpu") {
+        assert!(device >= 0.3 * wall, "device {device} s of {wall} s on a software adapter");
+    }
+    advance_to(&mut e, 3000).unwrap();
+    assert!(e.device_seconds().unwrap() > device);
+}
+
 /// A driver that cuts a persistent dispatch short (llvmpipe stops a
 /// shader's loops after 65535 iterations) is caught, not taken as done:
 /// on a software adapter, one dispatch of 4096 steps must fail with the

@@ -9,7 +9,7 @@ use super::options::{IN_FLIGHT, ONE_STEP_BATCH, PERSISTENT_BATCH};
 use super::precision::{Coord, GpuReal};
 use super::scene_state::gpu_junction_springs;
 use super::shaders::Kernel;
-use super::{recorder, GpuEngine, STATUS_BYTES};
+use super::{device_timer, recorder, GpuEngine, STATUS_BYTES};
 use crate::engines::{blow_up, EngineError};
 use crate::model::real::Coordinate;
 use crate::model::Driver;
@@ -69,10 +69,15 @@ impl<T: GpuReal> GpuEngine<T> {
                 label: Some("steps"),
             });
         let scene_count = self.scenes.len() as u32;
+        let timer_slot = self.timer.as_mut().map(|t| t.take_slot());
         {
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some("steps"),
-                timestamp_writes: None,
+                timestamp_writes: self
+                    .timer
+                    .as_ref()
+                    .zip(timer_slot)
+                    .map(|(t, k)| t.pass_writes(k)),
             });
             pass.set_pipeline(&self.pipeline);
             pass.set_bind_group(0, &self.state_group, &[]);
@@ -109,15 +114,24 @@ impl<T: GpuReal> GpuEngine<T> {
             }
         }
         let status_size = (self.scenes.len() * STATUS_BYTES) as u64;
+        let staging_size = status_size
+            + self
+                .timer
+                .as_ref()
+                .map_or(0, |_| device_timer::TIMESTAMP_BYTES);
         let staging = self.spare_staging.pop().unwrap_or_else(|| {
             self.ctx.device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("status readback"),
-                size: status_size,
+                size: staging_size,
                 usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
                 mapped_at_creation: false,
             })
         });
         encoder.copy_buffer_to_buffer(&self.buffers.status, 0, &staging, 0, status_size);
+        // The pass's timestamps after the statuses (a multiple of 8 bytes).
+        if let (Some(timer), Some(slot)) = (self.timer.as_ref(), timer_slot) {
+            timer.copy_out(&mut encoder, slot, &staging, status_size);
+        }
         let pending = match self.recorder.as_mut() {
             Some(rec) => rec.copy_out(&self.ctx.device, &mut encoder, planned),
             None => None,
@@ -182,7 +196,11 @@ impl<T: GpuReal> GpuEngine<T> {
                 .slice(..)
                 .get_mapped_range()
                 .map_err(|e| EngineError::Gpu(format!("status readback: {e}")))?;
-            bytemuck::cast_slice(&view).to_vec()
+            let status_size = self.scenes.len() * STATUS_BYTES;
+            if let Some(timer) = self.timer.as_mut() {
+                timer.add(&view[status_size..]);
+            }
+            bytemuck::cast_slice(&view[..status_size]).to_vec()
         };
         batch.staging.unmap();
         self.spare_staging.push(batch.staging);

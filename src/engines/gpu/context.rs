@@ -20,6 +20,10 @@ pub struct GpuContext {
     pub limits: wgpu::Limits,
     /// The first uncaptured device error, if any (checked after submits).
     pub error: Arc<Mutex<Option<String>>>,
+    /// Nanoseconds per timestamp tick, where the adapter has timestamp
+    /// queries: each batch's compute pass is then timed on the device
+    /// (`GpuEngine::device_seconds`).
+    pub timestamp_period_ns: Option<f64>,
     /// Group 0 of the one-step kernels and of the persistent kernel (their
     /// state bindings differ).
     layouts: Arc<[KernelLayout; 2]>,
@@ -106,7 +110,11 @@ impl GpuContext {
         }
         // f64 kernels where the adapter has them (`--precision f64`); the
         // mixed kernels need no feature.
-        let features = adapter.features() & wgpu::Features::SHADER_F64;
+        // Timestamp queries where the adapter has them: the device time of
+        // each batch, beside its wall time (what the output costs on the
+        // device, against what it costs the host).
+        let features =
+            adapter.features() & (wgpu::Features::SHADER_F64 | wgpu::Features::TIMESTAMP_QUERY);
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("slipfront"),
             required_features: features,
@@ -163,12 +171,16 @@ impl GpuContext {
             kernel_layout(Kernel::OneStep),
             kernel_layout(Kernel::Persistent),
         ]);
+        let timestamp_period_ns = features
+            .contains(wgpu::Features::TIMESTAMP_QUERY)
+            .then(|| queue.get_timestamp_period() as f64);
         Ok(GpuContext {
             device,
             queue,
             info,
             limits,
             error,
+            timestamp_period_ns,
             layouts,
             batch_layout,
             pipelines: Arc::new(Mutex::new(HashMap::new())),

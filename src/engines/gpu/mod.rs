@@ -32,6 +32,7 @@
 mod batches;
 mod bindings;
 pub mod context;
+mod device_timer;
 pub mod ensemble;
 pub mod kernel_choice;
 pub mod layout;
@@ -209,6 +210,8 @@ pub struct GpuEngine<T: GpuReal = f32> {
     /// What `run_ahead` sets `lead` to (`GpuOptions::run_ahead`).
     run_ahead_batches: usize,
     spare_staging: Vec<wgpu::Buffer>,
+    /// Each batch's pass timed on the device, where the adapter can.
+    timer: Option<device_timer::DeviceTimer>,
     /// Dispatches that stepped the lattice (forces-only passes included).
     dispatches: u64,
     /// Dispatches of the output kernels (one-step kernels' samples).
@@ -534,6 +537,7 @@ impl<T: GpuReal> GpuEngine<T> {
                 failure: None,
             })
             .collect();
+        let timer = device_timer::DeviceTimer::new(&ctx);
         let mut engine = GpuEngine {
             scenes,
             ensemble,
@@ -557,6 +561,7 @@ impl<T: GpuReal> GpuEngine<T> {
             lead: 0,
             run_ahead_batches: opts.run_ahead,
             spare_staging: Vec::new(),
+            timer,
             dispatches: 0,
             output_dispatches: 0,
             output: opts.output,
@@ -649,6 +654,14 @@ impl<T: GpuReal> GpuEngine<T> {
     /// Scene `scene`'s samples recorded on the device since the last call.
     fn take_samples_of(&mut self, scene: usize) -> Vec<Sample> {
         std::mem::take(&mut self.samples[scene])
+    }
+
+    /// Seconds the device has spent in the passes of the batches retired
+    /// so far (None where the adapter has no timestamp queries). Against
+    /// the wall time of the same steps it says whether the device or the
+    /// host set the pace.
+    pub fn device_seconds(&self) -> Option<f64> {
+        self.timer.as_ref().map(|t| t.busy_seconds())
     }
 
     /// Whether output samples are recorded on the device.
