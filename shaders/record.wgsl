@@ -136,7 +136,23 @@ fn record_finish(
     var s = no_sums();
     let partials = plans[scene].partials;
     let at = plans[scene].partials_offset;
-    for (var g = local; g < partials; g += RECORD_THREADS) {
+    // Eight partials loaded before their combines (in the same order):
+    // one thread's chain of storage round trips was this dispatch's length.
+    let stride = RECORD_THREADS;
+    var g = local;
+    for (; g + 7u * stride < partials; g += 8u * stride) {
+        let p0 = sums[at + g];
+        let p1 = sums[at + g + stride];
+        let p2 = sums[at + g + 2u * stride];
+        let p3 = sums[at + g + 3u * stride];
+        let p4 = sums[at + g + 4u * stride];
+        let p5 = sums[at + g + 5u * stride];
+        let p6 = sums[at + g + 6u * stride];
+        let p7 = sums[at + g + 7u * stride];
+        s = combine(combine(combine(combine(s, p0), p1), p2), p3);
+        s = combine(combine(combine(combine(s, p4), p5), p6), p7);
+    }
+    for (; g < partials; g += stride) {
         s = combine(s, sums[at + g]);
     }
     end_whole_sample(local, s);

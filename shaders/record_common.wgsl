@@ -45,6 +45,26 @@ fn sums_slot(e: RecordEntry) -> u32 {
     return plans[scene].sums_offset + e.sums_slot;
 }
 
+// (pinned junctions, ruptures) of junctions first .. first + 8, their
+// eight states loaded before any is used.
+fn tally_eight(first: u32) -> vec2<u32> {
+    let s0 = junction_state[first];
+    let s1 = junction_state[first + 1u];
+    let s2 = junction_state[first + 2u];
+    let s3 = junction_state[first + 3u];
+    let s4 = junction_state[first + 4u];
+    let s5 = junction_state[first + 5u];
+    let s6 = junction_state[first + 6u];
+    let s7 = junction_state[first + 7u];
+    let x0 = vec4<u32>(s0.x, s1.x, s2.x, s3.x);
+    let x1 = vec4<u32>(s4.x, s5.x, s6.x, s7.x);
+    let one = vec4<u32>(1u);
+    let none = vec4<u32>(0u);
+    let held = select(none, one, x0 == vec4<u32>(PINNED)) + select(none, one, x1 == vec4<u32>(PINNED));
+    let ruptures = (s0.y + s1.y + s2.y + s3.y) + (s4.y + s5.y + s6.y + s7.y);
+    return vec2<u32>(held.x + held.y + held.z + held.w, ruptures);
+}
+
 // Block i's sums at the instant of sample e (u(s), v(s−½), the forces,
 // friction and normal force of s), and its rows if due.
 fn block_sample(
@@ -78,27 +98,21 @@ fn block_sample(
         var ruptures = u32(slide_i.y);
         let ns = plans[scene].junctions_per_block;
         let first = junction_base() + i * ns;
-        // Eight states loaded before any is used: one thread tallies a
+        // Sixteen states loaded before any is used: one thread tallies a
         // block's Ns junctions, and a load at a time made that a chain of
         // Ns memory round trips on hardware (integer sums: any order, the
         // same result).
         var j = 0u;
+        for (; j + 16u <= ns; j += 16u) {
+            let a = tally_eight(first + j);
+            let b = tally_eight(first + j + 8u);
+            pinned += a.x + b.x;
+            ruptures += a.y + b.y;
+        }
         for (; j + 8u <= ns; j += 8u) {
-            let s0 = junction_state[first + j];
-            let s1 = junction_state[first + j + 1u];
-            let s2 = junction_state[first + j + 2u];
-            let s3 = junction_state[first + j + 3u];
-            let s4 = junction_state[first + j + 4u];
-            let s5 = junction_state[first + j + 5u];
-            let s6 = junction_state[first + j + 6u];
-            let s7 = junction_state[first + j + 7u];
-            let x0 = vec4<u32>(s0.x, s1.x, s2.x, s3.x);
-            let x1 = vec4<u32>(s4.x, s5.x, s6.x, s7.x);
-            let one = vec4<u32>(1u);
-            let none = vec4<u32>(0u);
-            let held = select(none, one, x0 == vec4<u32>(PINNED)) + select(none, one, x1 == vec4<u32>(PINNED));
-            pinned += held.x + held.y + held.z + held.w;
-            ruptures += (s0.y + s1.y + s2.y + s3.y) + (s4.y + s5.y + s6.y + s7.y);
+            let a = tally_eight(first + j);
+            pinned += a.x;
+            ruptures += a.y;
         }
         for (; j < ns; j++) {
             let state = junction_state[first + j];
