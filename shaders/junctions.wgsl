@@ -62,61 +62,89 @@ fn junction_friction(ix: u32, jb: JunctionBlock, total: LaneSum, other: real) ->
 // The lane's sum is a force_sum: compensated in mixed precision, since an
 // f32 running sum of a block's alike junction forces rounded the friction
 // coherently across the interface (CPU twin's doc says more).
-// A junction's spring is loaded with its state, not after it (one round
-// trip to storage a junction instead of two on a lane's path; a slipping
-// junction's spring is then loaded for nothing, and between events nearly
-// every junction is pinned). Spring and state are written back only where
-// they changed, so a step between events writes none of them (the same
-// bits, less storage traffic).
+// A junction's spring is loaded with its state, not after it, and a lane's
+// junctions two at a time (junctions j and j + JUNCTION_LANES, both loaded
+// before either is used): each pair costs one round trip to storage on the
+// lane's path, not four. A slipping junction's spring is then loaded for
+// nothing; between events nearly every junction is pinned. Spring and state
+// are written back only where they changed, so a step between events
+// writes none of them (the same bits, less storage traffic).
 fn junction_lane(ix: u32, lane: u32, jb: JunctionBlock, ld: Loads) -> LaneSum {
+    var total = lane_sum_zero();
+    let first = junction_base() + ix * c.junction_count;
+    var j = lane;
+    for (; j + JUNCTION_LANES < c.junction_count; j += 2u * JUNCTION_LANES) {
+        let next = j + JUNCTION_LANES;
+        let state_a = junction_state[first + j];
+        let spring_a = junction_spring[first + j];
+        let state_b = junction_state[first + next];
+        let spring_b = junction_spring[first + next];
+        total = junction_update(ix, j, first + j, state_a, spring_a, jb, ld, total);
+        total = junction_update(ix, next, first + next, state_b, spring_b, jb, ld, total);
+    }
+    if j < c.junction_count {
+        total = junction_update(ix, j, first + j, junction_state[first + j], junction_spring[first + j], jb, ld, total);
+    }
+    return total;
+}
+
+// Junction j of block ix (at idx) by one step from its loaded state and
+// spring, added to the lane's sum `total`.
+fn junction_update(
+    ix: u32,
+    j: u32,
+    idx: u32,
+    loaded_state: vec2<u32>,
+    loaded_spring: JunctionSpring,
+    jb: JunctionBlock,
+    ld: Loads,
+    sum: LaneSum,
+) -> LaneSum {
     let f_n = jb.f_n;
     let threshold = jb.threshold;
-    var total = lane_sum_zero();
-    for (var j = lane; j < c.junction_count; j += JUNCTION_LANES) {
-        let idx = junction_base() + ix * c.junction_count + j;
-        var state = junction_state[idx];
-        var spring = junction_spring[idx];
-        let was_slipping = state.x != PINNED;
-        var spring_changed = false;
-        if was_slipping {
-            // A lifted block (f_N = 0) keeps its junctions waiting at 0.
-            state.x = max(state.x, 1u) - 1u;
-            if state.x == 0u && f_n > 0.0 {
-                spring = JunctionSpring(coord_pack(jb.ux), junction_stiffness(f_n));
-                spring_changed = true;
-                state.x = PINNED;
-            }
+    var total = sum;
+    var state = loaded_state;
+    var spring = loaded_spring;
+    let was_slipping = state.x != PINNED;
+    var spring_changed = false;
+    if was_slipping {
+        // A lifted block (f_N = 0) keeps its junctions waiting at 0.
+        state.x = max(state.x, 1u) - 1u;
+        if state.x == 0u && f_n > 0.0 {
+            spring = JunctionSpring(coord_pack(jb.ux), junction_stiffness(f_n));
+            spring_changed = true;
+            state.x = PINNED;
         }
-        var pinned = state.x == PINNED;
-        var broke = false;
-        if pinned {
-            if ld.preparing {
-                // While the normal load is applied, attachment is continuous.
-                spring.stiffness = junction_stiffness(f_n);
-                spring_changed = true;
-            }
-            let f = -spring.stiffness * coord_diff(jb.ux, coord_unpack(spring.anchor));
-            if !ld.preparing && abs(f) > threshold {
-                let count = state.y + 1u;
-                state.y = count;
-                let n = slip_steps(c.seed, ix, j, count, c.slip_mean_steps, c.slip_std_steps);
-                // PINNED - 1 at most: a countdown never reads as pinned.
-                state.x = min(n, PINNED - 1u);
-                pinned = false;
-                broke = true;
-            } else {
-                total.pinned = force_sum_add(total.pinned, f);
-            }
+    }
+    var pinned = state.x == PINNED;
+    var broke = false;
+    if pinned {
+        if ld.preparing {
+            // While the normal load is applied, attachment is continuous.
+            spring.stiffness = junction_stiffness(f_n);
+            spring_changed = true;
         }
-        if !pinned {
-            total.slipping += 1u;
+        let f = -spring.stiffness * coord_diff(jb.ux, coord_unpack(spring.anchor));
+        if !ld.preparing && abs(f) > threshold {
+            let count = state.y + 1u;
+            state.y = count;
+            let n = slip_steps(c.seed, ix, j, count, c.slip_mean_steps, c.slip_std_steps);
+            // PINNED - 1 at most: a countdown never reads as pinned.
+            state.x = min(n, PINNED - 1u);
+            pinned = false;
+            broke = true;
+        } else {
+            total.pinned = force_sum_add(total.pinned, f);
         }
-        if spring_changed {
-            junction_spring[idx] = spring;
-        }
-        if was_slipping || broke {
-            junction_state[idx] = state;
-        }
+    }
+    if !pinned {
+        total.slipping += 1u;
+    }
+    if spring_changed {
+        junction_spring[idx] = spring;
+    }
+    if was_slipping || broke {
+        junction_state[idx] = state;
     }
     return total;
 }
