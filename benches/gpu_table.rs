@@ -184,15 +184,17 @@ fn table_s1_sweep(dir: &std::path::Path, points: usize) -> Sweep {
 
 /// Wall seconds of `sweep` on the GPU in mixed f32, `ensemble` scenes per
 /// dispatch at most (1: one point at a time), the device running ahead of
-/// the runners by `run_ahead` batches (0: it waits for them every chunk).
+/// the runners by `run_ahead` batches (0: it waits for them every chunk);
+/// and the CPU its threads used per wall second.
 fn sweep_wall(
     dir: &std::path::Path,
     sweep: &Sweep,
     ensemble: usize,
     run_ahead: usize,
-) -> Result<f64, String> {
+) -> Result<(f64, String), String> {
     let out = dir.join(format!("sweep-{}-{ensemble}", sweep.points.len()));
     let _ = std::fs::remove_dir_all(&out);
+    let threads = thread_cpu::ThreadCpu::start();
     let t0 = Instant::now();
     let report = run_sweep(
         sweep,
@@ -214,11 +216,12 @@ fn sweep_wall(
         },
     )?;
     let wall = t0.elapsed().as_secs_f64();
+    let threads = thread_cpu::per_wall(&threads.finish(), wall);
     let _ = std::fs::remove_dir_all(&out);
     if report.not_ok > 0 {
         return Err(format!("{} points not ok", report.not_ok));
     }
-    Ok(wall)
+    Ok((wall, threads))
 }
 
 /// Which sections to run (`SLIPFRONT_GPU_TABLE_SECTIONS=1,3,6`; all by
@@ -578,13 +581,37 @@ fn main() {
     if let Some(_timer) = sections.start(6) {
         // 6. Table S1 points as one sweep.
         println!("\n## 6. Table S1 points as one sweep, 0.01 s of driving each\n");
-        println!("| points | how | wall (s) | aggregate block-steps/s | against one at a time |");
-        println!("| ---: | --- | ---: | ---: | ---: |");
-        let sweeps: &[usize] = if quick { &[4] } else { &[64, 256] };
-        for &n in sweeps {
+        println!(
+            "Block-steps/s of the runs count each point's normal-load phase; the sweep steps \
+             that phase once for all of them, so block-steps/s stepped counts it once. Host \
+             threads: CPU seconds per wall second by thread.\n"
+        );
+        println!(
+            "| points | how | wall (s) | block-steps/s of the runs | block-steps/s stepped | \
+             against one at a time | host threads |"
+        );
+        println!("| ---: | --- | ---: | ---: | ---: | ---: | --- |");
+        let sweeps: Vec<usize> = match std::env::var("SLIPFRONT_GPU_TABLE_SWEEPS") {
+            Ok(list) => list
+                .split(',')
+                .map(|n| {
+                    n.trim().parse().unwrap_or_else(|_| {
+                        panic!("SLIPFRONT_GPU_TABLE_SWEEPS: `{n}` is not a point count")
+                    })
+                })
+                .collect(),
+            Err(_) if quick => vec![4],
+            Err(_) => vec![64, 256],
+        };
+        for &n in &sweeps {
             let sweep = table_s1_sweep(&dir, n);
             let model = Model::from_scenario(&sweep.points[0].scenario, false).expect("model");
+            // Each point's run has its normal-load phase, but the sweep
+            // steps that phase once for all (`share_loading`): block-steps
+            // of the runs, and block-steps the device stepped.
             let block_steps = n as f64 * model.total_steps() as f64 * model.n_blocks() as f64;
+            let stepped = (n as f64 * model.drive_steps as f64 + model.prep_steps as f64)
+                * model.n_blocks() as f64;
             let ahead = GpuOptions::default().run_ahead;
             // Untimed first: it times the kernels on this ensemble and
             // caches the choice, which the timed sweeps then share.
@@ -593,7 +620,9 @@ fn main() {
             // The same without running ahead: what the device's wait for
             // the runners costs.
             let waiting = sweep_wall(&dir, &sweep, n, 0);
-            let alone = if n == sweeps[0] {
+            // One at a time only for the smaller sweep (64 points take
+            // 75 s so on an H200).
+            let alone = if n == sweeps[0] && n <= 64 {
                 Some(sweep_wall(&dir, &sweep, 1, ahead))
             } else {
                 None
@@ -604,17 +633,18 @@ fn main() {
                 ("one at a time", alone.as_ref()),
             ] {
                 match wall {
-                    Some(Ok(w)) => {
+                    Some(Ok((w, threads))) => {
                         let against = match alone.as_ref() {
-                            Some(Ok(a)) => format!("{:.1}×", a / w),
+                            Some(Ok((a, _))) => format!("{:.1}×", a / w),
                             _ => String::new(),
                         };
                         println!(
-                            "| {n} | {how} | {w:.1} | {:.3e} | {against} |",
-                            block_steps / w
+                            "| {n} | {how} | {w:.1} | {:.3e} | {:.3e} | {against} | {threads} |",
+                            block_steps / w,
+                            stepped / w
                         );
                     }
-                    Some(Err(e)) => println!("| {n} | {how} | not run: {e} | | |"),
+                    Some(Err(e)) => println!("| {n} | {how} | not run: {e} | | | | |"),
                     None => {}
                 }
             }

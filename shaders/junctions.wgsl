@@ -65,14 +65,47 @@ fn junction_friction(ix: u32, jb: JunctionBlock, total: LaneSum, other: real) ->
 // A junction's spring is loaded with its state, not after it, and a lane's
 // junctions two at a time (junctions j and j + JUNCTION_LANES, both loaded
 // before either is used): each pair costs one round trip to storage on the
-// lane's path, not four. A slipping junction's spring is then loaded for
+// lane's path, not four. The persistent kernels load two lanes' first
+// pairs at once (lane_first, lane_from). A slipping junction's spring is then loaded for
 // nothing; between events nearly every junction is pinned. Spring and state
 // are written back only where they changed, so a step between events
 // writes none of them (the same bits, less storage traffic).
 fn junction_lane(ix: u32, lane: u32, jb: JunctionBlock, ld: Loads) -> LaneSum {
+    return lane_from(ix, lane, jb, ld, lane_first(ix, lane));
+}
+
+// A lane's first two junctions (lane and lane + JUNCTION_LANES) as loaded,
+// so that the kernels can send two lanes' loads out together. A junction
+// past the block's last is loaded as the last (in bounds) and not used.
+struct LaneFirst {
+    state_a: vec2<u32>,
+    spring_a: JunctionSpring,
+    state_b: vec2<u32>,
+    spring_b: JunctionSpring,
+}
+
+fn lane_first(ix: u32, lane: u32) -> LaneFirst {
+    let first = junction_base() + ix * c.junction_count;
+    let last = first + max(c.junction_count, 1u) - 1u;
+    let a = min(first + lane, last);
+    let b = min(first + lane + JUNCTION_LANES, last);
+    return LaneFirst(junction_state[a], junction_spring[a], junction_state[b], junction_spring[b]);
+}
+
+// The lane's sum: its first two junctions from `loaded`, the rest (Ns >
+// 2 JUNCTION_LANES) loaded a pair at a time.
+fn lane_from(ix: u32, lane: u32, jb: JunctionBlock, ld: Loads, loaded: LaneFirst) -> LaneSum {
     var total = lane_sum_zero();
     let first = junction_base() + ix * c.junction_count;
     var j = lane;
+    if j < c.junction_count {
+        total = junction_update(ix, j, first + j, loaded.state_a, loaded.spring_a, jb, ld, total);
+        j += JUNCTION_LANES;
+    }
+    if j < c.junction_count {
+        total = junction_update(ix, j, first + j, loaded.state_b, loaded.spring_b, jb, ld, total);
+        j += JUNCTION_LANES;
+    }
     for (; j + JUNCTION_LANES < c.junction_count; j += 2u * JUNCTION_LANES) {
         let next = j + JUNCTION_LANES;
         let state_a = junction_state[first + j];

@@ -93,7 +93,21 @@ fn persistent_steps(
                 }
             }
             if FRICTION_LAW == LAW_JUNCTIONS {
-                for (var w = t; w < c.nx * lanes; w += PERSISTENT_THREADS) {
+                // Two lanes a round, both lanes' first junctions loaded
+                // before either is stepped: half the chains of storage round
+                // trips on a thread's path.
+                let items = c.nx * lanes;
+                var w = t;
+                for (; w + PERSISTENT_THREADS < items; w += 2u * PERSISTENT_THREADS) {
+                    let w2 = w + PERSISTENT_THREADS;
+                    let ix = w / lanes;
+                    let ix2 = w2 / lanes;
+                    let first = lane_first(ix, w % lanes);
+                    let first2 = lane_first(ix2, w2 % lanes);
+                    lane_partial[lane_base() + w] = lane_from(ix, w % lanes, junction_block(ix), ld, first);
+                    lane_partial[lane_base() + w2] = lane_from(ix2, w2 % lanes, junction_block(ix2), ld, first2);
+                }
+                if w < items {
                     let ix = w / lanes;
                     lane_partial[lane_base() + w] = junction_lane(ix, w % lanes, junction_block(ix), ld);
                 }

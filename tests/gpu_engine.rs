@@ -426,9 +426,15 @@ fn the_device_time_of_the_steps_is_measured_and_bounded_by_the_wall_time() {
     advance_to(&mut e, 1500).unwrap();
     let wall = t0.elapsed().as_secs_f64();
     let device = e.device_seconds().unwrap();
-    assert!(device > 0.0 && device <= wall * 1.02 + 1e-3, "device {device} s, wall {wall} s");
+    assert!(
+        device > 0.0 && device <= wall * 1.02 + 1e-3,
+        "device {device} s, wall {wall} s"
+    );
     if e.describe().contains("Cpu") {
-        assert!(device >= 0.3 * wall, "device {device} s of {wall} s on a software adapter");
+        assert!(
+            device >= 0.3 * wall,
+            "device {device} s of {wall} s on a software adapter"
+        );
     }
     advance_to(&mut e, 3000).unwrap();
     assert!(e.device_seconds().unwrap() > device);
