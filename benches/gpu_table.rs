@@ -35,7 +35,9 @@
 //! SLIPFRONT_GPU_TABLE_SECTIONS=1,3,6 runs only those sections (a short
 //! loan of a GPU can take the table in parts); each prints its wall time.
 //! SLIPFRONT_GPU_TABLE_SCENES=1,256 runs section 3 at those scene counts
-//! only (two builds compared in one loan).
+//! only, SLIPFRONT_GPU_TABLE_LAUNCHES=resident/1024,persistent/512 those
+//! kernels only (two builds compared in one loan);
+//! SLIPFRONT_GPU_TABLE_SWEEPS=256 runs section 6 at those point counts.
 
 use slipfront::app::runner::{run_scene, ProgressMode, RunOptions};
 use slipfront::app::sweeps::{run_sweep, KeepMcap, Sweep, SweepOptions};
@@ -384,10 +386,20 @@ fn main() {
         // sweep's measurement times them (how many scenes share an SM
         // depends on their threads).
         let tried = launches(&s1, 2, GpuOptions::default(), &ctx.limits);
+        // SLIPFRONT_GPU_TABLE_LAUNCHES=resident/1024,one-step-lanes: only those.
+        let launches_wanted: Option<Vec<String>> = std::env::var("SLIPFRONT_GPU_TABLE_LAUNCHES")
+            .ok()
+            .map(|list| list.split(',').map(|n| n.trim().to_string()).collect());
         let mut alone = vec![None; tried.len()];
         for &n in &counts {
             let models: Vec<Model> = (1..=n).map(table_s1).collect();
             for (&launch, alone) in tried.iter().zip(alone.iter_mut()) {
+                if !launches_wanted
+                    .as_ref()
+                    .is_none_or(|w| w.contains(&launch.name()))
+                {
+                    continue;
+                }
                 let result = GpuEnsemble::new(&models, launch.options(GpuOptions::default()))
                     .map_err(|e| e.to_string())
                     .and_then(|mut e| {
