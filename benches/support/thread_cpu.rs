@@ -3,7 +3,9 @@
 //! timed span keeps busy. Linux only (/proc); elsewhere it reports nothing.
 //! A thread that ends in the span (the file's writer, at the run's end) is
 //! sampled every `EVERY` while the span lasts, so its last `EVERY` at most
-//! is missed.
+//! is missed. The sampler reads every thread's /proc entry each time: with
+//! a sweep's 256 runner threads, every 20 ms cost it 0.57 CPU seconds per
+//! wall second on the H200 machine (session 16), hence 100 ms.
 
 use std::collections::BTreeMap;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -11,7 +13,7 @@ use std::sync::{Arc, Mutex};
 use std::thread::JoinHandle;
 use std::time::Duration;
 
-const EVERY: Duration = Duration::from_millis(20);
+const EVERY: Duration = Duration::from_millis(100);
 
 /// (name, CPU seconds so far) of each live thread, by thread id. The main
 /// thread is named "main" (threads a driver starts often inherit its name).

@@ -18,10 +18,9 @@ pub const IN_FLIGHT: usize = 2;
 /// writes output meanwhile (`Engine::run_ahead`, `GpuOptions::run_ahead`):
 /// the device keeps stepping while the runner handles the samples read
 /// back so far, instead of idling for it. Four one-step batches are 4096
-/// steps; a lockstep chunk is eight. Whether it pays is not settled: the
-/// H200 figures so far put the first output run of a process at a
-/// disadvantage (BENCHMARKS.md, session 15), and the bench now warms up
-/// before it weighs the two.
+/// steps; a lockstep chunk is eight. Warmed up and weighed per step, it
+/// pays on the H200 (BENCHMARKS.md, session 16): output cost 1.33× against
+/// 1.44× at 57×31, 1.58× against 1.79× at 1024×512.
 pub const RUN_AHEAD_BATCHES: usize = 4;
 /// The most batches a run may ask to run ahead (`--gpu-run-ahead`): each
 /// holds its staging buffers until it is retired, and its samples wait.
