@@ -226,6 +226,22 @@ fn sweep_wall(
     Ok((wall, threads))
 }
 
+/// The counts listed in environment variable `name` (`1,64,256`), else
+/// `default`.
+fn counts_from_env(name: &str, default: &[usize]) -> Vec<usize> {
+    match std::env::var(name) {
+        Ok(list) => list
+            .split(',')
+            .map(|n| {
+                n.trim()
+                    .parse()
+                    .unwrap_or_else(|_| panic!("{name}: `{n}` is not a count"))
+            })
+            .collect(),
+        Err(_) => default.to_vec(),
+    }
+}
+
 /// Which sections to run (`SLIPFRONT_GPU_TABLE_SECTIONS=1,3,6`; all by
 /// default), so that a short loan of a GPU can run the table in parts;
 /// each section's own wall time is printed after it.
@@ -356,18 +372,14 @@ fn main() {
     }
     if let Some(_timer) = sections.start(3) {
         // 3. Ensembles of Table S1 scenes.
-        let counts: Vec<usize> = match std::env::var("SLIPFRONT_GPU_TABLE_SCENES") {
-            Ok(list) => list
-                .split(',')
-                .map(|n| {
-                    n.trim().parse().unwrap_or_else(|_| {
-                        panic!("SLIPFRONT_GPU_TABLE_SCENES: `{n}` is not a scene count")
-                    })
-                })
-                .collect(),
-            Err(_) if quick => vec![1, 4, 16],
-            Err(_) => vec![1, 4, 16, 64, 256, 1024],
-        };
+        let counts = counts_from_env(
+            "SLIPFRONT_GPU_TABLE_SCENES",
+            if quick {
+                &[1, 4, 16]
+            } else {
+                &[1, 4, 16, 64, 256, 1024]
+            },
+        );
         println!("## 3. Ensembles of Table S1 scenes in one dispatch\n");
         println!(
             "Speed-up: the ensemble's aggregate rate over the same kernel's rate for one scene \
@@ -603,18 +615,10 @@ fn main() {
              against one at a time | host threads |"
         );
         println!("| ---: | --- | ---: | ---: | ---: | ---: | --- |");
-        let sweeps: Vec<usize> = match std::env::var("SLIPFRONT_GPU_TABLE_SWEEPS") {
-            Ok(list) => list
-                .split(',')
-                .map(|n| {
-                    n.trim().parse().unwrap_or_else(|_| {
-                        panic!("SLIPFRONT_GPU_TABLE_SWEEPS: `{n}` is not a point count")
-                    })
-                })
-                .collect(),
-            Err(_) if quick => vec![4],
-            Err(_) => vec![64, 256],
-        };
+        let sweeps = counts_from_env(
+            "SLIPFRONT_GPU_TABLE_SWEEPS",
+            if quick { &[4] } else { &[64, 256] },
+        );
         for &n in &sweeps {
             let sweep = table_s1_sweep(&dir, n);
             let model = Model::from_scenario(&sweep.points[0].scenario, false).expect("model");
