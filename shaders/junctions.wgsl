@@ -74,49 +74,50 @@ fn junction_lane(ix: u32, lane: u32, jb: JunctionBlock, ld: Loads) -> LaneSum {
     return lane_from(ix, lane, jb, ld, lane_first(ix, lane));
 }
 
-// A lane's first two junctions (lane and lane + JUNCTION_LANES) as loaded,
-// so that the kernels can send two lanes' loads out together. A junction
-// past the block's last is loaded as the last (in bounds) and not used.
-struct LaneFirst {
+// Two junctions of a lane (j and j + JUNCTION_LANES) as loaded, so that
+// both loads go out before either is used, and the kernels can send two
+// lanes' first pairs out together. A junction past the block's last is
+// loaded as the last (in bounds) and not used.
+struct LanePair {
     state_a: vec2<u32>,
     spring_a: JunctionSpring,
     state_b: vec2<u32>,
     spring_b: JunctionSpring,
 }
 
-fn lane_first(ix: u32, lane: u32) -> LaneFirst {
+fn lane_pair(ix: u32, j: u32) -> LanePair {
     let first = junction_base() + ix * c.junction_count;
     let last = first + max(c.junction_count, 1u) - 1u;
-    let a = min(first + lane, last);
-    let b = min(first + lane + JUNCTION_LANES, last);
-    return LaneFirst(junction_state[a], junction_spring[a], junction_state[b], junction_spring[b]);
+    let a = min(first + j, last);
+    let b = min(first + j + JUNCTION_LANES, last);
+    return LanePair(junction_state[a], junction_spring[a], junction_state[b], junction_spring[b]);
 }
 
-// The lane's sum: its first two junctions from `loaded`, the rest (Ns >
-// 2 JUNCTION_LANES) loaded a pair at a time.
-fn lane_from(ix: u32, lane: u32, jb: JunctionBlock, ld: Loads, loaded: LaneFirst) -> LaneSum {
+fn lane_first(ix: u32, lane: u32) -> LanePair {
+    return lane_pair(ix, lane);
+}
+
+// The lane's sum, its first pair from `loaded` and each later pair loaded
+// as it starts. One call of junction_update in one loop: llvmpipe counts
+// every loop iteration of every inlined copy against its limit
+// (options::persistent_steps_per_dispatch), and the f64 draws loop.
+fn lane_from(ix: u32, lane: u32, jb: JunctionBlock, ld: Loads, loaded: LanePair) -> LaneSum {
     var total = lane_sum_zero();
     let first = junction_base() + ix * c.junction_count;
-    var j = lane;
-    if j < c.junction_count {
-        total = junction_update(ix, j, first + j, loaded.state_a, loaded.spring_a, jb, ld, total);
-        j += JUNCTION_LANES;
-    }
-    if j < c.junction_count {
-        total = junction_update(ix, j, first + j, loaded.state_b, loaded.spring_b, jb, ld, total);
-        j += JUNCTION_LANES;
-    }
-    for (; j + JUNCTION_LANES < c.junction_count; j += 2u * JUNCTION_LANES) {
-        let next = j + JUNCTION_LANES;
-        let state_a = junction_state[first + j];
-        let spring_a = junction_spring[first + j];
-        let state_b = junction_state[first + next];
-        let spring_b = junction_spring[first + next];
-        total = junction_update(ix, j, first + j, state_a, spring_a, jb, ld, total);
-        total = junction_update(ix, next, first + next, state_b, spring_b, jb, ld, total);
-    }
-    if j < c.junction_count {
-        total = junction_update(ix, j, first + j, junction_state[first + j], junction_spring[first + j], jb, ld, total);
+    var pair = loaded;
+    var second = false;
+    for (var j = lane; j < c.junction_count; j += JUNCTION_LANES) {
+        if !second && j != lane {
+            pair = lane_pair(ix, j);
+        }
+        var state = pair.state_a;
+        var spring = pair.spring_a;
+        if second {
+            state = pair.state_b;
+            spring = pair.spring_b;
+        }
+        total = junction_update(ix, j, first + j, state, spring, jb, ld, total);
+        second = !second;
     }
     return total;
 }

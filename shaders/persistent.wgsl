@@ -20,6 +20,8 @@
 @group(0) @binding(16) var<storage, read> record_entries: array<RecordEntry>;
 
 override PERSISTENT_THREADS: u32 = 256u;
+// Junction lanes two at a time in phase 1 (hardware; see there).
+override TWO_LANES_A_ROUND: bool = true;
 
 // The lane sums of one interface block, lanes first .. first + lanes of
 // lane_partial, merged in lane order (the CPU twin's order). The loads go
@@ -93,12 +95,14 @@ fn persistent_steps(
                 }
             }
             if FRICTION_LAW == LAW_JUNCTIONS {
-                // Two lanes a round, both lanes' first junctions loaded
-                // before either is stepped: half the chains of storage round
-                // trips on a thread's path.
+                // Two lanes a round on hardware, both lanes' first
+                // junctions loaded before either is stepped: half the chains
+                // of storage round trips on a thread's path. One on software
+                // adapters (TWO_LANES_A_ROUND false), where a second inlined
+                // lane doubles the loop iterations llvmpipe counts.
                 let items = c.nx * lanes;
                 var w = t;
-                for (; w + PERSISTENT_THREADS < items; w += 2u * PERSISTENT_THREADS) {
+                for (; TWO_LANES_A_ROUND && w + PERSISTENT_THREADS < items; w += 2u * PERSISTENT_THREADS) {
                     let w2 = w + PERSISTENT_THREADS;
                     let ix = w / lanes;
                     let ix2 = w2 / lanes;
@@ -107,7 +111,7 @@ fn persistent_steps(
                     lane_partial[lane_base() + w] = lane_from(ix, w % lanes, junction_block(ix), ld, first);
                     lane_partial[lane_base() + w2] = lane_from(ix2, w2 % lanes, junction_block(ix2), ld, first2);
                 }
-                if w < items {
+                for (; w < items; w += PERSISTENT_THREADS) {
                     let ix = w / lanes;
                     lane_partial[lane_base() + w] = junction_lane(ix, w % lanes, junction_block(ix), ld);
                 }

@@ -506,6 +506,10 @@ impl<T: GpuReal> GpuEngine<T> {
         let mut constants = variant.constants.clone();
         if kernel.is_persistent() {
             constants.push(("PERSISTENT_THREADS", persistent_threads as f64));
+            // llvmpipe counts the iterations of every inlined loop against
+            // its limit: one junction lane a round there.
+            let two_lanes = !ctx.is_software();
+            constants.push(("TWO_LANES_A_ROUND", two_lanes as u8 as f64));
         }
         if kernel == Kernel::Resident {
             constants.push(("RESIDENT_BLOCKS", n as f64));
