@@ -66,12 +66,12 @@ fn junction_friction(ix: u32, jb: JunctionBlock, total: LaneSum, other: real) ->
 // junctions two at a time (junctions j and j + JUNCTION_LANES, both loaded
 // before either is used): each pair costs one round trip to storage on the
 // lane's path, not four. The persistent kernels load two lanes' first
-// pairs at once (lane_first, lane_from). A slipping junction's spring is then loaded for
-// nothing; between events nearly every junction is pinned. Spring and state
-// are written back only where they changed, so a step between events
-// writes none of them (the same bits, less storage traffic).
+// pairs at once (lane_pair, lane_from). A slipping junction's spring is
+// then loaded for nothing; between events nearly every junction is pinned.
+// Spring and state are written back only where they changed, so a step
+// between events writes none of them (the same bits, less storage traffic).
 fn junction_lane(ix: u32, lane: u32, jb: JunctionBlock, ld: Loads) -> LaneSum {
-    return lane_from(ix, lane, jb, ld, lane_first(ix, lane));
+    return lane_from(ix, lane, jb, ld, lane_pair(ix, lane));
 }
 
 // Two junctions of a lane (j and j + JUNCTION_LANES) as loaded, so that
@@ -91,10 +91,6 @@ fn lane_pair(ix: u32, j: u32) -> LanePair {
     let a = min(first + j, last);
     let b = min(first + j + JUNCTION_LANES, last);
     return LanePair(junction_state[a], junction_spring[a], junction_state[b], junction_spring[b]);
-}
-
-fn lane_first(ix: u32, lane: u32) -> LanePair {
-    return lane_pair(ix, lane);
 }
 
 // The lane's sum, its first pair from `loaded` and each later pair loaded

@@ -106,8 +106,8 @@ fn persistent_steps(
                     let w2 = w + PERSISTENT_THREADS;
                     let ix = w / lanes;
                     let ix2 = w2 / lanes;
-                    let first = lane_first(ix, w % lanes);
-                    let first2 = lane_first(ix2, w2 % lanes);
+                    let first = lane_pair(ix, w % lanes);
+                    let first2 = lane_pair(ix2, w2 % lanes);
                     lane_partial[lane_base() + w] = lane_from(ix, w % lanes, junction_block(ix), ld, first);
                     lane_partial[lane_base() + w2] = lane_from(ix2, w2 % lanes, junction_block(ix2), ld, first2);
                 }

@@ -109,11 +109,6 @@ fn block_sample(
             pinned += a.x + b.x;
             ruptures += a.y + b.y;
         }
-        for (; j + 8u <= ns; j += 8u) {
-            let a = tally_eight(first + j);
-            pinned += a.x;
-            ruptures += a.y;
-        }
         for (; j < ns; j++) {
             let state = junction_state[first + j];
             pinned += select(0u, 1u, state.x == PINNED);
