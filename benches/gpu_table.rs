@@ -96,6 +96,18 @@ fn timed_with_cpu(
     }
 }
 
+/// One run of section 4: its wall time, engine, CPU seconds per wall
+/// second, per thread, device busy time and, when timed, its dispatches.
+#[derive(Debug)]
+struct Timed {
+    wall: f64,
+    how: String,
+    cpu: f64,
+    threads: String,
+    device: Option<f64>,
+    dispatches: Option<slipfront::engines::gpu::DispatchTimes>,
+}
+
 fn options(kernel: Kernel) -> GpuOptions {
     GpuOptions {
         path: GpuPath::of(kernel),
@@ -456,6 +468,7 @@ fn main() {
         // (the file's creation, the checkpoint at the end: 37 MB at
         // 1024×512), which a run of a second or less weighs heavily.
         let mut marginal = Vec::new();
+        let mut split = Vec::new();
         for &(nx, nz, first) in output_sizes {
             let mut walls = Vec::new();
             for steps in [first, 2 * first] {
@@ -464,9 +477,13 @@ fn main() {
                 let scenario = bench_scene::scenario(nx, nz, &[&format!("time.end={t_end:e}")]);
                 let file = dir.join("run.mcap");
                 let ahead = GpuOptions::default().run_ahead;
+                // `time_dispatches`: the run's dispatches timed one by one
+                // (timestamps inside the pass, which add a little device
+                // time), for the split of its device time they return.
                 let wall = |output: Option<&std::path::Path>,
-                            run_ahead: usize|
-                 -> Result<(f64, String, f64, String, Option<f64>), String> {
+                            run_ahead: usize,
+                            time_dispatches: bool|
+                 -> Result<Timed, String> {
                     let model =
                         Model::from_scenario(&scenario, false).map_err(|e| e.to_string())?;
                     let opts = GpuOptions {
@@ -476,6 +493,9 @@ fn main() {
                     };
                     let mut e = GpuEngine::with_options(&model, opts).map_err(|e| e.to_string())?;
                     advance_to(&mut e, model.prep_steps).map_err(|e| e.to_string())?;
+                    if time_dispatches && !e.time_each_dispatch().map_err(|e| e.to_string())? {
+                        return Err("no timestamps inside passes".into());
+                    }
                     if let Some(p) = output {
                         let _ = std::fs::remove_file(p);
                         let _ = std::fs::remove_file(slipfront::io::checkpoint::path_for(p));
@@ -498,24 +518,33 @@ fn main() {
                         .map_or(String::new(), |m| {
                             format!("; file {:.1} MB", m.len() as f64 / 1e6)
                         });
-                    Ok((wall, e.describe(), cpu, format!("{threads}{megabytes}"), device))
+                    Ok(Timed {
+                        wall,
+                        how: e.describe(),
+                        cpu,
+                        threads: format!("{threads}{megabytes}"),
+                        device,
+                        dispatches: e.dispatch_times(),
+                    })
                 };
                 // An untimed run with output first: the first one in a process
                 // builds the record pipelines, which cost the first timed
                 // column 0.22–0.28 s at 57×31 on an H200 (session 15).
                 if steps == first {
-                    let _ = wall(Some(&file), ahead);
+                    let _ = wall(Some(&file), ahead, false);
                 }
                 match (
-                    wall(None, ahead),
-                    wall(Some(&file), ahead),
-                    wall(Some(&file), 0),
+                    wall(None, ahead, false),
+                    wall(Some(&file), ahead, false),
+                    wall(Some(&file), 0, false),
                 ) {
-                    (
-                        Ok((without, how, _, quiet, device_without)),
-                        Ok((with, _, host, busy, device_with)),
-                        Ok((waiting, _, _, _, _)),
-                    ) => {
+                    (Ok(quiet_run), Ok(output_run), Ok(waiting_run)) => {
+                        let (without, device_without) = (quiet_run.wall, quiet_run.device);
+                        let (with, host, device_with) =
+                            (output_run.wall, output_run.cpu, output_run.device);
+                        let (how, quiet, busy) =
+                            (quiet_run.how, quiet_run.threads, output_run.threads);
+                        let waiting = waiting_run.wall;
                         let kernel = how.split(", ").nth(1).unwrap_or(&how).to_string();
                         let device =
                             |d: Option<f64>| d.map_or("–".to_string(), |d| format!("{d:.3} s"));
@@ -536,6 +565,19 @@ fn main() {
                     (a, b, c) => {
                         println!("| {nx}×{nz} | not run: {a:?} {b:?} {c:?} | | | | | | | | | |")
                     }
+                }
+                // Where the output's device time goes: the shorter run again,
+                // its dispatches timed.
+                if steps == first {
+                    split.push(match wall(Some(&file), ahead, true) {
+                        Ok(Timed {
+                            dispatches: Some(t),
+                            wall,
+                            ..
+                        }) => format!("- {nx}×{nz}, {steps} steps with -o ({wall:.3} s): {t}"),
+                        Ok(_) => format!("- {nx}×{nz}: the dispatches were not timed"),
+                        Err(e) => format!("- {nx}×{nz}: not run: {e}"),
+                    });
                 }
             }
             if let [short, long] = walls[..] {
@@ -560,6 +602,10 @@ fn main() {
         }
         println!("\nPer step, without what a run pays once (the longer run less the shorter):\n");
         for line in marginal {
+            println!("{line}");
+        }
+        println!("\nThe device time of a run with -o by dispatch (timestamps inside the pass):\n");
+        for line in split {
             println!("{line}");
         }
         // Which host thread the output keeps busy: the runner ("main"),

@@ -223,22 +223,7 @@ fn device_samples_match_the_cpu_twin_on_host_snapshots() {
 /// twin a step later is flagged.
 #[test]
 fn a_large_lattice_records_in_two_dispatches() {
-    let set: Vec<String> = [
-        "geometry.nx=257",
-        "geometry.nz=65",
-        "geometry.length=0.64",
-        "geometry.height=0.16",
-        "loading.normal.ramp_time=2e-5",
-        "loading.normal.relax_time=2e-5",
-        "time.end=2e-5",
-        "output.global_interval=2e-6",
-        "output.interface_interval=4e-6",
-        "output.bulk_interval=1e-5",
-    ]
-    .iter()
-    .map(|s| s.to_string())
-    .collect();
-    let s = Scenario::parse(slipfront::model::scenario::DEFAULT_SCENARIO, "large", &set).unwrap();
+    let s = large_lattice();
     let m = Model::from_scenario(&s, false).unwrap();
     assert!(m.n_blocks() > slipfront::engines::gpu::RECORD_SMALL_BLOCKS);
     let plan = plan(&m, &s);
@@ -259,6 +244,69 @@ fn a_large_lattice_records_in_two_dispatches() {
     let (shifted, field) = worst_error(&later, &samples);
     println!("device against the twin a step later {shifted:.2e} ({field})");
     assert!(shifted > 1e-4, "a one-step shift must be flagged");
+}
+
+/// A 257 × 65 lattice (more blocks than one workgroup records), with a
+/// bulk field among its samples.
+fn large_lattice() -> Scenario {
+    let set: Vec<String> = [
+        "geometry.nx=257",
+        "geometry.nz=65",
+        "geometry.length=0.64",
+        "geometry.height=0.16",
+        "loading.normal.ramp_time=2e-5",
+        "loading.normal.relax_time=2e-5",
+        "time.end=2e-5",
+        "output.global_interval=2e-6",
+        "output.interface_interval=4e-6",
+        "output.bulk_interval=1e-5",
+    ]
+    .iter()
+    .map(|s| s.to_string())
+    .collect();
+    Scenario::parse(slipfront::model::scenario::DEFAULT_SCENARIO, "large", &set).unwrap()
+}
+
+/// Timestamps inside the pass split its device time between the step and
+/// the record dispatches (lavapipe has them): every dispatch is counted
+/// once, the parts add up to the passes' time, and a step of 16,705
+/// blocks costs more than adding 66 partials (the finish), which a
+/// timestamp put on the wrong side of a dispatch would turn round.
+#[test]
+fn the_device_time_splits_between_step_and_record_dispatches() {
+    let s = large_lattice();
+    let m = Model::from_scenario(&s, false).unwrap();
+    let mut dev = engine(&m, GpuPath::OneStep, GpuOutput::Device);
+    assert!(dev.record_samples(&plan(&m, &s)).unwrap());
+    let adapter = dev.describe();
+    assert!(
+        dev.time_each_dispatch().unwrap(),
+        "{adapter}: no timestamps inside passes"
+    );
+    let (d0, o0, busy0) = (
+        dev.dispatches().unwrap(),
+        dev.output_dispatches().unwrap(),
+        dev.device_seconds().unwrap(),
+    );
+    advance_to(&mut dev, m.total_steps()).unwrap();
+    let t = dev.dispatch_times().expect("dispatches timed");
+    let busy = dev.device_seconds().unwrap() - busy0;
+    println!("{t}; passes {busy:.4} s");
+    assert_eq!(t.steps, dev.dispatches().unwrap() - d0);
+    let records = dev.output_dispatches().unwrap() - o0;
+    assert!(t.samples >= 8 && t.samples == t.finishes, "{t:?}");
+    assert_eq!(t.samples + t.finishes, records);
+    assert!(
+        (t.total_seconds() - busy).abs() <= 1e-9 * busy + 1e-9,
+        "parts {} s, passes {busy} s",
+        t.total_seconds()
+    );
+    assert!(t.step_seconds > 0.0 && t.sample_seconds > 0.0 && t.finish_seconds > 0.0);
+    let each = |s: f64, n: u64| s / n as f64;
+    assert!(
+        each(t.step_seconds, t.steps) > 3.0 * each(t.finish_seconds, t.finishes),
+        "{t}"
+    );
 }
 
 fn temp(name: &str) -> PathBuf {

@@ -28,6 +28,8 @@ pub(super) struct InFlight {
         recorder::Pending,
         mpsc::Receiver<Result<(), wgpu::BufferAsyncError>>,
     )>,
+    /// Its dispatches, where they are timed one by one.
+    marks: Option<device_timer::BatchMarks>,
 }
 
 impl<T: GpuReal> GpuEngine<T> {
@@ -70,6 +72,7 @@ impl<T: GpuReal> GpuEngine<T> {
             });
         let scene_count = self.scenes.len() as u32;
         let timer_slot = self.timer.as_mut().map(|t| t.take_slot());
+        let mut marks = timer_slot.and_then(device_timer::DeviceTimer::marks);
         {
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some("steps"),
@@ -95,12 +98,27 @@ impl<T: GpuReal> GpuEngine<T> {
                         // dispatch read and the forces it computed.
                         if let Some((k, _)) = samples.next_if(|(_, p)| p.offset == i) {
                             let rec = self.recorder.as_ref().expect("samples need a recorder");
-                            self.output_dispatches += rec.encode(&mut pass, k);
+                            // With the dispatch timing: a timestamp before
+                            // the record dispatches and one after each.
+                            let mut mark = |pass: &mut wgpu::ComputePass| {
+                                if let (Some(t), Some(m)) = (self.timer.as_ref(), marks.as_mut()) {
+                                    t.mark(pass, m);
+                                }
+                            };
+                            mark(&mut pass);
+                            let dispatches = rec.encode(&mut pass, k, &mut mark);
+                            if let Some(m) = marks.as_mut() {
+                                m.push_sample(i, dispatches);
+                            }
+                            self.output_dispatches += dispatches;
                             pass.set_pipeline(&self.pipeline);
                             pass.set_bind_group(0, &self.state_group, &[]);
                         }
                     }
                     self.dispatches += steps;
+                    if let Some(m) = marks.as_mut() {
+                        m.set_steps(steps);
+                    }
                 }
                 Kernel::Persistent | Kernel::Resident => {
                     for d in 0..steps.div_ceil(self.steps_per_dispatch) {
@@ -108,6 +126,9 @@ impl<T: GpuReal> GpuEngine<T> {
                         pass.set_bind_group(1, &self.batch_group, &[offset]);
                         pass.dispatch_workgroups(1, 1, scene_count);
                         self.dispatches += 1;
+                    }
+                    if let Some(m) = marks.as_mut() {
+                        m.set_steps(steps.div_ceil(self.steps_per_dispatch));
                     }
                     self.persistent_steps = self.persistent_steps.wrapping_add(steps as u32);
                 }
@@ -118,7 +139,7 @@ impl<T: GpuReal> GpuEngine<T> {
             + self
                 .timer
                 .as_ref()
-                .map_or(0, |_| device_timer::TIMESTAMP_BYTES);
+                .map_or(0, device_timer::DeviceTimer::staging_bytes);
         let staging = self.spare_staging.pop().unwrap_or_else(|| {
             self.ctx.device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("status readback"),
@@ -130,7 +151,7 @@ impl<T: GpuReal> GpuEngine<T> {
         encoder.copy_buffer_to_buffer(&self.buffers.status, 0, &staging, 0, status_size);
         // The pass's timestamps after the statuses (a multiple of 8 bytes).
         if let (Some(timer), Some(slot)) = (self.timer.as_ref(), timer_slot) {
-            timer.copy_out(&mut encoder, slot, &staging, status_size);
+            timer.copy_out(&mut encoder, slot, marks.as_ref(), &staging, status_size);
         }
         let pending = match self.recorder.as_mut() {
             Some(rec) => rec.copy_out(&self.ctx.device, &mut encoder, planned),
@@ -156,6 +177,7 @@ impl<T: GpuReal> GpuEngine<T> {
             first_step: self.step,
             persistent_steps: self.persistent_steps,
             records,
+            marks,
         });
         for scene in &mut self.scenes {
             scene.forces_ready = forces_only;
@@ -198,7 +220,7 @@ impl<T: GpuReal> GpuEngine<T> {
                 .map_err(|e| EngineError::Gpu(format!("status readback: {e}")))?;
             let status_size = self.scenes.len() * STATUS_BYTES;
             if let Some(timer) = self.timer.as_mut() {
-                timer.add(&view[status_size..]);
+                timer.add(&view[status_size..], batch.marks.as_ref());
             }
             bytemuck::cast_slice(&view[..status_size]).to_vec()
         };

@@ -112,9 +112,12 @@ impl GpuContext {
         // mixed kernels need no feature.
         // Timestamp queries where the adapter has them: the device time of
         // each batch, beside its wall time (what the output costs on the
-        // device, against what it costs the host).
-        let features =
-            adapter.features() & (wgpu::Features::SHADER_F64 | wgpu::Features::TIMESTAMP_QUERY);
+        // device, against what it costs the host), and inside passes, of
+        // each dispatch (GpuEngine::time_each_dispatch).
+        let features = adapter.features()
+            & (wgpu::Features::SHADER_F64
+                | wgpu::Features::TIMESTAMP_QUERY
+                | wgpu::Features::TIMESTAMP_QUERY_INSIDE_PASSES);
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("slipfront"),
             required_features: features,

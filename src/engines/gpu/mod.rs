@@ -53,6 +53,7 @@ use crate::model::scenario::FrictionLaw;
 use crate::model::Model;
 use bytemuck::Zeroable;
 use context::GpuContext;
+pub use device_timer::DispatchTimes;
 use layout::{GpuBatch, GpuConsts, GpuJunctionSpring, GpuLaneSum, GpuStatus, WORKGROUP};
 use options::*;
 pub use options::{GpuOptions, GpuOutput, GpuPath, PERSISTENT_THREADS, RESIDENT_THREADS};
@@ -666,6 +667,26 @@ impl<T: GpuReal> GpuEngine<T> {
     /// host set the pace.
     pub fn device_seconds(&self) -> Option<f64> {
         self.timer.as_ref().map(|t| t.busy_seconds())
+    }
+
+    /// Times each dispatch of the batches from now on, where the adapter
+    /// has timestamps inside passes (an attribution for benchmarks: the
+    /// timestamps between dispatches add a little device time); whether
+    /// it has. Waits for the batches running.
+    pub fn time_each_dispatch(&mut self) -> Result<bool, EngineError> {
+        self.drain()?;
+        let Some(timer) = self.timer.as_mut() else {
+            return Ok(false);
+        };
+        // Status staging buffers grow by the timestamps' room.
+        self.spare_staging.clear();
+        Ok(timer.time_each_dispatch(&self.ctx))
+    }
+
+    /// The device time of the batches retired since `time_each_dispatch`,
+    /// split between the step and the output dispatches.
+    pub fn dispatch_times(&self) -> Option<DispatchTimes> {
+        self.timer.as_ref().and_then(|t| t.dispatch_times())
     }
 
     /// Whether output samples are recorded on the device.

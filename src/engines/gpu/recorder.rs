@@ -347,10 +347,16 @@ impl Recorder {
         self.recorded_through = planned.last().map(|p| p.step);
     }
 
-    /// Records sample `k` of the batch (one or two dispatches) in `pass`;
-    /// the caller sets its own pipeline and groups again afterwards.
-    /// Returns the dispatches.
-    pub fn encode(&self, pass: &mut wgpu::ComputePass, k: usize) -> u64 {
+    /// Records sample `k` of the batch (one or two dispatches) in `pass`,
+    /// calling `after_each` after each dispatch (the dispatch timing's
+    /// marks); the caller sets its own pipeline and groups again
+    /// afterwards. Returns the dispatches.
+    pub fn encode(
+        &self,
+        pass: &mut wgpu::ComputePass,
+        k: usize,
+        after_each: &mut dyn FnMut(&mut wgpu::ComputePass),
+    ) -> u64 {
         let offset = (k as u64 * self.stride) as u32;
         pass.set_bind_group(0, &self.group, &[]);
         pass.set_bind_group(1, &self.entry_group, &[offset]);
@@ -359,13 +365,16 @@ impl Recorder {
             None => {
                 pass.set_pipeline(&self.pipelines.small);
                 pass.dispatch_workgroups(1, 1, scenes);
+                after_each(pass);
                 1
             }
             Some((x, y)) => {
                 pass.set_pipeline(&self.pipelines.sample);
                 pass.dispatch_workgroups(x, y, scenes);
+                after_each(pass);
                 pass.set_pipeline(&self.pipelines.finish);
                 pass.dispatch_workgroups(1, 1, scenes);
+                after_each(pass);
                 2
             }
         }
