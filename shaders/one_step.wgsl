@@ -3,7 +3,14 @@
 // junction lanes in order), then the leapfrog update written to the other
 // state buffer. Workgroup row z is scene z of an ensemble. No barrier, so software adapters run it without
 // coroutines. CPU twin: src/engines/cpu/mod.rs CpuEngine::one_step.
-// import: common, scene, step_forces, verlet
+// The recording variant (RECORD_KINETIC, the step dispatch of an output
+// sample on a lattice recorded in two dispatches) also sums its
+// workgroup's kinetic energy at the sample's instant into the sample's
+// partial g (record_kinetic.wgsl); the workgroup barriers of that sum
+// are in that variant only.
+// import: common, record_kinetic, scene, step_forces, verlet
+
+override RECORD_KINETIC: bool = false;
 
 @compute @workgroup_size(WORKGROUP)
 fn one_step(
@@ -12,14 +19,24 @@ fn one_step(
     @builtin(num_workgroups) groups: vec3<u32>,
 ) {
     enter_scene(wid.z);
-    let i = (wid.x + wid.y * groups.x) * WORKGROUP + local;
-    if i >= c.n_blocks || scene_stopped() {
-        return;
+    let g = wid.x + wid.y * groups.x;
+    let i = g * WORKGROUP + local;
+    var kinetic = real(0.0);
+    if i < c.n_blocks && !scene_stopped() {
+        let ld = loads_at(step_offset);
+        let ready = batch.forces_ready != 0u && step_offset == 0u;
+        let ff = block_forces(i, ld, ready);
+        if RECORD_KINETIC {
+            kinetic = bulk_kinetic(i, load_vel(i), ff.xy);
+        }
+        if batch.forces_only == 0u {
+            verlet(i, ff.xy, ff.z, ld, step_offset);
+        }
     }
-    let ld = loads_at(step_offset);
-    let ready = batch.forces_ready != 0u && step_offset == 0u;
-    let ff = block_forces(i, ld, ready);
-    if batch.forces_only == 0u {
-        verlet(i, ff.xy, ff.z, ld, step_offset);
+    if RECORD_KINETIC {
+        let total = sum_kinetic(local, kinetic);
+        if local == 0u && g < plans[scene].partials {
+            write_kinetic_partial(g, total);
+        }
     }
 }

@@ -4,11 +4,17 @@
 // thread 0 adds the lane sums in lane order and updates the block. The
 // other workgroups update WORKGROUP blocks each, one per thread. The
 // workgroup barrier makes llvmpipe run the whole shader as coroutines, so
-// software adapters take one_step (serial lanes) instead.
+// software adapters take one_step (serial lanes) instead. With junctions,
+// the other workgroups start at block WORKGROUP·⌊nx/WORKGROUP⌋, so that
+// each covers the blocks of one output partial (record_kinetic.wgsl),
+// whose kinetic energy the recording variant (RECORD_KINETIC) sums as in
+// one_step.
 // CPU twin: src/engines/cpu/mod.rs CpuEngine::one_step (force pass and update).
-// import: bulk_forces, common, coordinates, junctions, scene, state, step_forces, verlet
+// import: bulk_forces, common, coordinates, junctions, record_kinetic, scene, state, step_forces, verlet
 
 var<workgroup> lane_sum: array<LaneSum, JUNCTION_LANES>;
+
+override RECORD_KINETIC: bool = false;
 
 @compute @workgroup_size(WORKGROUP)
 fn one_step_lanes(
@@ -51,17 +57,30 @@ fn one_step_lanes(
                 verlet(w, f, friction, ld, i_step);
             }
         }
-        return;
     }
-    var i = w * WORKGROUP + local;
+    // The bulk workgroups: partial g's blocks, less the interface's.
+    var g = w;
     if FRICTION_LAW == LAW_JUNCTIONS {
-        i = c.nx + (w - c.nx) * WORKGROUP + local;
+        g = c.nx / WORKGROUP + (w - c.nx);
     }
-    if i >= c.n_blocks {
-        return;
+    let i = g * WORKGROUP + local;
+    var kinetic = real(0.0);
+    let bulk = !junction_group && i < c.n_blocks && (FRICTION_LAW != LAW_JUNCTIONS || i >= c.nx);
+    if bulk {
+        let ff = block_forces(i, ld, ready);
+        if RECORD_KINETIC {
+            kinetic = bulk_kinetic(i, load_vel(i), ff.xy);
+        }
+        if update {
+            verlet(i, ff.xy, ff.z, ld, i_step);
+        }
     }
-    let ff = block_forces(i, ld, ready);
-    if update {
-        verlet(i, ff.xy, ff.z, ld, i_step);
+    // Partials that hold interface blocks are the output kernels' to
+    // write (record.wgsl, after this dispatch).
+    if RECORD_KINETIC {
+        let total = sum_kinetic(local, kinetic);
+        if local == 0u && !junction_group && g < plans[scene].partials {
+            write_kinetic_partial(g, total);
+        }
     }
 }

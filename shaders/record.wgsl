@@ -8,7 +8,9 @@
 // (record_small); larger ones take two dispatches: record_sample, one
 // thread per block, writes the interface row and the bulk field if due and
 // reduces each workgroup's sums to a partial, then record_finish adds the
-// partials. The sample's sums also decide the fast interface cadence for
+// partials. Where the step dispatch summed the partials' kinetic energy
+// (record_kinetic.wgsl), record_special replaces record_sample and writes
+// only the partials with other sums. The sample's sums also decide the fast interface cadence for
 // the next samples. Workgroup row z of every dispatch records scene z (all
 // scenes of an ensemble at once, in their own regions of the buffers).
 // The shared part is record_common.wgsl. CPU twin: src/engines/sample.rs record_sample.
@@ -98,7 +100,18 @@ fn record_small(
     end_whole_sample(local, s);
 }
 
-// Larger lattices, first dispatch: a thread per block, a partial per
+// Whether workgroup g of record_sample has a part in the sample: it is
+// due and g holds blocks (a lattice past 65535 partials dispatches a few
+// workgroups more), made uniform across the workgroup.
+fn in_sample(local: u32, g: u32) -> bool {
+    if local == 0u {
+        wg_go = select(0u, 1u, sample_due(entry) && g < plans[scene].partials);
+    }
+    return workgroupUniformLoad(&wg_go) != 0u;
+}
+
+// Larger lattices, first dispatch (where the step did not sum the kinetic
+// energy, or a bulk field is due): a thread per block, a partial per
 // workgroup.
 @compute @workgroup_size(WORKGROUP)
 fn record_sample(
@@ -106,11 +119,17 @@ fn record_sample(
     @builtin(workgroup_id) wid: vec3<u32>,
     @builtin(num_workgroups) groups: vec3<u32>,
 ) {
+    let g = wid.x + wid.y * groups.x;
     enter_scene_consts(wid.z);
-    if !begin_sample(local) {
+    if !in_sample(local, g) {
         return;
     }
-    let g = wid.x + wid.y * groups.x;
+    write_partial(local, g);
+}
+
+// Partial g of the sample: every sum of its blocks, reduced across the
+// workgroup (a thread per block).
+fn write_partial(local: u32, g: u32) {
     let i = g * WORKGROUP + local;
     var s = no_sums();
     if i < c.n_blocks {
@@ -121,6 +140,27 @@ fn record_sample(
     if local == 0u {
         sums[plans[scene].partials_offset + g] = wg_sums[0];
     }
+}
+
+// The partials that hold blocks adding more than kinetic energy (the
+// interface, the top row where the top reaction is summed, the driven
+// block), in increasing order (src/engines/gpu/recorder.rs).
+@group(0) @binding(18) var<storage, read> special_groups: array<u32>;
+
+// Larger lattices whose sample's step dispatch summed each partial's
+// kinetic energy (the one-step kernels' RECORD_KINETIC variant), when no
+// bulk field is due, first dispatch: only the partials of special_groups,
+// a workgroup each, with all their sums. The others are the step's.
+@compute @workgroup_size(WORKGROUP)
+fn record_special(
+    @builtin(local_invocation_index) local: u32,
+    @builtin(workgroup_id) wid: vec3<u32>,
+) {
+    enter_scene_consts(wid.z);
+    if !begin_sample(local) {
+        return;
+    }
+    write_partial(local, special_groups[wid.x]);
 }
 
 // Larger lattices, second dispatch: one workgroup adds the partials.

@@ -4,7 +4,7 @@
 // persistent kernel, which records in its loop. The including module
 // declares c, flags, junction_state, slide and the record buffers
 // (record_buffers.wgsl). CPU twin: src/engines/sample.rs record_sample.
-// import: bindings, coordinates, record_buffers, scene
+// import: bindings, coordinates, record_buffers, record_kinetic, scene
 
 // The fixed cadences make the sample due, or the fast one does and is on.
 fn sample_due(e: RecordEntry) -> bool {
@@ -15,12 +15,6 @@ fn sample_due(e: RecordEntry) -> bool {
 fn interface_due(e: RecordEntry) -> bool {
     return (e.channels & RECORD_INTERFACE) != 0u
         || ((e.channels & RECORD_FAST) != 0u && plans[scene].fast != 0u);
-}
-
-fn no_sums() -> SampleSums {
-    var s: SampleSums;
-    s.min_pinned = 3.0e38;
-    return s;
 }
 
 fn combine(a: SampleSums, b: SampleSums) -> SampleSums {
@@ -76,20 +70,7 @@ fn block_sample(
     friction: real,
     normal: real,
 ) -> SampleSums {
-    // The velocity at the instant of u (CPU twin:
-    // engine::synchronised_velocity); samples are taken while driving.
-    let half_dt_over_m = 0.5 * c.dt * c.inv_mass;
-    var v = vec2<real>(v_half.x + half_dt_over_m * (f.x + friction), v_half.y + half_dt_over_m * f.y);
-    let fl = flags[i];
-    if (fl & FLAG_FIX_X) != 0u {
-        v.x = 0.0;
-    }
-    if (fl & FLAG_FIX_Z) != 0u {
-        v.y = 0.0;
-    }
-    if (fl & FLAG_PRESCRIBED_X) != 0u {
-        v.x = c.drive_velocity;
-    }
+    let v = sampled_velocity(i, v_half, f, friction);
     var s = no_sums();
     s.kinetic = v.x * v.x + v.y * v.y;
     if i < c.nx {

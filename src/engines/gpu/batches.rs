@@ -90,13 +90,25 @@ impl<T: GpuReal> GpuEngine<T> {
                     for i in 0..steps {
                         let offset = (i * self.offset_stride) as u32;
                         pass.set_bind_group(1, &self.batch_group, &[offset]);
+                        // A sample's step dispatch sums its kinetic energy
+                        // where the recorder asks (the recording variant).
+                        let sample = samples.next_if(|(_, p)| p.offset == i);
+                        let record_step = sample.and_then(|(_, p)| {
+                            let rec = self.recorder.as_ref()?;
+                            rec.kinetic_in_step(&p.entry)
+                                .then_some(self.record_step.as_ref())
+                                .flatten()
+                        });
+                        if let Some(pipeline) = record_step {
+                            pass.set_pipeline(pipeline);
+                        }
                         pass.dispatch_workgroups(self.groups.0, self.groups.1, scene_count);
                         if !forces_only {
                             self.current = 1 - self.current;
                         }
                         // The sample of step first + i, from the state this
                         // dispatch read and the forces it computed.
-                        if let Some((k, _)) = samples.next_if(|(_, p)| p.offset == i) {
+                        if let Some((k, p)) = sample {
                             let rec = self.recorder.as_ref().expect("samples need a recorder");
                             // With the dispatch timing: a timestamp before
                             // the record dispatches and one after each.
@@ -106,7 +118,7 @@ impl<T: GpuReal> GpuEngine<T> {
                                 }
                             };
                             mark(&mut pass);
-                            let dispatches = rec.encode(&mut pass, k, &mut mark);
+                            let dispatches = rec.encode(&mut pass, k, &p.entry, &mut mark);
                             if let Some(m) = marks.as_mut() {
                                 m.push_sample(i, dispatches);
                             }

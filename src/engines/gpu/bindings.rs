@@ -153,7 +153,7 @@ mod tests {
     fn reflected_bindings_follow_the_declarations() {
         let one_step = Bindings::reflect(&Kernel::OneStep.source::<f32>()).unwrap();
         let numbers: Vec<u32> = one_step.layout(0, &[]).iter().map(|e| e.binding).collect();
-        assert_eq!(numbers, [0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 17]);
+        assert_eq!(numbers, [0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 13, 14, 17]);
         let persistent = Bindings::reflect(&Kernel::Persistent.source::<f32>()).unwrap();
         let numbers: Vec<u32> = persistent
             .layout(0, &[])
@@ -199,7 +199,7 @@ mod tests {
         ));
         let record = Bindings::reflect(&record_source::<f32>()).unwrap();
         let numbers: Vec<u32> = record.layout(0, &[]).iter().map(|e| e.binding).collect();
-        assert_eq!(numbers, [0, 1, 2, 3, 4, 5, 6, 7, 9, 10, 13, 14, 15]);
+        assert_eq!(numbers, [0, 1, 2, 3, 4, 5, 6, 7, 9, 10, 13, 14, 15, 18]);
         // The output kernels only read the state (the control: the
         // kernels' own declaration of `force` is read-write).
         let force = |b: &Bindings| {

@@ -221,6 +221,9 @@ pub struct GpuEngine<T: GpuReal = f32> {
     output: GpuOutput,
     /// Output samples recorded on the device, scene by scene.
     recorder: Option<recorder::Recorder>,
+    /// The one-step kernel's recording variant (`RECORD_KINETIC`), for the
+    /// step dispatches of samples, where the recorder asks for it.
+    record_step: Option<wgpu::ComputePipeline>,
     /// Samples read back and not yet taken.
     samples: Vec<Vec<Sample>>,
     /// Why `auto` took this kernel, when it measured.
@@ -523,8 +526,15 @@ impl<T: GpuReal> GpuEngine<T> {
             }
             _ => 0,
         };
-        let plain_blocks = n as u32 - junction_groups;
-        let groups = groups_for(junction_groups + plain_blocks.div_ceil(WORKGROUP));
+        // With junction workgroups, the others start at the first block of
+        // the workgroup-sized run that holds block nx (one_step_lanes.wgsl).
+        let first_plain = if junction_groups > 0 {
+            model.nx as u32 / WORKGROUP * WORKGROUP
+        } else {
+            0
+        };
+        let plain_groups = (n as u32 - first_plain).div_ceil(WORKGROUP);
+        let groups = groups_for(junction_groups + plain_groups);
         let steps_per_dispatch = opts
             .steps_per_dispatch
             .unwrap_or_else(|| {
@@ -571,6 +581,7 @@ impl<T: GpuReal> GpuEngine<T> {
             output_dispatches: 0,
             output: opts.output,
             recorder: None,
+            record_step: None,
             samples: vec![Vec::new(); scene_count],
             choice: None,
         };
@@ -643,9 +654,14 @@ impl<T: GpuReal> GpuEngine<T> {
                 // The host has taken the samples up to here (none before
                 // driving, and none at its first step).
                 rec.recorded_through = Some(self.step.max(model.prep_steps));
-                if persistent {
-                    let records = rec.persistent_bindings();
+                if persistent || rec.kinetic_in_steps() {
+                    let records = rec.state_bindings();
                     self.state_group = state_group(&self.ctx, self.kernel, &self.buffers, records);
+                }
+                if rec.kinetic_in_steps() {
+                    let mut constants = self.variant.constants.clone();
+                    constants.push(("RECORD_KINETIC", 1.0));
+                    self.record_step = Some(self.ctx.pipeline::<T>(self.kernel, &constants));
                 }
                 self.recorder = Some(rec);
                 Ok(true)

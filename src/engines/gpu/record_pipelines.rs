@@ -18,6 +18,7 @@ pub struct RecordPipelines {
     pub entry: wgpu::BindGroupLayout,
     pub small: wgpu::ComputePipeline,
     pub sample: wgpu::ComputePipeline,
+    pub special: wgpu::ComputePipeline,
     pub finish: wgpu::ComputePipeline,
 }
 
@@ -64,6 +65,7 @@ impl RecordPipelines {
             bindings,
             small: pipeline("record_small"),
             sample: pipeline("record_sample"),
+            special: pipeline("record_special"),
             finish: pipeline("record_finish"),
             group,
             entry: entry_layout,

@@ -73,6 +73,12 @@ pub struct Recorder {
     stride: u64,
     /// Workgroups of `record_sample` (x, y); None: one `record_small`.
     groups: Option<(u32, u32)>,
+    /// Whether the step dispatch of a sample sums each partial's kinetic
+    /// energy (the one-step kernels, on lattices recorded in two
+    /// dispatches): then a sample without a bulk field takes
+    /// `record_special` over these partials, not `record_sample`.
+    kinetic_in_steps: bool,
+    special_count: u32,
     max_entries: u32,
     max_interface: u32,
     max_bulk: u32,
@@ -90,6 +96,28 @@ fn words(bytes: u64) -> u64 {
     bytes / 4
 }
 
+/// The partials (workgroups of `WORKGROUP` blocks) of any of the scenes
+/// that hold a block adding more than kinetic energy to a sample: the
+/// interface row, the top row where the top reaction is summed, the
+/// driven block. In increasing order, each once (`record_special`).
+fn special_groups(models: &[Model]) -> Vec<u32> {
+    let m = &models[0];
+    let (n, nx) = (m.n_blocks() as u32, m.nx as u32);
+    let mut groups: Vec<u32> = (0..nx.div_ceil(WORKGROUP)).collect();
+    for m in models {
+        match m.driver {
+            Driver::TopVelocity { .. } => {
+                groups.extend((n - nx) / WORKGROUP..n.div_ceil(WORKGROUP))
+            }
+            Driver::SideSpring { row, .. } => groups.push((row * m.nx) as u32 / WORKGROUP),
+            _ => {}
+        }
+    }
+    groups.sort_unstable();
+    groups.dedup();
+    groups
+}
+
 impl Recorder {
     /// The recorder of an engine's scenes (`models`, one lattice), or why
     /// the device cannot hold the records of one batch.
@@ -102,6 +130,7 @@ impl Recorder {
         plan: &SamplePlan,
         stride: Option<u64>,
     ) -> Result<Recorder, String> {
+        let stride_given = stride.is_some();
         let stride = stride.unwrap_or(size_of::<GpuRecordEntry>() as u64);
         let device = &ctx.device;
         let model = &models[0];
@@ -132,6 +161,13 @@ impl Recorder {
         }
         let partials = (n as u32).div_ceil(WORKGROUP);
         let groups = (model.n_blocks() > RECORD_SMALL_BLOCKS).then(|| super::groups_for(partials));
+        let kinetic_in_steps = groups.is_some() && stride_given;
+        let special = special_groups(models);
+        let special_groups = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("record special groups"),
+            contents: bytemuck::cast_slice(&special),
+            usage: wgpu::BufferUsages::STORAGE,
+        });
         let sums_per_scene = (max_entries + partials) as u64;
         let sums_bytes = scenes * sums_per_scene * size_of::<GpuSampleSums>() as u64;
         if words(rows_bytes) > u32::MAX as u64 || scenes * sums_per_scene > u32::MAX as u64 {
@@ -201,6 +237,7 @@ impl Recorder {
                     ("plans", &plan_buffer),
                     ("sums", &sums),
                     ("rows", &rows),
+                    ("special_groups", &special_groups),
                 ]
                 .map(|(name, buffer)| (name, buffer.as_entire_binding())),
             ),
@@ -232,6 +269,8 @@ impl Recorder {
             entry_group,
             stride,
             groups,
+            kinetic_in_steps,
+            special_count: special.len() as u32,
             max_entries,
             max_interface,
             max_bulk,
@@ -243,9 +282,10 @@ impl Recorder {
         })
     }
 
-    /// The buffers the persistent kernel binds at 13 (plan), 14 (sums),
-    /// 15 (rows) and 16 (entries).
-    pub fn persistent_bindings(&self) -> [&wgpu::Buffer; 4] {
+    /// The buffers the step kernels bind: the persistent kernel at 13
+    /// (plan), 14 (sums), 15 (rows) and 16 (entries); the one-step kernels'
+    /// recording variant plans and sums.
+    pub fn state_bindings(&self) -> [&wgpu::Buffer; 4] {
         [&self.plan_buffer, &self.sums, &self.rows, &self.entries]
     }
 
@@ -347,14 +387,29 @@ impl Recorder {
         self.recorded_through = planned.last().map(|p| p.step);
     }
 
-    /// Records sample `k` of the batch (one or two dispatches) in `pass`,
-    /// calling `after_each` after each dispatch (the dispatch timing's
-    /// marks); the caller sets its own pipeline and groups again
+    /// Whether the step dispatch of sample `entry` is to sum each
+    /// partial's kinetic energy (the one-step kernels' recording variant,
+    /// `RECORD_KINETIC`): lattices recorded in two dispatches, when no
+    /// bulk field is due (`record_sample` writes every partial then).
+    pub fn kinetic_in_step(&self, entry: &GpuRecordEntry) -> bool {
+        self.kinetic_in_steps && entry.channels & RECORD_BULK == 0
+    }
+
+    /// Whether any sample's step dispatch may sum kinetic energy (the
+    /// engine then builds the recording variant of its step kernel).
+    pub fn kinetic_in_steps(&self) -> bool {
+        self.kinetic_in_steps
+    }
+
+    /// Records sample `k` of the batch, `entry`, (one or two dispatches)
+    /// in `pass`, calling `after_each` after each dispatch (the dispatch
+    /// timing's marks); the caller sets its own pipeline and groups again
     /// afterwards. Returns the dispatches.
     pub fn encode(
         &self,
         pass: &mut wgpu::ComputePass,
         k: usize,
+        entry: &GpuRecordEntry,
         after_each: &mut dyn FnMut(&mut wgpu::ComputePass),
     ) -> u64 {
         let offset = (k as u64 * self.stride) as u32;
@@ -369,8 +424,13 @@ impl Recorder {
                 1
             }
             Some((x, y)) => {
-                pass.set_pipeline(&self.pipelines.sample);
-                pass.dispatch_workgroups(x, y, scenes);
+                if self.kinetic_in_step(entry) {
+                    pass.set_pipeline(&self.pipelines.special);
+                    pass.dispatch_workgroups(self.special_count, 1, scenes);
+                } else {
+                    pass.set_pipeline(&self.pipelines.sample);
+                    pass.dispatch_workgroups(x, y, scenes);
+                }
                 after_each(pass);
                 pass.set_pipeline(&self.pipelines.finish);
                 pass.dispatch_workgroups(1, 1, scenes);

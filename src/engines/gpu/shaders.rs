@@ -41,6 +41,7 @@ wgsl_files!(
     "record",
     "record_buffers",
     "record_common",
+    "record_kinetic",
     "rng",
     "scene",
     "state_one_step",
@@ -148,7 +149,7 @@ pub fn compose(prelude: &str, entry: &str, slots: &Slots) -> Result<String, Stri
 }
 
 /// The output kernels' module (`record_small`, `record_sample`,
-/// `record_finish`): scene 0 of the state buffers, no override constants.
+/// `record_special`, `record_finish`): scene 0 of the state buffers, no override constants.
 pub fn record_source<T: GpuReal>() -> String {
     let slots = Slots {
         bindings: "record",
@@ -166,7 +167,12 @@ pub fn validate_record<T: GpuReal>() -> Result<naga::Module, String> {
     naga::valid::Validator::new(naga::valid::ValidationFlags::all(), T::CAPABILITIES)
         .validate(&module)
         .map_err(|e| format!("record: {}", e.emit_to_string(&src)))?;
-    for name in ["record_small", "record_sample", "record_finish"] {
+    for name in [
+        "record_small",
+        "record_sample",
+        "record_special",
+        "record_finish",
+    ] {
         if !module.entry_points.iter().any(|e| e.name == name) {
             return Err(format!("record: entry point {name} missing"));
         }
