@@ -332,6 +332,82 @@ fn an_ensemble_records_every_scene_on_the_device_as_its_solo_run() {
     }
 }
 
+/// On a lattice recorded in two dispatches (more than 16,384 blocks), the
+/// step dispatch of a sample sums each partial's kinetic energy for every
+/// scene and the output kernels write the partials with other sums
+/// (record_kinetic.wgsl): each scene's samples are still bit for bit its
+/// solo run's, on both one-step kernels (one-step-lanes lays out its
+/// workgroups otherwise), samples with and without a bulk field among
+/// them. Control: scene 1's samples are not scene 0's.
+#[test]
+fn a_large_lattice_ensemble_records_every_scene_as_its_solo_run() {
+    let large = |extra: &[&str]| {
+        let mut set: Vec<String> = [
+            "geometry.nx=257",
+            "geometry.nz=65",
+            "geometry.length=0.64",
+            "geometry.height=0.16",
+            "loading.normal.ramp_time=2e-5",
+            "loading.normal.relax_time=2e-5",
+            "loading.drive.velocity=2",
+            "time.end=3e-5",
+        ]
+        .iter()
+        .map(|s| s.to_string())
+        .collect();
+        set.extend(extra.iter().map(|s| s.to_string()));
+        let s = Scenario::parse(DEFAULT_SCENARIO, "large", &set).unwrap();
+        Model::from_scenario(&s, true).unwrap()
+    };
+    let models = vec![
+        large(&[]),
+        large(&["time.seed=7", "loading.normal.force=1800"]),
+    ];
+    let m = &models[0];
+    assert!(m.n_blocks() > slipfront::engines::gpu::RECORD_SMALL_BLOCKS);
+    let every = |t: f64| ((t / m.dt).round() as u64).max(1);
+    let plan = SamplePlan {
+        every_global: every(5e-6),
+        every_interface: every(1e-5),
+        every_bulk: every(2e-5),
+        ..sample_plan(m, every(1e-6))
+    };
+    let chunks = [m.prep_steps, m.total_steps() - m.prep_steps];
+    for path in [GpuPath::OneStep, GpuPath::OneStepLanes] {
+        let mut e = ensemble(&models, path);
+        let mut got = vec![Vec::new(); models.len()];
+        for (i, &n) in chunks.iter().enumerate() {
+            e.advance(n).unwrap();
+            if i == 0 {
+                for k in 0..models.len() {
+                    assert!(e.record_samples(k, &plan).unwrap(), "{path:?}");
+                }
+            }
+            for (k, g) in got.iter_mut().enumerate() {
+                g.extend(e.take_samples(k));
+            }
+        }
+        let mut solos = Vec::new();
+        for (k, model) in models.iter().enumerate() {
+            let mut g = GpuEngine::with_options(model, options(path)).unwrap();
+            advance_to(&mut g, model.prep_steps).unwrap();
+            assert!(g.record_samples(&plan).unwrap());
+            advance_to(&mut g, model.total_steps()).unwrap();
+            let alone = g.take_samples();
+            assert!(
+                alone.len() >= 6,
+                "{path:?} scene {k}: {} samples",
+                alone.len()
+            );
+            assert!(alone.iter().any(|s| s.bulk.is_some()));
+            assert!(alone.iter().any(|s| s.bulk.is_none()));
+            assert!(got[k] == alone, "{path:?} scene {k}: the samples differ");
+            solos.push(alone);
+        }
+        assert!(got[1] != solos[0], "{path:?}: scene 1 is not scene 0");
+    }
+}
+
 /// A lockstep scene asks its runner for fixed long chunks (its advance
 /// waits for every other scene, so its wall time cannot size them: sized
 /// by it, a 256-scene ensemble on an H200 shrank them to one step each);
