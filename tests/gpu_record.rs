@@ -309,11 +309,12 @@ fn large_lattice_keys() -> Vec<String> {
     .collect()
 }
 
-/// Timestamps inside the pass split its device time between the step and
-/// the record dispatches (lavapipe has them): every dispatch is counted
-/// once, the parts add up to the passes' time, and a step of 16,705
-/// blocks costs more than adding 66 partials (the finish), which a
-/// timestamp put on the wrong side of a dispatch would turn round.
+/// Timestamps inside the pass split its device time between the steps,
+/// the samples' steps and the record dispatches (lavapipe has them):
+/// every dispatch is counted once, the parts add up to the passes' time,
+/// and a step of 16,705 blocks costs more than adding 262 partials (the
+/// finish), which a timestamp put on the wrong side of a dispatch would
+/// turn round.
 #[test]
 fn the_device_time_splits_between_step_and_record_dispatches() {
     let s = large_lattice();
@@ -334,9 +335,10 @@ fn the_device_time_splits_between_step_and_record_dispatches() {
     let t = dev.dispatch_times().expect("dispatches timed");
     let busy = dev.device_seconds().unwrap() - busy0;
     println!("{t}; passes {busy:.4} s");
-    assert_eq!(t.steps, dev.dispatches().unwrap() - d0);
+    assert_eq!(t.steps + t.sample_steps, dev.dispatches().unwrap() - d0);
     let records = dev.output_dispatches().unwrap() - o0;
     assert!(t.samples >= 8 && t.samples == t.finishes, "{t:?}");
+    assert_eq!(t.sample_steps, t.samples);
     assert_eq!(t.samples + t.finishes, records);
     assert!(
         (t.total_seconds() - busy).abs() <= 1e-9 * busy + 1e-9,
@@ -344,6 +346,7 @@ fn the_device_time_splits_between_step_and_record_dispatches() {
         t.total_seconds()
     );
     assert!(t.step_seconds > 0.0 && t.sample_seconds > 0.0 && t.finish_seconds > 0.0);
+    assert!(t.sample_step_seconds > 0.0);
     let each = |s: f64, n: u64| s / n as f64;
     assert!(
         each(t.step_seconds, t.steps) > 3.0 * each(t.finish_seconds, t.finishes),

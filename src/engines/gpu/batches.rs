@@ -102,7 +102,21 @@ impl<T: GpuReal> GpuEngine<T> {
                         if let Some(pipeline) = record_step {
                             pass.set_pipeline(pipeline);
                         }
+                        // With the dispatch timing: a sample's step dispatch
+                        // between two timestamps.
+                        let mut step_marked = false;
+                        if let (Some(t), Some(m), Some(_)) =
+                            (self.timer.as_ref(), marks.as_mut(), sample)
+                        {
+                            step_marked = m.marks_before_step();
+                            if step_marked {
+                                t.mark(&mut pass, m);
+                            }
+                        }
                         pass.dispatch_workgroups(self.groups.0, self.groups.1, scene_count);
+                        if let Some(m) = marks.as_mut() {
+                            m.step_dispatched();
+                        }
                         if !forces_only {
                             self.current = 1 - self.current;
                         }
@@ -110,8 +124,9 @@ impl<T: GpuReal> GpuEngine<T> {
                         // dispatch read and the forces it computed.
                         if let Some((k, p)) = sample {
                             let rec = self.recorder.as_ref().expect("samples need a recorder");
-                            // With the dispatch timing: a timestamp before
-                            // the record dispatches and one after each.
+                            // With the dispatch timing: a timestamp after
+                            // the step dispatch and one after each record
+                            // dispatch.
                             let mut mark = |pass: &mut wgpu::ComputePass| {
                                 if let (Some(t), Some(m)) = (self.timer.as_ref(), marks.as_mut()) {
                                     t.mark(pass, m);
@@ -120,7 +135,7 @@ impl<T: GpuReal> GpuEngine<T> {
                             mark(&mut pass);
                             let dispatches = rec.encode(&mut pass, k, &p.entry, &mut mark);
                             if let Some(m) = marks.as_mut() {
-                                m.push_sample(i, dispatches);
+                                m.push_sample(i, step_marked, dispatches);
                             }
                             self.output_dispatches += dispatches;
                             pass.set_pipeline(&self.pipeline);

@@ -33,9 +33,14 @@ const INSIDE_QUERIES: u32 = wgpu::QUERY_SET_MAX_QUERIES;
 /// them, so the parts add up to the passes' time.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct DispatchTimes {
-    /// Step dispatches (forces-only ones included) and their seconds.
+    /// Step dispatches of no sample (forces-only ones included), and
+    /// their seconds.
     pub steps: u64,
     pub step_seconds: f64,
+    /// Step dispatches of samples (on large lattices the one-step
+    /// kernels' recording variant, `RECORD_KINETIC`) and their seconds.
+    pub sample_steps: u64,
+    pub sample_step_seconds: f64,
     /// Samples' first output dispatches (`record_small`, or
     /// `record_sample` on lattices that take two) and their seconds.
     pub samples: u64,
@@ -48,7 +53,18 @@ pub struct DispatchTimes {
 impl DispatchTimes {
     /// Seconds in all.
     pub fn total_seconds(&self) -> f64 {
-        self.step_seconds + self.sample_seconds + self.finish_seconds
+        self.step_seconds + self.sample_step_seconds + self.sample_seconds + self.finish_seconds
+    }
+
+    fn add(&mut self, t: &DispatchTimes) {
+        self.steps += t.steps;
+        self.step_seconds += t.step_seconds;
+        self.sample_steps += t.sample_steps;
+        self.sample_step_seconds += t.sample_step_seconds;
+        self.samples += t.samples;
+        self.sample_seconds += t.sample_seconds;
+        self.finishes += t.finishes;
+        self.finish_seconds += t.finish_seconds;
     }
 }
 
@@ -57,11 +73,15 @@ impl std::fmt::Display for DispatchTimes {
         let each = |s: f64, n: u64| if n == 0 { 0.0 } else { s / n as f64 * 1e6 };
         write!(
             f,
-            "steps {:.3} s ({} dispatches, {:.2} µs each); record first dispatch {:.3} s \
-             ({}, {:.2} µs each); record finish {:.3} s ({}, {:.2} µs each)",
+            "steps {:.3} s ({} dispatches, {:.2} µs each); steps of samples {:.3} s ({}, \
+             {:.2} µs each); record first dispatch {:.3} s ({}, {:.2} µs each); record finish \
+             {:.3} s ({}, {:.2} µs each)",
             self.step_seconds,
             self.steps,
             each(self.step_seconds, self.steps),
+            self.sample_step_seconds,
+            self.sample_steps,
+            each(self.sample_step_seconds, self.sample_steps),
             self.sample_seconds,
             self.samples,
             each(self.sample_seconds, self.samples),
@@ -73,14 +93,27 @@ impl std::fmt::Display for DispatchTimes {
 }
 
 /// What a timed batch's pass held: its step dispatches and, in order,
-/// each sample's step offset and record dispatches (1 or 2).
+/// its samples.
 #[derive(Debug, Clone, Default)]
 pub struct BatchMarks {
     steps: u64,
-    samples: Vec<(u64, u64)>,
+    samples: Vec<SampleMarks>,
     set: usize,
     /// Timestamps written so far (the pass's two first).
     written: u32,
+    /// Step dispatches since the last timestamp.
+    unmarked: u64,
+}
+
+/// A sample's timestamps: one before its step dispatch where steps of no
+/// sample came since the last timestamp (else the last one stands for it),
+/// one after it, and one after each record dispatch (1 or 2). At most
+/// 2 + 3 × 1024 in a batch of 1024 steps.
+#[derive(Debug, Clone, Copy)]
+struct SampleMarks {
+    offset: u64,
+    step_marked: bool,
+    dispatches: u64,
 }
 
 /// The query sets of the dispatch timing.
@@ -224,6 +257,7 @@ impl DeviceTimer {
     pub fn mark(&self, pass: &mut wgpu::ComputePass, marks: &mut BatchMarks) {
         pass.write_timestamp(&self.inside_set(marks.set).0, marks.written);
         marks.written += 1;
+        marks.unmarked = 0;
     }
 
     /// After the pass: its timestamps into `staging` at `at`.
@@ -272,13 +306,7 @@ impl DeviceTimer {
             .map(|b| u64::from_le_bytes(b.try_into().expect("8 bytes")))
             .collect();
         if let Some(times) = marks.split(&stamps, self.period_ns) {
-            let t = &mut inside.times;
-            t.steps += times.steps;
-            t.step_seconds += times.step_seconds;
-            t.samples += times.samples;
-            t.sample_seconds += times.sample_seconds;
-            t.finishes += times.finishes;
-            t.finish_seconds += times.finish_seconds;
+            inside.times.add(&times);
         }
     }
 
@@ -299,19 +327,37 @@ impl BatchMarks {
         self.steps = steps;
     }
 
-    /// A sample after the step dispatch at `offset`, in `dispatches`
-    /// record dispatches, whose timestamps were marked (one before them,
-    /// one after each).
-    pub fn push_sample(&mut self, offset: u64, dispatches: u64) {
-        self.samples.push((offset, dispatches));
+    /// A step dispatch was encoded.
+    pub fn step_dispatched(&mut self) {
+        self.unmarked += 1;
     }
 
-    /// Queries the batch wrote: the pass's two, and per sample one before
-    /// its record dispatches and one after each.
+    /// Whether a sample's step dispatch needs a timestamp before it:
+    /// steps of no sample came since the last one.
+    pub fn marks_before_step(&self) -> bool {
+        self.unmarked > 0
+    }
+
+    /// A sample at step `offset` whose timestamps were written: before its
+    /// step dispatch if `step_marked`, after it, and after each of its
+    /// `dispatches` record dispatches.
+    pub fn push_sample(&mut self, offset: u64, step_marked: bool, dispatches: u64) {
+        self.samples.push(SampleMarks {
+            offset,
+            step_marked,
+            dispatches,
+        });
+    }
+
+    /// Queries the batch wrote.
     fn queries(&self) -> u32 {
         debug_assert_eq!(
             self.written as u64,
-            2 + self.samples.iter().map(|&(_, d)| 1 + d).sum::<u64>()
+            2 + self
+                .samples
+                .iter()
+                .map(|m| m.step_marked as u64 + 1 + m.dispatches)
+                .sum::<u64>()
         );
         self.written
     }
@@ -326,22 +372,26 @@ impl BatchMarks {
         let mut at = begin;
         let mut next_step = 0u64;
         let mut k = 2;
-        for &(offset, dispatches) in &self.samples {
-            let before = stamps[k];
-            times.step_seconds += seconds(at, before)?;
-            times.steps += offset + 1 - next_step;
-            next_step = offset + 1;
-            let first = stamps[k + 1];
-            times.sample_seconds += seconds(before, first)?;
-            times.samples += 1;
-            at = first;
-            if dispatches == 2 {
-                let second = stamps[k + 2];
-                times.finish_seconds += seconds(first, second)?;
-                times.finishes += 1;
-                at = second;
+        for m in &self.samples {
+            if m.step_marked {
+                times.step_seconds += seconds(at, stamps[k])?;
+                times.steps += m.offset - next_step;
+                at = stamps[k];
+                k += 1;
             }
-            k += 1 + dispatches as usize;
+            times.sample_step_seconds += seconds(at, stamps[k])?;
+            times.sample_steps += 1;
+            at = stamps[k];
+            next_step = m.offset + 1;
+            times.sample_seconds += seconds(at, stamps[k + 1])?;
+            times.samples += 1;
+            at = stamps[k + 1];
+            if m.dispatches == 2 {
+                times.finish_seconds += seconds(at, stamps[k + 2])?;
+                times.finishes += 1;
+                at = stamps[k + 2];
+            }
+            k += 1 + m.dispatches as usize;
         }
         times.step_seconds += seconds(at, end)?;
         times.steps += self.steps - next_step;
