@@ -59,18 +59,50 @@ fn tally_eight(first: u32) -> vec2<u32> {
     return vec2<u32>(held.x + held.y + held.z + held.w, ruptures);
 }
 
+// tally_eight of the first `count` (0 to 8) of junctions first ..
+// first + 8 only: every index is kept at or below first + count - 1 (the
+// block's last state; first, where count is 0), and the states past
+// count add nothing. No loop: llvmpipe counts every loop iteration of a
+// persistent dispatch against its limit.
+fn tally_eight_of(first: u32, count: u32) -> vec2<u32> {
+    let last = first + max(count, 1u) - 1u;
+    let s0 = junction_state[min(first, last)];
+    let s1 = junction_state[min(first + 1u, last)];
+    let s2 = junction_state[min(first + 2u, last)];
+    let s3 = junction_state[min(first + 3u, last)];
+    let s4 = junction_state[min(first + 4u, last)];
+    let s5 = junction_state[min(first + 5u, last)];
+    let s6 = junction_state[min(first + 6u, last)];
+    let s7 = junction_state[min(first + 7u, last)];
+    let n = vec4<u32>(count);
+    let in0 = vec4<u32>(0u, 1u, 2u, 3u) < n;
+    let in1 = vec4<u32>(4u, 5u, 6u, 7u) < n;
+    let one = vec4<u32>(1u);
+    let none = vec4<u32>(0u);
+    let held0 = (vec4<u32>(s0.x, s1.x, s2.x, s3.x) == vec4<u32>(PINNED)) & in0;
+    let held1 = (vec4<u32>(s4.x, s5.x, s6.x, s7.x) == vec4<u32>(PINNED)) & in1;
+    let held = select(none, one, held0) + select(none, one, held1);
+    let ruptures = select(none, vec4<u32>(s0.y, s1.y, s2.y, s3.y), in0)
+        + select(none, vec4<u32>(s4.y, s5.y, s6.y, s7.y), in1);
+    return vec2<u32>(
+        held.x + held.y + held.z + held.w,
+        ruptures.x + ruptures.y + ruptures.z + ruptures.w,
+    );
+}
+
 // Block i's sums at the instant of sample e (u(s), v(s−½), the forces,
 // friction and normal force of s), and its rows if due.
 fn block_sample(
     i: u32,
     e: RecordEntry,
+    fl: u32,
     u: Disp,
     v_half: vec2<real>,
     f: vec2<real>,
     friction: real,
     normal: real,
 ) -> SampleSums {
-    let v = sampled_velocity(i, v_half, f, friction);
+    let v = sampled_velocity(fl, v_half, f, friction);
     var s = no_sums();
     s.kinetic = v.x * v.x + v.y * v.y;
     if i < c.nx {
@@ -90,10 +122,13 @@ fn block_sample(
             pinned += a.x + b.x;
             ruptures += a.y + b.y;
         }
-        for (; j < ns; j++) {
-            let state = junction_state[first + j];
-            pinned += select(0u, 1u, state.x == PINNED);
-            ruptures += state.y;
+        // The last ns mod 16 in one more round, the states past the
+        // block's masked out.
+        if j < ns {
+            let a = tally_eight_of(first + j, ns - j);
+            let b = tally_eight_of(first + j + 8u, ns - min(ns, j + 8u));
+            pinned += a.x + b.x;
+            ruptures += a.y + b.y;
         }
         var fraction = real(pinned) / real(max(ns, 1u));
         if ns == 0u {

@@ -17,12 +17,12 @@ fn no_sums() -> SampleSums {
     return s;
 }
 
-// Block i's velocity at the instant of u (CPU twin:
-// engine::synchronised_velocity); samples are taken while driving.
-fn sampled_velocity(i: u32, v_half: vec2<real>, f: vec2<real>, friction: real) -> vec2<real> {
+// A block's velocity at the instant of u (CPU twin:
+// engine::synchronised_velocity), from its flags `fl`; samples are taken
+// while driving.
+fn sampled_velocity(fl: u32, v_half: vec2<real>, f: vec2<real>, friction: real) -> vec2<real> {
     let half_dt_over_m = 0.5 * c.dt * c.inv_mass;
     var v = vec2<real>(v_half.x + half_dt_over_m * (f.x + friction), v_half.y + half_dt_over_m * f.y);
-    let fl = flags[i];
     if (fl & FLAG_FIX_X) != 0u {
         v.x = 0.0;
     }
@@ -38,7 +38,7 @@ fn sampled_velocity(i: u32, v_half: vec2<real>, f: vec2<real>, friction: real) -
 // |v|² of a block away from the interface (no friction) at the sample's
 // instant, from v(s−½) and the force of s.
 fn bulk_kinetic(i: u32, v_half: vec2<real>, f: vec2<real>) -> real {
-    let v = sampled_velocity(i, v_half, f, 0.0);
+    let v = sampled_velocity(flags[i], v_half, f, 0.0);
     return v.x * v.x + v.y * v.y;
 }
 
