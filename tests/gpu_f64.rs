@@ -4,10 +4,14 @@
 //! adapter (or no f64 on it) exists.
 
 use slipfront::engines::cpu::CpuEngine;
-use slipfront::engines::gpu::{GpuEngine, GpuOptions, GpuPath};
+use slipfront::engines::gpu::{GpuEngine, GpuOptions, GpuOutput, GpuPath};
 use slipfront::io::compare::{compare_snapshots, fields_over};
 use slipfront::model::scenario::{Scenario, DEFAULT_SCENARIO};
 use slipfront::{advance_to, Engine, Model, Snapshot};
+
+#[path = "support/record_twins.rs"]
+mod record_twins;
+use record_twins::{large_lattice, plan, twins, worst_error};
 
 fn model(extra: &[&str]) -> Model {
     let mut set: Vec<String> = slipfront::app::verify::SMALL_SCENE
@@ -210,5 +214,63 @@ fn gpu_f64_rate_state_matches_cpu_f64_on_every_kernel() {
             "{path:?}: {errors:?}"
         );
         assert_eq!(got.slips, reference.slips, "{path:?}");
+    }
+}
+
+/// f64 runs record their output samples on the device as mixed ones do
+/// (f64 is the default precision where the adapter has it): each sample
+/// equals the CPU twin (`engine::record_sample`) on a host snapshot of a
+/// second f64 run at its step, to f64 round-off in the sums. On the small
+/// triggered scene (one dispatch a sample on one-step; in the loop of the
+/// persistent kernel) and on 257×65 (the step's kinetic partials,
+/// `record_special`, `record_finish`, bulk fields by `record_sample`).
+/// Negative control: the twin a step later is flagged.
+#[test]
+fn f64_output_samples_are_recorded_on_the_device() {
+    let triggered = slipfront::app::verify::small_triggered_scene(&["time.end=3e-4"]).unwrap();
+    let large = large_lattice();
+    let runs = [
+        (&triggered, GpuPath::OneStep),
+        (&triggered, GpuPath::Persistent),
+        (&large, GpuPath::OneStep),
+    ];
+    for (s, path) in runs {
+        let m = Model::from_scenario(s, false).unwrap();
+        let engine = |output: GpuOutput| {
+            let opts = GpuOptions {
+                path,
+                output,
+                ..GpuOptions::default()
+            };
+            GpuEngine::<f64>::with_precision(&m, opts)
+                .unwrap_or_else(|e| panic!("a GPU adapter with f64 is required: {e}"))
+        };
+        let mut dev = engine(GpuOutput::Device);
+        advance_to(&mut dev, m.prep_steps).unwrap();
+        assert!(dev.record_samples(&plan(&m, s)).unwrap(), "{path:?}");
+        advance_to(&mut dev, m.total_steps()).unwrap();
+        let samples = dev.take_samples();
+        assert!(samples.len() >= 8, "{path:?}: {} samples", samples.len());
+        assert!(samples.iter().any(|x| x.bulk.is_some()));
+        assert!(samples.iter().any(|x| x.interface.is_some()));
+        let mut host = engine(GpuOutput::Host);
+        let (twin, later) = twins(&m, &mut host, &samples);
+        let (err, field) = worst_error(&twin, &samples);
+        println!(
+            "{path:?}, {} blocks: {} samples, device against twin {err:.2e} ({field})",
+            m.n_blocks(),
+            samples.len()
+        );
+        // Sums in another order (a tree against the twin's loop), and
+        // bulk fields rounded to f32 alike.
+        assert!(
+            err < 1e-12,
+            "{path:?}: {field} off by {err:.2e} of its scale"
+        );
+        let (shifted, field) = worst_error(&later, &samples);
+        assert!(
+            shifted > 1e-6,
+            "{path:?}: a one-step shift must be flagged ({field})"
+        );
     }
 }

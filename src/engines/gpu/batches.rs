@@ -194,7 +194,7 @@ impl<T: GpuReal> GpuEngine<T> {
         };
         let rx = map(&staging);
         let records = pending.map(|p| {
-            let rx = map(recorder::Recorder::staging(&p));
+            let rx = map(recorder::Recorder::<T>::staging(&p));
             (p, rx)
         });
         self.in_flight.push_back(InFlight {

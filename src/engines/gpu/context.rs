@@ -31,7 +31,8 @@ pub struct GpuContext {
     pub batch_layout: wgpu::BindGroupLayout,
     pipelines: Arc<Mutex<HashMap<String, wgpu::ComputePipeline>>>,
     /// The output kernels, compiled on first use.
-    record: Arc<OnceLock<Arc<RecordPipelines>>>,
+    /// The output kernels, by precision (`GpuReal::NAME`).
+    record: Arc<Mutex<HashMap<&'static str, Arc<RecordPipelines>>>>,
 }
 
 static SHARED: OnceLock<Result<GpuContext, String>> = OnceLock::new();
@@ -187,7 +188,7 @@ impl GpuContext {
             layouts,
             batch_layout,
             pipelines: Arc::new(Mutex::new(HashMap::new())),
-            record: Arc::new(OnceLock::new()),
+            record: Arc::new(Mutex::new(HashMap::new())),
         })
     }
 
@@ -237,15 +238,17 @@ impl GpuContext {
     }
 
     /// The output kernels' pipelines (`shaders/record.wgsl`).
-    pub fn record_pipelines(&self) -> Arc<RecordPipelines> {
-        self.record
-            .get_or_init(|| {
+    pub fn record_pipelines<T: GpuReal>(&self) -> Arc<RecordPipelines> {
+        let mut cache = self.record.lock().expect("record pipelines");
+        cache
+            .entry(T::NAME)
+            .or_insert_with(|| {
                 // lavapipe runs a workgroup on one core and a barrier as a
                 // switch of every invocation: 8 threads (one SIMD row)
                 // record a Table S1 sample faster there than 256
                 // (benches/gpu_output.rs, BENCHMARKS.md).
                 let threads = if self.is_software() { 8 } else { 256 };
-                Arc::new(RecordPipelines::new(&self.device, threads))
+                Arc::new(RecordPipelines::new::<T>(&self.device, threads))
             })
             .clone()
     }

@@ -220,7 +220,7 @@ pub struct GpuEngine<T: GpuReal = f32> {
     /// Where output samples are made (the option).
     output: GpuOutput,
     /// Output samples recorded on the device, scene by scene.
-    recorder: Option<recorder::Recorder>,
+    recorder: Option<recorder::Recorder<T>>,
     /// The one-step kernel's recording variant (`RECORD_KINETIC`), for the
     /// step dispatches of samples, where the recorder asks for it.
     record_step: Option<wgpu::ComputePipeline>,
@@ -622,7 +622,7 @@ impl<T: GpuReal> GpuEngine<T> {
         // The persistent kernels reduce a sample across the workgroup: a
         // power of two of threads (shaders/record_common.wgsl).
         let reducible = self.persistent_threads.is_power_of_two();
-        if self.output == GpuOutput::Host || (persistent && !reducible) || !T::RECORDS_ON_DEVICE {
+        if self.output == GpuOutput::Host || (persistent && !reducible) {
             return Ok(false);
         }
         // The batches in flight finish first (a blow-up among them is

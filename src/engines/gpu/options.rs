@@ -86,7 +86,7 @@ pub enum GpuOutput {
     /// On the device (`shaders/record.wgsl`, and in the persistent
     /// kernel's loop): only the channels due are read back, asynchronously
     /// with the batches; an ensemble records all its scenes in one dispatch
-    /// (mixed f32; f64 runs take host snapshots).
+    /// (in the run's precision, mixed f32 or f64).
     #[default]
     Device,
     /// A whole-state snapshot read back at every output step (the

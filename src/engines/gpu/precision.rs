@@ -42,10 +42,6 @@ pub trait GpuReal: Real<Coord: Pod + WgslType> + WgslType {
     /// What naga must allow, and the device must have, for these kernels.
     const CAPABILITIES: naga::valid::Capabilities;
     const FEATURES: wgpu::Features;
-    /// Whether output samples may be recorded on the device: the output
-    /// kernels' host side (recorder.rs) reads mixed-precision sums and
-    /// rows, so f64 runs take their samples from host snapshots.
-    const RECORDS_ON_DEVICE: bool;
 }
 
 impl GpuReal for f32 {
@@ -59,7 +55,6 @@ impl GpuReal for f32 {
     const COORDINATES: &'static str = "double_single";
     const CAPABILITIES: naga::valid::Capabilities = naga::valid::Capabilities::empty();
     const FEATURES: wgpu::Features = wgpu::Features::empty();
-    const RECORDS_ON_DEVICE: bool = true;
 }
 
 impl GpuReal for f64 {
@@ -73,7 +68,6 @@ impl GpuReal for f64 {
     const COORDINATES: &'static str = "coord_f64";
     const CAPABILITIES: naga::valid::Capabilities = naga::valid::Capabilities::FLOAT64;
     const FEATURES: wgpu::Features = wgpu::Features::SHADER_F64;
-    const RECORDS_ON_DEVICE: bool = false;
 }
 
 /// The coordinate type of `T`'s kernels.

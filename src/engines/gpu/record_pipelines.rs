@@ -2,6 +2,7 @@
 //! group layouts, built once per device (`GpuContext::record_pipelines`).
 
 use super::bindings::Bindings;
+use super::precision::GpuReal;
 
 /// The output module's binding that takes a dynamic offset per sample.
 pub const RECORD_ENTRY: &str = "entry";
@@ -23,13 +24,15 @@ pub struct RecordPipelines {
 }
 
 impl RecordPipelines {
-    /// `threads`: the workgroup of the one-workgroup kernels (a power of
-    /// two up to 256).
-    pub fn new(device: &wgpu::Device, threads: u32) -> RecordPipelines {
+    /// The output kernels in precision `T`. `threads`: the workgroup of
+    /// the one-workgroup kernels (a power of two up to 256), at most the
+    /// slots of `T`'s sums in workgroup memory (`layout::reduction_slots`).
+    pub fn new<T: GpuReal>(device: &wgpu::Device, threads: u32) -> RecordPipelines {
+        let threads = threads.min(super::layout::reduction_slots::<T>());
         // The output module's own declarations (shaders/record.wgsl):
         // group 0 the constants, the state (read only) and the record
         // buffers; group 1 the sample's entry, at a dynamic offset.
-        let source = super::shaders::record_source::<f32>();
+        let source = super::shaders::record_source::<T>();
         let bindings = Bindings::reflect(&source).expect("record.wgsl parses (tested with naga)");
         let group = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("record"),

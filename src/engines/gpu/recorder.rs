@@ -13,6 +13,7 @@ use super::layout::{
     RECORD_GLOBAL, RECORD_INTERFACE, RECORD_INTERFACE_WORDS, WORKGROUP,
 };
 use super::options::ONE_STEP_BATCH;
+use super::precision::GpuReal;
 use super::record_pipelines::{RecordPipelines, RECORD_SMALL_BLOCKS};
 use crate::engines::{BulkField, InterfaceRow, Sample, SamplePlan, SampleSums};
 use crate::model::{Driver, Model};
@@ -54,8 +55,9 @@ pub struct Pending {
     scene_bytes: u64,
 }
 
-/// The output side of one GPU engine: every scene's samples.
-pub struct Recorder {
+/// The output side of one GPU engine: every scene's samples, in the
+/// kernels' precision `T` (sums and rows of `T`).
+pub struct Recorder<T: GpuReal> {
     /// The cadences every scene shares (each scene's fast flag is on the
     /// device, in its plan).
     plan: SamplePlan,
@@ -90,10 +92,12 @@ pub struct Recorder {
     /// The last step sampled (by the device or by the host).
     pub recorded_through: Option<u64>,
     spare: Vec<wgpu::Buffer>,
+    precision: std::marker::PhantomData<T>,
 }
 
-fn words(bytes: u64) -> u64 {
-    bytes / 4
+/// Reals of `T` in `bytes`.
+fn words<T>(bytes: u64) -> u64 {
+    bytes / size_of::<T>() as u64
 }
 
 /// The partials (workgroups of `WORKGROUP` blocks) of any of the scenes
@@ -118,7 +122,7 @@ fn special_groups(models: &[Model]) -> Vec<u32> {
     groups
 }
 
-impl Recorder {
+impl<T: GpuReal> Recorder<T> {
     /// The recorder of an engine's scenes (`models`, one lattice), or why
     /// the device cannot hold the records of one batch.
     /// `stride`: the dynamic-offset alignment (one-step kernels), or None
@@ -129,15 +133,16 @@ impl Recorder {
         state: StateBuffers,
         plan: &SamplePlan,
         stride: Option<u64>,
-    ) -> Result<Recorder, String> {
+    ) -> Result<Recorder<T>, String> {
         let stride_given = stride.is_some();
         let stride = stride.unwrap_or(size_of::<GpuRecordEntry>() as u64);
         let device = &ctx.device;
         let model = &models[0];
         let scenes = models.len() as u64;
         let (n, nx) = (model.n_blocks() as u64, model.nx as u64);
-        let interface_bytes = nx * RECORD_INTERFACE_WORDS as u64 * 4;
-        let bulk_bytes = n * RECORD_BULK_WORDS as u64 * 4;
+        let real = size_of::<T>() as u64;
+        let interface_bytes = nx * RECORD_INTERFACE_WORDS as u64 * real;
+        let bulk_bytes = n * RECORD_BULK_WORDS as u64 * real;
         let max_entries = ONE_STEP_BATCH as u32 + 1;
         let budget = ROWS_BUDGET / 2 / scenes;
         let max_interface = (budget / interface_bytes).clamp(1, max_entries as u64) as u32;
@@ -169,19 +174,19 @@ impl Recorder {
             usage: wgpu::BufferUsages::STORAGE,
         });
         let sums_per_scene = (max_entries + partials) as u64;
-        let sums_bytes = scenes * sums_per_scene * size_of::<GpuSampleSums>() as u64;
-        if words(rows_bytes) > u32::MAX as u64 || scenes * sums_per_scene > u32::MAX as u64 {
+        let sums_bytes = scenes * sums_per_scene * size_of::<GpuSampleSums<T>>() as u64;
+        if words::<T>(rows_bytes) > u32::MAX as u64 || scenes * sums_per_scene > u32::MAX as u64 {
             return Err("the records of one batch need more than 2^32 words".into());
         }
-        let gpu_plans: Vec<GpuRecordPlan> = models
+        let gpu_plans: Vec<GpuRecordPlan<T>> = models
             .iter()
             .enumerate()
             .map(|(k, m)| {
                 let k = k as u64;
-                GpuRecordPlan {
+                GpuRecordPlan::<T> {
                     fast: plan.fast as u32,
                     every_fast: plan.every_fast.min(u32::MAX as u64) as u32,
-                    fast_slip_speed: plan.fast_slip_speed as f32,
+                    fast_slip_speed: T::from_f64(plan.fast_slip_speed),
                     driven_block: match m.driver {
                         Driver::SideSpring { row, .. } => (row * m.nx) as u32,
                         _ => u32::MAX,
@@ -191,8 +196,8 @@ impl Recorder {
                     partials,
                     sums_offset: (k * sums_per_scene) as u32,
                     partials_offset: (k * sums_per_scene) as u32 + max_entries,
-                    interface_offset: words(k * rows_per_scene) as u32,
-                    bulk_offset: words(k * rows_per_scene + bulk_offset) as u32,
+                    interface_offset: words::<T>(k * rows_per_scene) as u32,
+                    bulk_offset: words::<T>(k * rows_per_scene + bulk_offset) as u32,
                 }
             })
             .collect();
@@ -217,7 +222,7 @@ impl Recorder {
             usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        let pipelines = ctx.record_pipelines();
+        let pipelines = ctx.record_pipelines::<T>();
         let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("record"),
             layout: &pipelines.group,
@@ -279,6 +284,7 @@ impl Recorder {
             bulk_offset,
             recorded_through: None,
             spare: Vec::new(),
+            precision: std::marker::PhantomData,
         })
     }
 
@@ -459,7 +465,7 @@ impl Recorder {
             .iter()
             .filter(|p| p.entry.channels & RECORD_BULK != 0)
             .count() as u32;
-        let sums_size = size_of::<GpuSampleSums>() as u64;
+        let sums_size = size_of::<GpuSampleSums<T>>() as u64;
         let sums_bytes = planned.len() as u64 * sums_size;
         let interface_bytes = interface_slots as u64 * self.interface_bytes();
         let bulk_bytes = bulk_slots as u64 * self.bulk_bytes();
@@ -508,11 +514,11 @@ impl Recorder {
     }
 
     fn interface_bytes(&self) -> u64 {
-        self.models[0].nx as u64 * RECORD_INTERFACE_WORDS as u64 * 4
+        self.models[0].nx as u64 * RECORD_INTERFACE_WORDS as u64 * size_of::<T>() as u64
     }
 
     fn bulk_bytes(&self) -> u64 {
-        self.models[0].n_blocks() as u64 * RECORD_BULK_WORDS as u64 * 4
+        self.models[0].n_blocks() as u64 * RECORD_BULK_WORDS as u64 * size_of::<T>() as u64
     }
 
     /// The staging buffer to map once the batch has run.
@@ -554,13 +560,13 @@ impl Recorder {
         records: &[u8],
         before: u64,
     ) -> Vec<Sample> {
-        let sums_bytes = pending.planned.len() * size_of::<GpuSampleSums>();
-        let sums: &[GpuSampleSums] = bytemuck::cast_slice(&records[..sums_bytes]);
-        let floats: &[f32] = bytemuck::cast_slice(&records[sums_bytes..]);
-        let interface_words = self.interface_bytes() as usize / 4;
+        let sums_bytes = pending.planned.len() * size_of::<GpuSampleSums<T>>();
+        let sums: &[GpuSampleSums<T>] = bytemuck::cast_slice(&records[..sums_bytes]);
+        let reals: &[T] = bytemuck::cast_slice(&records[sums_bytes..]);
+        let interface_words = self.interface_bytes() as usize / size_of::<T>();
         let bulk_at = pending.interface_slots as usize * interface_words;
-        let bulk_words = self.bulk_bytes() as usize / 4;
-        debug_assert!(floats.len() >= bulk_at + pending.bulk_slots as usize * bulk_words);
+        let bulk_words = self.bulk_bytes() as usize / size_of::<T>();
+        debug_assert!(reals.len() >= bulk_at + pending.bulk_slots as usize * bulk_words);
         let mut samples = Vec::new();
         for (p, s) in pending.planned.iter().zip(sums) {
             if s.recorded == 0 || p.step >= before {
@@ -568,16 +574,16 @@ impl Recorder {
             }
             let interface = (s.interface_row != 0).then(|| {
                 let at = p.entry.interface_slot as usize * interface_words;
-                let row = &floats[at..at + interface_words];
+                let row = &reals[at..at + interface_words];
                 let col = |k: usize| -> Vec<f64> {
                     row.chunks(RECORD_INTERFACE_WORDS as usize)
-                        .map(|b| b[k] as f64)
+                        .map(|b| b[k].as_f64())
                         .collect()
                 };
                 InterfaceRow {
                     ux: row
                         .chunks(RECORD_INTERFACE_WORDS as usize)
-                        .map(|b| b[0] as f64 + b[1] as f64)
+                        .map(|b| b[0].as_f64() + b[1].as_f64())
                         .collect(),
                     friction: col(2),
                     normal: col(3),
@@ -587,11 +593,13 @@ impl Recorder {
             });
             let bulk = (p.entry.channels & RECORD_BULK != 0).then(|| {
                 let at = bulk_at + p.entry.bulk_slot as usize * bulk_words;
-                let field = &floats[at..at + bulk_words];
+                let field = &reals[at..at + bulk_words];
                 let col = |k: usize| -> Vec<f32> {
                     field
                         .chunks(RECORD_BULK_WORDS as usize)
-                        .map(|b| b[k])
+                        // The file's bulk fields are f32 (as the host
+                        // twin rounds them).
+                        .map(|b| b[k].as_f64() as f32)
                         .collect()
                 };
                 BulkField {
@@ -605,14 +613,14 @@ impl Recorder {
                 step: p.step,
                 time: m.time_of_step(p.step),
                 sums: SampleSums {
-                    kinetic_energy: 0.5 * m.mass * s.kinetic as f64,
-                    friction: s.friction as f64,
-                    pinned_fraction: s.pinned as f64 / m.nx.max(1) as f64,
-                    min_pinned_fraction: s.min_pinned as f64,
-                    max_slip_speed: s.max_slip_speed as f64,
+                    kinetic_energy: 0.5 * m.mass * s.kinetic.as_f64(),
+                    friction: s.friction.as_f64(),
+                    pinned_fraction: s.pinned.as_f64() / m.nx.max(1) as f64,
+                    min_pinned_fraction: s.min_pinned.as_f64(),
+                    max_slip_speed: s.max_slip_speed.as_f64(),
                     ruptures: s.ruptures_lo as u64 | (s.ruptures_hi as u64) << 32,
-                    driven_ux: s.driven_ux_hi as f64 + s.driven_ux_lo as f64,
-                    top_reaction: s.top_reaction as f64,
+                    driven_ux: s.driven_ux_hi.as_f64() + s.driven_ux_lo.as_f64(),
+                    top_reaction: s.top_reaction.as_f64(),
                 },
                 interface,
                 bulk,
