@@ -45,7 +45,7 @@ use slipfront::engines::backend::{make_engine, Backend, Precision};
 use slipfront::engines::gpu::ensemble::GpuEnsemble;
 use slipfront::engines::gpu::kernel_choice::{candidates, launches, measure};
 use slipfront::engines::gpu::shaders::Kernel;
-use slipfront::engines::gpu::{context, GpuEngine, GpuOptions, GpuOutput, GpuPath};
+use slipfront::engines::gpu::{context, GpuEngine, GpuOptions, GpuOutput, GpuPath, GpuReal};
 use slipfront::model::scenario::built_in;
 use slipfront::{advance_to, Engine, EngineError, Model, Scenario};
 use std::time::Instant;
@@ -106,6 +106,61 @@ struct Timed {
     threads: String,
     device: Option<f64>,
     dispatches: Option<slipfront::engines::gpu::DispatchTimes>,
+}
+
+/// One run of section 4's scenario in precision `T` with device records,
+/// timed from the end of its normal-load phase: with an output file at
+/// `output` or none, running ahead by `run_ahead` batches, and with
+/// `time_dispatches` its dispatches timed one by one (timestamps inside
+/// the pass, which add a little device time) for the split of its device
+/// time.
+fn output_run<T: GpuReal>(
+    scenario: &Scenario,
+    output: Option<&std::path::Path>,
+    run_ahead: usize,
+    time_dispatches: bool,
+) -> Result<Timed, String> {
+    let model = Model::from_scenario(scenario, false).map_err(|e| e.to_string())?;
+    let opts = GpuOptions {
+        output: GpuOutput::Device,
+        run_ahead,
+        ..GpuOptions::default()
+    };
+    let mut e = GpuEngine::<T>::with_precision(&model, opts).map_err(|e| e.to_string())?;
+    advance_to(&mut e, model.prep_steps).map_err(|e| e.to_string())?;
+    if time_dispatches && !e.time_each_dispatch().map_err(|e| e.to_string())? {
+        return Err("no timestamps inside passes".into());
+    }
+    if let Some(p) = output {
+        let _ = std::fs::remove_file(p);
+        let _ = std::fs::remove_file(slipfront::io::checkpoint::path_for(p));
+    }
+    let run = RunOptions {
+        output: output.map(|p| p.to_path_buf()),
+        progress: ProgressMode::None,
+        ..RunOptions::default()
+    };
+    let threads = thread_cpu::ThreadCpu::start();
+    let device0 = e.device_seconds();
+    let (t0, cpu0) = (Instant::now(), process_cpu_seconds());
+    run_scene(&mut e, scenario, &run).map_err(|e| e.to_string())?;
+    let device = e.device_seconds().zip(device0).map(|(b, a)| b - a);
+    let wall = t0.elapsed().as_secs_f64();
+    let cpu = (process_cpu_seconds() - cpu0) / wall;
+    let threads = thread_cpu::per_wall(&threads.finish(), wall);
+    let megabytes = output
+        .and_then(|p| std::fs::metadata(p).ok())
+        .map_or(String::new(), |m| {
+            format!("; file {:.1} MB", m.len() as f64 / 1e6)
+        });
+    Ok(Timed {
+        wall,
+        how: e.describe(),
+        cpu,
+        threads: format!("{threads}{megabytes}"),
+        device,
+        dispatches: e.dispatch_times(),
+    })
 }
 
 fn options(kernel: Kernel) -> GpuOptions {
@@ -469,6 +524,7 @@ fn main() {
         // 1024×512), which a run of a second or less weighs heavily.
         let mut marginal = Vec::new();
         let mut split = Vec::new();
+        let (mut marginal_f64, mut split_f64) = (Vec::new(), Vec::new());
         for &(nx, nz, first) in output_sizes {
             let mut walls = Vec::new();
             for steps in [first, 2 * first] {
@@ -477,55 +533,8 @@ fn main() {
                 let scenario = bench_scene::scenario(nx, nz, &[&format!("time.end={t_end:e}")]);
                 let file = dir.join("run.mcap");
                 let ahead = GpuOptions::default().run_ahead;
-                // `time_dispatches`: the run's dispatches timed one by one
-                // (timestamps inside the pass, which add a little device
-                // time), for the split of its device time they return.
-                let wall = |output: Option<&std::path::Path>,
-                            run_ahead: usize,
-                            time_dispatches: bool|
-                 -> Result<Timed, String> {
-                    let model =
-                        Model::from_scenario(&scenario, false).map_err(|e| e.to_string())?;
-                    let opts = GpuOptions {
-                        output: GpuOutput::Device,
-                        run_ahead,
-                        ..GpuOptions::default()
-                    };
-                    let mut e = GpuEngine::with_options(&model, opts).map_err(|e| e.to_string())?;
-                    advance_to(&mut e, model.prep_steps).map_err(|e| e.to_string())?;
-                    if time_dispatches && !e.time_each_dispatch().map_err(|e| e.to_string())? {
-                        return Err("no timestamps inside passes".into());
-                    }
-                    if let Some(p) = output {
-                        let _ = std::fs::remove_file(p);
-                        let _ = std::fs::remove_file(slipfront::io::checkpoint::path_for(p));
-                    }
-                    let run = RunOptions {
-                        output: output.map(|p| p.to_path_buf()),
-                        progress: ProgressMode::None,
-                        ..RunOptions::default()
-                    };
-                    let threads = thread_cpu::ThreadCpu::start();
-                    let device0 = e.device_seconds();
-                    let (t0, cpu0) = (Instant::now(), process_cpu_seconds());
-                    run_scene(&mut e, &scenario, &run).map_err(|e| e.to_string())?;
-                    let device = e.device_seconds().zip(device0).map(|(b, a)| b - a);
-                    let wall = t0.elapsed().as_secs_f64();
-                    let cpu = (process_cpu_seconds() - cpu0) / wall;
-                    let threads = thread_cpu::per_wall(&threads.finish(), wall);
-                    let megabytes = output
-                        .and_then(|p| std::fs::metadata(p).ok())
-                        .map_or(String::new(), |m| {
-                            format!("; file {:.1} MB", m.len() as f64 / 1e6)
-                        });
-                    Ok(Timed {
-                        wall,
-                        how: e.describe(),
-                        cpu,
-                        threads: format!("{threads}{megabytes}"),
-                        device,
-                        dispatches: e.dispatch_times(),
-                    })
+                let wall = |output: Option<&std::path::Path>, run_ahead: usize, time: bool| {
+                    output_run::<f32>(&scenario, output, run_ahead, time)
                 };
                 // An untimed run with output first: the first one in a process
                 // builds the record pipelines, which cost the first timed
@@ -580,6 +589,59 @@ fn main() {
                     });
                 }
             }
+            // f64, the default precision where the adapter has it (its
+            // samples recorded on the device since session 17): the same
+            // two lengths, without and with -o, and the split.
+            let file = dir.join("run.mcap");
+            let ahead = GpuOptions::default().run_ahead;
+            let scenario_of = |steps: u64| {
+                let t_end = steps as f64 * bench_scene::scene(nx, nz).dt;
+                bench_scene::scenario(nx, nz, &[&format!("time.end={t_end:e}")])
+            };
+            let _ = output_run::<f64>(&scenario_of(first), Some(&file), ahead, false);
+            let mut f64_walls = Vec::new();
+            for steps in [first, 2 * first] {
+                let scenario = scenario_of(steps);
+                match (
+                    output_run::<f64>(&scenario, None, ahead, false),
+                    output_run::<f64>(&scenario, Some(&file), ahead, false),
+                ) {
+                    (Ok(a), Ok(b)) => f64_walls.push((a.wall, b.wall, a.device, b.device)),
+                    (a, b) => marginal_f64.push(format!(
+                        "- {nx}×{nz} in f64, {steps} steps: not run: {:?} {:?}",
+                        a.err(),
+                        b.err()
+                    )),
+                }
+            }
+            if let [short, long] = f64_walls[..] {
+                let device = match (short.2.zip(long.2), short.3.zip(long.3)) {
+                    (Some((a, b)), Some((c, d))) => format!(
+                        "; the device was busy {:.3} s of them without output, {:.3} s with -o",
+                        b - a,
+                        d - c
+                    ),
+                    _ => String::new(),
+                };
+                marginal_f64.push(format!(
+                    "- {nx}×{nz} in f64: the second {first} steps cost {:.3} s without output, \
+                     {:.3} s with -o ({:.2}×){device}",
+                    long.0 - short.0,
+                    long.1 - short.1,
+                    (long.1 - short.1) / (long.0 - short.0),
+                ));
+            }
+            split_f64.push(
+                match output_run::<f64>(&scenario_of(first), Some(&file), ahead, true) {
+                    Ok(Timed {
+                        dispatches: Some(t),
+                        wall,
+                        ..
+                    }) => format!("- {nx}×{nz} in f64, {first} steps with -o ({wall:.3} s): {t}"),
+                    Ok(_) => format!("- {nx}×{nz} in f64: the dispatches were not timed"),
+                    Err(e) => format!("- {nx}×{nz} in f64: not run: {e}"),
+                },
+            );
             if let [short, long] = walls[..] {
                 let device = match (short.3.zip(long.3), short.4.zip(long.4)) {
                     (Some((a, b)), Some((c, d))) => format!(
@@ -601,11 +663,11 @@ fn main() {
             }
         }
         println!("\nPer step, without what a run pays once (the longer run less the shorter):\n");
-        for line in marginal {
+        for line in marginal.iter().chain(&marginal_f64) {
             println!("{line}");
         }
         println!("\nThe device time of a run with -o by dispatch (timestamps inside the pass):\n");
-        for line in split {
+        for line in split.iter().chain(&split_f64) {
             println!("{line}");
         }
         // Which host thread the output keeps busy: the runner ("main"),
