@@ -30,8 +30,8 @@ pub struct GpuContext {
     /// Group 1: the step offset (dynamic) and the batch (or the batches).
     pub batch_layout: wgpu::BindGroupLayout,
     pipelines: Arc<Mutex<HashMap<String, wgpu::ComputePipeline>>>,
-    /// The output kernels, compiled on first use.
-    /// The output kernels, by precision (`GpuReal::NAME`).
+    /// The output kernels by precision (`GpuReal::NAME`), compiled on
+    /// first use.
     record: Arc<Mutex<HashMap<&'static str, Arc<RecordPipelines>>>>,
 }
 
