@@ -274,3 +274,85 @@ fn f64_output_samples_are_recorded_on_the_device() {
         );
     }
 }
+
+/// An f64 ensemble records each scene's samples on the device as the
+/// scene's solo f64 run does: the same samples at the same steps, to f64
+/// round-off (lavapipe may round an ensemble's per-scene constants' last
+/// bit otherwise than a solo run's), with the fast cadence switching per
+/// scene. Each scene's region of the record buffers follows the f64
+/// layout: a plan's fast flag written at the f32 layout's offset broke
+/// every scene but the last. Control: scene 1's samples are not scene 0's.
+#[test]
+fn an_f64_ensemble_records_every_scene_as_its_solo_run() {
+    use slipfront::engines::gpu::ensemble::GpuEnsemble;
+    use slipfront::engines::SamplePlan;
+    let triggered = |extra: &[&str]| {
+        let s = slipfront::app::verify::small_triggered_scene(extra).unwrap();
+        Model::from_scenario(&s, false).unwrap()
+    };
+    let models = vec![
+        triggered(&[]),
+        triggered(&["friction.static_coefficient=0.45"]),
+        triggered(&["time.seed=11", "loading.normal.force=1800"]),
+    ];
+    let m = &models[0];
+    let every = |t: f64| ((t / m.dt).round() as u64).max(1);
+    let plan = SamplePlan {
+        prep_steps: m.prep_steps,
+        every_global: every(1e-5),
+        every_interface: every(2e-5),
+        every_bulk: every(5e-5),
+        every_fast: every(1e-6),
+        fast_slip_speed: 1e-3,
+        fast: false,
+    };
+    let chunks = [m.prep_steps, 700, 1300, 1];
+    for path in [GpuPath::OneStep, GpuPath::Persistent] {
+        let opts = GpuOptions {
+            path,
+            ..GpuOptions::default()
+        };
+        let mut e = GpuEnsemble::<f64>::with_precision(&models, opts)
+            .unwrap_or_else(|e| panic!("a GPU adapter with f64 is required: {e}"));
+        let mut got = vec![Vec::new(); models.len()];
+        for (i, &n) in chunks.iter().enumerate() {
+            e.advance(n).unwrap();
+            if i == 0 {
+                for k in 0..models.len() {
+                    assert!(e.record_samples(k, &plan).unwrap(), "{path:?}");
+                }
+            }
+            for (k, g) in got.iter_mut().enumerate() {
+                g.extend(e.take_samples(k));
+            }
+        }
+        let mut solos = Vec::new();
+        for (k, model) in models.iter().enumerate() {
+            let mut g = GpuEngine::<f64>::with_precision(model, opts).unwrap();
+            let mut alone = Vec::new();
+            for (i, &n) in chunks.iter().enumerate() {
+                let target = g.steps_done() + n;
+                advance_to(&mut g, target).unwrap();
+                if i == 0 {
+                    assert!(g.record_samples(&plan).unwrap());
+                }
+                alone.extend(g.take_samples());
+            }
+            assert!(
+                alone.len() > 50,
+                "{path:?} scene {k}: {} samples",
+                alone.len()
+            );
+            let steps =
+                |v: &[slipfront::engines::Sample]| v.iter().map(|x| x.step).collect::<Vec<_>>();
+            assert_eq!(steps(&got[k]), steps(&alone), "{path:?} scene {k}");
+            let (err, field) = worst_error(&alone, &got[k]);
+            assert!(err < 1e-12, "{path:?} scene {k}: {field} off by {err:.2e}");
+            solos.push(alone);
+        }
+        // Scene 1 slips otherwise than scene 0: other samples (a
+        // comparison of two lists of other lengths would not be one).
+        let differs = got[1].len() != solos[0].len() || worst_error(&solos[0], &got[1]).0 > 1e-6;
+        assert!(differs, "{path:?}: scene 1 is not scene 0");
+    }
+}

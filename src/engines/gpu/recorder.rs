@@ -309,7 +309,8 @@ impl<T: GpuReal> Recorder<T> {
     /// (the engine has drained).
     pub fn set_plan(&mut self, queue: &wgpu::Queue, scene: usize, plan: &SamplePlan) {
         debug_assert!(self.samples_like(plan));
-        let at = scene * size_of::<GpuRecordPlan>() + std::mem::offset_of!(GpuRecordPlan, fast);
+        let at =
+            scene * size_of::<GpuRecordPlan<T>>() + std::mem::offset_of!(GpuRecordPlan<T>, fast);
         queue.write_buffer(
             &self.plan_buffer,
             at as u64,
