@@ -6,7 +6,7 @@
 // the caller merges the lane sums in lane order and junction_friction adds
 // the slipping junctions' force, which can hold the block at rest.
 // CPU twin: src/engines/kernels/junctions.rs junction_lane, junction_friction.
-// import: common, coordinates, rng, scene, state
+// import: common, coordinates, junction_store, rng, scene, state
 
 fn junction_stiffness(f_n: real) -> real {
     if c.stiffness_normal_load != 0u {
@@ -86,11 +86,11 @@ struct LanePair {
 }
 
 fn lane_pair(ix: u32, j: u32) -> LanePair {
-    let first = junction_base() + ix * c.junction_count;
+    let first = junction_first(ix);
     let last = first + max(c.junction_count, 1u) - 1u;
     let a = min(first + j, last);
     let b = min(first + j + JUNCTION_LANES, last);
-    return LanePair(junction_state[a], junction_spring[a], junction_state[b], junction_spring[b]);
+    return LanePair(junction_state_at(a), junction_spring_at(a), junction_state_at(b), junction_spring_at(b));
 }
 
 // The lane's sum, its first pair from `loaded` and each later pair loaded
@@ -99,7 +99,7 @@ fn lane_pair(ix: u32, j: u32) -> LanePair {
 // (options::persistent_steps_per_dispatch), and the f64 draws loop.
 fn lane_from(ix: u32, lane: u32, jb: JunctionBlock, ld: Loads, loaded: LanePair) -> LaneSum {
     var total = lane_sum_zero();
-    let first = junction_base() + ix * c.junction_count;
+    let first = junction_first(ix);
     var pair = loaded;
     var second = false;
     for (var j = lane; j < c.junction_count; j += JUNCTION_LANES) {
@@ -171,10 +171,10 @@ fn junction_update(
         total.slipping += 1u;
     }
     if spring_changed {
-        junction_spring[idx] = spring;
+        set_junction_spring(idx, spring);
     }
     if was_slipping || broke {
-        junction_state[idx] = state;
+        set_junction_state(idx, state);
     }
     return total;
 }

@@ -10,7 +10,7 @@
 // start and written back at its end (state_resident.wgsl: the resident
 // kernel, for lattices that fit). Both run this same loop.
 // CPU twin: src/engines/cpu/mod.rs CpuEngine::one_step (one step of its loop).
-// import: bulk_forces, common, coordinates, friction_law, junctions, record_buffers, record_common, scene, state, verlet
+// import: bulk_forces, common, coordinates, friction_law, junctions, lane_partials, record_buffers, record_common, scene, state, verlet
 
 // With an output file, the samples of the batch (batch.records of them,
 // in step order; src/engines/gpu/recorder.rs): a sample of step s is recorded in
@@ -22,31 +22,6 @@
 override PERSISTENT_THREADS: u32 = 256u;
 // Junction lanes two at a time in phase 1 (hardware; see there).
 override TWO_LANES_A_ROUND: bool = true;
-
-// The lane sums of one interface block, lanes first .. first + lanes of
-// lane_partial, merged in lane order (the CPU twin's order). The loads go
-// out eight at a time ahead of their merges: this thread's chain of
-// storage round trips, one per lane, was the step's critical path.
-fn merged_lane_partials(first: u32, lanes: u32) -> LaneSum {
-    var total = lane_sum_zero();
-    var l = 0u;
-    for (; l + 8u <= lanes; l += 8u) {
-        let p0 = lane_partial[first + l];
-        let p1 = lane_partial[first + l + 1u];
-        let p2 = lane_partial[first + l + 2u];
-        let p3 = lane_partial[first + l + 3u];
-        let p4 = lane_partial[first + l + 4u];
-        let p5 = lane_partial[first + l + 5u];
-        let p6 = lane_partial[first + l + 6u];
-        let p7 = lane_partial[first + l + 7u];
-        total = lane_sum_merge(lane_sum_merge(lane_sum_merge(lane_sum_merge(total, p0), p1), p2), p3);
-        total = lane_sum_merge(lane_sum_merge(lane_sum_merge(lane_sum_merge(total, p4), p5), p6), p7);
-    }
-    for (; l < lanes; l++) {
-        total = lane_sum_merge(total, lane_partial[first + l]);
-    }
-    return total;
-}
 
 var<workgroup> stop: u32;
 // First and end step of this dispatch, samples in the batch, the first

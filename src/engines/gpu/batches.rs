@@ -55,7 +55,7 @@ impl<T: GpuReal> GpuEngine<T> {
                 batch.forces_only = forces_only as u32;
                 batch.steps_per_dispatch = self.steps_per_dispatch as u32;
                 batch.parity = self.current as u32;
-                if self.kernel.is_persistent() {
+                if self.kernel.is_persistent() || self.kernel == Kernel::Tiled {
                     batch.records = planned.len() as u32;
                 }
                 batch
@@ -85,23 +85,34 @@ impl<T: GpuReal> GpuEngine<T> {
             pass.set_pipeline(&self.pipeline);
             pass.set_bind_group(0, &self.state_group, &[]);
             match self.kernel {
-                Kernel::OneStep | Kernel::OneStepLanes => {
+                Kernel::OneStep | Kernel::OneStepLanes | Kernel::Tiled => {
+                    // A dispatch per step, or the tiled kernel's of up to
+                    // its halo's steps, each after its gather; a sample's
+                    // step always ends a dispatch.
+                    let offsets: Vec<u64> = planned.iter().map(|p| p.offset).collect();
+                    let ends = super::tiles::dispatch_ends(
+                        self.kernel,
+                        steps,
+                        self.steps_per_dispatch,
+                        &offsets,
+                    );
                     let mut samples = planned.iter().enumerate().peekable();
-                    for i in 0..steps {
-                        let offset = (i * self.offset_stride) as u32;
+                    let mut first = 0;
+                    for &end in &ends {
+                        let offset = (first * self.offset_stride) as u32;
                         pass.set_bind_group(1, &self.batch_group, &[offset]);
+                        // The step that ends this dispatch.
+                        let i = end - 1;
                         // A sample's step dispatch sums its kinetic energy
                         // where the recorder asks (the recording variant).
                         let sample = samples.next_if(|(_, p)| p.offset == i);
+                        debug_assert!(samples.peek().is_none_or(|(_, p)| p.offset > i));
                         let record_step = sample.and_then(|(_, p)| {
                             let rec = self.recorder.as_ref()?;
                             rec.kinetic_in_step(&p.entry)
                                 .then_some(self.record_step.as_ref())
                                 .flatten()
                         });
-                        if let Some(pipeline) = record_step {
-                            pass.set_pipeline(pipeline);
-                        }
                         // With the dispatch timing: a sample's step dispatch
                         // between two timestamps.
                         let mut step_marked = false;
@@ -113,12 +124,20 @@ impl<T: GpuReal> GpuEngine<T> {
                                 t.mark(&mut pass, m);
                             }
                         }
+                        if let Some((_, gather)) = self.tiles.as_ref() {
+                            pass.set_pipeline(gather);
+                            pass.dispatch_workgroups(self.groups.0, self.groups.1, scene_count);
+                            pass.set_pipeline(&self.pipeline);
+                        }
+                        if let Some(pipeline) = record_step {
+                            pass.set_pipeline(pipeline);
+                        }
                         pass.dispatch_workgroups(self.groups.0, self.groups.1, scene_count);
                         if let Some(m) = marks.as_mut() {
                             m.step_dispatched();
                         }
                         if !forces_only {
-                            self.current = 1 - self.current;
+                            self.current = (self.current + (end - first) as usize) % 2;
                         }
                         // The sample of step first + i, from the state this
                         // dispatch read and the forces it computed.
@@ -141,10 +160,11 @@ impl<T: GpuReal> GpuEngine<T> {
                             pass.set_pipeline(&self.pipeline);
                             pass.set_bind_group(0, &self.state_group, &[]);
                         }
+                        first = end;
                     }
-                    self.dispatches += steps;
+                    self.dispatches += ends.len() as u64;
                     if let Some(m) = marks.as_mut() {
-                        m.set_steps(steps);
+                        m.set_steps(ends.len() as u64);
                     }
                 }
                 Kernel::Persistent | Kernel::Resident => {
@@ -358,7 +378,7 @@ impl<T: GpuReal> GpuEngine<T> {
             self.scenes[0].model.ramp_steps,
         );
         let max_batch = match self.kernel {
-            Kernel::OneStep | Kernel::OneStepLanes => ONE_STEP_BATCH,
+            Kernel::OneStep | Kernel::OneStepLanes | Kernel::Tiled => ONE_STEP_BATCH,
             Kernel::Persistent | Kernel::Resident => {
                 PERSISTENT_BATCH.min(self.steps_per_dispatch * ONE_STEP_BATCH)
             }

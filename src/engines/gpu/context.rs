@@ -24,9 +24,9 @@ pub struct GpuContext {
     /// queries: each batch's compute pass is then timed on the device
     /// (`GpuEngine::device_seconds`).
     pub timestamp_period_ns: Option<f64>,
-    /// Group 0 of the one-step kernels and of the persistent kernel (their
-    /// state bindings differ).
-    layouts: Arc<[KernelLayout; 2]>,
+    /// Group 0 of the one-step kernels, of the persistent kernel and of the
+    /// tiled kernel (their state bindings differ).
+    layouts: Arc<[KernelLayout; 3]>,
     /// Group 1: the step offset (dynamic) and the batch (or the batches).
     pub batch_layout: wgpu::BindGroupLayout,
     pipelines: Arc<Mutex<HashMap<String, wgpu::ComputePipeline>>>,
@@ -51,9 +51,9 @@ pub fn shared() -> Result<GpuContext, EngineError> {
         .map_err(EngineError::Gpu)
 }
 
-/// Storage bindings the persistent kernel uses (the most of them: the
-/// scenes' constants, its record buffers and the law state).
-const STORAGE_BINDINGS: u32 = 18;
+/// Storage bindings the tiled kernel uses (the most of them: the scenes'
+/// constants, the state, its halo's scratch buffers and the record entries).
+const STORAGE_BINDINGS: u32 = 19;
 
 /// Group 0's layout of one kernel family and the pipeline layout using it.
 struct KernelLayout {
@@ -68,7 +68,11 @@ pub const STEP_OFFSET: &str = "step_offset";
 
 /// Index in `GpuContext::layouts`.
 fn layout_index(kernel: Kernel) -> usize {
-    kernel.is_persistent() as usize
+    match kernel {
+        Kernel::OneStep | Kernel::OneStepLanes => 0,
+        Kernel::Persistent | Kernel::Resident => 1,
+        Kernel::Tiled => 2,
+    }
 }
 
 /// Lists the adapters with Vulkan/Metal/DX12 support, hardware first.
@@ -158,6 +162,7 @@ impl GpuContext {
                 }
                 // The resident kernel declares the same bindings (tested).
                 Kernel::Persistent | Kernel::Resident => reflect(Kernel::Persistent),
+                Kernel::Tiled => reflect(Kernel::Tiled),
             };
             let group = layout(kernel.entry_point(), &bindings.layout(0, &[]));
             let pipeline = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
@@ -174,6 +179,7 @@ impl GpuContext {
         let layouts = Arc::new([
             kernel_layout(Kernel::OneStep),
             kernel_layout(Kernel::Persistent),
+            kernel_layout(Kernel::Tiled),
         ]);
         let timestamp_period_ns = features
             .contains(wgpu::Features::TIMESTAMP_QUERY)
@@ -209,8 +215,19 @@ impl GpuContext {
         kernel: Kernel,
         constants: &[(&str, f64)],
     ) -> wgpu::ComputePipeline {
+        self.pipeline_of::<T>(kernel, kernel.entry_point(), constants)
+    }
+
+    /// The pipeline of entry point `entry` of `kernel`'s module (the tiled
+    /// kernel's gather beside its steps).
+    pub fn pipeline_of<T: GpuReal>(
+        &self,
+        kernel: Kernel,
+        entry: &str,
+        constants: &[(&str, f64)],
+    ) -> wgpu::ComputePipeline {
         let layout = &self.layouts[layout_index(kernel)].pipeline;
-        let key = format!("{}{kernel:?}{constants:?}", T::NAME);
+        let key = format!("{}{kernel:?}{entry}{constants:?}", T::NAME);
         let mut cache = self.pipelines.lock().expect("pipeline cache");
         cache
             .entry(key)
@@ -223,10 +240,10 @@ impl GpuContext {
                     });
                 self.device
                     .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                        label: Some(kernel.entry_point()),
+                        label: Some(entry),
                         layout: Some(layout),
                         module: &module,
-                        entry_point: Some(kernel.entry_point()),
+                        entry_point: Some(entry),
                         compilation_options: wgpu::PipelineCompilationOptions {
                             constants,
                             ..Default::default()

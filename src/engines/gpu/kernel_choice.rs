@@ -166,7 +166,8 @@ fn kernel_named(name: &str) -> Option<Kernel> {
 }
 
 /// The kernels worth timing on `model`: the lanes kernel only where
-/// junctions give it lanes, the persistent kernel only on small lattices.
+/// junctions give it lanes, the persistent and tiled kernels only on small
+/// lattices (the tiled one without a per-block friction law).
 pub fn candidates(model: &Model) -> Vec<Kernel> {
     let junctions = matches!(
         model.law,
@@ -181,6 +182,10 @@ pub fn candidates(model: &Model) -> Vec<Kernel> {
             // does not fit workgroup memory (skipped with that reason).
             Kernel::Persistent | Kernel::Resident => {
                 model.n_blocks() <= PERSISTENT_MEASURE_MAX_BLOCKS
+            }
+            // Refused at build too where its tile does not fit.
+            Kernel::Tiled => {
+                !model.law.is_per_block() && model.n_blocks() <= PERSISTENT_MEASURE_MAX_BLOCKS
             }
         })
         .collect()

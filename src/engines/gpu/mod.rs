@@ -44,6 +44,7 @@ mod record_pipelines;
 mod recorder;
 mod scene_state;
 pub mod shaders;
+pub mod tiles;
 
 use crate::engines::step_params::Consts;
 use crate::engines::{Engine, EngineError, EngineState, Sample, SamplePlan, Snapshot};
@@ -86,6 +87,9 @@ struct Buffers {
     /// What the persistent kernel binds for the record buffers until it
     /// records output samples (never read then).
     record_placeholders: [wgpu::Buffer; 4],
+    /// The tiled kernel's scratch: each tile's halo blocks (u, v) and
+    /// halo junctions (state, spring); placeholders for the other kernels.
+    tile_scratch: [wgpu::Buffer; 4],
 }
 
 /// Group 0 of `kernel`: the state buffers, and for the persistent kernel the
@@ -117,6 +121,10 @@ fn state_group(
         ("law_state", &b.law_state),
         ("status", &b.status),
         ("lane_partial", &b.lane_partial),
+        ("tile_halo_disp", &b.tile_scratch[0]),
+        ("tile_halo_vel", &b.tile_scratch[1]),
+        ("halo_junction_state", &b.tile_scratch[2]),
+        ("halo_junction_spring", &b.tile_scratch[3]),
         ("plans", plan),
         ("sums", sums),
         ("rows", rows),
@@ -188,6 +196,9 @@ pub struct GpuEngine<T: GpuReal = f32> {
     buffers: Buffers,
     kernel: Kernel,
     pipeline: wgpu::ComputePipeline,
+    /// The tiled kernel's tiles and its halo gather, dispatched before
+    /// each of its dispatches.
+    tiles: Option<(tiles::TileGeometry, wgpu::ComputePipeline)>,
     /// Both state copies (one step) or copy 0 (persistent).
     state_group: wgpu::BindGroup,
     batch_group: wgpu::BindGroup,
@@ -373,6 +384,17 @@ impl<T: GpuReal> GpuEngine<T> {
         if kernel == Kernel::Resident {
             resident_fit::<T>(model, &ctx.limits).map_err(EngineError::Gpu)?;
         }
+        let geometry = match kernel {
+            Kernel::Tiled => {
+                let halo = opts.steps_per_dispatch.unwrap_or(tiles::TILE_HALO as u64);
+                let width = opts.tile_width.unwrap_or(tiles::TILE_WIDTH);
+                let halo = u32::try_from(halo).unwrap_or(u32::MAX);
+                let g = tiles::TileGeometry::new(model, width, halo).map_err(EngineError::Gpu)?;
+                tiles::tiled_fit::<T>(model, &g, &ctx.limits).map_err(EngineError::Gpu)?;
+                Some(g)
+            }
+            _ => None,
+        };
         let device = &ctx.device;
         let storage = |label: &str, bytes: &[u8]| {
             // Zero-sized bindings are invalid: pad empty arrays to one element.
@@ -456,9 +478,32 @@ impl<T: GpuReal> GpuEngine<T> {
             ),
             lane_partial: storage(
                 "lane partial sums",
-                // One WGSL `LaneSum` per lane.
-                bytemuck::cast_slice(&vec![GpuLaneSum::<T>::zeroed(); s * shape.nx * shape.lanes]),
+                // One WGSL `LaneSum` per lane (of each tile's held blocks
+                // for the tiled kernel).
+                bytemuck::cast_slice(&vec![
+                    GpuLaneSum::<T>::zeroed();
+                    s * geometry.map_or(shape.nx * shape.lanes, |g| g
+                        .scratch_per_scene(
+                            nj / shape.nx.max(1),
+                            shape.lanes
+                        )[2])
+                ]),
             ),
+            tile_scratch: {
+                let [blocks, junctions, _] = geometry.map_or([0; 3], |g| {
+                    g.scratch_per_scene(nj / shape.nx.max(1), shape.lanes)
+                });
+                let zeros = |len: usize, bytes: usize| vec![0u8; s * len * bytes];
+                [
+                    storage("tile halo disp", &zeros(blocks, Self::DISP_BYTES)),
+                    storage("tile halo vel", &zeros(blocks, Self::REAL_PAIR_BYTES)),
+                    storage("halo junction state", &zeros(junctions, WORD_PAIR_BYTES)),
+                    storage(
+                        "halo junction spring",
+                        &zeros(junctions, Self::SPRING_BYTES),
+                    ),
+                ]
+            },
             // One element of the largest record struct in this precision.
             record_placeholders: std::array::from_fn(|_| {
                 storage(
@@ -519,7 +564,19 @@ impl<T: GpuReal> GpuEngine<T> {
             constants.push(("RESIDENT_BLOCKS", n as f64));
             constants.push(("REDUCTION_WIDTH", resident_reduction_width::<T>() as f64));
         }
+        if let Some(g) = geometry {
+            constants.push(("TILE_WIDTH", g.width as f64));
+            constants.push(("TILE_HALO", g.halo as f64));
+            constants.push(("TILE_BLOCKS", g.blocks as f64));
+            constants.push(("TILE_THREADS", persistent_threads as f64));
+        }
         let pipeline = ctx.pipeline::<T>(kernel, &constants);
+        let tiles = geometry.map(|g| {
+            let entry = kernel
+                .gather_entry_point()
+                .expect("the tiled kernel gathers");
+            (g, ctx.pipeline_of::<T>(kernel, entry, &constants))
+        });
         let junction_groups = match (kernel, model.law) {
             (Kernel::OneStepLanes, FrictionLaw::Junctions | FrictionLaw::SingleJunction) => {
                 model.nx as u32
@@ -534,13 +591,24 @@ impl<T: GpuReal> GpuEngine<T> {
             0
         };
         let plain_groups = (n as u32 - first_plain).div_ceil(WORKGROUP);
-        let groups = groups_for(junction_groups + plain_groups);
-        let steps_per_dispatch = opts
-            .steps_per_dispatch
-            .unwrap_or_else(|| {
-                persistent_steps_per_dispatch(model, kernel, persistent_threads, ctx.is_software())
-            })
-            .clamp(1, PERSISTENT_BATCH);
+        let groups = match geometry {
+            Some(g) => (g.tiles, 1),
+            None => groups_for(junction_groups + plain_groups),
+        };
+        let steps_per_dispatch = match geometry {
+            Some(g) => g.halo as u64,
+            None => opts
+                .steps_per_dispatch
+                .unwrap_or_else(|| {
+                    persistent_steps_per_dispatch(
+                        model,
+                        kernel,
+                        persistent_threads,
+                        ctx.is_software(),
+                    )
+                })
+                .clamp(1, PERSISTENT_BATCH),
+        };
         ctx.check()?;
         let scenes = models
             .iter()
@@ -561,6 +629,7 @@ impl<T: GpuReal> GpuEngine<T> {
             buffers,
             kernel,
             pipeline,
+            tiles,
             state_group,
             batch_group,
             batch_buffer,
@@ -654,7 +723,9 @@ impl<T: GpuReal> GpuEngine<T> {
                 // The host has taken the samples up to here (none before
                 // driving, and none at its first step).
                 rec.recorded_through = Some(self.step.max(model.prep_steps));
-                if persistent || rec.kinetic_in_steps() {
+                // The tiled kernel reads the entries: its dispatches end
+                // at samples.
+                if persistent || rec.kinetic_in_steps() || self.kernel == Kernel::Tiled {
                     let records = rec.state_bindings();
                     self.state_group = state_group(&self.ctx, self.kernel, &self.buffers, records);
                 }
@@ -735,6 +806,19 @@ impl<T: GpuReal> GpuEngine<T> {
                 self.steps_per_dispatch,
                 self.persistent_threads
             ),
+            Kernel::Tiled => {
+                let (g, _) = self.tiles.as_ref().expect("the tiled kernel has tiles");
+                format!(
+                    "tiled kernel ({} tiles of {} columns, halo {}, {} bytes of workgroup memory \
+                     each), up to {} steps per dispatch, {} threads",
+                    g.tiles,
+                    g.width,
+                    g.halo,
+                    g.workgroup_bytes::<T>(),
+                    g.halo,
+                    self.persistent_threads
+                )
+            }
         }
     }
 }

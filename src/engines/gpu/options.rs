@@ -78,6 +78,10 @@ pub enum GpuPath {
     /// the whole dispatch (lattices that fit the adapter's workgroup memory:
     /// Table S1 needs 46 KB in mixed f32).
     Resident,
+    /// Temporal blocking: a workgroup per column tile steps its tile and a
+    /// halo of 4 columns for up to 4 steps per dispatch (small lattices
+    /// with junction friction or none).
+    Tiled,
 }
 
 /// Where the output samples of a run with an output file are made.
@@ -101,8 +105,11 @@ pub struct GpuOptions {
     /// Threads of the persistent and resident kernels' workgroup; None:
     /// the kernel's default (`PERSISTENT_THREADS`, `RESIDENT_THREADS`).
     pub persistent_threads: Option<u32>,
-    /// Steps per persistent dispatch instead of the adapter's safe default.
+    /// Steps per persistent dispatch instead of the adapter's safe default;
+    /// for the tiled kernel its halo, the most steps per dispatch.
     pub steps_per_dispatch: Option<u64>,
+    /// Columns each tile of the tiled kernel owns (`tiles::TILE_WIDTH`).
+    pub tile_width: Option<u32>,
     /// Batches an `advance` may leave running once its runner lets it run
     /// ahead (`Engine::run_ahead`); 0: every advance waits for its steps.
     pub run_ahead: usize,
@@ -115,6 +122,7 @@ impl Default for GpuOptions {
             output: GpuOutput::Device,
             persistent_threads: None,
             steps_per_dispatch: None,
+            tile_width: None,
             run_ahead: RUN_AHEAD_BATCHES,
         }
     }
@@ -214,6 +222,7 @@ impl GpuPath {
             Kernel::OneStepLanes => GpuPath::OneStepLanes,
             Kernel::Persistent => GpuPath::Persistent,
             Kernel::Resident => GpuPath::Resident,
+            Kernel::Tiled => GpuPath::Tiled,
         }
     }
 
@@ -241,6 +250,7 @@ pub fn choose_kernel(path: GpuPath, software: bool) -> Kernel {
         GpuPath::OneStepLanes => Kernel::OneStepLanes,
         GpuPath::Persistent => Kernel::Persistent,
         GpuPath::Resident => Kernel::Resident,
+        GpuPath::Tiled => Kernel::Tiled,
         // Measured on lavapipe (BENCHMARKS.md): barriers cost more than
         // dispatches there, so neither the lanes nor the persistent kernel
         // pays.

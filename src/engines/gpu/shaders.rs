@@ -4,7 +4,10 @@
 //! Every file of `shaders/` says what it uses in an `// import:` line: other
 //! files by name, or a slot that each module fills with one file of its
 //! choice: `state` (the one-step kernels' ping-pong state, the persistent
-//! kernel's in storage, or the resident kernel's in workgroup memory), `coordinates` (double-single or f64: the precision) and
+//! kernel's in storage, the resident kernel's in workgroup memory, or the
+//! tiled kernel's tile and halo), `junction_store` (where the junctions
+//! are stepped: storage, or for the tiled kernel its halo's private
+//! copies too), `coordinates` (double-single or f64: the precision) and
 //! `bindings` (where the output code finds the state buffers: the
 //! kernels' common.wgsl, or the output module's read-only views). A module
 //! is the generated prelude of `layout.rs` and the closure of its entry
@@ -34,7 +37,10 @@ wgsl_files!(
     "common",
     "coord_f64",
     "double_single",
+    "junction_store",
+    "junction_tiled",
     "junctions",
+    "lane_partials",
     "one_step",
     "one_step_lanes",
     "persistent",
@@ -47,7 +53,9 @@ wgsl_files!(
     "state_one_step",
     "state_persistent",
     "state_resident",
+    "state_tiled",
     "step_forces",
+    "tiled",
     "verlet",
 );
 
@@ -100,16 +108,18 @@ pub fn imports(text: &str) -> Result<Vec<&str>, String> {
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Slots {
     pub state: &'static str,
+    pub junction_store: &'static str,
     pub coordinates: &'static str,
     pub bindings: &'static str,
 }
 
 impl Slots {
-    /// A kernel's slots: its state, `T`'s coordinates, the kernels'
-    /// bindings.
+    /// A kernel's slots: its state, the junctions in storage, `T`'s
+    /// coordinates, the kernels' bindings.
     pub fn kernel<T: GpuReal>(state: &'static str) -> Slots {
         Slots {
             state,
+            junction_store: "junction_store",
             coordinates: T::COORDINATES,
             bindings: "common",
         }
@@ -118,6 +128,7 @@ impl Slots {
     fn resolve<'a>(&self, name: &'a str) -> &'a str {
         match name {
             "state" => self.state,
+            "junction_store" => self.junction_store,
             "coordinates" => self.coordinates,
             "bindings" => self.bindings,
             other => other,
@@ -195,14 +206,18 @@ pub enum Kernel {
     /// The persistent kernel's loop with each scene's u and v in its
     /// workgroup's memory for the whole dispatch (lattices that fit).
     Resident,
+    /// Temporal blocking: a workgroup per column tile and scene steps its
+    /// tile and a halo for several steps per dispatch (`tiled.wgsl`).
+    Tiled,
 }
 
 impl Kernel {
-    pub const ALL: [Kernel; 4] = [
+    pub const ALL: [Kernel; 5] = [
         Kernel::OneStep,
         Kernel::OneStepLanes,
         Kernel::Persistent,
         Kernel::Resident,
+        Kernel::Tiled,
     ];
 
     pub fn entry_point(self) -> &'static str {
@@ -211,7 +226,14 @@ impl Kernel {
             Kernel::OneStepLanes => "one_step_lanes",
             // One loop (persistent.wgsl), two places for the state.
             Kernel::Persistent | Kernel::Resident => "persistent_steps",
+            Kernel::Tiled => "tiled_steps",
         }
+    }
+
+    /// The entry point dispatched before each of this kernel's own, if
+    /// any: the tiled kernel's copy of its tiles' halos.
+    pub fn gather_entry_point(self) -> Option<&'static str> {
+        (self == Kernel::Tiled).then_some("tile_gather")
     }
 
     /// Many steps per dispatch, one workgroup per scene: the persistent
@@ -228,8 +250,12 @@ impl Kernel {
             Kernel::OneStepLanes => ("state_one_step", "one_step_lanes"),
             Kernel::Persistent => ("state_persistent", "persistent"),
             Kernel::Resident => ("state_resident", "persistent"),
+            Kernel::Tiled => ("state_tiled", "tiled"),
         };
-        let slots = Slots::kernel::<T>(state);
+        let mut slots = Slots::kernel::<T>(state);
+        if self == Kernel::Tiled {
+            slots.junction_store = "junction_tiled";
+        }
         compose(&super::layout::wgsl_prelude::<T>(), entry, &slots)
             .expect("the shader files' imports resolve (tested)")
     }
@@ -295,12 +321,13 @@ pub fn validate_kernel<T: GpuReal>(phase: Kernel) -> Result<naga::Module, String
     naga::valid::Validator::new(naga::valid::ValidationFlags::all(), T::CAPABILITIES)
         .validate(&module)
         .map_err(|e| format!("{}: {}", phase.entry_point(), e.emit_to_string(&src)))?;
-    if !module
-        .entry_points
-        .iter()
-        .any(|e| e.name == phase.entry_point())
-    {
-        return Err(format!("{}: entry point missing", phase.entry_point()));
+    for entry in std::iter::once(phase.entry_point()).chain(phase.gather_entry_point()) {
+        if !module.entry_points.iter().any(|e| e.name == entry) {
+            return Err(format!(
+                "{}: entry point {entry} missing",
+                phase.entry_point()
+            ));
+        }
     }
     Ok(module)
 }
@@ -360,7 +387,16 @@ mod tests {
         let mut slots = Slots::kernel::<T>("state_one_step");
         match name {
             "state_one_step" | "state_persistent" | "state_resident" => slots.state = name,
-            "persistent" => slots.state = "state_persistent",
+            "persistent" | "lane_partials" => slots.state = "state_persistent",
+            "state_tiled" | "tiled" => {
+                slots.state = "state_tiled";
+                slots.junction_store = "junction_tiled";
+            }
+            "junction_store" => slots.junction_store = name,
+            "junction_tiled" => {
+                slots.state = "state_tiled";
+                slots.junction_store = name;
+            }
             "double_single" | "coord_f64" => slots.coordinates = name,
             "common" | "record" => slots.bindings = name,
             _ => {}
@@ -449,7 +485,8 @@ mod tests {
         for (name, text) in all_files() {
             let wanted = imports(text).unwrap_or_else(|e| panic!("{name}: {e}"));
             for w in wanted {
-                let known = file(w).is_some() || ["state", "coordinates", "bindings"].contains(&w);
+                let known = file(w).is_some()
+                    || ["state", "junction_store", "coordinates", "bindings"].contains(&w);
                 assert!(known, "{name}.wgsl imports unknown {w}");
             }
         }

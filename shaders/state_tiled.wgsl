@@ -1,0 +1,119 @@
+// Block state of the tiled kernel (temporal blocking, tiled.wgsl): a
+// workgroup owns the columns [tile_x0, tile_x1) of one scene, all rows, and
+// holds them with a halo of up to TILE_HALO columns on each side in
+// workgroup memory, at local slot row · TILE_SPAN + (column − tile_lo).
+// In storage the state is the one-step kernels' pair of copies: a
+// dispatch reads copy (parity + first step) and leaves steps end − 1 and
+// end in their copies as a run of one-step dispatches would. The halo's
+// columns come from tile_halo_disp/vel, where tile_gather copied them
+// before the dispatch: a neighbour writes its own columns meanwhile.
+// CPU twin: src/engines/gpu/tiles.rs TileGeometry (the host side of this layout).
+// import: scene
+
+@group(0) @binding(1) var<storage, read_write> disp_a: array<Disp>;
+@group(0) @binding(2) var<storage, read_write> vel_a: array<vec2<real>>;
+@group(0) @binding(3) var<storage, read_write> disp_b: array<Disp>;
+@group(0) @binding(4) var<storage, read_write> vel_b: array<vec2<real>>;
+// The halo of each tile of each scene: TILE_BLOCKS slots per tile.
+@group(0) @binding(19) var<storage, read_write> tile_halo_disp: array<Disp>;
+@group(0) @binding(20) var<storage, read_write> tile_halo_vel: array<vec2<real>>;
+// Lane sums of each tile's interface blocks: TILE_SPAN · lanes per tile.
+@group(0) @binding(12) var<storage, read_write> lane_partial: array<LaneSum>;
+
+// Columns a tile owns, and steps (≤ halo columns) a dispatch may run.
+override TILE_WIDTH: u32 = 8u;
+override TILE_HALO: u32 = 4u;
+// (TILE_WIDTH + 2 TILE_HALO) · nz: the host compiles it to the lattice.
+override TILE_BLOCKS: u32 = 1u;
+
+var<workgroup> tile_disp: array<Disp, TILE_BLOCKS>;
+var<workgroup> tile_vel: array<vec2<real>, TILE_BLOCKS>;
+
+// This workgroup's tile, its owned columns and the columns it holds.
+var<private> tile: u32;
+var<private> tile_x0: u32;
+var<private> tile_x1: u32;
+var<private> tile_lo: u32;
+var<private> tile_hi: u32;
+
+fn tile_span() -> u32 {
+    return TILE_WIDTH + 2u * TILE_HALO;
+}
+
+fn tile_count() -> u32 {
+    return (c.nx + TILE_WIDTH - 1u) / TILE_WIDTH;
+}
+
+fn tile_enter(t: u32) {
+    tile = t;
+    tile_x0 = t * TILE_WIDTH;
+    tile_x1 = min(c.nx, tile_x0 + TILE_WIDTH);
+    tile_lo = tile_x0 - min(tile_x0, TILE_HALO);
+    tile_hi = min(c.nx, tile_x1 + TILE_HALO);
+}
+
+// This tile's index among every scene's tiles (its scratch regions).
+fn tile_index() -> u32 {
+    return scene * tile_count() + tile;
+}
+
+fn tile_owns(ix: u32) -> bool {
+    return ix >= tile_x0 && ix < tile_x1;
+}
+
+fn tile_slot_at(ix: u32, iz: u32) -> u32 {
+    return iz * tile_span() + (ix - tile_lo);
+}
+
+fn tile_slot(i: u32) -> u32 {
+    return tile_slot_at(i % c.nx, i / c.nx);
+}
+
+fn load_disp(i: u32) -> Disp {
+    return tile_disp[tile_slot(i)];
+}
+
+fn load_vel(i: u32) -> vec2<real> {
+    return tile_vel[tile_slot(i)];
+}
+
+fn store_block(i: u32, u: Disp, v: vec2<real>) {
+    let k = tile_slot(i);
+    tile_disp[k] = u;
+    tile_vel[k] = v;
+}
+
+// The storage copy that holds step `step` of the batch (the one-step
+// kernels' convention, state_one_step.wgsl).
+fn copy_of(step: u32) -> u32 {
+    return (batch.parity + step) & 1u;
+}
+
+fn stored_disp(i: u32, copy: u32) -> Disp {
+    if copy == 1u {
+        return disp_b[block_base() + i];
+    }
+    return disp_a[block_base() + i];
+}
+
+fn stored_vel(i: u32, copy: u32) -> vec2<real> {
+    if copy == 1u {
+        return vel_b[block_base() + i];
+    }
+    return vel_a[block_base() + i];
+}
+
+fn store_copy(i: u32, copy: u32, u: Disp, v: vec2<real>) {
+    if copy == 1u {
+        disp_b[block_base() + i] = u;
+        vel_b[block_base() + i] = v;
+    } else {
+        disp_a[block_base() + i] = u;
+        vel_a[block_base() + i] = v;
+    }
+}
+
+// The halo scratch slot of block (ix, iz) of this tile.
+fn halo_slot(ix: u32, iz: u32) -> u32 {
+    return tile_index() * TILE_BLOCKS + tile_slot_at(ix, iz);
+}

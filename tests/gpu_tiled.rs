@@ -1,0 +1,140 @@
+//! The tiled kernel (temporal blocking, `shaders/tiled.wgsl`) against the
+//! one-step kernel, on whatever adapter is present (lavapipe in CI): the
+//! same phase functions in the same order, so the same bits, whatever the
+//! tiles, the halo, where batches begin and where samples fall. These tests
+//! fail, never skip, when no adapter exists.
+
+use slipfront::engines::gpu::{GpuEngine, GpuOptions, GpuPath};
+use slipfront::model::scenario::{Scenario, DEFAULT_SCENARIO};
+use slipfront::{advance_to, Engine, Model, Snapshot};
+
+fn model(set: &[&str]) -> Model {
+    let set: Vec<String> = set.iter().map(|s| s.to_string()).collect();
+    let s = Scenario::parse(DEFAULT_SCENARIO, "test", &set).unwrap();
+    Model::from_scenario(&s, false).unwrap()
+}
+
+/// The small side-driven scene of the cross-checks (29 × 16 blocks),
+/// driven fast enough that junctions break within the run.
+fn driven() -> Model {
+    let small: &[&str] = &slipfront::app::verify::SMALL_SCENE;
+    model(&[small, &["loading.drive.velocity=0.4"]].concat())
+}
+
+fn tiled(m: &Model, width: u32, halo: u64) -> GpuEngine {
+    let opts = GpuOptions {
+        path: GpuPath::Tiled,
+        tile_width: Some(width),
+        steps_per_dispatch: Some(halo),
+        ..GpuOptions::default()
+    };
+    GpuEngine::with_options(m, opts)
+        .unwrap_or_else(|e| panic!("a GPU adapter is required (lavapipe in CI): {e}"))
+}
+
+fn one_step(m: &Model) -> GpuEngine {
+    let opts = GpuOptions {
+        path: GpuPath::OneStep,
+        ..GpuOptions::default()
+    };
+    GpuEngine::with_options(m, opts)
+        .unwrap_or_else(|e| panic!("a GPU adapter is required (lavapipe in CI): {e}"))
+}
+
+fn run_to(e: &mut GpuEngine, end: u64) -> Snapshot {
+    advance_to(e, end).unwrap();
+    e.snapshot().unwrap()
+}
+
+/// Through the normal-load phase and into ruptures, the tiled kernel ends
+/// where the one-step kernel ends, bit for bit: tiles of 8 columns with
+/// the default halo (29 columns: a last tile of 5), a halo wider than the
+/// tiles (it reaches past the neighbour), one tile holding the whole
+/// lattice, and one column a tile. Negative control: a drive 1e-9 faster
+/// is flagged.
+#[test]
+fn the_tiled_kernel_is_the_one_step_kernel_bit_for_bit() {
+    let m = driven();
+    let end = m.prep_steps + 2500;
+    let reference = run_to(&mut one_step(&m), end);
+    println!("{} ruptures by step {end}", reference.total_ruptures());
+    assert!(reference.total_ruptures() > 100, "junctions broke");
+    for (width, halo) in [(8, 4), (3, 7), (32, 2), (1, 1)] {
+        let mut e = tiled(&m, width, halo);
+        let how = e.describe();
+        assert!(how.contains("tiled kernel"), "{how}");
+        let got = run_to(&mut e, end);
+        assert!(
+            got == reference,
+            "tiles of {width}, halo {halo}: {} ruptures against {}",
+            got.total_ruptures(),
+            reference.total_ruptures()
+        );
+        // Up to `halo` steps a dispatch (and one at each batch's start).
+        let dispatches = e.dispatches().unwrap();
+        assert!(dispatches * halo >= end, "{dispatches} dispatches");
+        if halo > 1 {
+            assert!(dispatches < end, "{dispatches} dispatches for {end} steps");
+        }
+    }
+    let mut faster = m.clone();
+    if let slipfront::model::Driver::SideSpring { velocity, .. } = &mut faster.driver {
+        *velocity *= 1.0 + 1e-9;
+    }
+    let other = run_to(&mut tiled(&faster, 8, 4), end);
+    assert_ne!(other.disp, reference.disp, "control");
+}
+
+/// Batches cut every 37 steps, each followed by a snapshot (whose forces
+/// the next batch's first step reads from storage), give the bits of one
+/// long run.
+#[test]
+fn tiled_bits_do_not_depend_on_where_batches_begin() {
+    let m = driven();
+    let end = m.prep_steps + 2500;
+    let whole = run_to(&mut tiled(&m, 8, 4), end);
+    let mut cut = tiled(&m, 8, 4);
+    while cut.steps_done() < end {
+        let next = (cut.steps_done() + 37).min(end);
+        advance_to(&mut cut, next).unwrap();
+        cut.snapshot().unwrap();
+    }
+    let b = cut.snapshot().unwrap();
+    assert!(whole.total_ruptures() > 0, "junctions broke");
+    assert!(whole == b, "chunks changed the bits");
+}
+
+/// A per-block friction law keeps state a halo would race on, and a tile
+/// that does not fit workgroup memory cannot run: both are refused with
+/// the reason and what to use instead; so is a halo of 0 steps.
+#[test]
+fn the_tiled_kernel_refuses_what_it_cannot_step() {
+    let coulomb = model(&["friction.law=\"coulomb\""]);
+    let err = match GpuEngine::with_options(
+        &coulomb,
+        GpuOptions {
+            path: GpuPath::Tiled,
+            ..GpuOptions::default()
+        },
+    ) {
+        Ok(_) => panic!("a per-block law must be refused"),
+        Err(e) => e.to_string(),
+    };
+    assert!(err.contains("coulomb keeps per-block state"), "{err}");
+    let m = driven();
+    let wide = GpuOptions {
+        path: GpuPath::Tiled,
+        tile_width: Some(4000),
+        ..GpuOptions::default()
+    };
+    let err = GpuEngine::with_options(&m, wide).err().unwrap().to_string();
+    assert!(err.contains("workgroup memory"), "{err}");
+    assert!(err.contains("the adapter allows"), "{err}");
+    let none = GpuOptions {
+        path: GpuPath::Tiled,
+        steps_per_dispatch: Some(0),
+        ..GpuOptions::default()
+    };
+    let err = GpuEngine::with_options(&m, none).err().unwrap().to_string();
+    assert!(err.contains("tile halo 0"), "{err}");
+}
