@@ -9,7 +9,8 @@
 //!    step and block-steps/s, each kernel on the scene alone;
 //! 2. what `auto` chooses on Table S1 (timed now, as `--gpu-path measure`),
 //!    and the persistent and resident kernels there with 256, 512 and 1024
-//!    threads (`--gpu-threads`: more threads, fewer registers each); and
+//!    threads (`--gpu-threads`: more threads, fewer registers each); the
+//!    tiled kernel by tile width, halo and threads; and
 //!    what the junctions cost there (Ns = 100, Ns = 16, Coulomb friction);
 //! 3. ensembles of 1 to 1024 Table S1 scenes (the precursors scene, a seed
 //!    each) in one dispatch, per kernel (the persistent and resident ones
@@ -193,6 +194,37 @@ fn solo_step_seconds(
     let (dt, steps, cpu) =
         timed_with_cpu(|n| e.advance(n), min_seconds).map_err(|e| e.to_string())?;
     Ok((dt / steps as f64, cpu / dt))
+}
+
+/// The tiled kernel on `model` by tile width, halo (the most steps per
+/// dispatch) and threads: which tiles fill the GPU's SMs and how many
+/// steps a dispatch should take (`shaders/tiled.wgsl`).
+fn tiled_grid(model: &Model, quick: bool, min_seconds: f64) {
+    println!("The tiled kernel by tile width, halo (steps per dispatch) and threads:\n");
+    println!("| tile width | halo | threads | µs/step | host CPU / wall |");
+    println!("| ---: | ---: | ---: | ---: | ---: |");
+    let (widths, halos, threads): (&[u32], &[u64], &[u32]) = if quick {
+        (&[8, 16], &[2, 4], &[256])
+    } else {
+        (&[4, 8, 16], &[2, 4, 8], &[256, 1024])
+    };
+    for &width in widths {
+        for &halo in halos {
+            for &t in threads {
+                let opts = GpuOptions {
+                    tile_width: Some(width),
+                    steps_per_dispatch: Some(halo),
+                    ..with_threads(Kernel::Tiled, Some(t))
+                };
+                let figure = match solo_step_seconds(model, opts, min_seconds) {
+                    Ok((s, host)) => format!("{:.2} | {host:.2}", s * 1e6),
+                    Err(e) => format!("not run: {e} |"),
+                };
+                println!("| {width} | {halo} | {t} | {figure} |");
+            }
+        }
+    }
+    println!();
 }
 
 /// The precursors scene (Table S1, Ns = 100) with seed `seed`.
@@ -435,6 +467,7 @@ fn main() {
             }
         }
         println!();
+        tiled_grid(&s1, quick, min_seconds);
         junction_cost(min_seconds);
     }
     if let Some(_timer) = sections.start(3) {

@@ -26,9 +26,13 @@
 // CPU twin: src/engines/cpu/mod.rs CpuEngine::one_step (each step of the loop).
 // import: bulk_forces, common, coordinates, junction_store, junctions, lane_partials, scene, state, verlet
 
-@group(0) @binding(16) var<storage, read> record_entries: array<RecordEntry>;
+// The batch's record entries (RecordEntry) as words: the recorder lays
+// them out RECORD_ENTRY_WORDS apart, the dynamic-offset alignment of the
+// output kernels that read one each; a step offset is an entry's first word.
+@group(0) @binding(16) var<storage, read> record_entry_words: array<u32>;
 
 override TILE_THREADS: u32 = 64u;
+override RECORD_ENTRY_WORDS: u32 = 64u;
 
 // The forces of the held blocks at the step under way.
 var<workgroup> tile_force: array<vec2<real>, TILE_BLOCKS>;
@@ -42,7 +46,7 @@ fn tile_dispatch_end(first: u32) -> u32 {
         end = min(1u, batch.steps);
     }
     for (var k = 0u; k < batch.records; k++) {
-        let offset = record_entries[k].offset;
+        let offset = record_entry_words[k * RECORD_ENTRY_WORDS];
         if offset >= first {
             end = min(end, offset + 1u);
             break;

@@ -81,6 +81,7 @@ fn each_scene_of_an_ensemble_matches_its_solo_run() {
         GpuPath::OneStepLanes,
         GpuPath::Persistent,
         GpuPath::Resident,
+        GpuPath::Tiled,
     ] {
         let mut e = ensemble(&models, path);
         e.advance(steps).unwrap();
@@ -276,6 +277,7 @@ fn an_ensemble_records_every_scene_on_the_device_as_its_solo_run() {
         GpuPath::OneStepLanes,
         GpuPath::Persistent,
         GpuPath::Resident,
+        GpuPath::Tiled,
     ] {
         let mut e = ensemble(&models, path);
         let mut got = vec![Vec::new(); models.len()];

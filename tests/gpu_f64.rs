@@ -65,6 +65,7 @@ fn gpu_f64_matches_cpu_f64_through_junction_ruptures_on_every_kernel() {
         GpuPath::OneStepLanes,
         GpuPath::Persistent,
         GpuPath::Resident,
+        GpuPath::Tiled,
     ] {
         let mut g = gpu_f64(&m, path);
         assert!(g.describe().starts_with("gpu f64, "), "{}", g.describe());

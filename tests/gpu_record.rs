@@ -63,6 +63,7 @@ fn device_samples_match_the_cpu_twin_on_host_snapshots() {
         (GpuPath::Persistent, None),
         (GpuPath::Resident, Some(256)),
         (GpuPath::Resident, Some(64)),
+        (GpuPath::Tiled, None),
     ];
     for (path, threads) in kernels {
         let mut dev = engine_with_threads(&m, path, GpuOutput::Device, threads);

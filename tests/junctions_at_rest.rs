@@ -53,6 +53,7 @@ fn engines(m: &Model) -> Vec<(String, Precision, Box<dyn Engine>)> {
         GpuPath::OneStepLanes,
         GpuPath::Persistent,
         GpuPath::Resident,
+        GpuPath::Tiled,
     ] {
         let opts = GpuOptions {
             path,

@@ -129,6 +129,7 @@ fn state_group(
         ("sums", sums),
         ("rows", rows),
         ("record_entries", entries),
+        ("record_entry_words", entries),
     ]
     .map(|(name, buffer)| (name, buffer.as_entire_binding()));
     ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
@@ -239,6 +240,13 @@ pub struct GpuEngine<T: GpuReal = f32> {
     samples: Vec<Vec<Sample>>,
     /// Why `auto` took this kernel, when it measured.
     choice: Option<kernel_choice::KernelChoice>,
+}
+
+/// Bytes between the record entries of the one-step and tiled kernels'
+/// batches: each output dispatch reads its own at a dynamic offset, so a
+/// multiple of the adapter's offset alignment, and at least one entry.
+fn record_entry_stride(offset_stride: u64) -> u64 {
+    (std::mem::size_of::<layout::GpuRecordEntry>() as u64).next_multiple_of(offset_stride)
 }
 
 pub(crate) fn groups_for(workgroups: u32) -> (u32, u32) {
@@ -569,6 +577,9 @@ impl<T: GpuReal> GpuEngine<T> {
             constants.push(("TILE_HALO", g.halo as f64));
             constants.push(("TILE_BLOCKS", g.blocks as f64));
             constants.push(("TILE_THREADS", persistent_threads as f64));
+            // Where the recorder puts its entries (`record_entry_stride`).
+            let words = record_entry_stride(offset_stride) / 4;
+            constants.push(("RECORD_ENTRY_WORDS", words as f64));
         }
         let pipeline = ctx.pipeline::<T>(kernel, &constants);
         let tiles = geometry.map(|g| {
@@ -717,7 +728,7 @@ impl<T: GpuReal> GpuEngine<T> {
         };
         let models: Vec<Model> = self.scenes.iter().map(|s| s.model.clone()).collect();
         let model = &models[0];
-        let stride = (!persistent).then_some(self.offset_stride);
+        let stride = (!persistent).then_some(record_entry_stride(self.offset_stride));
         match recorder::Recorder::new(&self.ctx, &models, state, plan, stride) {
             Ok(mut rec) => {
                 // The host has taken the samples up to here (none before
