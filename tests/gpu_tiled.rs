@@ -4,9 +4,13 @@
 //! tiles, the halo, where batches begin and where samples fall. These tests
 //! fail, never skip, when no adapter exists.
 
-use slipfront::engines::gpu::{GpuEngine, GpuOptions, GpuPath};
+use slipfront::engines::gpu::{GpuEngine, GpuOptions, GpuOutput, GpuPath};
 use slipfront::model::scenario::{Scenario, DEFAULT_SCENARIO};
 use slipfront::{advance_to, Engine, Model, Snapshot};
+
+#[path = "support/record_twins.rs"]
+mod record_twins;
+use record_twins::{large_lattice, plan, twins, worst_error};
 
 fn model(set: &[&str]) -> Model {
     let set: Vec<String> = set.iter().map(|s| s.to_string()).collect();
@@ -137,4 +141,44 @@ fn the_tiled_kernel_refuses_what_it_cannot_step() {
     };
     let err = GpuEngine::with_options(&m, none).err().unwrap().to_string();
     assert!(err.contains("tile halo 0"), "{err}");
+}
+
+/// A lattice above `RECORD_SMALL_BLOCKS` (257 × 65) records its samples
+/// in two output dispatches after a tiled dispatch (the tiled kernel has no
+/// recording variant to sum the kinetic energy in its step): the samples
+/// equal the CPU twin on host snapshots of the same kernel, and the twin
+/// a step later is flagged.
+#[test]
+fn a_large_lattice_on_the_tiled_kernel_records_its_samples_on_the_device() {
+    let s = large_lattice();
+    let m = Model::from_scenario(&s, false).unwrap();
+    assert!(m.n_blocks() > slipfront::engines::gpu::RECORD_SMALL_BLOCKS);
+    let plan = plan(&m, &s);
+    // 8 columns of 65 rows fit lavapipe's 32 KB of workgroup memory.
+    let engine = |output| {
+        let opts = GpuOptions {
+            path: GpuPath::Tiled,
+            output,
+            tile_width: Some(4),
+            steps_per_dispatch: Some(2),
+            ..GpuOptions::default()
+        };
+        GpuEngine::with_options(&m, opts).expect("a GPU adapter (lavapipe in CI)")
+    };
+    let mut dev = engine(GpuOutput::Device);
+    assert!(dev.record_samples(&plan).unwrap());
+    advance_to(&mut dev, m.total_steps()).unwrap();
+    let samples = dev.take_samples();
+    assert!(samples.len() >= 8, "{} samples", samples.len());
+    assert!(samples.iter().any(|x| x.bulk.is_some()));
+    let mut host = engine(GpuOutput::Host);
+    let (twin, later) = twins(&m, &mut host, &samples);
+    let (err, field) = worst_error(&twin, &samples);
+    println!(
+        "{} samples: device against twin {err:.2e} ({field})",
+        samples.len()
+    );
+    assert!(err < 1e-5, "{field} off by {err:.2e} of its scale");
+    let (shifted, field) = worst_error(&later, &samples);
+    assert!(shifted > 1e-4, "a one-step shift must be flagged ({field})");
 }

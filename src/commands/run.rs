@@ -20,7 +20,8 @@ pub struct RunArgs {
     /// GPU kernel: one-step (1 dispatch per step), one-step-lanes
     /// (junction lanes in parallel), persistent (many steps per
     /// dispatch, small lattices), resident (persistent with the lattice
-    /// in workgroup memory, where it fits), auto (on a hardware GPU the fastest,
+    /// in workgroup memory, where it fits), tiled (a workgroup per column
+    /// tile, up to 4 steps per dispatch; junction friction), auto (on a hardware GPU the fastest,
     /// timed on this scene at start-up and cached per adapter and
     /// lattice) or measure (time them now, on any adapter).
     #[arg(long, value_enum, default_value = "auto")]

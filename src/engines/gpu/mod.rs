@@ -729,7 +729,8 @@ impl<T: GpuReal> GpuEngine<T> {
         let models: Vec<Model> = self.scenes.iter().map(|s| s.model.clone()).collect();
         let model = &models[0];
         let stride = (!persistent).then_some(record_entry_stride(self.offset_stride));
-        match recorder::Recorder::new(&self.ctx, &models, state, plan, stride) {
+        let steps_sum_kinetic = matches!(self.kernel, Kernel::OneStep | Kernel::OneStepLanes);
+        match recorder::Recorder::new(&self.ctx, &models, state, plan, stride, steps_sum_kinetic) {
             Ok(mut rec) => {
                 // The host has taken the samples up to here (none before
                 // driving, and none at its first step).

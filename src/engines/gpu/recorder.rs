@@ -125,14 +125,18 @@ fn special_groups(models: &[Model]) -> Vec<u32> {
 impl<T: GpuReal> Recorder<T> {
     /// The recorder of an engine's scenes (`models`, one lattice), or why
     /// the device cannot hold the records of one batch.
-    /// `stride`: the dynamic-offset alignment (one-step kernels), or None
-    /// for the persistent kernel, which reads the entries as an array.
+    /// `stride`: the dynamic-offset alignment (one-step and tiled
+    /// kernels), or None for the persistent kernel, which reads the
+    /// entries as an array; `steps_sum_kinetic`: the step kernel has the
+    /// recording variant (`RECORD_KINETIC`, the one-step kernels), which
+    /// a large lattice's samples then use.
     pub fn new(
         ctx: &GpuContext,
         models: &[Model],
         state: StateBuffers,
         plan: &SamplePlan,
         stride: Option<u64>,
+        steps_sum_kinetic: bool,
     ) -> Result<Recorder<T>, String> {
         let stride_given = stride.is_some();
         let stride = stride.unwrap_or(size_of::<GpuRecordEntry>() as u64);
@@ -166,7 +170,7 @@ impl<T: GpuReal> Recorder<T> {
         }
         let partials = (n as u32).div_ceil(WORKGROUP);
         let groups = (model.n_blocks() > RECORD_SMALL_BLOCKS).then(|| super::groups_for(partials));
-        let kinetic_in_steps = groups.is_some() && stride_given;
+        let kinetic_in_steps = groups.is_some() && stride_given && steps_sum_kinetic;
         let special = special_groups(models);
         let special_groups = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("record special groups"),
