@@ -9,6 +9,15 @@ use slipfront::io::compare::{compare_snapshots, fields_over};
 use slipfront::model::scenario::{Scenario, DEFAULT_SCENARIO};
 use slipfront::{advance_to, Engine, EngineError, Model, Snapshot};
 
+#[path = "support/ensemble_records.rs"]
+mod ensemble_records;
+use ensemble_records::ensemble_and_solo_records;
+// Only the 257 × 65 scene's keys.
+#[allow(dead_code)]
+#[path = "support/record_twins.rs"]
+mod record_twins;
+use record_twins::large_lattice_keys;
+
 fn model(extra: &[&str]) -> Model {
     let mut set: Vec<String> = slipfront::app::verify::SMALL_SCENE
         .iter()
@@ -279,40 +288,21 @@ fn an_ensemble_records_every_scene_on_the_device_as_its_solo_run() {
         GpuPath::Resident,
         GpuPath::Tiled,
     ] {
-        let mut e = ensemble(&models, path);
-        let mut got = vec![Vec::new(); models.len()];
-        for (i, &n) in chunks.iter().enumerate() {
-            e.advance(n).unwrap();
-            if i == 0 {
-                for k in 0..models.len() {
-                    assert!(e.record_samples(k, &plan).unwrap(), "{path:?}");
-                }
+        let records =
+            ensemble_and_solo_records::<f32>(&models, options(path), &plan, &chunks, |e| {
                 let other = SamplePlan {
                     every_bulk: plan.every_bulk + 1,
                     ..plan
                 };
                 assert!(!e.record_samples(1, &other).unwrap(), "{path:?}");
                 assert!(e.record_samples(1, &plan).unwrap(), "{path:?}");
-            }
-            for (k, g) in got.iter_mut().enumerate() {
-                g.extend(e.take_samples(k));
-            }
-        }
+            });
+        let got = &records.ensemble;
         assert!(
-            e.output_dispatches() > 0 || matches!(path, GpuPath::Persistent | GpuPath::Resident)
+            records.output_dispatches > 0
+                || matches!(path, GpuPath::Persistent | GpuPath::Resident)
         );
-        let mut solos = Vec::new();
-        for (k, model) in models.iter().enumerate() {
-            let mut g = GpuEngine::with_options(model, options(path)).unwrap();
-            let mut alone = Vec::new();
-            for (i, &n) in chunks.iter().enumerate() {
-                let target = g.steps_done() + n;
-                advance_to(&mut g, target).unwrap();
-                if i == 0 {
-                    assert!(g.record_samples(&plan).unwrap());
-                }
-                alone.extend(g.take_samples());
-            }
+        for (k, alone) in records.solo.iter().enumerate() {
             let fast = alone.iter().filter(|s| s.interface.is_some()).count();
             assert!(
                 k > 0 || fast > 2 * alone.len() / 3,
@@ -321,16 +311,18 @@ fn an_ensemble_records_every_scene_on_the_device_as_its_solo_run() {
             );
             assert!(alone.iter().any(|s| s.bulk.is_some()));
             assert_eq!(got[k].len(), alone.len(), "{path:?} scene {k}");
-            for (a, b) in got[k].iter().zip(&alone) {
+            for (a, b) in got[k].iter().zip(alone) {
                 assert!(
                     a == b,
                     "{path:?} scene {k}: sample of step {} differs",
                     b.step
                 );
             }
-            solos.push(alone);
         }
-        assert!(got[1] != solos[0], "{path:?}: scene 1 is not scene 0");
+        assert!(
+            got[1] != records.solo[0],
+            "{path:?}: scene 1 is not scene 0"
+        );
     }
 }
 
@@ -344,19 +336,8 @@ fn an_ensemble_records_every_scene_on_the_device_as_its_solo_run() {
 #[test]
 fn a_large_lattice_ensemble_records_every_scene_as_its_solo_run() {
     let large = |extra: &[&str]| {
-        let mut set: Vec<String> = [
-            "geometry.nx=257",
-            "geometry.nz=65",
-            "geometry.length=0.64",
-            "geometry.height=0.16",
-            "loading.normal.ramp_time=2e-5",
-            "loading.normal.relax_time=2e-5",
-            "loading.drive.velocity=2",
-            "time.end=3e-5",
-        ]
-        .iter()
-        .map(|s| s.to_string())
-        .collect();
+        let mut set = large_lattice_keys();
+        set.extend(["loading.drive.velocity=2", "time.end=3e-5"].map(String::from));
         set.extend(extra.iter().map(|s| s.to_string()));
         let s = Scenario::parse(DEFAULT_SCENARIO, "large", &set).unwrap();
         Model::from_scenario(&s, true).unwrap()
@@ -376,26 +357,9 @@ fn a_large_lattice_ensemble_records_every_scene_as_its_solo_run() {
     };
     let chunks = [m.prep_steps, m.total_steps() - m.prep_steps];
     for path in [GpuPath::OneStep, GpuPath::OneStepLanes] {
-        let mut e = ensemble(&models, path);
-        let mut got = vec![Vec::new(); models.len()];
-        for (i, &n) in chunks.iter().enumerate() {
-            e.advance(n).unwrap();
-            if i == 0 {
-                for k in 0..models.len() {
-                    assert!(e.record_samples(k, &plan).unwrap(), "{path:?}");
-                }
-            }
-            for (k, g) in got.iter_mut().enumerate() {
-                g.extend(e.take_samples(k));
-            }
-        }
-        let mut solos = Vec::new();
-        for (k, model) in models.iter().enumerate() {
-            let mut g = GpuEngine::with_options(model, options(path)).unwrap();
-            advance_to(&mut g, model.prep_steps).unwrap();
-            assert!(g.record_samples(&plan).unwrap());
-            advance_to(&mut g, model.total_steps()).unwrap();
-            let alone = g.take_samples();
+        let records =
+            ensemble_and_solo_records::<f32>(&models, options(path), &plan, &chunks, |_| {});
+        for (k, (got, alone)) in records.ensemble.iter().zip(&records.solo).enumerate() {
             assert!(
                 alone.len() >= 6,
                 "{path:?} scene {k}: {} samples",
@@ -403,10 +367,12 @@ fn a_large_lattice_ensemble_records_every_scene_as_its_solo_run() {
             );
             assert!(alone.iter().any(|s| s.bulk.is_some()));
             assert!(alone.iter().any(|s| s.bulk.is_none()));
-            assert!(got[k] == alone, "{path:?} scene {k}: the samples differ");
-            solos.push(alone);
+            assert!(got == alone, "{path:?} scene {k}: the samples differ");
         }
-        assert!(got[1] != solos[0], "{path:?}: scene 1 is not scene 0");
+        assert!(
+            records.ensemble[1] != records.solo[0],
+            "{path:?}: scene 1 is not scene 0"
+        );
     }
 }
 

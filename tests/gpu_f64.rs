@@ -12,6 +12,9 @@ use slipfront::{advance_to, Engine, Model, Snapshot};
 #[path = "support/record_twins.rs"]
 mod record_twins;
 use record_twins::{large_lattice, plan, twins, worst_error};
+#[path = "support/ensemble_records.rs"]
+mod ensemble_records;
+use ensemble_records::ensemble_and_solo_records;
 
 fn model(extra: &[&str]) -> Model {
     let mut set: Vec<String> = slipfront::app::verify::SMALL_SCENE
@@ -285,7 +288,6 @@ fn f64_output_samples_are_recorded_on_the_device() {
 /// every scene but the last. Control: scene 1's samples are not scene 0's.
 #[test]
 fn an_f64_ensemble_records_every_scene_as_its_solo_run() {
-    use slipfront::engines::gpu::ensemble::GpuEnsemble;
     use slipfront::engines::SamplePlan;
     let triggered = |extra: &[&str]| {
         let s = slipfront::app::verify::small_triggered_scene(extra).unwrap();
@@ -313,32 +315,11 @@ fn an_f64_ensemble_records_every_scene_as_its_solo_run() {
             path,
             ..GpuOptions::default()
         };
-        let mut e = GpuEnsemble::<f64>::with_precision(&models, opts)
-            .unwrap_or_else(|e| panic!("a GPU adapter with f64 is required: {e}"));
-        let mut got = vec![Vec::new(); models.len()];
-        for (i, &n) in chunks.iter().enumerate() {
-            e.advance(n).unwrap();
-            if i == 0 {
-                for k in 0..models.len() {
-                    assert!(e.record_samples(k, &plan).unwrap(), "{path:?}");
-                }
-            }
-            for (k, g) in got.iter_mut().enumerate() {
-                g.extend(e.take_samples(k));
-            }
-        }
-        let mut solos = Vec::new();
-        for (k, model) in models.iter().enumerate() {
-            let mut g = GpuEngine::<f64>::with_precision(model, opts).unwrap();
-            let mut alone = Vec::new();
-            for (i, &n) in chunks.iter().enumerate() {
-                let target = g.steps_done() + n;
-                advance_to(&mut g, target).unwrap();
-                if i == 0 {
-                    assert!(g.record_samples(&plan).unwrap());
-                }
-                alone.extend(g.take_samples());
-            }
+        let records = ensemble_and_solo_records::<f64>(&models, opts, &plan, &chunks, |_| {});
+        let (got, solos) = (&records.ensemble, &records.solo);
+        // Recorded on the device (the persistent kernel in its loop).
+        assert!(records.output_dispatches > 0 || path == GpuPath::Persistent);
+        for (k, alone) in solos.iter().enumerate() {
             assert!(
                 alone.len() > 50,
                 "{path:?} scene {k}: {} samples",
@@ -346,10 +327,9 @@ fn an_f64_ensemble_records_every_scene_as_its_solo_run() {
             );
             let steps =
                 |v: &[slipfront::engines::Sample]| v.iter().map(|x| x.step).collect::<Vec<_>>();
-            assert_eq!(steps(&got[k]), steps(&alone), "{path:?} scene {k}");
-            let (err, field) = worst_error(&alone, &got[k]);
+            assert_eq!(steps(&got[k]), steps(alone), "{path:?} scene {k}");
+            let (err, field) = worst_error(alone, &got[k]);
             assert!(err < 1e-12, "{path:?} scene {k}: {field} off by {err:.2e}");
-            solos.push(alone);
         }
         // Scene 1 slips otherwise than scene 0: other samples (a
         // comparison of two lists of other lengths would not be one).
