@@ -1,20 +1,33 @@
 // Where the tiled kernel keeps the junctions it steps (the
 // `junction_store` slot): its own columns' in the storage buffers, as
-// every kernel; its halo's interface blocks' in a private copy per tile
-// (halo_junction_state/spring, filled by tile_gather), stepped exactly as
-// their owner steps the originals, and dropped at the dispatch's end. A
-// halo junction's index carries HALO_JUNCTION.
+// every kernel; its halo's interface blocks' in a private copy per tile,
+// stepped exactly as their owner steps the originals, and dropped at the
+// dispatch's end. A halo junction's index carries HALO_JUNCTION.
+// tile_junction_state/spring hold two published copies of every scene's
+// junctions (as pub_disp: only the edge columns' are used), then the
+// tiles' private copies; a dispatch fills its private copy from the
+// published one it reads.
 // CPU twin: src/engines/gpu/tiles.rs TileGeometry (the host side of this layout).
 // import: common, scene, state
 
-@group(0) @binding(21) var<storage, read_write> halo_junction_state: array<vec2<u32>>;
-@group(0) @binding(22) var<storage, read_write> halo_junction_spring: array<JunctionSpring>;
+@group(0) @binding(21) var<storage, read_write> tile_junction_state: array<vec2<u32>>;
+@group(0) @binding(22) var<storage, read_write> tile_junction_spring: array<JunctionSpring>;
 
 const HALO_JUNCTION: u32 = 0x80000000u;
 
+// Junctions of all scenes in one published copy.
+fn junctions_per_copy() -> u32 {
+    return scene_count() * c.nx * c.junction_count;
+}
+
+// Block ix's first junction in published copy `copy`.
+fn pub_junction_first(copy: u32, ix: u32) -> u32 {
+    return copy * junctions_per_copy() + junction_base() + ix * c.junction_count;
+}
+
 // Block ix's first junction in this tile's private copy (any held column).
 fn halo_junction_first(ix: u32) -> u32 {
-    return (tile_index() * tile_span() + (ix - tile_lo)) * c.junction_count;
+    return 2u * junctions_per_copy() + (tile_index() * tile_span() + (ix - tile_lo)) * c.junction_count;
 }
 
 fn junction_first(ix: u32) -> u32 {
@@ -26,21 +39,21 @@ fn junction_first(ix: u32) -> u32 {
 
 fn junction_state_at(k: u32) -> vec2<u32> {
     if (k & HALO_JUNCTION) != 0u {
-        return halo_junction_state[k & ~HALO_JUNCTION];
+        return tile_junction_state[k & ~HALO_JUNCTION];
     }
     return junction_state[k];
 }
 
 fn junction_spring_at(k: u32) -> JunctionSpring {
     if (k & HALO_JUNCTION) != 0u {
-        return halo_junction_spring[k & ~HALO_JUNCTION];
+        return tile_junction_spring[k & ~HALO_JUNCTION];
     }
     return junction_spring[k];
 }
 
 fn set_junction_state(k: u32, state: vec2<u32>) {
     if (k & HALO_JUNCTION) != 0u {
-        halo_junction_state[k & ~HALO_JUNCTION] = state;
+        tile_junction_state[k & ~HALO_JUNCTION] = state;
     } else {
         junction_state[k] = state;
     }
@@ -48,7 +61,7 @@ fn set_junction_state(k: u32, state: vec2<u32>) {
 
 fn set_junction_spring(k: u32, spring: JunctionSpring) {
     if (k & HALO_JUNCTION) != 0u {
-        halo_junction_spring[k & ~HALO_JUNCTION] = spring;
+        tile_junction_spring[k & ~HALO_JUNCTION] = spring;
     } else {
         junction_spring[k] = spring;
     }

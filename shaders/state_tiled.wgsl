@@ -4,9 +4,12 @@
 // workgroup memory, at local slot row · TILE_SPAN + (column − tile_lo).
 // In storage the state is the one-step kernels' pair of copies: a
 // dispatch reads copy (parity + first step) and leaves steps end − 1 and
-// end in their copies as a run of one-step dispatches would. The halo's
-// columns come from tile_halo_disp/vel, where tile_gather copied them
-// before the dispatch: a neighbour writes its own columns meanwhile.
+// end in their copies as a run of one-step dispatches would. A neighbour
+// overwrites its columns meanwhile, so the halo comes from a published
+// copy instead (pub_disp, pub_vel: two copies of the lattice, of which
+// only the columns near a tile's edges are used): dispatch d of a batch
+// reads copy d mod 2 and publishes its own edge columns' end state in the
+// other; tile_gather publishes them before the batch's first.
 // CPU twin: src/engines/gpu/tiles.rs TileGeometry (the host side of this layout).
 // import: scene
 
@@ -14,9 +17,11 @@
 @group(0) @binding(2) var<storage, read_write> vel_a: array<vec2<real>>;
 @group(0) @binding(3) var<storage, read_write> disp_b: array<Disp>;
 @group(0) @binding(4) var<storage, read_write> vel_b: array<vec2<real>>;
-// The halo of each tile of each scene: TILE_BLOCKS slots per tile.
-@group(0) @binding(19) var<storage, read_write> tile_halo_disp: array<Disp>;
-@group(0) @binding(20) var<storage, read_write> tile_halo_vel: array<vec2<real>>;
+// Two published copies of every scene's blocks (scene-major in each).
+@group(0) @binding(19) var<storage, read_write> pub_disp: array<Disp>;
+@group(0) @binding(20) var<storage, read_write> pub_vel: array<vec2<real>>;
+// The step after each dispatch of the batch (`tiles::dispatch_ends`).
+@group(0) @binding(16) var<storage, read> tile_ends: array<u32>;
 // Lane sums of each tile's interface blocks: TILE_SPAN · lanes per tile.
 @group(0) @binding(12) var<storage, read_write> lane_partial: array<LaneSum>;
 
@@ -113,7 +118,17 @@ fn store_copy(i: u32, copy: u32, u: Disp, v: vec2<real>) {
     }
 }
 
-// The halo scratch slot of block (ix, iz) of this tile.
-fn halo_slot(ix: u32, iz: u32) -> u32 {
-    return tile_index() * TILE_BLOCKS + tile_slot_at(ix, iz);
+// Scenes in the buffers (pub_disp holds two copies of each).
+fn scene_count() -> u32 {
+    return arrayLength(&pub_disp) / (2u * c.n_blocks);
+}
+
+// Block i's slot in published copy `copy`.
+fn pub_slot(copy: u32, i: u32) -> u32 {
+    return (copy * scene_count() + scene) * c.n_blocks + i;
+}
+
+// Whether this tile's column ix is in a neighbour's halo.
+fn tile_edge(ix: u32) -> bool {
+    return ix < tile_x0 + TILE_HALO || ix + TILE_HALO >= tile_x1;
 }

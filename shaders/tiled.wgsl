@@ -7,18 +7,20 @@
 // after K ≤ TILE_HALO steps its own columns are exact, and only those are
 // written back. No barrier crosses workgroups, so the tiles run on many
 // SMs at once, and a dispatch costs per K steps, not per step.
+// - The halo comes from a published copy, not from the state its owner
+//   overwrites meanwhile: each dispatch publishes its edge columns' end
+//   state (and their interface junctions) in the copy the next dispatch
+//   reads; tile_gather publishes them once before a batch's first.
 // - A halo block's junctions are stepped from a private copy
 //   (junction_tiled.wgsl): their updates depend only on the block's u_x
 //   and their state, and the slip draws are keyed by (seed, block,
 //   junction, count), so the copy evolves as its owner's original does.
-// - tile_gather, the dispatch before each, copies every tile's halo
-//   (blocks, and interface junctions) out of the state its neighbours are
-//   about to overwrite.
-// - Where a dispatch ends (tile_dispatch_end, the host's
-//   tiles::dispatch_end): after TILE_HALO steps, at the batch's end, after
-//   the batch's first step (whose forces may be the snapshot's, read from
-//   `force` by every tile while no tile writes it), and after a sample's
-//   step, which the output kernels then record as after a one-step dispatch.
+// - Dispatch d of a batch (its dynamic offset) runs the steps from
+//   tile_ends[d − 1] (0 for the first) to tile_ends[d], which the host
+//   cuts after TILE_HALO steps, after the batch's first step (whose forces
+//   may be a snapshot's, read from `force` by every tile while no tile
+//   writes it) and after a sample's step, which the output kernels then
+//   record as after a one-step dispatch (`tiles::dispatch_ends`).
 // Each step runs the one-step kernels' phase functions in their order:
 // bulk force and junction lanes, then (after a barrier) friction from
 // the lanes merged in lane order, and the update. Junction friction laws
@@ -26,37 +28,83 @@
 // CPU twin: src/engines/cpu/mod.rs CpuEngine::one_step (each step of the loop).
 // import: bulk_forces, common, coordinates, junction_store, junctions, lane_partials, scene, state, verlet
 
-// The batch's record entries (RecordEntry) as words: the recorder lays
-// them out RECORD_ENTRY_WORDS apart, the dynamic-offset alignment of the
-// output kernels that read one each; a step offset is an entry's first word.
-@group(0) @binding(16) var<storage, read> record_entry_words: array<u32>;
-
 override TILE_THREADS: u32 = 64u;
-override RECORD_ENTRY_WORDS: u32 = 64u;
 
 // The forces of the held blocks at the step under way.
 var<workgroup> tile_force: array<vec2<real>, TILE_BLOCKS>;
 // First step, end step and whether the scene has stopped.
 var<workgroup> tile_plan: vec4<u32>;
 
-// The step after the last of the dispatch that starts at `first`.
-fn tile_dispatch_end(first: u32) -> u32 {
-    var end = min(first + TILE_HALO, batch.steps);
-    if first == 0u {
-        end = min(1u, batch.steps);
-    }
-    for (var k = 0u; k < batch.records; k++) {
-        let offset = record_entry_words[k * RECORD_ENTRY_WORDS];
-        if offset >= first {
-            end = min(end, offset + 1u);
-            break;
+// Publishes this tile's edge columns (every row: those in a neighbour's
+// halo) in published copy `copy`: u and v from the tile's state, the
+// interface junctions from storage. After a barrier.
+fn publish_edges(t: u32, copy: u32) {
+    let own = tile_x1 - tile_x0;
+    for (var k = t; k < own * c.nz; k += TILE_THREADS) {
+        let ix = tile_x0 + k % own;
+        if tile_edge(ix) {
+            let i = (k / own) * c.nx + ix;
+            pub_disp[pub_slot(copy, i)] = load_disp(i);
+            pub_vel[pub_slot(copy, i)] = load_vel(i);
         }
     }
-    return end;
+    publish_edge_junctions(t, copy);
 }
 
-// Copies this tile's halo columns (every row) and their interface blocks'
-// junctions out of the state of the dispatch's first step.
+// The interface junctions of this tile's edge columns, from storage into
+// published copy `copy`.
+fn publish_edge_junctions(t: u32, copy: u32) {
+    if FRICTION_LAW != LAW_JUNCTIONS {
+        return;
+    }
+    let own = tile_x1 - tile_x0;
+    let ns = c.junction_count;
+    for (var k = t; k < own * ns; k += TILE_THREADS) {
+        let ix = tile_x0 + k / ns;
+        if tile_edge(ix) {
+            let j = k % ns;
+            let at = pub_junction_first(copy, ix) + j;
+            tile_junction_state[at] = junction_state[junction_base() + ix * ns + j];
+            tile_junction_spring[at] = junction_spring[junction_base() + ix * ns + j];
+        }
+    }
+}
+
+// Loads this tile's own columns from the state copy of step `first`, its
+// halo from published copy `copy`, and its halo's junctions into its
+// private copy. Before a barrier.
+fn load_tile(t: u32, first: u32, copy: u32) {
+    let held = tile_hi - tile_lo;
+    let state = copy_of(first);
+    for (var k = t; k < held * c.nz; k += TILE_THREADS) {
+        let ix = tile_lo + k % held;
+        let i = (k / held) * c.nx + ix;
+        let at = tile_slot(i);
+        if tile_owns(ix) {
+            tile_disp[at] = stored_disp(i, state);
+            tile_vel[at] = stored_vel(i, state);
+        } else {
+            tile_disp[at] = pub_disp[pub_slot(copy, i)];
+            tile_vel[at] = pub_vel[pub_slot(copy, i)];
+        }
+    }
+    if FRICTION_LAW == LAW_JUNCTIONS {
+        let ns = c.junction_count;
+        for (var k = t; k < held * ns; k += TILE_THREADS) {
+            let ix = tile_lo + k / ns;
+            if !tile_owns(ix) {
+                let j = k % ns;
+                let published = pub_junction_first(copy, ix) + j;
+                let to = halo_junction_first(ix) + j;
+                tile_junction_state[to] = tile_junction_state[published];
+                tile_junction_spring[to] = tile_junction_spring[published];
+            }
+        }
+    }
+}
+
+// Before a batch's first dispatch: every tile publishes its edge columns
+// from the state of the batch's first step, in published copy 0.
 @compute @workgroup_size(TILE_THREADS)
 fn tile_gather(
     @builtin(local_invocation_index) t: u32,
@@ -64,33 +112,17 @@ fn tile_gather(
 ) {
     enter_scene(wid.z);
     tile_enter(wid.x);
-    if scene_stopped() {
-        return;
-    }
-    let copy = copy_of(step_offset);
-    let left = tile_x0 - tile_lo;
-    let halo_cols = left + (tile_hi - tile_x1);
-    for (var k = t; k < halo_cols * c.nz; k += TILE_THREADS) {
-        let col = k % halo_cols;
-        let iz = k / halo_cols;
-        let ix = select(tile_x1 + (col - left), tile_lo + col, col < left);
-        let i = iz * c.nx + ix;
-        let at = halo_slot(ix, iz);
-        tile_halo_disp[at] = stored_disp(i, copy);
-        tile_halo_vel[at] = stored_vel(i, copy);
-    }
-    if FRICTION_LAW == LAW_JUNCTIONS {
-        let ns = c.junction_count;
-        for (var k = t; k < halo_cols * ns; k += TILE_THREADS) {
-            let col = k / ns;
-            let ix = select(tile_x1 + (col - left), tile_lo + col, col < left);
-            let j = k % ns;
-            let original = junction_base() + ix * ns + j;
-            let to = halo_junction_first(ix) + j;
-            halo_junction_state[to] = junction_state[original];
-            halo_junction_spring[to] = junction_spring[original];
+    let state = copy_of(0u);
+    let own = tile_x1 - tile_x0;
+    for (var k = t; k < own * c.nz; k += TILE_THREADS) {
+        let ix = tile_x0 + k % own;
+        if tile_edge(ix) {
+            let i = (k / own) * c.nx + ix;
+            pub_disp[pub_slot(0u, i)] = stored_disp(i, state);
+            pub_vel[pub_slot(0u, i)] = stored_vel(i, state);
         }
     }
+    publish_edge_junctions(t, 0u);
 }
 
 @compute @workgroup_size(TILE_THREADS)
@@ -100,8 +132,12 @@ fn tiled_steps(
 ) {
     enter_scene(wid.z);
     tile_enter(wid.x);
+    // Dispatch d runs steps tile_ends[d − 1] .. tile_ends[d], reads
+    // published copy d mod 2 and publishes in the other.
+    let d = step_offset;
     if t == 0u {
-        tile_plan = vec4<u32>(step_offset, tile_dispatch_end(step_offset), u32(scene_stopped()), 0u);
+        let first = select(tile_ends[max(d, 1u) - 1u], 0u, d == 0u);
+        tile_plan = vec4<u32>(first, tile_ends[d], u32(scene_stopped()), 0u);
     }
     let plan = workgroupUniformLoad(&tile_plan);
     if plan.z != 0u {
@@ -109,22 +145,8 @@ fn tiled_steps(
     }
     let lanes = min(JUNCTION_LANES, c.junction_count);
     let update = batch.forces_only == 0u;
-    // The held blocks: own columns from the state, the halo from the copy.
-    let held = tile_hi - tile_lo;
-    let copy = copy_of(plan.x);
-    for (var k = t; k < held * c.nz; k += TILE_THREADS) {
-        let ix = tile_lo + k % held;
-        let iz = k / held;
-        let i = iz * c.nx + ix;
-        let at = tile_slot_at(ix, iz);
-        if tile_owns(ix) {
-            tile_disp[at] = stored_disp(i, copy);
-            tile_vel[at] = stored_vel(i, copy);
-        } else {
-            tile_disp[at] = tile_halo_disp[halo_slot(ix, iz)];
-            tile_vel[at] = tile_halo_vel[halo_slot(ix, iz)];
-        }
-    }
+    load_tile(t, plan.x, d & 1u);
+    storageBarrier();
     workgroupBarrier();
     let lane_first = tile_index() * tile_span() * lanes;
     for (var s = plan.x; s < plan.y; s++) {
@@ -196,9 +218,9 @@ fn tiled_steps(
         let last = copy_of(plan.y);
         for (var k = t; k < own * c.nz; k += TILE_THREADS) {
             let ix = tile_x0 + k % own;
-            let iz = k / own;
-            let i = iz * c.nx + ix;
+            let i = (k / own) * c.nx + ix;
             store_copy(i, last, load_disp(i), load_vel(i));
         }
     }
+    publish_edges(t, (d + 1u) & 1u);
 }

@@ -55,7 +55,7 @@ impl<T: GpuReal> GpuEngine<T> {
                 batch.forces_only = forces_only as u32;
                 batch.steps_per_dispatch = self.steps_per_dispatch as u32;
                 batch.parity = self.current as u32;
-                if self.kernel.is_persistent() || self.kernel == Kernel::Tiled {
+                if self.kernel.is_persistent() {
                     batch.records = planned.len() as u32;
                 }
                 batch
@@ -64,6 +64,23 @@ impl<T: GpuReal> GpuEngine<T> {
         self.ctx
             .queue
             .write_buffer(&self.batch_buffer, 0, bytemuck::cast_slice(&batches));
+        // The step after each dispatch (one-step and tiled kernels), which
+        // the tiled kernel reads.
+        let offsets: Vec<u64> = planned.iter().map(|p| p.offset).collect();
+        let ends = match self.kernel.is_persistent() {
+            true => Vec::new(),
+            false => {
+                super::tiles::dispatch_ends(self.kernel, steps, self.steps_per_dispatch, &offsets)
+            }
+        };
+        if self.tiles.is_some() {
+            let words: Vec<u32> = ends.iter().map(|&e| e as u32).collect();
+            self.ctx.queue.write_buffer(
+                &self.buffers.tile_scratch[4],
+                0,
+                bytemuck::cast_slice(&words),
+            );
+        }
         let mut encoder = self
             .ctx
             .device
@@ -87,19 +104,25 @@ impl<T: GpuReal> GpuEngine<T> {
             match self.kernel {
                 Kernel::OneStep | Kernel::OneStepLanes | Kernel::Tiled => {
                     // A dispatch per step, or the tiled kernel's of up to
-                    // its halo's steps, each after its gather; a sample's
-                    // step always ends a dispatch.
-                    let offsets: Vec<u64> = planned.iter().map(|p| p.offset).collect();
-                    let ends = super::tiles::dispatch_ends(
-                        self.kernel,
-                        steps,
-                        self.steps_per_dispatch,
-                        &offsets,
-                    );
+                    // its halo's steps after one gather; a sample's step
+                    // always ends a dispatch.
+                    if let Some((_, gather)) = self.tiles.as_ref() {
+                        pass.set_bind_group(1, &self.batch_group, &[0]);
+                        pass.set_pipeline(gather);
+                        pass.dispatch_workgroups(self.groups.0, self.groups.1, scene_count);
+                        pass.set_pipeline(&self.pipeline);
+                    }
                     let mut samples = planned.iter().enumerate().peekable();
                     let mut first = 0;
-                    for &end in &ends {
-                        let offset = (first * self.offset_stride) as u32;
+                    for (d, &end) in ends.iter().enumerate() {
+                        // The tiled kernel's dispatch d finds its steps in
+                        // tile_ends[d]; a one-step dispatch is its step.
+                        let index = if self.tiles.is_some() {
+                            d as u64
+                        } else {
+                            first
+                        };
+                        let offset = (index * self.offset_stride) as u32;
                         pass.set_bind_group(1, &self.batch_group, &[offset]);
                         // The step that ends this dispatch.
                         let i = end - 1;
@@ -123,11 +146,6 @@ impl<T: GpuReal> GpuEngine<T> {
                             if step_marked {
                                 t.mark(&mut pass, m);
                             }
-                        }
-                        if let Some((_, gather)) = self.tiles.as_ref() {
-                            pass.set_pipeline(gather);
-                            pass.dispatch_workgroups(self.groups.0, self.groups.1, scene_count);
-                            pass.set_pipeline(&self.pipeline);
                         }
                         if let Some(pipeline) = record_step {
                             pass.set_pipeline(pipeline);

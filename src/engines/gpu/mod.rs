@@ -1,12 +1,16 @@
-//! The GPU engine: state in storage buffers, and one of two kernels:
+//! The GPU engine: state in storage buffers, and one of three kernels:
 //!
 //! - `one_step` (any lattice): one dispatch per step, forces, friction and
 //!   the leapfrog update fused, reading the state of step n from one buffer
-//!   pair and writing step n+1 to the other;
+//!   pair and writing step n+1 to the other (and its form with junction
+//!   lanes, `one_step_lanes`);
 //! - `persistent_steps` (small lattices): one workgroup loops over up to
 //!   4096 steps inside one dispatch, with barriers between the phases; its
 //!   resident form holds u and v in workgroup memory for the whole
-//!   dispatch (lattices that fit it).
+//!   dispatch (lattices that fit it);
+//! - `tiled_steps` (small lattices, `tiles`): a workgroup per column tile
+//!   steps its tile and a halo for a few steps per dispatch, leaving the
+//!   state where the one-step kernel would.
 //!
 //! Steps go in batches (one submit each, `batches`) whose loads the
 //! kernels compute from the batch's first step. After each batch the kernel's blow-up
@@ -87,9 +91,11 @@ struct Buffers {
     /// What the persistent kernel binds for the record buffers until it
     /// records output samples (never read then).
     record_placeholders: [wgpu::Buffer; 4],
-    /// The tiled kernel's scratch: each tile's halo blocks (u, v) and
-    /// halo junctions (state, spring); placeholders for the other kernels.
-    tile_scratch: [wgpu::Buffer; 4],
+    /// The tiled kernel's: two published copies of the blocks (u, v), of
+    /// the junctions (state, spring; then each tile's private halo
+    /// junctions), and the ends of a batch's dispatches; placeholders for
+    /// the other kernels.
+    tile_scratch: [wgpu::Buffer; 5],
 }
 
 /// Group 0 of `kernel`: the state buffers, and for the persistent kernel the
@@ -121,15 +127,15 @@ fn state_group(
         ("law_state", &b.law_state),
         ("status", &b.status),
         ("lane_partial", &b.lane_partial),
-        ("tile_halo_disp", &b.tile_scratch[0]),
-        ("tile_halo_vel", &b.tile_scratch[1]),
-        ("halo_junction_state", &b.tile_scratch[2]),
-        ("halo_junction_spring", &b.tile_scratch[3]),
+        ("pub_disp", &b.tile_scratch[0]),
+        ("pub_vel", &b.tile_scratch[1]),
+        ("tile_junction_state", &b.tile_scratch[2]),
+        ("tile_junction_spring", &b.tile_scratch[3]),
+        ("tile_ends", &b.tile_scratch[4]),
         ("plans", plan),
         ("sums", sums),
         ("rows", rows),
         ("record_entries", entries),
-        ("record_entry_words", entries),
     ]
     .map(|(name, buffer)| (name, buffer.as_entire_binding()));
     ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
@@ -435,6 +441,11 @@ impl<T: GpuReal> GpuEngine<T> {
                 GpuConsts::new(&Consts::<T>::new(m), speed_limit)
             })
             .collect();
+        // The tiled kernel's scratch per scene (`TileGeometry::scratch_per_scene`);
+        // the lane sums of the others.
+        let scratch = geometry.map_or([0, 0, shape.nx * shape.lanes], |g| {
+            g.scratch_per_scene(n, shape.nx, nj / shape.nx.max(1), shape.lanes)
+        });
         let buffers = Buffers {
             consts: storage("scene consts", bytemuck::cast_slice(&gpu_consts)),
             disp: [
@@ -488,28 +499,20 @@ impl<T: GpuReal> GpuEngine<T> {
                 "lane partial sums",
                 // One WGSL `LaneSum` per lane (of each tile's held blocks
                 // for the tiled kernel).
-                bytemuck::cast_slice(&vec![
-                    GpuLaneSum::<T>::zeroed();
-                    s * geometry.map_or(shape.nx * shape.lanes, |g| g
-                        .scratch_per_scene(
-                            nj / shape.nx.max(1),
-                            shape.lanes
-                        )[2])
-                ]),
+                bytemuck::cast_slice(&vec![GpuLaneSum::<T>::zeroed(); s * scratch[2]]),
             ),
             tile_scratch: {
-                let [blocks, junctions, _] = geometry.map_or([0; 3], |g| {
-                    g.scratch_per_scene(nj / shape.nx.max(1), shape.lanes)
-                });
                 let zeros = |len: usize, bytes: usize| vec![0u8; s * len * bytes];
+                let ends = geometry.map_or(0, |_| ONE_STEP_BATCH as usize);
                 [
-                    storage("tile halo disp", &zeros(blocks, Self::DISP_BYTES)),
-                    storage("tile halo vel", &zeros(blocks, Self::REAL_PAIR_BYTES)),
-                    storage("halo junction state", &zeros(junctions, WORD_PAIR_BYTES)),
+                    storage("published disp", &zeros(scratch[0], Self::DISP_BYTES)),
+                    storage("published vel", &zeros(scratch[0], Self::REAL_PAIR_BYTES)),
+                    storage("tile junction state", &zeros(scratch[1], WORD_PAIR_BYTES)),
                     storage(
-                        "halo junction spring",
-                        &zeros(junctions, Self::SPRING_BYTES),
+                        "tile junction spring",
+                        &zeros(scratch[1], Self::SPRING_BYTES),
                     ),
+                    storage("tile dispatch ends", &vec![0u8; ends * 4]),
                 ]
             },
             // One element of the largest record struct in this precision.
@@ -577,9 +580,6 @@ impl<T: GpuReal> GpuEngine<T> {
             constants.push(("TILE_HALO", g.halo as f64));
             constants.push(("TILE_BLOCKS", g.blocks as f64));
             constants.push(("TILE_THREADS", persistent_threads as f64));
-            // Where the recorder puts its entries (`record_entry_stride`).
-            let words = record_entry_stride(offset_stride) / 4;
-            constants.push(("RECORD_ENTRY_WORDS", words as f64));
         }
         let pipeline = ctx.pipeline::<T>(kernel, &constants);
         let tiles = geometry.map(|g| {
@@ -735,9 +735,7 @@ impl<T: GpuReal> GpuEngine<T> {
                 // The host has taken the samples up to here (none before
                 // driving, and none at its first step).
                 rec.recorded_through = Some(self.step.max(model.prep_steps));
-                // The tiled kernel reads the entries: its dispatches end
-                // at samples.
-                if persistent || rec.kinetic_in_steps() || self.kernel == Kernel::Tiled {
+                if persistent || rec.kinetic_in_steps() {
                     let records = rec.state_bindings();
                     self.state_group = state_group(&self.ctx, self.kernel, &self.buffers, records);
                 }

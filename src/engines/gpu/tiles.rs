@@ -63,14 +63,22 @@ impl TileGeometry {
         self.blocks as u64 * per_block as u64 + TILE_OWN_BYTES
     }
 
-    /// Slots of each scratch buffer per scene: halo blocks, halo
-    /// junctions, lane sums.
-    pub fn scratch_per_scene(&self, ns: usize, lanes: usize) -> [usize; 3] {
+    /// Elements of each scratch buffer per scene of `blocks` blocks, `nx`
+    /// columns, `ns` junctions per interface block and `lanes` lanes: the
+    /// published blocks (two copies); the published junctions (two copies)
+    /// and then each tile's private halo junctions; the lane sums.
+    pub fn scratch_per_scene(
+        &self,
+        blocks: usize,
+        nx: usize,
+        ns: usize,
+        lanes: usize,
+    ) -> [usize; 3] {
         let tiles = self.tiles as usize;
         let span = self.span as usize;
         [
-            tiles * self.blocks as usize,
-            tiles * span * ns,
+            2 * blocks,
+            2 * nx * ns + tiles * span * ns,
             tiles * span * lanes,
         ]
     }
