@@ -206,7 +206,7 @@ fn tiled_grid(model: &Model, quick: bool, min_seconds: f64) {
     let (widths, halos, threads): (&[u32], &[u64], &[u32]) = if quick {
         (&[8, 16], &[2, 4], &[256])
     } else {
-        (&[4, 8, 16], &[2, 4, 8], &[256, 1024])
+        (&[2, 4, 8, 16], &[2, 4, 8], &[256, 1024])
     };
     for &width in widths {
         for &halo in halos {

@@ -57,10 +57,20 @@ fn measure_times_every_candidate_takes_the_fastest_and_caches_it() {
     let (opts, choice) = resolve::<f32>(&m, &ctx, options(GpuPath::Measure), &cache).unwrap();
     let choice = choice.expect("measure always measures");
     assert_eq!(choice.source, ChoiceSource::Measured);
-    let timed: Vec<Kernel> = choice.timings.iter().map(|t| t.0.kernel).collect();
+    let mut timed: Vec<Kernel> = choice.timings.iter().map(|t| t.0.kernel).collect();
+    timed.dedup();
     assert_eq!(timed, candidates(&m));
-    // A scene alone is timed at each kernel's default threads.
-    assert!(choice.timings.iter().all(|t| t.0.threads.is_none()));
+    // A scene alone is timed at each kernel's default threads, but the
+    // tiled kernel at several.
+    for (launch, _) in &choice.timings {
+        let tiled = launch.kernel == Kernel::Tiled;
+        assert_eq!(launch.threads.is_some(), tiled, "{}", launch.name());
+    }
+    let tiled_launches = choice
+        .timings
+        .iter()
+        .filter(|t| t.0.kernel == Kernel::Tiled);
+    assert_eq!(tiled_launches.count(), 3);
     assert_eq!(timed.len(), 5, "all five kernels fit a 29 × 16 scene");
     for (k, s) in &choice.timings {
         // lavapipe: 10 µs .. 100 ms per step of 464 blocks.
@@ -137,7 +147,7 @@ fn an_ensemble_times_the_single_workgroup_kernels_at_several_threads() {
     let choice = choice.expect("measure always measures");
     let timed: Vec<Launch> = choice.timings.iter().map(|t| t.0).collect();
     assert_eq!(timed, launches(&m, 3, opts, &ctx.limits));
-    for kernel in [Kernel::Persistent, Kernel::Resident] {
+    for kernel in [Kernel::Persistent, Kernel::Resident, Kernel::Tiled] {
         let threads: Vec<Option<u32>> = timed
             .iter()
             .filter(|l| l.kernel == kernel)
@@ -158,15 +168,19 @@ fn an_ensemble_times_the_single_workgroup_kernels_at_several_threads() {
         (cached.launch, &cached.timings),
         (choice.launch, &choice.timings)
     );
-    // Fixed threads, or a scene alone: each kernel once, at its threads.
+    // Fixed threads: each kernel once, at its threads; a scene alone:
+    // each at its default threads but the tiled kernel, at each.
     let fixed = GpuOptions {
         persistent_threads: Some(64),
         ..opts
     };
-    for (scenes, o) in [(3, fixed), (1, opts)] {
-        let plain: Vec<Launch> = candidates(&m).into_iter().map(Launch::of).collect();
-        assert_eq!(launches(&m, scenes, o, &ctx.limits), plain);
+    let plain: Vec<Launch> = candidates(&m).into_iter().map(Launch::of).collect();
+    assert_eq!(launches(&m, 3, fixed, &ctx.limits), plain);
+    let alone = launches(&m, 1, opts, &ctx.limits);
+    for launch in &alone {
+        assert_eq!(launch.threads.is_some(), launch.kernel == Kernel::Tiled);
     }
+    assert_eq!(alone.len(), plain.len() + variants.len() - 1);
     let _ = std::fs::remove_dir_all(&dir);
 }
 

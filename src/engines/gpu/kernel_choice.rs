@@ -195,7 +195,10 @@ pub fn candidates(model: &Model) -> Vec<Kernel> {
 /// kernel, and for an ensemble the single-workgroup kernels at each of
 /// `ENSEMBLE_THREADS` the adapter allows, unless `--gpu-threads` fixed
 /// them. A scene alone takes each kernel's default threads (on an H200 the
-/// most threads were fastest alone, and every variant costs a compile).
+/// most threads were fastest alone, and every variant costs a compile),
+/// but the tiled kernel is timed at each of them too: not yet measured on
+/// hardware, a tile's lanes (1,024 at Table S1's defaults) against its
+/// blocks (496) do not say which count wins.
 pub fn launches(
     model: &Model,
     scenes: usize,
@@ -207,7 +210,8 @@ pub fn launches(
         .min(limits.max_compute_workgroup_size_x);
     let mut out = Vec::new();
     for kernel in candidates(model) {
-        if kernel.is_persistent() && scenes > 1 && opts.persistent_threads.is_none() {
+        let varied = kernel == Kernel::Tiled || (kernel.is_persistent() && scenes > 1);
+        if varied && opts.persistent_threads.is_none() {
             out.extend(
                 ENSEMBLE_THREADS
                     .iter()
