@@ -54,14 +54,14 @@ fn add_bond(
     let r0 = vec2<real>(real(d.x) * c.spacing, real(d.y) * c.spacing);
     let rest = length * c.spacing;
     let kb = stiffness * c.k;
-    let uj = load_disp(j);
+    let uj = load_disp_at(j, u32(jx), u32(jz));
     let du = vec2<real>(coord_diff(uj.x, ui.x), coord_diff(uj.z, ui.z));
     let r = r0 + du;
     let len = sqrt(r.x * r.x + r.y * r.y);
     // Elongation without cancellation: (|r|² − l²)/(|r| + l).
     let stretch = (2.0 * (r0.x * du.x + r0.y * du.y) + (du.x * du.x + du.y * du.y)) / (len + rest);
     var damper = vec2<real>(0.0, 0.0);
-    let dv = load_vel(j) - vi;
+    let dv = load_vel_at(j, u32(jx), u32(jz)) - vi;
     if SPLITS_BONDS {
         // Mixed f32: r0 + du would round du to ulp(r0), about two steps
         // of creep, and turn the bond's direction in stairs; the force
@@ -96,8 +96,8 @@ fn add_bond(
 fn bulk_force(i: u32, ld: Loads) -> vec2<real> {
     let ix = i32(i % c.nx);
     let iz = i32(i / c.nx);
-    let ui = load_disp(i);
-    let vi = load_vel(i);
+    let ui = load_disp_at(i, u32(ix), u32(iz));
+    let vi = load_vel_at(i, u32(ix), u32(iz));
     // Compensated sums in mixed precision (force_sum_add says why), the
     // bonds in stencil order.
     var fx = force_sum_zero();

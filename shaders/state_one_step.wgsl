@@ -3,7 +3,7 @@
 // another. Which copy holds step n follows from the batch's starting copy
 // and the step offset (one bind group for all dispatches, see common.wgsl).
 // CPU twin: src/engines/gpu/mod.rs state_group (the host side of these bindings).
-// import: common, scene
+// import: common, scene, state_by_index
 
 @group(0) @binding(1) var<storage, read_write> disp_a: array<Disp>;
 @group(0) @binding(2) var<storage, read_write> vel_a: array<vec2<real>>;

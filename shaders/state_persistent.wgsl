@@ -3,7 +3,7 @@
 // the state in place. lane_partial holds the junction lane sums between
 // the force and the update phases.
 // CPU twin: src/engines/gpu/mod.rs state_group (the host side of these bindings).
-// import: scene
+// import: scene, state_by_index
 
 @group(0) @binding(1) var<storage, read_write> disp: array<Disp>;
 @group(0) @binding(2) var<storage, read_write> vel: array<vec2<real>>;

@@ -8,7 +8,7 @@
 // lattice, and takes this kernel only where the lattice fits the
 // adapter's workgroup memory (options::resident_fit).
 // CPU twin: src/engines/gpu/mod.rs state_group (the host side of these bindings).
-// import: scene
+// import: scene, state_by_index
 
 @group(0) @binding(1) var<storage, read_write> disp: array<Disp>;
 @group(0) @binding(2) var<storage, read_write> vel: array<vec2<real>>;

@@ -82,6 +82,16 @@ fn load_vel(i: u32) -> vec2<real> {
     return tile_vel[tile_slot(i)];
 }
 
+// Block j at column jx and row jz: its slot without dividing j by nx
+// (the bulk force's neighbours, whose column and row it has at hand).
+fn load_disp_at(j: u32, jx: u32, jz: u32) -> Disp {
+    return tile_disp[tile_slot_at(jx, jz)];
+}
+
+fn load_vel_at(j: u32, jx: u32, jz: u32) -> vec2<real> {
+    return tile_vel[tile_slot_at(jx, jz)];
+}
+
 fn store_block(i: u32, u: Disp, v: vec2<real>) {
     let k = tile_slot(i);
     tile_disp[k] = u;

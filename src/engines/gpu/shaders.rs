@@ -51,6 +51,7 @@ wgsl_files!(
     "rng",
     "scene",
     "state_one_step",
+    "state_by_index",
     "state_persistent",
     "state_resident",
     "state_tiled",

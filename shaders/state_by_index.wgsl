@@ -1,0 +1,16 @@
+// Loads by column and row for the state slots indexed by block (one-step,
+// persistent, resident): the block's index is all they need. The tiled
+// kernel's slot finds its local slot from the column and row instead of
+// dividing the index by nx (state_tiled.wgsl).
+// CPU twin: src/engines/kernels/bulk_forces.rs bulk_force (its neighbours, by index).
+// import: state
+
+// Block j at column jx and row jz (j = jz·nx + jx): the bulk force's
+// neighbours, whose column and row it has at hand.
+fn load_disp_at(j: u32, jx: u32, jz: u32) -> Disp {
+    return load_disp(j);
+}
+
+fn load_vel_at(j: u32, jx: u32, jz: u32) -> vec2<real> {
+    return load_vel(j);
+}
