@@ -405,6 +405,9 @@ impl<T: GpuReal> GpuEngine<T> {
                 let halo = u32::try_from(halo).unwrap_or(u32::MAX);
                 let g = tiles::TileGeometry::new(model, width, halo).map_err(EngineError::Gpu)?;
                 tiles::tiled_fit::<T>(model, &g, &ctx.limits).map_err(EngineError::Gpu)?;
+                if ctx.is_software() {
+                    tiles::software_fit(model, &g, persistent_threads).map_err(EngineError::Gpu)?;
+                }
                 Some(g)
             }
             _ => None,

@@ -115,6 +115,51 @@ pub fn tiled_fit<T: GpuReal>(
     Ok(bytes)
 }
 
+/// Loop iterations a software adapter may run in one tiled dispatch per
+/// invocation: llvmpipe ends a shader's loops after 65535 in all,
+/// silently, so half of that (as `options::persistent_steps_per_dispatch`).
+const SOFTWARE_LOOP_BUDGET: usize = 32_768;
+
+/// The most loop iterations one invocation of `threads` runs in a tiled
+/// dispatch of `geometry.halo` steps on `model` (counted as the persistent
+/// kernel's are: 10 a block for its bonds, a junction lane's junctions,
+/// eight lane sums a round), with loading and publishing the tile.
+pub fn loop_iterations(model: &Model, geometry: &TileGeometry, threads: u32) -> usize {
+    let t = threads.max(1) as usize;
+    let span = geometry.span as usize;
+    let (ns, lanes) = match model.junctions {
+        Some(j)
+            if !model.law.is_per_block()
+                && model.law != crate::model::scenario::FrictionLaw::None =>
+        {
+            (j.count, crate::model::junction::JUNCTION_LANES.min(j.count))
+        }
+        _ => (0, 0),
+    };
+    let blocks = (span * model.nz).div_ceil(t);
+    let items = (span * lanes).div_ceil(t);
+    let merges = span.div_ceil(t) * lanes.div_ceil(8).max(1);
+    let per_step = 3 + blocks * 10 + items * (1 + ns.div_ceil(lanes.max(1))) + merges;
+    let tile = 2 * blocks + 2 * (span * ns).div_ceil(t);
+    geometry.halo as usize * per_step + tile
+}
+
+/// On a software adapter, whether a tiled dispatch stays within the loop
+/// budget; an error naming the count and what to change where not.
+pub fn software_fit(model: &Model, geometry: &TileGeometry, threads: u32) -> Result<(), String> {
+    let n = loop_iterations(model, geometry, threads);
+    if n > SOFTWARE_LOOP_BUDGET {
+        return Err(format!(
+            "a tiled dispatch of {} steps with {threads} threads would run about {n} loop \
+             iterations per thread, and software adapters end a shader's loops after 65535 \
+             (this engine keeps to {SOFTWARE_LOOP_BUDGET}): use fewer steps per dispatch, more \
+             threads or --gpu-path one-step",
+            geometry.halo
+        ));
+    }
+    Ok(())
+}
+
 /// The step after the last of the dispatch that starts at step `first` of
 /// a batch of `steps` steps with samples at `sample_offsets` (ascending):
 /// after `halo` steps, at the batch's end, after the batch's first step
@@ -147,6 +192,28 @@ pub fn dispatch_ends(kernel: Kernel, steps: u64, halo: u64, sample_offsets: &[u6
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Table S1 at the defaults is far inside llvmpipe's loop budget;
+    /// one thread and a 32-step halo on a tall lattice is past it, and is
+    /// refused with the count.
+    #[test]
+    fn a_dispatch_past_the_software_loop_budget_is_refused() {
+        let s = crate::model::scenario::Scenario::parse(
+            crate::model::scenario::built_in("tromborg2014_precursors").unwrap(),
+            "s1",
+            &[] as &[String],
+        )
+        .unwrap();
+        let m = Model::from_scenario(&s, false).unwrap();
+        let defaults = TileGeometry::new(&m, TILE_WIDTH, TILE_HALO).unwrap();
+        let n = loop_iterations(&m, &defaults, 256);
+        assert!(n < SOFTWARE_LOOP_BUDGET / 10, "{n}");
+        assert!(software_fit(&m, &defaults, 256).is_ok());
+        let wide = TileGeometry::new(&m, 16, MAX_TILE_HALO).unwrap();
+        let err = software_fit(&m, &wide, 1).unwrap_err();
+        assert!(err.contains("loop iterations per thread"), "{err}");
+        assert!(loop_iterations(&m, &wide, 1) > SOFTWARE_LOOP_BUDGET);
+    }
 
     #[test]
     fn a_dispatch_ends_after_its_halo_the_first_step_a_sample_or_the_batch() {
