@@ -164,7 +164,7 @@ pub fn software_fit(model: &Model, geometry: &TileGeometry, threads: u32) -> Res
 /// a batch of `steps` steps with samples at `sample_offsets` (ascending):
 /// after `halo` steps, at the batch's end, after the batch's first step
 /// (whose forces may be a snapshot's) and after a sample's step. The
-/// kernel computes the same (`tile_dispatch_end` in `shaders/tiled.wgsl`).
+/// engine writes a batch's ends to the kernel's `tile_ends`.
 pub fn dispatch_end(first: u64, steps: u64, halo: u64, sample_offsets: &[u64]) -> u64 {
     let mut end = if first == 0 { 1 } else { first + halo }.min(steps);
     if let Some(&sample) = sample_offsets.iter().find(|&&o| o >= first) {
