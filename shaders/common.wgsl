@@ -17,6 +17,9 @@
 @group(0) @binding(8) var<storage, read_write> junction_spring: array<JunctionSpring>;
 // (slip steps left or PINNED, rupture count) per junction.
 @group(0) @binding(9) var<storage, read_write> junction_state: array<vec2<u32>>;
+// Per interface block, the sums of its junctions while none of them
+// changes (junctions.wgsl, junction_block); zeroed records are empty.
+@group(0) @binding(23) var<storage, read_write> junction_cache: array<JunctionCache>;
 // (sliding direction 0/±1, stick → slip count) per interface block.
 @group(0) @binding(10) var<storage, read_write> slide: array<vec2<i32>>;
 // The friction law's own state, its block_state_words per interface block

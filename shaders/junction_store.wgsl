@@ -25,3 +25,9 @@ fn set_junction_state(k: u32, state: vec2<u32>) {
 fn set_junction_spring(k: u32, spring: JunctionSpring) {
     junction_spring[k] = spring;
 }
+
+// Whether this kernel keeps block ix's junction sums (junction_cache): a
+// block's own kernel does; the tiled kernel's halo copies do not.
+fn junction_sums_kept(ix: u32) -> bool {
+    return true;
+}

@@ -66,3 +66,9 @@ fn set_junction_spring(k: u32, spring: JunctionSpring) {
         junction_spring[k] = spring;
     }
 }
+
+// A halo block's sums are its owner's to keep (the owner writes them in
+// the same dispatch): the halo copy sums its junctions every step.
+fn junction_sums_kept(ix: u32) -> bool {
+    return tile_owns(ix);
+}

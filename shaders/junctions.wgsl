@@ -16,27 +16,101 @@ fn junction_stiffness(f_n: real) -> real {
 }
 
 // What every junction of interface block ix needs this step: u_x, the
-// normal force per junction, the break threshold and one slipping
-// junction's force mu_d f_N.
+// reference r of the pinned sums (junction_reference), the normal force
+// per junction, the break threshold and one slipping junction's force
+// mu_d f_N.
+//
+// `kept`: the block's junctions are all pinned and none can break this
+// step, so none changes, and its sums are those of junction_cache: the
+// lanes skip it (no junction is loaded) and junction_friction takes the
+// kept sums. `keeps`: junction_friction stores the sums it made.
 struct JunctionBlock {
     ux: coord,
+    reference: coord,
     f_n: real,
     threshold: real,
     slipping_force: real,
+    kept: bool,
+    keeps: bool,
+    sums: JunctionCache,
 }
 
-fn junction_block(ix: u32) -> JunctionBlock {
+// How far under the threshold the kept bound must stay: it covers the
+// rounding of the bound and of each junction's force (a few ulps).
+const KEPT_MARGIN: real = 1.0 + 1.0 / 65536.0;
+
+// GpuOptions::keep_junction_sums: false sums every junction every step.
+override KEEP_JUNCTION_SUMS: bool = true;
+
+fn junction_block(ix: u32, ld: Loads) -> JunctionBlock {
     let u = load_disp(ix);
     let f_n = foundation_normal(coord_value(u.z)) / real(c.junction_count);
-    return JunctionBlock(u.x, f_n, c.mu_s * f_n, c.mu_d * f_n);
+    let threshold = c.mu_s * f_n;
+    let keeps = KEEP_JUNCTION_SUMS && junction_sums_kept(ix) && !ld.preparing;
+    var sums = JunctionCache(force_sum_zero(), u.x, 0.0, 0.0, 0.0, 0.0);
+    var kept = false;
+    if keeps && f_n > 0.0 {
+        sums = junction_cache[interface_base() + ix];
+        // |k_j (u_x - a_j)| <= k_max |u_x - r| + max |k_j (a_j - r)|.
+        let reach = sums.stiffness_max * abs(coord_diff(u.x, sums.reference)) + sums.stretch_max;
+        kept = sums.stiffness_max > 0.0 && reach * KEPT_MARGIN <= threshold;
+    }
+    var reference = sums.reference;
+    if !kept {
+        let first = junction_first(ix);
+        reference = junction_reference(u.x, threshold, ld, junction_state_at(first), junction_spring_at(first));
+    }
+    return JunctionBlock(u.x, reference, f_n, threshold, c.mu_d * f_n, kept, keeps, sums);
+}
+
+// The coordinate r the block's pinned forces are summed about this step:
+// junction 0's anchor if it is pinned after the step (pinned now and not
+// breaking), else u_x. A pure function of the state, so sums kept from an
+// earlier step of an unchanged block have the bits of sums made anew.
+fn junction_reference(ux: coord, threshold: real, ld: Loads, state: vec2<u32>, spring: JunctionSpring) -> coord {
+    if state.x != PINNED {
+        return ux;
+    }
+    let f = -spring.stiffness * coord_diff(ux, coord_unpack(spring.anchor));
+    if !ld.preparing && abs(f) > threshold {
+        return ux;
+    }
+    return coord_unpack(spring.anchor);
 }
 
 fn lane_sum_zero() -> LaneSum {
-    return LaneSum(force_sum_zero(), 0u, 0u);
+    return LaneSum(force_sum_zero(), force_sum_zero(), 0.0, 0.0, 0u, 0u);
 }
 
 fn lane_sum_merge(a: LaneSum, b: LaneSum) -> LaneSum {
-    return LaneSum(force_sum_merge(a.pinned, b.pinned), a.slipping + b.slipping, 0u);
+    return LaneSum(
+        force_sum_merge(a.anchored, b.anchored),
+        force_sum_merge(a.stiffness, b.stiffness),
+        max(a.stretch_max, b.stretch_max),
+        max(a.stiffness_max, b.stiffness_max),
+        a.slipping + b.slipping,
+        0u,
+    );
+}
+
+// A junction pinned after the step, its stiffness k_j and its term
+// k_j (a_j - r), added to a lane's sums.
+fn lane_sum_add(a: LaneSum, stiffness: real, term: real) -> LaneSum {
+    return LaneSum(
+        force_sum_add(a.anchored, term),
+        force_sum_add(a.stiffness, stiffness),
+        max(a.stretch_max, abs(term)),
+        max(a.stiffness_max, stiffness),
+        a.slipping,
+        0u,
+    );
+}
+
+// The pinned junctions' force on the block: sum k_j (a_j - r) minus
+// (sum k_j)(u_x - r). Where r is u_x, the term by term sum.
+fn pinned_friction(jb: JunctionBlock, total: LaneSum) -> real {
+    let moved = force_sum_value(total.stiffness) * coord_diff(jb.ux, jb.reference);
+    return force_sum_value(force_sum_add(total.anchored, -moved));
 }
 
 // The friction on interface block ix from its merged lane sums, its other
@@ -44,8 +118,17 @@ fn lane_sum_merge(a: LaneSum, b: LaneSum) -> LaneSum {
 // the slipping junctions' n mu_d f_N, which under the at-rest rule `hold`
 // (c.law0 != 0) stops the block this step when that bound allows, and
 // under `sign` pushes against v (the thesis's rule).
-fn junction_friction(ix: u32, jb: JunctionBlock, total: LaneSum, other: real) -> real {
-    let pinned = force_sum_value(total.pinned);
+fn junction_friction(ix: u32, jb: JunctionBlock, lanes: LaneSum, other: real) -> real {
+    var total = lanes;
+    if jb.kept {
+        total = LaneSum(jb.sums.anchored, force_sum_add(force_sum_zero(), jb.sums.stiffness), 0.0, 0.0, 0u, 0u);
+    } else if jb.keeps {
+        // Kept only while every junction is pinned (stiffness_max 0: empty).
+        let k_max = select(0.0, total.stiffness_max, total.slipping == 0u);
+        let sums = JunctionCache(total.anchored, jb.reference, force_sum_value(total.stiffness), total.stretch_max, k_max, 0.0);
+        junction_cache[interface_base() + ix] = sums;
+    }
+    let pinned = pinned_friction(jb, total);
     if total.slipping == 0u {
         return pinned;
     }
@@ -71,6 +154,9 @@ fn junction_friction(ix: u32, jb: JunctionBlock, total: LaneSum, other: real) ->
 // Spring and state are written back only where they changed, so a step
 // between events writes none of them (the same bits, less storage traffic).
 fn junction_lane(ix: u32, lane: u32, jb: JunctionBlock, ld: Loads) -> LaneSum {
+    if jb.kept {
+        return lane_sum_zero();
+    }
     return lane_from(ix, lane, jb, ld, lane_pair(ix, lane));
 }
 
@@ -83,6 +169,15 @@ struct LanePair {
     spring_a: JunctionSpring,
     state_b: vec2<u32>,
     spring_b: JunctionSpring,
+}
+
+// Block ix's pair for lane j, or nothing loaded where its sums are kept.
+fn lane_pair_of(ix: u32, j: u32, jb: JunctionBlock) -> LanePair {
+    if jb.kept {
+        let none = JunctionSpring(coord_pack(jb.ux), 0.0);
+        return LanePair(vec2<u32>(PINNED, 0u), none, vec2<u32>(PINNED, 0u), none);
+    }
+    return lane_pair(ix, j);
 }
 
 fn lane_pair(ix: u32, j: u32) -> LanePair {
@@ -99,6 +194,9 @@ fn lane_pair(ix: u32, j: u32) -> LanePair {
 // (options::persistent_steps_per_dispatch), and the f64 draws loop.
 fn lane_from(ix: u32, lane: u32, jb: JunctionBlock, ld: Loads, loaded: LanePair) -> LaneSum {
     var total = lane_sum_zero();
+    if jb.kept {
+        return total;
+    }
     let first = junction_first(ix);
     var pair = loaded;
     var second = false;
@@ -164,7 +262,7 @@ fn junction_update(
             pinned = false;
             broke = true;
         } else {
-            total.pinned = force_sum_add(total.pinned, f);
+            total = lane_sum_add(total, spring.stiffness, spring.stiffness * coord_diff(coord_unpack(spring.anchor), jb.reference));
         }
     }
     if !pinned {

@@ -31,7 +31,7 @@ fn one_step_lanes(
     let lanes = min(JUNCTION_LANES, c.junction_count);
     let junction_group = FRICTION_LAW == LAW_JUNCTIONS && w < c.nx;
     if junction_group && !ready && local < lanes {
-        lane_sum[local] = junction_lane(w, local, junction_block(w), ld);
+        lane_sum[local] = junction_lane(w, local, junction_block(w, ld), ld);
     }
     // Outside the branch: every workgroup reaches it (an ensemble scene's
     // constants are not uniform to the uniformity analysis).
@@ -45,11 +45,12 @@ fn one_step_lanes(
                 friction = contact[interface_base() + w].x;
             } else {
                 f = bulk_force(w, ld);
+                let jb = junction_block(w, ld);
                 var lane_sums = lane_sum_zero();
-                for (var l = 0u; l < lanes; l++) {
+                for (var l = 0u; !jb.kept && l < lanes; l++) {
                     lane_sums = lane_sum_merge(lane_sums, lane_sum[l]);
                 }
-                friction = junction_friction(w, junction_block(w), lane_sums, f.x);
+                friction = junction_friction(w, jb, lane_sums, f.x);
                 force[block_base() + w] = f;
                 contact[interface_base() + w] = vec2<real>(friction, foundation_normal(coord_value(load_disp(w).z)));
             }

@@ -81,14 +81,16 @@ fn persistent_steps(
                     let w2 = w + PERSISTENT_THREADS;
                     let ix = w / lanes;
                     let ix2 = w2 / lanes;
-                    let first = lane_pair(ix, w % lanes);
-                    let first2 = lane_pair(ix2, w2 % lanes);
-                    lane_partial[lane_base() + w] = lane_from(ix, w % lanes, junction_block(ix), ld, first);
-                    lane_partial[lane_base() + w2] = lane_from(ix2, w2 % lanes, junction_block(ix2), ld, first2);
+                    let jb = junction_block(ix, ld);
+                    let jb2 = junction_block(ix2, ld);
+                    let first = lane_pair_of(ix, w % lanes, jb);
+                    let first2 = lane_pair_of(ix2, w2 % lanes, jb2);
+                    lane_partial[lane_base() + w] = lane_from(ix, w % lanes, jb, ld, first);
+                    lane_partial[lane_base() + w2] = lane_from(ix2, w2 % lanes, jb2, ld, first2);
                 }
                 for (; w < items; w += PERSISTENT_THREADS) {
                     let ix = w / lanes;
-                    lane_partial[lane_base() + w] = junction_lane(ix, w % lanes, junction_block(ix), ld);
+                    lane_partial[lane_base() + w] = junction_lane(ix, w % lanes, junction_block(ix, ld), ld);
                 }
             }
         }
@@ -119,8 +121,12 @@ fn persistent_steps(
             var friction: real = 0.0;
             if FRICTION_LAW != LAW_NONE && i < c.nx {
                 if FRICTION_LAW == LAW_JUNCTIONS && !ready {
-                    let lane_sums = merged_lane_partials(lane_base() + i * lanes, lanes);
-                    friction = junction_friction(i, junction_block(i), lane_sums, force[block_base() + i].x);
+                    let jb = junction_block(i, ld);
+                    var lane_sums = lane_sum_zero();
+                    if !jb.kept {
+                        lane_sums = merged_lane_partials(lane_base() + i * lanes, lanes);
+                    }
+                    friction = junction_friction(i, jb, lane_sums, force[block_base() + i].x);
                     contact[interface_base() + i] = vec2<real>(friction, foundation_normal(coord_value(load_disp(i).z)));
                 } else {
                     friction = contact[interface_base() + i].x;

@@ -23,7 +23,7 @@ fn block_forces(i: u32, ld: Loads, ready: bool) -> vec3<real> {
     }
     if FRICTION_LAW == LAW_JUNCTIONS && i < c.nx {
         let lanes = min(JUNCTION_LANES, c.junction_count);
-        let jb = junction_block(i);
+        let jb = junction_block(i, ld);
         var lane_sums = lane_sum_zero();
         for (var l = 0u; l < lanes; l++) {
             lane_sums = lane_sum_merge(lane_sums, junction_lane(i, l, jb, ld));

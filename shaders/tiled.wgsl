@@ -174,7 +174,7 @@ fn tiled_steps(
                     let ix = a + w / lanes;
                     let l = w % lanes;
                     let at = lane_first + (ix - tile_lo) * lanes + l;
-                    lane_partial[at] = junction_lane(ix, l, junction_block(ix), ld);
+                    lane_partial[at] = junction_lane(ix, l, junction_block(ix, ld), ld);
                 }
             }
         }
@@ -194,8 +194,12 @@ fn tiled_steps(
             } else {
                 f = tile_force[tile_slot_at(ix, iz)];
                 if FRICTION_LAW == LAW_JUNCTIONS && iz == 0u {
-                    let sums = merged_lane_partials(lane_first + (ix - tile_lo) * lanes, lanes);
-                    friction = junction_friction(ix, junction_block(ix), sums, f.x);
+                    let jb = junction_block(ix, ld);
+                    var sums = lane_sum_zero();
+                    if !jb.kept {
+                        sums = merged_lane_partials(lane_first + (ix - tile_lo) * lanes, lanes);
+                    }
+                    friction = junction_friction(ix, jb, sums, f.x);
                     if tile_owns(ix) {
                         contact[interface_base() + ix] = vec2<real>(friction, foundation_normal(coord_value(load_disp(ix).z)));
                     }

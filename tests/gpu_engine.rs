@@ -685,3 +685,53 @@ fn rate_state_friction_matches_the_cpu_on_every_kernel() {
         assert_eq!(c.slips, g.slips, "{path:?}");
     }
 }
+
+/// A block whose junctions are all pinned and whose u_x stays well inside
+/// every junction's threshold keeps its junction sums and skips its
+/// junctions (`GpuOptions::keep_junction_sums`). That must give the bits
+/// of summing every junction every step, on every kernel, through the
+/// stick-slip window's ruptures and re-pinnings; and the sums must be kept
+/// for most blocks between events, or the test would pass without them.
+#[test]
+fn kept_junction_sums_give_the_bits_of_summing_every_step() {
+    let m = stick_slip_scene(&[]);
+    let run = |m: &Model, path, keep| {
+        let opts = GpuOptions {
+            path,
+            keep_junction_sums: keep,
+            ..GpuOptions::default()
+        };
+        let mut g = GpuEngine::with_options(m, opts).expect("a GPU adapter (lavapipe in CI)");
+        let mut kept = Vec::new();
+        for step in (m.prep_steps..=m.prep_steps + 6000).step_by(500) {
+            advance_to(&mut g, step).unwrap();
+            kept.push(g.kept_junction_blocks(0).unwrap());
+        }
+        (g.snapshot().unwrap(), kept)
+    };
+    for path in KERNELS {
+        let (kept, counts) = run(&m, path, true);
+        let (summed, none) = run(&m, path, false);
+        println!("{path:?}: blocks with kept sums every 500 steps {counts:?}");
+        assert!(
+            kept.total_ruptures() > 100,
+            "{path:?}: the window must hold ruptures"
+        );
+        assert!(none.iter().all(|&n| n == 0), "{path:?}: {none:?}");
+        assert!(
+            counts.iter().any(|&n| 2 * n >= m.nx),
+            "{path:?}: sums kept for at most {:?} of {} blocks",
+            counts.iter().max(),
+            m.nx
+        );
+        assert!(kept == summed, "{path:?}: kept sums changed the bits");
+    }
+    // Control: the same comparison sees a drive 1e-9 faster.
+    let mut faster = m.clone();
+    if let slipfront::model::Driver::SideSpring { velocity, .. } = &mut faster.driver {
+        *velocity *= 1.0 + 1e-9;
+    }
+    let (kept, _) = run(&m, GpuPath::OneStep, true);
+    let (other, _) = run(&faster, GpuPath::OneStep, true);
+    assert!(kept != other, "control");
+}

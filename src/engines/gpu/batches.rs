@@ -381,9 +381,10 @@ impl<T: GpuReal> GpuEngine<T> {
                     at,
                     bytemuck::cast_slice(&spring),
                 );
+                self.forget_junction_sums(k);
             }
             // The forces of this step change with the driver: recompute them.
-            scene.forces_ready = false;
+            self.scenes[k].forces_ready = false;
         }
         Ok(())
     }

@@ -153,7 +153,10 @@ mod tests {
     fn reflected_bindings_follow_the_declarations() {
         let one_step = Bindings::reflect(&Kernel::OneStep.source::<f32>()).unwrap();
         let numbers: Vec<u32> = one_step.layout(0, &[]).iter().map(|e| e.binding).collect();
-        assert_eq!(numbers, [0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 13, 14, 17]);
+        assert_eq!(
+            numbers,
+            [0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 13, 14, 17, 23]
+        );
         let persistent = Bindings::reflect(&Kernel::Persistent.source::<f32>()).unwrap();
         let numbers: Vec<u32> = persistent
             .layout(0, &[])
@@ -162,7 +165,7 @@ mod tests {
             .collect();
         assert_eq!(
             numbers,
-            [0, 1, 2, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16, 17]
+            [0, 1, 2, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16, 17, 23]
         );
         assert_eq!(persistent.binding("lane_partial"), Some((0, 12)));
         // The resident kernel shares the persistent kernel's layout.

@@ -53,7 +53,7 @@ pub fn shared() -> Result<GpuContext, EngineError> {
 
 /// Storage bindings the tiled kernel uses (the most of them: the scenes'
 /// constants, the state, its halo's scratch buffers and the record entries).
-const STORAGE_BINDINGS: u32 = 19;
+const STORAGE_BINDINGS: u32 = 20;
 
 /// Group 0's layout of one kernel family and the pipeline layout using it.
 struct KernelLayout {

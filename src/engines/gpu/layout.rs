@@ -220,14 +220,38 @@ gpu_struct! {
 }
 
 gpu_struct! {
-    /// What the junction lanes of a block hand back: the pinned junctions'
-    /// force sum (a WGSL `force_sum`) and the count of slipping junctions
-    /// (the CPU twin's `kernels::junctions::LaneSum`).
+    /// What the junction lanes of a block hand back (the CPU twin's
+    /// `kernels::junctions::LaneSum`): over the junctions pinned after the
+    /// step, Σ k_j·(a_j − r) and Σ k_j (WGSL `force_sum`s), the largest
+    /// |k_j·(a_j − r)| and k_j; and the count of slipping junctions.
     pub struct GpuLaneSum<T> as "LaneSum" {
-        pub pinned: Coord<T>,
+        pub anchored: Coord<T>,
+        pub stiffness: Coord<T>,
+        pub stretch_max: T,
+        pub stiffness_max: T,
         pub slipping: u32,
         /// Unused: keeps both precisions free of padding.
         pub reserved: u32,
+    }
+}
+
+gpu_struct! {
+    /// The sums of an interface block whose junctions are all pinned,
+    /// kept from the step that made them (`junction_cache`): while no
+    /// junction changes, they are what the lanes would sum again. Valid
+    /// where `stiffness_max` > 0 (a zeroed record is empty). The CPU twin
+    /// sums anew every step (`kernels::junctions::pinned_friction`).
+    pub struct GpuJunctionCache<T> as "JunctionCache" {
+        /// Σ k_j·(a_j − r) (a WGSL `force_sum`).
+        pub anchored: Coord<T>,
+        /// r, junction 0's anchor.
+        pub reference: Coord<T>,
+        /// Σ k_j, rounded once.
+        pub stiffness: T,
+        pub stretch_max: T,
+        pub stiffness_max: T,
+        /// Unused: keeps both precisions free of padding.
+        pub reserved: T,
     }
 }
 
@@ -407,6 +431,7 @@ pub fn wgsl_prelude<T: GpuReal>() -> String {
         GpuDisp::<T>::wgsl(),
         GpuJunctionSpring::<T>::wgsl(),
         GpuLaneSum::<T>::wgsl(),
+        GpuJunctionCache::<T>::wgsl(),
         GpuStatus::wgsl(),
         GpuRecordPlan::<T>::wgsl(),
         GpuRecordEntry::wgsl(),
@@ -646,6 +671,11 @@ mod tests {
             "LaneSum",
             size_of::<GpuLaneSum<T>>(),
             GpuLaneSum::<T>::fields(),
+        );
+        check(
+            "JunctionCache",
+            size_of::<GpuJunctionCache<T>>(),
+            GpuJunctionCache::<T>::fields(),
         );
         check("Status", size_of::<GpuStatus>(), GpuStatus::fields());
         check(

@@ -59,7 +59,9 @@ use crate::model::Model;
 use bytemuck::Zeroable;
 use context::GpuContext;
 pub use device_timer::DispatchTimes;
-use layout::{GpuBatch, GpuConsts, GpuJunctionSpring, GpuLaneSum, GpuStatus, WORKGROUP};
+use layout::{
+    GpuBatch, GpuConsts, GpuJunctionCache, GpuJunctionSpring, GpuLaneSum, GpuStatus, WORKGROUP,
+};
 use options::*;
 pub use options::{GpuOptions, GpuOutput, GpuPath, PERSISTENT_THREADS, RESIDENT_THREADS};
 pub use precision::GpuReal;
@@ -83,6 +85,9 @@ struct Buffers {
     contact: wgpu::Buffer,
     junction_spring: wgpu::Buffer,
     junction_state: wgpu::Buffer,
+    /// Per interface block, the sums of its junctions while none changes
+    /// (`GpuJunctionCache`); zeroed wherever the host writes junctions.
+    junction_cache: wgpu::Buffer,
     slide: wgpu::Buffer,
     /// The friction law's state (`Shape::law_words` per scene).
     law_state: wgpu::Buffer,
@@ -123,6 +128,7 @@ fn state_group(
         ("contact", &b.contact),
         ("junction_spring", &b.junction_spring),
         ("junction_state", &b.junction_state),
+        ("junction_cache", &b.junction_cache),
         ("slide", &b.slide),
         ("law_state", &b.law_state),
         ("status", &b.status),
@@ -480,6 +486,10 @@ impl<T: GpuReal> GpuEngine<T> {
                 "junction_state",
                 bytemuck::cast_slice(&vec![[crate::model::junction::PINNED, 0u32]; s * nj]),
             ),
+            junction_cache: storage(
+                "junction sums kept",
+                bytemuck::cast_slice(&vec![GpuJunctionCache::<T>::zeroed(); s * shape.nx]),
+            ),
             slide: storage(
                 "slide",
                 bytemuck::cast_slice(&vec![[0i32; 2]; s * shape.nx]),
@@ -567,6 +577,7 @@ impl<T: GpuReal> GpuEngine<T> {
         });
         let variant = Variant::for_model(model);
         let mut constants = variant.constants.clone();
+        constants.push(("KEEP_JUNCTION_SUMS", opts.keep_junction_sums as u8 as f64));
         if kernel.is_persistent() {
             constants.push(("PERSISTENT_THREADS", persistent_threads as f64));
             // llvmpipe counts the iterations of every inlined loop against

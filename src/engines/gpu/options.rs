@@ -113,6 +113,10 @@ pub struct GpuOptions {
     /// Batches an `advance` may leave running once its runner lets it run
     /// ahead (`Engine::run_ahead`); 0: every advance waits for its steps.
     pub run_ahead: usize,
+    /// Keep an interface block's junction sums while none of its junctions
+    /// can change, and skip its junctions then (`junction_cache`): the same
+    /// bits either way. false sums every junction every step (a check).
+    pub keep_junction_sums: bool,
 }
 
 impl Default for GpuOptions {
@@ -124,6 +128,7 @@ impl Default for GpuOptions {
             steps_per_dispatch: None,
             tile_width: None,
             run_ahead: RUN_AHEAD_BATCHES,
+            keep_junction_sums: true,
         }
     }
 }

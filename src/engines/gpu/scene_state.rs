@@ -3,12 +3,13 @@
 //! kinematics and junctions). Scene k's elements start at k times the
 //! per-scene count of each buffer.
 
-use super::layout::GpuJunctionSpring;
+use super::layout::{GpuJunctionCache, GpuJunctionSpring};
 use super::precision::{Coord, GpuReal, Packed};
 use super::readback::{cast_prefix, read_ranges, Range};
 use super::{GpuEngine, Shape, WORD_PAIR_BYTES};
 use crate::engines::{EngineError, EngineState, FrictionState, Snapshot, StateArrays};
 use crate::model::real::Coordinate;
+use bytemuck::Zeroable;
 
 impl<T: GpuReal> GpuEngine<T> {
     /// Byte range of scene `k`'s slice of a buffer with `per_scene` elements
@@ -99,6 +100,35 @@ impl<T: GpuReal> GpuEngine<T> {
         }
     }
 
+    /// Empties scene `k`'s kept junction sums (`junction_cache`): every
+    /// host write of its junctions calls this, so no kernel uses sums of
+    /// springs that are no longer there.
+    pub(super) fn forget_junction_sums(&self, k: usize) {
+        let nx = self.shape.nx;
+        let empty = vec![GpuJunctionCache::<T>::zeroed(); nx];
+        let bytes = std::mem::size_of::<GpuJunctionCache<T>>();
+        self.write_scene(
+            &self.buffers.junction_cache,
+            k,
+            nx,
+            bytes,
+            bytemuck::cast_slice(&empty),
+        );
+    }
+
+    /// Interface blocks of scene `k` whose junction sums are kept now (all
+    /// their junctions pinned since the sums were made): how much of the
+    /// junction phase the kernels skip while nothing breaks.
+    pub fn kept_junction_blocks(&mut self, k: usize) -> Result<usize, EngineError> {
+        self.drain()?;
+        let nx = self.shape.nx;
+        let bytes = std::mem::size_of::<GpuJunctionCache<T>>();
+        let range = self.slice(&self.buffers.junction_cache, k, nx, bytes);
+        let raw = read_ranges(&self.ctx, &[range])?;
+        let sums: Vec<GpuJunctionCache<T>> = cast_prefix(&raw[0], nx);
+        Ok(sums.iter().filter(|s| s.stiffness_max > T::zero()).count())
+    }
+
     pub(super) fn snapshot_of(&mut self, k: usize) -> Result<Snapshot, EngineError> {
         self.ready_forces()?;
         self.read_state(k)
@@ -160,6 +190,7 @@ impl<T: GpuReal> GpuEngine<T> {
             WORD_PAIR_BYTES,
             bytemuck::cast_slice(&state),
         );
+        self.forget_junction_sums(k);
         self.scenes[k].forces_ready = false;
         Ok(())
     }
@@ -230,6 +261,7 @@ impl<T: GpuReal> GpuEngine<T> {
         );
         let js = bytemuck::cast_slice(&state.junction_state);
         self.write_scene(&b.junction_state, k, nj, WORD_PAIR_BYTES, js);
+        self.forget_junction_sums(k);
         self.write_scene(
             &b.slide,
             k,

@@ -52,8 +52,9 @@ pub fn junctions<T: Real, C: Coordinate<T>>(
     other: T,
     slots: JunctionSlots<'_, T, C>,
 ) -> (T, T) {
-    let jb = junction_block(c, u);
-    let mut total = LaneSum::<C::Sum>::default();
+    let mut jb = junction_block(c, u);
+    jb.reference = junction_reference(c, p, &jb, slots.state[0], &slots.spring[0]);
+    let mut total = LaneSum::<T, C::Sum>::default();
     for lane in 0..JUNCTION_LANES.min(c.junction_count) {
         let slots = JunctionSlots {
             spring: &mut *slots.spring,
@@ -61,10 +62,39 @@ pub fn junctions<T: Real, C: Coordinate<T>>(
         };
         total = total.merge(junction_lane(c, p, ix, lane, &jb, slots));
     }
+    let pinned = pinned_friction(c, &jb, &total);
     (
-        junction_friction(c, jb.slipping_force, total, other, v[0]),
+        junction_friction(c, jb.slipping_force, pinned, total.slipping, other, v[0]),
         foundation_normal(c, u[1].value()),
     )
+}
+
+/// Twin of the WGSL `junction_reference`: the coordinate r the block's
+/// pinned forces are summed about this step, junction 0's anchor if that
+/// junction is pinned after the step (pinned now and not breaking), else
+/// u_x. A pure function of the state, so a kernel that keeps the sums of
+/// an unchanged block (the GPU's `junction_cache`) gets the bits of one
+/// that sums them again. Every pinned junction is within μs·f_N/k_j of
+/// u_x, so about r too: the sums about r are of the size of the forces.
+pub fn junction_reference<T: Real, C: Coordinate<T>>(
+    c: &Consts<T>,
+    p: &StepParams<T>,
+    jb: &JunctionBlock<T, C>,
+    state: [u32; 2],
+    spring: &JunctionSpring<C, T>,
+) -> C {
+    if state[0] != PINNED {
+        return jb.ux;
+    }
+    let f = hold(
+        c.f32_probe,
+        JUNCTIONS,
+        -spring.stiffness * jb.ux.diff(spring.anchor),
+    );
+    if !p.preparing && f.abs() > jb.threshold {
+        return jb.ux;
+    }
+    spring.anchor
 }
 
 /// What every junction of one interface block needs this step (twin of the
@@ -72,6 +102,9 @@ pub fn junctions<T: Real, C: Coordinate<T>>(
 /// the break threshold μs·f_N and one slipping junction's force μd·f_N.
 pub struct JunctionBlock<T, C> {
     pub ux: C,
+    /// The reference r of the pinned sums (`junction_reference`; u_x
+    /// until it is set).
+    pub reference: C,
     pub f_n: T,
     pub threshold: T,
     pub slipping_force: T,
@@ -87,6 +120,7 @@ pub fn junction_block<T: Real, C: Coordinate<T>>(c: &Consts<T>, u: [C; 2]) -> Ju
     );
     JunctionBlock {
         ux: u[0],
+        reference: u[0],
         f_n,
         threshold: hold(probe, JUNCTIONS, break_threshold(c.mu_s, f_n)),
         slipping_force: hold(probe, JUNCTIONS, c.mu_d * f_n),
@@ -94,48 +128,83 @@ pub fn junction_block<T: Real, C: Coordinate<T>>(c: &Consts<T>, u: [C; 2]) -> Ju
 }
 
 /// What the junction lanes of a block hand back (twin of the WGSL
-/// `LaneSum`, laid out as `GpuLaneSum`): the sum of the pinned junctions'
-/// forces and how many junctions slip.
+/// `LaneSum`, laid out as `GpuLaneSum`), over the junctions pinned after
+/// the step: Σ k_j·(a_j − r) (`anchored`) and Σ k_j (`stiffness`) in the
+/// precision's `ForceSum`, the count of slipping junctions, and the
+/// largest |k_j·(a_j − r)| and k_j (`stretch_max`, `stiffness_max`: what a
+/// kernel needs to know that no junction can break while u_x stays near r).
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
-pub struct LaneSum<S> {
-    pub pinned: S,
+pub struct LaneSum<T, S> {
+    pub anchored: S,
+    pub stiffness: S,
     pub slipping: u32,
+    pub stretch_max: T,
+    pub stiffness_max: T,
 }
 
-impl<S> LaneSum<S> {
+impl<T: Real, S: ForceSum<T>> LaneSum<T, S> {
     /// Twin of the WGSL `lane_sum_merge`.
     #[inline]
-    pub fn merge<T: Real>(self, other: LaneSum<S>) -> LaneSum<S>
-    where
-        S: ForceSum<T>,
-    {
+    pub fn merge(self, other: LaneSum<T, S>) -> LaneSum<T, S> {
         LaneSum {
-            pinned: self.pinned.merge(other.pinned),
+            anchored: self.anchored.merge(other.anchored),
+            stiffness: self.stiffness.merge(other.stiffness),
             slipping: self.slipping + other.slipping,
+            stretch_max: self.stretch_max.max(other.stretch_max),
+            stiffness_max: self.stiffness_max.max(other.stiffness_max),
         }
     }
+
+    /// Twin of the WGSL `lane_sum_add`: a junction pinned after the step,
+    /// its stiffness k_j and term k_j·(a_j − r).
+    #[inline(always)]
+    pub fn add_pinned(mut self, stiffness: T, term: T) -> LaneSum<T, S> {
+        self.anchored = self.anchored.add(term);
+        self.stiffness = self.stiffness.add(stiffness);
+        self.stretch_max = self.stretch_max.max(term.abs());
+        self.stiffness_max = self.stiffness_max.max(stiffness);
+        self
+    }
+}
+
+/// Twin of the WGSL `pinned_friction`: the pinned junctions' force on the
+/// block, Σ k_j·(a_j − r) − (Σ k_j)·(u_x − r). Where r is u_x (junction 0
+/// not pinned) the second term is 0 and this is Σ −k_j·(u_x − a_j) term
+/// by term.
+#[inline]
+pub fn pinned_friction<T: Real, C: Coordinate<T>>(
+    c: &Consts<T>,
+    jb: &JunctionBlock<T, C>,
+    total: &LaneSum<T, C::Sum>,
+) -> T {
+    let moved = hold(
+        c.f32_probe,
+        JUNCTIONS,
+        total.stiffness.value() * jb.ux.diff(jb.reference),
+    );
+    total.anchored.add(-moved).value()
 }
 
 /// Twin of the WGSL `junction_friction`: the friction on a block from its
-/// lanes' sums `total`, one slipping junction's force `slipping_force`
-/// (μd·f_N), its other force along x `other` and its velocity `vx`
-/// (v(n−½)). The slipping junctions add n_slipping·μd·f_N under the
-/// scenario's at-rest rule (`model::friction::junctions::SlipAtRest`):
-/// `hold` stops the block this step when that bound allows, `sign` pushes
-/// against v.
+/// pinned junctions' force `pinned`, the count of its slipping junctions,
+/// one slipping junction's force `slipping_force` (μd·f_N), its other
+/// force along x `other` and its velocity `vx` (v(n−½)). The slipping
+/// junctions add n_slipping·μd·f_N under the scenario's at-rest rule
+/// (`model::friction::junctions::SlipAtRest`): `hold` stops the block this
+/// step when that bound allows, `sign` pushes against v.
 #[inline]
-pub fn junction_friction<T: Real, S: ForceSum<T>>(
+pub fn junction_friction<T: Real>(
     c: &Consts<T>,
     slipping_force: T,
-    total: LaneSum<S>,
+    pinned: T,
+    slipping: u32,
     other: T,
     vx: T,
 ) -> T {
-    let pinned = total.pinned.value();
-    if total.slipping == 0 {
+    if slipping == 0 {
         return pinned;
     }
-    let capacity = T::from_f64(total.slipping as f64) * slipping_force;
+    let capacity = T::from_f64(slipping as f64) * slipping_force;
     // The friction that brings the block to rest this step.
     let stop = -(other + pinned) - c.mass * vx / c.dt;
     pinned + slipping_friction(c.law[0] != T::zero(), capacity, stop, vx)
@@ -158,16 +227,34 @@ pub fn junction_lane<T: Real, C: Coordinate<T>>(
     lane: usize,
     jb: &JunctionBlock<T, C>,
     slots: JunctionSlots<'_, T, C>,
-) -> LaneSum<C::Sum> {
-    let mut total = LaneSum::<C::Sum>::default();
+) -> LaneSum<T, C::Sum> {
+    let mut total = LaneSum::<T, C::Sum>::default();
     for j in (lane..c.junction_count).step_by(JUNCTION_LANES) {
         let state = &mut slots.state[j];
-        match junction(c, p, ix, j, jb, &mut slots.spring[j], state) {
-            Some(f) => total.pinned = total.pinned.add(f),
+        let spring = &mut slots.spring[j];
+        match junction(c, p, ix, j, jb, spring, state) {
+            Some(_) => {
+                let term = anchored_term(c, jb, spring);
+                total = total.add_pinned(spring.stiffness, term);
+            }
             None => total.slipping += 1,
         }
     }
     total
+}
+
+/// Twin of the WGSL `anchored_term`: a pinned junction's k_j·(a_j − r).
+#[inline(always)]
+pub fn anchored_term<T: Real, C: Coordinate<T>>(
+    c: &Consts<T>,
+    jb: &JunctionBlock<T, C>,
+    spring: &JunctionSpring<C, T>,
+) -> T {
+    hold(
+        c.f32_probe,
+        JUNCTIONS,
+        spring.stiffness * spring.anchor.diff(jb.reference),
+    )
 }
 
 /// One junction `j` of block `ix` advanced by one step; returns its force

@@ -40,7 +40,7 @@ pub struct Scratch<T: Real, C: Coordinate<T>> {
     /// loads join them (`bulk_forces::external_loads` says why).
     sum_x: Vec<C::Sum>,
     sum_z: Vec<C::Sum>,
-    junctions: JunctionScratch<T, C::Sum>,
+    junctions: JunctionScratch<T, C::Sum, C>,
 }
 
 impl<T: Real, C: Coordinate<T>> Scratch<T, C> {

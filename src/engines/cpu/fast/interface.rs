@@ -19,15 +19,18 @@ use crate::model::scenario::FrictionLaw;
 
 /// Working arrays of the junction pass, kept between steps.
 #[derive(Debug, Clone, Default)]
-pub struct JunctionScratch<T, S> {
-    /// Forces of one block's junctions.
+pub struct JunctionScratch<T, S, C> {
+    /// Forces of one block's junctions (their break test).
     force: Vec<T>,
-    /// Lane sums (the precision's `ForceSum`), block-major:
-    /// `lanes[ix * JUNCTION_LANES + lane]`.
-    lanes: Vec<S>,
-    total: Vec<S>,
-    /// Per block: slipping junctions and one slipping junction's force.
-    slipping: Vec<(u32, T)>,
+    /// Per junction of one block, pinned after the step: k_j·(a_j − r)
+    /// and k_j (0 and 0 where it slips: neutral in the lane sums).
+    term: Vec<T>,
+    stiffness: Vec<T>,
+    /// Lane sums, block-major: `lanes[ix * JUNCTION_LANES + lane]`.
+    lanes: Vec<LaneSum<T, S>>,
+    /// Per block: slipping junctions, one slipping junction's force and
+    /// the reference r of its sums.
+    slipping: Vec<(u32, T, C)>,
     /// Junctions of one block left to the reference's `junction`.
     rare: Vec<bool>,
 }
@@ -40,7 +43,7 @@ pub fn interface_row<T: Real, C: Coordinate<T>>(
     row: RowView<'_, T, C>,
     fx: &[T],
     out: &mut Interface<'_, T, C>,
-    scratch: &mut JunctionScratch<T, C::Sum>,
+    scratch: &mut JunctionScratch<T, C::Sum, C>,
 ) {
     let c = s.c;
     match s.law {
@@ -69,79 +72,102 @@ fn junction_row<T: Real, C: Coordinate<T>>(
     row: RowView<'_, T, C>,
     fx: &[T],
     out: &mut Interface<'_, T, C>,
-    scratch: &mut JunctionScratch<T, C::Sum>,
+    scratch: &mut JunctionScratch<T, C::Sum, C>,
 ) {
     let c = s.c;
     let (nx, ns) = (c.nx, c.junction_count);
     let lanes_used = JUNCTION_LANES.min(ns);
     scratch.force.resize(ns, T::zero());
-    scratch.lanes.resize(nx * JUNCTION_LANES, C::Sum::default());
-    scratch.total.resize(nx, C::Sum::default());
-    scratch.slipping.resize(nx, (0, T::zero()));
+    scratch.term.resize(ns, T::zero());
+    scratch.stiffness.resize(ns, T::zero());
+    scratch
+        .lanes
+        .resize(nx * JUNCTION_LANES, LaneSum::default());
+    scratch.slipping.resize(nx, (0, T::zero(), C::default()));
     scratch.rare.resize(ns, false);
     let JunctionScratch {
         force,
+        term,
+        stiffness,
         lanes,
-        total,
         slipping,
         rare,
     } = scratch;
     for ix in 0..nx {
         let u = [row.ux[ix], row.uz[ix]];
-        let jb = junctions::junction_block(c, u);
+        let mut jb = junctions::junction_block(c, u);
         let spring = &mut out.spring[ix * ns..(ix + 1) * ns];
         let state = &mut out.state[ix * ns..(ix + 1) * ns];
+        jb.reference = junctions::junction_reference(c, &s.after, &jb, state[0], &spring[0]);
         let lane_sums = &mut lanes[ix * JUNCTION_LANES..ix * JUNCTION_LANES + lanes_used];
         let reference_path = s.after.preparing || c.f32_probe & JUNCTIONS != 0;
         if reference_path {
             // While the normal load is applied every pinned junction's
             // stiffness follows it, and the precision probe rounds junction
             // values: the reference's path for all.
-            let each = force.iter_mut().zip(&mut *spring).zip(&mut *state);
-            for (j, ((f, spring), state)) in each.enumerate() {
-                *f = pinned_force(junctions::junction(c, &s.after, ix, j, &jb, spring, state));
+            let each = spring.iter_mut().zip(&mut *state);
+            for (j, (spring, state)) in each.enumerate() {
+                junctions::junction(c, &s.after, ix, j, &jb, spring, state);
             }
         }
         let all_pinned = !reference_path && pinned_forces(&jb, spring, state, force);
         if !reference_path && !all_pinned && common_junctions(&jb, spring, state, force, rare) {
-            let each = force
-                .iter_mut()
-                .zip(&mut *spring)
-                .zip(&mut *state)
-                .zip(&*rare);
-            for (j, (((f, spring), state), _)) in each.enumerate().filter(|(_, x)| *x.1) {
-                *f = pinned_force(junctions::junction(c, &s.after, ix, j, &jb, spring, state));
+            let each = spring.iter_mut().zip(&mut *state).zip(&*rare);
+            for (j, ((spring, state), _)) in each.enumerate().filter(|(_, x)| *x.1) {
+                junctions::junction(c, &s.after, ix, j, &jb, spring, state);
             }
         }
+        pinned_terms(c, &jb, spring, state, term, stiffness);
         let count = if all_pinned { 0 } else { count_slipping(state) };
-        slipping[ix] = (count, jb.slipping_force);
-        sum_lanes(force, lane_sums);
+        slipping[ix] = (count, jb.slipping_force, jb.reference);
+        sum_lanes(term, stiffness, lane_sums);
     }
     // The reference's final sum, lane by lane, every block at once.
-    total.fill(C::Sum::default());
-    for lane in 0..lanes_used {
-        for (ix, t) in total.iter_mut().enumerate() {
-            *t = t.merge(lanes[ix * JUNCTION_LANES + lane]);
-        }
-    }
     for (ix, contact) in out.contact.iter_mut().enumerate() {
-        let (count, slipping_force) = slipping[ix];
-        let sums = LaneSum {
-            pinned: total[ix],
-            slipping: count,
+        let lane_sums = &lanes[ix * JUNCTION_LANES..ix * JUNCTION_LANES + lanes_used];
+        let total = lane_sums
+            .iter()
+            .fold(LaneSum::default(), |t: LaneSum<T, C::Sum>, l| t.merge(*l));
+        let (count, slipping_force, reference) = slipping[ix];
+        let jb = junctions::JunctionBlock {
+            ux: row.ux[ix],
+            reference,
+            f_n: T::zero(),
+            threshold: T::zero(),
+            slipping_force,
         };
+        let pinned = junctions::pinned_friction(c, &jb, &total);
         *contact = [
-            junctions::junction_friction(c, slipping_force, sums, fx[ix], row.vx[ix]),
+            junctions::junction_friction(c, slipping_force, pinned, count, fx[ix], row.vx[ix]),
             junctions::foundation_normal(c, row.uz[ix].value()),
         ];
     }
 }
 
-/// A junction's term of its lane's pinned sum: its force if pinned, 0 if
-/// it slips (adding 0 leaves the reference's sum unchanged).
+/// Each junction's terms of the lane sums after the step: k_j·(a_j − r)
+/// and k_j where it is pinned, 0 and 0 where it slips (adding 0 leaves the
+/// reference's sums and maxima unchanged).
 #[inline(always)]
-fn pinned_force<T: Real>(force: Option<T>) -> T {
-    force.unwrap_or(T::zero())
+fn pinned_terms<T: Real, C: Coordinate<T>>(
+    c: &crate::engines::step_params::Consts<T>,
+    jb: &JunctionBlock<T, C>,
+    spring: &[JunctionSpring<C, T>],
+    state: &[[u32; 2]],
+    term: &mut [T],
+    stiffness: &mut [T],
+) {
+    let n = term.len();
+    let each = term
+        .iter_mut()
+        .zip(&mut stiffness[..n])
+        .zip(&spring[..n])
+        .zip(&state[..n]);
+    for (((t, k), spring), state) in each {
+        let pinned = state[0] == PINNED;
+        let anchored = junctions::anchored_term(c, jb, spring);
+        *t = if pinned { anchored } else { T::zero() };
+        *k = if pinned { spring.stiffness } else { T::zero() };
+    }
 }
 
 /// Junctions of one block slipping after its step.
@@ -213,17 +239,27 @@ fn common_junctions<T: Real, C: Coordinate<T>>(
     any
 }
 
-/// Lane sums of one block's junction forces in the reference's order:
-/// lane l holds 0 + f_l + f_(l+LANES) + ..., in the precision's `ForceSum`.
+/// Lane sums of one block's junction terms in the reference's order:
+/// lane l holds the terms of junctions l, l + LANES, ... added in turn.
 #[inline(always)]
-fn sum_lanes<T: Real, S: ForceSum<T>>(force: &[T], lane_sums: &mut [S]) {
+fn sum_lanes<T: Real, S: ForceSum<T>>(
+    term: &[T],
+    stiffness: &[T],
+    lane_sums: &mut [LaneSum<T, S>],
+) {
     let lanes = lane_sums.len();
-    for (sum, f) in lane_sums.iter_mut().zip(&force[..lanes]) {
-        *sum = S::default().add(*f);
+    for (sum, (t, k)) in lane_sums
+        .iter_mut()
+        .zip(term[..lanes].iter().zip(&stiffness[..lanes]))
+    {
+        *sum = LaneSum::default().add_pinned(*k, *t);
     }
-    for chunk in force[lanes..].chunks(lanes) {
-        for (sum, f) in lane_sums.iter_mut().zip(chunk) {
-            *sum = sum.add(*f);
+    let rest = term[lanes..]
+        .chunks(lanes)
+        .zip(stiffness[lanes..].chunks(lanes));
+    for (terms, ks) in rest {
+        for (sum, (t, k)) in lane_sums.iter_mut().zip(terms.iter().zip(ks)) {
+            *sum = sum.add_pinned(*k, *t);
         }
     }
 }
