@@ -39,6 +39,9 @@
 //! only, SLIPFRONT_GPU_TABLE_LAUNCHES=resident/1024,persistent/512 those
 //! kernels only (two builds compared in one loan);
 //! SLIPFRONT_GPU_TABLE_SWEEPS=256 runs section 6 at those point counts.
+//! SLIPFRONT_GPU_TABLE_KEEP_SUMS=0 sums every junction every step in
+//! sections 1–3 (`GpuOptions::keep_junction_sums` off): the same bits,
+//! the cost of the junction phase without skipping quiet blocks.
 
 use slipfront::app::runner::{run_scene, ProgressMode, RunOptions};
 use slipfront::app::sweeps::{run_sweep, KeepMcap, Sweep, SweepOptions};
@@ -167,6 +170,8 @@ fn output_run<T: GpuReal>(
 fn options(kernel: Kernel) -> GpuOptions {
     GpuOptions {
         path: GpuPath::of(kernel),
+        keep_junction_sums: std::env::var("SLIPFRONT_GPU_TABLE_KEEP_SUMS")
+            .map_or(true, |v| v != "0"),
         ..GpuOptions::default()
     }
 }
@@ -236,8 +241,10 @@ fn table_s1(seed: usize) -> Model {
 
 /// What a Table S1 step costs with fewer junction lanes and with none:
 /// the same lattice with Ns = 100 (64 lanes per interface block, as
-/// shipped), Ns = 16 (16 lanes) and Coulomb friction (no junctions), per
-/// kernel at its default threads. Where the junctions' share is large, the
+/// shipped) with every junction summed every step and with quiet blocks'
+/// sums kept (the default; the timed span is after the normal-load phase,
+/// where the precursors scene is quiet), Ns = 16 (16 lanes) and Coulomb
+/// friction (no junctions), per kernel at its default threads. Where the junctions' share is large, the
 /// lane sums (one thread adds a block's lanes, in order) are the step's
 /// critical path; where it is small, the stencil and the barriers are.
 fn junction_cost(min_seconds: f64) {
@@ -245,8 +252,27 @@ fn junction_cost(min_seconds: f64) {
     println!("| friction | kernel | µs/step | host CPU / wall |");
     println!("| --- | --- | ---: | ---: |");
     let text = built_in("tromborg2014_precursors").expect("shipped scene");
+    // The same scene with every junction summed every step: what keeping a
+    // quiet block's sums (`GpuOptions::keep_junction_sums`) saves.
+    for kernel in candidates(&s1_model(text)) {
+        let opts = GpuOptions {
+            keep_junction_sums: false,
+            ..options(kernel)
+        };
+        let figure = match solo_step_seconds(&s1_model(text), opts, min_seconds) {
+            Ok((s, host)) => format!("{:.2} | {host:.2}", s * 1e6),
+            Err(e) => format!("not run: {e} |"),
+        };
+        println!(
+            "| junctions, Ns = 100, every junction summed every step | {} | {figure} |",
+            path_name(kernel)
+        );
+    }
     for (name, set) in [
-        ("junctions, Ns = 100 (64 lanes)", None),
+        (
+            "junctions, Ns = 100 (64 lanes), quiet blocks' sums kept",
+            None,
+        ),
         (
             "junctions, Ns = 16 (16 lanes)",
             Some("friction.junctions.count=16"),
@@ -257,7 +283,11 @@ fn junction_cost(min_seconds: f64) {
         let scenario = Scenario::parse(text, "table S1", &set).expect("a Table S1 variant");
         let model = Model::from_scenario(&scenario, false).expect("a Table S1 variant");
         for kernel in candidates(&model) {
-            let figure = match solo_step_seconds(&model, options(kernel), min_seconds) {
+            let kept = GpuOptions {
+                keep_junction_sums: true,
+                ..options(kernel)
+            };
+            let figure = match solo_step_seconds(&model, kept, min_seconds) {
                 Ok((s, host)) => format!("{:.2} | {host:.2}", s * 1e6),
                 Err(e) => format!("not run: {e} |"),
             };
@@ -265,6 +295,12 @@ fn junction_cost(min_seconds: f64) {
         }
     }
     println!();
+}
+
+/// The precursors scene as shipped.
+fn s1_model(text: &str) -> Model {
+    let scenario = Scenario::parse(text, "table S1", &[]).expect("the shipped scene");
+    Model::from_scenario(&scenario, false).expect("the shipped scene")
 }
 
 /// `points` seeds of the precursors scene, 0.01 s of driving each, as a

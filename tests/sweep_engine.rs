@@ -257,3 +257,39 @@ fn path_evaluators_are_bitwise_the_reference() {
     sweep.set_kinematics(step, &moved, &later.vel_half).unwrap();
     assert_ne!(a, sweep.snapshot().unwrap());
 }
+
+/// The sweep engine keeps a quiet interface block's junction sums and
+/// skips its junctions (`junctions::KeptSums`); the reference engine sums
+/// every junction every step. Through ruptures and re-pinnings they must
+/// agree bit for bit, in mixed f32 and f64, and the sums must be kept for
+/// most blocks at some point, or the comparison would not cover them.
+fn kept_sums_match<T: Real, C: Coordinate<T>>() {
+    let m = model(&[
+        "loading.drive.velocity=0.4",
+        "friction.junctions.slip_time_mean=2e-4",
+        "friction.junctions.slip_time_std=2e-5",
+    ]);
+    let mut reference = CpuEngine::<T, C>::new(&m, 1).unwrap();
+    let mut sweep = SweepEngine::<T, C>::new(&m, 2).unwrap();
+    let mut most = 0;
+    for at in (m.prep_steps..=m.prep_steps + 6000).step_by(250) {
+        advance_to(&mut reference, at).unwrap();
+        advance_to(&mut sweep, at).unwrap();
+        most = most.max(sweep.kept_junction_blocks());
+        let (a, b) = (reference.snapshot().unwrap(), sweep.snapshot().unwrap());
+        assert!(a == b, "{}", first_difference(&a, &b));
+    }
+    let ruptures = reference.snapshot().unwrap().total_ruptures();
+    assert!(ruptures > 100, "the window must hold ruptures: {ruptures}");
+    assert!(
+        2 * most >= m.nx,
+        "sums kept for at most {most} of {} blocks",
+        m.nx
+    );
+}
+
+#[test]
+fn kept_junction_sums_are_bitwise_the_reference() {
+    kept_sums_match::<f32, DoubleSingle>();
+    kept_sums_match::<f64, f64>();
+}

@@ -167,6 +167,62 @@ impl<T: Real, S: ForceSum<T>> LaneSum<T, S> {
     }
 }
 
+/// How far under the threshold a block's kept bound must stay (twin of
+/// the WGSL `KEPT_MARGIN`): it covers the rounding of the bound and of
+/// each junction's force, a few ulps.
+pub const KEPT_MARGIN: f64 = 1.0 + 1.0 / 65536.0;
+
+/// The sums of an interface block whose junctions are all pinned, kept
+/// from the step that made them (twin of the WGSL `JunctionCache`). While
+/// no junction changes, they are what the lanes would sum again; the
+/// reference engine sums anew every step, the sweep engine keeps them.
+/// Empty where `stiffness_max` is 0.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct KeptSums<T, S, C> {
+    pub anchored: S,
+    pub reference: C,
+    pub stiffness: T,
+    pub stretch_max: T,
+    pub stiffness_max: T,
+}
+
+impl<T: Real, C: Coordinate<T>> KeptSums<T, C::Sum, C> {
+    /// The sums to keep after a step of the block summed about
+    /// `reference` (empty if a junction slips).
+    pub fn of(reference: C, total: &LaneSum<T, C::Sum>) -> Self {
+        if total.slipping != 0 {
+            return Self::default();
+        }
+        KeptSums {
+            anchored: total.anchored,
+            reference,
+            stiffness: total.stiffness.value(),
+            stretch_max: total.stretch_max,
+            stiffness_max: total.stiffness_max,
+        }
+    }
+
+    /// Twin of the test in the WGSL `junction_block`: whether no junction
+    /// of the block can change this step. Each junction's force is at most
+    /// k_max·|u_x − r| + max|k_j·(a_j − r)|; under the threshold (and the
+    /// margin), none breaks, and none slips.
+    pub fn hold(&self, jb: &JunctionBlock<T, C>) -> bool {
+        let reach = self.stiffness_max * jb.ux.diff(self.reference).abs() + self.stretch_max;
+        jb.f_n > T::zero()
+            && self.stiffness_max > T::zero()
+            && reach * T::from_f64(KEPT_MARGIN) <= jb.threshold
+    }
+
+    /// The lane sums these stand for (as the WGSL `junction_friction`).
+    pub fn lane_sum(&self) -> LaneSum<T, C::Sum> {
+        LaneSum {
+            anchored: self.anchored,
+            stiffness: C::Sum::default().add(self.stiffness),
+            ..LaneSum::default()
+        }
+    }
+}
+
 /// Twin of the WGSL `pinned_friction`: the pinned junctions' force on the
 /// block, Σ k_j·(a_j − r) − (Σ k_j)·(u_x − r). Where r is u_x (junction 0
 /// not pinned) the second term is 0 and this is Σ −k_j·(u_x − a_j) term

@@ -56,6 +56,17 @@ impl<T: Real, C: Coordinate<T>> Scratch<T, C> {
             junctions: JunctionScratch::default(),
         }
     }
+
+    /// Drops the interface row's kept junction sums
+    /// (`JunctionScratch::forget_junction_sums`).
+    pub fn forget_junction_sums(&mut self) {
+        self.junctions.forget_junction_sums();
+    }
+
+    /// Interface blocks whose junction sums are kept now.
+    pub fn kept_junction_blocks(&self) -> usize {
+        self.junctions.kept_blocks()
+    }
 }
 
 fn view<'a, T, C>(

@@ -12,7 +12,7 @@ use super::rows::RowView;
 use super::step::{Interface, Shared};
 use crate::engines::cpu::{JunctionSpring, PINNED};
 use crate::engines::kernels::block_laws::block_law;
-use crate::engines::kernels::junctions::{self, JunctionBlock, LaneSum, JUNCTION_LANES};
+use crate::engines::kernels::junctions::{self, JunctionBlock, KeptSums, LaneSum, JUNCTION_LANES};
 use crate::engines::precision_probe::JUNCTIONS;
 use crate::model::real::{Coordinate, ForceSum, Real};
 use crate::model::scenario::FrictionLaw;
@@ -33,6 +33,27 @@ pub struct JunctionScratch<T, S, C> {
     slipping: Vec<(u32, T, C)>,
     /// Junctions of one block left to the reference's `junction`.
     rare: Vec<bool>,
+    /// Per block, the sums kept while none of its junctions changes
+    /// (`junctions::KeptSums`), and whether they stood for this step's.
+    kept: Vec<KeptSums<T, S, C>>,
+    kept_now: Vec<bool>,
+}
+
+impl<T: Real, C: Coordinate<T>> JunctionScratch<T, C::Sum, C> {
+    /// Drops the kept sums: the engine calls this wherever junctions are
+    /// written other than by stepping (loaded states, the trigger's
+    /// anchors), so no sums of springs no longer there are used.
+    pub fn forget_junction_sums(&mut self) {
+        self.kept.clear();
+    }
+
+    /// Blocks whose sums are kept now.
+    pub fn kept_blocks(&self) -> usize {
+        self.kept
+            .iter()
+            .filter(|k| k.stiffness_max > T::zero())
+            .count()
+    }
 }
 
 /// Friction and normal force of the interface row from the row's new state
@@ -85,6 +106,8 @@ fn junction_row<T: Real, C: Coordinate<T>>(
         .resize(nx * JUNCTION_LANES, LaneSum::default());
     scratch.slipping.resize(nx, (0, T::zero(), C::default()));
     scratch.rare.resize(ns, false);
+    scratch.kept.resize(nx, KeptSums::default());
+    scratch.kept_now.resize(nx, false);
     let JunctionScratch {
         force,
         term,
@@ -92,19 +115,27 @@ fn junction_row<T: Real, C: Coordinate<T>>(
         lanes,
         slipping,
         rare,
+        kept,
+        kept_now,
     } = scratch;
+    // While the normal load is applied every pinned junction's stiffness
+    // follows it, and the precision probe rounds junction values: the
+    // reference's path for all, and nothing kept.
+    let reference_path = s.after.preparing || c.f32_probe & JUNCTIONS != 0;
     for ix in 0..nx {
         let u = [row.ux[ix], row.uz[ix]];
         let mut jb = junctions::junction_block(c, u);
+        kept_now[ix] = !reference_path && kept[ix].hold(&jb);
+        if kept_now[ix] {
+            // No junction can change: the kept sums are this step's.
+            slipping[ix] = (0, jb.slipping_force, kept[ix].reference);
+            continue;
+        }
         let spring = &mut out.spring[ix * ns..(ix + 1) * ns];
         let state = &mut out.state[ix * ns..(ix + 1) * ns];
         jb.reference = junctions::junction_reference(c, &s.after, &jb, state[0], &spring[0]);
         let lane_sums = &mut lanes[ix * JUNCTION_LANES..ix * JUNCTION_LANES + lanes_used];
-        let reference_path = s.after.preparing || c.f32_probe & JUNCTIONS != 0;
         if reference_path {
-            // While the normal load is applied every pinned junction's
-            // stiffness follows it, and the precision probe rounds junction
-            // values: the reference's path for all.
             let each = spring.iter_mut().zip(&mut *state);
             for (j, (spring, state)) in each.enumerate() {
                 junctions::junction(c, &s.after, ix, j, &jb, spring, state);
@@ -124,11 +155,24 @@ fn junction_row<T: Real, C: Coordinate<T>>(
     }
     // The reference's final sum, lane by lane, every block at once.
     for (ix, contact) in out.contact.iter_mut().enumerate() {
-        let lane_sums = &lanes[ix * JUNCTION_LANES..ix * JUNCTION_LANES + lanes_used];
-        let total = lane_sums
-            .iter()
-            .fold(LaneSum::default(), |t: LaneSum<T, C::Sum>, l| t.merge(*l));
         let (count, slipping_force, reference) = slipping[ix];
+        let total = if kept_now[ix] {
+            kept[ix].lane_sum()
+        } else {
+            let lane_sums = &lanes[ix * JUNCTION_LANES..ix * JUNCTION_LANES + lanes_used];
+            let mut total = lane_sums
+                .iter()
+                .fold(LaneSum::default(), |t: LaneSum<T, C::Sum>, l| t.merge(*l));
+            // The lanes here add 0 for a slipping junction; the count is
+            // made apart.
+            total.slipping = count;
+            kept[ix] = if reference_path {
+                KeptSums::default()
+            } else {
+                KeptSums::of(reference, &total)
+            };
+            total
+        };
         let jb = junctions::JunctionBlock {
             ux: row.ux[ix],
             reference,

@@ -170,6 +170,13 @@ impl<T: Real, C: Coordinate<T>> SweepEngine<T, C> {
         self.bands.len()
     }
 
+    /// Interface blocks whose junction sums are kept now (all junctions
+    /// pinned since they were made; `junctions::KeptSums`): how much of the
+    /// junction pass a quiet step skips.
+    pub fn kept_junction_blocks(&self) -> usize {
+        self.scratch.iter().map(Scratch::kept_junction_blocks).sum()
+    }
+
     /// An evaluator of forces on one thread, as `CpuEngine::with_junctions`
     /// (the same bits): `base`'s junction arrays and sliding state, for
     /// driving-phase states given by `set_kinematics`, read by `snapshot`.
@@ -183,6 +190,7 @@ impl<T: Real, C: Coordinate<T>> SweepEngine<T, C> {
         e.drive_origin = C::from_f64(drive_origin);
         e.friction.load_junctions(base);
         e.friction.load_slide(base);
+        e.forget_junction_sums();
         e.step = model.prep_steps.max(base.step);
         Ok(e)
     }
@@ -320,6 +328,15 @@ impl<T: Real, C: Coordinate<T>> SweepEngine<T, C> {
             let snap = self.snapshot_now();
             let anchors = crate::engines::trigger::trigger_anchors(&self.model, &snap);
             self.friction.set_anchors(anchors);
+            self.forget_junction_sums();
+        }
+    }
+
+    /// Every band's kept junction sums dropped (only the interface band
+    /// keeps any): called wherever junctions change other than by stepping.
+    fn forget_junction_sums(&mut self) {
+        for scratch in &mut self.scratch {
+            scratch.forget_junction_sums();
         }
     }
 
@@ -443,6 +460,7 @@ impl<T: Real, C: Coordinate<T>> Engine for SweepEngine<T, C> {
 
     fn set_junctions(&mut self, snap: &Snapshot) -> Result<(), EngineError> {
         self.friction.load_junctions(snap);
+        self.forget_junction_sums();
         Ok(())
     }
 
@@ -475,6 +493,7 @@ impl<T: Real, C: Coordinate<T>> Engine for SweepEngine<T, C> {
         }
         now.contact = state.contact_as();
         self.friction = FrictionState::from_state(state);
+        self.forget_junction_sums();
         Ok(())
     }
 
