@@ -26,8 +26,8 @@ fn set_junction_spring(k: u32, spring: JunctionSpring) {
     junction_spring[k] = spring;
 }
 
-// Whether this kernel keeps block ix's junction sums (junction_cache): a
-// block's own kernel does; the tiled kernel's halo copies do not.
-fn junction_sums_kept(ix: u32) -> bool {
-    return true;
+// Where block ix's kept junction sums are (junction_cache): its scene's
+// record. The tiled kernel's halo copies keep theirs apart.
+fn junction_sums_slot(ix: u32) -> u32 {
+    return interface_base() + ix;
 }

@@ -67,8 +67,14 @@ fn set_junction_spring(k: u32, spring: JunctionSpring) {
     }
 }
 
-// A halo block's sums are its owner's to keep (the owner writes them in
-// the same dispatch): the halo copy sums its junctions every step.
-fn junction_sums_kept(ix: u32) -> bool {
-    return tile_owns(ix);
+// Where block ix's kept junction sums are: its own columns' in the
+// scenes' records, as every kernel; a halo block's in this tile's private
+// records after every scene's (its owner rewrites the scene's record in
+// the same dispatch). load_tile empties the private ones, so a halo block
+// sums its junctions at a dispatch's first step and keeps them from then.
+fn junction_sums_slot(ix: u32) -> u32 {
+    if tile_owns(ix) {
+        return interface_base() + ix;
+    }
+    return scene_count() * c.nx + tile_index() * tile_span() + (ix - tile_lo);
 }

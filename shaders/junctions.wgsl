@@ -46,11 +46,11 @@ fn junction_block(ix: u32, ld: Loads) -> JunctionBlock {
     let u = load_disp(ix);
     let f_n = foundation_normal(coord_value(u.z)) / real(c.junction_count);
     let threshold = c.mu_s * f_n;
-    let keeps = KEEP_JUNCTION_SUMS && junction_sums_kept(ix) && !ld.preparing;
+    let keeps = KEEP_JUNCTION_SUMS && !ld.preparing;
     var sums = JunctionCache(force_sum_zero(), u.x, 0.0, 0.0, 0.0, 0.0);
     var kept = false;
     if keeps && f_n > 0.0 {
-        sums = junction_cache[interface_base() + ix];
+        sums = junction_cache[junction_sums_slot(ix)];
         // |k_j (u_x - a_j)| <= k_max |u_x - r| + max |k_j (a_j - r)|.
         let reach = sums.stiffness_max * abs(coord_diff(u.x, sums.reference)) + sums.stretch_max;
         kept = sums.stiffness_max > 0.0 && reach * KEPT_MARGIN <= threshold;
@@ -126,7 +126,7 @@ fn junction_friction(ix: u32, jb: JunctionBlock, lanes: LaneSum, other: real) ->
         // Kept only while every junction is pinned (stiffness_max 0: empty).
         let k_max = select(0.0, total.stiffness_max, total.slipping == 0u);
         let sums = JunctionCache(total.anchored, jb.reference, force_sum_value(total.stiffness), total.stretch_max, k_max, 0.0);
-        junction_cache[interface_base() + ix] = sums;
+        junction_cache[junction_sums_slot(ix)] = sums;
     }
     let pinned = pinned_friction(jb, total);
     if total.slipping == 0u {

@@ -89,6 +89,12 @@ fn load_tile(t: u32, first: u32, copy: u32) {
         }
     }
     if FRICTION_LAW == LAW_JUNCTIONS {
+        // The halo's kept sums are of an earlier dispatch's junctions.
+        for (var ix = tile_lo + t; ix < tile_hi; ix += TILE_THREADS) {
+            if !tile_owns(ix) {
+                junction_cache[junction_sums_slot(ix)] = JunctionCache();
+            }
+        }
         let ns = c.junction_count;
         for (var k = t; k < held * ns; k += TILE_THREADS) {
             let ix = tile_lo + k / ns;

@@ -182,3 +182,31 @@ fn a_large_lattice_on_the_tiled_kernel_records_its_samples_on_the_device() {
     let (shifted, field) = worst_error(&later, &samples);
     assert!(shifted > 1e-4, "a one-step shift must be flagged ({field})");
 }
+
+/// The halo copies keep their junction sums apart from their owner's
+/// (`junction_sums_slot` in `junction_tiled.wgsl`): emptied at each
+/// dispatch's start, summed at its first step, kept from the second. In a
+/// quiet stretch of driving (before the first rupture) both the scene's
+/// records and the halos' private ones hold kept sums; the one-step kernel
+/// keeps none apart. The bits are those of summing every step
+/// (`gpu_engine.rs`, `kept_junction_sums_give_the_bits_of_summing_every_step`).
+#[test]
+fn halo_copies_keep_their_junction_sums_apart() {
+    let m = driven();
+    let end = m.prep_steps + 200;
+    let mut e = tiled(&m, 8, 4);
+    advance_to(&mut e, end).unwrap();
+    assert_eq!(e.snapshot().unwrap().total_ruptures(), 0, "a quiet stretch");
+    let owned = e.kept_junction_blocks(0).unwrap();
+    let halos = e.kept_halo_junction_records().unwrap();
+    // 29 columns in tiles of 8: 4 tiles, 6 halo sides of 4 columns. The
+    // columns a step updates shrink by one each side, so a side's
+    // outermost column is never stepped; the other three are stepped from
+    // the first step on and keep their sums.
+    assert_eq!(owned, m.nx, "every block's sums kept");
+    assert_eq!(halos, 6 * 3, "every stepped halo column's sums kept");
+    let mut other = one_step(&m);
+    advance_to(&mut other, end).unwrap();
+    assert_eq!(other.kept_halo_junction_records().unwrap(), 0);
+    assert_eq!(other.kept_junction_blocks(0).unwrap(), m.nx);
+}

@@ -488,7 +488,14 @@ impl<T: GpuReal> GpuEngine<T> {
             ),
             junction_cache: storage(
                 "junction sums kept",
-                bytemuck::cast_slice(&vec![GpuJunctionCache::<T>::zeroed(); s * shape.nx]),
+                // Each scene's interface blocks, then (tiled kernel) each
+                // tile's private records of its halo columns.
+                bytemuck::cast_slice(&vec![
+                    GpuJunctionCache::<T>::zeroed();
+                    s * (shape.nx
+                        + geometry
+                            .map_or(0, |g| (g.tiles * g.span) as usize))
+                ]),
             ),
             slide: storage(
                 "slide",

@@ -129,6 +129,27 @@ impl<T: GpuReal> GpuEngine<T> {
         Ok(sums.iter().filter(|s| s.stiffness_max > T::zero()).count())
     }
 
+    /// Kept records of the tiled kernel's halo copies (`junction_sums_slot`
+    /// in `junction_tiled.wgsl`), every scene and tile: 0 for the other
+    /// kernels, which keep none apart.
+    pub fn kept_halo_junction_records(&mut self) -> Result<usize, EngineError> {
+        self.drain()?;
+        let bytes = std::mem::size_of::<GpuJunctionCache<T>>();
+        let owned = (self.scenes.len() * self.shape.nx * bytes) as u64;
+        let size = self.buffers.junction_cache.size() - owned;
+        if size == 0 {
+            return Ok(0);
+        }
+        let range = Range {
+            buffer: &self.buffers.junction_cache,
+            offset: owned,
+            size,
+        };
+        let raw = read_ranges(&self.ctx, &[range])?;
+        let sums: Vec<GpuJunctionCache<T>> = cast_prefix(&raw[0], size as usize / bytes);
+        Ok(sums.iter().filter(|s| s.stiffness_max > T::zero()).count())
+    }
+
     pub(super) fn snapshot_of(&mut self, k: usize) -> Result<Snapshot, EngineError> {
         self.ready_forces()?;
         self.read_state(k)
