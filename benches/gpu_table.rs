@@ -9,9 +9,8 @@
 //!    step and block-steps/s, each kernel on the scene alone;
 //! 2. what `auto` chooses on Table S1 (timed now, as `--gpu-path measure`),
 //!    and the persistent and resident kernels there with 256, 512 and 1024
-//!    threads (`--gpu-threads`: more threads, fewer registers each); the
-//!    tiled kernel by tile width, halo and threads; and
-//!    what the junctions cost there (Ns = 100, Ns = 16, Coulomb friction);
+//!    threads (`--gpu-threads`: more threads, fewer registers each); and the
+//!    tiled kernel by tile width, halo and threads;
 //! 3. ensembles of 1 to 1024 Table S1 scenes (the precursors scene, a seed
 //!    each) in one dispatch, per kernel (the persistent and resident ones
 //!    at 256, 512 and 1024 threads): aggregate block-steps/s and the
@@ -22,7 +21,10 @@
 //!    over it;
 //! 6. the issue's own figure: 64 and 256 Table S1 points (a seed each,
 //!    0.01 s of driving) as one `sweep --backend gpu` (its kernel timed on
-//!    the sweep's ensemble, as `auto` does), and the 64 one at a time.
+//!    the sweep's ensemble, as `auto` does), and the 64 one at a time;
+//! 7. what the junctions cost on Table S1: Ns = 100 with every junction
+//!    summed every step and with quiet blocks' sums kept (the default),
+//!    Ns = 16, and Coulomb friction.
 //!
 //! Sections 1–3 also print the host's CPU time per wall second of each
 //! timed span: it says whether the host (encoding dispatches, waiting) or
@@ -397,14 +399,14 @@ impl Drop for SectionTimer {
 
 impl Sections {
     fn from_env() -> Self {
-        let all = (1..=6).collect();
+        let all = (1..=7).collect();
         match std::env::var("SLIPFRONT_GPU_TABLE_SECTIONS") {
             Ok(list) => Sections(
                 list.split(',')
                     .map(|s| match s.trim().parse() {
-                        Ok(n @ 1..=6) => n,
+                        Ok(n @ 1..=7) => n,
                         _ => {
-                            panic!("SLIPFRONT_GPU_TABLE_SECTIONS: `{s}` is not a section (1 to 6)")
+                            panic!("SLIPFRONT_GPU_TABLE_SECTIONS: `{s}` is not a section (1 to 7)")
                         }
                     })
                     .collect(),
@@ -504,7 +506,6 @@ fn main() {
         }
         println!();
         tiled_grid(&s1, quick, min_seconds);
-        junction_cost(min_seconds);
     }
     if let Some(_timer) = sections.start(3) {
         // 3. Ensembles of Table S1 scenes.
@@ -842,6 +843,11 @@ fn main() {
                 }
             }
         }
+    }
+    if let Some(_timer) = sections.start(7) {
+        // 7. What the junctions cost on Table S1.
+        println!("\n## 7. What the junctions cost on Table S1\n");
+        junction_cost(min_seconds);
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
