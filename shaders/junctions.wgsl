@@ -47,7 +47,12 @@ fn junction_block(ix: u32, ld: Loads) -> JunctionBlock {
     let f_n = foundation_normal(coord_value(u.z)) / real(c.junction_count);
     let threshold = c.mu_s * f_n;
     let keeps = KEEP_JUNCTION_SUMS && !ld.preparing;
-    var sums = JunctionCache(force_sum_zero(), u.x, 0.0, 0.0, 0.0, 0.0);
+    // Junction 0 is loaded with the kept sums, not after them: a block
+    // that must be summed then waits one round trip for both.
+    let first = junction_first(ix);
+    let state0 = junction_state_at(first);
+    let spring0 = junction_spring_at(first);
+    var sums = JunctionCache();
     var kept = false;
     if keeps && f_n > 0.0 {
         sums = junction_cache[junction_sums_slot(ix)];
@@ -57,8 +62,7 @@ fn junction_block(ix: u32, ld: Loads) -> JunctionBlock {
     }
     var reference = sums.reference;
     if !kept {
-        let first = junction_first(ix);
-        reference = junction_reference(u.x, threshold, ld, junction_state_at(first), junction_spring_at(first));
+        reference = junction_reference(u.x, threshold, ld, state0, spring0);
     }
     return JunctionBlock(u.x, reference, f_n, threshold, c.mu_d * f_n, kept, keeps, sums);
 }
