@@ -215,6 +215,26 @@ mod tests {
         assert!(loop_iterations(&m, &wide, 1) > SOFTWARE_LOOP_BUDGET);
     }
 
+    /// A tile of no columns, or a halo past the most steps a dispatch may
+    /// take, is refused with the value and the range.
+    #[test]
+    fn a_tile_of_no_columns_or_too_wide_a_halo_is_refused() {
+        let s = crate::model::scenario::Scenario::parse(
+            crate::model::scenario::DEFAULT_SCENARIO,
+            "s1",
+            &[] as &[String],
+        )
+        .unwrap();
+        let m = Model::from_scenario(&s, false).unwrap();
+        let err = TileGeometry::new(&m, 0, TILE_HALO).unwrap_err();
+        assert!(
+            err.contains("tile width 0") && err.contains("at least 1"),
+            "{err}"
+        );
+        let err = TileGeometry::new(&m, TILE_WIDTH, MAX_TILE_HALO + 1).unwrap_err();
+        assert!(err.contains(&format!("1 to {MAX_TILE_HALO}")), "{err}");
+    }
+
     #[test]
     fn a_dispatch_ends_after_its_halo_the_first_step_a_sample_or_the_batch() {
         let ends = dispatch_ends(Kernel::Tiled, 20, 4, &[6, 7, 15]);
