@@ -172,9 +172,18 @@ fn output_run<T: GpuReal>(
 fn options(kernel: Kernel) -> GpuOptions {
     GpuOptions {
         path: GpuPath::of(kernel),
-        keep_junction_sums: std::env::var("SLIPFRONT_GPU_TABLE_KEEP_SUMS")
-            .map_or(true, |v| v != "0"),
+        keep_junction_sums: keep_sums(),
         ..GpuOptions::default()
+    }
+}
+
+/// `SLIPFRONT_GPU_TABLE_KEEP_SUMS`: 1 (the default) keeps quiet blocks'
+/// junction sums, 0 sums every junction every step.
+fn keep_sums() -> bool {
+    match std::env::var("SLIPFRONT_GPU_TABLE_KEEP_SUMS").as_deref() {
+        Err(_) | Ok("1") => true,
+        Ok("0") => false,
+        Ok(v) => panic!("SLIPFRONT_GPU_TABLE_KEEP_SUMS: `{v}` is neither 0 nor 1"),
     }
 }
 

@@ -125,8 +125,7 @@ impl<T: GpuReal> GpuEngine<T> {
         let bytes = std::mem::size_of::<GpuJunctionCache<T>>();
         let range = self.slice(&self.buffers.junction_cache, k, nx, bytes);
         let raw = read_ranges(&self.ctx, &[range])?;
-        let sums: Vec<GpuJunctionCache<T>> = cast_prefix(&raw[0], nx);
-        Ok(sums.iter().filter(|s| s.stiffness_max > T::zero()).count())
+        Ok(kept_records::<T>(&raw[0]))
     }
 
     /// Kept records of the tiled kernel's halo copies (`junction_sums_slot`
@@ -146,8 +145,7 @@ impl<T: GpuReal> GpuEngine<T> {
             size,
         };
         let raw = read_ranges(&self.ctx, &[range])?;
-        let sums: Vec<GpuJunctionCache<T>> = cast_prefix(&raw[0], size as usize / bytes);
-        Ok(sums.iter().filter(|s| s.stiffness_max > T::zero()).count())
+        Ok(kept_records::<T>(&raw[0]))
     }
 
     pub(super) fn snapshot_of(&mut self, k: usize) -> Result<Snapshot, EngineError> {
@@ -317,6 +315,13 @@ pub(super) struct RawState<T: GpuReal> {
     force: Vec<[T; 2]>,
     contact: Vec<[T; 2]>,
     friction: FrictionState<T, Coord<T>>,
+}
+
+/// Records of `junction_cache` bytes that hold kept sums (not empty).
+fn kept_records<T: GpuReal>(bytes: &[u8]) -> usize {
+    let n = bytes.len() / std::mem::size_of::<GpuJunctionCache<T>>();
+    let sums: Vec<GpuJunctionCache<T>> = cast_prefix(bytes, n);
+    sums.iter().filter(|s| s.stiffness_max > T::zero()).count()
 }
 
 /// The `junction_spring` buffer's records: anchors as coordinates,

@@ -62,7 +62,7 @@ pub fn junctions<T: Real, C: Coordinate<T>>(
         };
         total = total.merge(junction_lane(c, p, ix, lane, &jb, slots));
     }
-    let pinned = pinned_friction(c, &jb, &total);
+    let pinned = pinned_friction(c, jb.ux, jb.reference, &total);
     (
         junction_friction(c, jb.slipping_force, pinned, total.slipping, other, v[0]),
         foundation_normal(c, u[1].value()),
@@ -230,13 +230,14 @@ impl<T: Real, C: Coordinate<T>> KeptSums<T, C::Sum, C> {
 #[inline]
 pub fn pinned_friction<T: Real, C: Coordinate<T>>(
     c: &Consts<T>,
-    jb: &JunctionBlock<T, C>,
+    ux: C,
+    reference: C,
     total: &LaneSum<T, C::Sum>,
 ) -> T {
     let moved = hold(
         c.f32_probe,
         JUNCTIONS,
-        total.stiffness.value() * jb.ux.diff(jb.reference),
+        total.stiffness.value() * ux.diff(reference),
     );
     total.anchored.add(-moved).value()
 }

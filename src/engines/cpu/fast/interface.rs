@@ -173,14 +173,7 @@ fn junction_row<T: Real, C: Coordinate<T>>(
             };
             total
         };
-        let jb = junctions::JunctionBlock {
-            ux: row.ux[ix],
-            reference,
-            f_n: T::zero(),
-            threshold: T::zero(),
-            slipping_force,
-        };
-        let pinned = junctions::pinned_friction(c, &jb, &total);
+        let pinned = junctions::pinned_friction(c, row.ux[ix], reference, &total);
         *contact = [
             junctions::junction_friction(c, slipping_force, pinned, count, fx[ix], row.vx[ix]),
             junctions::foundation_normal(c, row.uz[ix].value()),
