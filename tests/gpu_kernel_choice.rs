@@ -5,8 +5,9 @@
 
 use slipfront::engines::gpu::context::{self, GpuContext};
 use slipfront::engines::gpu::kernel_choice::{
-    cache_key, candidates, launches, resolve, resolve_scenes, scenes_cache_key, ChoiceCache,
-    ChoiceSource, KernelChoice, Launch, CACHE_FILE, ENSEMBLE_THREADS,
+    cache_key, candidates, driving_start, launches, resolve, resolve_scenes, scenes_cache_key,
+    time_kernel, ChoiceCache, ChoiceSource, KernelChoice, Launch, TimedPhase, CACHE_FILE,
+    ENSEMBLE_THREADS,
 };
 use slipfront::engines::gpu::shaders::Kernel;
 use slipfront::engines::gpu::{GpuEngine, GpuOptions, GpuPath};
@@ -78,6 +79,19 @@ fn measure_times_every_candidate_takes_the_fastest_and_caches_it() {
     }
     let fastest = fastest(&choice);
     assert_eq!(choice.launch, fastest);
+    // Timed where a run spends its steps: from the last step of the
+    // normal-load phase (about 2,200 steps here, well within the budget).
+    assert_eq!(
+        choice.phase,
+        TimedPhase::Driving {
+            from_step: m.prep_steps - 1
+        }
+    );
+    assert!(
+        choice.describe().contains("timed in driving from step"),
+        "{}",
+        choice.describe()
+    );
     assert!(
         choice.describe().contains("µs/step"),
         "{}",
@@ -95,6 +109,7 @@ fn measure_times_every_candidate_takes_the_fastest_and_caches_it() {
     assert_eq!(cached.source, ChoiceSource::Cached);
     assert_eq!(cached.launch, choice.launch);
     assert_eq!(cached.timings, choice.timings);
+    assert_eq!(cached.phase, choice.phase);
 
     // Another seed is the same shape (the same choice); controls: other
     // junction counts, another precision and damaged lines are not.
@@ -111,19 +126,82 @@ fn measure_times_every_candidate_takes_the_fastest_and_caches_it() {
     if ctx.check_precision::<f64>().is_ok() {
         assert_ne!(cache_key::<f64>(&m, &ctx, options(GpuPath::Measure)), key);
     }
+    let driving = "timed in driving from step 10";
+    for damaged in [
+        format!("{key}\tone-step\tone-step=oops\t{driving}\n"),
+        format!("{key}\twarp\tone-step=1e-4\t{driving}\n"),
+        // An older build's line, timed in the load phase without saying so.
+        format!("{key}\tone-step\tone-step=1e-4\n"),
+        format!("{key}\tone-step\tone-step=1e-4\ttimed somewhere\n"),
+    ] {
+        std::fs::write(dir.join(CACHE_FILE), &damaged).unwrap();
+        assert_eq!(cache.lookup(&key), None, "{damaged}");
+    }
     std::fs::write(
         dir.join(CACHE_FILE),
-        format!("{key}\tone-step\tone-step=oops\n"),
+        format!("{key}\tone-step\tone-step=1e-4\t{driving}\n"),
     )
     .unwrap();
-    assert_eq!(cache.lookup(&key), None);
-    std::fs::write(
-        dir.join(CACHE_FILE),
-        format!("{key}\twarp\tone-step=1e-4\n"),
-    )
-    .unwrap();
-    assert_eq!(cache.lookup(&key), None);
+    assert_eq!(
+        cache.lookup(&key).map(|c| c.phase),
+        Some(TimedPhase::Driving { from_step: 10 })
+    );
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// The state the kernels are timed from: an ensemble's scenes step their
+/// normal-load phase together to its last step, and each launch is timed
+/// on from there. A load phase that would take longer than the budget is
+/// not stepped (the kernels are then timed from the initial state) and
+/// the choice says why; so are scenes whose load phases differ.
+#[test]
+fn the_kernels_are_timed_from_the_end_of_the_load_phase_within_a_budget() {
+    let ctx = ctx();
+    let m = small(&[]);
+    let opts = GpuOptions::default();
+    let one_step = Launch::of(Kernel::OneStep);
+    let pair = [m.clone(), small(&["time.seed=5"])];
+    let (states, phase) = driving_start::<f32>(&pair, &ctx, opts, one_step, 60.0);
+    let end = m.prep_steps - 1;
+    assert_eq!(phase, TimedPhase::Driving { from_step: end });
+    let states = states.expect("stepped within the budget");
+    assert_eq!(states.len(), 2);
+    assert!(states.iter().all(|s| s.step == end));
+    for launch in [one_step, Launch::of(Kernel::Resident)] {
+        let s = time_kernel::<f32>(&pair, &ctx, opts, launch, Some(&states)).unwrap();
+        assert!(s > 1e-5 && s < 0.1, "{}: {s} s/step", launch.name());
+    }
+    // Control: the states are loaded, so those of another lattice are
+    // refused.
+    let taller = ["geometry.nz=17", "geometry.height=0.04"];
+    let other = [small(&taller), small(&taller)];
+    assert!(time_kernel::<f32>(&other, &ctx, opts, one_step, Some(&states)).is_err());
+
+    let (states, phase) = driving_start::<f32>(&pair, &ctx, opts, one_step, 0.0);
+    assert!(states.is_none());
+    let TimedPhase::NormalLoad { why } = &phase else {
+        panic!("timed in driving with no budget: {phase:?}");
+    };
+    assert!(why.contains("over the 0 s budget"), "{why}");
+    assert!(
+        phase
+            .describe()
+            .starts_with("timed in the normal-load phase: reaching driving"),
+        "{}",
+        phase.describe()
+    );
+    assert_eq!(TimedPhase::described(&phase.describe()), Some(phase));
+
+    let longer = small(&["loading.normal.relax_time=4e-4"]);
+    assert!(longer.prep_steps > m.prep_steps);
+    let (states, phase) = driving_start::<f32>(&[m, longer], &ctx, opts, one_step, 60.0);
+    assert!(states.is_none());
+    assert_eq!(
+        phase,
+        TimedPhase::NormalLoad {
+            why: "the scenes' normal-load phases differ in length".into()
+        }
+    );
 }
 
 /// An ensemble is timed with the single-workgroup kernels at each of
@@ -234,7 +312,10 @@ fn a_cached_choice_is_taken_and_measure_refreshes_it() {
     std::fs::create_dir_all(&dir).unwrap();
     std::fs::write(
         dir.join(CACHE_FILE),
-        format!("other key\tone-step\tone-step=1e-3\n{key}\tpersistent\tone-step=2e-3,persistent=1e-3\n"),
+        format!(
+            "other key\tone-step\tone-step=1e-3\ttimed in driving from step 5\n\
+             {key}\tpersistent\tone-step=2e-3,persistent=1e-3\ttimed in driving from step 5\n"
+        ),
     )
     .unwrap();
     let cached = cache.lookup(&key).unwrap();

@@ -163,26 +163,7 @@ impl<T: GpuReal> GpuEnsemble<T> {
     /// one step: the end of a shared normal-load phase); the ensemble moves
     /// to that step.
     pub fn start_from(&mut self, states: &[&EngineState]) -> Result<(), EngineError> {
-        if states.len() != self.len() {
-            return Err(EngineError::State(format!(
-                "{} states for an ensemble of {} scenes",
-                states.len(),
-                self.len()
-            )));
-        }
-        let step = states[0].step;
-        if let Some(s) = states.iter().find(|s| s.step != step) {
-            return Err(EngineError::State(format!(
-                "the scenes of an ensemble start at one step, not at {step} and {}",
-                s.step
-            )));
-        }
-        self.engine.drain()?;
-        self.engine.step = step;
-        for (k, state) in states.iter().enumerate() {
-            self.engine.load_state_of(k, state)?;
-        }
-        Ok(())
+        self.engine.start_scenes_from(states)
     }
 
     /// Replaces one scene's state by `state`, which must be of the step

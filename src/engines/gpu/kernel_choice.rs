@@ -4,6 +4,13 @@
 //! adapter, driver, precision, lattice, compiled terms and kernel sources,
 //! so a second run of the same shape starts at once.
 //!
+//! The kernels are timed from the end of the scene's normal-load phase,
+//! stepped once beforehand and shared by every candidate: a run spends
+//! nearly all its steps driving, and there a quiet block keeps its
+//! junction sums, while in the load phase every junction is written each
+//! step. Timed in the load phase, a kernel whose junction work is its cost
+//! would be judged on work it mostly skips.
+//!
 //! Why measure: the fixed rule picked a kernel 3.3× slower than the best
 //! on an H100 for Table S1 (BENCHMARKS.md), and which kernel wins depends
 //! on the lattice, the junction count, the precision and the GPU.
@@ -17,7 +24,7 @@ use super::options::{GpuOptions, GpuPath};
 use super::precision::GpuReal;
 use super::shaders::{Kernel, Variant};
 use super::GpuEngine;
-use crate::engines::EngineError;
+use crate::engines::{EngineError, EngineState};
 use crate::model::scenario::FrictionLaw;
 use crate::model::Model;
 use std::hash::{Hash, Hasher};
@@ -36,6 +43,13 @@ const REPEATS: usize = 3;
 /// (a large lattice is timed over fewer steps).
 const MAX_TIMED_STEPS: u64 = 256;
 const TARGET_REPEAT_SECONDS: f64 = 0.05;
+/// The most wall time spent stepping the normal-load phase before timing
+/// (once for all candidates). A lattice whose load phase takes longer (a
+/// large one: more blocks, a shorter time step, more steps) is timed from
+/// its initial state, and the choice says so.
+pub const PREPARE_BUDGET_SECONDS: f64 = 3.0;
+/// Steps timed after the warm-up to estimate the load phase's wall time.
+const ESTIMATE_STEPS: u64 = 32;
 /// The cache file in the cache directory.
 pub const CACHE_FILE: &str = "gpu-kernels.tsv";
 
@@ -102,6 +116,39 @@ pub enum ChoiceSource {
     Cached,
 }
 
+/// Where the candidates were timed.
+#[derive(Debug, Clone, PartialEq)]
+pub enum TimedPhase {
+    /// From the state at `from_step`, the last step of the normal-load
+    /// phase: the timed steps are the first of driving.
+    Driving { from_step: u64 },
+    /// From the initial state, in the normal-load phase, and why.
+    NormalLoad { why: String },
+}
+
+impl TimedPhase {
+    /// `timed from step 13409 (driving)`; also the cache's field.
+    pub fn describe(&self) -> String {
+        match self {
+            TimedPhase::Driving { from_step } => format!("timed in driving from step {from_step}"),
+            TimedPhase::NormalLoad { why } => format!("timed in the normal-load phase: {why}"),
+        }
+    }
+
+    /// The inverse of `describe`.
+    pub fn described(text: &str) -> Option<TimedPhase> {
+        if let Some(step) = text.strip_prefix("timed in driving from step ") {
+            return Some(TimedPhase::Driving {
+                from_step: step.parse().ok()?,
+            });
+        }
+        let why = text.strip_prefix("timed in the normal-load phase: ")?;
+        Some(TimedPhase::NormalLoad {
+            why: why.to_string(),
+        })
+    }
+}
+
 /// The kernel that steps a run, and the figures behind it.
 #[derive(Debug, Clone, PartialEq)]
 pub struct KernelChoice {
@@ -113,6 +160,8 @@ pub struct KernelChoice {
     pub skipped: Vec<(Launch, String)>,
     /// Scenes stepped together while timed (1: a solo run's choice).
     pub scenes: usize,
+    /// The state the launches were timed from.
+    pub phase: TimedPhase,
 }
 
 impl KernelChoice {
@@ -140,9 +189,10 @@ impl KernelChoice {
             "µs/step"
         };
         let mut text = format!(
-            "chose {}: {} {unit}, {source}",
+            "chose {}: {} {unit}, {source}, {}",
             self.launch.name(),
-            figures.join(", ")
+            figures.join(", "),
+            self.phase.describe()
         );
         for (l, why) in &self.skipped {
             text += &format!("; {} not timed: {why}", l.name());
@@ -229,17 +279,22 @@ pub fn launches(
 }
 
 /// Wall time per step of `launch` on the scenes `models` (one, or an
-/// ensemble stepped in one dispatch) from their initial state: a warm-up,
-/// then the fastest of a few repeats (each an `advance`, which returns when
-/// its steps have run on the device).
+/// ensemble stepped in one dispatch), from `start` (one state per scene)
+/// or else from their initial state: a warm-up, then the fastest of a few
+/// repeats (each an `advance`, which returns when its steps have run on
+/// the device).
 pub fn time_kernel<T: GpuReal>(
     models: &[Model],
     ctx: &GpuContext,
     opts: GpuOptions,
     launch: Launch,
+    start: Option<&[EngineState]>,
 ) -> Result<f64, EngineError> {
     let opts = launch.options(opts);
     let mut engine = GpuEngine::<T>::build(models, ctx.clone(), opts, models.len() > 1)?;
+    if let Some(states) = start {
+        engine.start_scenes_from(&states.iter().collect::<Vec<_>>())?;
+    }
     let started = Instant::now();
     engine.advance_steps(WARM_UP_STEPS)?;
     let rough = started.elapsed().as_secs_f64() / WARM_UP_STEPS as f64;
@@ -253,21 +308,91 @@ pub fn time_kernel<T: GpuReal>(
     Ok(best)
 }
 
+/// The states the candidates are timed from: the scenes stepped by
+/// `launch` to the last step of their normal-load phase, if that takes at
+/// most `budget` seconds (estimated from a few steps after a warm-up);
+/// else none, and why.
+pub fn driving_start<T: GpuReal>(
+    models: &[Model],
+    ctx: &GpuContext,
+    opts: GpuOptions,
+    launch: Launch,
+    budget: f64,
+) -> (Option<Vec<EngineState>>, TimedPhase) {
+    let end = models[0].prep_steps.saturating_sub(1);
+    if models.iter().any(|m| m.prep_steps != models[0].prep_steps) {
+        let why = "the scenes' normal-load phases differ in length".to_string();
+        return (None, TimedPhase::NormalLoad { why });
+    }
+    if end == 0 {
+        return (None, TimedPhase::Driving { from_step: 0 });
+    }
+    let stepped = || -> Result<Result<Vec<EngineState>, String>, EngineError> {
+        let mut engine =
+            GpuEngine::<T>::build(models, ctx.clone(), launch.options(opts), models.len() > 1)?;
+        engine.advance_steps(WARM_UP_STEPS.min(end))?;
+        let estimate = ESTIMATE_STEPS.min(end - engine.step);
+        let t = Instant::now();
+        engine.advance_steps(estimate)?;
+        let per_step = t.elapsed().as_secs_f64() / estimate.max(1) as f64;
+        let left = end - engine.step;
+        let reach = per_step * left as f64;
+        if reach > budget {
+            return Ok(Err(format!(
+                "reaching driving would take {reach:.1} s ({left} steps at {:.1} µs/step on {}), \
+                 over the {budget} s budget",
+                per_step * 1e6,
+                launch.name()
+            )));
+        }
+        engine.advance_steps(left)?;
+        (0..models.len())
+            .map(|k| engine.save_state_of(k))
+            .collect::<Result<Vec<_>, _>>()
+            .map(Ok)
+    };
+    match stepped() {
+        Ok(Ok(states)) => (Some(states), TimedPhase::Driving { from_step: end }),
+        Ok(Err(why)) => (None, TimedPhase::NormalLoad { why }),
+        Err(e) => {
+            let why = format!(
+                "{} could not step the normal-load phase: {e}",
+                launch.name()
+            );
+            (None, TimedPhase::NormalLoad { why })
+        }
+    }
+}
+
 /// Times every launch (`launches`) on the scenes `models` (one, or an
-/// ensemble of one lattice shape) and takes the fastest. A launch that
-/// cannot be built (a buffer too large, a lattice beyond workgroup memory,
-/// a device error) is skipped with its reason; if none can, the first
-/// error is returned.
+/// ensemble of one lattice shape) from the start of driving
+/// (`driving_start`, within `PREPARE_BUDGET_SECONDS`) and takes the
+/// fastest. A launch that cannot be built (a buffer too large, a lattice
+/// beyond workgroup memory, a device error) is skipped with its reason; if
+/// none can, the first error is returned.
 pub fn measure<T: GpuReal>(
     models: &[Model],
     ctx: &GpuContext,
     opts: GpuOptions,
 ) -> Result<KernelChoice, EngineError> {
+    measure_within::<T>(models, ctx, opts, PREPARE_BUDGET_SECONDS)
+}
+
+/// `measure` with `budget` seconds to step the normal-load phase.
+pub fn measure_within<T: GpuReal>(
+    models: &[Model],
+    ctx: &GpuContext,
+    opts: GpuOptions,
+    budget: f64,
+) -> Result<KernelChoice, EngineError> {
     let mut timings = Vec::new();
     let mut skipped = Vec::new();
     let mut first_error = None;
-    for launch in launches(&models[0], models.len(), opts, &ctx.limits) {
-        match time_kernel::<T>(models, ctx, opts, launch) {
+    let launches = launches(&models[0], models.len(), opts, &ctx.limits);
+    // One-step (always a candidate, first) steps the load phase.
+    let (start, phase) = driving_start::<T>(models, ctx, opts, launches[0], budget);
+    for launch in launches {
+        match time_kernel::<T>(models, ctx, opts, launch, start.as_deref()) {
             Ok(s) => timings.push((launch, s)),
             Err(e) => {
                 skipped.push((launch, e.to_string()));
@@ -284,12 +409,15 @@ pub fn measure<T: GpuReal>(
         source: ChoiceSource::Measured,
         skipped,
         scenes: models.len(),
+        phase,
     })
 }
 
 /// The measured choices of this machine, one line per adapter and lattice:
-/// `key <TAB> launch <TAB> launch=seconds,...` (a launch: `resident`, or
-/// `resident/512` with its threads).
+/// `key <TAB> launch <TAB> launch=seconds,... <TAB> phase` (a launch:
+/// `resident`, or `resident/512` with its threads; the phase as
+/// `TimedPhase::describe` writes it). A line without its phase (an older
+/// build's, timed in the load phase) is measured again.
 #[derive(Debug, Clone)]
 pub struct ChoiceCache {
     /// None: no cache directory could be found (nothing is kept).
@@ -347,6 +475,7 @@ impl ChoiceCache {
                         .then_some((Launch::named(name)?, seconds))
                 })
                 .collect::<Option<Vec<_>>>()?;
+            let phase = TimedPhase::described(fields.next()?)?;
             timings
                 .iter()
                 .any(|(l, _)| *l == launch)
@@ -356,6 +485,7 @@ impl ChoiceCache {
                     source: ChoiceSource::Cached,
                     skipped: Vec::new(),
                     scenes: 1,
+                    phase,
                 })
         })
     }
@@ -378,9 +508,10 @@ impl ChoiceCache {
             .map(|(l, s)| format!("{}={s:e}", l.name()))
             .collect();
         lines.push(format!(
-            "{key}\t{}\t{}",
+            "{key}\t{}\t{}\t{}",
             choice.launch.name(),
-            figures.join(",")
+            figures.join(","),
+            choice.phase.describe().replace(['\t', '\n'], " ")
         ));
         let write = || -> std::io::Result<()> {
             std::fs::create_dir_all(dir)?;

@@ -214,6 +214,31 @@ impl<T: GpuReal> GpuEngine<T> {
         Ok(())
     }
 
+    /// Starts every scene from its state in `states` (one per scene, all of
+    /// one step); the engine moves to that step.
+    pub(super) fn start_scenes_from(&mut self, states: &[&EngineState]) -> Result<(), EngineError> {
+        if states.len() != self.scenes.len() {
+            return Err(EngineError::State(format!(
+                "{} states for an ensemble of {} scenes",
+                states.len(),
+                self.scenes.len()
+            )));
+        }
+        let step = states[0].step;
+        if let Some(s) = states.iter().find(|s| s.step != step) {
+            return Err(EngineError::State(format!(
+                "the scenes of an ensemble start at one step, not at {step} and {}",
+                s.step
+            )));
+        }
+        self.drain()?;
+        self.step = step;
+        for (k, state) in states.iter().enumerate() {
+            self.load_state_of(k, state)?;
+        }
+        Ok(())
+    }
+
     pub(super) fn save_state_of(&mut self, k: usize) -> Result<EngineState, EngineError> {
         self.ready_forces()?;
         let r = self.read_raw(k)?;
