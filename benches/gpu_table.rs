@@ -46,133 +46,27 @@
 //! sections 1–3 (`GpuOptions::keep_junction_sums` off): the same bits,
 //! the cost of the junction phase without skipping quiet blocks.
 
-use slipfront::app::runner::{run_scene, ProgressMode, RunOptions};
+use gpu_timing::{output_run, solo_step_seconds, table_s1, timed_advance, timed_with_cpu, Timed};
 use slipfront::app::sweeps::{run_sweep, KeepMcap, Sweep, SweepOptions};
 use slipfront::engines::backend::{make_engine, Backend, Precision};
 use slipfront::engines::gpu::ensemble::GpuEnsemble;
 use slipfront::engines::gpu::kernel_choice::{candidates, launches, measure_within};
 use slipfront::engines::gpu::shaders::Kernel;
-use slipfront::engines::gpu::{context, GpuEngine, GpuOptions, GpuOutput, GpuPath, GpuReal};
+use slipfront::engines::gpu::{context, GpuOptions, GpuPath};
 use slipfront::model::scenario::built_in;
-use slipfront::{advance_to, Engine, EngineError, Model, Scenario};
+use slipfront::{advance_to, Model, Scenario};
 use std::time::Instant;
 
 #[path = "support/bench_scene.rs"]
 mod bench_scene;
+#[path = "support/gpu_timing.rs"]
+mod gpu_timing;
 #[path = "support/thread_cpu.rs"]
 mod thread_cpu;
 
 /// Section 2's budget for stepping the normal-load phase before timing
 /// (`auto`'s is 3 s): the bench always times from the start of driving.
 const PREPARE_WITHOUT_BUDGET: f64 = 1e6;
-
-/// CPU seconds used so far by every thread of this process (the driver's
-/// included).
-fn process_cpu_seconds() -> f64 {
-    let mut t = libc::timespec {
-        tv_sec: 0,
-        tv_nsec: 0,
-    };
-    // SAFETY: clock_gettime writes the timespec it is given.
-    unsafe { libc::clock_gettime(libc::CLOCK_PROCESS_CPUTIME_ID, &mut t) };
-    t.tv_sec as f64 + t.tv_nsec as f64 * 1e-9
-}
-
-/// Wall seconds of `advance(steps)` calls, doubling `steps` until one takes
-/// at least `min_seconds`: (seconds, steps) of that last one.
-fn timed_advance(
-    advance: impl FnMut(u64) -> Result<(), EngineError>,
-    min_seconds: f64,
-) -> Result<(f64, u64), EngineError> {
-    timed_with_cpu(advance, min_seconds).map(|t| (t.0, t.1))
-}
-
-/// As `timed_advance`, with the host CPU seconds of the same span: a
-/// share of the wall time near 1 (or above, with threads) says the host
-/// is the limit; near 0, the device (on a hardware adapter).
-fn timed_with_cpu(
-    mut advance: impl FnMut(u64) -> Result<(), EngineError>,
-    min_seconds: f64,
-) -> Result<(f64, u64, f64), EngineError> {
-    let mut steps = 16u64;
-    loop {
-        let (t0, cpu0) = (Instant::now(), process_cpu_seconds());
-        advance(steps)?;
-        let dt = t0.elapsed().as_secs_f64();
-        let cpu = process_cpu_seconds() - cpu0;
-        if dt >= min_seconds || steps >= 1 << 24 {
-            return Ok((dt, steps, cpu));
-        }
-        steps *= if dt < min_seconds / 8.0 { 8 } else { 2 };
-    }
-}
-
-/// One run of section 4: its wall time, engine, CPU seconds per wall
-/// second, per thread, device busy time and, when timed, its dispatches.
-#[derive(Debug)]
-struct Timed {
-    wall: f64,
-    how: String,
-    cpu: f64,
-    threads: String,
-    device: Option<f64>,
-    dispatches: Option<slipfront::engines::gpu::DispatchTimes>,
-}
-
-/// One run of section 4's scenario in precision `T` with device records,
-/// timed from the end of its normal-load phase: with an output file at
-/// `output` or none, running ahead by `run_ahead` batches, and with
-/// `time_dispatches` its dispatches timed one by one (timestamps inside
-/// the pass, which add a little device time) for the split of its device
-/// time.
-fn output_run<T: GpuReal>(
-    scenario: &Scenario,
-    output: Option<&std::path::Path>,
-    run_ahead: usize,
-    time_dispatches: bool,
-) -> Result<Timed, String> {
-    let model = Model::from_scenario(scenario, false).map_err(|e| e.to_string())?;
-    let opts = GpuOptions {
-        output: GpuOutput::Device,
-        run_ahead,
-        ..GpuOptions::default()
-    };
-    let mut e = GpuEngine::<T>::with_precision(&model, opts).map_err(|e| e.to_string())?;
-    advance_to(&mut e, model.prep_steps).map_err(|e| e.to_string())?;
-    if time_dispatches && !e.time_each_dispatch().map_err(|e| e.to_string())? {
-        return Err("no timestamps inside passes".into());
-    }
-    if let Some(p) = output {
-        let _ = std::fs::remove_file(p);
-        let _ = std::fs::remove_file(slipfront::io::checkpoint::path_for(p));
-    }
-    let run = RunOptions {
-        output: output.map(|p| p.to_path_buf()),
-        progress: ProgressMode::None,
-        ..RunOptions::default()
-    };
-    let threads = thread_cpu::ThreadCpu::start();
-    let device0 = e.device_seconds();
-    let (t0, cpu0) = (Instant::now(), process_cpu_seconds());
-    run_scene(&mut e, scenario, &run).map_err(|e| e.to_string())?;
-    let device = e.device_seconds().zip(device0).map(|(b, a)| b - a);
-    let wall = t0.elapsed().as_secs_f64();
-    let cpu = (process_cpu_seconds() - cpu0) / wall;
-    let threads = thread_cpu::per_wall(&threads.finish(), wall);
-    let megabytes = output
-        .and_then(|p| std::fs::metadata(p).ok())
-        .map_or(String::new(), |m| {
-            format!("; file {:.1} MB", m.len() as f64 / 1e6)
-        });
-    Ok(Timed {
-        wall,
-        how: e.describe(),
-        cpu,
-        threads: format!("{threads}{megabytes}"),
-        device,
-        dispatches: e.dispatch_times(),
-    })
-}
 
 fn options(kernel: Kernel) -> GpuOptions {
     GpuOptions {
@@ -201,20 +95,6 @@ fn with_threads(kernel: Kernel, threads: Option<u32>) -> GpuOptions {
 
 fn path_name(kernel: Kernel) -> String {
     GpuPath::of(kernel).name()
-}
-
-/// Seconds per step of `kernel` on `model` alone, past its normal-load
-/// phase, and the host CPU seconds per wall second of the same span.
-fn solo_step_seconds(
-    model: &Model,
-    opts: GpuOptions,
-    min_seconds: f64,
-) -> Result<(f64, f64), String> {
-    let mut e = GpuEngine::with_options(model, opts).map_err(|e| e.to_string())?;
-    advance_to(&mut e, model.prep_steps + 16).map_err(|e| e.to_string())?;
-    let (dt, steps, cpu) =
-        timed_with_cpu(|n| e.advance(n), min_seconds).map_err(|e| e.to_string())?;
-    Ok((dt / steps as f64, cpu / dt))
 }
 
 /// The tiled kernel on `model` by tile width, halo (the most steps per
@@ -246,13 +126,6 @@ fn tiled_grid(model: &Model, quick: bool, min_seconds: f64) {
         }
     }
     println!();
-}
-
-/// The precursors scene (Table S1, Ns = 100) with seed `seed`.
-fn table_s1(seed: usize) -> Model {
-    let text = built_in("tromborg2014_precursors").expect("shipped scene");
-    let s = Scenario::parse(text, "table S1", &[format!("time.seed={seed}")]).expect("scene");
-    Model::from_scenario(&s, false).expect("model")
 }
 
 /// What a Table S1 step costs with fewer junction lanes and with none:

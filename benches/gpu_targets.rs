@@ -1,0 +1,290 @@
+//! The GPU engine's targets, each with its figure and whether it is met, in
+//! one command for a short loan of a GPU:
+//!
+//!     cargo bench --bench gpu_targets
+//!
+//! (on the lent GPU machine: the packed `gpu_targets` binary). Mixed f32,
+//! the precursors scene (Table S1: 57×31, Ns = 100), every figure timed
+//! past the normal-load phase:
+//!
+//! 1. `auto` picks the fastest kernel: its measurement as a run makes it,
+//!    then every launch it timed, timed again alone over at least `SECONDS`.
+//!    Met when the chosen launch is within `PICK_TOLERANCE` of the fastest.
+//! 2. Table S1 in at most 3 µs a step: the fastest of those figures.
+//! 3. 256 scenes (a seed each) in one dispatch at 2e10 block-steps/s or
+//!    more in aggregate: the launch a sweep takes (timed on that ensemble,
+//!    as `sweep --backend gpu` does), then the ensemble stepped.
+//! 4. 64 scenes at 20× or more the rate of one at a time: the 64-scene
+//!    ensemble's aggregate (its own measured launch) over the fastest solo
+//!    figure of 2. This is the ensemble's step; a sweep's wall time with
+//!    its files is `gpu_table` section 6.
+//! 5. An output file at the default cadences at 1024×512 costs at most 1.3×
+//!    no output: the second N steps of a run with `-o` against the same
+//!    without (what a run pays once, the file's creation and its final
+//!    checkpoint, left out).
+//!
+//! The ensemble-against-solo bits are `tests/gpu_ensemble.rs`: run its
+//! binary on the same machine. SLIPFRONT_GPU_TARGETS_QUICK=1 (a software
+//! adapter) runs 16 and 4 scenes and the output at 57×31, over shorter
+//! spans: not the targets' sizes, and the table says so.
+
+use slipfront::engines::gpu::context::{self, GpuContext};
+use slipfront::engines::gpu::ensemble::GpuEnsemble;
+use slipfront::engines::gpu::kernel_choice::{measure, KernelChoice, Launch};
+use slipfront::engines::gpu::GpuOptions;
+use slipfront::Model;
+use std::time::Instant;
+
+#[path = "support/bench_scene.rs"]
+mod bench_scene;
+#[path = "support/gpu_timing.rs"]
+mod gpu_timing;
+#[path = "support/thread_cpu.rs"]
+mod thread_cpu;
+
+use gpu_timing::{output_run, solo_step_seconds, table_s1, timed_with_cpu};
+
+/// How much slower than the fastest launch `auto`'s pick may be, timed
+/// again, and still count as the fastest: two launches this close swap
+/// places between timings.
+const PICK_TOLERANCE: f64 = 0.05;
+const TABLE_S1_STEP_SECONDS: f64 = 3e-6;
+const ENSEMBLE_RATE: f64 = 2e10;
+const ENSEMBLE_SPEED_UP: f64 = 20.0;
+const OUTPUT_RATIO: f64 = 1.3;
+
+/// One target's line of the summary.
+struct Target {
+    what: String,
+    figure: String,
+    met: Option<bool>,
+}
+
+impl Target {
+    fn new(what: String, figure: String, met: bool) -> Target {
+        Target {
+            what,
+            figure,
+            met: Some(met),
+        }
+    }
+
+    fn not_measured(what: String, why: String) -> Target {
+        Target {
+            what,
+            figure: format!("not measured: {why}"),
+            met: None,
+        }
+    }
+}
+
+/// `auto`'s choice on `s1` and each launch it timed, timed again alone:
+/// (choice, [(launch, seconds per step)]).
+fn solo_figures(
+    ctx: &GpuContext,
+    s1: &Model,
+    min_seconds: f64,
+) -> Result<(KernelChoice, Vec<(Launch, f64)>), String> {
+    let choice = measure::<f32>(std::slice::from_ref(s1), ctx, GpuOptions::default())
+        .map_err(|e| e.to_string())?;
+    println!("`auto` on Table S1: {}\n", choice.describe());
+    println!("| launch | auto's figure (µs/step) | timed again (µs/step) | host CPU / wall |");
+    println!("| --- | ---: | ---: | ---: |");
+    let mut again = Vec::new();
+    for &(launch, seconds) in &choice.timings {
+        match solo_step_seconds(s1, launch.options(GpuOptions::default()), min_seconds) {
+            Ok((s, host)) => {
+                println!(
+                    "| {} | {:.2} | {:.2} | {host:.2} |",
+                    launch.name(),
+                    seconds * 1e6,
+                    s * 1e6
+                );
+                again.push((launch, s));
+            }
+            Err(e) => println!(
+                "| {} | {:.2} | not run: {e} | |",
+                launch.name(),
+                seconds * 1e6
+            ),
+        }
+    }
+    println!();
+    Ok((choice, again))
+}
+
+/// The launch a sweep of `models` takes (timed on that ensemble) and the
+/// ensemble's seconds per step with it.
+fn ensemble_step(
+    ctx: &GpuContext,
+    models: &[Model],
+    min_seconds: f64,
+) -> Result<(Launch, f64), String> {
+    let opts = slipfront::app::sweeps::default_gpu();
+    let choice = measure::<f32>(models, ctx, opts).map_err(|e| e.to_string())?;
+    println!("{} scenes: {}\n", models.len(), choice.describe());
+    let mut e = GpuEnsemble::new(models, choice.launch.options(opts)).map_err(|e| e.to_string())?;
+    e.advance(models[0].prep_steps + 16)
+        .map_err(|e| e.to_string())?;
+    let (dt, steps, _) =
+        timed_with_cpu(|k| e.advance(k), min_seconds).map_err(|e| e.to_string())?;
+    Ok((choice.launch, dt / steps as f64))
+}
+
+/// The output's cost at `nx`×`nz`: the wall seconds of the second `steps`
+/// steps of a run without an output file and with one (`-o`).
+fn output_cost(nx: u32, nz: u32, steps: u64, dir: &std::path::Path) -> Result<(f64, f64), String> {
+    let file = dir.join("run.mcap");
+    let ahead = GpuOptions::default().run_ahead;
+    let scenario_of = |n: u64| {
+        let t_end = n as f64 * bench_scene::scene(nx, nz).dt;
+        bench_scene::scenario(nx, nz, &[&format!("time.end={t_end:e}")])
+    };
+    // Untimed first: the first run with output builds the record pipelines.
+    output_run::<f32>(&scenario_of(steps), Some(&file), ahead, false)?;
+    let mut walls = Vec::new();
+    for n in [steps, 2 * steps] {
+        let scenario = scenario_of(n);
+        let without = output_run::<f32>(&scenario, None, ahead, false)?.wall;
+        let with = output_run::<f32>(&scenario, Some(&file), ahead, false)?.wall;
+        walls.push((without, with));
+    }
+    Ok((walls[1].0 - walls[0].0, walls[1].1 - walls[0].1))
+}
+
+fn main() {
+    let quick = std::env::var("SLIPFRONT_GPU_TARGETS_QUICK").is_ok();
+    let min_seconds = if quick { 0.3 } else { 1.0 };
+    let started = Instant::now();
+    let ctx = context::shared().expect("a GPU adapter (lavapipe counts)");
+    println!("# GPU targets: {}\n", ctx.describe());
+    if quick {
+        println!("Quick: 16 and 4 scenes, output at 57×31: not the targets' sizes.\n");
+    }
+    let s1 = table_s1(1);
+    let blocks = s1.n_blocks() as f64;
+    let mut targets = Vec::new();
+
+    // 1 and 2: the solo kernels.
+    let pick = format!(
+        "`auto` picks the fastest launch (within {:.0} %)",
+        PICK_TOLERANCE * 100.0
+    );
+    let speed = format!("Table S1 ≤ {:.0} µs/step", TABLE_S1_STEP_SECONDS * 1e6);
+    let mut fastest_solo = None;
+    match solo_figures(&ctx, &s1, min_seconds) {
+        Ok((choice, again)) => {
+            let fastest = again.iter().copied().min_by(|a, b| a.1.total_cmp(&b.1));
+            let chosen = again.iter().find(|(l, _)| *l == choice.launch).map(|t| t.1);
+            match (fastest, chosen) {
+                (Some((best, best_s)), Some(chosen_s)) => {
+                    fastest_solo = Some(best_s);
+                    targets.push(Target::new(
+                        pick,
+                        format!(
+                            "chose {} ({:.2} µs/step timed again); fastest {} ({:.2})",
+                            choice.launch.name(),
+                            chosen_s * 1e6,
+                            best.name(),
+                            best_s * 1e6
+                        ),
+                        chosen_s <= best_s * (1.0 + PICK_TOLERANCE),
+                    ));
+                    targets.push(Target::new(
+                        speed,
+                        format!("{:.2} µs/step ({})", best_s * 1e6, best.name()),
+                        best_s <= TABLE_S1_STEP_SECONDS,
+                    ));
+                }
+                _ => {
+                    let why = "the chosen launch did not run again".to_string();
+                    targets.push(Target::not_measured(pick, why.clone()));
+                    targets.push(Target::not_measured(speed, why));
+                }
+            }
+        }
+        Err(e) => {
+            targets.push(Target::not_measured(pick, e.clone()));
+            targets.push(Target::not_measured(speed, e));
+        }
+    }
+
+    // 3 and 4: ensembles.
+    let (many, some) = if quick { (16, 4) } else { (256, 64) };
+    let what = format!("{many} scenes ≥ {ENSEMBLE_RATE:.0e} block-steps/s");
+    let models: Vec<Model> = (1..=many).map(table_s1).collect();
+    targets.push(match ensemble_step(&ctx, &models, min_seconds) {
+        Ok((launch, s)) => {
+            let rate = many as f64 * blocks / s;
+            Target::new(
+                what,
+                format!(
+                    "{rate:.3e} ({}, {:.2} µs per ensemble step)",
+                    launch.name(),
+                    s * 1e6
+                ),
+                rate >= ENSEMBLE_RATE,
+            )
+        }
+        Err(e) => Target::not_measured(what, e),
+    });
+    let what = format!("{some} scenes ≥ {ENSEMBLE_SPEED_UP:.0}× one at a time");
+    let models: Vec<Model> = (1..=some).map(table_s1).collect();
+    targets.push(
+        match (ensemble_step(&ctx, &models, min_seconds), fastest_solo) {
+            (Ok((launch, s)), Some(solo)) => {
+                let speed_up = some as f64 * solo / s;
+                Target::new(
+                    what,
+                    format!(
+                        "{speed_up:.1}× ({}: {:.3e} block-steps/s against {:.3e} alone)",
+                        launch.name(),
+                        some as f64 * blocks / s,
+                        blocks / solo
+                    ),
+                    speed_up >= ENSEMBLE_SPEED_UP,
+                )
+            }
+            (Err(e), _) => Target::not_measured(what, e),
+            (_, None) => Target::not_measured(what, "no solo figure".into()),
+        },
+    );
+
+    // 5: output.
+    let (nx, nz, steps) = if quick {
+        (57, 31, 2000)
+    } else {
+        (1024, 512, 20_000)
+    };
+    let what = format!("output at {nx}×{nz} ≤ {OUTPUT_RATIO}× none");
+    let dir = std::env::temp_dir().join(format!("slipfront-gpu-targets-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    targets.push(match output_cost(nx, nz, steps, &dir) {
+        Ok((without, with)) => Target::new(
+            what,
+            format!(
+                "{:.2}× (the second {steps} steps: {with:.3} s with -o, {without:.3} s without)",
+                with / without
+            ),
+            with <= OUTPUT_RATIO * without,
+        ),
+        Err(e) => Target::not_measured(what, e),
+    });
+    let _ = std::fs::remove_dir_all(&dir);
+
+    println!("## Targets\n");
+    println!("| target | measured | met |");
+    println!("| --- | --- | --- |");
+    for t in &targets {
+        let met = match t.met {
+            Some(true) => "yes",
+            Some(false) => "no",
+            None => "–",
+        };
+        println!("| {} | {} | {met} |", t.what, t.figure);
+    }
+    println!(
+        "\n({:.1} s of wall time; the ensemble-against-solo bits: tests/gpu_ensemble.rs)",
+        started.elapsed().as_secs_f64()
+    );
+}
