@@ -1,0 +1,176 @@
+//! The measured choices of this machine, kept between runs, and the keys
+//! they are kept under.
+
+use super::{ChoiceSource, KernelChoice, Launch, TimedPhase};
+use crate::engines::gpu::context::GpuContext;
+use crate::engines::gpu::options::GpuOptions;
+use crate::engines::gpu::precision::GpuReal;
+use crate::engines::gpu::shaders::{Kernel, Variant};
+use crate::model::Model;
+use std::hash::{Hash, Hasher};
+use std::path::{Path, PathBuf};
+
+/// The cache file in the cache directory.
+pub const CACHE_FILE: &str = "gpu-kernels.tsv";
+
+/// The measured choices of this machine, one line per adapter and lattice:
+/// `key <TAB> launch <TAB> launch=seconds,... <TAB> phase` (a launch:
+/// `resident`, or `resident/512` with its threads; the phase as
+/// `TimedPhase::describe` writes it). A line without its phase (an older
+/// build's, timed in the load phase) is measured again.
+#[derive(Debug, Clone)]
+pub struct ChoiceCache {
+    /// None: no cache directory could be found (nothing is kept).
+    dir: Option<PathBuf>,
+}
+
+impl ChoiceCache {
+    /// `$SLIPFRONT_CACHE_DIR`, else `$XDG_CACHE_HOME/slipfront`, else
+    /// `~/.cache/slipfront`.
+    pub fn default_location() -> ChoiceCache {
+        let env = |k: &str| {
+            std::env::var_os(k)
+                .filter(|v| !v.is_empty())
+                .map(PathBuf::from)
+        };
+        let dir = env("SLIPFRONT_CACHE_DIR")
+            .or_else(|| env("XDG_CACHE_HOME").map(|d| d.join("slipfront")))
+            .or_else(|| env("HOME").map(|d| d.join(".cache").join("slipfront")));
+        ChoiceCache { dir }
+    }
+
+    pub fn at(dir: &Path) -> ChoiceCache {
+        ChoiceCache {
+            dir: Some(dir.to_path_buf()),
+        }
+    }
+
+    pub fn file(&self) -> Option<PathBuf> {
+        self.dir.as_ref().map(|d| d.join(CACHE_FILE))
+    }
+
+    fn lines(&self) -> Vec<String> {
+        self.file()
+            .and_then(|f| std::fs::read_to_string(f).ok())
+            .map(|text| text.lines().map(str::to_string).collect())
+            .unwrap_or_default()
+    }
+
+    /// The choice stored under `key`; a line that does not parse is
+    /// ignored (measured again).
+    pub fn lookup(&self, key: &str) -> Option<KernelChoice> {
+        self.lines().iter().find_map(|line| {
+            let mut fields = line.split('\t');
+            if fields.next()? != key {
+                return None;
+            }
+            let launch = Launch::named(fields.next()?)?;
+            let timings = fields
+                .next()?
+                .split(',')
+                .map(|pair| {
+                    let (name, seconds) = pair.split_once('=')?;
+                    let seconds: f64 = seconds.parse().ok()?;
+                    (seconds.is_finite() && seconds > 0.0)
+                        .then_some((Launch::named(name)?, seconds))
+                })
+                .collect::<Option<Vec<_>>>()?;
+            let phase = TimedPhase::described(fields.next()?)?;
+            timings
+                .iter()
+                .any(|(l, _)| *l == launch)
+                .then_some(KernelChoice {
+                    launch,
+                    timings,
+                    source: ChoiceSource::Cached,
+                    skipped: Vec::new(),
+                    scenes: 1,
+                    phase,
+                })
+        })
+    }
+
+    /// Stores `choice` under `key`, replacing an older line. The file is
+    /// written whole and renamed into place, so a reader never sees half
+    /// of it. Failing to write only loses the cache: returns why.
+    pub fn store(&self, key: &str, choice: &KernelChoice) -> Result<(), String> {
+        let (Some(dir), Some(file)) = (&self.dir, self.file()) else {
+            return Err("no cache directory (set SLIPFRONT_CACHE_DIR)".into());
+        };
+        let mut lines: Vec<String> = self
+            .lines()
+            .into_iter()
+            .filter(|l| l.split('\t').next() != Some(key))
+            .collect();
+        let figures: Vec<String> = choice
+            .timings
+            .iter()
+            .map(|(l, s)| format!("{}={s:e}", l.name()))
+            .collect();
+        lines.push(format!(
+            "{key}\t{}\t{}\t{}",
+            choice.launch.name(),
+            figures.join(","),
+            choice.phase.describe().replace(['\t', '\n'], " ")
+        ));
+        let write = || -> std::io::Result<()> {
+            std::fs::create_dir_all(dir)?;
+            let tmp = dir.join(format!("{CACHE_FILE}.{}.tmp", std::process::id()));
+            std::fs::write(&tmp, lines.join("\n") + "\n")?;
+            std::fs::rename(&tmp, &file)
+        };
+        write().map_err(|e| format!("cannot write {}: {e}", file.display()))
+    }
+}
+
+/// What a measured choice depends on: the adapter and its driver, the
+/// precision, the lattice (`lattice_key`), the persistent kernels' threads
+/// and the kernels' sources (a new version of slipfront measures again).
+pub fn cache_key<T: GpuReal>(model: &Model, ctx: &GpuContext, opts: GpuOptions) -> String {
+    scenes_cache_key::<T>(model, 1, ctx, opts)
+}
+
+/// The lattice a choice is for: its shape, junction count and compiled
+/// terms (scenes alike in these step at the same speed).
+pub fn lattice_key(model: &Model) -> String {
+    format!(
+        "{}x{} | junctions {} | {}",
+        model.nx,
+        model.nz,
+        model.n_junctions(),
+        Variant::for_model(model).describe()
+    )
+}
+
+/// `cache_key` of an ensemble of `scenes` scenes like `model` (one scene:
+/// the solo key).
+pub fn scenes_cache_key<T: GpuReal>(
+    model: &Model,
+    scenes: usize,
+    ctx: &GpuContext,
+    opts: GpuOptions,
+) -> String {
+    let mut sources = std::collections::hash_map::DefaultHasher::new();
+    for kernel in Kernel::ALL {
+        kernel.source::<T>().hash(&mut sources);
+    }
+    let info = &ctx.info;
+    let ensemble = if scenes > 1 {
+        format!(" | ensemble of {scenes}")
+    } else {
+        String::new()
+    };
+    format!(
+        "{} | {:?} | {} {} | {} | {}{ensemble} | threads {} | kernels {:016x}",
+        info.name,
+        info.backend,
+        info.driver,
+        info.driver_info,
+        T::NAME,
+        lattice_key(model),
+        opts.persistent_threads
+            .map_or_else(|| "default".to_string(), |t| t.to_string()),
+        sources.finish()
+    )
+    .replace(['\t', '\n'], " ")
+}

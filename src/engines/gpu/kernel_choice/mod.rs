@@ -1,0 +1,309 @@
+//! `--gpu-path auto` on a hardware adapter: every kernel that fits the
+//! scene is timed on the scene itself for a few hundred steps, and the
+//! fastest steps the run. The choice and its figures are cached per
+//! adapter, driver, precision, lattice, compiled terms and kernel sources,
+//! so a second run of the same shape starts at once.
+//!
+//! The kernels are timed from the end of the scene's normal-load phase,
+//! stepped once beforehand and shared by every candidate: a run spends
+//! nearly all its steps driving, and there a quiet block keeps its
+//! junction sums, while in the load phase every junction is written each
+//! step. Timed in the load phase, a kernel whose junction work is its cost
+//! would be judged on work it mostly skips.
+//!
+//! Why measure: the fixed rule picked a kernel 3.3× slower than the best
+//! on an H100 for Table S1 (BENCHMARKS.md), and which kernel wins depends
+//! on the lattice, the junction count, the precision and the GPU.
+//! Software adapters (lavapipe) keep the measured rule of
+//! `options::choose_kernel`: there pipelines take seconds to compile, and
+//! runs must stay deterministic in CI. `--gpu-path measure` times the
+//! kernels anyway, on any adapter, and refreshes the cache.
+//!
+//! `timing` times the launches, `cache` keeps the choices.
+
+mod cache;
+mod timing;
+
+pub use cache::{cache_key, lattice_key, scenes_cache_key, ChoiceCache, CACHE_FILE};
+pub use timing::{driving_start, measure, measure_within, time_kernel, PREPARE_BUDGET_SECONDS};
+
+use super::context::GpuContext;
+use super::options::{GpuOptions, GpuPath};
+use super::precision::GpuReal;
+use super::shaders::Kernel;
+use crate::engines::EngineError;
+use crate::model::scenario::FrictionLaw;
+use crate::model::Model;
+
+/// The persistent kernel steps a lattice with one workgroup: it is timed
+/// only up to this many blocks (at 1024×256 it ran 150× slower than the
+/// lanes kernel on an H100).
+pub const PERSISTENT_MEASURE_MAX_BLOCKS: usize = 16_384;
+
+/// Threads a workgroup of the single-workgroup kernels (persistent,
+/// resident) are timed at when an ensemble is measured: with many scenes,
+/// fewer threads a scene let several scenes share a multiprocessor (on an
+/// H200, 1024-thread resident scenes ran one per SM, in waves), while one
+/// scene alone runs fastest with the most (BENCHMARKS.md, 2026-11-27).
+pub const ENSEMBLE_THREADS: [u32; 3] = [256, 512, 1024];
+
+/// A kernel as timed: its threads a workgroup where they were chosen
+/// (None: the kernel's default, or `--gpu-threads`). Written
+/// `resident/512` (kernel/threads) in figures and in the cache.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Launch {
+    pub kernel: Kernel,
+    pub threads: Option<u32>,
+}
+
+impl Launch {
+    pub fn of(kernel: Kernel) -> Launch {
+        Launch {
+            kernel,
+            threads: None,
+        }
+    }
+
+    /// `one-step-lanes`, `resident/512`.
+    pub fn name(self) -> String {
+        match self.threads {
+            Some(t) => format!("{}/{t}", path_name(self.kernel)),
+            None => path_name(self.kernel),
+        }
+    }
+
+    /// The inverse of `name`.
+    pub fn named(name: &str) -> Option<Launch> {
+        let (kernel, threads) = match name.split_once('/') {
+            Some((k, t)) => (k, Some(t.parse().ok().filter(|&t: &u32| t > 0)?)),
+            None => (name, None),
+        };
+        Some(Launch {
+            kernel: kernel_named(kernel)?,
+            threads,
+        })
+    }
+
+    /// `opts` running this launch.
+    pub fn options(self, opts: GpuOptions) -> GpuOptions {
+        GpuOptions {
+            path: GpuPath::of(self.kernel),
+            persistent_threads: self.threads.or(opts.persistent_threads),
+            ..opts
+        }
+    }
+}
+
+/// Where a choice came from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ChoiceSource {
+    /// Timed now on this scene.
+    Measured,
+    /// Timed earlier on this adapter for this lattice (the cache).
+    Cached,
+}
+
+/// Where the candidates were timed.
+#[derive(Debug, Clone, PartialEq)]
+pub enum TimedPhase {
+    /// From the state at `from_step`, the last step of the normal-load
+    /// phase: the timed steps are the first of driving.
+    Driving { from_step: u64 },
+    /// From the initial state, in the normal-load phase, and why.
+    NormalLoad { why: String },
+}
+
+impl TimedPhase {
+    /// `timed from step 13409 (driving)`; also the cache's field.
+    pub fn describe(&self) -> String {
+        match self {
+            TimedPhase::Driving { from_step } => format!("timed in driving from step {from_step}"),
+            TimedPhase::NormalLoad { why } => format!("timed in the normal-load phase: {why}"),
+        }
+    }
+
+    /// The inverse of `describe`.
+    pub fn described(text: &str) -> Option<TimedPhase> {
+        if let Some(step) = text.strip_prefix("timed in driving from step ") {
+            return Some(TimedPhase::Driving {
+                from_step: step.parse().ok()?,
+            });
+        }
+        let why = text.strip_prefix("timed in the normal-load phase: ")?;
+        Some(TimedPhase::NormalLoad {
+            why: why.to_string(),
+        })
+    }
+}
+
+/// The kernel that steps a run, and the figures behind it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct KernelChoice {
+    pub launch: Launch,
+    /// Each launch timed, with its wall time per step in seconds.
+    pub timings: Vec<(Launch, f64)>,
+    pub source: ChoiceSource,
+    /// Candidates that could not be timed, and why.
+    pub skipped: Vec<(Launch, String)>,
+    /// Scenes stepped together while timed (1: a solo run's choice).
+    pub scenes: usize,
+    /// The state the launches were timed from.
+    pub phase: TimedPhase,
+}
+
+impl KernelChoice {
+    /// `chose one-step-lanes: one-step 45.1, one-step-lanes 8.7,
+    /// persistent 29.0 µs/step, measured now on this scene`.
+    pub fn describe(&self) -> String {
+        let figures: Vec<String> = self
+            .timings
+            .iter()
+            .map(|(l, s)| format!("{} {:.1}", l.name(), s * 1e6))
+            .collect();
+        let source = match (self.source, self.scenes) {
+            (ChoiceSource::Measured, 1) => "measured now on this scene".to_string(),
+            (ChoiceSource::Measured, n) => format!("measured now on an ensemble of {n} scenes"),
+            (ChoiceSource::Cached, 1) => {
+                "measured earlier on this adapter for this lattice".to_string()
+            }
+            (ChoiceSource::Cached, n) => {
+                format!("measured earlier on this adapter for ensembles of {n} of this lattice")
+            }
+        };
+        let unit = if self.scenes > 1 {
+            "µs per step of the ensemble"
+        } else {
+            "µs/step"
+        };
+        let mut text = format!(
+            "chose {}: {} {unit}, {source}, {}",
+            self.launch.name(),
+            figures.join(", "),
+            self.phase.describe()
+        );
+        for (l, why) in &self.skipped {
+            text += &format!("; {} not timed: {why}", l.name());
+        }
+        text
+    }
+
+    /// The kernel chosen.
+    pub fn kernel(&self) -> Kernel {
+        self.launch.kernel
+    }
+}
+
+/// The `--gpu-path` value of `kernel`.
+pub fn path_name(kernel: Kernel) -> String {
+    GpuPath::of(kernel).name()
+}
+
+fn kernel_named(name: &str) -> Option<Kernel> {
+    Kernel::ALL.into_iter().find(|k| path_name(*k) == name)
+}
+
+/// The kernels worth timing on `model`: the lanes kernel only where
+/// junctions give it lanes, the persistent and tiled kernels only on small
+/// lattices (the tiled one without a per-block friction law).
+pub fn candidates(model: &Model) -> Vec<Kernel> {
+    let junctions = matches!(
+        model.law,
+        FrictionLaw::Junctions | FrictionLaw::SingleJunction
+    ) && model.junctions.is_some_and(|j| j.count > 1);
+    Kernel::ALL
+        .into_iter()
+        .filter(|k| match k {
+            Kernel::OneStep => true,
+            Kernel::OneStepLanes => junctions,
+            // The resident kernel is refused at build where the lattice
+            // does not fit workgroup memory (skipped with that reason).
+            Kernel::Persistent | Kernel::Resident => {
+                model.n_blocks() <= PERSISTENT_MEASURE_MAX_BLOCKS
+            }
+            // Refused at build too where its tile does not fit.
+            Kernel::Tiled => {
+                !model.law.is_per_block() && model.n_blocks() <= PERSISTENT_MEASURE_MAX_BLOCKS
+            }
+        })
+        .collect()
+}
+
+/// The launches to time on `scenes` scenes like `model`: every candidate
+/// kernel, and for an ensemble the single-workgroup kernels at each of
+/// `ENSEMBLE_THREADS` the adapter allows, unless `--gpu-threads` fixed
+/// them. A scene alone takes each kernel's default threads (on an H200 the
+/// most threads were fastest alone, and every variant costs a compile),
+/// but the tiled kernel is timed at each of them too: not yet measured on
+/// hardware, a tile's lanes (1,024 at Table S1's defaults) against its
+/// blocks (496) do not say which count wins.
+pub fn launches(
+    model: &Model,
+    scenes: usize,
+    opts: GpuOptions,
+    limits: &wgpu::Limits,
+) -> Vec<Launch> {
+    let most = limits
+        .max_compute_invocations_per_workgroup
+        .min(limits.max_compute_workgroup_size_x);
+    let mut out = Vec::new();
+    for kernel in candidates(model) {
+        let varied = kernel == Kernel::Tiled || (kernel.is_persistent() && scenes > 1);
+        if varied && opts.persistent_threads.is_none() {
+            out.extend(
+                ENSEMBLE_THREADS
+                    .iter()
+                    .filter(|&&t| t <= most)
+                    .map(|&t| Launch {
+                        kernel,
+                        threads: Some(t),
+                    }),
+            );
+        } else {
+            out.push(Launch::of(kernel));
+        }
+    }
+    out
+}
+
+/// The options a solo run is built with, and the measured choice behind
+/// them: `auto` on a hardware adapter takes the cached choice or measures
+/// and caches one; `measure` always measures (and caches); any other path
+/// (and `auto` on a software adapter, by the rule) is kept as it is.
+pub fn resolve<T: GpuReal>(
+    model: &Model,
+    ctx: &GpuContext,
+    opts: GpuOptions,
+    cache: &ChoiceCache,
+) -> Result<(GpuOptions, Option<KernelChoice>), EngineError> {
+    resolve_scenes::<T>(model, 1, ctx, opts, cache)
+}
+
+/// `resolve` for `scenes` scenes like `model` stepped as one ensemble: the
+/// candidates are timed on such an ensemble (a sweep's kernel: which
+/// kernel fills the GPU best depends on how many scenes share it).
+pub fn resolve_scenes<T: GpuReal>(
+    model: &Model,
+    scenes: usize,
+    ctx: &GpuContext,
+    opts: GpuOptions,
+    cache: &ChoiceCache,
+) -> Result<(GpuOptions, Option<KernelChoice>), EngineError> {
+    let use_cache = match opts.path {
+        GpuPath::Auto if !ctx.is_software() => true,
+        GpuPath::Measure => false,
+        _ => return Ok((opts, None)),
+    };
+    let key = scenes_cache_key::<T>(model, scenes, ctx, opts);
+    let cached = if use_cache { cache.lookup(&key) } else { None };
+    let choice = match cached {
+        Some(c) => KernelChoice { scenes, ..c },
+        None => {
+            let c = measure::<T>(&vec![model.clone(); scenes.max(1)], ctx, opts)?;
+            // A cache that cannot be written costs only the next run's
+            // measurement.
+            let _ = cache.store(&key, &c);
+            c
+        }
+    };
+    Ok((choice.launch.options(opts), Some(choice)))
+}
