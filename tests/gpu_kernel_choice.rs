@@ -80,15 +80,15 @@ fn measure_times_every_candidate_takes_the_fastest_and_caches_it() {
     let fastest = fastest(&choice);
     assert_eq!(choice.launch, fastest);
     // Timed where a run spends its steps: from the last step of the
-    // normal-load phase (about 2,200 steps here, well within the budget).
-    assert_eq!(
-        choice.phase,
-        TimedPhase::Driving {
-            from_step: m.prep_steps - 1
-        }
-    );
+    // normal-load phase (about 2,300 steps here, under a second on an idle
+    // lavapipe), unless a busy machine makes that longer than the budget
+    // (the budget itself: the test below).
+    match &choice.phase {
+        TimedPhase::Driving { from_step } => assert_eq!(*from_step, m.prep_steps - 1),
+        TimedPhase::NormalLoad { why } => assert!(why.contains("over the 3 s budget"), "{why}"),
+    }
     assert!(
-        choice.describe().contains("timed in driving from step"),
+        choice.describe().contains("timed in "),
         "{}",
         choice.describe()
     );
