@@ -46,10 +46,11 @@
 //! sections 1–3 (`GpuOptions::keep_junction_sums` off): the same bits,
 //! the cost of the junction phase without skipping quiet blocks.
 
-use gpu_timing::{output_run, solo_step_seconds, table_s1, timed_advance, timed_with_cpu, Timed};
+use gpu_timing::{
+    ensemble_step_seconds, output_run, solo_step_seconds, table_s1, timed_advance, Timed,
+};
 use slipfront::app::sweeps::{run_sweep, KeepMcap, Sweep, SweepOptions};
 use slipfront::engines::backend::{make_engine, Backend, Precision};
-use slipfront::engines::gpu::ensemble::GpuEnsemble;
 use slipfront::engines::gpu::kernel_choice::{candidates, launches, measure_within};
 use slipfront::engines::gpu::shaders::Kernel;
 use slipfront::engines::gpu::{context, GpuOptions, GpuPath};
@@ -451,15 +452,13 @@ fn main() {
                 {
                     continue;
                 }
-                let result = GpuEnsemble::new(&models, launch.options(GpuOptions::default()))
-                    .map_err(|e| e.to_string())
-                    .and_then(|mut e| {
-                        e.advance(s1.prep_steps + 16).map_err(|e| e.to_string())?;
-                        timed_with_cpu(|k| e.advance(k), min_seconds).map_err(|e| e.to_string())
-                    });
+                let result = ensemble_step_seconds(
+                    &models,
+                    launch.options(GpuOptions::default()),
+                    min_seconds,
+                );
                 match result {
-                    Ok((dt, steps, cpu)) => {
-                        let per_step = dt / steps as f64;
+                    Ok((per_step, host)) => {
                         let rate = n as f64 * blocks / per_step;
                         let one = *alone.get_or_insert(blocks / per_step);
                         println!(
@@ -467,7 +466,7 @@ fn main() {
                             launch.name(),
                             per_step * 1e6,
                             rate / one,
-                            cpu / dt
+                            host
                         );
                     }
                     Err(e) => println!("| {n} | {} | not run: {e} | | | |", launch.name()),

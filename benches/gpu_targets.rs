@@ -29,7 +29,6 @@
 //! spans: not the targets' sizes, and the table says so.
 
 use slipfront::engines::gpu::context::{self, GpuContext};
-use slipfront::engines::gpu::ensemble::GpuEnsemble;
 use slipfront::engines::gpu::kernel_choice::{measure, KernelChoice, Launch};
 use slipfront::engines::gpu::GpuOptions;
 use slipfront::Model;
@@ -42,7 +41,7 @@ mod gpu_timing;
 #[path = "support/thread_cpu.rs"]
 mod thread_cpu;
 
-use gpu_timing::{output_run, solo_step_seconds, table_s1, timed_with_cpu};
+use gpu_timing::{ensemble_step_seconds, output_run, solo_step_seconds, table_s1};
 
 /// How much slower than the fastest launch `auto`'s pick may be, timed
 /// again, and still count as the fastest: two launches this close swap
@@ -123,12 +122,8 @@ fn ensemble_step(
     let opts = slipfront::app::sweeps::default_gpu();
     let choice = measure::<f32>(models, ctx, opts).map_err(|e| e.to_string())?;
     println!("{} scenes: {}\n", models.len(), choice.describe());
-    let mut e = GpuEnsemble::new(models, choice.launch.options(opts)).map_err(|e| e.to_string())?;
-    e.advance(models[0].prep_steps + 16)
-        .map_err(|e| e.to_string())?;
-    let (dt, steps, _) =
-        timed_with_cpu(|k| e.advance(k), min_seconds).map_err(|e| e.to_string())?;
-    Ok((choice.launch, dt / steps as f64))
+    let (per_step, _) = ensemble_step_seconds(models, choice.launch.options(opts), min_seconds)?;
+    Ok((choice.launch, per_step))
 }
 
 /// The output's cost at `nx`×`nz`: the wall seconds of the second `steps`

@@ -7,6 +7,7 @@
 
 use super::thread_cpu;
 use slipfront::app::runner::{run_scene, ProgressMode, RunOptions};
+use slipfront::engines::gpu::ensemble::GpuEnsemble;
 use slipfront::engines::gpu::{GpuEngine, GpuOptions, GpuOutput, GpuReal};
 use slipfront::model::scenario::built_in;
 use slipfront::{advance_to, Engine, EngineError, Model, Scenario};
@@ -139,4 +140,20 @@ pub fn table_s1(seed: usize) -> Model {
     let text = built_in("tromborg2014_precursors").expect("shipped scene");
     let s = Scenario::parse(text, "table S1", &[format!("time.seed={seed}")]).expect("scene");
     Model::from_scenario(&s, false).expect("model")
+}
+
+/// Seconds per step of the ensemble of `models` (one dispatch steps them
+/// all) with `opts`, past their normal-load phase, and the host CPU
+/// seconds per wall second of the same span.
+pub fn ensemble_step_seconds(
+    models: &[Model],
+    opts: GpuOptions,
+    min_seconds: f64,
+) -> Result<(f64, f64), String> {
+    let mut e = GpuEnsemble::new(models, opts).map_err(|e| e.to_string())?;
+    e.advance(models[0].prep_steps + 16)
+        .map_err(|e| e.to_string())?;
+    let (dt, steps, cpu) =
+        timed_with_cpu(|k| e.advance(k), min_seconds).map_err(|e| e.to_string())?;
+    Ok((dt / steps as f64, cpu / dt))
 }

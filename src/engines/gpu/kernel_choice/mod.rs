@@ -114,7 +114,7 @@ pub enum TimedPhase {
 }
 
 impl TimedPhase {
-    /// `timed from step 13409 (driving)`; also the cache's field.
+    /// `timed in driving from step 13409`; also the cache's field.
     pub fn describe(&self) -> String {
         match self {
             TimedPhase::Driving { from_step } => format!("timed in driving from step {from_step}"),
