@@ -76,8 +76,20 @@ fn add_bond(
         } else if DAMPING_FORM != 0u {
             damper = vec2<real>(c.eta * dv.x, c.eta * dv.y);
         }
-        *fx = force_sum_add_bond(force_sum_add(*fx, q * r0.x), q * du.x, damper.x);
-        *fz = force_sum_add_bond(force_sum_add(*fz, q * r0.y), q * du.y, damper.y);
+        // A stencil entry along an axis has r0 = 0 across it: its q·r0 term
+        // is ±0, and adding ±0 leaves a compensated sum's bits as they are
+        // (neither of its words is −0), so the term is not added. d is a
+        // constant of each call, so the test costs nothing.
+        var sx = *fx;
+        var sz = *fz;
+        if d.x != 0 {
+            sx = force_sum_add(sx, q * r0.x);
+        }
+        if d.y != 0 {
+            sz = force_sum_add(sz, q * r0.y);
+        }
+        *fx = force_sum_add_bond(sx, q * du.x, damper.x);
+        *fz = force_sum_add_bond(sz, q * du.y, damper.y);
         return;
     }
     let inv_len = 1.0 / len;
@@ -93,11 +105,13 @@ fn add_bond(
     *fz = force_sum_add_bond(*fz, spring * n.y, damper.y);
 }
 
-fn bulk_force(i: u32, ld: Loads) -> vec2<real> {
-    let ix = i32(i % c.nx);
-    let iz = i32(i / c.nx);
-    let ui = load_disp_at(i, u32(ix), u32(iz));
-    let vi = load_vel_at(i, u32(ix), u32(iz));
+// Block i at column column and row row (i = row·nx + column: the caller
+// has them, or divides once).
+fn bulk_force(i: u32, column: u32, row: u32, ld: Loads) -> vec2<real> {
+    let ix = i32(column);
+    let iz = i32(row);
+    let ui = load_disp_at(i, column, row);
+    let vi = load_vel_at(i, column, row);
     // Compensated sums in mixed precision (force_sum_add says why), the
     // bonds in stencil order.
     var fx = force_sum_zero();

@@ -110,3 +110,29 @@ fn report_blow_up(i: u32, step: u32, u: Disp, v: vec2<real>) {
         atomicStore(&status[s + 6u], bitcast<u32>(f32(v.y)));
     }
 }
+
+// A thread's items first, first + stride, ... of a grid `width` items wide
+// (item k at column k mod width, row k / width), walked by column and row
+// with no division per item: dividing by a width known only at run time
+// costs a GPU about twenty instructions, a few per block-step in the tiled
+// kernel's loops. The kernels' loops over blocks, lanes and tile columns.
+struct GridWalk {
+    column: u32,
+    row: u32,
+    step_columns: u32,
+    step_rows: u32,
+    width: u32,
+}
+
+fn grid_walk(first: u32, stride: u32, width: u32) -> GridWalk {
+    return GridWalk(first % width, first / width, stride % width, stride / width, width);
+}
+
+fn grid_walk_next(w: ptr<function, GridWalk>) {
+    (*w).column += (*w).step_columns;
+    (*w).row += (*w).step_rows;
+    if (*w).column >= (*w).width {
+        (*w).column -= (*w).width;
+        (*w).row += 1u;
+    }
+}

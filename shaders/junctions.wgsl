@@ -3,7 +3,7 @@
 // slipping junction counts its slip steps down (no global step count).
 // Lane l of block ix handles junctions l, l + JUNCTION_LANES, ...: it sums
 // the pinned junctions' forces and counts the slipping ones (a LaneSum);
-// the caller merges the lane sums in lane order and junction_friction adds
+// the caller merges the lane sums as a tree (lane_tree8) and junction_friction adds
 // the slipping junctions' force, which can hold the block at rest.
 // CPU twin: src/engines/kernels/junctions.rs junction_lane, junction_friction.
 // import: common, coordinates, junction_store, rng, scene, state
@@ -43,7 +43,7 @@ const KEPT_MARGIN: real = 1.0 + 1.0 / 65536.0;
 override KEEP_JUNCTION_SUMS: bool = true;
 
 fn junction_block(ix: u32, ld: Loads) -> JunctionBlock {
-    let u = load_disp(ix);
+    let u = load_disp_at(ix, ix, 0u);
     let f_n = foundation_normal(coord_value(u.z)) / real(c.junction_count);
     let threshold = c.mu_s * f_n;
     let keeps = KEEP_JUNCTION_SUMS && !ld.preparing;
@@ -84,6 +84,17 @@ fn junction_reference(ux: coord, threshold: real, ld: Loads, state: vec2<u32>, s
 
 fn lane_sum_zero() -> LaneSum {
     return LaneSum(force_sum_zero(), force_sum_zero(), 0.0, 0.0, 0u, 0u);
+}
+
+// Eight lane sums, or eight subtrees, merged as a complete binary tree.
+// A block's 64 lane slots merge as eight subtrees of eight lanes, absent
+// lanes (past the junction count) as the zero sum, which a merge leaves
+// as it is: six merges deep, where a running sum was sixty-four (CPU twin:
+// kernels/junctions.rs merge_lanes).
+fn lane_tree8(a0: LaneSum, a1: LaneSum, a2: LaneSum, a3: LaneSum, a4: LaneSum, a5: LaneSum, a6: LaneSum, a7: LaneSum) -> LaneSum {
+    let low = lane_sum_merge(lane_sum_merge(a0, a1), lane_sum_merge(a2, a3));
+    let high = lane_sum_merge(lane_sum_merge(a4, a5), lane_sum_merge(a6, a7));
+    return lane_sum_merge(low, high);
 }
 
 fn lane_sum_merge(a: LaneSum, b: LaneSum) -> LaneSum {
@@ -137,7 +148,7 @@ fn junction_friction(ix: u32, jb: JunctionBlock, lanes: LaneSum, other: real) ->
         return pinned;
     }
     let capacity = real(total.slipping) * jb.slipping_force;
-    let vx = load_vel(ix).x;
+    let vx = load_vel_at(ix, ix, 0u).x;
     if c.law0 != 0.0 {
         // The friction that brings the block to rest this step.
         let stop = -(other + pinned) - c.mass * vx / c.dt;

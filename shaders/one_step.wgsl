@@ -30,7 +30,7 @@ fn one_step(
             kinetic = bulk_kinetic(i, load_vel(i), ff.xy);
         }
         if batch.forces_only == 0u {
-            verlet(i, ff.xy, ff.z, ld, step_offset);
+            verlet(i, i % c.nx, i / c.nx, ff.xy, ff.z, ld, step_offset);
         }
     }
     if RECORD_KINETIC {

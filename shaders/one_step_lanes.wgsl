@@ -1,7 +1,8 @@
 // One step n → n+1 of every block in one dispatch, junction lanes in
 // parallel (hardware GPUs, many junctions): workgroup w < nx (junction
-// laws) is interface block w, its threads are the junction lanes and
-// thread 0 adds the lane sums in lane order and updates the block. The
+// laws) is interface block w, its threads are the junction lanes; every
+// eighth thread merges eight lanes' sums, thread 0 merges those eight
+// (the CPU twin's tree, lane_tree8) and updates the block. The
 // other workgroups update WORKGROUP blocks each, one per thread. The
 // workgroup barrier makes llvmpipe run the whole shader as coroutines, so
 // software adapters take one_step (serial lanes) instead. With junctions,
@@ -30,11 +31,36 @@ fn one_step_lanes(
     let update = batch.forces_only == 0u;
     let lanes = min(JUNCTION_LANES, c.junction_count);
     let junction_group = FRICTION_LAW == LAW_JUNCTIONS && w < c.nx;
-    if junction_group && !ready && local < lanes {
-        lane_sum[local] = junction_lane(w, local, junction_block(w, ld), ld);
+    // A kept block's lane sums are not merged: not made. Slots past the
+    // last lane hold the zero sum.
+    var kept = true;
+    if junction_group && !ready && local < JUNCTION_LANES {
+        let jb = junction_block(w, ld);
+        kept = jb.kept;
+        if !kept {
+            var sum = lane_sum_zero();
+            if local < lanes {
+                sum = junction_lane(w, local, jb, ld);
+            }
+            lane_sum[local] = sum;
+        }
     }
     // Outside the branch: every workgroup reaches it (an ensemble scene's
     // constants are not uniform to the uniformity analysis).
+    workgroupBarrier();
+    if !kept && local % 8u == 0u {
+        let l = local;
+        lane_sum[l] = lane_tree8(
+            lane_sum[l],
+            lane_sum[l + 1u],
+            lane_sum[l + 2u],
+            lane_sum[l + 3u],
+            lane_sum[l + 4u],
+            lane_sum[l + 5u],
+            lane_sum[l + 6u],
+            lane_sum[l + 7u],
+        );
+    }
     workgroupBarrier();
     if junction_group {
         if local == 0u {
@@ -44,18 +70,18 @@ fn one_step_lanes(
                 f = force[block_base() + w];
                 friction = contact[interface_base() + w].x;
             } else {
-                f = bulk_force(w, ld);
+                f = bulk_force(w, w, 0u, ld);
                 let jb = junction_block(w, ld);
                 var lane_sums = lane_sum_zero();
-                for (var l = 0u; !jb.kept && l < lanes; l++) {
-                    lane_sums = lane_sum_merge(lane_sums, lane_sum[l]);
+                if !jb.kept {
+                    lane_sums = lane_tree8(lane_sum[0], lane_sum[8], lane_sum[16], lane_sum[24], lane_sum[32], lane_sum[40], lane_sum[48], lane_sum[56]);
                 }
                 friction = junction_friction(w, jb, lane_sums, f.x);
                 force[block_base() + w] = f;
                 contact[interface_base() + w] = vec2<real>(friction, foundation_normal(coord_value(load_disp(w).z)));
             }
             if update {
-                verlet(w, f, friction, ld, i_step);
+                verlet(w, w, 0u, f, friction, ld, i_step);
             }
         }
     }
@@ -73,7 +99,7 @@ fn one_step_lanes(
             kinetic = bulk_kinetic(i, load_vel(i), ff.xy);
         }
         if update {
-            verlet(i, ff.xy, ff.z, ld, i_step);
+            verlet(i, i % c.nx, i / c.nx, ff.xy, ff.z, ld, i_step);
         }
     }
     // Partials that hold interface blocks are the output kernels' to

@@ -62,8 +62,9 @@ fn persistent_steps(
         let ld = loads_at(s);
         let ready = batch.forces_ready != 0u && s == 0u;
         if !ready {
-            for (var i = t; i < c.n_blocks; i += PERSISTENT_THREADS) {
-                let f = bulk_force(i, ld);
+            for (var b = grid_walk(t, PERSISTENT_THREADS, c.nx); b.row < c.nz; grid_walk_next(&b)) {
+                let i = b.row * c.nx + b.column;
+                let f = bulk_force(i, b.column, b.row, ld);
                 force[block_base() + i] = f;
                 if is_block_law() && i < c.nx {
                     contact[interface_base() + i] = block_law_friction(i, f.x, ld);
@@ -75,22 +76,37 @@ fn persistent_steps(
                 // of storage round trips on a thread's path. One on software
                 // adapters (TWO_LANES_A_ROUND false), where a second inlined
                 // lane doubles the loop iterations llvmpipe counts.
+                // Item w is lane w mod lanes of block w / lanes (row and
+                // column of the walk).
                 let items = c.nx * lanes;
                 var w = t;
+                var lane = grid_walk(t, PERSISTENT_THREADS, lanes);
                 for (; TWO_LANES_A_ROUND && w + PERSISTENT_THREADS < items; w += 2u * PERSISTENT_THREADS) {
                     let w2 = w + PERSISTENT_THREADS;
-                    let ix = w / lanes;
-                    let ix2 = w2 / lanes;
+                    var lane2 = lane;
+                    grid_walk_next(&lane2);
+                    let ix = lane.row;
+                    let ix2 = lane2.row;
                     let jb = junction_block(ix, ld);
                     let jb2 = junction_block(ix2, ld);
-                    let first = lane_pair_of(ix, w % lanes, jb);
-                    let first2 = lane_pair_of(ix2, w2 % lanes, jb2);
-                    lane_partial[lane_base() + w] = lane_from(ix, w % lanes, jb, ld, first);
-                    lane_partial[lane_base() + w2] = lane_from(ix2, w2 % lanes, jb2, ld, first2);
+                    let first = lane_pair_of(ix, lane.column, jb);
+                    let first2 = lane_pair_of(ix2, lane2.column, jb2);
+                    // A kept block's partials are not merged: not written.
+                    if !jb.kept {
+                        lane_partial[lane_base() + w] = lane_from(ix, lane.column, jb, ld, first);
+                    }
+                    if !jb2.kept {
+                        lane_partial[lane_base() + w2] = lane_from(ix2, lane2.column, jb2, ld, first2);
+                    }
+                    lane = lane2;
+                    grid_walk_next(&lane);
                 }
                 for (; w < items; w += PERSISTENT_THREADS) {
-                    let ix = w / lanes;
-                    lane_partial[lane_base() + w] = junction_lane(ix, w % lanes, junction_block(ix, ld), ld);
+                    let jb = junction_block(lane.row, ld);
+                    if !jb.kept {
+                        lane_partial[lane_base() + w] = junction_lane(lane.row, lane.column, jb, ld);
+                    }
+                    grid_walk_next(&lane);
                 }
             }
         }
@@ -117,7 +133,8 @@ fn persistent_steps(
                 }
             }
         }
-        for (var i = t; i < c.n_blocks; i += PERSISTENT_THREADS) {
+        for (var b = grid_walk(t, PERSISTENT_THREADS, c.nx); b.row < c.nz; grid_walk_next(&b)) {
+            let i = b.row * c.nx + b.column;
             var friction: real = 0.0;
             if FRICTION_LAW != LAW_NONE && i < c.nx {
                 if FRICTION_LAW == LAW_JUNCTIONS && !ready {
@@ -141,7 +158,7 @@ fn persistent_steps(
                 acc = combine(acc, block_sample(i, e, flags[i], load_disp(i), load_vel(i), f, friction, normal));
             }
             if batch.forces_only == 0u {
-                verlet(i, force[block_base() + i], friction, ld, s);
+                verlet(i, b.column, b.row, force[block_base() + i], friction, ld, s);
             }
         }
         if sampling {

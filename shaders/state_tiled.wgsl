@@ -93,7 +93,11 @@ fn load_vel_at(j: u32, jx: u32, jz: u32) -> vec2<real> {
 }
 
 fn store_block(i: u32, u: Disp, v: vec2<real>) {
-    let k = tile_slot(i);
+    store_block_at(i, i % c.nx, i / c.nx, u, v);
+}
+
+fn store_block_at(i: u32, ix: u32, iz: u32, u: Disp, v: vec2<real>) {
+    let k = tile_slot_at(ix, iz);
     tile_disp[k] = u;
     tile_vel[k] = v;
 }

@@ -1,6 +1,6 @@
 // The forces of block i at the start of a step, stored in `force`, and its
 // friction: a per-block law (friction_law), or the junction lanes of an interface block
-// one after the other, in lane order (the CPU twin's order). With `ready`
+// one after the other, merged as the CPU twin's tree (merge_lanes). With `ready`
 // the forces were computed already (by a snapshot's force pass): read them.
 // Returns (force, friction). CPU twin: src/engines/cpu/mod.rs CpuEngine::force_pass.
 // import: bulk_forces, junctions, friction_law, common, coordinates, scene, state
@@ -13,7 +13,7 @@ fn block_forces(i: u32, ld: Loads, ready: bool) -> vec3<real> {
         }
         return vec3<real>(force[block_base() + i], friction);
     }
-    let f = bulk_force(i, ld);
+    let f = bulk_force(i, i % c.nx, i / c.nx, ld);
     force[block_base() + i] = f;
     var friction: real = 0.0;
     if is_block_law() && i < c.nx {
@@ -24,10 +24,21 @@ fn block_forces(i: u32, ld: Loads, ready: bool) -> vec3<real> {
     if FRICTION_LAW == LAW_JUNCTIONS && i < c.nx {
         let lanes = min(JUNCTION_LANES, c.junction_count);
         let jb = junction_block(i, ld);
-        var lane_sums = lane_sum_zero();
-        for (var l = 0u; l < lanes; l++) {
-            lane_sums = lane_sum_merge(lane_sums, junction_lane(i, l, jb, ld));
+        // The lanes eight at a time, each eight merged as a subtree, the
+        // subtrees as the tree's top (the CPU twin's merge_lanes).
+        var subtrees: array<LaneSum, 8>;
+        for (var k = 0u; k < 8u; k++) {
+            var eight: array<LaneSum, 8>;
+            for (var j = 0u; j < 8u; j++) {
+                let l = 8u * k + j;
+                eight[j] = lane_sum_zero();
+                if l < lanes {
+                    eight[j] = junction_lane(i, l, jb, ld);
+                }
+            }
+            subtrees[k] = lane_tree8(eight[0], eight[1], eight[2], eight[3], eight[4], eight[5], eight[6], eight[7]);
         }
+        let lane_sums = lane_tree8(subtrees[0], subtrees[1], subtrees[2], subtrees[3], subtrees[4], subtrees[5], subtrees[6], subtrees[7]);
         friction = junction_friction(i, jb, lane_sums, f.x);
         contact[interface_base() + i] = vec2<real>(friction, foundation_normal(coord_value(load_disp(i).z)));
     }

@@ -23,7 +23,7 @@
 //   record as after a one-step dispatch (`tiles::dispatch_ends`).
 // Each step runs the one-step kernels' phase functions in their order:
 // bulk force and junction lanes, then (after a barrier) friction from
-// the lanes merged in lane order, and the update. Junction friction laws
+// the lanes merged as a tree (lane_tree8), and the update. Junction friction laws
 // only (the per-block laws keep state that a halo would race on).
 // CPU twin: src/engines/cpu/mod.rs CpuEngine::one_step (each step of the loop).
 // import: bulk_forces, common, coordinates, junction_store, junctions, lane_partials, scene, state, verlet
@@ -39,13 +39,12 @@ var<workgroup> tile_plan: vec4<u32>;
 // halo) in published copy `copy`: u and v from the tile's state, the
 // interface junctions from storage. After a barrier.
 fn publish_edges(t: u32, copy: u32) {
-    let own = tile_x1 - tile_x0;
-    for (var k = t; k < own * c.nz; k += TILE_THREADS) {
-        let ix = tile_x0 + k % own;
+    for (var b = grid_walk(t, TILE_THREADS, tile_x1 - tile_x0); b.row < c.nz; grid_walk_next(&b)) {
+        let ix = tile_x0 + b.column;
         if tile_edge(ix) {
-            let i = (k / own) * c.nx + ix;
-            pub_disp[pub_slot(copy, i)] = load_disp(i);
-            pub_vel[pub_slot(copy, i)] = load_vel(i);
+            let i = b.row * c.nx + ix;
+            pub_disp[pub_slot(copy, i)] = load_disp_at(i, ix, b.row);
+            pub_vel[pub_slot(copy, i)] = load_vel_at(i, ix, b.row);
         }
     }
     publish_edge_junctions(t, copy);
@@ -57,12 +56,11 @@ fn publish_edge_junctions(t: u32, copy: u32) {
     if FRICTION_LAW != LAW_JUNCTIONS {
         return;
     }
-    let own = tile_x1 - tile_x0;
     let ns = c.junction_count;
-    for (var k = t; k < own * ns; k += TILE_THREADS) {
-        let ix = tile_x0 + k / ns;
+    for (var b = grid_walk(t, TILE_THREADS, ns); b.row < tile_x1 - tile_x0; grid_walk_next(&b)) {
+        let ix = tile_x0 + b.row;
         if tile_edge(ix) {
-            let j = k % ns;
+            let j = b.column;
             let at = pub_junction_first(copy, ix) + j;
             tile_junction_state[at] = junction_state[junction_base() + ix * ns + j];
             tile_junction_spring[at] = junction_spring[junction_base() + ix * ns + j];
@@ -76,10 +74,10 @@ fn publish_edge_junctions(t: u32, copy: u32) {
 fn load_tile(t: u32, first: u32, copy: u32) {
     let held = tile_hi - tile_lo;
     let state = copy_of(first);
-    for (var k = t; k < held * c.nz; k += TILE_THREADS) {
-        let ix = tile_lo + k % held;
-        let i = (k / held) * c.nx + ix;
-        let at = tile_slot(i);
+    for (var b = grid_walk(t, TILE_THREADS, held); b.row < c.nz; grid_walk_next(&b)) {
+        let ix = tile_lo + b.column;
+        let i = b.row * c.nx + ix;
+        let at = tile_slot_at(ix, b.row);
         if tile_owns(ix) {
             tile_disp[at] = stored_disp(i, state);
             tile_vel[at] = stored_vel(i, state);
@@ -96,10 +94,10 @@ fn load_tile(t: u32, first: u32, copy: u32) {
             }
         }
         let ns = c.junction_count;
-        for (var k = t; k < held * ns; k += TILE_THREADS) {
-            let ix = tile_lo + k / ns;
+        for (var b = grid_walk(t, TILE_THREADS, ns); b.row < held; grid_walk_next(&b)) {
+            let ix = tile_lo + b.row;
             if !tile_owns(ix) {
-                let j = k % ns;
+                let j = b.column;
                 let published = pub_junction_first(copy, ix) + j;
                 let to = halo_junction_first(ix) + j;
                 tile_junction_state[to] = tile_junction_state[published];
@@ -119,11 +117,10 @@ fn tile_gather(
     enter_scene(wid.z);
     tile_enter(wid.x);
     let state = copy_of(0u);
-    let own = tile_x1 - tile_x0;
-    for (var k = t; k < own * c.nz; k += TILE_THREADS) {
-        let ix = tile_x0 + k % own;
+    for (var b = grid_walk(t, TILE_THREADS, tile_x1 - tile_x0); b.row < c.nz; grid_walk_next(&b)) {
+        let ix = tile_x0 + b.column;
         if tile_edge(ix) {
-            let i = (k / own) * c.nx + ix;
+            let i = b.row * c.nx + ix;
             pub_disp[pub_slot(0u, i)] = stored_disp(i, state);
             pub_vel[pub_slot(0u, i)] = stored_vel(i, state);
         }
@@ -165,30 +162,33 @@ fn tiled_steps(
         let ld = loads_at(s);
         let ready = batch.forces_ready != 0u && s == 0u;
         if !ready {
-            for (var k = t; k < cols * c.nz; k += TILE_THREADS) {
-                let ix = a + k % cols;
-                let iz = k / cols;
+            for (var b = grid_walk(t, TILE_THREADS, cols); b.row < c.nz; grid_walk_next(&b)) {
+                let ix = a + b.column;
+                let iz = b.row;
                 let i = iz * c.nx + ix;
-                let f = bulk_force(i, ld);
+                let f = bulk_force(i, ix, iz, ld);
                 tile_force[tile_slot_at(ix, iz)] = f;
                 if tile_owns(ix) {
                     force[block_base() + i] = f;
                 }
             }
             if FRICTION_LAW == LAW_JUNCTIONS {
-                for (var w = t; w < cols * lanes; w += TILE_THREADS) {
-                    let ix = a + w / lanes;
-                    let l = w % lanes;
-                    let at = lane_first + (ix - tile_lo) * lanes + l;
-                    lane_partial[at] = junction_lane(ix, l, junction_block(ix, ld), ld);
+                for (var w = grid_walk(t, TILE_THREADS, lanes); w.row < cols; grid_walk_next(&w)) {
+                    let ix = a + w.row;
+                    let l = w.column;
+                    let jb = junction_block(ix, ld);
+                    // A kept block's partials are not merged: not written.
+                    if !jb.kept {
+                        lane_partial[lane_first + (ix - tile_lo) * lanes + l] = junction_lane(ix, l, jb, ld);
+                    }
                 }
             }
         }
         storageBarrier();
         workgroupBarrier();
-        for (var k = t; k < cols * c.nz; k += TILE_THREADS) {
-            let ix = a + k % cols;
-            let iz = k / cols;
+        for (var b = grid_walk(t, TILE_THREADS, cols); b.row < c.nz; grid_walk_next(&b)) {
+            let ix = a + b.column;
+            let iz = b.row;
             let i = iz * c.nx + ix;
             var f: vec2<real>;
             var friction: real = 0.0;
@@ -207,7 +207,7 @@ fn tiled_steps(
                     }
                     friction = junction_friction(ix, jb, sums, f.x);
                     if tile_owns(ix) {
-                        contact[interface_base() + ix] = vec2<real>(friction, foundation_normal(coord_value(load_disp(ix).z)));
+                        contact[interface_base() + ix] = vec2<real>(friction, foundation_normal(coord_value(load_disp_at(ix, ix, 0u).z)));
                     }
                 }
             }
@@ -215,21 +215,20 @@ fn tiled_steps(
                 // The last step's starting state stays in its copy, where a
                 // run of one-step dispatches leaves it (output samples read it).
                 if s + 1u == plan.y && tile_owns(ix) {
-                    store_copy(i, copy_of(s), load_disp(i), load_vel(i));
+                    store_copy(i, copy_of(s), load_disp_at(i, ix, iz), load_vel_at(i, ix, iz));
                 }
-                verlet(i, f, friction, ld, s);
+                verlet(i, ix, iz, f, friction, ld, s);
             }
         }
         storageBarrier();
         workgroupBarrier();
     }
     if update {
-        let own = tile_x1 - tile_x0;
         let last = copy_of(plan.y);
-        for (var k = t; k < own * c.nz; k += TILE_THREADS) {
-            let ix = tile_x0 + k % own;
-            let i = (k / own) * c.nx + ix;
-            store_copy(i, last, load_disp(i), load_vel(i));
+        for (var b = grid_walk(t, TILE_THREADS, tile_x1 - tile_x0); b.row < c.nz; grid_walk_next(&b)) {
+            let ix = tile_x0 + b.column;
+            let i = b.row * c.nx + ix;
+            store_copy(i, last, load_disp_at(i, ix, b.row), load_vel_at(i, ix, b.row));
         }
     }
     publish_edges(t, (d + 1u) & 1u);

@@ -54,14 +54,16 @@ pub fn junctions<T: Real, C: Coordinate<T>>(
 ) -> (T, T) {
     let mut jb = junction_block(c, u);
     jb.reference = junction_reference(c, p, &jb, slots.state[0], &slots.spring[0]);
-    let mut total = LaneSum::<T, C::Sum>::default();
-    for lane in 0..JUNCTION_LANES.min(c.junction_count) {
+    let mut lane_sums = [LaneSum::<T, C::Sum>::default(); JUNCTION_LANES];
+    let lanes = JUNCTION_LANES.min(c.junction_count);
+    for (lane, sum) in lane_sums[..lanes].iter_mut().enumerate() {
         let slots = JunctionSlots {
             spring: &mut *slots.spring,
             state: &mut *slots.state,
         };
-        total = total.merge(junction_lane(c, p, ix, lane, &jb, slots));
+        *sum = junction_lane(c, p, ix, lane, &jb, slots);
     }
+    let total = merge_lanes(&lane_sums[..lanes]);
     let pinned = pinned_friction(c, jb.ux, jb.reference, &total);
     (
         junction_friction(c, jb.slipping_force, pinned, total.slipping, other, v[0]),
@@ -166,6 +168,33 @@ impl<T: Real, S: ForceSum<T>> LaneSum<T, S> {
         self
     }
 }
+
+/// A block's lane sums merged as a complete binary tree over the
+/// `JUNCTION_LANES` lane slots: lanes (0, 1), (2, 3), ... first, then pairs
+/// of those, six levels. Slots past `lanes.len()` (fewer junctions than
+/// lanes) hold the zero sum, which a merge leaves as it is. A tree, not a
+/// running sum in lane order: on a GPU the thread that merges a block's 64
+/// lane sums then waits on a chain of six merges, not sixty-four, and the
+/// merges of each level are independent. Twin of the WGSL
+/// `lane_tree8` as the kernels use it (eight subtrees of eight lanes).
+pub fn merge_lanes<T: Real, S: ForceSum<T>>(lanes: &[LaneSum<T, S>]) -> LaneSum<T, S> {
+    fn subtree<T: Real, S: ForceSum<T>>(
+        lanes: &[LaneSum<T, S>],
+        first: usize,
+        width: usize,
+    ) -> LaneSum<T, S> {
+        if width == 1 {
+            return lanes.get(first).copied().unwrap_or_default();
+        }
+        let half = width / 2;
+        subtree(lanes, first, half).merge(subtree(lanes, first + half, half))
+    }
+    debug_assert!(lanes.len() <= JUNCTION_LANES);
+    subtree(lanes, 0, JUNCTION_LANES)
+}
+
+// The kernels merge eight subtrees of eight lanes (lane_tree8).
+const _: () = assert!(JUNCTION_LANES == 64);
 
 /// How far under the threshold a block's kept bound must stay (twin of
 /// the WGSL `KEPT_MARGIN`): it covers the rounding of the bound and of

@@ -153,16 +153,14 @@ fn junction_row<T: Real, C: Coordinate<T>>(
         slipping[ix] = (count, jb.slipping_force, jb.reference);
         sum_lanes(term, stiffness, lane_sums);
     }
-    // The reference's final sum, lane by lane, every block at once.
+    // The reference's final sum, the lanes' tree (merge_lanes), every block at once.
     for (ix, contact) in out.contact.iter_mut().enumerate() {
         let (count, slipping_force, reference) = slipping[ix];
         let total = if kept_now[ix] {
             kept[ix].lane_sum()
         } else {
             let lane_sums = &lanes[ix * JUNCTION_LANES..ix * JUNCTION_LANES + lanes_used];
-            let mut total = lane_sums
-                .iter()
-                .fold(LaneSum::default(), |t: LaneSum<T, C::Sum>, l| t.merge(*l));
+            let mut total = junctions::merge_lanes(lane_sums);
             // The lanes here add 0 for a slipping junction; the count is
             // made apart.
             total.slipping = count;
