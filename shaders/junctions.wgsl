@@ -97,6 +97,55 @@ fn lane_tree8(a0: LaneSum, a1: LaneSum, a2: LaneSum, a3: LaneSum, a4: LaneSum, a
     return lane_sum_merge(low, high);
 }
 
+// The same tree built one leaf at a time, leaves 0, 1, 2, ... in order
+// (a binary counter: l_n holds the finished subtree of 2^n leaves that
+// waits for its right sibling). No array, so no private memory indexed at
+// run time, which llvmpipe keeps in memory rather than registers.
+struct LaneTree {
+    l0: LaneSum,
+    l1: LaneSum,
+    l2: LaneSum,
+    l3: LaneSum,
+    l4: LaneSum,
+    l5: LaneSum,
+}
+
+// Adds leaf k; returns the subtree that leaf completes: after leaf 2^n − 1,
+// the tree of the first 2^n leaves (leaf 63: all 64 lanes).
+fn lane_tree_add(t: ptr<function, LaneTree>, k: u32, leaf: LaneSum) -> LaneSum {
+    var s = leaf;
+    if (k & 1u) == 0u {
+        (*t).l0 = s;
+        return s;
+    }
+    s = lane_sum_merge((*t).l0, s);
+    if (k & 2u) == 0u {
+        (*t).l1 = s;
+        return s;
+    }
+    s = lane_sum_merge((*t).l1, s);
+    if (k & 4u) == 0u {
+        (*t).l2 = s;
+        return s;
+    }
+    s = lane_sum_merge((*t).l2, s);
+    if (k & 8u) == 0u {
+        (*t).l3 = s;
+        return s;
+    }
+    s = lane_sum_merge((*t).l3, s);
+    if (k & 16u) == 0u {
+        (*t).l4 = s;
+        return s;
+    }
+    s = lane_sum_merge((*t).l4, s);
+    if (k & 32u) == 0u {
+        (*t).l5 = s;
+        return s;
+    }
+    return lane_sum_merge((*t).l5, s);
+}
+
 fn lane_sum_merge(a: LaneSum, b: LaneSum) -> LaneSum {
     return LaneSum(
         force_sum_merge(a.anchored, b.anchored),

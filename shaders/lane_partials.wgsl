@@ -18,10 +18,11 @@ fn lane_partial_or_zero(first: u32, l: u32, lanes: u32) -> LaneSum {
 // lanes. Each subtree's eight loads go out together ahead of its merges,
 // and no merge waits on more than six before it.
 fn merged_lane_partials(first: u32, lanes: u32) -> LaneSum {
-    var subtrees: array<LaneSum, 8>;
+    var tree: LaneTree;
+    var total = lane_sum_zero();
     for (var k = 0u; k < 8u; k++) {
         let l = 8u * k;
-        subtrees[k] = lane_tree8(
+        total = lane_tree_add(&tree, k, lane_tree8(
             lane_partial_or_zero(first, l, lanes),
             lane_partial_or_zero(first, l + 1u, lanes),
             lane_partial_or_zero(first, l + 2u, lanes),
@@ -30,7 +31,8 @@ fn merged_lane_partials(first: u32, lanes: u32) -> LaneSum {
             lane_partial_or_zero(first, l + 5u, lanes),
             lane_partial_or_zero(first, l + 6u, lanes),
             lane_partial_or_zero(first, l + 7u, lanes),
-        );
+        ));
     }
-    return lane_tree8(subtrees[0], subtrees[1], subtrees[2], subtrees[3], subtrees[4], subtrees[5], subtrees[6], subtrees[7]);
+    // Leaf 7 completed the tree of the eight subtrees.
+    return total;
 }

@@ -24,21 +24,17 @@ fn block_forces(i: u32, ld: Loads, ready: bool) -> vec3<real> {
     if FRICTION_LAW == LAW_JUNCTIONS && i < c.nx {
         let lanes = min(JUNCTION_LANES, c.junction_count);
         let jb = junction_block(i, ld);
-        // The lanes eight at a time, each eight merged as a subtree, the
-        // subtrees as the tree's top (the CPU twin's merge_lanes).
-        var subtrees: array<LaneSum, 8>;
-        for (var k = 0u; k < 8u; k++) {
-            var eight: array<LaneSum, 8>;
-            for (var j = 0u; j < 8u; j++) {
-                let l = 8u * k + j;
-                eight[j] = lane_sum_zero();
-                if l < lanes {
-                    eight[j] = junction_lane(i, l, jb, ld);
-                }
+        // Every lane slot into the tree in order (the CPU twin's
+        // merge_lanes), the slots past the last lane as the zero sum.
+        var tree: LaneTree;
+        var lane_sums = lane_sum_zero();
+        for (var l = 0u; l < JUNCTION_LANES; l++) {
+            var leaf = lane_sum_zero();
+            if l < lanes {
+                leaf = junction_lane(i, l, jb, ld);
             }
-            subtrees[k] = lane_tree8(eight[0], eight[1], eight[2], eight[3], eight[4], eight[5], eight[6], eight[7]);
+            lane_sums = lane_tree_add(&tree, l, leaf);
         }
-        let lane_sums = lane_tree8(subtrees[0], subtrees[1], subtrees[2], subtrees[3], subtrees[4], subtrees[5], subtrees[6], subtrees[7]);
         friction = junction_friction(i, jb, lane_sums, f.x);
         contact[interface_base() + i] = vec2<real>(friction, foundation_normal(coord_value(load_disp(i).z)));
     }
