@@ -37,8 +37,12 @@ fn tiled(m: &Model, width: u32, halo: u64) -> GpuEngine {
 }
 
 fn one_step(m: &Model) -> GpuEngine {
+    on_path(m, GpuPath::OneStep)
+}
+
+fn on_path(m: &Model, path: GpuPath) -> GpuEngine {
     let opts = GpuOptions {
-        path: GpuPath::OneStep,
+        path,
         ..GpuOptions::default()
     };
     GpuEngine::with_options(m, opts)
@@ -86,6 +90,39 @@ fn the_tiled_kernel_is_the_one_step_kernel_bit_for_bit() {
         *velocity *= 1.0 + 1e-9;
     }
     let other = run_to(&mut tiled(&faster, 8, 4), end);
+    assert_ne!(other.disp, reference.disp, "control");
+}
+
+/// Every kernel merges a block's lane sums as the same tree from its own
+/// source (one-step: one thread walking the lanes; one-step-lanes:
+/// subtrees in workgroup memory; persistent and resident: partials in
+/// storage), so through the normal-load phase (every block summed every
+/// step) and ruptures they end in the bits of the one-step kernel.
+/// Negative control: a drive 1e-9 faster is flagged.
+#[test]
+fn every_kernel_is_the_one_step_kernel_bit_for_bit() {
+    let m = driven();
+    let end = m.prep_steps + 2500;
+    let reference = run_to(&mut one_step(&m), end);
+    assert!(reference.total_ruptures() > 100, "junctions broke");
+    for path in [
+        GpuPath::OneStepLanes,
+        GpuPath::Persistent,
+        GpuPath::Resident,
+    ] {
+        let got = run_to(&mut on_path(&m, path), end);
+        assert!(
+            got == reference,
+            "{path:?}: {} ruptures against {}",
+            got.total_ruptures(),
+            reference.total_ruptures()
+        );
+    }
+    let mut faster = m.clone();
+    if let slipfront::model::Driver::SideSpring { velocity, .. } = &mut faster.driver {
+        *velocity *= 1.0 + 1e-9;
+    }
+    let other = run_to(&mut on_path(&faster, GpuPath::OneStepLanes), end);
     assert_ne!(other.disp, reference.disp, "control");
 }
 
