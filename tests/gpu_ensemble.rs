@@ -96,6 +96,7 @@ fn each_scene_of_an_ensemble_matches_its_solo_run() {
         e.advance(steps).unwrap();
         assert_eq!(e.steps_done(), steps);
         let runs: Vec<Snapshot> = (0..models.len()).map(|k| e.snapshot(k).unwrap()).collect();
+        let mut alone_runs = Vec::new();
         for (k, m) in models.iter().enumerate() {
             assert!(e.failure(k).is_none());
             let alone = solo(m, path, steps).unwrap();
@@ -105,14 +106,10 @@ fn each_scene_of_an_ensemble_matches_its_solo_run() {
                 alone.total_ruptures()
             );
             same_run(&runs[k], &alone).unwrap_or_else(|e| panic!("{path:?} scene {k}: {e}"));
+            alone_runs.push(alone);
         }
-        // The last scene alone in an ensemble: the same bits.
-        let mut one = ensemble(&models[2..], path);
-        one.advance(steps).unwrap();
-        assert!(one.snapshot(0).unwrap() == runs[2], "{path:?}");
         // Negative control: scene 1 (μs 1% higher) is not scene 0.
-        let other = solo(&models[0], path, steps).unwrap();
-        assert!(same_run(&runs[1], &other).is_err(), "{path:?}");
+        assert!(same_run(&runs[1], &alone_runs[0]).is_err(), "{path:?}");
     }
 }
 
@@ -281,9 +278,10 @@ fn an_ensemble_records_every_scene_on_the_device_as_its_solo_run() {
     let plan = sample_plan(m, ((1e-6 / m.dt).round() as u64).max(1));
     // Through the normal-load phase, then 0.3 ms of driving in chunks.
     let chunks = [m.prep_steps, 700, 1300, 1];
+    // One-step-lanes records through the one-step kernel's output
+    // dispatches; its own layout is held on the large lattice below.
     for path in [
         GpuPath::OneStep,
-        GpuPath::OneStepLanes,
         GpuPath::Persistent,
         GpuPath::Resident,
         GpuPath::Tiled,

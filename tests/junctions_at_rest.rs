@@ -37,8 +37,8 @@ fn one_block(rule: &str, dt_fraction: f64, shear: f64) -> Model {
 }
 
 /// The engines the rule must hold on, each with its precision: both CPU
-/// engines and the GPU's kernels, in f64 and in mixed f32.
-fn engines(m: &Model) -> Vec<(String, Precision, Box<dyn Engine>)> {
+/// engines and, with `gpu`, the GPU's kernels, in f64 and in mixed f32.
+fn engines(m: &Model, gpu: bool) -> Vec<(String, Precision, Box<dyn Engine>)> {
     let mut out: Vec<(String, Precision, Box<dyn Engine>)> = Vec::new();
     let need = |e: slipfront::EngineError| -> GpuEngine<f64> {
         panic!("a GPU adapter is required (lavapipe in CI): {e}")
@@ -47,6 +47,9 @@ fn engines(m: &Model) -> Vec<(String, Precision, Box<dyn Engine>)> {
         out.push((format!("cpu {p:?}"), p, cpu_engine(m, p, 1).unwrap()));
         let reference = cpu_reference_engine(m, p, 1).unwrap();
         out.push((format!("cpu-reference {p:?}"), p, reference));
+    }
+    if !gpu {
+        return out;
     }
     for path in [
         GpuPath::OneStep,
@@ -99,12 +102,15 @@ fn drift(m: &Model, e: &mut dyn Engine) -> f64 {
     (u[1] - u[0]) / 4.0e-4
 }
 
+/// The CPU engines at three time steps; the GPU kernels (the same rule in
+/// WGSL, one dispatch a step for this one block on lavapipe) at the
+/// coarsest, where the sign rule drifts fastest.
 #[test]
 fn a_block_held_by_slipping_junctions_stays_at_rest_at_every_dt_on_every_engine() {
     let mut moved = Vec::new();
     for dt_fraction in [0.02, 0.01, 0.005] {
         let m = one_block("hold", dt_fraction, 0.1);
-        for (name, precision, mut e) in engines(&m) {
+        for (name, precision, mut e) in engines(&m, dt_fraction == 0.02) {
             let v = drift(&m, e.as_mut());
             if v.abs() > allowed_drift(precision) {
                 moved.push(format!(

@@ -1,14 +1,19 @@
 //! Long-run accuracy of f32, the CI-sized version of
 //! `benches/long_run_precision.rs`: the precursors scene driven 5× faster
 //! (V = 2 mm/s) for 0.065 s (≈ 2.9e5 steps), long enough for three growing
-//! precursors. CPU f32 mixed and the GPU engine (lavapipe in CI) must
-//! reproduce f64's precursors (count, lengths, start time and F/F_N within
+//! precursors. CPU f32 mixed must reproduce f64's precursors (count, lengths, start time and F/F_N within
 //! 0.1%), as f64 does under a 1e-6 change of the drive speed. Plain f32
 //! displacements (the engines before mixed precision) are the negative
 //! control: measured, their third rupture grows across the whole interface
 //! (a full event at 0.0630 s instead of a 52.5 mm precursor; with the
 //! junction sums in the order before the GPU v2 lanes it was a 55 mm
 //! precursor 4.6% late), so the comparison must flag them.
+//!
+//! The GPU engine's run of this scene is in the bench
+//! (`cargo bench --bench long_run_precision -- --gpu`), not here: lavapipe
+//! took 8 to 15 minutes of CI's 90 for its 2.9e5 steps,
+//! while CI's GPU tests hold every kernel to the CPU's rupture counts and
+//! times on shorter windows (tests/gpu_engine.rs).
 
 use slipfront::app::runner::{run_scene, RunOptions};
 use slipfront::engines::backend::{make_engine, Backend, Precision};
@@ -30,8 +35,7 @@ fn outcome(label: &str, backend: Backend, precision: Precision, velocity: f64) -
     ];
     let s = Scenario::load(std::path::Path::new(SCENE), &set).unwrap();
     let m = Model::from_scenario(&s, false).unwrap();
-    let mut e = make_engine(&m, backend, precision, 1)
-        .unwrap_or_else(|e| panic!("{label}: an engine is required (lavapipe in CI): {e}"));
+    let mut e = make_engine(&m, backend, precision, 1).unwrap_or_else(|e| panic!("{label}: {e}"));
     let path = std::env::temp_dir().join(format!(
         "slipfront_long_run_{}_{}.mcap",
         std::process::id(),
@@ -49,7 +53,7 @@ fn outcome(label: &str, backend: Backend, precision: Precision, velocity: f64) -
 }
 
 #[test]
-fn f32_mixed_on_cpu_and_gpu_keeps_the_precursors_of_f64_and_plain_f32_does_not() {
+fn f32_mixed_keeps_the_precursors_of_f64_and_plain_f32_does_not() {
     let cases = [
         ("f64", Backend::Cpu, Precision::F64, V),
         (
@@ -60,7 +64,6 @@ fn f32_mixed_on_cpu_and_gpu_keeps_the_precursors_of_f64_and_plain_f32_does_not()
         ),
         ("f32 mixed", Backend::Cpu, Precision::F32, V),
         ("f32 plain", Backend::Cpu, Precision::F32Plain, V),
-        ("gpu f32 mixed", Backend::Gpu, Precision::F32, V),
     ];
     let outcomes: Vec<RunOutcome> = std::thread::scope(|sc| {
         let runs: Vec<_> = cases
@@ -77,7 +80,7 @@ fn f32_mixed_on_cpu_and_gpu_keeps_the_precursors_of_f64_and_plain_f32_does_not()
     // than one block and no full event yet.
     let extended = reference.precursors.iter().filter(|p| p.0 > 5e-3).count();
     assert!(extended >= 3, "{}", reference.describe());
-    for k in [1, 2, 4] {
+    for k in [1, 2] {
         assert_eq!(
             outcome_mismatch(reference, &outcomes[k], 1e-3),
             Vec::<String>::new(),

@@ -121,7 +121,20 @@ fn precursor(rule: &str, dt_fraction: f64) -> (f64, f64) {
 fn the_first_precursor_holds_at_dt_over_2_under_hold_and_not_under_sign() {
     // Stored: 21.25 mm and 14.44 m/s at T/50 and T/100 under hold; 28.75
     // and 26.25 mm, 23.65 and 16.02 m/s under sign.
-    let (coarse, fine) = (precursor("hold", 0.02), precursor("hold", 0.01));
+    // The four runs at once (each is one CPU thread).
+    let runs: Vec<(f64, f64)> = std::thread::scope(|sc| {
+        let handles: Vec<_> = [
+            ("hold", 0.02),
+            ("hold", 0.01),
+            ("sign", 0.02),
+            ("sign", 0.01),
+        ]
+        .map(|(rule, f)| sc.spawn(move || precursor(rule, f)))
+        .into_iter()
+        .collect();
+        handles.into_iter().map(|h| h.join().unwrap()).collect()
+    });
+    let (coarse, fine) = (runs[0], runs[1]);
     assert!((coarse.0 - 0.02125).abs() < 1e-9, "{coarse:?}");
     assert!((coarse.1 - 14.44).abs() < 0.02 * 14.44, "{coarse:?}");
     assert_eq!(coarse.0, fine.0, "length at dt/2");
@@ -130,7 +143,7 @@ fn the_first_precursor_holds_at_dt_over_2_under_hold_and_not_under_sign() {
         "{coarse:?} {fine:?}"
     );
     // The negative control: the same comparison flags the sign rule.
-    let (coarse, fine) = (precursor("sign", 0.02), precursor("sign", 0.01));
+    let (coarse, fine) = (runs[2], runs[3]);
     assert!(
         coarse.0 > 0.025 && fine.0 != coarse.0,
         "{coarse:?} {fine:?}"

@@ -16,10 +16,20 @@ fn dir(name: &str) -> PathBuf {
 /// Eight points of the small side-driven scene (junctions break from
 /// 0.6 ms): two μs, two spring stiffnesses (a log range), two seeds.
 fn sweep_file(d: &Path, extra_axis: &str) -> PathBuf {
+    sweep_file_with_seeds(d, extra_axis, 2)
+}
+
+/// The same points with one seed: the GPU sweeps (lavapipe steps this
+/// scene at about 1 ms a step, so every point costs seconds).
+fn gpu_sweep_file(d: &Path, extra_axis: &str) -> PathBuf {
+    sweep_file_with_seeds(d, extra_axis, 1)
+}
+
+fn sweep_file_with_seeds(d: &Path, extra_axis: &str, seeds: usize) -> PathBuf {
     let base = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/tromborg2014_stick_slip.toml");
     let text = format!(
         r#"base = "{}"
-seeds = 2
+seeds = {seeds}
 
 [set]
 "geometry.nx" = 29
@@ -365,7 +375,7 @@ fn a_gpu_ensemble_sweep_gives_the_table_of_points_run_one_at_a_time() {
 
 fn gpu_ensemble_sweep_matches_points_run_alone(precision: &str) {
     let d = dir(&format!("ensemble_{precision}"));
-    let file = sweep_file(&d, "\"loading.normal.force\" = [1800.0, 1920.0]");
+    let file = gpu_sweep_file(&d, "\"loading.normal.force\" = [1800.0, 1920.0]");
     let together = d.join("together");
     let text = ok(&[
         "sweep",
@@ -377,10 +387,10 @@ fn gpu_ensemble_sweep_matches_points_run_alone(precision: &str) {
         "--precision",
         precision,
         "--ensemble",
-        "8",
+        "4",
     ]);
-    assert!(text.contains("16 run now (0 not ok)"), "{text}");
-    assert!(text.contains("ensembles of 8, 8"), "{text}");
+    assert!(text.contains("8 run now (0 not ok)"), "{text}");
+    assert!(text.contains("ensembles of 4, 4"), "{text}");
     // The two normal-load phases run as one ensemble too; the table below
     // equals the one whose loadings ran alone.
     assert!(
@@ -401,7 +411,7 @@ fn gpu_ensemble_sweep_matches_points_run_alone(precision: &str) {
         "1",
         "--quiet",
     ]);
-    assert!(text.contains("16 run now (0 not ok)"), "{text}");
+    assert!(text.contains("8 run now (0 not ok)"), "{text}");
     let (a, b) = (
         table(&together.join("summary.csv")),
         table(&apart.join("summary.csv")),
@@ -438,7 +448,7 @@ fn gpu_ensemble_sweep_matches_points_run_alone(precision: &str) {
     let force = column(&a, "loading.normal.force");
     let first = column(&a, "first_full_time_s");
     let of = |f: &str| -> Vec<&str> {
-        (0..16)
+        (0..8)
             .filter(|&k| force[k] == f)
             .map(|k| first[k])
             .collect()
@@ -454,7 +464,7 @@ fn gpu_ensemble_sweep_matches_points_run_alone(precision: &str) {
 #[test]
 fn a_measured_sweep_runs_every_point_on_the_kernel_timed_on_its_ensemble() {
     let d = dir("gpu_measure");
-    let file = sweep_file(&d, "");
+    let file = gpu_sweep_file(&d, "");
     let cache = d.join("cache");
     let run = |name: &str, extra: &[&str]| {
         let out = d.join(name);
@@ -471,16 +481,16 @@ fn a_measured_sweep_runs_every_point_on_the_kernel_timed_on_its_ensemble() {
             String::from_utf8_lossy(&got.stderr)
         );
         assert!(got.status.success(), "{text}");
-        assert!(text.contains("8 run now (0 not ok)"), "{text}");
+        assert!(text.contains("4 run now (0 not ok)"), "{text}");
         (table(&out.join("summary.csv")), text)
     };
-    let (measured, text) = run("measured", &["--gpu-path", "measure", "--ensemble", "4"]);
+    let (measured, text) = run("measured", &["--gpu-path", "measure", "--ensemble", "2"]);
     let line = text
         .lines()
         .find(|l| l.starts_with("sweep: GPU kernel for 29x16"))
         .unwrap_or_else(|| panic!("the choice is printed: {text}"));
     assert!(
-        line.contains("measured now on an ensemble of 8 scenes"),
+        line.contains("measured now on an ensemble of 4 scenes"),
         "{line}"
     );
     let chosen = line
@@ -499,7 +509,7 @@ fn a_measured_sweep_runs_every_point_on_the_kernel_timed_on_its_ensemble() {
         assert!(line.contains(kernel), "{kernel} timed: {line}");
     }
     let cached = std::fs::read_to_string(cache.join("gpu-kernels.tsv")).unwrap();
-    assert!(cached.contains("| ensemble of 8 |"), "{cached}");
+    assert!(cached.contains("| ensemble of 4 |"), "{cached}");
     // `resident/512` is `--gpu-path resident --gpu-threads 512`.
     let mut named_args = vec!["--ensemble", "1", "--quiet", "--gpu-path"];
     match chosen.split_once('/') {
@@ -520,14 +530,14 @@ fn a_measured_sweep_runs_every_point_on_the_kernel_timed_on_its_ensemble() {
 #[test]
 fn gpu_points_with_device_records_alone_or_as_an_ensemble_give_the_host_snapshot_table() {
     let d = dir("gpu_device_records");
-    let file = sweep_file(&d, "");
+    let file = gpu_sweep_file(&d, "");
     let run = |name: &str, extra: &[&str]| {
         let out = d.join(name);
         let mut args = gpu_f32_sweep(&file, &out);
         args.extend(["--gpu-path", "one-step-lanes", "--quiet"]);
         args.extend(extra);
         let text = ok(&args);
-        assert!(text.contains("8 run now (0 not ok)"), "{text}");
+        assert!(text.contains("4 run now (0 not ok)"), "{text}");
         table(&out.join("summary.csv"))
     };
     let alone = ["--ensemble", "1"];
@@ -540,7 +550,7 @@ fn gpu_points_with_device_records_alone_or_as_an_ensemble_give_the_host_snapshot
         &[&alone[..], &["--gpu-output", "device", "--threads", "2"]].concat(),
     );
     assert_eq!(host, device);
-    let ensemble = run("ensemble", &["--ensemble", "8", "--gpu-output", "device"]);
+    let ensemble = run("ensemble", &["--ensemble", "4", "--gpu-output", "device"]);
     assert_eq!(host, ensemble);
     // Not vacuous: the points slip, and differently.
     let events = column(&host, "events");
