@@ -1,8 +1,9 @@
 //! Long-run accuracy of f32, the CI-sized version of
 //! `benches/long_run_precision.rs`: the precursors scene driven 5× faster
 //! (V = 2 mm/s) for 0.065 s (≈ 2.9e5 steps), long enough for three growing
-//! precursors. CPU f32 mixed must reproduce f64's precursors (count, lengths, start time and F/F_N within
-//! 0.1%), as f64 does under a 1e-6 change of the drive speed. Plain f32
+//! precursors. CPU f32 mixed must reproduce f64's precursors (count,
+//! lengths, start time and F/F_N within 0.1%), as f64 does under a 1e-6
+//! change of the drive speed. Plain f32
 //! displacements (the engines before mixed precision) are the negative
 //! control: measured, their third rupture grows across the whole interface
 //! (a full event at 0.0630 s instead of a 52.5 mm precursor; with the
@@ -28,14 +29,16 @@ const SCENE: &str = concat!(
 );
 const V: f64 = 2.0e-3;
 
-fn outcome(label: &str, backend: Backend, precision: Precision, velocity: f64) -> RunOutcome {
+/// The scene run on the CPU engine in `precision`.
+fn outcome(label: &str, precision: Precision, velocity: f64) -> RunOutcome {
     let set = vec![
         format!("loading.drive.velocity={velocity}"),
         "time.end=0.065".to_string(),
     ];
     let s = Scenario::load(std::path::Path::new(SCENE), &set).unwrap();
     let m = Model::from_scenario(&s, false).unwrap();
-    let mut e = make_engine(&m, backend, precision, 1).unwrap_or_else(|e| panic!("{label}: {e}"));
+    let mut e =
+        make_engine(&m, Backend::Cpu, precision, 1).unwrap_or_else(|e| panic!("{label}: {e}"));
     let path = std::env::temp_dir().join(format!(
         "slipfront_long_run_{}_{}.mcap",
         std::process::id(),
@@ -55,20 +58,15 @@ fn outcome(label: &str, backend: Backend, precision: Precision, velocity: f64) -
 #[test]
 fn f32_mixed_keeps_the_precursors_of_f64_and_plain_f32_does_not() {
     let cases = [
-        ("f64", Backend::Cpu, Precision::F64, V),
-        (
-            "f64 perturbed",
-            Backend::Cpu,
-            Precision::F64,
-            V * (1.0 + 1e-6),
-        ),
-        ("f32 mixed", Backend::Cpu, Precision::F32, V),
-        ("f32 plain", Backend::Cpu, Precision::F32Plain, V),
+        ("f64", Precision::F64, V),
+        ("f64 perturbed", Precision::F64, V * (1.0 + 1e-6)),
+        ("f32 mixed", Precision::F32, V),
+        ("f32 plain", Precision::F32Plain, V),
     ];
     let outcomes: Vec<RunOutcome> = std::thread::scope(|sc| {
         let runs: Vec<_> = cases
             .iter()
-            .map(|&(l, b, p, v)| sc.spawn(move || outcome(l, b, p, v)))
+            .map(|&(l, p, v)| sc.spawn(move || outcome(l, p, v)))
             .collect();
         runs.into_iter().map(|h| h.join().unwrap()).collect()
     });

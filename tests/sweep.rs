@@ -448,7 +448,7 @@ fn gpu_ensemble_sweep_matches_points_run_alone(precision: &str) {
     let force = column(&a, "loading.normal.force");
     let first = column(&a, "first_full_time_s");
     let of = |f: &str| -> Vec<&str> {
-        (0..8)
+        (0..force.len())
             .filter(|&k| force[k] == f)
             .map(|k| first[k])
             .collect()
