@@ -34,8 +34,12 @@ fn one_step_lanes(
     // A kept block's lane sums are not merged: not made. Slots past the
     // last lane hold the zero sum.
     var kept = true;
+    // Thread 0 keeps its block's jb (as lane 0) for the merge after the
+    // barrier: the lanes' updates cannot change it (junction 0's re-pin
+    // anchors at u_x, the reference it had while slipping).
+    var jb: JunctionBlock;
     if junction_group && !ready && local < JUNCTION_LANES {
-        let jb = junction_block(w, ld);
+        jb = junction_block(w, ld);
         kept = jb.kept;
         if !kept {
             var sum = lane_sum_zero();
@@ -71,7 +75,6 @@ fn one_step_lanes(
                 friction = contact[interface_base() + w].x;
             } else {
                 f = bulk_force(w, w, 0u, ld);
-                let jb = junction_block(w, ld);
                 var lane_sums = lane_sum_zero();
                 if !jb.kept {
                     lane_sums = lane_tree8(lane_sum[0], lane_sum[8], lane_sum[16], lane_sum[24], lane_sum[32], lane_sum[40], lane_sum[48], lane_sum[56]);
