@@ -3,12 +3,12 @@
 //! (V = 2 mm/s) for 0.065 s (≈ 2.9e5 steps), long enough for three growing
 //! precursors. CPU f32 mixed must reproduce f64's precursors (count,
 //! lengths, start time and F/F_N within 0.1%), as f64 does under a 1e-6
-//! change of the drive speed. Plain f32
-//! displacements (the engines before mixed precision) are the negative
-//! control: measured, their third rupture grows across the whole interface
-//! (a full event at 0.0630 s instead of a 52.5 mm precursor; with the
-//! junction sums in the order before the GPU v2 lanes it was a 55 mm
-//! precursor 4.6% late), so the comparison must flag them.
+//! change of the drive speed. Plain f32 displacements (the engines before
+//! mixed precision) are the negative control: measured, their third
+//! rupture grows across the whole interface (a full event at 0.0630 s
+//! instead of a 52.5 mm precursor; with the junction sums in the order
+//! before the GPU v2 lanes it was a 55 mm precursor 4.6% late), so the
+//! comparison must flag them.
 //!
 //! The GPU engine's run of this scene is in the bench
 //! (`cargo bench --bench long_run_precision -- --gpu`), not here: lavapipe

@@ -448,9 +448,11 @@ fn gpu_ensemble_sweep_matches_points_run_alone(precision: &str) {
     let force = column(&a, "loading.normal.force");
     let first = column(&a, "first_full_time_s");
     let of = |f: &str| -> Vec<&str> {
-        (0..force.len())
-            .filter(|&k| force[k] == f)
-            .map(|k| first[k])
+        force
+            .iter()
+            .zip(&first)
+            .filter(|(force, _)| **force == f)
+            .map(|(_, first)| *first)
             .collect()
     };
     assert_ne!(of("1800.0"), of("1920.0"));
