@@ -10,7 +10,7 @@
 // start and written back at its end (state_resident.wgsl: the resident
 // kernel, for lattices that fit). Both run this same loop.
 // CPU twin: src/engines/cpu/mod.rs CpuEngine::one_step (one step of its loop).
-// import: bulk_forces, common, coordinates, friction_law, junctions, lane_partials, record_buffers, record_common, scene, state, verlet
+// import: bulk_forces, common, coordinates, friction_law, junctions, lane_merge, lane_partials, record_buffers, record_common, scene, state, verlet
 
 // With an output file, the samples of the batch (batch.records of them,
 // in step order; src/engines/gpu/recorder.rs): a sample of step s is recorded in
@@ -36,6 +36,8 @@ fn persistent_steps(
 ) {
     enter_scene(wid.z);
     let lanes = min(JUNCTION_LANES, c.junction_count);
+    // Before the barrier of workgroupUniformLoad below.
+    lane_shuffle_enter(t, lanes);
     // The steps of this dispatch, made uniform for the barriers of the loop.
     if t == 0u {
         let begin = step_offset * batch.steps_per_dispatch;
@@ -52,6 +54,11 @@ fn persistent_steps(
         stop = atomicLoad(&status[status_base()]);
     }
     let steps = workgroupUniformLoad(&span);
+    lane_shuffle_ready();
+    let stride = lane_subtree_stride();
+    if t == 0u {
+        atomicMax(&status[status_base() + 8u], lane_levels_used());
+    }
     var next_sample = steps.w;
     var ran = 0u;
     if workgroupUniformLoad(&stop) != 0u {
@@ -92,11 +99,19 @@ fn persistent_steps(
                     let first = lane_pair_of(ix, lane.column, jb);
                     let first2 = lane_pair_of(ix2, lane2.column, jb2);
                     // A kept block's partials are not merged: not written.
+                    // Where lanes merge in subgroups, a run's first lane
+                    // writes its subtree.
                     if !jb.kept {
-                        lane_partial[lane_base() + w] = lane_from(ix, lane.column, jb, ld, first);
+                        let sum = lane_subtree(lane_from(ix, lane.column, jb, ld, first), lane.column);
+                        if lane.column % stride == 0u {
+                            lane_partial[lane_base() + w] = sum;
+                        }
                     }
                     if !jb2.kept {
-                        lane_partial[lane_base() + w2] = lane_from(ix2, lane2.column, jb2, ld, first2);
+                        let sum = lane_subtree(lane_from(ix2, lane2.column, jb2, ld, first2), lane2.column);
+                        if lane2.column % stride == 0u {
+                            lane_partial[lane_base() + w2] = sum;
+                        }
                     }
                     lane = lane2;
                     grid_walk_next(&lane);
@@ -104,7 +119,10 @@ fn persistent_steps(
                 for (; w < items; w += PERSISTENT_THREADS) {
                     let jb = junction_block(lane.row, ld);
                     if !jb.kept {
-                        lane_partial[lane_base() + w] = junction_lane(lane.row, lane.column, jb, ld);
+                        let sum = lane_subtree(junction_lane(lane.row, lane.column, jb, ld), lane.column);
+                        if lane.column % stride == 0u {
+                            lane_partial[lane_base() + w] = sum;
+                        }
                     }
                     grid_walk_next(&lane);
                 }

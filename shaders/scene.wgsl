@@ -46,6 +46,7 @@ fn lane_base() -> u32 {
     return scene * c.nx * min(JUNCTION_LANES, c.junction_count);
 }
 
+// GpuStatus's words.
 fn status_base() -> u32 {
-    return scene * 8u;
+    return scene * 10u;
 }

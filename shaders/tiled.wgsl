@@ -26,7 +26,7 @@
 // the lanes merged as a tree (lane_tree8), and the update. Junction friction laws
 // only (the per-block laws keep state that a halo would race on).
 // CPU twin: src/engines/cpu/mod.rs CpuEngine::one_step (each step of the loop).
-// import: bulk_forces, common, coordinates, junction_store, junctions, lane_partials, scene, state, verlet
+// import: bulk_forces, common, coordinates, junction_store, junctions, lane_merge, lane_partials, scene, state, verlet
 
 override TILE_THREADS: u32 = 64u;
 
@@ -135,6 +135,9 @@ fn tiled_steps(
 ) {
     enter_scene(wid.z);
     tile_enter(wid.x);
+    let lanes = min(JUNCTION_LANES, c.junction_count);
+    // Before the barrier of workgroupUniformLoad below.
+    lane_shuffle_enter(t, lanes);
     // Dispatch d runs steps tile_ends[d − 1] .. tile_ends[d], reads
     // published copy d mod 2 and publishes in the other.
     let d = step_offset;
@@ -146,7 +149,11 @@ fn tiled_steps(
     if plan.z != 0u {
         return;
     }
-    let lanes = min(JUNCTION_LANES, c.junction_count);
+    lane_shuffle_ready();
+    let stride = lane_subtree_stride();
+    if t == 0u && wid.x == 0u {
+        atomicMax(&status[status_base() + 8u], lane_levels_used());
+    }
     let update = batch.forces_only == 0u;
     load_tile(t, plan.x, d & 1u);
     storageBarrier();
@@ -178,8 +185,13 @@ fn tiled_steps(
                     let l = w.column;
                     let jb = junction_block(ix, ld);
                     // A kept block's partials are not merged: not written.
+                    // Where lanes merge in subgroups, a run's first lane
+                    // writes its subtree.
                     if !jb.kept {
-                        lane_partial[lane_first + (ix - tile_lo) * lanes + l] = junction_lane(ix, l, jb, ld);
+                        let sum = lane_subtree(junction_lane(ix, l, jb, ld), l);
+                        if l % stride == 0u {
+                            lane_partial[lane_first + (ix - tile_lo) * lanes + l] = sum;
+                        }
                     }
                 }
             }

@@ -735,3 +735,60 @@ fn kept_junction_sums_give_the_bits_of_summing_every_step() {
     let (other, _) = run(&faster, GpuPath::OneStep, true);
     assert!(kept != other, "control");
 }
+
+/// The persistent, resident and tiled kernels merge runs of a block's
+/// junction lanes in subgroups before storage where the adapter has
+/// subgroup operations (`GpuOptions::lane_shuffle`): the same tree of the
+/// same lane sums, so the bits of every lane's sum through storage,
+/// through the normal-load phase and the stick-slip window's first 2,000
+/// steps of driving (hundreds of ruptures), with every block summed every
+/// step. Further on, the two modules part where a block's sum lands on a
+/// rounding tie, as the one-step kernels do (docs/gpu-kernels.md; on
+/// lavapipe 2,225 steps in, block 4, where the shuffled merge rounds as
+/// one-step-lanes does). The kernels must report that they merged in
+/// subgroups (lavapipe: runs of 8 lanes), or the test would pass without
+/// them; in CI the adapter must have subgroups.
+#[test]
+fn lane_shuffles_give_the_bits_of_lane_sums_through_storage() {
+    let m = stick_slip_scene(&[]);
+    let run = |m: &Model, path, shuffle| {
+        let opts = GpuOptions {
+            path,
+            keep_junction_sums: false,
+            lane_shuffle: shuffle,
+            ..GpuOptions::default()
+        };
+        let mut g = GpuEngine::with_options(m, opts).expect("a GPU adapter (lavapipe in CI)");
+        advance_to(&mut g, m.prep_steps + 2000).unwrap();
+        (g.snapshot().unwrap(), g.lane_shuffle_levels())
+    };
+    let ctx = slipfront::engines::gpu::context::shared().expect("a GPU adapter");
+    if std::env::var("CI").is_ok_and(|v| v == "true") {
+        assert!(ctx.has_subgroups(), "{}: no subgroups", ctx.info.name);
+    }
+    for path in [GpuPath::Persistent, GpuPath::Resident, GpuPath::Tiled] {
+        let (shuffled, levels) = run(&m, path, true);
+        let (stored, none) = run(&m, path, false);
+        println!("{path:?}: lane tree levels merged in subgroups: {levels}");
+        assert!(
+            shuffled.total_ruptures() > 100,
+            "{path:?}: the window must hold ruptures"
+        );
+        assert_eq!(none, 0, "{path:?}");
+        if ctx.has_subgroups() {
+            assert!(levels >= 3, "{path:?}: merged {levels} levels in subgroups");
+        }
+        assert!(
+            shuffled == stored,
+            "{path:?}: lane shuffles changed the bits"
+        );
+    }
+    // Control: the same comparison sees a drive 1e-9 faster.
+    let mut faster = m.clone();
+    if let slipfront::model::Driver::SideSpring { velocity, .. } = &mut faster.driver {
+        *velocity *= 1.0 + 1e-9;
+    }
+    let (base, _) = run(&m, GpuPath::Persistent, true);
+    let (other, _) = run(&faster, GpuPath::Persistent, true);
+    assert!(base != other, "control");
+}

@@ -315,6 +315,9 @@ impl<T: GpuReal> GpuEngine<T> {
                 mine.extend(new);
             }
         }
+        for status in &statuses {
+            self.lane_levels = self.lane_levels.max(status.lane_levels);
+        }
         for (scene, status) in self.scenes.iter_mut().zip(&statuses) {
             if scene.failure.is_some() {
                 continue;

@@ -3,7 +3,7 @@
 use super::bindings::Bindings;
 use super::precision::GpuReal;
 use super::record_pipelines::RecordPipelines;
-use super::shaders::Kernel;
+use super::shaders::{Kernel, LaneMerge};
 use crate::engines::EngineError;
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex, OnceLock};
@@ -119,10 +119,13 @@ impl GpuContext {
         // each batch, beside its wall time (what the output costs on the
         // device, against what it costs the host), and inside passes, of
         // each dispatch (GpuEngine::time_each_dispatch).
+        // Subgroup operations where the adapter has them: the junction
+        // lanes' sums merged in registers (lane_shuffle.wgsl).
         let features = adapter.features()
             & (wgpu::Features::SHADER_F64
                 | wgpu::Features::TIMESTAMP_QUERY
-                | wgpu::Features::TIMESTAMP_QUERY_INSIDE_PASSES);
+                | wgpu::Features::TIMESTAMP_QUERY_INSIDE_PASSES
+                | wgpu::Features::SUBGROUP);
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("slipfront"),
             required_features: features,
@@ -213,9 +216,25 @@ impl GpuContext {
     pub fn pipeline<T: GpuReal>(
         &self,
         kernel: Kernel,
+        lanes: LaneMerge,
         constants: &[(&str, f64)],
     ) -> wgpu::ComputePipeline {
-        self.pipeline_of::<T>(kernel, kernel.entry_point(), constants)
+        self.pipeline_of::<T>(kernel, lanes, kernel.entry_point(), constants)
+    }
+
+    /// Whether the adapter was opened with subgroup operations.
+    pub fn has_subgroups(&self) -> bool {
+        self.device.features().contains(wgpu::Features::SUBGROUP)
+    }
+
+    /// How junction lanes merge where `wanted` asks for shuffles: in
+    /// subgroups only where the adapter has them.
+    pub fn lane_merge(&self, wanted: bool) -> LaneMerge {
+        if wanted && self.has_subgroups() {
+            LaneMerge::Shuffle
+        } else {
+            LaneMerge::Storage
+        }
     }
 
     /// The pipeline of entry point `entry` of `kernel`'s module (the tiled
@@ -223,11 +242,12 @@ impl GpuContext {
     pub fn pipeline_of<T: GpuReal>(
         &self,
         kernel: Kernel,
+        lanes: LaneMerge,
         entry: &str,
         constants: &[(&str, f64)],
     ) -> wgpu::ComputePipeline {
         let layout = &self.layouts[layout_index(kernel)].pipeline;
-        let key = format!("{}{kernel:?}{entry}{constants:?}", T::NAME);
+        let key = format!("{}{kernel:?}{lanes:?}{entry}{constants:?}", T::NAME);
         let mut cache = self.pipelines.lock().expect("pipeline cache");
         cache
             .entry(key)
@@ -236,7 +256,7 @@ impl GpuContext {
                     .device
                     .create_shader_module(wgpu::ShaderModuleDescriptor {
                         label: Some(kernel.entry_point()),
-                        source: wgpu::ShaderSource::Wgsl(kernel.source::<T>().into()),
+                        source: wgpu::ShaderSource::Wgsl(kernel.source_with::<T>(lanes).into()),
                     });
                 self.device
                     .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {

@@ -270,6 +270,13 @@ gpu_struct! {
         pub vz: f32,
         /// Steps the persistent kernel has run, all dispatches (mod 2³²).
         pub persistent_steps: u32,
+        /// The most levels of the junction lane tree a workgroup merged in
+        /// subgroups (`lane_shuffle.wgsl`; 0: none, each lane's sum through
+        /// storage), over the scene's dispatches.
+        pub lane_levels: u32,
+        /// Unused: an even count of words (the status copies are followed
+        /// by 8-byte timestamps).
+        pub reserved: u32,
     }
 }
 

@@ -69,7 +69,7 @@ use precision::{Coord, Packed};
 pub use record_pipelines::RECORD_SMALL_BLOCKS;
 
 use scene_state::gpu_junction_springs;
-use shaders::{Kernel, Variant};
+use shaders::{Kernel, LaneMerge, Variant};
 use std::collections::VecDeque;
 use wgpu::util::DeviceExt;
 
@@ -225,6 +225,11 @@ pub struct GpuEngine<T: GpuReal = f32> {
     /// Steps the persistent kernel has been asked to run (mod 2³²).
     persistent_steps: u32,
     variant: Variant,
+    /// Where the kernel's junction lanes merge first (`GpuOptions::lane_shuffle`).
+    lane_merge: LaneMerge,
+    /// The most lane tree levels a workgroup has merged in subgroups
+    /// (`GpuStatus::lane_levels`), over every batch read back.
+    lane_levels: u32,
     /// The copy of u and v that holds the current state.
     current: usize,
     /// Steps submitted (every scene is at this step).
@@ -602,12 +607,16 @@ impl<T: GpuReal> GpuEngine<T> {
             constants.push(("TILE_BLOCKS", g.blocks as f64));
             constants.push(("TILE_THREADS", persistent_threads as f64));
         }
-        let pipeline = ctx.pipeline::<T>(kernel, &constants);
+        let lane_merge = ctx.lane_merge(opts.lane_shuffle);
+        let pipeline = ctx.pipeline::<T>(kernel, lane_merge, &constants);
         let tiles = geometry.map(|g| {
             let entry = kernel
                 .gather_entry_point()
                 .expect("the tiled kernel gathers");
-            (g, ctx.pipeline_of::<T>(kernel, entry, &constants))
+            (
+                g,
+                ctx.pipeline_of::<T>(kernel, lane_merge, entry, &constants),
+            )
         });
         let junction_groups = match (kernel, model.law) {
             (Kernel::OneStepLanes, FrictionLaw::Junctions | FrictionLaw::SingleJunction) => {
@@ -671,6 +680,8 @@ impl<T: GpuReal> GpuEngine<T> {
             steps_per_dispatch,
             persistent_steps: 0,
             variant,
+            lane_merge,
+            lane_levels: 0,
             current: 0,
             step: 0,
             in_flight: VecDeque::new(),
@@ -763,7 +774,10 @@ impl<T: GpuReal> GpuEngine<T> {
                 if rec.kinetic_in_steps() {
                     let mut constants = self.variant.constants.clone();
                     constants.push(("RECORD_KINETIC", 1.0));
-                    self.record_step = Some(self.ctx.pipeline::<T>(self.kernel, &constants));
+                    let pipeline = self
+                        .ctx
+                        .pipeline::<T>(self.kernel, self.lane_merge, &constants);
+                    self.record_step = Some(pipeline);
                 }
                 self.recorder = Some(rec);
                 Ok(true)
@@ -785,6 +799,15 @@ impl<T: GpuReal> GpuEngine<T> {
     /// host set the pace.
     pub fn device_seconds(&self) -> Option<f64> {
         self.timer.as_ref().map(|t| t.busy_seconds())
+    }
+
+    /// Levels of the junction lane tree the kernel's workgroups merged in
+    /// subgroups in the batches read back so far: 0 where every lane's sum
+    /// went through storage (no subgroups, `GpuOptions::lane_shuffle`
+    /// false, a one-step kernel, or lanes that do not fit the subgroups),
+    /// 3 for runs of 8 lanes (lavapipe), 5 for 32 (NVIDIA).
+    pub fn lane_shuffle_levels(&self) -> u32 {
+        self.lane_levels
     }
 
     /// Times each dispatch of the batches from now on, where the adapter

@@ -117,6 +117,12 @@ pub struct GpuOptions {
     /// can change, and skip its junctions then (`junction_cache`): the same
     /// bits either way. false sums every junction every step (a check).
     pub keep_junction_sums: bool,
+    /// Merge runs of a block's junction lanes in subgroups before their
+    /// sums cross threads through storage (persistent, resident and tiled
+    /// kernels, adapters with subgroup operations; `shaders::LaneMerge`):
+    /// the same tree, so the same sums. false: every lane's sum through
+    /// storage (a check, and the comparison in benchmarks).
+    pub lane_shuffle: bool,
 }
 
 impl Default for GpuOptions {
@@ -129,6 +135,7 @@ impl Default for GpuOptions {
             tile_width: None,
             run_ahead: RUN_AHEAD_BATCHES,
             keep_junction_sums: true,
+            lane_shuffle: true,
         }
     }
 }

@@ -7,7 +7,9 @@
 //! kernel's in storage, the resident kernel's in workgroup memory, or the
 //! tiled kernel's tile and halo), `junction_store` (where the junctions
 //! are stepped: storage, or for the tiled kernel its halo's private
-//! copies too), `coordinates` (double-single or f64: the precision) and
+//! copies too), `lane_merge` (the junction lanes' sums merged in subgroups
+//! before storage, or not: `LaneMerge`), `coordinates` (double-single or
+//! f64: the precision) and
 //! `bindings` (where the output code finds the state buffers: the
 //! kernels' common.wgsl, or the output module's read-only views). A module
 //! is the generated prelude of `layout.rs` and the closure of its entry
@@ -40,7 +42,9 @@ wgsl_files!(
     "junction_store",
     "junction_tiled",
     "junctions",
+    "lane_no_shuffle",
     "lane_partials",
+    "lane_shuffle",
     "one_step",
     "one_step_lanes",
     "persistent",
@@ -110,6 +114,7 @@ pub fn imports(text: &str) -> Result<Vec<&str>, String> {
 pub struct Slots {
     pub state: &'static str,
     pub junction_store: &'static str,
+    pub lane_merge: &'static str,
     pub coordinates: &'static str,
     pub bindings: &'static str,
 }
@@ -121,6 +126,7 @@ impl Slots {
         Slots {
             state,
             junction_store: "junction_store",
+            lane_merge: LaneMerge::Storage.file(),
             coordinates: T::COORDINATES,
             bindings: "common",
         }
@@ -130,6 +136,7 @@ impl Slots {
         match name {
             "state" => self.state,
             "junction_store" => self.junction_store,
+            "lane_merge" => self.lane_merge,
             "coordinates" => self.coordinates,
             "bindings" => self.bindings,
             other => other,
@@ -192,6 +199,35 @@ pub fn validate_record<T: GpuReal>() -> Result<naga::Module, String> {
     Ok(module)
 }
 
+/// Where the persistent, resident and tiled kernels merge a block's
+/// junction lane sums first: each lane's sum goes through storage to the
+/// merging thread, or runs of 8 to 64 lanes merge in subgroups first (the
+/// same tree, so the same sums; adapters with `Features::SUBGROUP`). The
+/// one-step kernels merge theirs as they did either way.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum LaneMerge {
+    Storage,
+    Shuffle,
+}
+
+impl LaneMerge {
+    /// The file that fills the `lane_merge` slot.
+    pub fn file(self) -> &'static str {
+        match self {
+            LaneMerge::Storage => "lane_no_shuffle",
+            LaneMerge::Shuffle => "lane_shuffle",
+        }
+    }
+
+    /// What naga needs to validate a module with these lanes.
+    pub fn capabilities(self) -> naga::valid::Capabilities {
+        match self {
+            LaneMerge::Storage => naga::valid::Capabilities::empty(),
+            LaneMerge::Shuffle => naga::valid::Capabilities::SUBGROUP,
+        }
+    }
+}
+
 /// A compute kernel: its entry point (the CPU twin's name) and source.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum Kernel {
@@ -246,6 +282,11 @@ impl Kernel {
     /// The full WGSL module of this kernel: it steps the scenes of one
     /// lattice shape, one or many, per dispatch (`shaders/scene.wgsl`).
     pub fn source<T: GpuReal>(self) -> String {
+        self.source_with::<T>(LaneMerge::Storage)
+    }
+
+    /// The module with its junction lanes merged as `lanes` says.
+    pub fn source_with<T: GpuReal>(self, lanes: LaneMerge) -> String {
         let (state, entry) = match self {
             Kernel::OneStep => ("state_one_step", "one_step"),
             Kernel::OneStepLanes => ("state_one_step", "one_step_lanes"),
@@ -254,6 +295,7 @@ impl Kernel {
             Kernel::Tiled => ("state_tiled", "tiled"),
         };
         let mut slots = Slots::kernel::<T>(state);
+        slots.lane_merge = lanes.file();
         if self == Kernel::Tiled {
             slots.junction_store = "junction_tiled";
         }
@@ -316,10 +358,19 @@ impl Variant {
 
 /// Parses and validates a kernel's module with naga (no adapter needed).
 pub fn validate_kernel<T: GpuReal>(phase: Kernel) -> Result<naga::Module, String> {
-    let src = phase.source::<T>();
+    validate_kernel_with::<T>(phase, LaneMerge::Storage)
+}
+
+/// The same with its junction lanes merged as `lanes` says.
+pub fn validate_kernel_with<T: GpuReal>(
+    phase: Kernel,
+    lanes: LaneMerge,
+) -> Result<naga::Module, String> {
+    let src = phase.source_with::<T>(lanes);
     let module = naga::front::wgsl::parse_str(&src)
         .map_err(|e| format!("{}: {}", phase.entry_point(), e.emit_to_string(&src)))?;
-    naga::valid::Validator::new(naga::valid::ValidationFlags::all(), T::CAPABILITIES)
+    let caps = T::CAPABILITIES | lanes.capabilities();
+    naga::valid::Validator::new(naga::valid::ValidationFlags::all(), caps)
         .validate(&module)
         .map_err(|e| format!("{}: {}", phase.entry_point(), e.emit_to_string(&src)))?;
     for entry in std::iter::once(phase.entry_point()).chain(phase.gather_entry_point()) {
@@ -394,6 +445,7 @@ mod tests {
                 slots.junction_store = "junction_tiled";
             }
             "junction_store" => slots.junction_store = name,
+            "lane_shuffle" | "lane_no_shuffle" => slots.lane_merge = name,
             "junction_tiled" => {
                 slots.state = "state_tiled";
                 slots.junction_store = name;
@@ -406,11 +458,16 @@ mod tests {
     }
 
     fn naga_errors<T: GpuReal>(src: &str) -> Option<String> {
+        naga_errors_with::<T>(src, LaneMerge::Storage)
+    }
+
+    fn naga_errors_with<T: GpuReal>(src: &str, lanes: LaneMerge) -> Option<String> {
         let module = match naga::front::wgsl::parse_str(src) {
             Ok(m) => m,
             Err(e) => return Some(e.emit_to_string(src)),
         };
-        naga::valid::Validator::new(naga::valid::ValidationFlags::all(), T::CAPABILITIES)
+        let caps = T::CAPABILITIES | lanes.capabilities();
+        naga::valid::Validator::new(naga::valid::ValidationFlags::all(), caps)
             .validate(&module)
             .err()
             .map(|e| e.emit_to_string(src))
@@ -427,7 +484,13 @@ mod tests {
             })
             .filter_map(|(name, _)| {
                 let src = compose(&prelude, name, &slots_for::<T>(name)).unwrap();
-                naga_errors::<T>(&src).map(|e| format!("{name}.wgsl ({}): {e}", T::NAME))
+                // Only the subgroup file may use subgroup operations.
+                let lanes = match name {
+                    "lane_shuffle" => LaneMerge::Shuffle,
+                    _ => LaneMerge::Storage,
+                };
+                naga_errors_with::<T>(&src, lanes)
+                    .map(|e| format!("{name}.wgsl ({}): {e}", T::NAME))
             })
             .collect()
     }
@@ -487,7 +550,14 @@ mod tests {
             let wanted = imports(text).unwrap_or_else(|e| panic!("{name}: {e}"));
             for w in wanted {
                 let known = file(w).is_some()
-                    || ["state", "junction_store", "coordinates", "bindings"].contains(&w);
+                    || [
+                        "state",
+                        "junction_store",
+                        "lane_merge",
+                        "coordinates",
+                        "bindings",
+                    ]
+                    .contains(&w);
                 assert!(known, "{name}.wgsl imports unknown {w}");
             }
         }
@@ -535,7 +605,10 @@ mod tests {
 
     fn validate_all<T: GpuReal>() {
         for kernel in Kernel::ALL {
-            validate_kernel::<T>(kernel).unwrap_or_else(|e| panic!("{}: {e}", T::NAME));
+            for lanes in [LaneMerge::Storage, LaneMerge::Shuffle] {
+                validate_kernel_with::<T>(kernel, lanes)
+                    .unwrap_or_else(|e| panic!("{} {lanes:?}: {e}", T::NAME));
+            }
         }
         validate_record::<T>().unwrap_or_else(|e| panic!("{}: {e}", T::NAME));
     }
@@ -548,6 +621,30 @@ mod tests {
     #[test]
     fn every_shader_validates_in_f64_too() {
         validate_all::<f64>();
+    }
+
+    /// The kernels that merge lanes in subgroups need the SUBGROUP
+    /// capability (the adapter's `Features::SUBGROUP`), and only they: the
+    /// storage modules validate without it (`validate_all`), and the
+    /// one-step kernels are the same module either way.
+    #[test]
+    fn lane_shuffles_need_the_subgroup_capability_and_only_their_kernels_use_them() {
+        for kernel in [Kernel::Persistent, Kernel::Resident, Kernel::Tiled] {
+            let src = kernel.source_with::<f32>(LaneMerge::Shuffle);
+            assert!(src.contains("subgroupShuffleXor"), "{kernel:?}");
+            assert!(naga_errors::<f32>(&src).is_some(), "{kernel:?}");
+            assert!(naga_errors_with::<f32>(&src, LaneMerge::Shuffle).is_none());
+            let storage = kernel.source::<f32>();
+            for op in ["subgroupShuffleXor(", "subgroupAdd(", "subgroupAll("] {
+                assert!(!storage.contains(op), "{kernel:?}: {op}");
+            }
+        }
+        for kernel in [Kernel::OneStep, Kernel::OneStepLanes] {
+            assert_eq!(
+                kernel.source_with::<f32>(LaneMerge::Shuffle),
+                kernel.source::<f32>()
+            );
+        }
     }
 
     /// The f64 kernels need the FLOAT64 capability, so the test above

@@ -1,0 +1,21 @@
+// lane_shuffle.wgsl's interface without subgroup operations (adapters
+// without them, and GpuOptions::lane_shuffle false): every lane writes its
+// own sum, and lane_partials.wgsl merges all of a block's lanes.
+// CPU twin: src/engines/kernels/junctions.rs merge_lanes.
+// import: junctions
+
+fn lane_shuffle_enter(t: u32, lanes: u32) {}
+
+fn lane_shuffle_ready() {}
+
+fn lane_levels_used() -> u32 {
+    return 0u;
+}
+
+fn lane_subtree_stride() -> u32 {
+    return 1u;
+}
+
+fn lane_subtree(sum: LaneSum, lane: u32) -> LaneSum {
+    return sum;
+}
