@@ -24,8 +24,9 @@
 //!    0.01 s of driving) as one `sweep --backend gpu` (its kernel timed on
 //!    the sweep's ensemble, as `auto` does), and the 64 one at a time;
 //! 7. what the junctions cost on Table S1: Ns = 100 with every junction
-//!    summed every step and with quiet blocks' sums kept (the default),
-//!    Ns = 16, and Coulomb friction.
+//!    summed every step (with runs of lanes merged in subgroups first, the
+//!    default, and with every lane's sum through storage) and with quiet
+//!    blocks' sums kept (the default), Ns = 16, and Coulomb friction.
 //!
 //! Sections 1–3 also print the host's CPU time per wall second of each
 //! timed span: it says whether the host (encoding dispatches, waiting) or
@@ -45,6 +46,10 @@
 //! SLIPFRONT_GPU_TABLE_KEEP_SUMS=0 sums every junction every step in
 //! sections 1–3 (`GpuOptions::keep_junction_sums` off): the same bits,
 //! the cost of the junction phase without skipping quiet blocks.
+//! SLIPFRONT_GPU_TABLE_LANE_SHUFFLE=0 sends every junction lane's sum
+//! through storage in sections 1–3 (`GpuOptions::lane_shuffle` off; the
+//! default merges runs of lanes in subgroups first where the adapter has
+//! them): the same bits. Section 7 prints both on Table S1.
 
 use gpu_timing::{
     ensemble_step_seconds, output_run, solo_step_seconds, table_s1, timed_advance, Timed,
@@ -73,8 +78,29 @@ fn options(kernel: Kernel) -> GpuOptions {
     GpuOptions {
         path: GpuPath::of(kernel),
         keep_junction_sums: keep_sums(),
+        lane_shuffle: lane_shuffle(),
         ..GpuOptions::default()
     }
+}
+
+/// `SLIPFRONT_GPU_TABLE_LANE_SHUFFLE`: 1 (the default) merges runs of
+/// junction lanes in subgroups before storage, 0 sends every lane's sum
+/// through storage.
+fn lane_shuffle() -> bool {
+    match std::env::var("SLIPFRONT_GPU_TABLE_LANE_SHUFFLE").as_deref() {
+        Err(_) | Ok("1") => true,
+        Ok("0") => false,
+        Ok(v) => panic!("SLIPFRONT_GPU_TABLE_LANE_SHUFFLE: `{v}` is neither 0 nor 1"),
+    }
+}
+
+/// The kernels whose junction lanes merge through storage, in subgroups
+/// first where the adapter has them (`GpuOptions::lane_shuffle`).
+fn shuffles_lanes(kernel: Kernel) -> bool {
+    matches!(
+        kernel,
+        Kernel::Persistent | Kernel::Resident | Kernel::Tiled
+    )
 }
 
 /// `SLIPFRONT_GPU_TABLE_KEEP_SUMS`: 1 (the default) keeps quiet blocks'
@@ -144,19 +170,34 @@ fn junction_cost(min_seconds: f64) {
     let text = built_in("tromborg2014_precursors").expect("shipped scene");
     // The same scene with every junction summed every step: what keeping a
     // quiet block's sums (`GpuOptions::keep_junction_sums`) saves.
+    // And with every lane's sum through storage: what merging runs of
+    // lanes in subgroups first saves where every block is summed.
     for kernel in candidates(&s1_model(text)) {
-        let opts = GpuOptions {
-            keep_junction_sums: false,
-            ..options(kernel)
+        let shuffles: &[bool] = if shuffles_lanes(kernel) {
+            &[true, false]
+        } else {
+            &[true]
         };
-        let figure = match solo_step_seconds(&s1_model(text), opts, min_seconds) {
-            Ok((s, host)) => format!("{:.2} | {host:.2}", s * 1e6),
-            Err(e) => format!("not run: {e} |"),
-        };
-        println!(
-            "| junctions, Ns = 100, every junction summed every step | {} | {figure} |",
-            path_name(kernel)
-        );
+        for &shuffle in shuffles {
+            let opts = GpuOptions {
+                keep_junction_sums: false,
+                lane_shuffle: shuffle,
+                ..options(kernel)
+            };
+            let figure = match solo_step_seconds(&s1_model(text), opts, min_seconds) {
+                Ok((s, host)) => format!("{:.2} | {host:.2}", s * 1e6),
+                Err(e) => format!("not run: {e} |"),
+            };
+            let lanes = match (shuffles_lanes(kernel), shuffle) {
+                (false, _) => "",
+                (true, true) => ", lanes merged in subgroups first",
+                (true, false) => ", every lane's sum through storage",
+            };
+            println!(
+                "| junctions, Ns = 100, every junction summed every step{lanes} | {} | {figure} |",
+                path_name(kernel)
+            );
+        }
     }
     for (name, set) in [
         (
