@@ -741,7 +741,7 @@ fn kept_junction_sums_give_the_bits_of_summing_every_step() {
 /// subgroup operations (`GpuOptions::lane_shuffle`): the same tree of the
 /// same lane sums, so the bits of every lane's sum through storage,
 /// through the normal-load phase and the stick-slip window's first 2,000
-/// steps of driving (hundreds of ruptures), with every block summed every
+/// steps of driving (2,400 ruptures), with every block summed every
 /// step. Further on, the two modules part where a block's sum lands on a
 /// rounding tie, as the one-step kernels do (docs/gpu-kernels.md; on
 /// lavapipe 2,225 steps in, block 4, where the shuffled merge rounds as
