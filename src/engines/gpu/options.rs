@@ -55,7 +55,7 @@ pub const RESIDENT_THREADS_SOFTWARE: u32 = PERSISTENT_THREADS;
 /// fold into them first): its workgroup memory holds the lattice.
 pub const RESIDENT_REDUCTION_WIDTH: u32 = 64;
 /// The resident kernel's own workgroup words (its step span, stop and
-/// sample flags), rounded up.
+/// sample flags, and the lane shuffles' levels: 28 bytes), rounded up.
 const RESIDENT_OWN_BYTES: u64 = 64;
 
 /// Which kernel steps the lattice.
