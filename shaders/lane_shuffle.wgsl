@@ -54,7 +54,8 @@ fn lane_levels_used() -> u32 {
     return lane_levels;
 }
 
-// Lanes apart of the subtrees a block leaves in storage (1: every lane).
+// Lanes apart of the subtrees a block leaves in storage (1: every lane;
+// a power of two, so a lane tests it with a mask, not a division).
 fn lane_subtree_stride() -> u32 {
     return 1u << lane_levels;
 }

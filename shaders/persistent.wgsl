@@ -103,13 +103,13 @@ fn persistent_steps(
                     // writes its subtree.
                     if !jb.kept {
                         let sum = lane_subtree(lane_from(ix, lane.column, jb, ld, first), lane.column);
-                        if lane.column % stride == 0u {
+                        if (lane.column & (stride - 1u)) == 0u {
                             lane_partial[lane_base() + w] = sum;
                         }
                     }
                     if !jb2.kept {
                         let sum = lane_subtree(lane_from(ix2, lane2.column, jb2, ld, first2), lane2.column);
-                        if lane2.column % stride == 0u {
+                        if (lane2.column & (stride - 1u)) == 0u {
                             lane_partial[lane_base() + w2] = sum;
                         }
                     }
@@ -120,7 +120,7 @@ fn persistent_steps(
                     let jb = junction_block(lane.row, ld);
                     if !jb.kept {
                         let sum = lane_subtree(junction_lane(lane.row, lane.column, jb, ld), lane.column);
-                        if lane.column % stride == 0u {
+                        if (lane.column & (stride - 1u)) == 0u {
                             lane_partial[lane_base() + w] = sum;
                         }
                     }

@@ -189,7 +189,7 @@ fn tiled_steps(
                     // writes its subtree.
                     if !jb.kept {
                         let sum = lane_subtree(junction_lane(ix, l, jb, ld), l);
-                        if l % stride == 0u {
+                        if (l & (stride - 1u)) == 0u {
                             lane_partial[lane_first + (ix - tile_lo) * lanes + l] = sum;
                         }
                     }
