@@ -94,15 +94,6 @@ fn lane_shuffle() -> bool {
     }
 }
 
-/// The kernels whose junction lanes merge through storage, in subgroups
-/// first where the adapter has them (`GpuOptions::lane_shuffle`).
-fn shuffles_lanes(kernel: Kernel) -> bool {
-    matches!(
-        kernel,
-        Kernel::Persistent | Kernel::Resident | Kernel::Tiled
-    )
-}
-
 /// `SLIPFRONT_GPU_TABLE_KEEP_SUMS`: 1 (the default) keeps quiet blocks'
 /// junction sums, 0 sums every junction every step.
 fn keep_sums() -> bool {
@@ -173,7 +164,7 @@ fn junction_cost(min_seconds: f64) {
     // And with every lane's sum through storage: what merging runs of
     // lanes in subgroups first saves where every block is summed.
     for kernel in candidates(&s1_model(text)) {
-        let shuffles: &[bool] = if shuffles_lanes(kernel) {
+        let shuffles: &[bool] = if kernel.merges_lanes_through_storage() {
             &[true, false]
         } else {
             &[true]
@@ -188,7 +179,7 @@ fn junction_cost(min_seconds: f64) {
                 Ok((s, host)) => format!("{:.2} | {host:.2}", s * 1e6),
                 Err(e) => format!("not run: {e} |"),
             };
-            let lanes = match (shuffles_lanes(kernel), shuffle) {
+            let lanes = match (kernel.merges_lanes_through_storage(), shuffle) {
                 (false, _) => "",
                 (true, true) => ", lanes merged in subgroups first",
                 (true, false) => ", every lane's sum through storage",

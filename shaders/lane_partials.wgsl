@@ -21,11 +21,10 @@ fn lane_partial_or_zero(first: u32, l: u32, lanes: u32) -> LaneSum {
 // lanes. Each subtree's eight loads go out together ahead of its merges,
 // and no merge waits on more than six before it.
 fn merged_lane_partials(first: u32, lanes: u32) -> LaneSum {
-    let stride = lane_subtree_stride();
-    if stride >= 8u {
-        // At most eight subtrees (JUNCTION_LANES / stride), all loaded
-        // before the first merge; past the block's lanes, the zero sum.
-        let k = stride;
+    let k = lane_subtree_stride();
+    if k >= 8u {
+        // At most eight subtrees (JUNCTION_LANES / k), all loaded before
+        // the first merge; past the block's lanes, the zero sum.
         return lane_tree8(
             lane_partial_or_zero(first, 0u, lanes),
             lane_partial_or_zero(first, k, lanes),

@@ -607,7 +607,8 @@ impl<T: GpuReal> GpuEngine<T> {
             constants.push(("TILE_BLOCKS", g.blocks as f64));
             constants.push(("TILE_THREADS", persistent_threads as f64));
         }
-        let lane_merge = ctx.lane_merge(opts.lane_shuffle);
+        // One module (and one compiled pipeline) for the one-step kernels.
+        let lane_merge = ctx.lane_merge(opts.lane_shuffle && kernel.merges_lanes_through_storage());
         let pipeline = ctx.pipeline::<T>(kernel, lane_merge, &constants);
         let tiles = geometry.map(|g| {
             let entry = kernel

@@ -279,6 +279,13 @@ impl Kernel {
         matches!(self, Kernel::Persistent | Kernel::Resident)
     }
 
+    /// Merges its junction lanes' sums through storage (`lane_partials.wgsl`),
+    /// so `LaneMerge` chooses its module; the one-step kernels merge theirs
+    /// in registers or workgroup memory, the same module either way.
+    pub fn merges_lanes_through_storage(self) -> bool {
+        matches!(self, Kernel::Persistent | Kernel::Resident | Kernel::Tiled)
+    }
+
     /// The full WGSL module of this kernel: it steps the scenes of one
     /// lattice shape, one or many, per dispatch (`shaders/scene.wgsl`).
     pub fn source<T: GpuReal>(self) -> String {
@@ -629,7 +636,10 @@ mod tests {
     /// one-step kernels are the same module either way.
     #[test]
     fn lane_shuffles_need_the_subgroup_capability_and_only_their_kernels_use_them() {
-        for kernel in [Kernel::Persistent, Kernel::Resident, Kernel::Tiled] {
+        let (stored, own): (Vec<Kernel>, Vec<Kernel>) = Kernel::ALL
+            .into_iter()
+            .partition(|k| k.merges_lanes_through_storage());
+        for kernel in stored {
             let src = kernel.source_with::<f32>(LaneMerge::Shuffle);
             assert!(src.contains("subgroupShuffleXor"), "{kernel:?}");
             assert!(naga_errors::<f32>(&src).is_some(), "{kernel:?}");
@@ -639,7 +649,8 @@ mod tests {
                 assert!(!storage.contains(op), "{kernel:?}: {op}");
             }
         }
-        for kernel in [Kernel::OneStep, Kernel::OneStepLanes] {
+        assert_eq!(own, [Kernel::OneStep, Kernel::OneStepLanes]);
+        for kernel in own {
             assert_eq!(
                 kernel.source_with::<f32>(LaneMerge::Shuffle),
                 kernel.source::<f32>()
