@@ -67,13 +67,15 @@ struct Plan {
     quick: bool,
 }
 
-fn env_parsed<T: FromStr>(name: &str, default: T, valid: impl Fn(&T) -> bool) -> T {
+/// `name`'s value, `default` where unset; a value outside `allowed` (what
+/// `valid` accepts) stops the bench with a message naming both.
+fn env_parsed<T: FromStr>(name: &str, default: T, allowed: &str, valid: impl Fn(&T) -> bool) -> T {
     match std::env::var(name) {
         Err(_) => default,
         Ok(text) => match text.trim().parse::<T>() {
             Ok(v) if valid(&v) => v,
             _ => {
-                eprintln!("{name}={text}: not an allowed value (see the bench's header)");
+                eprintln!("{name}={text}: expected {allowed}");
                 std::process::exit(2);
             }
         },
@@ -92,16 +94,21 @@ fn plan(model_of: impl Fn(usize) -> Model) -> Plan {
     let runs = env_parsed(
         "SLIPFRONT_GPU_PRECISION_RUNS",
         if quick { 8 } else { 24 },
+        "a whole number from 4 to 1024",
         |n| (4..=1024).contains(n),
     );
     let end = env_parsed(
         "SLIPFRONT_GPU_PRECISION_END",
         if quick { 0.03 } else { 0.0f64 },
+        "seconds of driving, 0 or more (0: the scene's)",
         |t| *t >= 0.0 && t.is_finite(),
     );
-    let junctions = env_parsed("SLIPFRONT_GPU_PRECISION_JUNCTIONS", 32usize, |n| {
-        (2..=4096).contains(n)
-    });
+    let junctions = env_parsed(
+        "SLIPFRONT_GPU_PRECISION_JUNCTIONS",
+        32usize,
+        "a whole number from 2 to 4096",
+        |n| (2..=4096).contains(n),
+    );
     let kernels = match std::env::var("SLIPFRONT_GPU_PRECISION_KERNELS") {
         Ok(list) => list
             .split(',')
