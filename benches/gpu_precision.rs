@@ -38,6 +38,7 @@
 //! on an H200 about 5 to 20 s each.
 
 use slipfront::app::sweeps::compare::{compare_tables, Comparison};
+use slipfront::app::sweeps::verdict::Members;
 use slipfront::app::sweeps::{default_gpu, run_sweep, KeepMcap, Sweep, SweepOptions};
 use slipfront::engines::backend::{Backend, Precision};
 use slipfront::engines::gpu::kernel_choice::candidates;
@@ -193,37 +194,12 @@ fn run(dir: &Path, plan: &Plan, e: &Ensemble) -> Result<(PathBuf, f64), String> 
     Ok((out, report.wall_seconds))
 }
 
-/// Which outcomes two ensembles are compared on.
-#[derive(Clone, Copy)]
-enum Members {
-    /// Disjoint perturbations: the whole-run outcomes chaos has mixed.
-    Disjoint,
-    /// The same perturbations: every outcome.
-    Same,
-}
-
 /// (Bonferroni-corrected smallest p, the outcome and test behind it).
 fn verdict(c: &Comparison, members: Members) -> (f64, String) {
-    let tests: Vec<_> = match members {
-        Members::Disjoint => c
-            .mixed_p_values()
-            .into_iter()
-            .filter(|v| !v.outcome.starts_with("first_full"))
-            .collect(),
-        Members::Same => c.p_values(),
-    };
-    let Some(min) = tests.iter().min_by(|a, b| a.p.total_cmp(&b.p)) else {
-        return (f64::NAN, "no outcome to compare".into());
-    };
-    let corrected = (min.p * tests.len() as f64).min(1.0);
-    let why = format!(
-        "{} {}, p {:.2e} of {} tests",
-        min.outcome,
-        min.test,
-        min.p,
-        tests.len()
-    );
-    (corrected, why)
+    match c.verdict(members) {
+        Some(v) => (v.corrected, v.describe()),
+        None => (f64::NAN, "no outcome to compare".into()),
+    }
 }
 
 fn compared(a: &Path, b: &Path, members: Members) -> (f64, String) {

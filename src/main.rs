@@ -140,7 +140,8 @@ enum Command {
     },
     /// Compare two sweep ensembles' outcome distributions (KS, Anderson–
     /// Darling, exact tests on counts and mode occupancy); exits 1 when an
-    /// outcome differs at p < alpha.
+    /// outcome differs at p < alpha (with --members: when the corrected
+    /// verdict does).
     Compare {
         /// A sweep folder (its summary.csv) or a table (.csv).
         a: PathBuf,
@@ -159,6 +160,10 @@ enum Command {
         /// Draw both ensembles' empirical CDFs, a panel per outcome (.png or .svg).
         #[arg(short = 'o', long, value_name = "FIGURE")]
         output: Option<PathBuf>,
+        /// Judge by one Bonferroni-corrected verdict over the tests fair for
+        /// these members; the closing line and exit status follow it.
+        #[arg(long, value_enum)]
+        members: Option<slipfront::app::sweeps::verdict::Members>,
     },
     /// Run the validation cases and compare measured against expected.
     Verify {
@@ -329,6 +334,7 @@ fn main() -> ExitCode {
             label_b,
             json,
             output,
+            members,
         } => commands::compare::compare(commands::compare::CompareArgs {
             a,
             b,
@@ -337,6 +343,7 @@ fn main() -> ExitCode {
             label_b,
             json,
             figure: output,
+            members,
         }),
         Command::Replay {
             file,

@@ -302,3 +302,81 @@ fn slow_front_speeds_are_compared_and_tables_without_them_still_read() {
     assert!(old.continuous.iter().all(|o| !o.name.starts_with("slow_")));
     assert!(!old.differs(0.01), "{:?}", old.differing(0.01));
 }
+
+/// Adds the column a `perturb` sweep writes, run k perturbed by
+/// (start + k)·1e-6.
+fn add_perturbation(dir: &Path, start: usize) {
+    let path = dir.join("summary.csv");
+    let text = std::fs::read_to_string(&path).unwrap();
+    let mut out = String::new();
+    for (k, l) in text.lines().enumerate() {
+        let value = match k {
+            0 => "perturb(loading.drive.velocity)".to_string(),
+            k => format!("{:e}", (start + k - 1) as f64 * 1e-6),
+        };
+        out.push_str(&format!("{l},{value}\n"));
+    }
+    std::fs::write(path, out).unwrap();
+}
+
+#[test]
+fn members_choose_the_outcomes_of_one_corrected_verdict() {
+    // First full events 5 % later on B: what two disjoint ranges of a
+    // short run's perturbation can give by construction.
+    let (a, b) = (dir("members-a"), dir("members-b"));
+    write_sweep(&a, &ensemble(60, 1.0));
+    write_sweep(&b, &ensemble(60, 1.05));
+    add_perturbation(&a, 0);
+    add_perturbation(&b, 60);
+    // Each test alone: the first event differs.
+    assert_eq!(slipfront(&["compare", s(&a), s(&b)]).status.code(), Some(1));
+    // Disjoint members: the whole-run outcomes agree.
+    let out = slipfront(&["compare", s(&a), s(&b), "--members", "disjoint"]);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(0), "{text}");
+    let last = text.lines().last().unwrap();
+    assert!(
+        last.starts_with("verdict (disjoint members")
+            && last.contains("do not differ at corrected p < 0.01"),
+        "{last}"
+    );
+    assert!(!last.contains("first_full"), "{last}");
+    // The same members claimed for disjoint ones is refused.
+    let out = slipfront(&["compare", s(&a), s(&b), "--members", "same"]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("--members same: 0 of A's 60 ok runs have a perturbation that B has"),
+        "{err}"
+    );
+
+    // The same members: every outcome, and the shift is flagged.
+    let c = dir("members-c");
+    write_sweep(&c, &ensemble(60, 1.05));
+    add_perturbation(&c, 0);
+    let out = slipfront(&["compare", s(&a), s(&c), "--members", "same", "--json"]);
+    assert_eq!(out.status.code(), Some(1));
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let verdict = &v["verdict"];
+    assert_eq!(verdict["members"], "same");
+    assert!(verdict["smallest"]["outcome"]
+        .as_str()
+        .unwrap()
+        .starts_with("first_full"));
+    let (p, tests) = (
+        verdict["smallest"]["p"].as_f64().unwrap(),
+        verdict["tests"].as_f64().unwrap(),
+    );
+    assert_eq!(verdict["corrected"].as_f64().unwrap(), (p * tests).min(1.0));
+    assert_eq!(tests, v["tests"].as_f64().unwrap());
+    assert_eq!(v["differs"], true);
+
+    // Tables without a perturbation column cannot be the same members.
+    let (d, e) = (dir("members-d"), dir("members-e"));
+    write_sweep(&d, &ensemble(20, 1.0));
+    write_sweep(&e, &ensemble(20, 1.0));
+    let out = slipfront(&["compare", s(&d), s(&e), "--members", "same"]);
+    assert_eq!(out.status.code(), Some(2));
+    let out = slipfront(&["compare", s(&d), s(&e), "--members", "disjoint"]);
+    assert_eq!(out.status.code(), Some(0));
+}

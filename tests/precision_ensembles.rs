@@ -33,6 +33,7 @@
 //! against 0.01.
 
 use slipfront::app::sweeps::compare::{compare_tables, Comparison};
+use slipfront::app::sweeps::verdict::Members;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -78,42 +79,19 @@ fn ensemble(dir: &Path, name: &str, start: usize, precision: &str, set: &str) ->
     out
 }
 
-/// Which outcomes two ensembles are compared on.
-#[derive(Clone, Copy)]
-enum Members {
-    /// Disjoint perturbations: the whole-run outcomes chaos has mixed.
-    Disjoint,
-    /// The same perturbations: every outcome.
-    Same,
-}
-
 /// (Bonferroni-corrected smallest p, a report).
 fn verdict(c: &Comparison, members: Members) -> (f64, String) {
-    let tests: Vec<_> = match members {
-        Members::Disjoint => c
-            .mixed_p_values()
-            .into_iter()
-            .filter(|v| !v.outcome.starts_with("first_full"))
-            .collect(),
-        Members::Same => c.p_values(),
-    };
-    assert!(tests.len() >= 5, "too few outcomes to compare: {tests:?}");
-    let min = tests
-        .iter()
-        .min_by(|a, b| a.p.total_cmp(&b.p))
-        .expect("tests ran");
-    let corrected = (min.p * tests.len() as f64).min(1.0);
+    let tests = c.weighed_p_values(members).len();
+    assert!(tests >= 5, "too few outcomes to compare: {tests}");
+    let v = c.verdict(members).expect("tests ran");
     let report = format!(
-        "{} vs {}: smallest p {:.3e} ({} {}) of {} tests, corrected {:.3e}",
+        "{} vs {}: corrected p {:.3e} ({})",
         c.label_a,
         c.label_b,
-        min.p,
-        min.outcome,
-        min.test,
-        tests.len(),
-        corrected
+        v.corrected,
+        v.describe()
     );
-    (corrected, report)
+    (v.corrected, report)
 }
 
 #[test]

@@ -1,12 +1,15 @@
 //! `slipfront compare A B`: two sweep tables' outcome distributions side
 //! by side with their tests, as text or JSON, and optionally a figure of
-//! the empirical CDFs. Exits 1 when some outcome differs at p < alpha.
+//! the empirical CDFs. Exits 1 when some outcome differs at p < alpha, or,
+//! with `--members`, when the Bonferroni verdict over the tests those
+//! members make fair is below alpha.
 
 use slipfront::analysis::stats::Quartiles;
 use slipfront::app::sweeps::compare::{
     compare_ensembles, Comparison, ContinuousOutcome, FOLLOWS_PERTURBATION,
 };
 use slipfront::app::sweeps::outcome_rows::read_ensemble;
+use slipfront::app::sweeps::verdict::{shared_perturbations, Members, Verdict};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
@@ -18,6 +21,8 @@ pub struct CompareArgs {
     pub label_b: Option<String>,
     pub json: bool,
     pub figure: Option<PathBuf>,
+    /// Judge by one corrected verdict for ensembles of these members.
+    pub members: Option<Members>,
 }
 
 pub fn compare(args: CompareArgs) -> anyhow::Result<ExitCode> {
@@ -31,6 +36,17 @@ pub fn compare(args: CompareArgs) -> anyhow::Result<ExitCode> {
     }
     let ea = read_ensemble(&args.a).map_err(|e| anyhow::anyhow!(e))?;
     let eb = read_ensemble(&args.b).map_err(|e| anyhow::anyhow!(e))?;
+    if args.members == Some(Members::Same) {
+        let shared = shared_perturbations(&ea.runs, &eb.runs);
+        let fewer = ea.runs.len().min(eb.runs.len());
+        anyhow::ensure!(
+            2 * shared > fewer,
+            "--members same: {shared} of A's {} ok runs have a perturbation that B has (the \
+             tables' perturb(KEY) column), expected most of the {fewer} runs of the smaller side; \
+             ensembles of other perturbations are compared with --members disjoint",
+            ea.runs.len()
+        );
+    }
     let label = |given: Option<String>, path: &Path| given.unwrap_or(path.display().to_string());
     let c = compare_ensembles(
         &ea,
@@ -38,6 +54,11 @@ pub fn compare(args: CompareArgs) -> anyhow::Result<ExitCode> {
         &label(args.label_a, &args.a),
         &label(args.label_b, &args.b),
     );
+    let verdict = args.members.and_then(|m| c.verdict(m));
+    let differs = match args.members {
+        Some(_) => verdict.as_ref().is_some_and(|v| v.differs(args.alpha)),
+        None => c.differs(args.alpha),
+    };
     if args.json {
         let mut v = serde_json::to_value(&c)?;
         v["alpha"] = serde_json::json!(args.alpha);
@@ -45,16 +66,20 @@ pub fn compare(args: CompareArgs) -> anyhow::Result<ExitCode> {
         v["bonferroni_min_p"] = serde_json::json!(c.bonferroni_min_p());
         v["tests"] = serde_json::json!(c.p_values().len());
         v["differing"] = serde_json::to_value(c.differing(args.alpha))?;
-        v["differs"] = serde_json::json!(c.differs(args.alpha));
+        v["verdict"] = serde_json::to_value(&verdict)?;
+        v["differs"] = serde_json::json!(differs);
         println!("{}", serde_json::to_string_pretty(&v)?);
     } else {
-        print_report(&c, args.alpha);
+        print_report(&c, args.alpha, args.members.is_some());
+        if let Some(members) = args.members {
+            print_verdict(verdict.as_ref(), members, args.alpha);
+        }
     }
     if let Some(path) = &args.figure {
         write_figure(&c, path)?;
         eprintln!("compare: figure {}", path.display());
     }
-    Ok(if c.differs(args.alpha) {
+    Ok(if differs {
         ExitCode::from(1)
     } else {
         ExitCode::SUCCESS
@@ -157,7 +182,9 @@ fn simulated(tables: usize) -> String {
     }
 }
 
-fn print_report(c: &Comparison, alpha: f64) {
+/// `judged_after`: a `--members` verdict follows, so the closing line is
+/// marked as each test's own.
+fn print_report(c: &Comparison, alpha: f64, judged_after: bool) {
     let (la, lb) = (short(&c.label_a), short(&c.label_b));
     for (label, runs, dropped) in [
         (&c.label_a, c.runs_a, &c.dropped_a),
@@ -203,7 +230,12 @@ fn print_report(c: &Comparison, alpha: f64) {
         Some(m) => {
             let differing = c.differing(alpha);
             println!(
-                "smallest p = {} ({} {}) of {tests} tests (Bonferroni {}): {}",
+                "{}smallest p = {} ({} {}) of {tests} tests (Bonferroni {}): {}",
+                if judged_after {
+                    "each test alone: "
+                } else {
+                    ""
+                },
                 p_text(Some(m.p), 0.0),
                 m.outcome,
                 m.test,
@@ -219,6 +251,27 @@ fn print_report(c: &Comparison, alpha: f64) {
                 }
             )
         }
+    }
+}
+
+/// The closing line of `--members`: the one verdict the exit status follows.
+fn print_verdict(verdict: Option<&Verdict>, members: Members, alpha: f64) {
+    let which = match members {
+        Members::Same => "same members: every outcome",
+        Members::Disjoint => "disjoint members: the whole-run outcomes chaos has mixed",
+    };
+    match verdict {
+        None => println!("verdict ({which}): no such test could run"),
+        Some(v) => println!(
+            "verdict ({which}): corrected p = {} ({}): {}",
+            p_text(Some(v.corrected), 0.0),
+            v.describe(),
+            if v.differs(alpha) {
+                format!("the ensembles DIFFER at corrected p < {alpha}")
+            } else {
+                format!("the ensembles do not differ at corrected p < {alpha}")
+            }
+        ),
     }
 }
 

@@ -14,6 +14,7 @@ pub mod outcomes;
 pub mod plan;
 pub mod slurm;
 pub mod table;
+pub mod verdict;
 
 pub use plan::{Point, Sweep, SweepFile};
 
