@@ -1,6 +1,7 @@
 //! The GPU engine against the CPU reference, on whatever adapter is present
 //! (lavapipe in CI). These tests fail, never skip, when no adapter exists.
 
+use slipfront::app::verify::STICK_SLIP_WINDOW;
 use slipfront::engines::backend::{cpu_engine, Precision};
 use slipfront::engines::gpu::shaders::Variant;
 use slipfront::engines::gpu::{GpuEngine, GpuOptions, GpuPath};
@@ -114,10 +115,7 @@ fn stick_slip_mismatch(a: &(Vec<u32>, Vec<u64>), b: &(Vec<u32>, Vec<u64>)) -> Ve
 
 fn stick_slip_scene(extra: &[&str]) -> Model {
     let mut set = SMALL.to_vec();
-    set.push("loading.drive.velocity=0.4");
-    // Short slip times, so junctions re-pin and break again in the window.
-    set.push("friction.junctions.slip_time_mean=2e-4");
-    set.push("friction.junctions.slip_time_std=2e-5");
+    set.extend_from_slice(&STICK_SLIP_WINDOW);
     set.extend_from_slice(extra);
     model(&set)
 }

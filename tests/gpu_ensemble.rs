@@ -2,6 +2,7 @@
 //! at a time on the GPU engine, on whatever adapter is present (lavapipe in
 //! CI). These tests fail, never skip, when no adapter exists.
 
+use slipfront::app::verify::STICK_SLIP_WINDOW;
 use slipfront::engines::gpu::ensemble::{incompatibility, GpuEnsemble};
 use slipfront::engines::gpu::{GpuEngine, GpuOptions, GpuPath};
 use slipfront::engines::SamplePlan;
@@ -23,11 +24,7 @@ fn model(extra: &[&str]) -> Model {
         .iter()
         .map(|s| s.to_string())
         .collect();
-    // Fast driving and short slip times: junctions break, re-pin and break
-    // again within a few thousand steps of driving.
-    set.push("loading.drive.velocity=0.4".into());
-    set.push("friction.junctions.slip_time_mean=2e-4".into());
-    set.push("friction.junctions.slip_time_std=2e-5".into());
+    set.extend(STICK_SLIP_WINDOW.iter().map(|s| s.to_string()));
     set.extend(extra.iter().map(|s| s.to_string()));
     let s = Scenario::parse(DEFAULT_SCENARIO, "test", &set).unwrap();
     Model::from_scenario(&s, true).unwrap()

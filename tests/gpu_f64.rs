@@ -3,6 +3,7 @@
 //! CI, which has SHADER_F64). These tests fail, never skip, when no
 //! adapter (or no f64 on it) exists.
 
+use slipfront::app::verify::STICK_SLIP_WINDOW;
 use slipfront::engines::cpu::CpuEngine;
 use slipfront::engines::gpu::{GpuEngine, GpuOptions, GpuOutput, GpuPath};
 use slipfront::io::compare::{compare_snapshots, fields_over};
@@ -21,11 +22,7 @@ fn model(extra: &[&str]) -> Model {
         .iter()
         .map(|s| s.to_string())
         .collect();
-    // The stick-slip window of tests/gpu_engine.rs: fast drive, short slip
-    // times, so junctions break, re-pin and break again within it.
-    set.push("loading.drive.velocity=0.4".into());
-    set.push("friction.junctions.slip_time_mean=2e-4".into());
-    set.push("friction.junctions.slip_time_std=2e-5".into());
+    set.extend(STICK_SLIP_WINDOW.iter().map(|s| s.to_string()));
     set.extend(extra.iter().map(|s| s.to_string()));
     let s = Scenario::parse(DEFAULT_SCENARIO, "test", &set).unwrap();
     Model::from_scenario(&s, false).unwrap()

@@ -3,6 +3,7 @@
 //! blow-up error, and the energy balance of a stick-slip run.
 
 use slipfront::analysis::energy::{step_power, stored_energy};
+use slipfront::app::verify::STICK_SLIP_WINDOW;
 use slipfront::engines::backend::{cpu_engine, Precision};
 use slipfront::model::scenario::{Component, Pulse, Scenario};
 use slipfront::model::{Driver, ModelError};
@@ -10,11 +11,7 @@ use slipfront::{advance_to, EngineError, Model};
 
 /// A 29 × 16 Table S1 lattice with short loading phases, and `extra` keys.
 fn small(extra: &[&str]) -> Scenario {
-    let mut set = vec![
-        "loading.drive.velocity=0.4",
-        "friction.junctions.slip_time_mean=2e-4",
-        "friction.junctions.slip_time_std=2e-5",
-    ];
+    let mut set = STICK_SLIP_WINDOW.to_vec();
     set.extend_from_slice(extra);
     slipfront::app::verify::small_scene(&set).unwrap()
 }

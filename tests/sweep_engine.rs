@@ -5,6 +5,7 @@
 //! law, damping form, driver and the trigger. A perturbed reference run is
 //! the negative control: the comparison must see a one-ulp change.
 
+use slipfront::app::verify::STICK_SLIP_WINDOW;
 use slipfront::engines::cpu::{CpuEngine, SweepEngine};
 use slipfront::model::real::{Coordinate, DoubleSingle, Real};
 use slipfront::model::scenario::{Scenario, DEFAULT_SCENARIO};
@@ -264,11 +265,7 @@ fn path_evaluators_are_bitwise_the_reference() {
 /// agree bit for bit, in mixed f32 and f64, and the sums must be kept for
 /// most blocks at some point, or the comparison would not cover them.
 fn kept_sums_match<T: Real, C: Coordinate<T>>() {
-    let m = model(&[
-        "loading.drive.velocity=0.4",
-        "friction.junctions.slip_time_mean=2e-4",
-        "friction.junctions.slip_time_std=2e-5",
-    ]);
+    let m = model(&STICK_SLIP_WINDOW);
     let mut reference = CpuEngine::<T, C>::new(&m, 1).unwrap();
     let mut sweep = SweepEngine::<T, C>::new(&m, 2).unwrap();
     let mut most = 0;

@@ -141,6 +141,16 @@ pub const SMALL_SCENE: [&str; 6] = [
     "loading.normal.relax_time=3e-4",
 ];
 
+/// Overrides for a stick-slip window in the small scene: a fast drive and
+/// short slip times, so junctions break, re-pin and break again within a
+/// few thousand steps of driving (the GPU, stability and sweep-engine
+/// cross-checks).
+pub const STICK_SLIP_WINDOW: [&str; 3] = [
+    "loading.drive.velocity=0.4",
+    "friction.junctions.slip_time_mean=2e-4",
+    "friction.junctions.slip_time_std=2e-5",
+];
+
 /// The small side-driven scene with `extra` overrides after SMALL_SCENE.
 pub fn small_scene(extra: &[&str]) -> Result<Scenario, crate::model::scenario::ScenarioError> {
     let set: Vec<String> = SMALL_SCENE
