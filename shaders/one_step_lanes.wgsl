@@ -2,7 +2,10 @@
 // parallel (hardware GPUs, many junctions): workgroup w < nx (junction
 // laws) is interface block w, its threads are the junction lanes; every
 // eighth thread merges eight lanes' sums, thread 0 merges those eight
-// (the CPU twin's tree, lane_tree8) and updates the block. The
+// (the CPU twin's tree, lane_tree8) and updates the block. The block's
+// bulk force is computed beside the lanes, by the last lane (the one with
+// the fewest junctions, or none), not after the merges on thread 0's
+// chain; the same function of the same state, so the same bits. The
 // other workgroups update WORKGROUP blocks each, one per thread. The
 // workgroup barrier makes llvmpipe run the whole shader as coroutines, so
 // software adapters take one_step (serial lanes) instead. With junctions,
@@ -14,6 +17,8 @@
 // import: bulk_forces, common, coordinates, junctions, record_kinetic, scene, state, step_forces, verlet
 
 var<workgroup> lane_sum: array<LaneSum, JUNCTION_LANES>;
+// The interface block's bulk force, from the last lane to thread 0.
+var<workgroup> interface_bulk: vec2<real>;
 
 override RECORD_KINETIC: bool = false;
 
@@ -48,6 +53,9 @@ fn one_step_lanes(
             }
             lane_sum[local] = sum;
         }
+        if local == JUNCTION_LANES - 1u {
+            interface_bulk = bulk_force(w, w, 0u, ld);
+        }
     }
     // Outside the branch: every workgroup reaches it (an ensemble scene's
     // constants are not uniform to the uniformity analysis).
@@ -74,7 +82,7 @@ fn one_step_lanes(
                 f = force[block_base() + w];
                 friction = contact[interface_base() + w].x;
             } else {
-                f = bulk_force(w, w, 0u, ld);
+                f = interface_bulk;
                 var lane_sums = lane_sum_zero();
                 if !jb.kept {
                     lane_sums = lane_tree8(lane_sum[0], lane_sum[8], lane_sum[16], lane_sum[24], lane_sum[32], lane_sum[40], lane_sum[48], lane_sum[56]);
