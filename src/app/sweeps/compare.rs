@@ -167,8 +167,8 @@ impl Comparison {
 
     /// The smallest p-value times the number of tests, at most 1.
     pub fn bonferroni_min_p(&self) -> Option<f64> {
-        let n = self.p_values().len();
-        self.min_p().map(|m| (m.p * n as f64).min(1.0))
+        self.verdict(super::verdict::Members::Same)
+            .map(|v| v.corrected)
     }
 
     /// The tests with p < alpha.
