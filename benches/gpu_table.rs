@@ -58,6 +58,7 @@ use slipfront::app::sweeps::{run_sweep, KeepMcap, Sweep, SweepOptions};
 use slipfront::engines::backend::{make_engine, Backend, Precision};
 use slipfront::engines::gpu::kernel_choice::{candidates, launches, measure_within};
 use slipfront::engines::gpu::shaders::Kernel;
+use slipfront::engines::gpu::tiles::TileShape;
 use slipfront::engines::gpu::{context, GpuOptions, GpuPath};
 use slipfront::model::scenario::built_in;
 use slipfront::{advance_to, Model, Scenario};
@@ -122,7 +123,7 @@ fn tiled_grid(model: &Model, quick: bool, min_seconds: f64) {
     println!("The tiled kernel by tile width, halo (steps per dispatch) and threads:\n");
     println!("| tile width | halo | threads | µs/step | host CPU / wall |");
     println!("| ---: | ---: | ---: | ---: | ---: |");
-    let (widths, halos, threads): (&[u32], &[u64], &[u32]) = if quick {
+    let (widths, halos, threads): (&[u32], &[u32], &[u32]) = if quick {
         (&[8, 16], &[2, 4], &[256])
     } else {
         (&[2, 4, 8, 16], &[2, 4, 8], &[256, 1024])
@@ -131,8 +132,7 @@ fn tiled_grid(model: &Model, quick: bool, min_seconds: f64) {
         for &halo in halos {
             for &t in threads {
                 let opts = GpuOptions {
-                    tile_width: Some(width),
-                    steps_per_dispatch: Some(halo),
+                    tile: Some(TileShape { width, halo }),
                     ..with_threads(Kernel::Tiled, Some(t))
                 };
                 let figure = match solo_step_seconds(model, opts, min_seconds) {

@@ -259,6 +259,9 @@ struct SweepRun {
     /// workgroup, as `run --gpu-threads`.
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
     gpu_threads: Option<u32>,
+    /// GPU backend: the tiled kernel's tiles, as `run --gpu-tile`.
+    #[arg(long, value_name = "WIDTHxHALO", value_parser = slipfront::engines::gpu::tiles::TileShape::parse)]
+    gpu_tile: Option<slipfront::engines::gpu::tiles::TileShape>,
     /// GPU backend: where the points' samples are made, alone or as
     /// ensembles alike (so a table does not depend on --ensemble):
     /// `device` records every scene of an ensemble in one dispatch and
@@ -415,6 +418,7 @@ fn main() -> ExitCode {
                     output: run.gpu_output,
                     persistent_threads: run.gpu_threads,
                     run_ahead: run.gpu_run_ahead,
+                    tile: run.gpu_tile,
                     ..Default::default()
                 },
             }),

@@ -10,6 +10,7 @@ use slipfront::engines::gpu::kernel_choice::{
     ENSEMBLE_THREADS,
 };
 use slipfront::engines::gpu::shaders::Kernel;
+use slipfront::engines::gpu::tiles::TileShape;
 use slipfront::engines::gpu::{GpuEngine, GpuOptions, GpuPath};
 use slipfront::Model;
 use std::path::PathBuf;
@@ -62,16 +63,43 @@ fn measure_times_every_candidate_takes_the_fastest_and_caches_it() {
     timed.dedup();
     assert_eq!(timed, candidates(&m));
     // A scene alone is timed at each kernel's default threads, but the
-    // tiled kernel at several.
+    // tiled kernel at several, and then at four other tile shapes
+    // (search_tile_shapes) with the threads that were fastest.
     for (launch, _) in &choice.timings {
         let tiled = launch.kernel == Kernel::Tiled;
         assert_eq!(launch.threads.is_some(), tiled, "{}", launch.name());
     }
-    let tiled_launches = choice
+    type Timed = (Launch, f64);
+    let (plain, shaped): (Vec<&Timed>, Vec<&Timed>) = choice
         .timings
         .iter()
-        .filter(|t| t.0.kernel == Kernel::Tiled);
-    assert_eq!(tiled_launches.count(), 3);
+        .filter(|t| t.0.kernel == Kernel::Tiled)
+        .partition(|t| t.0.tile.is_none());
+    assert_eq!(plain.len(), 3);
+    let threads = plain
+        .iter()
+        .min_by(|a, b| a.1.total_cmp(&b.1))
+        .unwrap()
+        .0
+        .threads;
+    let searched: Vec<Launch> = shaped
+        .iter()
+        .map(|t| t.0)
+        .chain(
+            choice
+                .skipped
+                .iter()
+                .map(|s| s.0)
+                .filter(|l| l.tile.is_some()),
+        )
+        .collect();
+    assert_eq!(searched.len(), 4, "{}", choice.describe());
+    assert!(searched.iter().all(|l| l.threads == threads));
+    assert!(
+        choice.describe().contains("tiled/") && choice.describe().contains("x4 "),
+        "{}",
+        choice.describe()
+    );
     assert_eq!(timed.len(), 5, "all five kernels fit a 29 × 16 scene");
     for (k, s) in &choice.timings {
         // lavapipe: 10 µs .. 100 ms per step of 464 blocks.
@@ -97,9 +125,13 @@ fn measure_times_every_candidate_takes_the_fastest_and_caches_it() {
         "{}",
         choice.describe()
     );
-    // The options now name the kernel.
+    // The options now name the kernel, and the tile shape if one won.
     let engine = GpuEngine::with_options(&m, opts).unwrap();
     assert_eq!(engine.kernel(), choice.kernel());
+    if let Some(shape) = choice.launch.tile {
+        let g = engine.tile_geometry().expect("tiled");
+        assert_eq!((g.width, g.halo), (shape.width, shape.halo));
+    }
 
     // The cache holds it, and reads back the same choice.
     let key = cache_key::<f32>(&m, &ctx, options(GpuPath::Measure));
@@ -126,6 +158,13 @@ fn measure_times_every_candidate_takes_the_fastest_and_caches_it() {
     if ctx.check_precision::<f64>().is_ok() {
         assert_ne!(cache_key::<f64>(&m, &ctx, options(GpuPath::Measure)), key);
     }
+    // A choice made with the tile shape searched is not one for a fixed
+    // shape (`--gpu-tile`), which is never searched.
+    let fixed = GpuOptions {
+        tile: Some(TileShape::DEFAULT),
+        ..options(GpuPath::Measure)
+    };
+    assert_eq!(cache.lookup(&cache_key::<f32>(&m, &ctx, fixed)), None);
     let driving = "timed in driving from step 10";
     for damaged in [
         format!("{key}\tone-step\tone-step=oops\t{driving}\n"),
@@ -223,8 +262,13 @@ fn an_ensemble_times_the_single_workgroup_kernels_at_several_threads() {
     let opts = options(GpuPath::Measure);
     let (chosen, choice) = resolve_scenes::<f32>(&m, 3, &ctx, opts, &cache).unwrap();
     let choice = choice.expect("measure always measures");
+    // Every launch, then the tile shapes searched (as a scene alone).
     let timed: Vec<Launch> = choice.timings.iter().map(|t| t.0).collect();
+    let (timed, shaped): (Vec<Launch>, Vec<Launch>) =
+        timed.into_iter().partition(|l| l.tile.is_none());
     assert_eq!(timed, launches(&m, 3, opts, &ctx.limits));
+    let skipped_shapes = choice.skipped.iter().filter(|s| s.0.tile.is_some()).count();
+    assert_eq!(shaped.len() + skipped_shapes, 4, "{}", choice.describe());
     for kernel in [Kernel::Persistent, Kernel::Resident, Kernel::Tiled] {
         let threads: Vec<Option<u32>> = timed
             .iter()
@@ -262,21 +306,62 @@ fn an_ensemble_times_the_single_workgroup_kernels_at_several_threads() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
-/// Launch names: `resident`, `resident/512`; anything else is not one
-/// (a damaged cache line is measured again).
+/// `--gpu-tile` fixes the tiled kernel's shape: `measure` times the
+/// kernels without searching shapes, and the options it returns keep the
+/// shape asked for, whichever kernel wins.
+#[test]
+fn a_fixed_tile_shape_is_not_searched() {
+    let ctx = ctx();
+    let m = small(&[]);
+    let dir = scratch("fixed-tile");
+    let cache = ChoiceCache::at(&dir);
+    let shape = TileShape { width: 16, halo: 2 };
+    let opts = GpuOptions {
+        tile: Some(shape),
+        ..options(GpuPath::Measure)
+    };
+    let (chosen, choice) = resolve::<f32>(&m, &ctx, opts, &cache).unwrap();
+    let choice = choice.expect("measure always measures");
+    assert!(choice.timings.iter().any(|t| t.0.kernel == Kernel::Tiled));
+    for (launch, _) in &choice.timings {
+        assert_eq!(launch.tile, None, "{}", choice.describe());
+    }
+    assert_eq!(chosen.tile, Some(shape));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Launch names: `resident`, `resident/512`, `tiled/1024/16x4`; anything
+/// else is not one (a damaged cache line is measured again).
 #[test]
 fn launch_names_read_back() {
+    let shape = TileShape { width: 16, halo: 2 };
     for l in [
         Launch::of(Kernel::OneStepLanes),
-        Launch {
-            kernel: Kernel::Resident,
-            threads: Some(512),
-        },
+        Launch::with_threads(Kernel::Resident, 512),
+        Launch::with_threads(Kernel::Tiled, 1024).with_tile(shape),
+        Launch::of(Kernel::Tiled).with_tile(shape),
     ] {
         assert_eq!(Launch::named(&l.name()), Some(l));
     }
     assert_eq!(Launch::of(Kernel::Resident).name(), "resident");
-    for bad in ["resident/0", "resident/x", "resident/", "warp/256", "warp"] {
+    assert_eq!(
+        Launch::with_threads(Kernel::Tiled, 1024)
+            .with_tile(shape)
+            .name(),
+        "tiled/1024/16x2"
+    );
+    for bad in [
+        "resident/0",
+        "resident/x",
+        "resident/",
+        "warp/256",
+        "warp",
+        "resident/256/8x4",
+        "tiled/256/8x0",
+        "tiled/256/8x4/2",
+        "tiled/8x4/256",
+        "tiled/256/",
+    ] {
         assert_eq!(Launch::named(bad), None, "{bad}");
     }
 }

@@ -4,6 +4,7 @@
 //! tiles, the halo, where batches begin and where samples fall. These tests
 //! fail, never skip, when no adapter exists.
 
+use slipfront::engines::gpu::tiles::TileShape;
 use slipfront::engines::gpu::{GpuEngine, GpuOptions, GpuOutput, GpuPath};
 use slipfront::model::scenario::{Scenario, DEFAULT_SCENARIO};
 use slipfront::{advance_to, Engine, Model, Snapshot};
@@ -25,11 +26,10 @@ fn driven() -> Model {
     model(&[small, &["loading.drive.velocity=0.4"]].concat())
 }
 
-fn tiled(m: &Model, width: u32, halo: u64) -> GpuEngine {
+fn tiled(m: &Model, width: u32, halo: u32) -> GpuEngine {
     let opts = GpuOptions {
         path: GpuPath::Tiled,
-        tile_width: Some(width),
-        steps_per_dispatch: Some(halo),
+        tile: Some(TileShape { width, halo }),
         ..GpuOptions::default()
     };
     GpuEngine::with_options(m, opts)
@@ -80,7 +80,10 @@ fn the_tiled_kernel_is_the_one_step_kernel_bit_for_bit() {
         );
         // Up to `halo` steps a dispatch (and one at each batch's start).
         let dispatches = e.dispatches().unwrap();
-        assert!(dispatches * halo >= end, "{dispatches} dispatches");
+        assert!(
+            dispatches * u64::from(halo) >= end,
+            "{dispatches} dispatches"
+        );
         if halo > 1 {
             assert!(dispatches < end, "{dispatches} dispatches for {end} steps");
         }
@@ -168,7 +171,10 @@ fn the_tiled_kernel_refuses_what_it_cannot_step() {
     let m = driven();
     let wide = GpuOptions {
         path: GpuPath::Tiled,
-        tile_width: Some(4000),
+        tile: Some(TileShape {
+            width: 4000,
+            ..TileShape::DEFAULT
+        }),
         ..GpuOptions::default()
     };
     let err = GpuEngine::with_options(&m, wide).err().unwrap().to_string();
@@ -176,7 +182,10 @@ fn the_tiled_kernel_refuses_what_it_cannot_step() {
     assert!(err.contains("the adapter allows"), "{err}");
     let none = GpuOptions {
         path: GpuPath::Tiled,
-        steps_per_dispatch: Some(0),
+        tile: Some(TileShape {
+            halo: 0,
+            ..TileShape::DEFAULT
+        }),
         ..GpuOptions::default()
     };
     let err = GpuEngine::with_options(&m, none).err().unwrap().to_string();
@@ -199,8 +208,7 @@ fn a_large_lattice_on_the_tiled_kernel_records_its_samples_on_the_device() {
         let opts = GpuOptions {
             path: GpuPath::Tiled,
             output,
-            tile_width: Some(4),
-            steps_per_dispatch: Some(2),
+            tile: Some(TileShape { width: 4, halo: 2 }),
             ..GpuOptions::default()
         };
         GpuEngine::with_options(&m, opts).expect("a GPU adapter (lavapipe in CI)")

@@ -34,6 +34,11 @@ pub struct RunArgs {
     /// (default: 256 persistent, 1024 resident; at most the adapter's).
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
     pub gpu_threads: Option<u32>,
+    /// The tiled kernel's tiles as WIDTHxHALO: columns each tile owns, and
+    /// halo columns each side, the most steps a dispatch runs (default 8x4;
+    /// `auto` on a hardware GPU searches a few shapes when this is not given).
+    #[arg(long, value_name = "WIDTHxHALO", value_parser = slipfront::engines::gpu::tiles::TileShape::parse)]
+    pub gpu_tile: Option<slipfront::engines::gpu::tiles::TileShape>,
     /// Batches the GPU may go on stepping while the samples it recorded
     /// are written (0: it waits for the output at every chunk; at most 64).
     #[arg(long, default_value_t = slipfront::engines::gpu::options::RUN_AHEAD_BATCHES,
@@ -186,6 +191,7 @@ impl RunArgs {
             output: self.gpu_output,
             persistent_threads: self.gpu_threads,
             run_ahead: self.gpu_run_ahead,
+            tile: self.gpu_tile,
             ..GpuOptions::default()
         };
         Ok(make_engine_with(

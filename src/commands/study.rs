@@ -142,6 +142,7 @@ fn coulomb_precursors_study(a: &StudyArgs) -> anyhow::Result<()> {
                 gpu_path: slipfront::engines::gpu::GpuPath::Auto,
                 gpu_output: slipfront::engines::gpu::GpuOutput::Device,
                 gpu_threads: None,
+                gpu_tile: None,
                 gpu_run_ahead: slipfront::engines::gpu::options::RUN_AHEAD_BATCHES,
                 precision: Some(a.precision),
                 set: loading.overrides(),

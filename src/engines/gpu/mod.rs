@@ -411,10 +411,9 @@ impl<T: GpuReal> GpuEngine<T> {
         }
         let geometry = match kernel {
             Kernel::Tiled => {
-                let halo = opts.steps_per_dispatch.unwrap_or(tiles::TILE_HALO as u64);
-                let width = opts.tile_width.unwrap_or(tiles::TILE_WIDTH);
-                let halo = u32::try_from(halo).unwrap_or(u32::MAX);
-                let g = tiles::TileGeometry::new(model, width, halo).map_err(EngineError::Gpu)?;
+                let shape = opts.tile.unwrap_or(tiles::TileShape::DEFAULT);
+                let g = tiles::TileGeometry::new(model, shape.width, shape.halo)
+                    .map_err(EngineError::Gpu)?;
                 tiles::tiled_fit::<T>(model, &g, &ctx.limits).map_err(EngineError::Gpu)?;
                 if ctx.is_software() {
                     tiles::software_fit(model, &g, persistent_threads).map_err(EngineError::Gpu)?;
@@ -712,6 +711,11 @@ impl<T: GpuReal> GpuEngine<T> {
     /// The kernel that steps this scene.
     pub fn kernel(&self) -> Kernel {
         self.kernel
+    }
+
+    /// The tiled kernel's tiles (None for the other kernels).
+    pub fn tile_geometry(&self) -> Option<tiles::TileGeometry> {
+        self.tiles.as_ref().map(|(g, _)| *g)
     }
 
     pub fn adapter(&self) -> String {

@@ -4,6 +4,7 @@
 use super::layout;
 use super::precision::{Coord, GpuReal};
 use super::shaders::Kernel;
+use super::tiles::TileShape;
 use crate::model::scenario::FrictionLaw;
 use crate::model::Model;
 
@@ -105,11 +106,12 @@ pub struct GpuOptions {
     /// Threads of the persistent and resident kernels' workgroup; None:
     /// the kernel's default (`PERSISTENT_THREADS`, `RESIDENT_THREADS`).
     pub persistent_threads: Option<u32>,
-    /// Steps per persistent dispatch instead of the adapter's safe default;
-    /// for the tiled kernel its halo, the most steps per dispatch.
+    /// Steps per persistent dispatch instead of the adapter's safe default.
     pub steps_per_dispatch: Option<u64>,
-    /// Columns each tile of the tiled kernel owns (`tiles::TILE_WIDTH`).
-    pub tile_width: Option<u32>,
+    /// The tiled kernel's tiles: columns each owns and halo columns each
+    /// side, the most steps a dispatch runs (None: `TileShape::DEFAULT`,
+    /// and `auto` searches a few; `--gpu-tile`).
+    pub tile: Option<TileShape>,
     /// Batches an `advance` may leave running once its runner lets it run
     /// ahead (`Engine::run_ahead`); 0: every advance waits for its steps.
     pub run_ahead: usize,
@@ -132,7 +134,7 @@ impl Default for GpuOptions {
             output: GpuOutput::Device,
             persistent_threads: None,
             steps_per_dispatch: None,
-            tile_width: None,
+            tile: None,
             run_ahead: RUN_AHEAD_BATCHES,
             keep_junction_sums: true,
             lane_shuffle: true,

@@ -17,6 +17,54 @@ pub const TILE_HALO: u32 = 4;
 pub const MAX_TILE_HALO: u32 = 32;
 /// The tiled kernel's own workgroup words (its plan), rounded up.
 const TILE_OWN_BYTES: u64 = 64;
+/// Tile widths `auto` times beside the default, at the default halo
+/// (`kernel_choice::search_tile_shapes`): narrower tiles spread a small
+/// lattice over more multiprocessors, wider ones redo less halo work.
+pub const WIDTHS_SEARCHED: [u32; 2] = [4, 16];
+/// Halos (steps per dispatch) `auto` then times at the fastest width:
+/// fewer dispatches a step against more redundant halo work.
+pub const HALOS_SEARCHED: [u32; 2] = [2, 8];
+
+/// A tile's shape: the columns it owns and its halo columns each side,
+/// the most steps one dispatch runs. Written `16x4` (width x halo) in
+/// launch names and on the command line.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct TileShape {
+    pub width: u32,
+    pub halo: u32,
+}
+
+impl TileShape {
+    /// The default shape (`TILE_WIDTH`, `TILE_HALO`).
+    pub const DEFAULT: TileShape = TileShape {
+        width: TILE_WIDTH,
+        halo: TILE_HALO,
+    };
+
+    /// `16x4`.
+    pub fn name(self) -> String {
+        format!("{}x{}", self.width, self.halo)
+    }
+
+    /// The inverse of `name`; an error naming the value and the allowed
+    /// ranges (a width of at least 1, a halo of 1 to `MAX_TILE_HALO`).
+    pub fn parse(text: &str) -> Result<TileShape, String> {
+        let bad = || {
+            format!(
+                "tile shape {text:?}: expected WIDTHxHALO, e.g. 8x4 (columns a tile owns, at \
+                 least 1; halo columns each side, the most steps a dispatch runs, 1 to \
+                 {MAX_TILE_HALO})"
+            )
+        };
+        let (w, h) = text.split_once('x').ok_or_else(bad)?;
+        let width: u32 = w.parse().map_err(|_| bad())?;
+        let halo: u32 = h.parse().map_err(|_| bad())?;
+        if width == 0 || halo == 0 || halo > MAX_TILE_HALO {
+            return Err(bad());
+        }
+        Ok(TileShape { width, halo })
+    }
+}
 
 /// The tiles of one lattice (`shaders/state_tiled.wgsl`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -233,6 +281,22 @@ mod tests {
         );
         let err = TileGeometry::new(&m, TILE_WIDTH, MAX_TILE_HALO + 1).unwrap_err();
         assert!(err.contains(&format!("1 to {MAX_TILE_HALO}")), "{err}");
+    }
+
+    /// Shapes read back from their names; anything else is refused with
+    /// the value and the ranges.
+    #[test]
+    fn tile_shapes_read_back_and_bad_ones_are_refused() {
+        for shape in [TileShape::DEFAULT, TileShape { width: 16, halo: 2 }] {
+            assert_eq!(TileShape::parse(&shape.name()), Ok(shape));
+        }
+        assert_eq!(TileShape::DEFAULT.name(), "8x4");
+        for bad in [
+            "8", "0x4", "8x0", "8x33", "x4", "8x", "ax4", "8x4x2", "-8x4",
+        ] {
+            let err = TileShape::parse(bad).unwrap_err();
+            assert!(err.contains(bad) && err.contains("1 to 32"), "{err}");
+        }
     }
 
     #[test]

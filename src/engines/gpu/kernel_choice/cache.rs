@@ -124,8 +124,9 @@ impl ChoiceCache {
 }
 
 /// What a measured choice depends on: the adapter and its driver, the
-/// precision, the lattice (`lattice_key`), the persistent kernels' threads
-/// and the kernels' sources (a new version of slipfront measures again).
+/// precision, the lattice (`lattice_key`), the persistent kernels' threads,
+/// the tile shape where one is fixed, and the kernels' sources (a new
+/// version of slipfront measures again).
 pub fn cache_key<T: GpuReal>(model: &Model, ctx: &GpuContext, opts: GpuOptions) -> String {
     scenes_cache_key::<T>(model, 1, ctx, opts)
 }
@@ -161,7 +162,7 @@ pub fn scenes_cache_key<T: GpuReal>(
         String::new()
     };
     format!(
-        "{} | {:?} | {} {} | {} | {}{ensemble} | threads {} | kernels {:016x}",
+        "{} | {:?} | {} {} | {} | {}{ensemble} | threads {} | tiles {} | kernels {:016x}",
         info.name,
         info.backend,
         info.driver,
@@ -170,6 +171,9 @@ pub fn scenes_cache_key<T: GpuReal>(
         lattice_key(model),
         opts.persistent_threads
             .map_or_else(|| "default".to_string(), |t| t.to_string()),
+        // A choice that searched the tile shape is not one for a fixed shape.
+        opts.tile
+            .map_or_else(|| "searched".to_string(), |s| s.name()),
         sources.finish()
     )
     .replace(['\t', '\n'], " ")

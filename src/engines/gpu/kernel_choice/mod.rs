@@ -19,18 +19,26 @@
 //! runs must stay deterministic in CI. `--gpu-path measure` times the
 //! kernels anyway, on any adapter, and refreshes the cache.
 //!
+//! The tiled kernel's tile shape is searched too (a few widths, then a
+//! few halos at the fastest width): which shape wins depends on how many
+//! multiprocessors the GPU has against the lattice's columns, and no
+//! hardware figure fixes a default yet.
+//!
 //! `timing` times the launches, `cache` keeps the choices.
 
 mod cache;
 mod timing;
 
 pub use cache::{cache_key, lattice_key, scenes_cache_key, ChoiceCache, CACHE_FILE};
-pub use timing::{driving_start, measure, measure_within, time_kernel, PREPARE_BUDGET_SECONDS};
+pub use timing::{
+    driving_start, measure, measure_within, search_tile_shapes, time_kernel, PREPARE_BUDGET_SECONDS,
+};
 
 use super::context::GpuContext;
 use super::options::{GpuOptions, GpuPath};
 use super::precision::GpuReal;
 use super::shaders::Kernel;
+use super::tiles::TileShape;
 use crate::engines::EngineError;
 use crate::model::scenario::FrictionLaw;
 use crate::model::Model;
@@ -48,12 +56,15 @@ pub const PERSISTENT_MEASURE_MAX_BLOCKS: usize = 16_384;
 pub const ENSEMBLE_THREADS: [u32; 3] = [256, 512, 1024];
 
 /// A kernel as timed: its threads a workgroup where they were chosen
-/// (None: the kernel's default, or `--gpu-threads`). Written
-/// `resident/512` (kernel/threads) in figures and in the cache.
+/// (None: the kernel's default, or `--gpu-threads`), and for the tiled
+/// kernel its tile shape where one was searched (None: the default, or
+/// `--gpu-tile`). Written `resident/512` or `tiled/1024/16x4`
+/// (kernel/threads/shape) in figures and in the cache.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Launch {
     pub kernel: Kernel,
     pub threads: Option<u32>,
+    pub tile: Option<TileShape>,
 }
 
 impl Launch {
@@ -61,27 +72,53 @@ impl Launch {
         Launch {
             kernel,
             threads: None,
+            tile: None,
         }
     }
 
-    /// `one-step-lanes`, `resident/512`.
-    pub fn name(self) -> String {
-        match self.threads {
-            Some(t) => format!("{}/{t}", path_name(self.kernel)),
-            None => path_name(self.kernel),
+    /// `kernel` at `threads` threads a workgroup.
+    pub fn with_threads(kernel: Kernel, threads: u32) -> Launch {
+        Launch {
+            threads: Some(threads),
+            ..Launch::of(kernel)
         }
+    }
+
+    /// This launch with tiles of `shape`.
+    pub fn with_tile(self, shape: TileShape) -> Launch {
+        Launch {
+            tile: Some(shape),
+            ..self
+        }
+    }
+
+    /// `one-step-lanes`, `resident/512`, `tiled/1024/16x4`.
+    pub fn name(self) -> String {
+        let mut name = path_name(self.kernel);
+        if let Some(t) = self.threads {
+            name += &format!("/{t}");
+        }
+        if let Some(shape) = self.tile {
+            name += &format!("/{}", shape.name());
+        }
+        name
     }
 
     /// The inverse of `name`.
     pub fn named(name: &str) -> Option<Launch> {
-        let (kernel, threads) = match name.split_once('/') {
-            Some((k, t)) => (k, Some(t.parse().ok().filter(|&t: &u32| t > 0)?)),
-            None => (name, None),
-        };
-        Some(Launch {
-            kernel: kernel_named(kernel)?,
-            threads,
-        })
+        let mut parts = name.split('/');
+        let mut launch = Launch::of(kernel_named(parts.next()?)?);
+        let mut rest = parts.peekable();
+        if let Some(t) = rest.next_if(|p| !p.contains('x')) {
+            launch.threads = Some(t.parse().ok().filter(|&t: &u32| t > 0)?);
+        }
+        if let Some(shape) = rest.next() {
+            if launch.kernel != Kernel::Tiled {
+                return None;
+            }
+            launch.tile = Some(TileShape::parse(shape).ok()?);
+        }
+        rest.next().is_none().then_some(launch)
     }
 
     /// `opts` running this launch.
@@ -89,6 +126,7 @@ impl Launch {
         GpuOptions {
             path: GpuPath::of(self.kernel),
             persistent_threads: self.threads.or(opts.persistent_threads),
+            tile: self.tile.or(opts.tile),
             ..opts
         }
     }
@@ -253,10 +291,7 @@ pub fn launches(
                 ENSEMBLE_THREADS
                     .iter()
                     .filter(|&&t| t <= most)
-                    .map(|&t| Launch {
-                        kernel,
-                        threads: Some(t),
-                    }),
+                    .map(|&t| Launch::with_threads(kernel, t)),
             );
         } else {
             out.push(Launch::of(kernel));

@@ -6,6 +6,8 @@ use super::{launches, ChoiceSource, KernelChoice, Launch, TimedPhase};
 use crate::engines::gpu::context::GpuContext;
 use crate::engines::gpu::options::GpuOptions;
 use crate::engines::gpu::precision::GpuReal;
+use crate::engines::gpu::shaders::Kernel;
+use crate::engines::gpu::tiles::{TileShape, HALOS_SEARCHED, WIDTHS_SEARCHED};
 use crate::engines::gpu::GpuEngine;
 use crate::engines::{EngineError, EngineState};
 use crate::model::Model;
@@ -113,10 +115,45 @@ pub fn driving_start<T: GpuReal>(
     }
 }
 
+/// The tiled kernel's shape, searched from `best`, its fastest launch at
+/// the default shape (and the threads it ran at), with `time` (seconds a
+/// step, or None where the launch could not run): first the widths of
+/// `tiles::WIDTHS_SEARCHED` at the default halo, then the halos of
+/// `HALOS_SEARCHED` at the fastest width. Two rounds of two, not the whole
+/// grid: each shape is a pipeline to compile, and the width (how many
+/// multiprocessors a scene spreads over) and the halo (dispatches a step
+/// against redundant work) pull mostly apart. Returns the fastest launch
+/// and its time, `best` if no shape beat it.
+pub fn search_tile_shapes(
+    best: (Launch, f64),
+    mut time: impl FnMut(Launch) -> Option<f64>,
+) -> (Launch, f64) {
+    let mut fastest = best;
+    let base = best.0;
+    for width in WIDTHS_SEARCHED {
+        let launch = base.with_tile(TileShape {
+            width,
+            ..TileShape::DEFAULT
+        });
+        if let Some(s) = time(launch).filter(|&s| s < fastest.1) {
+            fastest = (launch, s);
+        }
+    }
+    let width = fastest.0.tile.unwrap_or(TileShape::DEFAULT).width;
+    for halo in HALOS_SEARCHED {
+        let launch = base.with_tile(TileShape { width, halo });
+        if let Some(s) = time(launch).filter(|&s| s < fastest.1) {
+            fastest = (launch, s);
+        }
+    }
+    fastest
+}
+
 /// Times every launch (`launches`) on the scenes `models` (one, or an
 /// ensemble of one lattice shape) from the start of driving
-/// (`driving_start`, within `PREPARE_BUDGET_SECONDS`) and takes the
-/// fastest. A launch that cannot be built (a buffer too large, a lattice
+/// (`driving_start`, within `PREPARE_BUDGET_SECONDS`), then the tiled
+/// kernel's other tile shapes (`search_tile_shapes`, unless the options
+/// fix the shape), and takes the fastest. A launch that cannot be built (a buffer too large, a lattice
 /// beyond workgroup memory, a device error) is skipped with its reason; if
 /// none can, the first error is returned.
 pub fn measure<T: GpuReal>(
@@ -140,14 +177,29 @@ pub fn measure_within<T: GpuReal>(
     let launches = launches(&models[0], models.len(), opts, &ctx.limits);
     // One-step (always a candidate, first) steps the load phase.
     let (start, phase) = driving_start::<T>(models, ctx, opts, launches[0], budget);
-    for launch in launches {
-        match time_kernel::<T>(models, ctx, opts, launch, start.as_deref()) {
-            Ok(s) => timings.push((launch, s)),
+    let mut time =
+        |launch: Launch| match time_kernel::<T>(models, ctx, opts, launch, start.as_deref()) {
+            Ok(s) => {
+                timings.push((launch, s));
+                Some(s)
+            }
             Err(e) => {
                 skipped.push((launch, e.to_string()));
                 first_error.get_or_insert(e);
+                None
+            }
+        };
+    let mut tiled_best: Option<(Launch, f64)> = None;
+    for launch in launches {
+        if let Some(s) = time(launch) {
+            if launch.kernel == Kernel::Tiled && tiled_best.is_none_or(|(_, b)| s < b) {
+                tiled_best = Some((launch, s));
             }
         }
+    }
+    // The tile's shape is searched unless the options fix it.
+    if let Some(best) = tiled_best.filter(|_| opts.tile.is_none()) {
+        search_tile_shapes(best, &mut time);
     }
     let Some(&(launch, _)) = timings.iter().min_by(|a, b| a.1.total_cmp(&b.1)) else {
         return Err(first_error.expect("at least one candidate (one-step always is)"));
@@ -160,4 +212,59 @@ pub fn measure_within<T: GpuReal>(
         scenes: models.len(),
         phase,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A made-up landscape of step times by shape: the search times the
+    /// widths at the default halo, then the halos at the fastest width,
+    /// and returns the fastest it timed; a shape that cannot run is passed
+    /// over.
+    #[test]
+    fn the_tile_search_walks_widths_then_halos_at_the_fastest_width() {
+        let base = Launch::with_threads(Kernel::Tiled, 1024);
+        let landscape = |shape: TileShape| -> Option<f64> {
+            match (shape.width, shape.halo) {
+                (8, 4) => Some(10.0),
+                (4, 4) => Some(11.0),
+                (16, 4) => Some(9.0),
+                (16, 2) => None,
+                (16, 8) => Some(7.0),
+                _ => Some(100.0),
+            }
+        };
+        let mut timed = Vec::new();
+        let (launch, s) = search_tile_shapes((base, 10.0), |l| {
+            timed.push(l.tile.unwrap().name());
+            landscape(l.tile.unwrap())
+        });
+        assert_eq!(timed, ["4x4", "16x4", "16x2", "16x8"]);
+        assert_eq!(launch, base.with_tile(TileShape { width: 16, halo: 8 }));
+        assert_eq!(launch.threads, Some(1024));
+        assert_eq!(s, 7.0);
+
+        // Nothing beats the default: it stays, without a shape; the halo
+        // round runs at the default width.
+        let mut timed = Vec::new();
+        let kept = search_tile_shapes((base, 1.0), |l| {
+            timed.push(l.tile.unwrap().name());
+            Some(2.0)
+        });
+        assert_eq!(kept, (base, 1.0));
+        assert_eq!(timed, ["4x4", "16x4", "8x2", "8x8"]);
+    }
+
+    /// A searched shape reaches the options the engine is built with.
+    #[test]
+    fn a_launch_with_a_tile_shape_sets_the_tile_options() {
+        let shaped =
+            Launch::with_threads(Kernel::Tiled, 256).with_tile(TileShape { width: 16, halo: 2 });
+        let opts = shaped.options(GpuOptions::default());
+        assert_eq!(opts.tile, Some(TileShape { width: 16, halo: 2 }));
+        assert_eq!(opts.persistent_threads, Some(256));
+        let plain = Launch::of(Kernel::Tiled).options(GpuOptions::default());
+        assert_eq!(plain.tile, None);
+    }
 }
