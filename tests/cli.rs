@@ -161,6 +161,14 @@ fn bad_input_exits_with_a_clear_message() {
             );
             assert!(err.contains("from 0 to 64"), "{err}");
         }
+        // A tile shape: WIDTHxHALO, the width at least 1, the halo 1 to 32.
+        for bad in ["8x0", "0x4", "8x33", "8"] {
+            let out = slipfront(&[command, &format!("--gpu-tile={bad}")]);
+            assert_eq!(out.status.code(), Some(2));
+            let err = String::from_utf8_lossy(&out.stderr);
+            assert!(err.contains(&format!("'{bad}' for '--gpu-tile")), "{err}");
+            assert!(err.contains("1 to 32"), "{err}");
+        }
     }
 }
 
