@@ -153,9 +153,9 @@ pub fn search_tile_shapes(
 /// ensemble of one lattice shape) from the start of driving
 /// (`driving_start`, within `PREPARE_BUDGET_SECONDS`), then the tiled
 /// kernel's other tile shapes (`search_tile_shapes`, unless the options
-/// fix the shape), and takes the fastest. A launch that cannot be built (a buffer too large, a lattice
-/// beyond workgroup memory, a device error) is skipped with its reason; if
-/// none can, the first error is returned.
+/// fix the shape), and takes the fastest. A launch that cannot be built
+/// (a buffer too large, a lattice beyond workgroup memory, a device error)
+/// is skipped with its reason; if none can, the first error is returned.
 pub fn measure<T: GpuReal>(
     models: &[Model],
     ctx: &GpuContext,
