@@ -12,6 +12,7 @@ use slipfront::engines::gpu::kernel_choice::{
 use slipfront::engines::gpu::shaders::Kernel;
 use slipfront::engines::gpu::tiles::TileShape;
 use slipfront::engines::gpu::{GpuEngine, GpuOptions, GpuPath};
+use slipfront::engines::Engine;
 use slipfront::Model;
 use std::path::PathBuf;
 
@@ -59,7 +60,29 @@ fn measure_times_every_candidate_takes_the_fastest_and_caches_it() {
     let (opts, choice) = resolve::<f32>(&m, &ctx, options(GpuPath::Measure), &cache).unwrap();
     let choice = choice.expect("measure always measures");
     assert_eq!(choice.source, ChoiceSource::Measured);
-    let mut timed: Vec<Kernel> = choice.timings.iter().map(|t| t.0.kernel).collect();
+    // Last, where the lanes merged in subgroups (lavapipe: runs of 8), the
+    // fastest launch that merged them is timed with every lane's sum
+    // through storage.
+    type Timed = (Launch, f64);
+    let (in_storage, choice_timings): (Vec<Timed>, Vec<Timed>) =
+        choice.timings.iter().partition(|t| t.0.lanes_in_storage);
+    if ctx.has_subgroups() {
+        assert_eq!(in_storage.len(), 1, "{}", choice.describe());
+        assert_eq!(choice.timings.last(), in_storage.first());
+        let twin = Launch {
+            lanes_in_storage: false,
+            ..in_storage[0].0
+        };
+        assert!(twin.kernel.merges_lanes_through_storage());
+        let merged_in_subgroups = choice_timings
+            .iter()
+            .filter(|t| t.0.kernel.merges_lanes_through_storage());
+        let fastest_merged = merged_in_subgroups.min_by(|a, b| a.1.total_cmp(&b.1));
+        assert_eq!(fastest_merged.map(|t| t.0), Some(twin));
+    } else {
+        assert!(in_storage.is_empty(), "{}", choice.describe());
+    }
+    let mut timed: Vec<Kernel> = choice_timings.iter().map(|t| t.0.kernel).collect();
     timed.dedup();
     assert_eq!(timed, candidates(&m));
     // A scene alone is timed at each kernel's default threads, but the
@@ -69,9 +92,7 @@ fn measure_times_every_candidate_takes_the_fastest_and_caches_it() {
         let tiled = launch.kernel == Kernel::Tiled;
         assert_eq!(launch.threads.is_some(), tiled, "{}", launch.name());
     }
-    type Timed = (Launch, f64);
-    let (plain, shaped): (Vec<&Timed>, Vec<&Timed>) = choice
-        .timings
+    let (plain, shaped): (Vec<&Timed>, Vec<&Timed>) = choice_timings
         .iter()
         .filter(|t| t.0.kernel == Kernel::Tiled)
         .partition(|t| t.0.tile.is_none());
@@ -125,12 +146,18 @@ fn measure_times_every_candidate_takes_the_fastest_and_caches_it() {
         "{}",
         choice.describe()
     );
-    // The options now name the kernel, and the tile shape if one won.
-    let engine = GpuEngine::with_options(&m, opts).unwrap();
+    // The options now name the kernel, the tile shape if one won, and
+    // where the lanes merge.
+    let mut engine = GpuEngine::with_options(&m, opts).unwrap();
     assert_eq!(engine.kernel(), choice.kernel());
     if let Some(shape) = choice.launch.tile {
         let g = engine.tile_geometry().expect("tiled");
         assert_eq!((g.width, g.halo), (shape.width, shape.halo));
+    }
+    assert_eq!(opts.lane_shuffle, !choice.launch.lanes_in_storage);
+    engine.advance(2).unwrap();
+    if choice.launch.lanes_in_storage {
+        assert_eq!(engine.lane_shuffle_levels(), 0);
     }
 
     // The cache holds it, and reads back the same choice.
@@ -165,6 +192,13 @@ fn measure_times_every_candidate_takes_the_fastest_and_caches_it() {
         ..options(GpuPath::Measure)
     };
     assert_eq!(cache.lookup(&cache_key::<f32>(&m, &ctx, fixed)), None);
+    // Nor one made with the lanes' merge searched for lanes fixed in
+    // storage.
+    let storage = GpuOptions {
+        lane_shuffle: false,
+        ..options(GpuPath::Measure)
+    };
+    assert_eq!(cache.lookup(&cache_key::<f32>(&m, &ctx, storage)), None);
     let driving = "timed in driving from step 10";
     for damaged in [
         format!("{key}\tone-step\tone-step=oops\t{driving}\n"),
@@ -262,8 +296,14 @@ fn an_ensemble_times_the_single_workgroup_kernels_at_several_threads() {
     let opts = options(GpuPath::Measure);
     let (chosen, choice) = resolve_scenes::<f32>(&m, 3, &ctx, opts, &cache).unwrap();
     let choice = choice.expect("measure always measures");
-    // Every launch, then the tile shapes searched (as a scene alone).
-    let timed: Vec<Launch> = choice.timings.iter().map(|t| t.0).collect();
+    // Every launch, then the tile shapes searched (as a scene alone),
+    // then the lanes through storage.
+    let timed: Vec<Launch> = choice
+        .timings
+        .iter()
+        .map(|t| t.0)
+        .filter(|l| !l.lanes_in_storage)
+        .collect();
     let (timed, shaped): (Vec<Launch>, Vec<Launch>) =
         timed.into_iter().partition(|l| l.tile.is_none());
     assert_eq!(timed, launches(&m, 3, opts, &ctx.limits));
@@ -306,11 +346,12 @@ fn an_ensemble_times_the_single_workgroup_kernels_at_several_threads() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
-/// `--gpu-tile` fixes the tiled kernel's shape: `measure` times the
-/// kernels without searching shapes, and the options it returns keep the
-/// shape asked for, whichever kernel wins.
+/// `--gpu-tile` fixes the tiled kernel's shape, and `lane_shuffle` false
+/// fixes every lane's sum in storage: `measure` times the kernels without
+/// searching shapes or lane merges, and the options it returns keep what
+/// was asked for, whichever kernel wins.
 #[test]
-fn a_fixed_tile_shape_is_not_searched() {
+fn a_fixed_tile_shape_or_lane_merge_is_not_searched() {
     let ctx = ctx();
     let m = small(&[]);
     let dir = scratch("fixed-tile");
@@ -318,6 +359,7 @@ fn a_fixed_tile_shape_is_not_searched() {
     let shape = TileShape { width: 16, halo: 2 };
     let opts = GpuOptions {
         tile: Some(shape),
+        lane_shuffle: false,
         ..options(GpuPath::Measure)
     };
     let (chosen, choice) = resolve::<f32>(&m, &ctx, opts, &cache).unwrap();
@@ -325,13 +367,15 @@ fn a_fixed_tile_shape_is_not_searched() {
     assert!(choice.timings.iter().any(|t| t.0.kernel == Kernel::Tiled));
     for (launch, _) in &choice.timings {
         assert_eq!(launch.tile, None, "{}", choice.describe());
+        assert!(!launch.lanes_in_storage, "{}", choice.describe());
     }
     assert_eq!(chosen.tile, Some(shape));
+    assert!(!chosen.lane_shuffle);
     let _ = std::fs::remove_dir_all(&dir);
 }
 
-/// Launch names: `resident`, `resident/512`, `tiled/1024/16x4`; anything
-/// else is not one (a damaged cache line is measured again).
+/// Launch names: `resident`, `resident/512`, `tiled/1024/16x4`,
+/// `resident/1024/lanes-in-storage`; anything else is not one (a damaged cache line is measured again).
 #[test]
 fn launch_names_read_back() {
     let shape = TileShape { width: 16, halo: 2 };
@@ -340,9 +384,20 @@ fn launch_names_read_back() {
         Launch::with_threads(Kernel::Resident, 512),
         Launch::with_threads(Kernel::Tiled, 1024).with_tile(shape),
         Launch::of(Kernel::Tiled).with_tile(shape),
+        Launch::with_threads(Kernel::Resident, 1024).with_lanes_in_storage(),
+        Launch::with_threads(Kernel::Tiled, 256)
+            .with_tile(shape)
+            .with_lanes_in_storage(),
+        Launch::of(Kernel::Persistent).with_lanes_in_storage(),
     ] {
         assert_eq!(Launch::named(&l.name()), Some(l));
     }
+    assert_eq!(
+        Launch::with_threads(Kernel::Resident, 512)
+            .with_lanes_in_storage()
+            .name(),
+        "resident/512/lanes-in-storage"
+    );
     assert_eq!(Launch::of(Kernel::Resident).name(), "resident");
     assert_eq!(
         Launch::with_threads(Kernel::Tiled, 1024)
@@ -361,6 +416,12 @@ fn launch_names_read_back() {
         "tiled/256/8x4/2",
         "tiled/8x4/256",
         "tiled/256/",
+        // The one-step kernels merge their lanes without storage.
+        "one-step-lanes/lanes-in-storage",
+        "resident/lanes-in-storage/256",
+        "tiled/lanes-in-storage/8x4",
+        "resident/256/lanes-in-storage/lanes-in-storage",
+        "resident/256/lanes",
     ] {
         assert_eq!(Launch::named(bad), None, "{bad}");
     }

@@ -412,8 +412,7 @@ impl<T: GpuReal> GpuEngine<T> {
         let geometry = match kernel {
             Kernel::Tiled => {
                 let shape = opts.tile.unwrap_or(tiles::TileShape::DEFAULT);
-                let g = tiles::TileGeometry::new(model, shape.width, shape.halo)
-                    .map_err(EngineError::Gpu)?;
+                let g = tiles::TileGeometry::new(model, shape).map_err(EngineError::Gpu)?;
                 tiles::tiled_fit::<T>(model, &g, &ctx.limits).map_err(EngineError::Gpu)?;
                 if ctx.is_software() {
                     tiles::software_fit(model, &g, persistent_threads).map_err(EngineError::Gpu)?;

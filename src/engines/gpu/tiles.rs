@@ -47,7 +47,7 @@ impl TileShape {
     }
 
     /// The inverse of `name`; an error naming the value and the allowed
-    /// ranges (a width of at least 1, a halo of 1 to `MAX_TILE_HALO`).
+    /// ranges (those of `check`).
     pub fn parse(text: &str) -> Result<TileShape, String> {
         let bad = || {
             format!(
@@ -59,10 +59,26 @@ impl TileShape {
         let (w, h) = text.split_once('x').ok_or_else(bad)?;
         let width: u32 = w.parse().map_err(|_| bad())?;
         let halo: u32 = h.parse().map_err(|_| bad())?;
-        if width == 0 || halo == 0 || halo > MAX_TILE_HALO {
-            return Err(bad());
+        let shape = TileShape { width, halo };
+        shape.check().map_err(|_| bad())?;
+        Ok(shape)
+    }
+
+    /// The allowed ranges, in one place: a width of at least 1 column, a
+    /// halo of 1 to `MAX_TILE_HALO` (the most steps a dispatch runs); an
+    /// error naming the value and its range.
+    pub fn check(self) -> Result<(), String> {
+        if self.width == 0 {
+            return Err("tile width 0: a tile owns at least 1 column".to_string());
         }
-        Ok(TileShape { width, halo })
+        if self.halo == 0 || self.halo > MAX_TILE_HALO {
+            return Err(format!(
+                "tile halo {}: halo columns each side, the most steps a dispatch of the tiled \
+                 kernel runs, are 1 to {MAX_TILE_HALO}",
+                self.halo
+            ));
+        }
+        Ok(())
     }
 }
 
@@ -82,18 +98,11 @@ pub struct TileGeometry {
 }
 
 impl TileGeometry {
-    /// Tiles of `width` columns with `halo` columns of halo over `model`'s
-    /// lattice; an error naming the value and the allowed range.
-    pub fn new(model: &Model, width: u32, halo: u32) -> Result<TileGeometry, String> {
-        if width == 0 {
-            return Err("tile width 0: a tile owns at least 1 column".to_string());
-        }
-        if halo == 0 || halo > MAX_TILE_HALO {
-            return Err(format!(
-                "tile halo {halo}: the steps per dispatch of the tiled kernel are 1 to \
-                 {MAX_TILE_HALO}"
-            ));
-        }
+    /// Tiles of `shape` over `model`'s lattice; an error naming the value
+    /// and the allowed range (`TileShape::check`).
+    pub fn new(model: &Model, shape: TileShape) -> Result<TileGeometry, String> {
+        shape.check()?;
+        let TileShape { width, halo } = shape;
         let span = width + 2 * halo;
         Ok(TileGeometry {
             width,
@@ -253,11 +262,18 @@ mod tests {
         )
         .unwrap();
         let m = Model::from_scenario(&s, false).unwrap();
-        let defaults = TileGeometry::new(&m, TILE_WIDTH, TILE_HALO).unwrap();
+        let defaults = TileGeometry::new(&m, TileShape::DEFAULT).unwrap();
         let n = loop_iterations(&m, &defaults, 256);
         assert!(n < SOFTWARE_LOOP_BUDGET / 10, "{n}");
         assert!(software_fit(&m, &defaults, 256).is_ok());
-        let wide = TileGeometry::new(&m, 16, MAX_TILE_HALO).unwrap();
+        let wide = TileGeometry::new(
+            &m,
+            TileShape {
+                width: 16,
+                halo: MAX_TILE_HALO,
+            },
+        )
+        .unwrap();
         let err = software_fit(&m, &wide, 1).unwrap_err();
         assert!(err.contains("loop iterations per thread"), "{err}");
         assert!(loop_iterations(&m, &wide, 1) > SOFTWARE_LOOP_BUDGET);
@@ -274,12 +290,26 @@ mod tests {
         )
         .unwrap();
         let m = Model::from_scenario(&s, false).unwrap();
-        let err = TileGeometry::new(&m, 0, TILE_HALO).unwrap_err();
+        let err = TileGeometry::new(
+            &m,
+            TileShape {
+                width: 0,
+                halo: TILE_HALO,
+            },
+        )
+        .unwrap_err();
         assert!(
             err.contains("tile width 0") && err.contains("at least 1"),
             "{err}"
         );
-        let err = TileGeometry::new(&m, TILE_WIDTH, MAX_TILE_HALO + 1).unwrap_err();
+        let err = TileGeometry::new(
+            &m,
+            TileShape {
+                width: TILE_WIDTH,
+                halo: MAX_TILE_HALO + 1,
+            },
+        )
+        .unwrap_err();
         assert!(err.contains(&format!("1 to {MAX_TILE_HALO}")), "{err}");
     }
 

@@ -5,7 +5,7 @@ use super::{ChoiceSource, KernelChoice, Launch, TimedPhase};
 use crate::engines::gpu::context::GpuContext;
 use crate::engines::gpu::options::GpuOptions;
 use crate::engines::gpu::precision::GpuReal;
-use crate::engines::gpu::shaders::{Kernel, Variant};
+use crate::engines::gpu::shaders::{Kernel, LaneMerge, Variant};
 use crate::model::Model;
 use std::hash::{Hash, Hasher};
 use std::path::{Path, PathBuf};
@@ -153,7 +153,9 @@ pub fn scenes_cache_key<T: GpuReal>(
 ) -> String {
     let mut sources = std::collections::hash_map::DefaultHasher::new();
     for kernel in Kernel::ALL {
-        kernel.source::<T>().hash(&mut sources);
+        for lanes in [LaneMerge::Storage, LaneMerge::Shuffle] {
+            kernel.source_with::<T>(lanes).hash(&mut sources);
+        }
     }
     let info = &ctx.info;
     let ensemble = if scenes > 1 {
@@ -162,7 +164,7 @@ pub fn scenes_cache_key<T: GpuReal>(
         String::new()
     };
     format!(
-        "{} | {:?} | {} {} | {} | {}{ensemble} | threads {} | tiles {} | kernels {:016x}",
+        "{} | {:?} | {} {} | {} | {}{ensemble} | threads {} | tiles {} | lanes {} | kernels {:016x}",
         info.name,
         info.backend,
         info.driver,
@@ -174,6 +176,13 @@ pub fn scenes_cache_key<T: GpuReal>(
         // A choice that searched the tile shape is not one for a fixed shape.
         opts.tile
             .map_or_else(|| "searched".to_string(), |s| s.name()),
+        // Nor is one that searched where the lanes merge one for lanes
+        // fixed in storage.
+        if opts.lane_shuffle {
+            "searched"
+        } else {
+            "in storage"
+        },
         sources.finish()
     )
     .replace(['\t', '\n'], " ")

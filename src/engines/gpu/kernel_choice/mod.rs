@@ -22,7 +22,11 @@
 //! The tiled kernel's tile shape is searched too (a few widths, then a
 //! few halos at the fastest width): which shape wins depends on how many
 //! multiprocessors the GPU has against the lattice's columns, and no
-//! hardware figure fixes a default yet.
+//! hardware figure fixes a default yet. So is where the junction lanes'
+//! sums merge (in subgroups first, or all through storage): the fastest
+//! launch that merged in subgroups is timed again with every sum through
+//! storage. Both give the same sums; no hardware run has timed the
+//! subgroup merges yet.
 //!
 //! `timing` times the launches, `cache` keeps the choices.
 
@@ -56,16 +60,24 @@ pub const PERSISTENT_MEASURE_MAX_BLOCKS: usize = 16_384;
 pub const ENSEMBLE_THREADS: [u32; 3] = [256, 512, 1024];
 
 /// A kernel as timed: its threads a workgroup where they were chosen
-/// (None: the kernel's default, or `--gpu-threads`), and for the tiled
+/// (None: the kernel's default, or `--gpu-threads`), for the tiled
 /// kernel its tile shape where one was searched (None: the default, or
-/// `--gpu-tile`). Written `resident/512` or `tiled/1024/16x4`
-/// (kernel/threads/shape) in figures and in the cache.
+/// `--gpu-tile`), and whether its junction lanes' sums all went through
+/// storage where they would merge in subgroups first. Written
+/// `resident/512`, `tiled/1024/16x4` or `resident/1024/lanes-in-storage`
+/// (kernel/threads/shape/lanes) in figures and in the cache.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Launch {
     pub kernel: Kernel,
     pub threads: Option<u32>,
     pub tile: Option<TileShape>,
+    /// Every lane's sum through storage (`GpuOptions::lane_shuffle`
+    /// false): the same sums by the same tree, at another speed.
+    pub lanes_in_storage: bool,
 }
+
+/// The name's last part for `Launch::lanes_in_storage`.
+const LANES_IN_STORAGE: &str = "lanes-in-storage";
 
 impl Launch {
     pub fn of(kernel: Kernel) -> Launch {
@@ -73,6 +85,7 @@ impl Launch {
             kernel,
             threads: None,
             tile: None,
+            lanes_in_storage: false,
         }
     }
 
@@ -92,7 +105,16 @@ impl Launch {
         }
     }
 
-    /// `one-step-lanes`, `resident/512`, `tiled/1024/16x4`.
+    /// This launch with every lane's sum through storage.
+    pub fn with_lanes_in_storage(self) -> Launch {
+        Launch {
+            lanes_in_storage: true,
+            ..self
+        }
+    }
+
+    /// `one-step-lanes`, `resident/512`, `tiled/1024/16x4`,
+    /// `resident/1024/lanes-in-storage`.
     pub fn name(self) -> String {
         let mut name = path_name(self.kernel);
         if let Some(t) = self.threads {
@@ -101,22 +123,33 @@ impl Launch {
         if let Some(shape) = self.tile {
             name += &format!("/{}", shape.name());
         }
+        if self.lanes_in_storage {
+            name += &format!("/{LANES_IN_STORAGE}");
+        }
         name
     }
 
-    /// The inverse of `name`.
+    /// The inverse of `name`: the parts in its order, each at most once.
     pub fn named(name: &str) -> Option<Launch> {
         let mut parts = name.split('/');
         let mut launch = Launch::of(kernel_named(parts.next()?)?);
         let mut rest = parts.peekable();
-        if let Some(t) = rest.next_if(|p| !p.contains('x')) {
+        if let Some(t) =
+            rest.next_if(|p| p.starts_with(|c: char| c.is_ascii_digit()) && !p.contains('x'))
+        {
             launch.threads = Some(t.parse().ok().filter(|&t: &u32| t > 0)?);
         }
-        if let Some(shape) = rest.next() {
+        if let Some(shape) = rest.next_if(|p| *p != LANES_IN_STORAGE) {
             if launch.kernel != Kernel::Tiled {
                 return None;
             }
             launch.tile = Some(TileShape::parse(shape).ok()?);
+        }
+        if rest.next_if(|p| *p == LANES_IN_STORAGE).is_some() {
+            if !launch.kernel.merges_lanes_through_storage() {
+                return None;
+            }
+            launch.lanes_in_storage = true;
         }
         rest.next().is_none().then_some(launch)
     }
@@ -127,6 +160,7 @@ impl Launch {
             path: GpuPath::of(self.kernel),
             persistent_threads: self.threads.or(opts.persistent_threads),
             tile: self.tile.or(opts.tile),
+            lane_shuffle: opts.lane_shuffle && !self.lanes_in_storage,
             ..opts
         }
     }

@@ -41,6 +41,26 @@ pub fn time_kernel<T: GpuReal>(
     launch: Launch,
     start: Option<&[EngineState]>,
 ) -> Result<f64, EngineError> {
+    time_launch::<T>(models, ctx, opts, launch, start).map(|t| t.seconds)
+}
+
+/// What timing a launch found: its wall time a step, and the levels of
+/// the junction lane tree its workgroups merged in subgroups
+/// (`GpuEngine::lane_shuffle_levels`; 0: every lane's sum through storage).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Timed {
+    pub seconds: f64,
+    pub lane_levels: u32,
+}
+
+/// `time_kernel`, with the lane levels the engine used.
+fn time_launch<T: GpuReal>(
+    models: &[Model],
+    ctx: &GpuContext,
+    opts: GpuOptions,
+    launch: Launch,
+    start: Option<&[EngineState]>,
+) -> Result<Timed, EngineError> {
     let opts = launch.options(opts);
     let mut engine = GpuEngine::<T>::build(models, ctx.clone(), opts, models.len() > 1)?;
     if let Some(states) = start {
@@ -56,7 +76,10 @@ pub fn time_kernel<T: GpuReal>(
         engine.advance_steps(steps)?;
         best = best.min(t.elapsed().as_secs_f64() / steps as f64);
     }
-    Ok(best)
+    Ok(Timed {
+        seconds: best,
+        lane_levels: engine.lane_shuffle_levels(),
+    })
 }
 
 /// The states the candidates are timed from: the scenes stepped by
@@ -153,7 +176,9 @@ pub fn search_tile_shapes(
 /// ensemble of one lattice shape) from the start of driving
 /// (`driving_start`, within `PREPARE_BUDGET_SECONDS`), then the tiled
 /// kernel's other tile shapes (`search_tile_shapes`, unless the options
-/// fix the shape), and takes the fastest. A launch that cannot be built
+/// fix the shape), then the fastest launch whose lanes merged in subgroups
+/// with every lane's sum through storage instead (unless the options fix
+/// that), and takes the fastest. A launch that cannot be built
 /// (a buffer too large, a lattice beyond workgroup memory, a device error)
 /// is skipped with its reason; if none can, the first error is returned.
 pub fn measure<T: GpuReal>(
@@ -177,10 +202,18 @@ pub fn measure_within<T: GpuReal>(
     let launches = launches(&models[0], models.len(), opts, &ctx.limits);
     // One-step (always a candidate, first) steps the load phase.
     let (start, phase) = driving_start::<T>(models, ctx, opts, launches[0], budget);
+    // The launches whose lanes merged in subgroups, with their times.
+    let mut shuffled = Vec::new();
     let mut time =
-        |launch: Launch| match time_kernel::<T>(models, ctx, opts, launch, start.as_deref()) {
-            Ok(s) => {
+        |launch: Launch| match time_launch::<T>(models, ctx, opts, launch, start.as_deref()) {
+            Ok(Timed {
+                seconds: s,
+                lane_levels,
+            }) => {
                 timings.push((launch, s));
+                if lane_levels > 0 {
+                    shuffled.push((launch, s));
+                }
                 Some(s)
             }
             Err(e) => {
@@ -200,6 +233,17 @@ pub fn measure_within<T: GpuReal>(
     // The tile's shape is searched unless the options fix it.
     if let Some(best) = tiled_best.filter(|_| opts.tile.is_none()) {
         search_tile_shapes(best, &mut time);
+    }
+    // Where the lanes merge: the same sums either way, and subgroup
+    // merges have no hardware figure yet. Only the fastest launch that
+    // used them is timed without (another pipeline to compile).
+    let fastest_shuffled = shuffled.iter().min_by(|a, b| a.1.total_cmp(&b.1));
+    if let Some(&(launch, _)) = fastest_shuffled {
+        let storage = launch.with_lanes_in_storage();
+        match time_kernel::<T>(models, ctx, opts, storage, start.as_deref()) {
+            Ok(s) => timings.push((storage, s)),
+            Err(e) => skipped.push((storage, e.to_string())),
+        }
     }
     let Some(&(launch, _)) = timings.iter().min_by(|a, b| a.1.total_cmp(&b.1)) else {
         return Err(first_error.expect("at least one candidate (one-step always is)"));
