@@ -25,8 +25,9 @@
 //! hardware figure fixes a default yet. So is where the junction lanes'
 //! sums merge (in subgroups first, or all through storage): the fastest
 //! launch that merged in subgroups is timed again with every sum through
-//! storage. Both give the same sums; no hardware run has timed the
-//! subgroup merges yet.
+//! storage. Both merge the same sums by the same tree (bit for bit but
+//! where a driver compiles a rounding tie apart: docs/gpu-kernels.md); no
+//! hardware run has timed the subgroup merges yet.
 //!
 //! `timing` times the launches, `cache` keeps the choices.
 
@@ -73,6 +74,7 @@ pub struct Launch {
     pub tile: Option<TileShape>,
     /// Every lane's sum through storage (`GpuOptions::lane_shuffle`
     /// false): the same sums by the same tree, at another speed.
+    /// Only for the kernels that merge lanes through storage.
     pub lanes_in_storage: bool,
 }
 

@@ -234,9 +234,9 @@ pub fn measure_within<T: GpuReal>(
     if let Some(best) = tiled_best.filter(|_| opts.tile.is_none()) {
         search_tile_shapes(best, &mut time);
     }
-    // Where the lanes merge: the same sums either way, and subgroup
-    // merges have no hardware figure yet. Only the fastest launch that
-    // used them is timed without (another pipeline to compile).
+    // Where the lanes merge: the same tree of sums either way, and
+    // subgroup merges have no hardware figure yet. Only the fastest launch
+    // that used them is timed without (another pipeline to compile).
     let fastest_shuffled = shuffled.iter().min_by(|a, b| a.1.total_cmp(&b.1));
     if let Some(&(launch, _)) = fastest_shuffled {
         let storage = launch.with_lanes_in_storage();
