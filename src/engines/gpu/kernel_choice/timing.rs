@@ -47,10 +47,10 @@ pub fn time_kernel<T: GpuReal>(
 /// What timing a launch found: its wall time a step, and the levels of
 /// the junction lane tree its workgroups merged in subgroups
 /// (`GpuEngine::lane_shuffle_levels`; 0: every lane's sum through storage).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Timed {
-    pub seconds: f64,
-    pub lane_levels: u32,
+#[derive(Debug, Clone, Copy)]
+struct Timed {
+    seconds: f64,
+    lane_levels: u32,
 }
 
 /// `time_kernel`, with the lane levels the engine used.
