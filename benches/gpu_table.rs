@@ -49,7 +49,9 @@
 //! SLIPFRONT_GPU_TABLE_LANE_SHUFFLE=0 sends every junction lane's sum
 //! through storage in sections 1–3 (`GpuOptions::lane_shuffle` off; the
 //! default merges runs of lanes in subgroups first where the adapter has
-//! them): the same bits. Section 7 prints both on Table S1.
+//! them): the same bits. Section 7 prints both on Table S1, and the
+//! shipped Table S1 scene with and without wgpu's run-time checks in the
+//! kernels (`GpuOptions::shader_checks`).
 
 use gpu_timing::{
     ensemble_step_seconds, output_run, solo_step_seconds, table_s1, timed_advance, Timed,
@@ -151,7 +153,8 @@ fn tiled_grid(model: &Model, quick: bool, min_seconds: f64) {
 /// shipped) with every junction summed every step and with quiet blocks'
 /// sums kept (the default; the timed span is after the normal-load phase,
 /// where the precursors scene is quiet), Ns = 16 (16 lanes) and Coulomb
-/// friction (no junctions), per kernel at its default threads. Where the junctions' share is large, the
+/// friction (no junctions), per kernel at its default threads; the
+/// shipped scene also with wgpu's run-time checks in the kernels. Where the junctions' share is large, the
 /// lane sums (one thread adds a block's lanes, in order) are the step's
 /// critical path; where it is small, the stencil and the barriers are.
 fn junction_cost(min_seconds: f64) {
@@ -204,16 +207,31 @@ fn junction_cost(min_seconds: f64) {
         let set: Vec<String> = set.map(String::from).into_iter().collect();
         let scenario = Scenario::parse(text, "table S1", &set).expect("a Table S1 variant");
         let model = Model::from_scenario(&scenario, false).expect("a Table S1 variant");
+        // The scene as shipped also with wgpu's run-time checks in the
+        // kernels (`GpuOptions::shader_checks`): what leaving them out saves.
+        let checks: &[bool] = if set.is_empty() {
+            &[false, true]
+        } else {
+            &[false]
+        };
         for kernel in candidates(&model) {
-            let kept = GpuOptions {
-                keep_junction_sums: true,
-                ..options(kernel)
-            };
-            let figure = match solo_step_seconds(&model, kept, min_seconds) {
-                Ok((s, host)) => format!("{:.2} | {host:.2}", s * 1e6),
-                Err(e) => format!("not run: {e} |"),
-            };
-            println!("| {name} | {} | {figure} |", path_name(kernel));
+            for &shader_checks in checks {
+                let kept = GpuOptions {
+                    keep_junction_sums: true,
+                    shader_checks,
+                    ..options(kernel)
+                };
+                let figure = match solo_step_seconds(&model, kept, min_seconds) {
+                    Ok((s, host)) => format!("{:.2} | {host:.2}", s * 1e6),
+                    Err(e) => format!("not run: {e} |"),
+                };
+                let checked = if shader_checks {
+                    ", wgpu's run-time checks in the kernels"
+                } else {
+                    ""
+                };
+                println!("| {name}{checked} | {} | {figure} |", path_name(kernel));
+            }
         }
     }
     println!();

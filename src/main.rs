@@ -274,6 +274,10 @@ struct SweepRun {
     #[arg(long, default_value_t = slipfront::engines::gpu::options::RUN_AHEAD_BATCHES,
           value_parser = commands::run::run_ahead_batches)]
     gpu_run_ahead: usize,
+    /// GPU backend: wgpu's run-time checks in the kernels, as `run
+    /// --gpu-shader-checks`.
+    #[arg(long)]
+    gpu_shader_checks: bool,
 }
 
 fn main() -> ExitCode {
@@ -419,6 +423,7 @@ fn main() -> ExitCode {
                     persistent_threads: run.gpu_threads,
                     run_ahead: run.gpu_run_ahead,
                     tile: run.gpu_tile,
+                    shader_checks: run.gpu_shader_checks,
                     ..Default::default()
                 },
             }),

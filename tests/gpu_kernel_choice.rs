@@ -199,6 +199,12 @@ fn measure_times_every_candidate_takes_the_fastest_and_caches_it() {
         ..options(GpuPath::Measure)
     };
     assert_eq!(cache.lookup(&cache_key::<f32>(&m, &ctx, storage)), None);
+    // Nor one timed without wgpu's run-time checks one for kernels with them.
+    let checked = GpuOptions {
+        shader_checks: true,
+        ..options(GpuPath::Measure)
+    };
+    assert_eq!(cache.lookup(&cache_key::<f32>(&m, &ctx, checked)), None);
     let driving = "timed in driving from step 10";
     for damaged in [
         format!("{key}\tone-step\tone-step=oops\t{driving}\n"),

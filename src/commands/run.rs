@@ -44,6 +44,11 @@ pub struct RunArgs {
     #[arg(long, default_value_t = slipfront::engines::gpu::options::RUN_AHEAD_BATCHES,
           value_parser = crate::commands::run::run_ahead_batches)]
     pub gpu_run_ahead: usize,
+    /// Let wgpu add its run-time checks to the GPU kernels (an index clamp
+    /// at each fixed-size array access, a counter in every loop): the same
+    /// results, slower; for checking a suspect kernel.
+    #[arg(long)]
+    pub gpu_shader_checks: bool,
     #[arg(long, value_enum)]
     pub precision: Option<Precision>,
     /// Override a scenario key: --set loading.drive.velocity=1e-3
@@ -192,6 +197,7 @@ impl RunArgs {
             persistent_threads: self.gpu_threads,
             run_ahead: self.gpu_run_ahead,
             tile: self.gpu_tile,
+            shader_checks: self.gpu_shader_checks,
             ..GpuOptions::default()
         };
         Ok(make_engine_with(

@@ -144,6 +144,7 @@ fn coulomb_precursors_study(a: &StudyArgs) -> anyhow::Result<()> {
                 gpu_threads: None,
                 gpu_tile: None,
                 gpu_run_ahead: slipfront::engines::gpu::options::RUN_AHEAD_BATCHES,
+                gpu_shader_checks: false,
                 precision: Some(a.precision),
                 set: loading.overrides(),
                 t_end,

@@ -30,9 +30,65 @@ pub struct GpuContext {
     /// Group 1: the step offset (dynamic) and the batch (or the batches).
     pub batch_layout: wgpu::BindGroupLayout,
     pipelines: Arc<Mutex<HashMap<String, wgpu::ComputePipeline>>>,
-    /// The output kernels by precision (`GpuReal::NAME`), compiled on
-    /// first use.
-    record: Arc<Mutex<HashMap<&'static str, Arc<RecordPipelines>>>>,
+    /// The output kernels by precision (`GpuReal::NAME`) and checks,
+    /// compiled on first use.
+    record: Arc<Mutex<HashMap<RecordKey, Arc<RecordPipelines>>>>,
+}
+
+/// The output kernels' precision (`GpuReal::NAME`) and checks.
+type RecordKey = (&'static str, ShaderChecks);
+
+/// Whether wgpu adds its own run-time checks to the engine's kernels
+/// (`GpuOptions::shader_checks`). Either way the storage buffers stay
+/// guarded by the driver (wgpu opens the device with robust buffer
+/// access), and integer divisions keep their guard against zero.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum ShaderChecks {
+    /// None added: every index into a fixed-size array (workgroup tiles,
+    /// reduction slots, stencil tables) is in range by construction, and
+    /// every loop is bounded by the scene's sizes and the batch's steps.
+    /// The kernels are our own, validated by naga in the unit tests, and
+    /// give the same bits either way (`tests/gpu_shader_checks.rs`).
+    Trusted,
+    /// wgpu's default: each such index clamped to its array, and each
+    /// loop given an iteration counter that ends it after 2^64 rounds.
+    /// Costs instructions in every inner loop; a check for a suspect kernel.
+    Checked,
+}
+
+impl ShaderChecks {
+    pub fn of(checked: bool) -> ShaderChecks {
+        if checked {
+            ShaderChecks::Checked
+        } else {
+            ShaderChecks::Trusted
+        }
+    }
+
+    /// The module of WGSL `source`, compiled with these checks.
+    pub fn module(self, device: &wgpu::Device, label: &str, source: String) -> wgpu::ShaderModule {
+        let desc = wgpu::ShaderModuleDescriptor {
+            label: Some(label),
+            source: wgpu::ShaderSource::Wgsl(source.into()),
+        };
+        match self {
+            ShaderChecks::Checked => device.create_shader_module(desc),
+            ShaderChecks::Trusted => {
+                let checks = wgpu::ShaderRuntimeChecks {
+                    bounds_checks: false,
+                    force_loop_bounding: false,
+                    ..wgpu::ShaderRuntimeChecks::checked()
+                };
+                // SAFETY: the engine's own kernels (shaders/), each validated
+                // by naga in a unit test, index their fixed-size arrays only
+                // within range and run only loops bounded by the scene's sizes
+                // and the batch's step count (see `Trusted`). Storage buffer
+                // accesses stay guarded by the driver's robust buffer access,
+                // and integer division keeps wgpu's guard.
+                unsafe { device.create_shader_module_trusted(desc, checks) }
+            }
+        }
+    }
 }
 
 static SHARED: OnceLock<Result<GpuContext, String>> = OnceLock::new();
@@ -49,6 +105,14 @@ pub fn shared() -> Result<GpuContext, EngineError> {
         })
         .clone()
         .map_err(EngineError::Gpu)
+}
+
+/// How a kernel's module is built: where its junction lanes merge, and
+/// which run-time checks wgpu adds.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct KernelBuild {
+    pub lanes: LaneMerge,
+    pub checks: ShaderChecks,
 }
 
 /// Storage bindings the tiled kernel uses (the most of them: the scenes'
@@ -216,10 +280,10 @@ impl GpuContext {
     pub fn pipeline<T: GpuReal>(
         &self,
         kernel: Kernel,
-        lanes: LaneMerge,
+        build: KernelBuild,
         constants: &[(&str, f64)],
     ) -> wgpu::ComputePipeline {
-        self.pipeline_of::<T>(kernel, lanes, kernel.entry_point(), constants)
+        self.pipeline_of::<T>(kernel, build, kernel.entry_point(), constants)
     }
 
     /// Whether the adapter was opened with subgroup operations.
@@ -242,22 +306,25 @@ impl GpuContext {
     pub fn pipeline_of<T: GpuReal>(
         &self,
         kernel: Kernel,
-        lanes: LaneMerge,
+        build: KernelBuild,
         entry: &str,
         constants: &[(&str, f64)],
     ) -> wgpu::ComputePipeline {
         let layout = &self.layouts[layout_index(kernel)].pipeline;
-        let key = format!("{}{kernel:?}{lanes:?}{entry}{constants:?}", T::NAME);
+        let KernelBuild { lanes, checks } = build;
+        let key = format!(
+            "{}{kernel:?}{lanes:?}{checks:?}{entry}{constants:?}",
+            T::NAME
+        );
         let mut cache = self.pipelines.lock().expect("pipeline cache");
         cache
             .entry(key)
             .or_insert_with(|| {
-                let module = self
-                    .device
-                    .create_shader_module(wgpu::ShaderModuleDescriptor {
-                        label: Some(kernel.entry_point()),
-                        source: wgpu::ShaderSource::Wgsl(kernel.source_with::<T>(lanes).into()),
-                    });
+                let module = checks.module(
+                    &self.device,
+                    kernel.entry_point(),
+                    kernel.source_with::<T>(lanes),
+                );
                 self.device
                     .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
                         label: Some(entry),
@@ -275,17 +342,17 @@ impl GpuContext {
     }
 
     /// The output kernels' pipelines (`shaders/record.wgsl`).
-    pub fn record_pipelines<T: GpuReal>(&self) -> Arc<RecordPipelines> {
+    pub fn record_pipelines<T: GpuReal>(&self, checks: ShaderChecks) -> Arc<RecordPipelines> {
         let mut cache = self.record.lock().expect("record pipelines");
         cache
-            .entry(T::NAME)
+            .entry((T::NAME, checks))
             .or_insert_with(|| {
                 // lavapipe runs a workgroup on one core and a barrier as a
                 // switch of every invocation: 8 threads (one SIMD row)
                 // record a Table S1 sample faster there than 256
                 // (benches/gpu_output.rs, BENCHMARKS.md).
                 let threads = if self.is_software() { 8 } else { 256 };
-                Arc::new(RecordPipelines::new::<T>(&self.device, threads))
+                Arc::new(RecordPipelines::new::<T>(&self.device, threads, checks))
             })
             .clone()
     }

@@ -57,7 +57,7 @@ use crate::model::real::{precision_name, Coordinate};
 use crate::model::scenario::FrictionLaw;
 use crate::model::Model;
 use bytemuck::Zeroable;
-use context::GpuContext;
+use context::{GpuContext, KernelBuild, ShaderChecks};
 pub use device_timer::DispatchTimes;
 use layout::{
     GpuBatch, GpuConsts, GpuJunctionCache, GpuJunctionSpring, GpuLaneSum, GpuStatus, WORKGROUP,
@@ -69,7 +69,7 @@ use precision::{Coord, Packed};
 pub use record_pipelines::RECORD_SMALL_BLOCKS;
 
 use scene_state::gpu_junction_springs;
-use shaders::{Kernel, LaneMerge, Variant};
+use shaders::{Kernel, Variant};
 use std::collections::VecDeque;
 use wgpu::util::DeviceExt;
 
@@ -225,8 +225,9 @@ pub struct GpuEngine<T: GpuReal = f32> {
     /// Steps the persistent kernel has been asked to run (mod 2³²).
     persistent_steps: u32,
     variant: Variant,
-    /// Where the kernel's junction lanes merge first (`GpuOptions::lane_shuffle`).
-    lane_merge: LaneMerge,
+    /// Where the kernel's junction lanes merge first (`GpuOptions::lane_shuffle`)
+    /// and which run-time checks its modules carry (`GpuOptions::shader_checks`).
+    build: KernelBuild,
     /// The most lane tree levels a workgroup has merged in subgroups
     /// (`GpuStatus::lane_levels`), over every batch read back.
     lane_levels: u32,
@@ -606,16 +607,16 @@ impl<T: GpuReal> GpuEngine<T> {
             constants.push(("TILE_THREADS", persistent_threads as f64));
         }
         // One module (and one compiled pipeline) for the one-step kernels.
-        let lane_merge = ctx.lane_merge(opts.lane_shuffle && kernel.merges_lanes_through_storage());
-        let pipeline = ctx.pipeline::<T>(kernel, lane_merge, &constants);
+        let build = KernelBuild {
+            lanes: ctx.lane_merge(opts.lane_shuffle && kernel.merges_lanes_through_storage()),
+            checks: ShaderChecks::of(opts.shader_checks),
+        };
+        let pipeline = ctx.pipeline::<T>(kernel, build, &constants);
         let tiles = geometry.map(|g| {
             let entry = kernel
                 .gather_entry_point()
                 .expect("the tiled kernel gathers");
-            (
-                g,
-                ctx.pipeline_of::<T>(kernel, lane_merge, entry, &constants),
-            )
+            (g, ctx.pipeline_of::<T>(kernel, build, entry, &constants))
         });
         let junction_groups = match (kernel, model.law) {
             (Kernel::OneStepLanes, FrictionLaw::Junctions | FrictionLaw::SingleJunction) => {
@@ -679,7 +680,7 @@ impl<T: GpuReal> GpuEngine<T> {
             steps_per_dispatch,
             persistent_steps: 0,
             variant,
-            lane_merge,
+            build,
             lane_levels: 0,
             current: 0,
             step: 0,
@@ -766,7 +767,16 @@ impl<T: GpuReal> GpuEngine<T> {
         let model = &models[0];
         let stride = (!persistent).then_some(record_entry_stride(self.offset_stride));
         let steps_sum_kinetic = matches!(self.kernel, Kernel::OneStep | Kernel::OneStepLanes);
-        match recorder::Recorder::new(&self.ctx, &models, state, plan, stride, steps_sum_kinetic) {
+        let checks = self.build.checks;
+        match recorder::Recorder::new(
+            &self.ctx,
+            &models,
+            state,
+            plan,
+            stride,
+            steps_sum_kinetic,
+            checks,
+        ) {
             Ok(mut rec) => {
                 // The host has taken the samples up to here (none before
                 // driving, and none at its first step).
@@ -778,9 +788,7 @@ impl<T: GpuReal> GpuEngine<T> {
                 if rec.kinetic_in_steps() {
                     let mut constants = self.variant.constants.clone();
                     constants.push(("RECORD_KINETIC", 1.0));
-                    let pipeline = self
-                        .ctx
-                        .pipeline::<T>(self.kernel, self.lane_merge, &constants);
+                    let pipeline = self.ctx.pipeline::<T>(self.kernel, self.build, &constants);
                     self.record_step = Some(pipeline);
                 }
                 self.recorder = Some(rec);

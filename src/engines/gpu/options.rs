@@ -125,6 +125,11 @@ pub struct GpuOptions {
     /// the same tree, so the same sums. false: every lane's sum through
     /// storage (a check, and the comparison in benchmarks).
     pub lane_shuffle: bool,
+    /// Let wgpu add its run-time checks to the kernels (an index clamp at
+    /// every fixed-size array access, an iteration counter in every loop;
+    /// `context::ShaderChecks`): the same bits, more instructions.
+    /// false (the default): the kernels as written (`--gpu-shader-checks`).
+    pub shader_checks: bool,
 }
 
 impl Default for GpuOptions {
@@ -138,6 +143,7 @@ impl Default for GpuOptions {
             run_ahead: RUN_AHEAD_BATCHES,
             keep_junction_sums: true,
             lane_shuffle: true,
+            shader_checks: false,
         }
     }
 }

@@ -2,6 +2,7 @@
 //! group layouts, built once per device (`GpuContext::record_pipelines`).
 
 use super::bindings::Bindings;
+use super::context::ShaderChecks;
 use super::precision::GpuReal;
 
 /// The output module's binding that takes a dynamic offset per sample.
@@ -27,7 +28,11 @@ impl RecordPipelines {
     /// The output kernels in precision `T`. `threads`: the workgroup of
     /// the one-workgroup kernels (a power of two up to 256), at most the
     /// slots of `T`'s sums in workgroup memory (`layout::reduction_slots`).
-    pub fn new<T: GpuReal>(device: &wgpu::Device, threads: u32) -> RecordPipelines {
+    pub fn new<T: GpuReal>(
+        device: &wgpu::Device,
+        threads: u32,
+        checks: ShaderChecks,
+    ) -> RecordPipelines {
         let threads = threads.min(super::layout::reduction_slots::<T>());
         // The output module's own declarations (shaders/record.wgsl):
         // group 0 the constants, the state (read only) and the record
@@ -47,10 +52,7 @@ impl RecordPipelines {
             bind_group_layouts: &[Some(&group), Some(&entry_layout)],
             immediate_size: 0,
         });
-        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("record"),
-            source: wgpu::ShaderSource::Wgsl(source.into()),
-        });
+        let module = checks.module(device, "record", source);
         let pipeline = |name: &str| {
             device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
                 label: Some(name),

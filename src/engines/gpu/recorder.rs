@@ -8,6 +8,7 @@
 //! record buffer (its plan says where).
 
 use super::context::GpuContext;
+use super::context::ShaderChecks;
 use super::layout::{
     GpuRecordEntry, GpuRecordPlan, GpuSampleSums, RECORD_BULK, RECORD_BULK_WORDS, RECORD_FAST,
     RECORD_GLOBAL, RECORD_INTERFACE, RECORD_INTERFACE_WORDS, WORKGROUP,
@@ -129,7 +130,8 @@ impl<T: GpuReal> Recorder<T> {
     /// kernels), or None for the persistent kernel, which reads the
     /// entries as an array; `steps_sum_kinetic`: the step kernel has the
     /// recording variant (`RECORD_KINETIC`, the one-step kernels), which
-    /// a large lattice's samples then use.
+    /// a large lattice's samples then use; `checks`: the run-time checks
+    /// of the output kernels' module, as the step kernel's.
     pub fn new(
         ctx: &GpuContext,
         models: &[Model],
@@ -137,6 +139,7 @@ impl<T: GpuReal> Recorder<T> {
         plan: &SamplePlan,
         stride: Option<u64>,
         steps_sum_kinetic: bool,
+        checks: ShaderChecks,
     ) -> Result<Recorder<T>, String> {
         let stride_given = stride.is_some();
         let stride = stride.unwrap_or(size_of::<GpuRecordEntry>() as u64);
@@ -226,7 +229,7 @@ impl<T: GpuReal> Recorder<T> {
             usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        let pipelines = ctx.record_pipelines::<T>();
+        let pipelines = ctx.record_pipelines::<T>(checks);
         let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("record"),
             layout: &pipelines.group,

@@ -125,7 +125,8 @@ impl ChoiceCache {
 
 /// What a measured choice depends on: the adapter and its driver, the
 /// precision, the lattice (`lattice_key`), the persistent kernels' threads,
-/// the tile shape where one is fixed, and the kernels' sources (a new
+/// the tile shape where one is fixed, whether the lanes' merge was
+/// searched, wgpu's run-time checks, and the kernels' sources (a new
 /// version of slipfront measures again).
 pub fn cache_key<T: GpuReal>(model: &Model, ctx: &GpuContext, opts: GpuOptions) -> String {
     scenes_cache_key::<T>(model, 1, ctx, opts)
@@ -164,7 +165,7 @@ pub fn scenes_cache_key<T: GpuReal>(
         String::new()
     };
     format!(
-        "{} | {:?} | {} {} | {} | {}{ensemble} | threads {} | tiles {} | lanes {} | kernels {:016x}",
+        "{} | {:?} | {} {} | {} | {}{ensemble} | threads {} | tiles {} | lanes {} | checks {} | kernels {:016x}",
         info.name,
         info.backend,
         info.driver,
@@ -182,6 +183,13 @@ pub fn scenes_cache_key<T: GpuReal>(
             "searched"
         } else {
             "in storage"
+        },
+        // Kernels timed with wgpu's run-time checks ran other code
+        // (choices cached before there was a choice were timed with them).
+        if opts.shader_checks {
+            "wgpu's"
+        } else {
+            "none"
         },
         sources.finish()
     )

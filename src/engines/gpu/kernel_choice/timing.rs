@@ -202,19 +202,13 @@ pub fn measure_within<T: GpuReal>(
     let launches = launches(&models[0], models.len(), opts, &ctx.limits);
     // One-step (always a candidate, first) steps the load phase.
     let (start, phase) = driving_start::<T>(models, ctx, opts, launches[0], budget);
-    // The launches whose lanes merged in subgroups, with their times.
-    let mut shuffled = Vec::new();
+    // Every launch is timed here: a failure is listed as skipped, and the
+    // first one is the error if none runs.
     let mut time =
         |launch: Launch| match time_launch::<T>(models, ctx, opts, launch, start.as_deref()) {
-            Ok(Timed {
-                seconds: s,
-                lane_levels,
-            }) => {
-                timings.push((launch, s));
-                if lane_levels > 0 {
-                    shuffled.push((launch, s));
-                }
-                Some(s)
+            Ok(timed) => {
+                timings.push((launch, timed.seconds));
+                Some(timed)
             }
             Err(e) => {
                 skipped.push((launch, e.to_string()));
@@ -222,9 +216,18 @@ pub fn measure_within<T: GpuReal>(
                 None
             }
         };
+    // The launches whose lanes merged in subgroups, with their times.
+    let mut shuffled = Vec::new();
+    let mut time_noting_merges = |launch: Launch| {
+        let timed = time(launch)?;
+        if timed.lane_levels > 0 {
+            shuffled.push((launch, timed.seconds));
+        }
+        Some(timed.seconds)
+    };
     let mut tiled_best: Option<(Launch, f64)> = None;
     for launch in launches {
-        if let Some(s) = time(launch) {
+        if let Some(s) = time_noting_merges(launch) {
             if launch.kernel == Kernel::Tiled && tiled_best.is_none_or(|(_, b)| s < b) {
                 tiled_best = Some((launch, s));
             }
@@ -232,18 +235,14 @@ pub fn measure_within<T: GpuReal>(
     }
     // The tile's shape is searched unless the options fix it.
     if let Some(best) = tiled_best.filter(|_| opts.tile.is_none()) {
-        search_tile_shapes(best, &mut time);
+        search_tile_shapes(best, &mut time_noting_merges);
     }
     // Where the lanes merge: the same tree of sums either way, and
     // subgroup merges have no hardware figure yet. Only the fastest launch
     // that used them is timed without (another pipeline to compile).
     let fastest_shuffled = shuffled.iter().min_by(|a, b| a.1.total_cmp(&b.1));
     if let Some(&(launch, _)) = fastest_shuffled {
-        let storage = launch.with_lanes_in_storage();
-        match time_kernel::<T>(models, ctx, opts, storage, start.as_deref()) {
-            Ok(s) => timings.push((storage, s)),
-            Err(e) => skipped.push((storage, e.to_string())),
-        }
+        time(launch.with_lanes_in_storage());
     }
     let Some(&(launch, _)) = timings.iter().min_by(|a, b| a.1.total_cmp(&b.1)) else {
         return Err(first_error.expect("at least one candidate (one-step always is)"));

@@ -1,0 +1,91 @@
+//! The GPU kernels built without wgpu's run-time checks (the default,
+//! `context::ShaderChecks::Trusted`) against the same kernels with them
+//! (`GpuOptions::shader_checks`, `--gpu-shader-checks`): every index of
+//! the kernels is in range and every loop ends by construction, so the
+//! clamps and loop counters the checks add never change what a kernel
+//! computes. These tests fail, never skip, when no adapter exists
+//! (lavapipe in CI).
+
+use slipfront::engines::gpu::{GpuEngine, GpuOptions, GpuOutput, GpuPath};
+use slipfront::engines::Sample;
+use slipfront::{advance_to, Engine, Model, Snapshot};
+
+// Only its sample plan.
+#[allow(dead_code)]
+#[path = "support/record_twins.rs"]
+mod record_twins;
+use record_twins::plan;
+
+const KERNELS: [GpuPath; 5] = [
+    GpuPath::OneStep,
+    GpuPath::OneStepLanes,
+    GpuPath::Persistent,
+    GpuPath::Resident,
+    GpuPath::Tiled,
+];
+
+/// The state at the end and every sample recorded on the device on the
+/// way, of `m` on kernel `path`, with or without wgpu's checks.
+fn run(
+    m: &Model,
+    plan: &slipfront::engines::SamplePlan,
+    path: GpuPath,
+    checks: bool,
+) -> (Snapshot, Vec<Sample>) {
+    let opts = GpuOptions {
+        path,
+        output: GpuOutput::Device,
+        shader_checks: checks,
+        ..GpuOptions::default()
+    };
+    let mut e = GpuEngine::with_options(m, opts)
+        .unwrap_or_else(|e| panic!("a GPU adapter is required (lavapipe in CI): {e}"));
+    assert!(
+        e.record_samples(plan).unwrap(),
+        "{path:?}: records on the device"
+    );
+    advance_to(&mut e, m.total_steps() - 1).unwrap();
+    e.settle().unwrap();
+    let samples = e.take_samples();
+    (e.snapshot().unwrap(), samples)
+}
+
+/// The small triggered front (29 × 16, a front across the interface within
+/// 0.3 ms, the fast cadence switching on and off), through 0.6 ms on every
+/// kernel: the same bits of state and of every device record with and
+/// without the checks. The front must break junctions and record samples,
+/// or the comparison would hold vacuously; a normal load 1e-6 larger
+/// (above f32 rounding) is flagged.
+#[test]
+fn kernels_without_run_time_checks_give_the_bits_of_checked_ones() {
+    let s = slipfront::app::verify::small_triggered_scene(&["time.end=6e-4"]).unwrap();
+    let m = Model::from_scenario(&s, false).unwrap();
+    let plan = plan(&m, &s);
+    for path in KERNELS {
+        let (trusted, trusted_samples) = run(&m, &plan, path, false);
+        let (checked, checked_samples) = run(&m, &plan, path, true);
+        println!(
+            "{path:?}: {} ruptures, {} samples",
+            trusted.total_ruptures(),
+            trusted_samples.len()
+        );
+        assert!(trusted.total_ruptures() > 100, "{path:?}: no front");
+        assert!(trusted_samples.len() > 100, "{path:?}: too few samples");
+        assert!(trusted == checked, "{path:?}: the checks changed the state");
+        assert!(
+            trusted_samples == checked_samples,
+            "{path:?}: the checks changed the records"
+        );
+    }
+    // Control: the same comparison sees a normal load 1e-6 larger.
+    let s = slipfront::app::verify::small_triggered_scene(&[
+        "time.end=6e-4",
+        "loading.normal.force=1920.002",
+    ])
+    .unwrap();
+    let heavier = Model::from_scenario(&s, false).unwrap();
+    let (base, base_samples) = run(&m, &plan, GpuPath::OneStep, false);
+    let (other, other_samples) = run(&heavier, &plan, GpuPath::OneStep, false);
+    assert!(base != other, "control: state");
+    assert!(base_samples != other_samples, "control: records");
+}
