@@ -3,6 +3,7 @@
 
 use super::bindings::Bindings;
 use super::context::ShaderChecks;
+use super::layout::WORKGROUP;
 use super::precision::GpuReal;
 
 /// The output module's binding that takes a dynamic offset per sample.
@@ -53,25 +54,35 @@ impl RecordPipelines {
             immediate_size: 0,
         });
         let module = checks.module(device, "record", source);
-        let pipeline = |name: &str| {
+        // `slots`: the reduction's slots in workgroup memory. The
+        // one-workgroup kernels take the most that fit (their threads fold
+        // into them); the kernels of a workgroup per 64 blocks use 64, so a
+        // workgroup holds 4 KB (mixed f32) instead of 16 and more of them
+        // share a multiprocessor when a sample reads the whole lattice.
+        let pipeline = |name: &str, slots: u32| {
             device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
                 label: Some(name),
                 layout: Some(&layout),
                 module: &module,
                 entry_point: Some(name),
                 compilation_options: wgpu::PipelineCompilationOptions {
-                    constants: &[("RECORD_THREADS", threads as f64)],
+                    constants: &[
+                        ("RECORD_THREADS", threads as f64),
+                        ("REDUCTION_WIDTH", slots as f64),
+                    ],
                     ..Default::default()
                 },
                 cache: None,
             })
         };
+        let all_slots = super::layout::reduction_slots::<T>();
+        let per_group = WORKGROUP.min(all_slots);
         RecordPipelines {
             bindings,
-            small: pipeline("record_small"),
-            sample: pipeline("record_sample"),
-            special: pipeline("record_special"),
-            finish: pipeline("record_finish"),
+            small: pipeline("record_small", all_slots),
+            sample: pipeline("record_sample", per_group),
+            special: pipeline("record_special", per_group),
+            finish: pipeline("record_finish", all_slots),
             group,
             entry: entry_layout,
         }
