@@ -1,5 +1,5 @@
 //! The GPU kernels built without wgpu's run-time checks (the default,
-//! `context::ShaderChecks::Trusted`) against the same kernels with them
+//! `compile::ShaderChecks::Trusted`) against the same kernels with them
 //! (`GpuOptions::shader_checks`, `--gpu-shader-checks`): every index of
 //! the kernels is in range and every loop ends by construction, so the
 //! clamps and loop counters the checks add never change what a kernel

@@ -165,12 +165,6 @@ impl Comparison {
             .reduce(|best, v| if v.p < best.p { v } else { best })
     }
 
-    /// The smallest p-value times the number of tests, at most 1.
-    pub fn bonferroni_min_p(&self) -> Option<f64> {
-        self.verdict(super::verdict::Members::Same)
-            .map(|v| v.corrected)
-    }
-
     /// The tests with p < alpha.
     pub fn differing(&self, alpha: f64) -> Vec<PValue> {
         self.p_values()

@@ -66,6 +66,12 @@ impl Comparison {
         }
     }
 
+    /// The smallest p-value times the number of tests, at most 1 (every
+    /// test weighed, as for the same members).
+    pub fn bonferroni_min_p(&self) -> Option<f64> {
+        self.verdict(Members::Same).map(|v| v.corrected)
+    }
+
     /// The Bonferroni verdict over `weighed_p_values(members)`; None when
     /// no such test ran.
     pub fn verdict(&self, members: Members) -> Option<Verdict> {

@@ -1,6 +1,7 @@
 //! Adapter selection: a hardware GPU, else a software one (lavapipe).
 
 use super::bindings::Bindings;
+use super::compile::{KernelBuild, ShaderChecks};
 use super::precision::GpuReal;
 use super::record_pipelines::RecordPipelines;
 use super::shaders::{Kernel, LaneMerge};
@@ -38,59 +39,6 @@ pub struct GpuContext {
 /// The output kernels' precision (`GpuReal::NAME`) and checks.
 type RecordKey = (&'static str, ShaderChecks);
 
-/// Whether wgpu adds its own run-time checks to the engine's kernels
-/// (`GpuOptions::shader_checks`). Either way the storage buffers stay
-/// guarded by the driver (wgpu opens the device with robust buffer
-/// access), and integer divisions keep their guard against zero.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub enum ShaderChecks {
-    /// None added: every index into a fixed-size array (workgroup tiles,
-    /// reduction slots, stencil tables) is in range by construction, and
-    /// every loop is bounded by the scene's sizes and the batch's steps.
-    /// The kernels are our own, validated by naga in the unit tests, and
-    /// give the same bits either way (`tests/gpu_shader_checks.rs`).
-    Trusted,
-    /// wgpu's default: each such index clamped to its array, and each
-    /// loop given an iteration counter that ends it after 2^64 rounds.
-    /// Costs instructions in every inner loop; a check for a suspect kernel.
-    Checked,
-}
-
-impl ShaderChecks {
-    pub fn of(checked: bool) -> ShaderChecks {
-        if checked {
-            ShaderChecks::Checked
-        } else {
-            ShaderChecks::Trusted
-        }
-    }
-
-    /// The module of WGSL `source`, compiled with these checks.
-    pub fn module(self, device: &wgpu::Device, label: &str, source: String) -> wgpu::ShaderModule {
-        let desc = wgpu::ShaderModuleDescriptor {
-            label: Some(label),
-            source: wgpu::ShaderSource::Wgsl(source.into()),
-        };
-        match self {
-            ShaderChecks::Checked => device.create_shader_module(desc),
-            ShaderChecks::Trusted => {
-                let checks = wgpu::ShaderRuntimeChecks {
-                    bounds_checks: false,
-                    force_loop_bounding: false,
-                    ..wgpu::ShaderRuntimeChecks::checked()
-                };
-                // SAFETY: the engine's own kernels (shaders/), each validated
-                // by naga in a unit test, index their fixed-size arrays only
-                // within range and run only loops bounded by the scene's sizes
-                // and the batch's step count (see `Trusted`). Storage buffer
-                // accesses stay guarded by the driver's robust buffer access,
-                // and integer division keeps wgpu's guard.
-                unsafe { device.create_shader_module_trusted(desc, checks) }
-            }
-        }
-    }
-}
-
 static SHARED: OnceLock<Result<GpuContext, String>> = OnceLock::new();
 
 /// The process-wide context, opened on first use.
@@ -105,14 +53,6 @@ pub fn shared() -> Result<GpuContext, EngineError> {
         })
         .clone()
         .map_err(EngineError::Gpu)
-}
-
-/// How a kernel's module is built: where its junction lanes merge, and
-/// which run-time checks wgpu adds.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct KernelBuild {
-    pub lanes: LaneMerge,
-    pub checks: ShaderChecks,
 }
 
 /// Storage bindings the tiled kernel uses (the most of them: the scenes'

@@ -35,6 +35,7 @@
 
 mod batches;
 mod bindings;
+pub mod compile;
 pub mod context;
 mod device_timer;
 pub mod ensemble;
@@ -57,7 +58,8 @@ use crate::model::real::{precision_name, Coordinate};
 use crate::model::scenario::FrictionLaw;
 use crate::model::Model;
 use bytemuck::Zeroable;
-use context::{GpuContext, KernelBuild, ShaderChecks};
+use compile::{KernelBuild, ShaderChecks};
+use context::GpuContext;
 pub use device_timer::DispatchTimes;
 use layout::{
     GpuBatch, GpuConsts, GpuJunctionCache, GpuJunctionSpring, GpuLaneSum, GpuStatus, WORKGROUP,

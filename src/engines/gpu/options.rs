@@ -127,7 +127,7 @@ pub struct GpuOptions {
     pub lane_shuffle: bool,
     /// Let wgpu add its run-time checks to the kernels (an index clamp at
     /// every fixed-size array access, an iteration counter in every loop;
-    /// `context::ShaderChecks`): the same bits, more instructions.
+    /// `compile::ShaderChecks`): the same bits, more instructions.
     /// false (the default): the kernels as written (`--gpu-shader-checks`).
     pub shader_checks: bool,
 }

@@ -2,7 +2,7 @@
 //! group layouts, built once per device (`GpuContext::record_pipelines`).
 
 use super::bindings::Bindings;
-use super::context::ShaderChecks;
+use super::compile::ShaderChecks;
 use super::layout::WORKGROUP;
 use super::precision::GpuReal;
 

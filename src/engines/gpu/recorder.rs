@@ -7,8 +7,8 @@
 //! (workgroup row z is scene z), each scene in its own region of every
 //! record buffer (its plan says where).
 
+use super::compile::ShaderChecks;
 use super::context::GpuContext;
-use super::context::ShaderChecks;
 use super::layout::{
     GpuRecordEntry, GpuRecordPlan, GpuSampleSums, RECORD_BULK, RECORD_BULK_WORDS, RECORD_FAST,
     RECORD_GLOBAL, RECORD_INTERFACE, RECORD_INTERFACE_WORDS, WORKGROUP,
