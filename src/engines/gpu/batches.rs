@@ -4,12 +4,13 @@
 //! `GpuOptions::run_ahead`) of them on the device and retires the oldest
 //! first, reading each scene's blow-up and samples.
 
+use super::buffers::gpu_junction_springs;
+use super::buffers::STATUS_BYTES;
 use super::layout::{self, GpuBatch, GpuStatus};
 use super::options::{IN_FLIGHT, ONE_STEP_BATCH, PERSISTENT_BATCH};
 use super::precision::{Coord, GpuReal};
-use super::scene_state::gpu_junction_springs;
 use super::shaders::Kernel;
-use super::{device_timer, recorder, GpuEngine, STATUS_BYTES};
+use super::{device_timer, recorder, GpuEngine};
 use crate::engines::{blow_up, EngineError};
 use crate::model::real::Coordinate;
 use crate::model::Driver;

@@ -35,6 +35,7 @@
 
 mod batches;
 mod bindings;
+mod buffers;
 pub mod compile;
 pub mod context;
 mod device_timer;
@@ -53,139 +54,116 @@ pub mod tiles;
 
 use crate::engines::step_params::Consts;
 use crate::engines::{Engine, EngineError, EngineState, Sample, SamplePlan, Snapshot};
-use crate::model::lattice::{block_flags, initial_displacement};
-use crate::model::real::{precision_name, Coordinate};
+use crate::model::real::precision_name;
 use crate::model::scenario::FrictionLaw;
 use crate::model::Model;
-use bytemuck::Zeroable;
+use buffers::{state_group, Buffers, Shape};
 use compile::{KernelBuild, ShaderChecks};
 use context::GpuContext;
 pub use device_timer::DispatchTimes;
-use layout::{
-    GpuBatch, GpuConsts, GpuJunctionCache, GpuJunctionSpring, GpuLaneSum, GpuStatus, WORKGROUP,
-};
+use layout::{GpuBatch, GpuJunctionSpring, WORKGROUP};
 use options::*;
 pub use options::{GpuOptions, GpuOutput, GpuPath, PERSISTENT_THREADS, RESIDENT_THREADS};
 pub use precision::GpuReal;
 use precision::{Coord, Packed};
 pub use record_pipelines::RECORD_SMALL_BLOCKS;
 
-use scene_state::gpu_junction_springs;
 use shaders::{Kernel, Variant};
 use std::collections::VecDeque;
-use wgpu::util::DeviceExt;
 
-struct Buffers {
-    /// The run constants: one record per scene.
-    consts: wgpu::Buffer,
-    /// Two copies of u and v: the one-step kernel reads one, writes the other.
-    disp: [wgpu::Buffer; 2],
-    vel: [wgpu::Buffer; 2],
-    force: wgpu::Buffer,
-    /// One lattice: shared by the scenes of an ensemble.
-    flags: wgpu::Buffer,
-    contact: wgpu::Buffer,
-    junction_spring: wgpu::Buffer,
-    junction_state: wgpu::Buffer,
-    /// Per interface block, the sums of its junctions while none changes
-    /// (`GpuJunctionCache`); zeroed wherever the host writes junctions.
-    junction_cache: wgpu::Buffer,
-    slide: wgpu::Buffer,
-    /// The friction law's state (`Shape::law_words` per scene).
-    law_state: wgpu::Buffer,
-    status: wgpu::Buffer,
-    lane_partial: wgpu::Buffer,
-    /// What the persistent kernel binds for the record buffers until it
-    /// records output samples (never read then).
-    record_placeholders: [wgpu::Buffer; 4],
-    /// The tiled kernel's: two published copies of the blocks (u, v), of
-    /// the junctions (state, spring; then each tile's private halo
-    /// junctions), and the ends of a batch's dispatches; placeholders for
-    /// the other kernels.
-    tile_scratch: [wgpu::Buffer; 5],
-}
-
-/// Group 0 of `kernel`: the state buffers, and for the persistent kernel the
-/// record buffers `[plan, sums, rows, entries]`, bound by the names the
-/// kernel's module declares (`bindings::Bindings`).
-fn state_group(
-    ctx: &GpuContext,
+/// The kernel an engine steps with, its workgroup's threads, and the tiled
+/// kernel's geometry.
+#[derive(Debug, Clone, Copy)]
+struct Launch {
     kernel: Kernel,
-    b: &Buffers,
-    records: [&wgpu::Buffer; 4],
-) -> wgpu::BindGroup {
-    let [plan, sums, rows, entries] = records;
-    let resources = [
-        ("scene_consts", &b.consts),
-        // The one-step kernels' ping-pong copies; the persistent kernel's
-        // state in place.
-        ("disp_a", &b.disp[0]),
-        ("vel_a", &b.vel[0]),
-        ("disp_b", &b.disp[1]),
-        ("vel_b", &b.vel[1]),
-        ("disp", &b.disp[0]),
-        ("vel", &b.vel[0]),
-        ("force", &b.force),
-        ("flags", &b.flags),
-        ("contact", &b.contact),
-        ("junction_spring", &b.junction_spring),
-        ("junction_state", &b.junction_state),
-        ("junction_cache", &b.junction_cache),
-        ("slide", &b.slide),
-        ("law_state", &b.law_state),
-        ("status", &b.status),
-        ("lane_partial", &b.lane_partial),
-        ("pub_disp", &b.tile_scratch[0]),
-        ("pub_vel", &b.tile_scratch[1]),
-        ("tile_junction_state", &b.tile_scratch[2]),
-        ("tile_junction_spring", &b.tile_scratch[3]),
-        ("tile_ends", &b.tile_scratch[4]),
-        ("plans", plan),
-        ("sums", sums),
-        ("rows", rows),
-        ("record_entries", entries),
-    ]
-    .map(|(name, buffer)| (name, buffer.as_entire_binding()));
-    ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: Some(kernel.entry_point()),
-        layout: ctx.state_layout(kernel),
-        entries: &ctx.bindings(kernel).entries(0, &resources),
-    })
+    threads: u32,
+    geometry: Option<tiles::TileGeometry>,
 }
 
-/// Elements of one scene in each buffer; scene s's slice starts at s times
-/// these (scene-major, `shaders/scene.wgsl`).
-#[derive(Debug, Clone, Copy, PartialEq)]
-struct Shape {
-    blocks: usize,
-    nx: usize,
-    junctions: usize,
-    lanes: usize,
-    /// Reals of friction-law state: `block_state_words` per interface block.
-    law_words: usize,
-}
-
-impl Shape {
-    fn of(model: &Model) -> Shape {
-        let lanes =
-            crate::model::junction::JUNCTION_LANES.min(model.junctions.map_or(0, |j| j.count));
-        Shape {
-            blocks: model.n_blocks(),
-            nx: model.nx,
-            junctions: model.n_junctions(),
-            lanes,
-            law_words: model.nx * model.law.declaration().block_state_words,
+impl Launch {
+    /// The override constants of the kernel's pipeline: the scene's terms
+    /// (`variant`), then what the kernel's layout needs; `blocks`: the
+    /// lattice's (the resident kernel's workgroup arrays).
+    fn constants<T: GpuReal>(
+        &self,
+        variant: &Variant,
+        opts: GpuOptions,
+        blocks: usize,
+        software: bool,
+    ) -> Vec<(&'static str, f64)> {
+        let mut constants = variant.constants.clone();
+        constants.push(("KEEP_JUNCTION_SUMS", opts.keep_junction_sums as u8 as f64));
+        if self.kernel.is_persistent() {
+            constants.push(("PERSISTENT_THREADS", self.threads as f64));
+            // llvmpipe counts the iterations of every inlined loop against
+            // its limit: one junction lane a round there.
+            constants.push(("TWO_LANES_A_ROUND", !software as u8 as f64));
         }
+        if self.kernel == Kernel::Resident {
+            constants.push(("RESIDENT_BLOCKS", blocks as f64));
+            constants.push(("REDUCTION_WIDTH", resident_reduction_width::<T>() as f64));
+        }
+        if let Some(g) = self.geometry {
+            constants.push(("TILE_WIDTH", g.width as f64));
+            constants.push(("TILE_HALO", g.halo as f64));
+            constants.push(("TILE_BLOCKS", g.blocks as f64));
+            constants.push(("TILE_THREADS", self.threads as f64));
+        }
+        constants
+    }
+
+    /// Workgroups of a step dispatch in x and y (z: the scenes): a tile
+    /// each for the tiled kernel; else a workgroup per interface block's
+    /// junctions (one-step-lanes) and one per `WORKGROUP` blocks.
+    fn groups(&self, model: &Model) -> (u32, u32) {
+        if let Some(g) = self.geometry {
+            return (g.tiles, 1);
+        }
+        let junction_groups = match (self.kernel, model.law) {
+            (Kernel::OneStepLanes, FrictionLaw::Junctions | FrictionLaw::SingleJunction) => {
+                model.nx as u32
+            }
+            _ => 0,
+        };
+        // With junction workgroups, the others start at the first block of
+        // the workgroup-sized run that holds block nx (one_step_lanes.wgsl).
+        let first_plain = if junction_groups > 0 {
+            model.nx as u32 / WORKGROUP * WORKGROUP
+        } else {
+            0
+        };
+        let plain_groups = (model.n_blocks() as u32 - first_plain).div_ceil(WORKGROUP);
+        groups_for(junction_groups + plain_groups)
     }
 }
 
-/// Bytes per element of the state buffers that do not depend on the
-/// precision (`GpuEngine::DISP_BYTES` and others do).
-const WORD_PAIR_BYTES: usize = std::mem::size_of::<[u32; 2]>();
-const STATUS_BYTES: usize = std::mem::size_of::<GpuStatus>();
-/// What the persistent kernel's unused record bindings hold at least (the
-/// plan, an entry, a word of rows); the sums need `GpuEngine::SUMS_BYTES`.
-const PLACEHOLDER_BYTES: usize = 64;
+/// Group 1 of `kernel`: the step offset (dynamic) and the scenes' batches.
+fn batch_group(
+    ctx: &GpuContext,
+    kernel: Kernel,
+    offsets: &wgpu::Buffer,
+    batches: &wgpu::Buffer,
+) -> wgpu::BindGroup {
+    ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some("batch"),
+        layout: &ctx.batch_layout,
+        entries: &ctx.bindings(kernel).entries(
+            1,
+            &[
+                (
+                    context::STEP_OFFSET,
+                    wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                        buffer: offsets,
+                        offset: 0,
+                        size: wgpu::BufferSize::new(4),
+                    }),
+                ),
+                ("batch", batches.as_entire_binding()),
+                ("scene_batches", batches.as_entire_binding()),
+            ],
+        ),
+    })
+}
 
 /// One scene: its model, constants and where it stands.
 struct Scene<T: GpuReal> {
@@ -360,27 +338,22 @@ impl<T: GpuReal> GpuEngine<T> {
         self.choice.as_ref()
     }
 
-    /// The engine over `models`, which share one lattice shape and time
-    /// schedule (checked by the caller), with the same kernels for one
-    /// scene or many; `ensemble`: a blow-up stops only its scene.
-    fn build(
+    /// Fails where one scene-major buffer of `models` is larger than a
+    /// storage binding may be, or there are more scenes than workgroups a
+    /// dispatch may have in a dimension.
+    fn check_bindings(
         models: &[Model],
-        ctx: GpuContext,
-        opts: GpuOptions,
+        ctx: &GpuContext,
         ensemble: bool,
-    ) -> Result<GpuEngine<T>, EngineError> {
-        ctx.check_precision::<T>()?;
-        let model = &models[0];
+    ) -> Result<(), EngineError> {
         let scene_count = models.len();
-        let shape = Shape::of(model);
-        let (n, nj) = (shape.blocks, shape.junctions);
         let limit = Self::binding_limit(&ctx.limits);
         let what = if ensemble {
             format!(" of {scene_count} scenes")
         } else {
             String::new()
         };
-        for (name, per_scene) in Self::largest_buffers(model) {
+        for (name, per_scene) in Self::largest_buffers(&models[0]) {
             let bytes = (scene_count * per_scene) as u64;
             if bytes > limit {
                 return Err(EngineError::Gpu(format!(
@@ -402,6 +375,51 @@ impl<T: GpuReal> GpuEngine<T> {
                 ctx.info.name
             )));
         }
+        Ok(())
+    }
+
+    /// Fails where `kernel` cannot hold `model` on this adapter (the
+    /// resident kernel's lattice, the tiled kernel's tile in workgroup
+    /// memory); the tiled kernel's geometry.
+    fn kernel_fit(
+        model: &Model,
+        ctx: &GpuContext,
+        opts: GpuOptions,
+        kernel: Kernel,
+        threads: u32,
+    ) -> Result<Option<tiles::TileGeometry>, EngineError> {
+        match kernel {
+            Kernel::Resident => {
+                resident_fit::<T>(model, &ctx.limits).map_err(EngineError::Gpu)?;
+                Ok(None)
+            }
+            Kernel::Tiled => {
+                let shape = opts.tile.unwrap_or(tiles::TileShape::DEFAULT);
+                let g = tiles::TileGeometry::new(model, shape).map_err(EngineError::Gpu)?;
+                tiles::tiled_fit::<T>(model, &g, &ctx.limits).map_err(EngineError::Gpu)?;
+                if ctx.is_software() {
+                    tiles::software_fit(model, &g, threads).map_err(EngineError::Gpu)?;
+                }
+                Ok(Some(g))
+            }
+            _ => Ok(None),
+        }
+    }
+
+    /// The engine over `models`, which share one lattice shape and time
+    /// schedule (checked by the caller), with the same kernels for one
+    /// scene or many; `ensemble`: a blow-up stops only its scene.
+    fn build(
+        models: &[Model],
+        ctx: GpuContext,
+        opts: GpuOptions,
+        ensemble: bool,
+    ) -> Result<GpuEngine<T>, EngineError> {
+        ctx.check_precision::<T>()?;
+        let model = &models[0];
+        let scene_count = models.len();
+        let shape = Shape::of(model);
+        Self::check_bindings(models, &ctx, ensemble)?;
         let kernel = choose_kernel(opts.path, ctx.is_software());
         let persistent_threads = persistent_threads(
             kernel,
@@ -409,205 +427,26 @@ impl<T: GpuReal> GpuEngine<T> {
             &ctx.limits,
             ctx.is_software(),
         );
-        if kernel == Kernel::Resident {
-            resident_fit::<T>(model, &ctx.limits).map_err(EngineError::Gpu)?;
-        }
-        let geometry = match kernel {
-            Kernel::Tiled => {
-                let shape = opts.tile.unwrap_or(tiles::TileShape::DEFAULT);
-                let g = tiles::TileGeometry::new(model, shape).map_err(EngineError::Gpu)?;
-                tiles::tiled_fit::<T>(model, &g, &ctx.limits).map_err(EngineError::Gpu)?;
-                if ctx.is_software() {
-                    tiles::software_fit(model, &g, persistent_threads).map_err(EngineError::Gpu)?;
-                }
-                Some(g)
-            }
-            _ => None,
-        };
+        let geometry = Self::kernel_fit(model, &ctx, opts, kernel, persistent_threads)?;
         let device = &ctx.device;
-        let storage = |label: &str, bytes: &[u8]| {
-            // Zero-sized bindings are invalid: pad empty arrays to one element.
-            let padded;
-            let contents = if bytes.is_empty() {
-                padded = vec![0u8; 48]; // a whole number of every element size
-                &padded[..]
-            } else {
-                bytes
-            };
-            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some(label),
-                contents,
-                usage: wgpu::BufferUsages::STORAGE
-                    | wgpu::BufferUsages::COPY_SRC
-                    | wgpu::BufferUsages::COPY_DST,
-            })
-        };
-        let disp: Vec<[Coord<T>; 2]> = models
-            .iter()
-            .flat_map(initial_displacement)
-            .map(|u| u.map(Coord::<T>::from_f64))
-            .collect();
-        let zeros2 = |len: usize| vec![[T::zero(); 2]; len];
-        let s = scene_count;
-        let gpu_consts: Vec<GpuConsts<T>> = models
-            .iter()
-            .map(|m| {
-                let speed_limit = T::from_f64(m.pressure_wave_speed());
-                GpuConsts::new(&Consts::<T>::new(m), speed_limit)
-            })
-            .collect();
-        // The tiled kernel's scratch per scene (`TileGeometry::scratch_per_scene`);
-        // the lane sums of the others.
-        let scratch = geometry.map_or([0, 0, shape.nx * shape.lanes], |g| {
-            g.scratch_per_scene(n, shape.nx, nj / shape.nx.max(1), shape.lanes)
-        });
-        let buffers = Buffers {
-            consts: storage("scene consts", bytemuck::cast_slice(&gpu_consts)),
-            disp: [
-                storage("disp 0", bytemuck::cast_slice(&disp)),
-                storage("disp 1", bytemuck::cast_slice(&disp)),
-            ],
-            vel: [
-                storage("vel 0", bytemuck::cast_slice(&zeros2(s * n))),
-                storage("vel 1", bytemuck::cast_slice(&zeros2(s * n))),
-            ],
-            force: storage("force", bytemuck::cast_slice(&zeros2(s * n))),
-            flags: storage("flags", bytemuck::cast_slice(&block_flags(model))),
-            contact: storage("contact", bytemuck::cast_slice(&zeros2(s * shape.nx))),
-            junction_spring: storage(
-                "junction_spring",
-                bytemuck::cast_slice(
-                    &models
-                        .iter()
-                        .flat_map(|m| {
-                            gpu_junction_springs::<T>(
-                                &crate::model::lattice::initial_anchors(m),
-                                &vec![0.0; nj],
-                            )
-                        })
-                        .collect::<Vec<_>>(),
-                ),
-            ),
-            junction_state: storage(
-                "junction_state",
-                bytemuck::cast_slice(&vec![[crate::model::junction::PINNED, 0u32]; s * nj]),
-            ),
-            junction_cache: storage(
-                "junction sums kept",
-                // Each scene's interface blocks, then (tiled kernel) each
-                // tile's private records of its halo columns.
-                bytemuck::cast_slice(&vec![
-                    GpuJunctionCache::<T>::zeroed();
-                    s * (shape.nx
-                        + geometry
-                            .map_or(0, |g| (g.tiles * g.span) as usize))
-                ]),
-            ),
-            slide: storage(
-                "slide",
-                bytemuck::cast_slice(&vec![[0i32; 2]; s * shape.nx]),
-            ),
-            law_state: storage(
-                "law_state",
-                bytemuck::cast_slice(
-                    &models
-                        .iter()
-                        .flat_map(crate::engines::friction_state::initial_law_state::<T, Coord<T>>)
-                        .map(T::pack)
-                        .collect::<Vec<Packed<T>>>(),
-                ),
-            ),
-            status: storage(
-                "status",
-                bytemuck::cast_slice(&vec![GpuStatus::zeroed(); s]),
-            ),
-            lane_partial: storage(
-                "lane partial sums",
-                // One WGSL `LaneSum` per lane (of each tile's held blocks
-                // for the tiled kernel).
-                bytemuck::cast_slice(&vec![GpuLaneSum::<T>::zeroed(); s * scratch[2]]),
-            ),
-            tile_scratch: {
-                let zeros = |len: usize, bytes: usize| vec![0u8; s * len * bytes];
-                let ends = geometry.map_or(0, |_| ONE_STEP_BATCH as usize);
-                [
-                    storage("published disp", &zeros(scratch[0], Self::DISP_BYTES)),
-                    storage("published vel", &zeros(scratch[0], Self::REAL_PAIR_BYTES)),
-                    storage("tile junction state", &zeros(scratch[1], WORD_PAIR_BYTES)),
-                    storage(
-                        "tile junction spring",
-                        &zeros(scratch[1], Self::SPRING_BYTES),
-                    ),
-                    storage("tile dispatch ends", &vec![0u8; ends * 4]),
-                ]
-            },
-            // One element of the largest record struct in this precision.
-            record_placeholders: std::array::from_fn(|_| {
-                storage(
-                    "no records",
-                    &vec![0u8; PLACEHOLDER_BYTES.max(Self::SUMS_BYTES)],
-                )
-            }),
-        };
-        // The step offsets 0..ONE_STEP_BATCH, one per dynamic-offset stride.
-        let offset_stride = (ctx.limits.min_storage_buffer_offset_alignment as u64).max(4);
-        let mut table = vec![0u8; (offset_stride * ONE_STEP_BATCH) as usize];
-        for i in 0..ONE_STEP_BATCH {
-            let at = (i * offset_stride) as usize;
-            table[at..at + 4].copy_from_slice(&(i as u32).to_le_bytes());
-        }
-        let offsets = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("step offsets"),
-            contents: &table,
-            usage: wgpu::BufferUsages::STORAGE,
-        });
+        let buffers = Buffers::new::<T>(device, models, shape, geometry);
+        let (offsets, offset_stride) = buffers::step_offsets(device, &ctx.limits);
         let batch_buffer = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("batch"),
-            size: (s * std::mem::size_of::<GpuBatch<T>>()) as u64,
+            size: (scene_count * std::mem::size_of::<GpuBatch<T>>()) as u64,
             usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
         let placeholders = buffers.record_placeholders.each_ref();
         let state_group = state_group(&ctx, kernel, &buffers, placeholders);
-        let batch_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("batch"),
-            layout: &ctx.batch_layout,
-            entries: &ctx.bindings(kernel).entries(
-                1,
-                &[
-                    (
-                        context::STEP_OFFSET,
-                        wgpu::BindingResource::Buffer(wgpu::BufferBinding {
-                            buffer: &offsets,
-                            offset: 0,
-                            size: wgpu::BufferSize::new(4),
-                        }),
-                    ),
-                    ("batch", batch_buffer.as_entire_binding()),
-                    ("scene_batches", batch_buffer.as_entire_binding()),
-                ],
-            ),
-        });
+        let batch_group = batch_group(&ctx, kernel, &offsets, &batch_buffer);
         let variant = Variant::for_model(model);
-        let mut constants = variant.constants.clone();
-        constants.push(("KEEP_JUNCTION_SUMS", opts.keep_junction_sums as u8 as f64));
-        if kernel.is_persistent() {
-            constants.push(("PERSISTENT_THREADS", persistent_threads as f64));
-            // llvmpipe counts the iterations of every inlined loop against
-            // its limit: one junction lane a round there.
-            let two_lanes = !ctx.is_software();
-            constants.push(("TWO_LANES_A_ROUND", two_lanes as u8 as f64));
-        }
-        if kernel == Kernel::Resident {
-            constants.push(("RESIDENT_BLOCKS", n as f64));
-            constants.push(("REDUCTION_WIDTH", resident_reduction_width::<T>() as f64));
-        }
-        if let Some(g) = geometry {
-            constants.push(("TILE_WIDTH", g.width as f64));
-            constants.push(("TILE_HALO", g.halo as f64));
-            constants.push(("TILE_BLOCKS", g.blocks as f64));
-            constants.push(("TILE_THREADS", persistent_threads as f64));
-        }
+        let launch = Launch {
+            kernel,
+            threads: persistent_threads,
+            geometry,
+        };
+        let constants = launch.constants::<T>(&variant, opts, shape.blocks, ctx.is_software());
         // One module (and one compiled pipeline) for the one-step kernels.
         let build = KernelBuild {
             lanes: ctx.lane_merge(opts.lane_shuffle && kernel.merges_lanes_through_storage()),
@@ -620,24 +459,7 @@ impl<T: GpuReal> GpuEngine<T> {
                 .expect("the tiled kernel gathers");
             (g, ctx.pipeline_of::<T>(kernel, build, entry, &constants))
         });
-        let junction_groups = match (kernel, model.law) {
-            (Kernel::OneStepLanes, FrictionLaw::Junctions | FrictionLaw::SingleJunction) => {
-                model.nx as u32
-            }
-            _ => 0,
-        };
-        // With junction workgroups, the others start at the first block of
-        // the workgroup-sized run that holds block nx (one_step_lanes.wgsl).
-        let first_plain = if junction_groups > 0 {
-            model.nx as u32 / WORKGROUP * WORKGROUP
-        } else {
-            0
-        };
-        let plain_groups = (n as u32 - first_plain).div_ceil(WORKGROUP);
-        let groups = match geometry {
-            Some(g) => (g.tiles, 1),
-            None => groups_for(junction_groups + plain_groups),
-        };
+        let groups = launch.groups(model);
         let steps_per_dispatch = match geometry {
             Some(g) => g.halo as u64,
             None => opts

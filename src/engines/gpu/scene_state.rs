@@ -3,10 +3,11 @@
 //! kinematics and junctions). Scene k's elements start at k times the
 //! per-scene count of each buffer.
 
+use super::buffers::{gpu_junction_springs, Shape, WORD_PAIR_BYTES};
 use super::layout::{GpuJunctionCache, GpuJunctionSpring};
 use super::precision::{Coord, GpuReal, Packed};
 use super::readback::{cast_prefix, read_ranges, Range};
-use super::{GpuEngine, Shape, WORD_PAIR_BYTES};
+use super::GpuEngine;
 use crate::engines::{EngineError, EngineState, FrictionState, Snapshot, StateArrays};
 use crate::model::real::Coordinate;
 use bytemuck::Zeroable;
@@ -347,20 +348,4 @@ fn kept_records<T: GpuReal>(bytes: &[u8]) -> usize {
     let n = bytes.len() / std::mem::size_of::<GpuJunctionCache<T>>();
     let sums: Vec<GpuJunctionCache<T>> = cast_prefix(bytes, n);
     sums.iter().filter(|s| s.stiffness_max > T::zero()).count()
-}
-
-/// The `junction_spring` buffer's records: anchors as coordinates,
-/// stiffnesses in `T`.
-pub(super) fn gpu_junction_springs<T: GpuReal>(
-    anchors: &[f64],
-    stiffness: &[f64],
-) -> Vec<GpuJunctionSpring<T>> {
-    anchors
-        .iter()
-        .zip(stiffness)
-        .map(|(a, k)| GpuJunctionSpring {
-            anchor: T::pack(Coord::<T>::from_f64(*a)),
-            stiffness: T::from_f64(*k),
-        })
-        .collect()
 }
