@@ -6,7 +6,7 @@
 //! computes. These tests fail, never skip, when no adapter exists
 //! (lavapipe in CI).
 
-use slipfront::engines::gpu::{GpuEngine, GpuOptions, GpuOutput, GpuPath};
+use slipfront::engines::gpu::{GpuEngine, GpuOptions, GpuOutput, GpuPath, GpuReal};
 use slipfront::engines::Sample;
 use slipfront::{advance_to, Engine, Model, Snapshot};
 
@@ -25,8 +25,9 @@ const KERNELS: [GpuPath; 5] = [
 ];
 
 /// The state at the end and every sample recorded on the device on the
-/// way, of `m` on kernel `path`, with or without wgpu's checks.
-fn run(
+/// way, of `m` on kernel `path` in precision `T`, with or without wgpu's
+/// checks.
+fn run_in<T: GpuReal>(
     m: &Model,
     plan: &slipfront::engines::SamplePlan,
     path: GpuPath,
@@ -38,7 +39,7 @@ fn run(
         shader_checks: checks,
         ..GpuOptions::default()
     };
-    let mut e = GpuEngine::with_options(m, opts)
+    let mut e = GpuEngine::<T>::with_precision(m, opts)
         .unwrap_or_else(|e| panic!("a GPU adapter is required (lavapipe in CI): {e}"));
     assert!(
         e.record_samples(plan).unwrap(),
@@ -62,8 +63,8 @@ fn kernels_without_run_time_checks_give_the_bits_of_checked_ones() {
     let m = Model::from_scenario(&s, false).unwrap();
     let plan = plan(&m, &s);
     for path in KERNELS {
-        let (trusted, trusted_samples) = run(&m, &plan, path, false);
-        let (checked, checked_samples) = run(&m, &plan, path, true);
+        let (trusted, trusted_samples) = run_in::<f32>(&m, &plan, path, false);
+        let (checked, checked_samples) = run_in::<f32>(&m, &plan, path, true);
         println!(
             "{path:?}: {} ruptures, {} samples",
             trusted.total_ruptures(),
@@ -84,8 +85,45 @@ fn kernels_without_run_time_checks_give_the_bits_of_checked_ones() {
     ])
     .unwrap();
     let heavier = Model::from_scenario(&s, false).unwrap();
-    let (base, base_samples) = run(&m, &plan, GpuPath::OneStep, false);
-    let (other, other_samples) = run(&heavier, &plan, GpuPath::OneStep, false);
+    let (base, base_samples) = run_in::<f32>(&m, &plan, GpuPath::OneStep, false);
+    let (other, other_samples) = run_in::<f32>(&heavier, &plan, GpuPath::OneStep, false);
     assert!(base != other, "control: state");
     assert!(base_samples != other_samples, "control: records");
+}
+
+/// The f64 kernels (coordinates in f64, the RNG's own logarithm and cosine
+/// with their bounded loops, `coord_f64.wgsl`) on the one-step and
+/// persistent kernels: the same bits with and without the checks. Adapters
+/// without SHADER_F64 run mixed f32 only; lavapipe (CI) has it.
+#[test]
+fn f64_kernels_without_run_time_checks_give_the_bits_of_checked_ones() {
+    let ctx = slipfront::engines::gpu::context::shared().expect("a GPU adapter");
+    if ctx.check_precision::<f64>().is_err() {
+        assert!(
+            std::env::var("CI").map_or(true, |v| v != "true"),
+            "{}: no f64 in CI",
+            ctx.info.name
+        );
+        println!("{}: no f64, nothing to compare", ctx.info.name);
+        return;
+    }
+    let s = slipfront::app::verify::small_triggered_scene(&["time.end=4e-4"]).unwrap();
+    let m = Model::from_scenario(&s, false).unwrap();
+    let plan = plan(&m, &s);
+    for path in [GpuPath::OneStep, GpuPath::Persistent] {
+        let (trusted, trusted_samples) = run_in::<f64>(&m, &plan, path, false);
+        let (checked, checked_samples) = run_in::<f64>(&m, &plan, path, true);
+        println!(
+            "{path:?}, f64: {} ruptures, {} samples",
+            trusted.total_ruptures(),
+            trusted_samples.len()
+        );
+        assert!(trusted.total_ruptures() > 100, "{path:?}: no front");
+        assert!(trusted_samples.len() > 100, "{path:?}: too few samples");
+        assert!(trusted == checked, "{path:?}: the checks changed the state");
+        assert!(
+            trusted_samples == checked_samples,
+            "{path:?}: the checks changed the records"
+        );
+    }
 }
