@@ -3,7 +3,7 @@
 // junction_first(ix) on. The tiled kernel keeps its halo's copies apart
 // (junction_tiled.wgsl); the junction phase (junctions.wgsl) reads and
 // writes only through these functions.
-// CPU twin: src/engines/gpu/scene_state.rs gpu_junction_springs (the host side of this layout).
+// CPU twin: src/engines/gpu/buffers.rs gpu_junction_springs (the host side of this layout).
 // import: common, scene
 
 fn junction_first(ix: u32) -> u32 {

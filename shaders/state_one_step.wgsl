@@ -2,7 +2,7 @@
 // one and writes step n+1 to the other (ping-pong), so no block waits for
 // another. Which copy holds step n follows from the batch's starting copy
 // and the step offset (one bind group for all dispatches, see common.wgsl).
-// CPU twin: src/engines/gpu/mod.rs state_group (the host side of these bindings).
+// CPU twin: src/engines/gpu/buffers.rs state_group (the host side of these bindings).
 // import: common, scene, state_by_index
 
 @group(0) @binding(1) var<storage, read_write> disp_a: array<Disp>;

@@ -2,7 +2,7 @@
 // lattice and separates the phases of a step with barriers, so it updates
 // the state in place. lane_partial holds the junction lane sums between
 // the force and the update phases.
-// CPU twin: src/engines/gpu/mod.rs state_group (the host side of these bindings).
+// CPU twin: src/engines/gpu/buffers.rs state_group (the host side of these bindings).
 // import: scene, state_by_index
 
 @group(0) @binding(1) var<storage, read_write> disp: array<Disp>;

@@ -7,7 +7,7 @@
 // keeps it. RESIDENT_BLOCKS ≥ c.n_blocks: the host compiles it to the
 // lattice, and takes this kernel only where the lattice fits the
 // adapter's workgroup memory (options::resident_fit).
-// CPU twin: src/engines/gpu/mod.rs state_group (the host side of these bindings).
+// CPU twin: src/engines/gpu/buffers.rs state_group (the host side of these bindings).
 // import: scene, state_by_index
 
 @group(0) @binding(1) var<storage, read_write> disp: array<Disp>;
