@@ -51,6 +51,31 @@ fn run_in<T: GpuReal>(
     (e.snapshot().unwrap(), samples)
 }
 
+/// `m` on kernel `path` in `T` gives the same bits of state and of every
+/// device record with and without the checks, through a front that broke
+/// junctions and recorded samples (else the comparison holds vacuously).
+fn assert_same_both_ways<T: GpuReal>(
+    m: &Model,
+    plan: &slipfront::engines::SamplePlan,
+    path: GpuPath,
+) {
+    let (trusted, trusted_samples) = run_in::<T>(m, plan, path, false);
+    let (checked, checked_samples) = run_in::<T>(m, plan, path, true);
+    println!(
+        "{path:?}, {}: {} ruptures, {} samples",
+        T::NAME,
+        trusted.total_ruptures(),
+        trusted_samples.len()
+    );
+    assert!(trusted.total_ruptures() > 100, "{path:?}: no front");
+    assert!(trusted_samples.len() > 100, "{path:?}: too few samples");
+    assert!(trusted == checked, "{path:?}: the checks changed the state");
+    assert!(
+        trusted_samples == checked_samples,
+        "{path:?}: the checks changed the records"
+    );
+}
+
 /// The small triggered front (29 × 16, a front across the interface within
 /// 0.3 ms, the fast cadence switching on and off), through 0.6 ms on every
 /// kernel: the same bits of state and of every device record with and
@@ -63,20 +88,7 @@ fn kernels_without_run_time_checks_give_the_bits_of_checked_ones() {
     let m = Model::from_scenario(&s, false).unwrap();
     let plan = plan(&m, &s);
     for path in KERNELS {
-        let (trusted, trusted_samples) = run_in::<f32>(&m, &plan, path, false);
-        let (checked, checked_samples) = run_in::<f32>(&m, &plan, path, true);
-        println!(
-            "{path:?}: {} ruptures, {} samples",
-            trusted.total_ruptures(),
-            trusted_samples.len()
-        );
-        assert!(trusted.total_ruptures() > 100, "{path:?}: no front");
-        assert!(trusted_samples.len() > 100, "{path:?}: too few samples");
-        assert!(trusted == checked, "{path:?}: the checks changed the state");
-        assert!(
-            trusted_samples == checked_samples,
-            "{path:?}: the checks changed the records"
-        );
+        assert_same_both_ways::<f32>(&m, &plan, path);
     }
     // Control: the same comparison sees a normal load 1e-6 larger.
     let s = slipfront::app::verify::small_triggered_scene(&[
@@ -111,19 +123,6 @@ fn f64_kernels_without_run_time_checks_give_the_bits_of_checked_ones() {
     let m = Model::from_scenario(&s, false).unwrap();
     let plan = plan(&m, &s);
     for path in [GpuPath::OneStep, GpuPath::Persistent] {
-        let (trusted, trusted_samples) = run_in::<f64>(&m, &plan, path, false);
-        let (checked, checked_samples) = run_in::<f64>(&m, &plan, path, true);
-        println!(
-            "{path:?}, f64: {} ruptures, {} samples",
-            trusted.total_ruptures(),
-            trusted_samples.len()
-        );
-        assert!(trusted.total_ruptures() > 100, "{path:?}: no front");
-        assert!(trusted_samples.len() > 100, "{path:?}: too few samples");
-        assert!(trusted == checked, "{path:?}: the checks changed the state");
-        assert!(
-            trusted_samples == checked_samples,
-            "{path:?}: the checks changed the records"
-        );
+        assert_same_both_ways::<f64>(&m, &plan, path);
     }
 }

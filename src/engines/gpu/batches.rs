@@ -4,8 +4,7 @@
 //! `GpuOptions::run_ahead`) of them on the device and retires the oldest
 //! first, reading each scene's blow-up and samples.
 
-use super::buffers::gpu_junction_springs;
-use super::buffers::STATUS_BYTES;
+use super::buffers::{gpu_junction_springs, STATUS_BYTES};
 use super::layout::{self, GpuBatch, GpuStatus};
 use super::options::{IN_FLIGHT, ONE_STEP_BATCH, PERSISTENT_BATCH};
 use super::precision::{Coord, GpuReal};

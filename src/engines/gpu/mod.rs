@@ -71,16 +71,17 @@ pub use record_pipelines::RECORD_SMALL_BLOCKS;
 use shaders::{Kernel, Variant};
 use std::collections::VecDeque;
 
-/// The kernel an engine steps with, its workgroup's threads, and the tiled
-/// kernel's geometry.
+/// The kernel an engine steps with, as built: its workgroup's threads and
+/// the tiled kernel's geometry resolved (`kernel_choice::Launch` is what
+/// a choice asks for).
 #[derive(Debug, Clone, Copy)]
-struct Launch {
+struct StepKernel {
     kernel: Kernel,
     threads: u32,
     geometry: Option<tiles::TileGeometry>,
 }
 
-impl Launch {
+impl StepKernel {
     /// The override constants of the kernel's pipeline: the scene's terms
     /// (`variant`), then what the kernel's layout needs; `blocks`: the
     /// lattice's (the resident kernel's workgroup arrays).
@@ -441,12 +442,12 @@ impl<T: GpuReal> GpuEngine<T> {
         let state_group = state_group(&ctx, kernel, &buffers, placeholders);
         let batch_group = batch_group(&ctx, kernel, &offsets, &batch_buffer);
         let variant = Variant::for_model(model);
-        let launch = Launch {
+        let step_kernel = StepKernel {
             kernel,
             threads: persistent_threads,
             geometry,
         };
-        let constants = launch.constants::<T>(&variant, opts, shape.blocks, ctx.is_software());
+        let constants = step_kernel.constants::<T>(&variant, opts, shape.blocks, ctx.is_software());
         // One module (and one compiled pipeline) for the one-step kernels.
         let build = KernelBuild {
             lanes: ctx.lane_merge(opts.lane_shuffle && kernel.merges_lanes_through_storage()),
@@ -459,7 +460,7 @@ impl<T: GpuReal> GpuEngine<T> {
                 .expect("the tiled kernel gathers");
             (g, ctx.pipeline_of::<T>(kernel, build, entry, &constants))
         });
-        let groups = launch.groups(model);
+        let groups = step_kernel.groups(model);
         let steps_per_dispatch = match geometry {
             Some(g) => g.halo as u64,
             None => opts

@@ -34,7 +34,8 @@ impl RecordPipelines {
         threads: u32,
         checks: ShaderChecks,
     ) -> RecordPipelines {
-        let threads = threads.min(super::layout::reduction_slots::<T>());
+        let all_slots = super::layout::reduction_slots::<T>();
+        let threads = threads.min(all_slots);
         // The output module's own declarations (shaders/record.wgsl):
         // group 0 the constants, the state (read only) and the record
         // buffers; group 1 the sample's entry, at a dynamic offset.
@@ -75,7 +76,6 @@ impl RecordPipelines {
                 cache: None,
             })
         };
-        let all_slots = super::layout::reduction_slots::<T>();
         let per_group = WORKGROUP.min(all_slots);
         RecordPipelines {
             bindings,
