@@ -41,7 +41,8 @@
 //! loan of a GPU can take the table in parts); each prints its wall time.
 //! SLIPFRONT_GPU_TABLE_SCENES=1,256 runs section 3 at those scene counts
 //! only, SLIPFRONT_GPU_TABLE_LAUNCHES=resident/1024,persistent/512 those
-//! kernels only (two builds compared in one loan);
+//! kernels only (two builds compared in one loan; a name such as
+//! `resident/1024/bond-patches` adds that launch's rows);
 //! SLIPFRONT_GPU_TABLE_SWEEPS=256 runs section 6 at those point counts.
 //! SLIPFRONT_GPU_TABLE_KEEP_SUMS=0 sums every junction every step in
 //! sections 1–3 (`GpuOptions::keep_junction_sums` off): the same bits,
@@ -51,7 +52,9 @@
 //! default merges runs of lanes in subgroups first where the adapter has
 //! them): the same bits. Section 7 prints both on Table S1, and the
 //! shipped Table S1 scene with and without wgpu's run-time checks in the
-//! kernels (`GpuOptions::shader_checks`).
+//! kernels (`GpuOptions::shader_checks`), and the persistent and resident
+//! kernels there with their bulk forces by patches of blocks
+//! (`GpuOptions::bond_patches`).
 
 use gpu_timing::{
     ensemble_step_seconds, output_run, solo_step_seconds, table_s1, timed_advance, Timed,
@@ -208,29 +211,34 @@ fn junction_cost(min_seconds: f64) {
         let scenario = Scenario::parse(text, "table S1", &set).expect("a Table S1 variant");
         let model = Model::from_scenario(&scenario, false).expect("a Table S1 variant");
         // The scene as shipped also with wgpu's run-time checks in the
-        // kernels (`GpuOptions::shader_checks`): what leaving them out saves.
-        let checks: &[bool] = if set.is_empty() {
-            &[false, true]
-        } else {
-            &[false]
-        };
+        // kernels (`GpuOptions::shader_checks`): what leaving them out saves;
+        // and the single-workgroup kernels with their bulk forces by patches
+        // of blocks (`GpuOptions::bond_patches`).
         for kernel in candidates(&model) {
-            for &shader_checks in checks {
+            let mut variants = vec![(false, false)];
+            if set.is_empty() {
+                variants.push((true, false));
+                if kernel.is_persistent() {
+                    variants.push((false, true));
+                }
+            }
+            for (shader_checks, bond_patches) in variants {
                 let kept = GpuOptions {
                     keep_junction_sums: true,
                     shader_checks,
+                    bond_patches,
                     ..options(kernel)
                 };
                 let figure = match solo_step_seconds(&model, kept, min_seconds) {
                     Ok((s, host)) => format!("{:.2} | {host:.2}", s * 1e6),
                     Err(e) => format!("not run: {e} |"),
                 };
-                let checked = if shader_checks {
-                    ", wgpu's run-time checks in the kernels"
-                } else {
-                    ""
+                let how = match (shader_checks, bond_patches) {
+                    (true, _) => ", wgpu's run-time checks in the kernels",
+                    (_, true) => ", bulk forces by 2×2 patches of blocks",
+                    _ => "",
                 };
-                println!("| {name}{checked} | {} | {figure} |", path_name(kernel));
+                println!("| {name}{how} | {} | {figure} |", path_name(kernel));
             }
         }
     }
@@ -487,7 +495,16 @@ fn main() {
         // single-workgroup kernels at each of ENSEMBLE_THREADS, as a
         // sweep's measurement times them (how many scenes share an SM
         // depends on their threads).
-        let tried = launches(&s1, 2, GpuOptions::default(), &ctx.limits);
+        let mut tried = launches(&s1, 2, GpuOptions::default(), &ctx.limits);
+        // The single-workgroup launches with their bulk forces by patches
+        // too, but only where SLIPFRONT_GPU_TABLE_LAUNCHES names them
+        // (`resident/1024/bond-patches`): six more rows a scene count.
+        let patched: Vec<_> = tried
+            .iter()
+            .filter(|l| l.kernel.is_persistent())
+            .map(|l| l.with_bond_patches())
+            .collect();
+        tried.extend(patched);
         // SLIPFRONT_GPU_TABLE_LAUNCHES=resident/1024,one-step-lanes: only those.
         let launches_wanted: Option<Vec<String>> = std::env::var("SLIPFRONT_GPU_TABLE_LAUNCHES")
             .ok()
@@ -496,10 +513,11 @@ fn main() {
         for &n in &counts {
             let models: Vec<Model> = (1..=n).map(table_s1).collect();
             for (&launch, alone) in tried.iter().zip(alone.iter_mut()) {
-                if !launches_wanted
-                    .as_ref()
-                    .is_none_or(|w| w.contains(&launch.name()))
-                {
+                let wanted = match &launches_wanted {
+                    Some(w) => w.contains(&launch.name()),
+                    None => !launch.bond_patches,
+                };
+                if !wanted {
                     continue;
                 }
                 let result = ensemble_step_seconds(

@@ -29,11 +29,96 @@ fn normal_profile(ix: u32) -> real {
     return 1.0 + c.normal_slope * (1.0 - (x + x));
 }
 
-// Bond b of block i (at column ix, row iz) to its neighbour at offset d,
-// rest length `length` and stiffness `stiffness` (in lattice units), added
-// to the block's sums. Called once per stencil entry with constant
-// arguments (bulk_force): a loop over the stencil indexed its constant
-// tables at run time, which drivers may keep in per-thread memory.
+// What one bond adds to a block's force sums: q·r0 (mixed f32's split
+// bonds only), then the spring and dashpot terms along x and along z.
+// Every term is an odd function of the bond's offset, displacement and
+// velocity differences, and round-to-nearest is symmetric, so the bond
+// seen from its other end adds exactly these terms negated
+// (bond_terms_negated): bulk_patch.wgsl computes a bond inside its patch
+// once.
+struct BondTerms {
+    axial: vec2<real>,
+    along_x: vec2<real>,
+    along_z: vec2<real>,
+}
+
+// The terms of the bond from a block (displacement ui, velocity vi) to its
+// neighbour at offset d (uj, vj), rest length `length` and stiffness
+// `stiffness` in lattice units. Called once per stencil entry with
+// constant arguments: a loop over the stencil indexed its constant tables
+// at run time, which drivers may keep in per-thread memory.
+fn bond_terms(ui: Disp, vi: vec2<real>, uj: Disp, vj: vec2<real>, d: vec2<i32>, length: real, stiffness: real) -> BondTerms {
+    let r0 = vec2<real>(real(d.x) * c.spacing, real(d.y) * c.spacing);
+    let rest = length * c.spacing;
+    let kb = stiffness * c.k;
+    let du = vec2<real>(coord_diff(uj.x, ui.x), coord_diff(uj.z, ui.z));
+    let r = r0 + du;
+    let len = sqrt(r.x * r.x + r.y * r.y);
+    // Elongation without cancellation: (|r|² − l²)/(|r| + l).
+    let stretch = (2.0 * (r0.x * du.x + r0.y * du.y) + (du.x * du.x + du.y * du.y)) / (len + rest);
+    var damper = vec2<real>(0.0, 0.0);
+    let dv = vj - vi;
+    if SPLITS_BONDS {
+        // Mixed f32: r0 + du would round du to ulp(r0), about two steps
+        // of creep, and turn the bond's direction in stairs; the force
+        // q·r is summed as q·r0 + q·du instead (CPU twin: bulk_force).
+        let q = kb * stretch / (rest + stretch);
+        if DAMPING_FORM == 2u {
+            let inv = 1.0 / (rest + stretch);
+            let n0 = vec2<real>(r0.x * inv, r0.y * inv);
+            let n1 = vec2<real>(du.x * inv, du.y * inv);
+            let along = c.eta * ((dv.x * n0.x + dv.y * n0.y) + (dv.x * n1.x + dv.y * n1.y));
+            damper = vec2<real>(along * n0.x + along * n1.x, along * n0.y + along * n1.y);
+        } else if DAMPING_FORM != 0u {
+            damper = vec2<real>(c.eta * dv.x, c.eta * dv.y);
+        }
+        return BondTerms(
+            vec2<real>(q * r0.x, q * r0.y),
+            vec2<real>(q * du.x, damper.x),
+            vec2<real>(q * du.y, damper.y),
+        );
+    }
+    let inv_len = 1.0 / len;
+    let n = vec2<real>(r.x * inv_len, r.y * inv_len);
+    let spring = kb * stretch;
+    if DAMPING_FORM == 2u {
+        let along = c.eta * (dv.x * n.x + dv.y * n.y);
+        damper = vec2<real>(along * n.x, along * n.y);
+    } else if DAMPING_FORM != 0u {
+        damper = vec2<real>(c.eta * dv.x, c.eta * dv.y);
+    }
+    return BondTerms(vec2<real>(0.0, 0.0), vec2<real>(spring * n.x, damper.x), vec2<real>(spring * n.y, damper.y));
+}
+
+// The same bond seen from the neighbour's end (offset −d): every term
+// negated, exactly.
+fn bond_terms_negated(t: BondTerms) -> BondTerms {
+    return BondTerms(-t.axial, -t.along_x, -t.along_z);
+}
+
+// A bond's terms at offset d (a constant of each call) added to a block's
+// sums, in the order the CPU twin adds them.
+fn add_bond_terms(t: BondTerms, d: vec2<i32>, fx: ptr<function, force_sum>, fz: ptr<function, force_sum>) {
+    var sx = *fx;
+    var sz = *fz;
+    if SPLITS_BONDS {
+        // A stencil entry along an axis has r0 = 0 across it: its q·r0 term
+        // is ±0, and adding ±0 leaves a compensated sum's bits as they are
+        // (neither of its words is −0), so the term is not added.
+        if d.x != 0 {
+            sx = force_sum_add(sx, t.axial.x);
+        }
+        if d.y != 0 {
+            sz = force_sum_add(sz, t.axial.y);
+        }
+    }
+    *fx = force_sum_add_bond(sx, t.along_x.x, t.along_x.y);
+    *fz = force_sum_add_bond(sz, t.along_z.x, t.along_z.y);
+}
+
+// Bond of the block at column ix and row iz (displacement ui, velocity vi)
+// to its neighbour at offset d, if that is in the lattice, added to the
+// block's sums.
 fn add_bond(
     ix: i32,
     iz: i32,
@@ -51,58 +136,9 @@ fn add_bond(
         return;
     }
     let j = u32(jz) * c.nx + u32(jx);
-    let r0 = vec2<real>(real(d.x) * c.spacing, real(d.y) * c.spacing);
-    let rest = length * c.spacing;
-    let kb = stiffness * c.k;
     let uj = load_disp_at(j, u32(jx), u32(jz));
-    let du = vec2<real>(coord_diff(uj.x, ui.x), coord_diff(uj.z, ui.z));
-    let r = r0 + du;
-    let len = sqrt(r.x * r.x + r.y * r.y);
-    // Elongation without cancellation: (|r|² − l²)/(|r| + l).
-    let stretch = (2.0 * (r0.x * du.x + r0.y * du.y) + (du.x * du.x + du.y * du.y)) / (len + rest);
-    var damper = vec2<real>(0.0, 0.0);
-    let dv = load_vel_at(j, u32(jx), u32(jz)) - vi;
-    if SPLITS_BONDS {
-        // Mixed f32: r0 + du would round du to ulp(r0), about two steps
-        // of creep, and turn the bond's direction in stairs; the force
-        // q·r is summed as q·r0 + q·du instead (CPU twin: bulk_force).
-        let q = kb * stretch / (rest + stretch);
-        if DAMPING_FORM == 2u {
-            let inv = 1.0 / (rest + stretch);
-            let n0 = vec2<real>(r0.x * inv, r0.y * inv);
-            let n1 = vec2<real>(du.x * inv, du.y * inv);
-            let along = c.eta * ((dv.x * n0.x + dv.y * n0.y) + (dv.x * n1.x + dv.y * n1.y));
-            damper = vec2<real>(along * n0.x + along * n1.x, along * n0.y + along * n1.y);
-        } else if DAMPING_FORM != 0u {
-            damper = vec2<real>(c.eta * dv.x, c.eta * dv.y);
-        }
-        // A stencil entry along an axis has r0 = 0 across it: its q·r0 term
-        // is ±0, and adding ±0 leaves a compensated sum's bits as they are
-        // (neither of its words is −0), so the term is not added. d is a
-        // constant of each call, so the test costs nothing.
-        var sx = *fx;
-        var sz = *fz;
-        if d.x != 0 {
-            sx = force_sum_add(sx, q * r0.x);
-        }
-        if d.y != 0 {
-            sz = force_sum_add(sz, q * r0.y);
-        }
-        *fx = force_sum_add_bond(sx, q * du.x, damper.x);
-        *fz = force_sum_add_bond(sz, q * du.y, damper.y);
-        return;
-    }
-    let inv_len = 1.0 / len;
-    let n = vec2<real>(r.x * inv_len, r.y * inv_len);
-    let spring = kb * stretch;
-    if DAMPING_FORM == 2u {
-        let along = c.eta * (dv.x * n.x + dv.y * n.y);
-        damper = vec2<real>(along * n.x, along * n.y);
-    } else if DAMPING_FORM != 0u {
-        damper = vec2<real>(c.eta * dv.x, c.eta * dv.y);
-    }
-    *fx = force_sum_add_bond(*fx, spring * n.x, damper.x);
-    *fz = force_sum_add_bond(*fz, spring * n.y, damper.y);
+    let vj = load_vel_at(j, u32(jx), u32(jz));
+    add_bond_terms(bond_terms(ui, vi, uj, vj, d, length, stiffness), d, fx, fz);
 }
 
 // Block i at column column and row row (i = row·nx + column: the caller
@@ -124,17 +160,27 @@ fn bulk_force(i: u32, column: u32, row: u32, ld: Loads) -> vec2<real> {
     add_bond(ix, iz, ui, vi, STENCIL[5], STENCIL_LENGTH[5], STENCIL_STIFFNESS[5], &fx, &fz);
     add_bond(ix, iz, ui, vi, STENCIL[6], STENCIL_LENGTH[6], STENCIL_STIFFNESS[6], &fx, &fz);
     add_bond(ix, iz, ui, vi, STENCIL[7], STENCIL_LENGTH[7], STENCIL_STIFFNESS[7], &fx, &fz);
+    return external_loads(i, column, ui, vi, fx, fz, ld);
+}
+
+// The loads that do not come from bonds, added to block i's bond sums in
+// the CPU twin's order (external_loads): foundation and interface
+// prestress, top loads, side spring, absolute damping; the total rounded
+// once.
+fn external_loads(i: u32, column: u32, ui: Disp, vi: vec2<real>, bond_x: force_sum, bond_z: force_sum, ld: Loads) -> vec2<real> {
+    var fx = bond_x;
+    var fz = bond_z;
     let fl = flags[i];
     if USE_FOUNDATION && (fl & FLAG_INTERFACE) != 0u {
         fz = force_sum_add(fz, foundation_normal(coord_value(ui.z)));
     }
     if USE_PRESTRESS && (fl & FLAG_INTERFACE) != 0u {
-        let total = select(ld.interface_shear_total, ld.strip_shear_total, u32(ix) < c.strip_blocks);
-        fx = force_sum_add(fx, total * (top_share(u32(ix)) * normal_profile(u32(ix))));
+        let total = select(ld.interface_shear_total, ld.strip_shear_total, column < c.strip_blocks);
+        fx = force_sum_add(fx, total * (top_share(column) * normal_profile(column)));
     }
     if USE_TOP_LOADS && (fl & FLAG_TOP) != 0u {
-        let share = top_share(u32(ix));
-        fz = force_sum_add(fz, -(ld.normal_total * (share * normal_profile(u32(ix)))));
+        let share = top_share(column);
+        fz = force_sum_add(fz, -(ld.normal_total * (share * normal_profile(column))));
         fx = force_sum_add(fx, ld.top_tangential_total * share);
     }
     if USE_SIDE_SPRING && (fl & FLAG_DRIVEN) != 0u && !ld.preparing {

@@ -10,7 +10,7 @@
 // start and written back at its end (state_resident.wgsl: the resident
 // kernel, for lattices that fit). Both run this same loop.
 // CPU twin: src/engines/cpu/mod.rs CpuEngine::one_step (one step of its loop).
-// import: bulk_forces, common, coordinates, friction_law, junctions, lane_merge, lane_partials, record_buffers, record_common, scene, state, verlet
+// import: bulk_forces, bulk_patch, common, coordinates, friction_law, junctions, lane_merge, lane_partials, record_buffers, record_common, scene, state, verlet
 
 // With an output file, the samples of the batch (batch.records of them,
 // in step order; src/engines/gpu/recorder.rs): a sample of step s is recorded in
@@ -22,12 +22,24 @@
 override PERSISTENT_THREADS: u32 = 256u;
 // Junction lanes two at a time in phase 1 (hardware; see there).
 override TWO_LANES_A_ROUND: bool = true;
+// Bulk forces by 2×2 patches of blocks, each inner bond computed once
+// (bulk_patch.wgsl; GpuOptions::bond_patches): the same bits, fewer
+// bonds and loads a block, a quarter of the threads busy.
+override BOND_PATCHES: bool = false;
 
 var<workgroup> stop: u32;
 // First and end step of this dispatch, samples in the batch, the first
 // sample at or after the first step.
 var<workgroup> span: vec4<u32>;
 var<workgroup> wg_sample: u32;
+
+// Block i's bulk force, and a per-block friction law's friction from it.
+fn store_bulk_force(i: u32, f: vec2<real>, ld: Loads) {
+    force[block_base() + i] = f;
+    if is_block_law() && i < c.nx {
+        contact[interface_base() + i] = block_law_friction(i, f.x, ld);
+    }
+}
 
 @compute @workgroup_size(PERSISTENT_THREADS)
 fn persistent_steps(
@@ -69,12 +81,28 @@ fn persistent_steps(
         let ld = loads_at(s);
         let ready = batch.forces_ready != 0u && s == 0u;
         if !ready {
-            for (var b = grid_walk(t, PERSISTENT_THREADS, c.nx); b.row < c.nz; grid_walk_next(&b)) {
-                let i = b.row * c.nx + b.column;
-                let f = bulk_force(i, b.column, b.row, ld);
-                force[block_base() + i] = f;
-                if is_block_law() && i < c.nx {
-                    contact[interface_base() + i] = block_law_friction(i, f.x, ld);
+            if BOND_PATCHES {
+                let columns = (c.nx + 1u) / 2u;
+                for (var p = grid_walk(t, PERSISTENT_THREADS, columns); 2u * p.row < c.nz; grid_walk_next(&p)) {
+                    let x0 = 2u * p.column;
+                    let z0 = 2u * p.row;
+                    let f = bulk_force_patch(x0, z0, ld);
+                    let i = z0 * c.nx + x0;
+                    store_bulk_force(i, f.a, ld);
+                    if x0 + 1u < c.nx {
+                        store_bulk_force(i + 1u, f.b, ld);
+                    }
+                    if z0 + 1u < c.nz {
+                        store_bulk_force(i + c.nx, f.c, ld);
+                        if x0 + 1u < c.nx {
+                            store_bulk_force(i + c.nx + 1u, f.d, ld);
+                        }
+                    }
+                }
+            } else {
+                for (var b = grid_walk(t, PERSISTENT_THREADS, c.nx); b.row < c.nz; grid_walk_next(&b)) {
+                    let i = b.row * c.nx + b.column;
+                    store_bulk_force(i, bulk_force(i, b.column, b.row, ld), ld);
                 }
             }
             if FRICTION_LAW == LAW_JUNCTIONS {

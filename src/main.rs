@@ -278,6 +278,10 @@ struct SweepRun {
     /// --gpu-shader-checks`.
     #[arg(long)]
     gpu_shader_checks: bool,
+    /// GPU backend: the bulk forces by patches of blocks, as `run
+    /// --gpu-bond-patches`.
+    #[arg(long)]
+    gpu_bond_patches: bool,
 }
 
 fn main() -> ExitCode {
@@ -424,6 +428,7 @@ fn main() -> ExitCode {
                     run_ahead: run.gpu_run_ahead,
                     tile: run.gpu_tile,
                     shader_checks: run.gpu_shader_checks,
+                    bond_patches: run.gpu_bond_patches,
                     ..Default::default()
                 },
             }),

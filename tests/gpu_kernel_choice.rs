@@ -60,15 +60,27 @@ fn measure_times_every_candidate_takes_the_fastest_and_caches_it() {
     let (opts, choice) = resolve::<f32>(&m, &ctx, options(GpuPath::Measure), &cache).unwrap();
     let choice = choice.expect("measure always measures");
     assert_eq!(choice.source, ChoiceSource::Measured);
-    // Last, where the lanes merged in subgroups (lavapipe: runs of 8), the
-    // fastest launch that merged them is timed with every lane's sum
-    // through storage.
+    // Last, the fastest single-workgroup launch is timed again with its
+    // bulk forces by patches of blocks.
     type Timed = (Launch, f64);
+    let (patched, unpatched): (Vec<Timed>, Vec<Timed>) =
+        choice.timings.iter().partition(|t| t.0.bond_patches);
+    assert_eq!(patched.len(), 1, "{}", choice.describe());
+    assert_eq!(choice.timings.last(), patched.first());
+    let fastest_single = unpatched
+        .iter()
+        .filter(|t| t.0.kernel.is_persistent())
+        .min_by(|a, b| a.1.total_cmp(&b.1))
+        .map(|t| t.0.with_bond_patches());
+    assert_eq!(fastest_single, Some(patched[0].0));
+    // Before it, where the lanes merged in subgroups (lavapipe: runs of 8),
+    // the fastest launch that merged them is timed with every lane's sum
+    // through storage.
     let (in_storage, choice_timings): (Vec<Timed>, Vec<Timed>) =
-        choice.timings.iter().partition(|t| t.0.lanes_in_storage);
+        unpatched.iter().partition(|t| t.0.lanes_in_storage);
     if ctx.has_subgroups() {
         assert_eq!(in_storage.len(), 1, "{}", choice.describe());
-        assert_eq!(choice.timings.last(), in_storage.first());
+        assert_eq!(unpatched.last(), in_storage.first());
         let twin = Launch {
             lanes_in_storage: false,
             ..in_storage[0].0
@@ -155,6 +167,7 @@ fn measure_times_every_candidate_takes_the_fastest_and_caches_it() {
         assert_eq!((g.width, g.halo), (shape.width, shape.halo));
     }
     assert_eq!(opts.lane_shuffle, !choice.launch.lanes_in_storage);
+    assert_eq!(opts.bond_patches, choice.launch.bond_patches);
     engine.advance(2).unwrap();
     if choice.launch.lanes_in_storage {
         assert_eq!(engine.lane_shuffle_levels(), 0);
@@ -303,12 +316,12 @@ fn an_ensemble_times_the_single_workgroup_kernels_at_several_threads() {
     let (chosen, choice) = resolve_scenes::<f32>(&m, 3, &ctx, opts, &cache).unwrap();
     let choice = choice.expect("measure always measures");
     // Every launch, then the tile shapes searched (as a scene alone),
-    // then the lanes through storage.
+    // then the lanes through storage, then the bulk forces by patches.
     let timed: Vec<Launch> = choice
         .timings
         .iter()
         .map(|t| t.0)
-        .filter(|l| !l.lanes_in_storage)
+        .filter(|l| !l.lanes_in_storage && !l.bond_patches)
         .collect();
     let (timed, shaped): (Vec<Launch>, Vec<Launch>) =
         timed.into_iter().partition(|l| l.tile.is_none());
@@ -352,12 +365,13 @@ fn an_ensemble_times_the_single_workgroup_kernels_at_several_threads() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
-/// `--gpu-tile` fixes the tiled kernel's shape, and `lane_shuffle` false
-/// fixes every lane's sum in storage: `measure` times the kernels without
-/// searching shapes or lane merges, and the options it returns keep what
+/// `--gpu-tile` fixes the tiled kernel's shape, `lane_shuffle` false
+/// fixes every lane's sum in storage, and `--gpu-bond-patches` the bulk
+/// forces by patches: `measure` times the kernels without searching
+/// shapes, lane merges or patches, and the options it returns keep what
 /// was asked for, whichever kernel wins.
 #[test]
-fn a_fixed_tile_shape_or_lane_merge_is_not_searched() {
+fn a_fixed_tile_shape_lane_merge_or_bond_patching_is_not_searched() {
     let ctx = ctx();
     let m = small(&[]);
     let dir = scratch("fixed-tile");
@@ -366,6 +380,7 @@ fn a_fixed_tile_shape_or_lane_merge_is_not_searched() {
     let opts = GpuOptions {
         tile: Some(shape),
         lane_shuffle: false,
+        bond_patches: true,
         ..options(GpuPath::Measure)
     };
     let (chosen, choice) = resolve::<f32>(&m, &ctx, opts, &cache).unwrap();
@@ -374,14 +389,16 @@ fn a_fixed_tile_shape_or_lane_merge_is_not_searched() {
     for (launch, _) in &choice.timings {
         assert_eq!(launch.tile, None, "{}", choice.describe());
         assert!(!launch.lanes_in_storage, "{}", choice.describe());
+        assert!(!launch.bond_patches, "{}", choice.describe());
     }
     assert_eq!(chosen.tile, Some(shape));
     assert!(!chosen.lane_shuffle);
+    assert!(chosen.bond_patches);
     let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// Launch names: `resident`, `resident/512`, `tiled/1024/16x4`,
-/// `resident/1024/lanes-in-storage`; anything else is not one (a damaged cache line is measured again).
+/// `resident/1024/lanes-in-storage`, `persistent/bond-patches`; anything else is not one (a damaged cache line is measured again).
 #[test]
 fn launch_names_read_back() {
     let shape = TileShape { width: 16, halo: 2 };
@@ -395,6 +412,10 @@ fn launch_names_read_back() {
             .with_tile(shape)
             .with_lanes_in_storage(),
         Launch::of(Kernel::Persistent).with_lanes_in_storage(),
+        Launch::with_threads(Kernel::Resident, 1024).with_bond_patches(),
+        Launch::of(Kernel::Persistent)
+            .with_lanes_in_storage()
+            .with_bond_patches(),
     ] {
         assert_eq!(Launch::named(&l.name()), Some(l));
     }
@@ -405,6 +426,13 @@ fn launch_names_read_back() {
         "resident/512/lanes-in-storage"
     );
     assert_eq!(Launch::of(Kernel::Resident).name(), "resident");
+    assert_eq!(
+        Launch::with_threads(Kernel::Persistent, 256)
+            .with_lanes_in_storage()
+            .with_bond_patches()
+            .name(),
+        "persistent/256/lanes-in-storage/bond-patches"
+    );
     assert_eq!(
         Launch::with_threads(Kernel::Tiled, 1024)
             .with_tile(shape)
@@ -428,6 +456,11 @@ fn launch_names_read_back() {
         "tiled/lanes-in-storage/8x4",
         "resident/256/lanes-in-storage/lanes-in-storage",
         "resident/256/lanes",
+        // Only the single-workgroup kernels compute their forces by patches.
+        "one-step/bond-patches",
+        "tiled/256/8x4/bond-patches",
+        "resident/bond-patches/lanes-in-storage",
+        "resident/256/bond-patches/bond-patches",
     ] {
         assert_eq!(Launch::named(bad), None, "{bad}");
     }

@@ -49,6 +49,12 @@ pub struct RunArgs {
     /// results, slower; for checking a suspect kernel.
     #[arg(long)]
     pub gpu_shader_checks: bool,
+    /// The persistent and resident GPU kernels compute the bulk forces by
+    /// 2×2 patches of blocks, each bond inside a patch once: the same
+    /// results, another split of the work (`auto` on a hardware GPU times
+    /// both when this is not given).
+    #[arg(long)]
+    pub gpu_bond_patches: bool,
     #[arg(long, value_enum)]
     pub precision: Option<Precision>,
     /// Override a scenario key: --set loading.drive.velocity=1e-3
@@ -198,6 +204,7 @@ impl RunArgs {
             run_ahead: self.gpu_run_ahead,
             tile: self.gpu_tile,
             shader_checks: self.gpu_shader_checks,
+            bond_patches: self.gpu_bond_patches,
             ..GpuOptions::default()
         };
         Ok(make_engine_with(

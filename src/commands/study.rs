@@ -145,6 +145,7 @@ fn coulomb_precursors_study(a: &StudyArgs) -> anyhow::Result<()> {
                 gpu_tile: None,
                 gpu_run_ahead: slipfront::engines::gpu::options::RUN_AHEAD_BATCHES,
                 gpu_shader_checks: false,
+                gpu_bond_patches: false,
                 precision: Some(a.precision),
                 set: loading.overrides(),
                 t_end,

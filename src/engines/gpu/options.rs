@@ -130,6 +130,13 @@ pub struct GpuOptions {
     /// `compile::ShaderChecks`): the same bits, more instructions.
     /// false (the default): the kernels as written (`--gpu-shader-checks`).
     pub shader_checks: bool,
+    /// The single-workgroup kernels (persistent, resident) compute the
+    /// bulk forces by 2×2 patches of blocks, a thread each, every bond
+    /// inside a patch once (`bulk_patch.wgsl`): the same bits, 26 bonds'
+    /// work a patch where a thread per block does 32, on a quarter of the
+    /// threads. false (the default): a thread per block; `auto` on
+    /// hardware times both (`--gpu-bond-patches` fixes it on).
+    pub bond_patches: bool,
 }
 
 impl Default for GpuOptions {
@@ -144,6 +151,7 @@ impl Default for GpuOptions {
             keep_junction_sums: true,
             lane_shuffle: true,
             shader_checks: false,
+            bond_patches: false,
         }
     }
 }

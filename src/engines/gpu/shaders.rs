@@ -36,6 +36,7 @@ macro_rules! wgsl_files {
 
 wgsl_files!(
     "bulk_forces",
+    "bulk_patch",
     "common",
     "coord_f64",
     "double_single",

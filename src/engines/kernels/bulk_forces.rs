@@ -44,6 +44,116 @@ impl<T, C> Clone for Blocks<'_, T, C> {
 }
 impl<T, C> Copy for Blocks<'_, T, C> {}
 
+/// What one bond adds to a block's force sums (twin of WGSL `BondTerms`):
+/// q·r0 (mixed f32's split bonds only), then the spring and dashpot terms
+/// along x and along z. Each is an odd function of the bond's offset and
+/// its displacement and velocity differences, and rounding to nearest is
+/// symmetric, so the bond seen from its far end adds exactly these terms
+/// negated (`negated`): `bulk_force_patch` computes a bond once.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BondTerms<T> {
+    pub axial: [T; 2],
+    pub along_x: [T; 2],
+    pub along_z: [T; 2],
+}
+
+impl<T: Real> BondTerms<T> {
+    /// The same bond seen from its far end.
+    pub fn negated(self) -> Self {
+        let neg = |[a, b]: [T; 2]| [-a, -b];
+        BondTerms {
+            axial: neg(self.axial),
+            along_x: neg(self.along_x),
+            along_z: neg(self.along_z),
+        }
+    }
+
+    /// These terms added to a block's sums, in the order every engine adds
+    /// a bond's.
+    #[inline(always)]
+    fn add_to<S: ForceSum<T>>(self, [fx, fz]: [S; 2]) -> [S; 2] {
+        if S::SPLITS_BONDS {
+            return [
+                fx.add(self.axial[0])
+                    .add_bond(self.along_x[0], self.along_x[1]),
+                fz.add(self.axial[1])
+                    .add_bond(self.along_z[0], self.along_z[1]),
+            ];
+        }
+        [
+            fx.add_bond(self.along_x[0], self.along_x[1]),
+            fz.add_bond(self.along_z[0], self.along_z[1]),
+        ]
+    }
+}
+
+/// The terms of `bond` from a block with displacement `ui` and velocity
+/// `vi` to its neighbour (`uj`, `vj`) (twin of WGSL `bond_terms`).
+#[inline(always)]
+fn bond_terms<T: Real, C: Coordinate<T>>(
+    c: &Consts<T>,
+    bond: &BondConsts<T>,
+    (ui, vi): ([C; 2], [T; 2]),
+    (uj, vj): ([C; 2], [T; 2]),
+) -> BondTerms<T> {
+    let du = [uj[0].diff(ui[0]), uj[1].diff(ui[1])];
+    let r = [bond.r0[0] + du[0], bond.r0[1] + du[1]];
+    let len = (r[0] * r[0] + r[1] * r[1]).sqrt();
+    // Elongation without cancellation: (|r|² − l²)/(|r| + l).
+    let two = T::one() + T::one();
+    let stretch = (two * (bond.r0[0] * du[0] + bond.r0[1] * du[1])
+        + (du[0] * du[0] + du[1] * du[1]))
+        / (len + bond.rest);
+    let held = |x: T| hold(c.f32_probe, FORCES, x);
+    let dv = [vj[0] - vi[0], vj[1] - vi[1]];
+    if C::Sum::SPLITS_BONDS {
+        // Mixed f32: r = r0 + du rounds du to ulp(r0) ≈ 2e-10 m, about
+        // two steps of creep, so the bond's direction would move in
+        // stairs, step after step alike, and bias the lattice. Instead
+        // the force q·r (q = k·stretch/|r|, |r| = rest + stretch) is
+        // summed as q·r0 + q·du, each exact to f32's relative precision.
+        let q = bond.k * stretch / (bond.rest + stretch);
+        let (dx, dz) = if c.bond_damping {
+            // n = r0/|r| + du/|r|, kept as its two parts alike.
+            let inv = T::one() / (bond.rest + stretch);
+            let n0 = [bond.r0[0] * inv, bond.r0[1] * inv];
+            let n1 = [du[0] * inv, du[1] * inv];
+            let along = c.eta * ((dv[0] * n0[0] + dv[1] * n0[1]) + (dv[0] * n1[0] + dv[1] * n1[1]));
+            (along * n0[0] + along * n1[0], along * n0[1] + along * n1[1])
+        } else {
+            (c.eta * dv[0], c.eta * dv[1])
+        };
+        return BondTerms {
+            axial: [q * bond.r0[0], q * bond.r0[1]],
+            along_x: [q * du[0], dx],
+            along_z: [q * du[1], dz],
+        };
+    }
+    let inv_len = T::one() / len;
+    let n = [r[0] * inv_len, r[1] * inv_len];
+    let spring = bond.k * stretch;
+    // (The probe rounds each bond's terms as the sweep engine's rows do.)
+    let (sx, sz) = (held(spring * n[0]), held(spring * n[1]));
+    let (dx, dz) = if c.bond_damping {
+        let along = c.eta * (dv[0] * n[0] + dv[1] * n[1]);
+        (held(along * n[0]), held(along * n[1]))
+    } else {
+        (held(c.eta * dv[0]), held(c.eta * dv[1]))
+    };
+    BondTerms {
+        axial: [T::zero(); 2],
+        along_x: [sx, dx],
+        along_z: [sz, dz],
+    }
+}
+
+/// The block at column `ix`, row `iz` (index `i = iz·nx + ix`), if it is in
+/// the lattice.
+fn block_at(c: &Consts<impl Real>, ix: i32, iz: i32) -> Option<usize> {
+    let inside = ix >= 0 && iz >= 0 && ix < c.nx as i32 && iz < c.nz as i32;
+    inside.then(|| iz as usize * c.nx + ix as usize)
+}
+
 /// Force on block `i` from everything but friction. `drive_target` is where
 /// the side spring's far end is (drive origin + V·t), as a coordinate.
 #[inline]
@@ -56,75 +166,67 @@ pub fn bulk_force<T: Real, C: Coordinate<T>>(
     i: usize,
 ) -> [T; 2] {
     let (ix, iz) = ((i % c.nx) as i32, (i / c.nx) as i32);
-    let ui = b.disp[i];
-    let vi = b.vel[i];
+    let own = (b.disp[i], b.vel[i]);
     // Summed as the precision's `ForceSum` (`crate::model::real` says why).
-    let mut fx = C::Sum::default();
-    let mut fz = C::Sum::default();
+    let mut f = [C::Sum::default(); 2];
     for bond in bonds {
-        let jx = ix + bond.dx;
-        let jz = iz + bond.dz;
-        if jx < 0 || jz < 0 || jx >= c.nx as i32 || jz >= c.nz as i32 {
-            continue;
+        if let Some(j) = block_at(c, ix + bond.dx, iz + bond.dz) {
+            f = bond_terms(c, bond, own, (b.disp[j], b.vel[j])).add_to(f);
         }
-        let j = jz as usize * c.nx + jx as usize;
-        let du = [b.disp[j][0].diff(ui[0]), b.disp[j][1].diff(ui[1])];
-        let r = [bond.r0[0] + du[0], bond.r0[1] + du[1]];
-        let len = (r[0] * r[0] + r[1] * r[1]).sqrt();
-        // Elongation without cancellation: (|r|² − l²)/(|r| + l).
-        let two = T::one() + T::one();
-        let stretch = (two * (bond.r0[0] * du[0] + bond.r0[1] * du[1])
-            + (du[0] * du[0] + du[1] * du[1]))
-            / (len + bond.rest);
-        let held = |x: T| hold(c.f32_probe, FORCES, x);
-        let dv = [b.vel[j][0] - vi[0], b.vel[j][1] - vi[1]];
-        if C::Sum::SPLITS_BONDS {
-            // Mixed f32: r = r0 + du rounds du to ulp(r0) ≈ 2e-10 m, about
-            // two steps of creep, so the bond's direction would move in
-            // stairs, step after step alike, and bias the lattice. Instead
-            // the force q·r (q = k·stretch/|r|, |r| = rest + stretch) is
-            // summed as q·r0 + q·du, each exact to f32's relative precision.
-            let q = bond.k * stretch / (bond.rest + stretch);
-            let rot = [q * du[0], q * du[1]];
-            let (dx, dz) = if c.bond_damping {
-                // n = r0/|r| + du/|r|, kept as its two parts alike.
-                let inv = T::one() / (bond.rest + stretch);
-                let n0 = [bond.r0[0] * inv, bond.r0[1] * inv];
-                let n1 = [du[0] * inv, du[1] * inv];
-                let along =
-                    c.eta * ((dv[0] * n0[0] + dv[1] * n0[1]) + (dv[0] * n1[0] + dv[1] * n1[1]));
-                (along * n0[0] + along * n1[0], along * n0[1] + along * n1[1])
-            } else {
-                (c.eta * dv[0], c.eta * dv[1])
-            };
-            fx = fx.add(q * bond.r0[0]).add_bond(rot[0], dx);
-            fz = fz.add(q * bond.r0[1]).add_bond(rot[1], dz);
-            continue;
-        }
-        let inv_len = T::one() / len;
-        let n = [r[0] * inv_len, r[1] * inv_len];
-        let spring = bond.k * stretch;
-        // (The probe rounds each bond's terms as the sweep engine's rows do.)
-        let (sx, sz) = (held(spring * n[0]), held(spring * n[1]));
-        let (dx, dz) = if c.bond_damping {
-            let along = c.eta * (dv[0] * n[0] + dv[1] * n[1]);
-            (held(along * n[0]), held(along * n[1]))
-        } else {
-            (held(c.eta * dv[0]), held(c.eta * dv[1]))
-        };
-        fx = fx.add_bond(sx, dx);
-        fz = fz.add_bond(sz, dz);
     }
-    external_loads(
-        c,
-        p,
-        drive_target,
-        b.flags[i],
-        ix as usize,
-        ui,
-        vi,
-        [fx, fz],
-    )
+    external_loads(c, p, drive_target, b.flags[i], ix as usize, own.0, own.1, f)
+}
+
+/// The forces on the 2×2 patch of blocks whose first is at column `x0`,
+/// row `z0` (twin of WGSL `bulk_force_patch`): blocks (x0, z0),
+/// (x0 + 1, z0), (x0, z0 + 1), (x0 + 1, z0 + 1), None where outside the
+/// lattice. Each bond between two of them is computed once, by the first
+/// in that order, and added negated by the second; every block adds its
+/// bonds in stencil order, so each force has `bulk_force`'s bits.
+#[inline]
+pub fn bulk_force_patch<T: Real, C: Coordinate<T>>(
+    c: &Consts<T>,
+    bonds: &[BondConsts<T>; 8],
+    p: &StepParams<T>,
+    drive_target: C,
+    b: Blocks<'_, T, C>,
+    (x0, z0): (usize, usize),
+) -> [Option<[T; 2]>; 4] {
+    const CORNERS: [(i32, i32); 4] = [(0, 0), (1, 0), (0, 1), (1, 1)];
+    let corner_of = |dx: i32, dz: i32| CORNERS.iter().position(|&o| o == (dx, dz));
+    // The inner bonds' terms as computed, by (first, second) corner.
+    let mut inner: [[Option<BondTerms<T>>; 4]; 4] = [[None; 4]; 4];
+    let mut out = [None; 4];
+    for (k, &(ox, oz)) in CORNERS.iter().enumerate() {
+        let (ix, iz) = (x0 as i32 + ox, z0 as i32 + oz);
+        let Some(i) = block_at(c, ix, iz) else {
+            continue;
+        };
+        let own = (b.disp[i], b.vel[i]);
+        let mut f = [C::Sum::default(); 2];
+        for bond in bonds {
+            let Some(j) = block_at(c, ix + bond.dx, iz + bond.dz) else {
+                continue;
+            };
+            let terms = match corner_of(ox + bond.dx, oz + bond.dz) {
+                Some(m) if m < k => inner[m][k].expect("computed by its first corner").negated(),
+                Some(m) => *inner[k][m].insert(bond_terms(c, bond, own, (b.disp[j], b.vel[j]))),
+                None => bond_terms(c, bond, own, (b.disp[j], b.vel[j])),
+            };
+            f = terms.add_to(f);
+        }
+        out[k] = Some(external_loads(
+            c,
+            p,
+            drive_target,
+            b.flags[i],
+            ix as usize,
+            own.0,
+            own.1,
+            f,
+        ));
+    }
+    out
 }
 
 /// Adds to the bond forces `f` of a block at column `ix` the loads that do
@@ -255,6 +357,124 @@ mod tests {
                 [f[0].as_f64(), f[1].as_f64()]
             })
             .collect()
+    }
+
+    /// The blocks whose force from `bulk_force_patch` (over every patch of
+    /// the snapshot's lattice) has other bits than `bulk_force` on the same
+    /// block, in precision (T, C), and the blocks compared. `nudged`: a
+    /// block whose u_x the patches see 1e-9 m further (a control). With a
+    /// drive target (the side spring) and the model's flags, so the
+    /// external loads are in the sums too.
+    fn patch_mismatches<T: Real, C: Coordinate<T>>(
+        m: &Model,
+        snap: &crate::Snapshot,
+        nudged: Option<usize>,
+    ) -> (Vec<usize>, usize) {
+        let c = Consts::<T>::new(m);
+        let bonds = bond_consts(&c);
+        let p = step_params(&c, snap.step);
+        let disp: Vec<[C; 2]> = snap
+            .disp
+            .iter()
+            .map(|u| [C::from_f64(u[0]), C::from_f64(u[1])])
+            .collect();
+        let mut seen = disp.clone();
+        if let Some(i) = nudged {
+            seen[i][0] = C::from_f64(snap.disp[i][0] + 1e-9);
+        }
+        let vel: Vec<[T; 2]> = snap
+            .vel_half
+            .iter()
+            .map(|v| [T::from_f64(v[0]), T::from_f64(v[1])])
+            .collect();
+        let flags = crate::model::lattice::block_flags(m);
+        let blocks = |disp| Blocks {
+            disp,
+            vel: &vel,
+            flags: &flags,
+        };
+        let target = C::from_f64(1e-6);
+        let (mut mismatched, mut compared) = (Vec::new(), 0);
+        for z0 in (0..m.nz).step_by(2) {
+            for x0 in (0..m.nx).step_by(2) {
+                let patch = bulk_force_patch(&c, &bonds, &p, target, blocks(&seen), (x0, z0));
+                for (k, (ox, oz)) in [(0, 0), (1, 0), (0, 1), (1, 1)].into_iter().enumerate() {
+                    let (ix, iz) = (x0 + ox, z0 + oz);
+                    if ix >= m.nx || iz >= m.nz {
+                        assert!(patch[k].is_none(), "({ix}, {iz}) is outside the lattice");
+                        continue;
+                    }
+                    let i = iz * m.nx + ix;
+                    let alone = bulk_force(&c, &bonds, &p, target, blocks(&disp), i);
+                    let bits = |f: [T; 2]| f.map(|x| x.as_f64().to_bits());
+                    if bits(patch[k].expect("a block of the lattice")) != bits(alone) {
+                        mismatched.push(i);
+                    }
+                    compared += 1;
+                }
+            }
+        }
+        (mismatched, compared)
+    }
+
+    /// The patch twin computes each inner bond once and adds it negated at
+    /// its far end; each force keeps `bulk_force`'s bits, in f64, mixed f32
+    /// and plain f32, with either damping form, on an odd lattice (partial
+    /// patches on the last column and row) that a front has disturbed.
+    /// Control: a block nudged by 1e-9 m is flagged, with its neighbours.
+    #[test]
+    fn bond_patches_give_each_block_the_bits_of_its_own_sum() {
+        for form in ["full", "bond"] {
+            let s = crate::app::verify::small_triggered_scene(&[
+                "geometry.nz=15",
+                "geometry.height=0.035",
+                &format!("damping.form=\"{form}\""),
+            ])
+            .unwrap();
+            let m = Model::from_scenario(&s, false).unwrap();
+            assert!(m.nx % 2 == 1 && m.nz % 2 == 1);
+            let mut e = SweepEngine::<f64, f64>::new(&m, 1).unwrap();
+            e.advance(m.prep_steps + 300).unwrap();
+            let snap = e.snapshot().unwrap();
+            assert!(snap.vel_half.iter().any(|v| v[0] != 0.0 && v[1] != 0.0));
+            let all = (Vec::new(), m.nx * m.nz);
+            assert_eq!(patch_mismatches::<f64, f64>(&m, &snap, None), all);
+            assert_eq!(patch_mismatches::<f32, DoubleSingle>(&m, &snap, None), all);
+            assert_eq!(patch_mismatches::<f32, f32>(&m, &snap, None), all);
+            // Control: block (5, 3) nudged; it and its 8 neighbours differ.
+            let nudged = 3 * m.nx + 5;
+            let (flagged, _) = patch_mismatches::<f32, DoubleSingle>(&m, &snap, Some(nudged));
+            assert!(
+                flagged.contains(&nudged) && flagged.len() == 9,
+                "{flagged:?}"
+            );
+        }
+    }
+
+    /// The order of the stencil that `shaders/bulk_patch.wgsl` is written
+    /// out for: which entries of each corner are inner bonds follows from
+    /// it.
+    #[test]
+    fn the_bond_patch_shader_assumes_the_stencils_order() {
+        let order: Vec<(i32, i32)> = STENCIL.iter().map(|b| (b.dx, b.dz)).collect();
+        assert_eq!(
+            order,
+            [
+                (1, 0),
+                (-1, 0),
+                (0, 1),
+                (0, -1),
+                (1, 1),
+                (-1, 1),
+                (1, -1),
+                (-1, -1)
+            ]
+        );
+        let shader = include_str!(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/shaders/bulk_patch.wgsl"
+        ));
+        assert!(shader.contains("(1,0), (−1,0), (0,1), (0,−1),\n// (1,1), (−1,1), (1,−1), (−1,−1)"));
     }
 
     /// Action equals reaction: a bond's force on its far end is the exact

@@ -165,7 +165,7 @@ pub fn scenes_cache_key<T: GpuReal>(
         String::new()
     };
     format!(
-        "{} | {:?} | {} {} | {} | {}{ensemble} | threads {} | tiles {} | lanes {} | checks {} | kernels {:016x}",
+        "{} | {:?} | {} {} | {} | {}{ensemble} | threads {} | tiles {} | lanes {} | checks {} | patches {} | kernels {:016x}",
         info.name,
         info.backend,
         info.driver,
@@ -190,6 +190,13 @@ pub fn scenes_cache_key<T: GpuReal>(
             "wgpu's"
         } else {
             "none"
+        },
+        // Nor is one that searched the bulk forces' patches one with them
+        // fixed on.
+        if opts.bond_patches {
+            "on"
+        } else {
+            "searched"
         },
         sources.finish()
     )

@@ -64,9 +64,11 @@ pub const ENSEMBLE_THREADS: [u32; 3] = [256, 512, 1024];
 /// (None: the kernel's default, or `--gpu-threads`), for the tiled
 /// kernel its tile shape where one was searched (None: the default, or
 /// `--gpu-tile`), and whether its junction lanes' sums all went through
-/// storage where they would merge in subgroups first. Written
-/// `resident/512`, `tiled/1024/16x4` or `resident/1024/lanes-in-storage`
-/// (kernel/threads/shape/lanes) in figures and in the cache.
+/// storage where they would merge in subgroups first, and whether its bulk
+/// forces went by patches of blocks. Written `resident/512`,
+/// `tiled/1024/16x4`, `resident/1024/lanes-in-storage` or
+/// `persistent/1024/bond-patches` (kernel/threads/shape/lanes/patches) in
+/// figures and in the cache.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Launch {
     pub kernel: Kernel,
@@ -76,10 +78,16 @@ pub struct Launch {
     /// false): the same sums by the same tree, at another speed.
     /// Only for the kernels that merge lanes through storage.
     pub lanes_in_storage: bool,
+    /// Bulk forces by 2×2 patches of blocks (`GpuOptions::bond_patches`):
+    /// the same bits, another split of the work. Only for the
+    /// single-workgroup kernels.
+    pub bond_patches: bool,
 }
 
 /// The name's last part for `Launch::lanes_in_storage`.
 const LANES_IN_STORAGE: &str = "lanes-in-storage";
+/// The name's last part for `Launch::bond_patches`.
+const BOND_PATCHES: &str = "bond-patches";
 
 impl Launch {
     pub fn of(kernel: Kernel) -> Launch {
@@ -88,6 +96,7 @@ impl Launch {
             threads: None,
             tile: None,
             lanes_in_storage: false,
+            bond_patches: false,
         }
     }
 
@@ -115,8 +124,16 @@ impl Launch {
         }
     }
 
+    /// This launch with the bulk forces by patches.
+    pub fn with_bond_patches(self) -> Launch {
+        Launch {
+            bond_patches: true,
+            ..self
+        }
+    }
+
     /// `one-step-lanes`, `resident/512`, `tiled/1024/16x4`,
-    /// `resident/1024/lanes-in-storage`.
+    /// `resident/1024/lanes-in-storage`, `persistent/1024/bond-patches`.
     pub fn name(self) -> String {
         let mut name = path_name(self.kernel);
         if let Some(t) = self.threads {
@@ -127,6 +144,9 @@ impl Launch {
         }
         if self.lanes_in_storage {
             name += &format!("/{LANES_IN_STORAGE}");
+        }
+        if self.bond_patches {
+            name += &format!("/{BOND_PATCHES}");
         }
         name
     }
@@ -141,7 +161,7 @@ impl Launch {
         {
             launch.threads = Some(t.parse().ok().filter(|&t: &u32| t > 0)?);
         }
-        if let Some(shape) = rest.next_if(|p| *p != LANES_IN_STORAGE) {
+        if let Some(shape) = rest.next_if(|p| *p != LANES_IN_STORAGE && *p != BOND_PATCHES) {
             if launch.kernel != Kernel::Tiled {
                 return None;
             }
@@ -153,6 +173,12 @@ impl Launch {
             }
             launch.lanes_in_storage = true;
         }
+        if rest.next_if(|p| *p == BOND_PATCHES).is_some() {
+            if !launch.kernel.is_persistent() {
+                return None;
+            }
+            launch.bond_patches = true;
+        }
         rest.next().is_none().then_some(launch)
     }
 
@@ -163,6 +189,7 @@ impl Launch {
             persistent_threads: self.threads.or(opts.persistent_threads),
             tile: self.tile.or(opts.tile),
             lane_shuffle: opts.lane_shuffle && !self.lanes_in_storage,
+            bond_patches: opts.bond_patches || self.bond_patches,
             ..opts
         }
     }
