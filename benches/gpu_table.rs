@@ -52,8 +52,8 @@
 //! default merges runs of lanes in subgroups first where the adapter has
 //! them): the same bits. Section 7 prints both on Table S1, and the
 //! shipped Table S1 scene with and without wgpu's run-time checks in the
-//! kernels (`GpuOptions::shader_checks`), and the persistent and resident
-//! kernels there with their bulk forces by patches of blocks
+//! kernels (`GpuOptions::shader_checks`), and the persistent, resident
+//! and tiled kernels there with their bulk forces by patches of blocks
 //! (`GpuOptions::bond_patches`).
 
 use gpu_timing::{
@@ -218,7 +218,7 @@ fn junction_cost(min_seconds: f64) {
             let mut variants = vec![(false, false)];
             if set.is_empty() {
                 variants.push((true, false));
-                if kernel.is_persistent() {
+                if kernel.has_bond_patches() {
                     variants.push((false, true));
                 }
             }
@@ -496,12 +496,12 @@ fn main() {
         // sweep's measurement times them (how many scenes share an SM
         // depends on their threads).
         let mut tried = launches(&s1, 2, GpuOptions::default(), &ctx.limits);
-        // The single-workgroup launches with their bulk forces by patches
-        // too, but only where SLIPFRONT_GPU_TABLE_LAUNCHES names them
-        // (`resident/1024/bond-patches`): six more rows a scene count.
+        // The launches with their bulk forces by patches too (persistent,
+        // resident, tiled), but only where SLIPFRONT_GPU_TABLE_LAUNCHES
+        // names them (`resident/1024/bond-patches`).
         let patched: Vec<_> = tried
             .iter()
-            .filter(|l| l.kernel.is_persistent())
+            .filter(|l| l.kernel.has_bond_patches())
             .map(|l| l.with_bond_patches())
             .collect();
         tried.extend(patched);

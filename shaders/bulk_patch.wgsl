@@ -5,9 +5,11 @@
 // they load 36. A bond seen from its other end adds exactly its terms
 // negated (bulk_forces.wgsl: BondTerms), and every block still adds its
 // bonds in stencil order, so each force has bulk_force's bits.
-// The patch at column x0 and row z0 (both even) holds blocks
-//   a (x0, z0), b (x0 + 1, z0), c (x0, z0 + 1), d (x0 + 1, z0 + 1);
-// at an odd lattice's last column or row, only those in the lattice.
+// The patch at column x0 and row z0 holds blocks
+//   a (x0, z0), b (x0 + 1, z0), c (x0, z0 + 1), d (x0 + 1, z0 + 1),
+// those of columns before x_end (c.nx, or where the tiled kernel's
+// step stops) and rows of the lattice: at an odd count's last column or
+// row, half a patch.
 // Written out for the stencil's order (1,0), (−1,0), (0,1), (0,−1),
 // (1,1), (−1,1), (1,−1), (−1,−1) (src/model/lattice.rs STENCIL; its test
 // `the_bond_patch_shader_assumes_the_stencils_order` holds it there).
@@ -22,8 +24,8 @@ struct PatchForces {
     d: vec2<real>,
 }
 
-fn bulk_force_patch(x0: u32, z0: u32, ld: Loads) -> PatchForces {
-    let has_b = x0 + 1u < c.nx;
+fn bulk_force_patch(x0: u32, z0: u32, x_end: u32, ld: Loads) -> PatchForces {
+    let has_b = x0 + 1u < x_end;
     let has_c = z0 + 1u < c.nz;
     let has_d = has_b && has_c;
     let ia = z0 * c.nx + x0;

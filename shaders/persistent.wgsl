@@ -86,7 +86,7 @@ fn persistent_steps(
                 for (var p = grid_walk(t, PERSISTENT_THREADS, columns); 2u * p.row < c.nz; grid_walk_next(&p)) {
                     let x0 = 2u * p.column;
                     let z0 = 2u * p.row;
-                    let f = bulk_force_patch(x0, z0, ld);
+                    let f = bulk_force_patch(x0, z0, c.nx, ld);
                     let i = z0 * c.nx + x0;
                     store_bulk_force(i, f.a, ld);
                     if x0 + 1u < c.nx {

@@ -26,9 +26,12 @@
 // the lanes merged as a tree (lane_tree8), and the update. Junction friction laws
 // only (the per-block laws keep state that a halo would race on).
 // CPU twin: src/engines/cpu/mod.rs CpuEngine::one_step (each step of the loop).
-// import: bulk_forces, common, coordinates, junction_store, junctions, lane_merge, lane_partials, scene, state, verlet
+// import: bulk_forces, bulk_patch, common, coordinates, junction_store, junctions, lane_merge, lane_partials, scene, state, verlet
 
 override TILE_THREADS: u32 = 64u;
+// Bulk forces by 2×2 patches of blocks (bulk_patch.wgsl;
+// GpuOptions::bond_patches), as in the persistent kernel.
+override BOND_PATCHES: bool = false;
 
 // The forces of the held blocks at the step under way.
 var<workgroup> tile_force: array<vec2<real>, TILE_BLOCKS>;
@@ -128,6 +131,15 @@ fn tile_gather(
     publish_edge_junctions(t, 0u);
 }
 
+// Block (ix, iz)'s bulk force, in the tile, and in `force` where the tile
+// owns it.
+fn store_tile_force(ix: u32, iz: u32, f: vec2<real>) {
+    tile_force[tile_slot_at(ix, iz)] = f;
+    if tile_owns(ix) {
+        force[block_base() + iz * c.nx + ix] = f;
+    }
+}
+
 @compute @workgroup_size(TILE_THREADS)
 fn tiled_steps(
     @builtin(local_invocation_index) t: u32,
@@ -169,14 +181,29 @@ fn tiled_steps(
         let ld = loads_at(s);
         let ready = batch.forces_ready != 0u && s == 0u;
         if !ready {
-            for (var b = grid_walk(t, TILE_THREADS, cols); b.row < c.nz; grid_walk_next(&b)) {
-                let ix = a + b.column;
-                let iz = b.row;
-                let i = iz * c.nx + ix;
-                let f = bulk_force(i, ix, iz, ld);
-                tile_force[tile_slot_at(ix, iz)] = f;
-                if tile_owns(ix) {
-                    force[block_base() + i] = f;
+            if BOND_PATCHES {
+                // Patches from column a; the last is half one where cols
+                // is odd (bulk_force_patch stops at column b).
+                for (var p = grid_walk(t, TILE_THREADS, (cols + 1u) / 2u); 2u * p.row < c.nz; grid_walk_next(&p)) {
+                    let x0 = a + 2u * p.column;
+                    let z0 = 2u * p.row;
+                    let f = bulk_force_patch(x0, z0, b, ld);
+                    store_tile_force(x0, z0, f.a);
+                    if x0 + 1u < b {
+                        store_tile_force(x0 + 1u, z0, f.b);
+                    }
+                    if z0 + 1u < c.nz {
+                        store_tile_force(x0, z0 + 1u, f.c);
+                        if x0 + 1u < b {
+                            store_tile_force(x0 + 1u, z0 + 1u, f.d);
+                        }
+                    }
+                }
+            } else {
+                for (var w = grid_walk(t, TILE_THREADS, cols); w.row < c.nz; grid_walk_next(&w)) {
+                    let ix = a + w.column;
+                    let iz = w.row;
+                    store_tile_force(ix, iz, bulk_force(iz * c.nx + ix, ix, iz, ld));
                 }
             }
             if FRICTION_LAW == LAW_JUNCTIONS {

@@ -1,4 +1,4 @@
-//! The single-workgroup kernels (persistent, resident) with their bulk
+//! The persistent, resident and tiled kernels with their bulk
 //! forces by 2×2 patches of blocks (`GpuOptions::bond_patches`,
 //! `shaders/bulk_patch.wgsl`) against the same kernels a thread per block,
 //! on the same state. A bond inside a patch is computed once and added
@@ -135,13 +135,13 @@ fn assert_forces_agree<T: GpuReal>(set: &[&str], path: GpuPath) {
     );
 }
 
-/// The small triggered front on the persistent and resident kernels in
+/// The small triggered front on the persistent, resident and tiled kernels in
 /// mixed f32: 29 × 16 (the last column's patches half full) and 29 × 15
 /// (the top row's too).
 #[test]
 fn bond_patches_give_the_forces_of_a_thread_per_block() {
     for set in [&[][..], &["geometry.nz=15", "geometry.height=0.035"][..]] {
-        for path in [GpuPath::Persistent, GpuPath::Resident] {
+        for path in [GpuPath::Persistent, GpuPath::Resident, GpuPath::Tiled] {
             assert_forces_agree::<f32>(set, path);
         }
     }

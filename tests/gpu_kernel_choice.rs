@@ -60,19 +60,19 @@ fn measure_times_every_candidate_takes_the_fastest_and_caches_it() {
     let (opts, choice) = resolve::<f32>(&m, &ctx, options(GpuPath::Measure), &cache).unwrap();
     let choice = choice.expect("measure always measures");
     assert_eq!(choice.source, ChoiceSource::Measured);
-    // Last, the fastest single-workgroup launch is timed again with its
-    // bulk forces by patches of blocks.
+    // Last, the fastest persistent, resident or tiled launch is timed
+    // again with its bulk forces by patches of blocks.
     type Timed = (Launch, f64);
     let (patched, unpatched): (Vec<Timed>, Vec<Timed>) =
         choice.timings.iter().partition(|t| t.0.bond_patches);
     assert_eq!(patched.len(), 1, "{}", choice.describe());
     assert_eq!(choice.timings.last(), patched.first());
-    let fastest_single = unpatched
+    let fastest_patchable = unpatched
         .iter()
-        .filter(|t| t.0.kernel.is_persistent())
+        .filter(|t| t.0.kernel.has_bond_patches())
         .min_by(|a, b| a.1.total_cmp(&b.1))
         .map(|t| t.0.with_bond_patches());
-    assert_eq!(fastest_single, Some(patched[0].0));
+    assert_eq!(fastest_patchable, Some(patched[0].0));
     // Before it, where the lanes merged in subgroups (lavapipe: runs of 8),
     // the fastest launch that merged them is timed with every lane's sum
     // through storage.
@@ -416,6 +416,9 @@ fn launch_names_read_back() {
         Launch::of(Kernel::Persistent)
             .with_lanes_in_storage()
             .with_bond_patches(),
+        Launch::with_threads(Kernel::Tiled, 256)
+            .with_tile(shape)
+            .with_bond_patches(),
     ] {
         assert_eq!(Launch::named(&l.name()), Some(l));
     }
@@ -456,9 +459,10 @@ fn launch_names_read_back() {
         "tiled/lanes-in-storage/8x4",
         "resident/256/lanes-in-storage/lanes-in-storage",
         "resident/256/lanes",
-        // Only the single-workgroup kernels compute their forces by patches.
+        // The one-step kernels have no patches.
         "one-step/bond-patches",
-        "tiled/256/8x4/bond-patches",
+        "one-step-lanes/bond-patches",
+        "tiled/256/bond-patches/8x4",
         "resident/bond-patches/lanes-in-storage",
         "resident/256/bond-patches/bond-patches",
     ] {

@@ -99,6 +99,8 @@ impl StepKernel {
             // llvmpipe counts the iterations of every inlined loop against
             // its limit: one junction lane a round there.
             constants.push(("TWO_LANES_A_ROUND", !software as u8 as f64));
+        }
+        if self.kernel.has_bond_patches() {
             constants.push(("BOND_PATCHES", opts.bond_patches as u8 as f64));
         }
         if self.kernel == Kernel::Resident {

@@ -130,12 +130,14 @@ pub struct GpuOptions {
     /// `compile::ShaderChecks`): the same bits, more instructions.
     /// false (the default): the kernels as written (`--gpu-shader-checks`).
     pub shader_checks: bool,
-    /// The single-workgroup kernels (persistent, resident) compute the
-    /// bulk forces by 2×2 patches of blocks, a thread each, every bond
-    /// inside a patch once (`bulk_patch.wgsl`): the same bits, 26 bonds'
-    /// work a patch where a thread per block does 32, on a quarter of the
-    /// threads. false (the default): a thread per block; `auto` on
-    /// hardware times both (`--gpu-bond-patches` fixes it on).
+    /// The persistent, resident and tiled kernels compute the bulk forces
+    /// by 2×2 patches of blocks, a thread each, every bond inside a patch
+    /// once (`bulk_patch.wgsl`): 26 bonds' work a patch where a thread per
+    /// block does 32, on a quarter of the threads. The same arithmetic; the
+    /// forces agree to their last bits (a driver may fuse a shared term
+    /// apart: `tests/gpu_bond_patches.rs`). false (the default): a thread
+    /// per block; `auto` on hardware times both (`--gpu-bond-patches`
+    /// fixes it on).
     pub bond_patches: bool,
 }
 

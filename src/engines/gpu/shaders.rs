@@ -280,6 +280,13 @@ impl Kernel {
         matches!(self, Kernel::Persistent | Kernel::Resident)
     }
 
+    /// Can compute its bulk forces by 2×2 patches of blocks
+    /// (`bulk_patch.wgsl`, `GpuOptions::bond_patches`): the kernels whose
+    /// force phase is a loop of its own, before a barrier.
+    pub fn has_bond_patches(self) -> bool {
+        matches!(self, Kernel::Persistent | Kernel::Resident | Kernel::Tiled)
+    }
+
     /// Merges its junction lanes' sums through storage (`lane_partials.wgsl`),
     /// so `LaneMerge` chooses its module; the one-step kernels merge theirs
     /// in registers or workgroup memory, the same module either way.

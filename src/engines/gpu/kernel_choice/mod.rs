@@ -79,8 +79,8 @@ pub struct Launch {
     /// Only for the kernels that merge lanes through storage.
     pub lanes_in_storage: bool,
     /// Bulk forces by 2×2 patches of blocks (`GpuOptions::bond_patches`):
-    /// the same bits, another split of the work. Only for the
-    /// single-workgroup kernels.
+    /// the same forces to their last bits, another split of the work.
+    /// Only for the kernels that have them (`Kernel::has_bond_patches`).
     pub bond_patches: bool,
 }
 
@@ -174,7 +174,7 @@ impl Launch {
             launch.lanes_in_storage = true;
         }
         if rest.next_if(|p| *p == BOND_PATCHES).is_some() {
-            if !launch.kernel.is_persistent() {
+            if !launch.kernel.has_bond_patches() {
                 return None;
             }
             launch.bond_patches = true;
