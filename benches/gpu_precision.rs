@@ -31,6 +31,9 @@
 //! - `SLIPFRONT_GPU_PRECISION_RUNS` (default 24), `SLIPFRONT_GPU_PRECISION_END`
 //!   (seconds of driving, default the scene's 0.3),
 //!   `SLIPFRONT_GPU_PRECISION_JUNCTIONS` (Ns, default 32);
+//! - `SLIPFRONT_GPU_PRECISION_BOND_PATCHES=1`: the GPU ensembles with their
+//!   bulk forces by 2×2 patches of blocks (`--gpu-bond-patches`: the
+//!   persistent, resident and tiled kernels; the others as they are);
 //! - `SLIPFRONT_GPU_PRECISION_QUICK=1`: 8 runs of 0.03 s, `auto` only, for a
 //!   software adapter. Too few events for a verdict, and the table says so.
 //!
@@ -65,6 +68,8 @@ struct Plan {
     junctions: usize,
     /// `--gpu-path` values.
     kernels: Vec<GpuPath>,
+    /// The GPU ensembles' bulk forces by patches of blocks.
+    bond_patches: bool,
     quick: bool,
 }
 
@@ -83,15 +88,21 @@ fn env_parsed<T: FromStr>(name: &str, default: T, allowed: &str, valid: impl Fn(
     }
 }
 
-fn plan(model_of: impl Fn(usize) -> Model) -> Plan {
-    let quick = match std::env::var("SLIPFRONT_GPU_PRECISION_QUICK").as_deref() {
+/// `name` set to 1 (true) or unset or 0 (false); anything else stops the
+/// bench with a message naming it.
+fn env_switch(name: &str) -> bool {
+    match std::env::var(name).as_deref() {
         Err(_) | Ok("0") => false,
         Ok("1") => true,
         Ok(v) => {
-            eprintln!("SLIPFRONT_GPU_PRECISION_QUICK={v}: expected 0 or 1");
+            eprintln!("{name}={v}: expected 0 or 1");
             std::process::exit(2);
         }
-    };
+    }
+}
+
+fn plan(model_of: impl Fn(usize) -> Model) -> Plan {
+    let quick = env_switch("SLIPFRONT_GPU_PRECISION_QUICK");
     let runs = env_parsed(
         "SLIPFRONT_GPU_PRECISION_RUNS",
         if quick { 8 } else { 24 },
@@ -134,6 +145,7 @@ fn plan(model_of: impl Fn(usize) -> Model) -> Plan {
         end: (end > 0.0).then_some(end),
         junctions,
         kernels,
+        bond_patches: env_switch("SLIPFRONT_GPU_PRECISION_BOND_PATCHES"),
         quick,
     }
 }
@@ -183,6 +195,7 @@ fn run(dir: &Path, plan: &Plan, e: &Ensemble) -> Result<(PathBuf, f64), String> 
             ensemble: slipfront::app::sweeps::DEFAULT_ENSEMBLE,
             gpu: GpuOptions {
                 path: e.path,
+                bond_patches: plan.bond_patches && e.backend == Backend::Gpu,
                 ..default_gpu()
             },
             on_point: None,
@@ -276,8 +289,13 @@ fn main() {
             extra: "",
         };
         let label = format!(
-            "{} {}",
+            "{}{} {}",
             path.name(),
+            if plan.bond_patches {
+                "/bond-patches"
+            } else {
+                ""
+            },
             if *precision == Precision::F64 {
                 "f64"
             } else {

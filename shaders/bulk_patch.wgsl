@@ -1,8 +1,8 @@
 // The bulk forces of a 2×2 patch of blocks by one thread, each bond
 // inside the patch computed once: of a patch's 32 stencil entries, 12 are
 // its 6 inner bonds seen from both ends, so a thread does 26 bonds' work
-// where four threads of bulk_force do 32, and loads 16 blocks' state where
-// they load 36. A bond seen from its other end adds exactly its terms
+// where four threads of bulk_force do 32, and reads 24 blocks' state
+// where they read 36 (16, where a driver merges the ring's repeated reads). A bond seen from its other end adds exactly its terms
 // negated (bulk_forces.wgsl: BondTerms), and every block still adds its
 // bonds in stencil order, so each force has bulk_force's bits.
 // The patch at column x0 and row z0 holds blocks

@@ -29,13 +29,7 @@ fn gpu_on(m: &Model, path: GpuPath) -> GpuEngine {
         .unwrap_or_else(|e| panic!("a GPU adapter is required (lavapipe in CI): {e}"))
 }
 
-const KERNELS: [GpuPath; 5] = [
-    GpuPath::OneStep,
-    GpuPath::OneStepLanes,
-    GpuPath::Persistent,
-    GpuPath::Resident,
-    GpuPath::Tiled,
-];
+const KERNELS: [GpuPath; 5] = GpuPath::KERNELS;
 
 fn run_both(m: &Model, steps: u64, path: GpuPath) -> (Snapshot, Snapshot) {
     let mut c = cpu_engine(m, Precision::F32, 1).unwrap();

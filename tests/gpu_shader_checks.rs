@@ -16,13 +16,7 @@ use slipfront::{advance_to, Engine, Model, Snapshot};
 mod record_twins;
 use record_twins::plan;
 
-const KERNELS: [GpuPath; 5] = [
-    GpuPath::OneStep,
-    GpuPath::OneStepLanes,
-    GpuPath::Persistent,
-    GpuPath::Resident,
-    GpuPath::Tiled,
-];
+const KERNELS: [GpuPath; 5] = GpuPath::KERNELS;
 
 /// The state at the end and every sample recorded on the device on the
 /// way, of `m` on kernel `path` in precision `T`, with or without wgpu's

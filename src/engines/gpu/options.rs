@@ -245,6 +245,16 @@ pub fn resident_reduction_width<T: GpuReal>() -> u32 {
 }
 
 impl GpuPath {
+    /// Every path that names a kernel, in `Kernel::ALL`'s order (what the
+    /// GPU tests run each comparison on).
+    pub const KERNELS: [GpuPath; 5] = [
+        GpuPath::OneStep,
+        GpuPath::OneStepLanes,
+        GpuPath::Persistent,
+        GpuPath::Resident,
+        GpuPath::Tiled,
+    ];
+
     /// The path that names `kernel`.
     pub fn of(kernel: Kernel) -> GpuPath {
         match kernel {
@@ -297,6 +307,12 @@ pub fn choose_kernel(path: GpuPath, software: bool) -> Kernel {
 mod tests {
     use super::*;
     use crate::model::scenario::{Scenario, DEFAULT_SCENARIO};
+
+    /// The tests' list of kernel paths is every kernel, once, in order.
+    #[test]
+    fn the_kernel_paths_are_every_kernel() {
+        assert_eq!(GpuPath::KERNELS, Kernel::ALL.map(GpuPath::of));
+    }
 
     #[test]
     fn auto_takes_the_barrier_free_kernel_on_software_adapters_and_lanes_on_hardware() {
