@@ -16,6 +16,10 @@
 use slipfront::engines::gpu::{GpuEngine, GpuOptions, GpuOutput, GpuPath, GpuReal};
 use slipfront::{advance_to, Engine, Model, Snapshot};
 
+#[path = "support/f64_adapter.rs"]
+mod f64_adapter;
+use f64_adapter::f64_adapter;
+
 fn engine<T: GpuReal>(m: &Model, path: GpuPath, bond_patches: bool) -> GpuEngine<T> {
     let opts = GpuOptions {
         path,
@@ -177,14 +181,7 @@ fn bond_patches_feed_a_per_block_law_the_same_forces() {
 /// run mixed f32 only; lavapipe (CI) has it.
 #[test]
 fn f64_bond_patches_give_the_forces_of_a_thread_per_block() {
-    let ctx = slipfront::engines::gpu::context::shared().expect("a GPU adapter");
-    if ctx.check_precision::<f64>().is_err() {
-        assert!(
-            std::env::var("CI").map_or(true, |v| v != "true"),
-            "{}: no f64 in CI",
-            ctx.info.name
-        );
-        println!("{}: no f64, nothing to compare", ctx.info.name);
+    if !f64_adapter() {
         return;
     }
     assert_forces_agree::<f64>(

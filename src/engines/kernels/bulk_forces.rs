@@ -328,22 +328,29 @@ mod tests {
         }
     }
 
+    /// A snapshot's displacements and velocities in precision (T, C).
+    #[allow(clippy::type_complexity)]
+    fn state_in<T: Real, C: Coordinate<T>>(snap: &crate::Snapshot) -> (Vec<[C; 2]>, Vec<[T; 2]>) {
+        let disp = snap
+            .disp
+            .iter()
+            .map(|u| [C::from_f64(u[0]), C::from_f64(u[1])])
+            .collect();
+        let vel = snap
+            .vel_half
+            .iter()
+            .map(|v| [T::from_f64(v[0]), T::from_f64(v[1])])
+            .collect();
+        (disp, vel)
+    }
+
     /// Bond forces alone (no block carries a flag, so no external load) on
     /// every block of a snapshot, in precision (T, C).
     fn bond_forces<T: Real, C: Coordinate<T>>(m: &Model, snap: &crate::Snapshot) -> Vec<[f64; 2]> {
         let c = Consts::<T>::new(m);
         let bonds = bond_consts(&c);
         let p = step_params(&c, snap.step);
-        let disp: Vec<[C; 2]> = snap
-            .disp
-            .iter()
-            .map(|u| [C::from_f64(u[0]), C::from_f64(u[1])])
-            .collect();
-        let vel: Vec<[T; 2]> = snap
-            .vel_half
-            .iter()
-            .map(|v| [T::from_f64(v[0]), T::from_f64(v[1])])
-            .collect();
+        let (disp, vel) = state_in::<T, C>(snap);
         let flags = vec![0; disp.len()];
         let blocks = Blocks {
             disp: &disp,
@@ -373,20 +380,11 @@ mod tests {
         let c = Consts::<T>::new(m);
         let bonds = bond_consts(&c);
         let p = step_params(&c, snap.step);
-        let disp: Vec<[C; 2]> = snap
-            .disp
-            .iter()
-            .map(|u| [C::from_f64(u[0]), C::from_f64(u[1])])
-            .collect();
+        let (disp, vel) = state_in::<T, C>(snap);
         let mut seen = disp.clone();
         if let Some(i) = nudged {
             seen[i][0] = C::from_f64(snap.disp[i][0] + 1e-9);
         }
-        let vel: Vec<[T; 2]> = snap
-            .vel_half
-            .iter()
-            .map(|v| [T::from_f64(v[0]), T::from_f64(v[1])])
-            .collect();
         let flags = crate::model::lattice::block_flags(m);
         let blocks = |disp| Blocks {
             disp,
