@@ -34,6 +34,8 @@
 //! - `SLIPFRONT_GPU_PRECISION_BOND_PATCHES=1`: the GPU ensembles with their
 //!   bulk forces by 2×2 patches of blocks (`--gpu-bond-patches`: the
 //!   persistent, resident and tiled kernels; the others as they are);
+//! - `SLIPFRONT_GPU_PRECISION_F64=0`: no GPU f64 ensemble (by default one
+//!   runs where the adapter has f64: on lavapipe another 20 to 50 minutes);
 //! - `SLIPFRONT_GPU_PRECISION_QUICK=1`: 8 runs of 0.03 s, `auto` only, for a
 //!   software adapter. Too few events for a verdict, and the table says so.
 //!
@@ -70,6 +72,8 @@ struct Plan {
     kernels: Vec<GpuPath>,
     /// The GPU ensembles' bulk forces by patches of blocks.
     bond_patches: bool,
+    /// A GPU f64 ensemble too, where the adapter has f64.
+    gpu_f64: bool,
     quick: bool,
 }
 
@@ -146,6 +150,8 @@ fn plan(model_of: impl Fn(usize) -> Model) -> Plan {
         junctions,
         kernels,
         bond_patches: env_switch("SLIPFRONT_GPU_PRECISION_BOND_PATCHES"),
+        gpu_f64: std::env::var("SLIPFRONT_GPU_PRECISION_F64").is_err()
+            || env_switch("SLIPFRONT_GPU_PRECISION_F64"),
         quick,
     }
 }
@@ -273,7 +279,7 @@ fn main() {
         .iter()
         .map(|&p| (format!("gpu_f32_{}", p.name()), Precision::F32, p))
         .collect();
-    if ctx.check_precision::<f64>().is_ok() {
+    if plan.gpu_f64 && ctx.check_precision::<f64>().is_ok() {
         gpu_runs.push(("gpu_f64_auto".into(), Precision::F64, GpuPath::Auto));
     }
     println!("| GPU ensemble | wall s | against f64, same members: corrected p | verdict | against μd +15 %: corrected p | bias seen |");
