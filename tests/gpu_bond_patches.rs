@@ -2,16 +2,15 @@
 //! forces by 2×2 patches of blocks (`GpuOptions::bond_patches`,
 //! `shaders/bulk_patch.wgsl`) against the same kernels a thread per block,
 //! on the same state. A bond inside a patch is computed once and added
-//! negated at its far end; a thread per block computes each bond from its
-//! lower end and negates it at the upper one. The arithmetic is the same,
-//! and on the CPU twin the bits are (`bulk_forces.rs`,
-//! `bond_patches_give_each_block_the_bits_of_its_own_sum`), but a driver
-//! fuses a product into its sum where it has one use and may not where it
-//! has two (lavapipe: a few blocks one ulp apart within five steps). So
-//! the forces must agree to the rounding of a block's bond terms, and a
-//! run's trajectory parts from the other's at that level, like the other
-//! kernels' (docs/gpu-kernels.md). These tests fail, never skip, when no
-//! adapter exists (lavapipe in CI).
+//! negated at its far end; a thread per block computes it at both ends.
+//! The arithmetic is the same, and on the CPU twin the bits are
+//! (`bulk_forces.rs`, `bond_patches_give_each_block_the_bits_of_its_own_sum`),
+//! but not on lavapipe in mixed f32: a few blocks one ulp apart within five
+//! steps (likely a product fused into its sum where it has one use and not
+//! where it has two). So the forces must agree to the rounding of a block's
+//! bond terms, and a run's trajectory parts from the other's at that level,
+//! like the other kernels' (docs/gpu-kernels.md). These tests fail, never
+//! skip, when no adapter exists (lavapipe in CI).
 
 use slipfront::engines::gpu::{GpuEngine, GpuOptions, GpuOutput, GpuPath, GpuReal};
 use slipfront::{advance_to, Engine, Model, Snapshot};

@@ -134,8 +134,8 @@ pub struct GpuOptions {
     /// by 2×2 patches of blocks, a thread each, every bond inside a patch
     /// once (`bulk_patch.wgsl`): 26 bonds' work a patch where a thread per
     /// block does 32, on a quarter of the threads. The same arithmetic; the
-    /// forces agree to their last bits (a driver may fuse a shared term
-    /// apart: `tests/gpu_bond_patches.rs`). false (the default): a thread
+    /// forces agree to their last bits, not always to the bit (lavapipe's
+    /// mixed f32: `tests/gpu_bond_patches.rs`). false (the default): a thread
     /// per block; `auto` on hardware times both (`--gpu-bond-patches`
     /// fixes it on).
     pub bond_patches: bool,
