@@ -207,6 +207,7 @@ impl RunArgs {
             bond_patches: self.gpu_bond_patches,
             ..GpuOptions::default()
         };
+        gpu.check_asked().map_err(anyhow::Error::msg)?;
         Ok(make_engine_with(
             model,
             self.backend,

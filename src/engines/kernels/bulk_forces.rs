@@ -165,16 +165,43 @@ pub fn bulk_force<T: Real, C: Coordinate<T>>(
     b: Blocks<'_, T, C>,
     i: usize,
 ) -> [T; 2] {
-    let (ix, iz) = ((i % c.nx) as i32, (i / c.nx) as i32);
     let own = (b.disp[i], b.vel[i]);
+    force_with(c, bonds, p, drive_target, b, i, |bond, j| {
+        bond_terms(c, bond, own, (b.disp[j], b.vel[j]))
+    })
+}
+
+/// Block `i`'s force from everything but friction, its bonds' terms from
+/// `terms_of(bond, j)` for each stencil bond to a block j of the lattice,
+/// added in stencil order, then the external loads.
+#[inline(always)]
+fn force_with<T: Real, C: Coordinate<T>>(
+    c: &Consts<T>,
+    bonds: &[BondConsts<T>; 8],
+    p: &StepParams<T>,
+    drive_target: C,
+    b: Blocks<'_, T, C>,
+    i: usize,
+    mut terms_of: impl FnMut(&BondConsts<T>, usize) -> BondTerms<T>,
+) -> [T; 2] {
+    let (ix, iz) = ((i % c.nx) as i32, (i / c.nx) as i32);
     // Summed as the precision's `ForceSum` (`crate::model::real` says why).
     let mut f = [C::Sum::default(); 2];
     for bond in bonds {
         if let Some(j) = block_at(c, ix + bond.dx, iz + bond.dz) {
-            f = bond_terms(c, bond, own, (b.disp[j], b.vel[j])).add_to(f);
+            f = terms_of(bond, j).add_to(f);
         }
     }
-    external_loads(c, p, drive_target, b.flags[i], ix as usize, own.0, own.1, f)
+    external_loads(
+        c,
+        p,
+        drive_target,
+        b.flags[i],
+        ix as usize,
+        b.disp[i],
+        b.vel[i],
+        f,
+    )
 }
 
 /// The forces on the 2×2 patch of blocks whose first is at column `x0`,
@@ -198,33 +225,18 @@ pub fn bulk_force_patch<T: Real, C: Coordinate<T>>(
     let mut inner: [[Option<BondTerms<T>>; 4]; 4] = [[None; 4]; 4];
     let mut out = [None; 4];
     for (k, &(ox, oz)) in CORNERS.iter().enumerate() {
-        let (ix, iz) = (x0 as i32 + ox, z0 as i32 + oz);
-        let Some(i) = block_at(c, ix, iz) else {
+        let Some(i) = block_at(c, x0 as i32 + ox, z0 as i32 + oz) else {
             continue;
         };
         let own = (b.disp[i], b.vel[i]);
-        let mut f = [C::Sum::default(); 2];
-        for bond in bonds {
-            let Some(j) = block_at(c, ix + bond.dx, iz + bond.dz) else {
-                continue;
-            };
-            let terms = match corner_of(ox + bond.dx, oz + bond.dz) {
+        out[k] = Some(force_with(c, bonds, p, drive_target, b, i, |bond, j| {
+            let computed = || bond_terms(c, bond, own, (b.disp[j], b.vel[j]));
+            match corner_of(ox + bond.dx, oz + bond.dz) {
                 Some(m) if m < k => inner[m][k].expect("computed by its first corner").negated(),
-                Some(m) => *inner[k][m].insert(bond_terms(c, bond, own, (b.disp[j], b.vel[j]))),
-                None => bond_terms(c, bond, own, (b.disp[j], b.vel[j])),
-            };
-            f = terms.add_to(f);
-        }
-        out[k] = Some(external_loads(
-            c,
-            p,
-            drive_target,
-            b.flags[i],
-            ix as usize,
-            own.0,
-            own.1,
-            f,
-        ));
+                Some(m) => *inner[k][m].insert(computed()),
+                None => computed(),
+            }
+        }));
     }
     out
 }
