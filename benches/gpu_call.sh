@@ -1,0 +1,84 @@
+#!/usr/bin/env bash
+# The GPU measurements a session lent a GPU should take, in one device call, the most
+# decisive first. Each step is cut off at its own cap and at what is left of the call's
+# budget, so a short loan still brings back the figures that decide issue 32, and the
+# call leaves time to run again.
+#
+# On the GPU machine, after a release build and packing here:
+#   cargo build --release --bins --benches --tests
+#   ../shared/device/pack.sh gpu_targets gpu_ensemble gpu_table gpu_precision
+#   device call, carry [".devbin"]: bash .devbin/on-gpu.sh 'bash ../benches/gpu_call.sh 420'
+# (on-gpu.sh runs its command from .devbin/, with the packed binaries on PATH).
+#
+# Argument: the budget in seconds (default 420: a 600 s call, with room for start-up).
+# SLIPFRONT_GPU_CALL_STEPS=targets,bits runs only those steps (names below).
+# SLIPFRONT_GPU_CALL_QUICK=1 runs every step in its benches' quick form: a smoke test of
+# this script on a software adapter, not a figure.
+#
+# Each step prints a header with its cap, and a line with its wall time and exit status;
+# the summary at the end lists every step as ran, cut off (timeout) or skipped (no time
+# left, or not asked for).
+set -u
+budget=${1:-420}
+start=$(date +%s)
+quick=${SLIPFRONT_GPU_CALL_QUICK:-}
+only=${SLIPFRONT_GPU_CALL_STEPS:-}
+summary=()
+
+if [ -n "$quick" ]; then
+  export SLIPFRONT_GPU_TARGETS_QUICK=1 SLIPFRONT_GPU_TABLE_QUICK=1 SLIPFRONT_GPU_PRECISION_QUICK=1
+fi
+
+# step NAME CAP_SECONDS COMMAND...: runs COMMAND under `timeout`, capped at CAP_SECONDS
+# and at the budget left.
+step() {
+  local name=$1 cap=$2
+  shift 2
+  if [ -n "$only" ] && [[ ",$only," != *",$name,"* ]]; then
+    summary+=("$name: not asked for")
+    return
+  fi
+  local left=$((budget - ($(date +%s) - start)))
+  if [ "$left" -lt 20 ]; then
+    summary+=("$name: skipped, ${left} s of the budget left")
+    return
+  fi
+  local limit=$((cap < left ? cap : left))
+  echo
+  echo "=== $name (at most ${limit} s): $*"
+  local t0 rc
+  t0=$(date +%s)
+  timeout --kill-after=10 "$limit" "$@"
+  rc=$?
+  local took=$(($(date +%s) - t0))
+  if [ "$rc" -eq 124 ] || [ "$rc" -eq 137 ]; then
+    summary+=("$name: cut off after ${took} s (its cap ${limit} s)")
+  else
+    summary+=("$name: ${took} s, exit ${rc}")
+  fi
+  echo "=== $name: ${took} s, exit ${rc}"
+}
+
+# with VAR=VALUE... COMMAND: the environment for one step only.
+with() { env "$@"; }
+
+# 1. The targets, met or not: auto's pick against every launch timed again, Table S1
+#    µs/step, 256 scenes' aggregate, 64 scenes against one at a time, output cost.
+step targets 180 gpu_targets
+# 2. Ensemble against solo, bit for bit (the issue's "the ensemble and solo tests pass").
+step bits 90 gpu_ensemble --test-threads 1
+# 3. The ensemble target's launches with and without bond patches, at 1 and 256 scenes:
+#    a 256-scene step well under twice the one-scene step means workgroups share an SM.
+step ensembles 150 with SLIPFRONT_GPU_TABLE_SECTIONS=3 SLIPFRONT_GPU_TABLE_SCENES=1,256 \
+  SLIPFRONT_GPU_TABLE_LAUNCHES=persistent/1024,resident/256,resident/512,resident/1024,resident/1024/bond-patches,persistent/1024/bond-patches \
+  gpu_table
+# 4. Table S1 per kernel: kept sums, lane shuffles, run-time checks, bond patches.
+step junctions 150 with SLIPFRONT_GPU_TABLE_SECTIONS=7 gpu_table
+# 5. Kernels against lattice size, and Table S1's thread counts and tile shapes.
+step kernels 200 with SLIPFRONT_GPU_TABLE_SECTIONS=1,2 gpu_table
+# 6. Accuracy: the GPU kernels' perturbation ensembles against CPU f64.
+step precision 300 gpu_precision
+
+echo
+echo "=== gpu_call summary (budget ${budget} s, used $(($(date +%s) - start)) s)"
+for line in "${summary[@]}"; do echo "- $line"; done
