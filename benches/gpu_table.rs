@@ -6,7 +6,8 @@
 //! Markdown, in mixed f32:
 //!
 //! 1. every kernel against lattice size (Table S1 to 8192×4096): µs per
-//!    step and block-steps/s, each kernel on the scene alone;
+//!    step and block-steps/s, each kernel on the scene alone, the one-step
+//!    kernels also with their bulk forces by 2×2 patches;
 //! 2. what `auto` chooses on Table S1 (timed now, as `--gpu-path measure`,
 //!    from the start of driving; and, for comparison, from the initial
 //!    state, as builds before 2026-11-27 timed it), and the persistent and resident kernels there with 256, 512 and 1024
@@ -212,15 +213,13 @@ fn junction_cost(min_seconds: f64) {
         let model = Model::from_scenario(&scenario, false).expect("a Table S1 variant");
         // The scene as shipped also with wgpu's run-time checks in the
         // kernels (`GpuOptions::shader_checks`): what leaving them out saves;
-        // and the single-workgroup kernels with their bulk forces by patches
-        // of blocks (`GpuOptions::bond_patches`).
+        // and with their bulk forces by patches of blocks
+        // (`GpuOptions::bond_patches`).
         for kernel in candidates(&model) {
             let mut variants = vec![(false, false)];
             if set.is_empty() {
                 variants.push((true, false));
-                if kernel.has_bond_patches() {
-                    variants.push((false, true));
-                }
+                variants.push((false, true));
             }
             for (shader_checks, bond_patches) in variants {
                 let kept = GpuOptions {
@@ -411,18 +410,33 @@ fn main() {
         for &(nx, nz) in sizes {
             let model = bench_scene::scene(nx, nz);
             let mut best = f64::INFINITY;
-            for kernel in candidates(&model) {
-                match solo_step_seconds(&model, options(kernel), min_seconds) {
+            // The one-step kernels also with their bulk forces by 2×2
+            // patches (a quarter of the threads: the large lattices' variant).
+            let runs = candidates(&model).into_iter().flat_map(|kernel| {
+                let one_step = matches!(kernel, Kernel::OneStep | Kernel::OneStepLanes);
+                let patched = one_step.then_some((kernel, true));
+                [(kernel, false)].into_iter().chain(patched)
+            });
+            for (kernel, bond_patches) in runs {
+                let opts = GpuOptions {
+                    bond_patches,
+                    ..options(kernel)
+                };
+                let name = format!(
+                    "{}{}",
+                    path_name(kernel),
+                    if bond_patches { "/bond-patches" } else { "" }
+                );
+                match solo_step_seconds(&model, opts, min_seconds) {
                     Ok((s, host)) => {
                         best = best.min(s);
                         println!(
-                            "| {nx}×{nz} | {} | {:.2} | {:.3e} | {host:.2} |",
-                            path_name(kernel),
+                            "| {nx}×{nz} | {name} | {:.2} | {:.3e} | {host:.2} |",
                             s * 1e6,
                             model.n_blocks() as f64 / s
                         );
                     }
-                    Err(e) => println!("| {nx}×{nz} | {} | not run: {e} | | |", path_name(kernel)),
+                    Err(e) => println!("| {nx}×{nz} | {name} | not run: {e} | | |"),
                 }
             }
             best_gpu.push(((nx, nz), model.n_blocks() as f64 / best));
@@ -496,14 +510,10 @@ fn main() {
         // sweep's measurement times them (how many scenes share an SM
         // depends on their threads).
         let mut tried = launches(&s1, 2, GpuOptions::default(), &ctx.limits);
-        // The launches with their bulk forces by patches too (persistent,
-        // resident, tiled), but only where SLIPFRONT_GPU_TABLE_LAUNCHES
-        // names them (`resident/1024/bond-patches`).
-        let patched: Vec<_> = tried
-            .iter()
-            .filter(|l| l.kernel.has_bond_patches())
-            .map(|l| l.with_bond_patches())
-            .collect();
+        // The launches with their bulk forces by patches too, but only
+        // where SLIPFRONT_GPU_TABLE_LAUNCHES names them
+        // (`resident/1024/bond-patches`).
+        let patched: Vec<_> = tried.iter().map(|l| l.with_bond_patches()).collect();
         tried.extend(patched);
         // SLIPFRONT_GPU_TABLE_LAUNCHES=resident/1024,one-step-lanes: only those.
         let launches_wanted: Option<Vec<String>> = std::env::var("SLIPFRONT_GPU_TABLE_LAUNCHES")

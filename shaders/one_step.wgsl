@@ -8,7 +8,10 @@
 // workgroup's kinetic energy at the sample's instant into the sample's
 // partial g (record_kinetic.wgsl); the workgroup barriers of that sum
 // are in that variant only.
-// import: common, record_kinetic, scene, step_forces, verlet
+// With BOND_PATCHES (GpuOptions::bond_patches) the threads step the
+// interface row a block each and the rows above by 2×2 patches
+// (step_patches.wgsl); that variant has no recording form.
+// import: common, record_kinetic, scene, step_forces, step_patches, verlet
 
 override RECORD_KINETIC: bool = false;
 
@@ -20,6 +23,10 @@ fn one_step(
 ) {
     enter_scene(wid.z);
     let g = wid.x + wid.y * groups.x;
+    if BOND_PATCHES {
+        step_by_patches(g * WORKGROUP + local);
+        return;
+    }
     let i = g * WORKGROUP + local;
     var kinetic = real(0.0);
     if i < c.n_blocks && !scene_stopped() {
@@ -40,3 +47,4 @@ fn one_step(
         }
     }
 }
+

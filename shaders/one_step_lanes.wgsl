@@ -12,9 +12,12 @@
 // the other workgroups start at block WORKGROUP·⌊nx/WORKGROUP⌋, so that
 // each covers the blocks of one output partial (record_kinetic.wgsl),
 // whose kinetic energy the recording variant (RECORD_KINETIC) sums as in
-// one_step.
+// one_step. With BOND_PATCHES the other workgroups step the rows above the
+// interface by 2×2 patches (step_patches.wgsl; without junctions, the
+// interface row a block a thread first), a thread each; that variant has
+// no recording form.
 // CPU twin: src/engines/cpu/mod.rs CpuEngine::one_step (force pass and update).
-// import: bulk_forces, common, coordinates, junctions, record_kinetic, scene, state, step_forces, verlet
+// import: bulk_forces, common, coordinates, junctions, record_kinetic, scene, state, step_forces, step_patches, verlet
 
 var<workgroup> lane_sum: array<LaneSum, JUNCTION_LANES>;
 // The interface block's bulk force, from the last lane to thread 0.
@@ -95,6 +98,14 @@ fn one_step_lanes(
                 verlet(w, w, 0u, f, friction, ld, i_step);
             }
         }
+    }
+    if BOND_PATCHES {
+        if FRICTION_LAW != LAW_JUNCTIONS {
+            step_by_patches(w * WORKGROUP + local);
+        } else if !junction_group {
+            step_by_patches(c.nx + (w - c.nx) * WORKGROUP + local);
+        }
+        return;
     }
     // The bulk workgroups: partial g's blocks, less the interface's.
     var g = w;

@@ -143,25 +143,6 @@ fn bad_input_exits_with_a_clear_message() {
     assert_eq!(out.status.code(), Some(2));
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("--from `nope.ckpt`: no such file"), "{err}");
-    // Bond patches on a kernel that has none.
-    let out = slipfront(&[
-        "run",
-        "--backend",
-        "gpu",
-        "--gpu-path",
-        "one-step",
-        "--gpu-bond-patches",
-    ]);
-    assert_eq!(out.status.code(), Some(2));
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert!(
-        err.contains("--gpu-bond-patches: --gpu-path one-step computes a thread's own block's bonds and has no patches"),
-        "{err}"
-    );
-    assert!(
-        err.contains("allowed with: persistent, resident, tiled"),
-        "{err}"
-    );
     // A workgroup of no threads, on run and sweep alike.
     for command in ["run", "sweep"] {
         let out = slipfront(&[command, "--gpu-threads", "0"]);

@@ -1,4 +1,4 @@
-//! The persistent, resident and tiled kernels with their bulk
+//! Every GPU kernel with its bulk
 //! forces by 2×2 patches of blocks (`GpuOptions::bond_patches`,
 //! `shaders/bulk_patch.wgsl`) against the same kernels a thread per block,
 //! on the same state. A bond inside a patch is computed once and added
@@ -138,13 +138,20 @@ fn assert_forces_agree<T: GpuReal>(set: &[&str], path: GpuPath) {
     );
 }
 
-/// The small triggered front on the persistent, resident and tiled kernels in
-/// mixed f32: 29 × 16 (the last column's patches half full) and 29 × 15
-/// (the top row's too).
+/// The small triggered front on every kernel in mixed f32: 29 × 16 (the
+/// last column's patches half full; the one-step kernels' patches start
+/// at row 1, so their top row's are half full too) and 29 × 15 (the top
+/// row's half full elsewhere).
 #[test]
 fn bond_patches_give_the_forces_of_a_thread_per_block() {
     for set in [&[][..], &["geometry.nz=15", "geometry.height=0.035"][..]] {
-        for path in [GpuPath::Persistent, GpuPath::Resident, GpuPath::Tiled] {
+        for path in [
+            GpuPath::OneStep,
+            GpuPath::OneStepLanes,
+            GpuPath::Persistent,
+            GpuPath::Resident,
+            GpuPath::Tiled,
+        ] {
             assert_forces_agree::<f32>(set, path);
         }
     }
@@ -162,18 +169,23 @@ fn bond_patches_feed_a_per_block_law_the_same_forces() {
     .unwrap();
     let m = Model::from_scenario(&s, false).unwrap();
     let step = m.prep_steps + 1500;
-    let (blocks, patches) = forces_both_ways::<f32>(&m, &m, GpuPath::Persistent, step);
-    let (worst, _) = worst_in_roundings::<f32>(&m, &blocks, &patches);
-    let sliding = blocks.vel_half[..m.nx]
-        .iter()
-        .filter(|v| v[0] != 0.0)
-        .count();
-    let rubbing = blocks.friction.iter().filter(|f| **f != 0.0).count();
-    println!(
-        "coulomb: {sliding} interface blocks moving, {rubbing} with friction, {worst:.2} roundings"
-    );
-    assert!(sliding > 0 && rubbing > 0, "the interface did not slide");
-    assert!(worst <= ROUNDINGS_ALLOWED, "{worst} roundings apart");
+    // One-step-lanes without junctions steps the interface row a thread a
+    // block before its patches.
+    for path in [GpuPath::OneStep, GpuPath::OneStepLanes, GpuPath::Persistent] {
+        let (blocks, patches) = forces_both_ways::<f32>(&m, &m, path, step);
+        let (worst, _) = worst_in_roundings::<f32>(&m, &blocks, &patches);
+        let sliding = blocks.vel_half[..m.nx]
+            .iter()
+            .filter(|v| v[0] != 0.0)
+            .count();
+        let rubbing = blocks.friction.iter().filter(|f| **f != 0.0).count();
+        println!(
+            "coulomb, {path:?}: {sliding} interface blocks moving, {rubbing} with friction, \
+             {worst:.2} roundings"
+        );
+        assert!(sliding > 0 && rubbing > 0, "the interface did not slide");
+        assert!(worst <= ROUNDINGS_ALLOWED, "{worst} roundings apart");
+    }
 }
 
 /// The same in f64 on the persistent kernel. Adapters without SHADER_F64
@@ -183,8 +195,7 @@ fn f64_bond_patches_give_the_forces_of_a_thread_per_block() {
     if !f64_adapter() {
         return;
     }
-    assert_forces_agree::<f64>(
-        &["geometry.nz=15", "geometry.height=0.035"],
-        GpuPath::Persistent,
-    );
+    for path in [GpuPath::OneStep, GpuPath::Persistent] {
+        assert_forces_agree::<f64>(&["geometry.nz=15", "geometry.height=0.035"], path);
+    }
 }

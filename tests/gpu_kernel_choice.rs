@@ -60,19 +60,18 @@ fn measure_times_every_candidate_takes_the_fastest_and_caches_it() {
     let (opts, choice) = resolve::<f32>(&m, &ctx, options(GpuPath::Measure), &cache).unwrap();
     let choice = choice.expect("measure always measures");
     assert_eq!(choice.source, ChoiceSource::Measured);
-    // Last, the fastest persistent, resident or tiled launch is timed
-    // again with its bulk forces by patches of blocks.
+    // Last, the fastest launch is timed again with its bulk forces by
+    // patches of blocks.
     type Timed = (Launch, f64);
     let (patched, unpatched): (Vec<Timed>, Vec<Timed>) =
         choice.timings.iter().partition(|t| t.0.bond_patches);
     assert_eq!(patched.len(), 1, "{}", choice.describe());
     assert_eq!(choice.timings.last(), patched.first());
-    let fastest_patchable = unpatched
+    let fastest_patched = unpatched
         .iter()
-        .filter(|t| t.0.kernel.has_bond_patches())
         .min_by(|a, b| a.1.total_cmp(&b.1))
         .map(|t| t.0.with_bond_patches());
-    assert_eq!(fastest_patchable, Some(patched[0].0));
+    assert_eq!(fastest_patched, Some(patched[0].0));
     // Before it, where the lanes merged in subgroups (lavapipe: runs of 8),
     // the fastest launch that merged them is timed with every lane's sum
     // through storage.
@@ -419,6 +418,8 @@ fn launch_names_read_back() {
         Launch::with_threads(Kernel::Tiled, 256)
             .with_tile(shape)
             .with_bond_patches(),
+        Launch::of(Kernel::OneStep).with_bond_patches(),
+        Launch::of(Kernel::OneStepLanes).with_bond_patches(),
     ] {
         assert_eq!(Launch::named(&l.name()), Some(l));
     }
@@ -459,9 +460,7 @@ fn launch_names_read_back() {
         "tiled/lanes-in-storage/8x4",
         "resident/256/lanes-in-storage/lanes-in-storage",
         "resident/256/lanes",
-        // The one-step kernels have no patches.
-        "one-step/bond-patches",
-        "one-step-lanes/bond-patches",
+        "one-step/bond-patches/lanes-in-storage",
         "tiled/256/bond-patches/8x4",
         "resident/bond-patches/lanes-in-storage",
         "resident/256/bond-patches/bond-patches",

@@ -49,10 +49,10 @@ pub struct RunArgs {
     /// results, slower; for checking a suspect kernel.
     #[arg(long)]
     pub gpu_shader_checks: bool,
-    /// The persistent, resident and tiled GPU kernels compute the bulk
-    /// forces by 2×2 patches of blocks, each bond inside a patch once: the
-    /// same forces to their last bits, another split of the work (`auto`
-    /// on a hardware GPU times both when this is not given).
+    /// The GPU kernels compute the bulk forces by 2×2 patches of blocks,
+    /// each bond inside a patch once: the same forces to their last bits,
+    /// another split of the work (`auto` on a hardware GPU times both when
+    /// this is not given).
     #[arg(long)]
     pub gpu_bond_patches: bool,
     #[arg(long, value_enum)]
@@ -207,7 +207,6 @@ impl RunArgs {
             bond_patches: self.gpu_bond_patches,
             ..GpuOptions::default()
         };
-        gpu.check_asked().map_err(anyhow::Error::msg)?;
         Ok(make_engine_with(
             model,
             self.backend,

@@ -98,7 +98,6 @@ pub fn sweep(a: SweepArgs) -> anyhow::Result<ExitCode> {
         );
         return Ok(ExitCode::SUCCESS);
     }
-    a.gpu.check_asked().map_err(anyhow::Error::msg)?;
     let precision = a.precision.unwrap_or(a.backend.default_precision());
     let backend = match a.backend {
         Backend::Auto => {

@@ -79,6 +79,9 @@ struct StepKernel {
     kernel: Kernel,
     threads: u32,
     geometry: Option<tiles::TileGeometry>,
+    /// Bulk forces by 2×2 patches (`GpuOptions::bond_patches`, on a kernel
+    /// that has them).
+    bond_patches: bool,
 }
 
 impl StepKernel {
@@ -100,9 +103,7 @@ impl StepKernel {
             // its limit: one junction lane a round there.
             constants.push(("TWO_LANES_A_ROUND", !software as u8 as f64));
         }
-        if self.kernel.has_bond_patches() {
-            constants.push(("BOND_PATCHES", opts.bond_patches as u8 as f64));
-        }
+        constants.push(("BOND_PATCHES", self.bond_patches as u8 as f64));
         if self.kernel == Kernel::Resident {
             constants.push(("RESIDENT_BLOCKS", blocks as f64));
             constants.push(("REDUCTION_WIDTH", resident_reduction_width::<T>() as f64));
@@ -118,7 +119,9 @@ impl StepKernel {
 
     /// Workgroups of a step dispatch in x and y (z: the scenes): a tile
     /// each for the tiled kernel; else a workgroup per interface block's
-    /// junctions (one-step-lanes) and one per `WORKGROUP` blocks.
+    /// junctions (one-step-lanes) and one per `WORKGROUP` blocks (one-step
+    /// with patches: per `WORKGROUP` threads of the interface row's blocks
+    /// and the 2×2 patches above it).
     fn groups(&self, model: &Model) -> (u32, u32) {
         if let Some(g) = self.geometry {
             return (g.tiles, 1);
@@ -129,6 +132,14 @@ impl StepKernel {
             }
             _ => 0,
         };
+        if self.bond_patches {
+            // The interface row a thread a block (unless junction
+            // workgroups step it), then the patches (step_patches.wgsl).
+            let (nx, nz) = (model.nx as u32, model.nz as u32);
+            let patches = nx.div_ceil(2) * (nz - 1).div_ceil(2);
+            let row = if junction_groups > 0 { 0 } else { nx };
+            return groups_for(junction_groups + (row + patches).div_ceil(WORKGROUP));
+        }
         // With junction workgroups, the others start at the first block of
         // the workgroup-sized run that holds block nx (one_step_lanes.wgsl).
         let first_plain = if junction_groups > 0 {
@@ -192,6 +203,8 @@ pub struct GpuEngine<T: GpuReal = f32> {
     ctx: GpuContext,
     buffers: Buffers,
     kernel: Kernel,
+    /// Its bulk forces by 2×2 patches (`GpuOptions::bond_patches`).
+    bond_patches: bool,
     pipeline: wgpu::ComputePipeline,
     /// The tiled kernel's tiles and its halo gather, dispatched before
     /// each of its dispatches.
@@ -449,6 +462,7 @@ impl<T: GpuReal> GpuEngine<T> {
             kernel,
             threads: persistent_threads,
             geometry,
+            bond_patches: opts.bond_patches,
         };
         let constants = step_kernel.constants::<T>(&variant, opts, shape.blocks, ctx.is_software());
         // One module (and one compiled pipeline) for the one-step kernels.
@@ -497,6 +511,7 @@ impl<T: GpuReal> GpuEngine<T> {
             ctx,
             buffers,
             kernel,
+            bond_patches: step_kernel.bond_patches,
             pipeline,
             tiles,
             state_group,
@@ -594,7 +609,10 @@ impl<T: GpuReal> GpuEngine<T> {
         let models: Vec<Model> = self.scenes.iter().map(|s| s.model.clone()).collect();
         let model = &models[0];
         let stride = (!persistent).then_some(record_entry_stride(self.offset_stride));
-        let steps_sum_kinetic = matches!(self.kernel, Kernel::OneStep | Kernel::OneStepLanes);
+        // The patched one-step kernel has no recording variant: the output
+        // kernels sum its samples' kinetic energy (one_step.wgsl).
+        let steps_sum_kinetic =
+            matches!(self.kernel, Kernel::OneStep | Kernel::OneStepLanes) && !self.bond_patches;
         let checks = self.build.checks;
         match recorder::Recorder::new(
             &self.ctx,

@@ -130,35 +130,15 @@ pub struct GpuOptions {
     /// `compile::ShaderChecks`): the same bits, more instructions.
     /// false (the default): the kernels as written (`--gpu-shader-checks`).
     pub shader_checks: bool,
-    /// The persistent, resident and tiled kernels compute the bulk forces
-    /// by 2×2 patches of blocks, a thread each, every bond inside a patch
-    /// once (`bulk_patch.wgsl`): 26 bonds' work a patch where a thread per
+    /// The kernels compute the bulk forces by 2×2 patches of blocks, a
+    /// thread each, every bond inside a patch once (`bulk_patch.wgsl`; the
+    /// one-step kernels' interface row keeps a thread per block): 26 bonds' work a patch where a thread per
     /// block does 32, on a quarter of the threads. The same arithmetic; the
     /// forces agree to their last bits, not always to the bit (lavapipe's
     /// mixed f32: `tests/gpu_bond_patches.rs`). false (the default): a thread
     /// per block; `auto` on hardware times both (`--gpu-bond-patches`
     /// fixes it on).
     pub bond_patches: bool,
-}
-
-impl GpuOptions {
-    /// What a user asked for, checked before any kernel is chosen:
-    /// `bond_patches` with a `--gpu-path` that names a kernel without
-    /// patches would do nothing, so it is refused, naming both. (With
-    /// `auto` or `measure` they apply wherever the chosen kernel has them.)
-    pub fn check_asked(&self) -> Result<(), String> {
-        let kernel = Kernel::ALL
-            .into_iter()
-            .find(|&k| GpuPath::of(k) == self.path);
-        match kernel {
-            Some(k) if self.bond_patches && !k.has_bond_patches() => Err(format!(
-                "--gpu-bond-patches: --gpu-path {} computes a thread's own block's bonds \
-                 and has no patches (allowed with: persistent, resident, tiled, auto, measure)",
-                self.path.name()
-            )),
-            _ => Ok(()),
-        }
-    }
 }
 
 impl Default for GpuOptions {
@@ -327,40 +307,6 @@ pub fn choose_kernel(path: GpuPath, software: bool) -> Kernel {
 mod tests {
     use super::*;
     use crate::model::scenario::{Scenario, DEFAULT_SCENARIO};
-
-    /// Patches asked for on a kernel without them are refused, naming the
-    /// flag, the path and the paths allowed; elsewhere they pass.
-    #[test]
-    fn bond_patches_on_a_kernel_without_them_are_refused() {
-        let asked = |path| GpuOptions {
-            path,
-            bond_patches: true,
-            ..GpuOptions::default()
-        };
-        for path in [GpuPath::OneStep, GpuPath::OneStepLanes] {
-            let e = asked(path).check_asked().unwrap_err();
-            assert!(e.contains("--gpu-bond-patches"), "{e}");
-            assert!(e.contains(&format!("--gpu-path {}", path.name())), "{e}");
-            assert!(
-                e.contains("allowed with: persistent, resident, tiled"),
-                "{e}"
-            );
-        }
-        for path in [
-            GpuPath::Auto,
-            GpuPath::Measure,
-            GpuPath::Persistent,
-            GpuPath::Resident,
-            GpuPath::Tiled,
-        ] {
-            assert_eq!(asked(path).check_asked(), Ok(()));
-        }
-        let plain = GpuOptions {
-            path: GpuPath::OneStep,
-            ..GpuOptions::default()
-        };
-        assert_eq!(plain.check_asked(), Ok(()));
-    }
 
     /// The tests' list of kernel paths is every kernel, once, in order.
     #[test]

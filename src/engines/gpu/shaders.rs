@@ -61,6 +61,7 @@ wgsl_files!(
     "state_resident",
     "state_tiled",
     "step_forces",
+    "step_patches",
     "tiled",
     "verlet",
 );
@@ -278,13 +279,6 @@ impl Kernel {
     /// kernel's loop, with its state in storage or workgroup memory.
     pub fn is_persistent(self) -> bool {
         matches!(self, Kernel::Persistent | Kernel::Resident)
-    }
-
-    /// Can compute its bulk forces by 2×2 patches of blocks
-    /// (`bulk_patch.wgsl`, `GpuOptions::bond_patches`): the kernels whose
-    /// force phase is a loop of its own, before a barrier.
-    pub fn has_bond_patches(self) -> bool {
-        matches!(self, Kernel::Persistent | Kernel::Resident | Kernel::Tiled)
     }
 
     /// Merges its junction lanes' sums through storage (`lane_partials.wgsl`),

@@ -80,7 +80,6 @@ pub struct Launch {
     pub lanes_in_storage: bool,
     /// Bulk forces by 2×2 patches of blocks (`GpuOptions::bond_patches`):
     /// the same forces to their last bits, another split of the work.
-    /// Only for the kernels that have them (`Kernel::has_bond_patches`).
     pub bond_patches: bool,
 }
 
@@ -174,9 +173,6 @@ impl Launch {
             launch.lanes_in_storage = true;
         }
         if rest.next_if(|p| *p == BOND_PATCHES).is_some() {
-            if !launch.kernel.has_bond_patches() {
-                return None;
-            }
             launch.bond_patches = true;
         }
         rest.next().is_none().then_some(launch)

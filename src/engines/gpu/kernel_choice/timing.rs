@@ -11,6 +11,7 @@ use crate::engines::gpu::tiles::{TileShape, HALOS_SEARCHED, WIDTHS_SEARCHED};
 use crate::engines::gpu::GpuEngine;
 use crate::engines::{EngineError, EngineState};
 use crate::model::Model;
+use std::cell::Cell;
 use std::time::Instant;
 
 /// Steps run before timing: the pipeline is compiled and warm.
@@ -178,9 +179,8 @@ pub fn search_tile_shapes(
 /// kernel's other tile shapes (`search_tile_shapes`, unless the options
 /// fix the shape), then the fastest launch whose lanes merged in subgroups
 /// with every lane's sum through storage instead (unless the options fix
-/// that), then the fastest launch of the persistent, resident and tiled
-/// kernels with its bulk forces by patches (unless the options fix them
-/// on), and takes the fastest. A launch that cannot be built
+/// that), then the fastest launch so far with its bulk forces by patches
+/// (unless the options fix them on), and takes the fastest. A launch that cannot be built
 /// (a buffer too large, a lattice beyond workgroup memory, a device error)
 /// is skipped with its reason; if none can, the first error is returned.
 pub fn measure<T: GpuReal>(
@@ -205,11 +205,16 @@ pub fn measure_within<T: GpuReal>(
     // One-step (always a candidate, first) steps the load phase.
     let (start, phase) = driving_start::<T>(models, ctx, opts, launches[0], budget);
     // Every launch is timed here: a failure is listed as skipped, and the
-    // first one is the error if none runs.
+    // first one is the error if none runs. The fastest so far is kept
+    // apart (the closure holds `timings`).
+    let fastest = Cell::new(None);
     let mut time =
         |launch: Launch| match time_launch::<T>(models, ctx, opts, launch, start.as_deref()) {
             Ok(timed) => {
                 timings.push((launch, timed.seconds));
+                let mut best = fastest.get();
+                keep_faster(&mut best, launch, timed.seconds);
+                fastest.set(best);
                 Some(timed)
             }
             Err(e) => {
@@ -228,39 +233,29 @@ pub fn measure_within<T: GpuReal>(
         Some(timed.seconds)
     };
     let mut tiled_best: Option<(Launch, f64)> = None;
-    // The fastest launch of a kernel that can compute its forces by
-    // patches (persistent, resident, tiled).
-    let mut patchable_best: Option<(Launch, f64)> = None;
     for launch in launches {
         if let Some(s) = time_noting_merges(launch) {
             if launch.kernel == Kernel::Tiled {
                 keep_faster(&mut tiled_best, launch, s);
             }
-            if launch.kernel.has_bond_patches() {
-                keep_faster(&mut patchable_best, launch, s);
-            }
         }
     }
     // The tile's shape is searched unless the options fix it.
     if let Some(best) = tiled_best.filter(|_| opts.tile.is_none()) {
-        let (shaped, s) = search_tile_shapes(best, &mut time_noting_merges);
-        keep_faster(&mut patchable_best, shaped, s);
+        search_tile_shapes(best, &mut time_noting_merges);
     }
     // Where the lanes merge: the same tree of sums either way, and
     // subgroup merges have no hardware figure yet. Only the fastest launch
     // that used them is timed without (another pipeline to compile).
     let fastest_shuffled = shuffled.iter().min_by(|a, b| a.1.total_cmp(&b.1));
     if let Some(&(launch, _)) = fastest_shuffled {
-        let in_storage = launch.with_lanes_in_storage();
-        if let Some(timed) = time(in_storage).filter(|_| launch.kernel.has_bond_patches()) {
-            keep_faster(&mut patchable_best, in_storage, timed.seconds);
-        }
+        time(launch.with_lanes_in_storage());
     }
-    // The bulk forces by patches, on the fastest launch that can have them
-    // (unless the options fix them on): the same forces to their last
-    // bits, and no hardware figure yet says whether a quarter of the
-    // threads doing 26 bonds' work each beats all of them doing 8.
-    if let Some((launch, _)) = patchable_best.filter(|_| !opts.bond_patches) {
+    // The bulk forces by patches, on the fastest launch so far (unless
+    // the options fix them on): the same forces to their last bits, and
+    // no hardware figure yet says whether a quarter of the threads doing
+    // 26 bonds' work each beats all of them doing 8.
+    if let Some((launch, _)) = fastest.get().filter(|_| !opts.bond_patches) {
         time(launch.with_bond_patches());
     }
     let Some(&(launch, _)) = timings.iter().min_by(|a, b| a.1.total_cmp(&b.1)) else {
