@@ -70,11 +70,12 @@ step bits 90 gpu_ensemble --test-threads 1
 # 3. The ensemble target's launches with and without bond patches, at 1 and 256 scenes:
 #    a 256-scene step well under twice the one-scene step means workgroups share an SM.
 step ensembles 150 with SLIPFRONT_GPU_TABLE_SECTIONS=3 SLIPFRONT_GPU_TABLE_SCENES=1,256 \
-  SLIPFRONT_GPU_TABLE_LAUNCHES=persistent/1024,resident/256,resident/512,resident/1024,resident/1024/bond-patches,persistent/1024/bond-patches \
+  SLIPFRONT_GPU_TABLE_LAUNCHES=persistent/1024,resident/256,resident/512,resident/1024,resident/1024/bond-patches,persistent/1024/bond-patches,one-step,one-step/bond-patches \
   gpu_table
 # 4. Table S1 per kernel: kept sums, lane shuffles, run-time checks, bond patches.
 step junctions 150 with SLIPFRONT_GPU_TABLE_SECTIONS=7 gpu_table
-# 5. Kernels against lattice size, and Table S1's thread counts and tile shapes.
+# 5. Kernels against lattice size (the one-step kernels with and without bond patches),
+#    and Table S1's thread counts and tile shapes.
 step kernels 200 with SLIPFRONT_GPU_TABLE_SECTIONS=1,2 gpu_table
 # 6. Accuracy: the GPU kernels' perturbation ensembles against CPU f64.
 step precision 300 gpu_precision

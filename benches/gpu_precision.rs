@@ -32,8 +32,7 @@
 //!   (seconds of driving, default the scene's 0.3),
 //!   `SLIPFRONT_GPU_PRECISION_JUNCTIONS` (Ns, default 32);
 //! - `SLIPFRONT_GPU_PRECISION_BOND_PATCHES=1`: the GPU ensembles with their
-//!   bulk forces by 2×2 patches of blocks (`--gpu-bond-patches`: the
-//!   persistent, resident and tiled kernels; the others as they are);
+//!   bulk forces by 2×2 patches of blocks (`--gpu-bond-patches`);
 //! - `SLIPFRONT_GPU_PRECISION_F64=0`: no GPU f64 ensemble (by default one
 //!   runs where the adapter has f64: on lavapipe another 20 to 50 minutes);
 //! - `SLIPFRONT_GPU_PRECISION_QUICK=1`: 8 runs of 0.03 s, `auto` only, for a

@@ -10,10 +10,8 @@
 // are in that variant only.
 // With BOND_PATCHES (GpuOptions::bond_patches) the threads step the
 // interface row a block each and the rows above by 2×2 patches
-// (step_patches.wgsl); that variant has no recording form.
+// (step_patches.wgsl), and a workgroup's partial holds its threads' items.
 // import: common, record_kinetic, scene, step_forces, step_patches, verlet
-
-override RECORD_KINETIC: bool = false;
 
 @compute @workgroup_size(WORKGROUP)
 fn one_step(
@@ -24,7 +22,13 @@ fn one_step(
     enter_scene(wid.z);
     let g = wid.x + wid.y * groups.x;
     if BOND_PATCHES {
-        step_by_patches(g * WORKGROUP + local);
+        let kinetic = step_by_patches(g * WORKGROUP + local);
+        if RECORD_KINETIC {
+            let total = sum_kinetic(local, kinetic);
+            if local == 0u && g < plans[scene].partials {
+                write_kinetic_partial(g, total);
+            }
+        }
         return;
     }
     let i = g * WORKGROUP + local;

@@ -12,18 +12,16 @@
 // the other workgroups start at block WORKGROUP·⌊nx/WORKGROUP⌋, so that
 // each covers the blocks of one output partial (record_kinetic.wgsl),
 // whose kinetic energy the recording variant (RECORD_KINETIC) sums as in
-// one_step. With BOND_PATCHES the other workgroups step the rows above the
-// interface by 2×2 patches (step_patches.wgsl; without junctions, the
-// interface row a block a thread first), a thread each; that variant has
-// no recording form.
+// one_step. With BOND_PATCHES the other workgroups step the items of
+// step_patches.wgsl from the same run of WORKGROUP (without junctions,
+// from the first: the interface row a block a thread), so that each
+// covers one output partial's items.
 // CPU twin: src/engines/cpu/mod.rs CpuEngine::one_step (force pass and update).
 // import: bulk_forces, common, coordinates, junctions, record_kinetic, scene, state, step_forces, step_patches, verlet
 
 var<workgroup> lane_sum: array<LaneSum, JUNCTION_LANES>;
 // The interface block's bulk force, from the last lane to thread 0.
 var<workgroup> interface_bulk: vec2<real>;
-
-override RECORD_KINETIC: bool = false;
 
 @compute @workgroup_size(WORKGROUP)
 fn one_step_lanes(
@@ -100,10 +98,21 @@ fn one_step_lanes(
         }
     }
     if BOND_PATCHES {
-        if FRICTION_LAW != LAW_JUNCTIONS {
-            step_by_patches(w * WORKGROUP + local);
-        } else if !junction_group {
-            step_by_patches(c.nx + (w - c.nx) * WORKGROUP + local);
+        var g = w;
+        if FRICTION_LAW == LAW_JUNCTIONS {
+            g = c.nx / WORKGROUP + (w - c.nx);
+        }
+        // The interface blocks' items are the junction workgroups'.
+        let t = g * WORKGROUP + local;
+        var kinetic = real(0.0);
+        if !junction_group && (FRICTION_LAW != LAW_JUNCTIONS || t >= c.nx) {
+            kinetic = step_by_patches(t);
+        }
+        if RECORD_KINETIC {
+            let total = sum_kinetic(local, kinetic);
+            if local == 0u && !junction_group && g < plans[scene].partials {
+                write_kinetic_partial(g, total);
+            }
         }
         return;
     }

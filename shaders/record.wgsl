@@ -14,7 +14,7 @@
 // the next samples. Workgroup row z of every dispatch records scene z (all
 // scenes of an ensemble at once, in their own regions of the buffers).
 // The shared part is record_common.wgsl. CPU twin: src/engines/sample.rs record_sample.
-// import: coordinates, record_buffers, record_common, scene
+// import: coordinates, patch_items, record_buffers, record_common, scene
 
 @group(0) @binding(1) var<storage, read> disp_a: array<Disp>;
 @group(0) @binding(2) var<storage, read> vel_a: array<vec2<real>>;
@@ -162,18 +162,47 @@ fn record_sample(
 }
 
 // Partial g of the sample: every sum of its blocks, reduced across the
-// workgroup (a thread per block).
+// workgroup (a thread per block; where the one-step kernels step by
+// patches, a thread per item of theirs, as their partials hold).
 fn write_partial(local: u32, g: u32) {
-    let i = g * WORKGROUP + local;
+    let t = g * WORKGROUP + local;
     var s = no_sums();
-    if i < c.n_blocks {
-        s = block_of_entry(i);
+    if plans[scene].partials_by_patches != 0u {
+        s = item_of_entry(t);
+    } else if t < c.n_blocks {
+        s = block_of_entry(t);
     }
     wg_sums[local] = s;
     reduce_workgroup(local, WORKGROUP);
     if local == 0u {
         sums[plans[scene].partials_offset + g] = wg_sums[0];
     }
+}
+
+// Item t of patch_items.wgsl: interface block t, or the blocks of a 2×2
+// patch in patch order (a, b, c, d), as step_by_patches sums their
+// kinetic energy.
+fn item_of_entry(t: u32) -> SampleSums {
+    if t < c.nx {
+        return block_of_entry(t);
+    }
+    let origin = patch_item_origin(t, c.nx);
+    if origin.y >= c.nz {
+        return no_sums();
+    }
+    let i = origin.y * c.nx + origin.x;
+    let has_b = origin.x + 1u < c.nx;
+    var s = block_of_entry(i);
+    if has_b {
+        s = combine(s, block_of_entry(i + 1u));
+    }
+    if origin.y + 1u < c.nz {
+        s = combine(s, block_of_entry(i + c.nx));
+        if has_b {
+            s = combine(s, block_of_entry(i + c.nx + 1u));
+        }
+    }
+    return s;
 }
 
 // The partials that hold blocks adding more than kinetic energy (the

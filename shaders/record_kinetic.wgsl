@@ -11,6 +11,9 @@
 
 var<workgroup> wg_kinetic: array<real, WORKGROUP>;
 
+// The one-step kernels' recording variant (set on its pipeline only).
+override RECORD_KINETIC: bool = false;
+
 fn no_sums() -> SampleSums {
     var s: SampleSums;
     s.min_pinned = 3.0e38;

@@ -4,41 +4,45 @@
 // it once (bulk_patch.wgsl), then the patch's four leapfrog updates; the
 // interface row keeps a thread per block, whose junction walk a patch would
 // double. A quarter of the threads for the bulk: the large lattices'
-// variant, where threads are plenty. It has no recording form
-// (RECORD_KINETIC sums a workgroup's consecutive blocks): the output
-// kernels sum its samples' kinetic energy (record_sample), so a run steps
-// the same with or without output.
+// variant, where threads are plenty. A sample's partials follow the
+// threads (patch_items.wgsl): the recording variant (RECORD_KINETIC) sums
+// the kinetic energy of a workgroup's items, and the output kernels the
+// same items' sums.
 // CPU twin: src/engines/kernels/bulk_forces.rs bulk_force_patch (the
 // forces), src/engines/kernels/verlet.rs verlet (the update).
-// import: bulk_patch, common, scene, state, step_forces, verlet
+// import: bulk_patch, common, patch_items, record_kinetic, scene, state, step_forces, verlet
 
 override BOND_PATCHES: bool = false;
 
-// Thread t of the one-step kernels' patched variant: below nx, interface
-// block t as in one_step (its junction walk stays one block long; in
-// one_step_lanes the junction workgroups step the interface row and call
-// this from t = nx on); then the 2×2 patches of rows 1 and up, row by row
-// (an even row count leaves the top row in half patches).
-fn step_by_patches(t: u32) {
+// Thread t of the one-step kernels' patched variant, item t of
+// patch_items.wgsl: interface block t as in one_step (its junction walk
+// stays one block long; one_step_lanes' junction workgroups step the
+// interface row, and its other threads start past it), or a patch.
+// Returns the item's kinetic energy at the step's instant, its blocks in
+// patch order (RECORD_KINETIC; zero otherwise).
+fn step_by_patches(t: u32) -> real {
+    var kinetic = real(0.0);
     if scene_stopped() {
-        return;
+        return kinetic;
     }
     let ld = loads_at(step_offset);
     let ready = batch.forces_ready != 0u && step_offset == 0u;
     let update = batch.forces_only == 0u;
     if t < c.nx {
         let ff = block_forces(t, ld, ready);
+        if RECORD_KINETIC {
+            kinetic = bulk_kinetic(t, load_vel(t), ff.xy);
+        }
         if update {
             verlet(t, t, 0u, ff.xy, ff.z, ld, step_offset);
         }
-        return;
+        return kinetic;
     }
-    let columns = (c.nx + 1u) / 2u;
-    let p = t - c.nx;
-    let x0 = 2u * (p % columns);
-    let z0 = 1u + 2u * (p / columns);
+    let origin = patch_item_origin(t, c.nx);
+    let x0 = origin.x;
+    let z0 = origin.y;
     if z0 >= c.nz {
-        return;
+        return kinetic;
     }
     let has_b = x0 + 1u < c.nx;
     let has_c = z0 + 1u < c.nz;
@@ -69,8 +73,20 @@ fn step_by_patches(t: u32) {
             }
         }
     }
+    if RECORD_KINETIC {
+        kinetic = bulk_kinetic(i, load_vel(i), f.a);
+        if has_b {
+            kinetic += bulk_kinetic(i + 1u, load_vel(i + 1u), f.b);
+        }
+        if has_c {
+            kinetic += bulk_kinetic(i + c.nx, load_vel(i + c.nx), f.c);
+            if has_b {
+                kinetic += bulk_kinetic(i + c.nx + 1u, load_vel(i + c.nx + 1u), f.d);
+            }
+        }
+    }
     if !update {
-        return;
+        return kinetic;
     }
     // Blocks above the interface have no friction.
     verlet(i, x0, z0, f.a, 0.0, ld, step_offset);
@@ -83,4 +99,5 @@ fn step_by_patches(t: u32) {
             verlet(i + c.nx + 1u, x0 + 1u, z0 + 1u, f.d, 0.0, ld, step_offset);
         }
     }
+    return kinetic;
 }

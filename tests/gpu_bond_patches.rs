@@ -145,13 +145,7 @@ fn assert_forces_agree<T: GpuReal>(set: &[&str], path: GpuPath) {
 #[test]
 fn bond_patches_give_the_forces_of_a_thread_per_block() {
     for set in [&[][..], &["geometry.nz=15", "geometry.height=0.035"][..]] {
-        for path in [
-            GpuPath::OneStep,
-            GpuPath::OneStepLanes,
-            GpuPath::Persistent,
-            GpuPath::Resident,
-            GpuPath::Tiled,
-        ] {
+        for path in GpuPath::KERNELS {
             assert_forces_agree::<f32>(set, path);
         }
     }

@@ -135,8 +135,9 @@ fn a_large_lattice_records_in_two_dispatches() {
     // its workgroups out differently (junction workgroups first).
     let side = large_lattice();
     let top = large_lattice_driven_at_the_top();
-    // The one-step kernels with bond patches have no recording variant:
-    // record_sample sums every partial there.
+    // The one-step kernels with bond patches sum their partials by their
+    // threads' items (interface blocks, then 2×2 patches): the top row's
+    // partials and the driven block's follow that layout.
     let runs = [
         ("side spring", &side, GpuPath::OneStep, false),
         ("side spring", &side, GpuPath::OneStepLanes, false),
@@ -148,6 +149,7 @@ fn a_large_lattice_records_in_two_dispatches() {
             GpuPath::OneStepLanes,
             true,
         ),
+        ("top velocity, bond patches", &top, GpuPath::OneStep, true),
     ];
     for (driver, s, path, bond_patches) in runs {
         let m = Model::from_scenario(s, false).unwrap();

@@ -298,12 +298,18 @@ gpu_struct! {
         /// Workgroups of `record_sample`, and where their partial sums go
         /// in the sums buffer.
         pub partials: u32,
+        /// 1: a partial holds the items of the one-step kernels' patched
+        /// threads (`shaders/patch_items.wgsl`), not `WORKGROUP`
+        /// consecutive blocks.
+        pub partials_by_patches: u32,
         pub partials_offset: u32,
         /// Word offsets of the interface rows and the bulk fields.
         pub interface_offset: u32,
         pub bulk_offset: u32,
         /// Where this scene's samples' sums start in the sums buffer.
         pub sums_offset: u32,
+        /// Unused: keeps both precisions free of padding.
+        pub reserved: u32,
     }
 }
 

@@ -133,12 +133,17 @@ impl StepKernel {
             _ => 0,
         };
         if self.bond_patches {
-            // The interface row a thread a block (unless junction
-            // workgroups step it), then the patches (step_patches.wgsl).
+            // The items of step_patches.wgsl: the interface row a thread a
+            // block, then the patches; with junction workgroups, from the
+            // run of WORKGROUP items that holds item nx (one_step_lanes.wgsl).
             let (nx, nz) = (model.nx as u32, model.nz as u32);
-            let patches = nx.div_ceil(2) * (nz - 1).div_ceil(2);
-            let row = if junction_groups > 0 { 0 } else { nx };
-            return groups_for(junction_groups + (row + patches).div_ceil(WORKGROUP));
+            let items = nx + nx.div_ceil(2) * (nz - 1).div_ceil(2);
+            let first = if junction_groups > 0 {
+                nx / WORKGROUP * WORKGROUP
+            } else {
+                0
+            };
+            return groups_for(junction_groups + (items - first).div_ceil(WORKGROUP));
         }
         // With junction workgroups, the others start at the first block of
         // the workgroup-sized run that holds block nx (one_step_lanes.wgsl).
@@ -222,6 +227,9 @@ pub struct GpuEngine<T: GpuReal = f32> {
     /// Steps the persistent kernel has been asked to run (mod 2³²).
     persistent_steps: u32,
     variant: Variant,
+    /// The step pipeline's override constants (its recording variant adds
+    /// `RECORD_KINETIC`).
+    constants: Vec<(&'static str, f64)>,
     /// Where the kernel's junction lanes merge first (`GpuOptions::lane_shuffle`)
     /// and which run-time checks its modules carry (`GpuOptions::shader_checks`).
     build: KernelBuild,
@@ -523,6 +531,7 @@ impl<T: GpuReal> GpuEngine<T> {
             steps_per_dispatch,
             persistent_steps: 0,
             variant,
+            constants,
             build,
             lane_levels: 0,
             current: 0,
@@ -609,10 +618,9 @@ impl<T: GpuReal> GpuEngine<T> {
         let models: Vec<Model> = self.scenes.iter().map(|s| s.model.clone()).collect();
         let model = &models[0];
         let stride = (!persistent).then_some(record_entry_stride(self.offset_stride));
-        // The patched one-step kernel has no recording variant: the output
-        // kernels sum its samples' kinetic energy (one_step.wgsl).
-        let steps_sum_kinetic =
-            matches!(self.kernel, Kernel::OneStep | Kernel::OneStepLanes) && !self.bond_patches;
+        let steps_sum_kinetic = matches!(self.kernel, Kernel::OneStep | Kernel::OneStepLanes);
+        // The one-step kernels' partials follow their patched threads.
+        let partials = recorder::Partials::of(model, steps_sum_kinetic && self.bond_patches);
         let checks = self.build.checks;
         match recorder::Recorder::new(
             &self.ctx,
@@ -621,6 +629,7 @@ impl<T: GpuReal> GpuEngine<T> {
             plan,
             stride,
             steps_sum_kinetic,
+            partials,
             checks,
         ) {
             Ok(mut rec) => {
@@ -632,7 +641,7 @@ impl<T: GpuReal> GpuEngine<T> {
                     self.state_group = state_group(&self.ctx, self.kernel, &self.buffers, records);
                 }
                 if rec.kinetic_in_steps() {
-                    let mut constants = self.variant.constants.clone();
+                    let mut constants = self.constants.clone();
                     constants.push(("RECORD_KINETIC", 1.0));
                     let pipeline = self.ctx.pipeline::<T>(self.kernel, self.build, &constants);
                     self.record_step = Some(pipeline);

@@ -101,26 +101,69 @@ fn words<T>(bytes: u64) -> u64 {
     bytes / size_of::<T>() as u64
 }
 
-/// The partials (workgroups of `WORKGROUP` blocks) of any of the scenes
-/// that hold a block adding more than kinetic energy to a sample: the
-/// interface row, the top row where the top reaction is summed, the
-/// driven block. In increasing order, each once (`record_special`).
-fn special_groups(models: &[Model]) -> Vec<u32> {
-    let m = &models[0];
-    let (n, nx) = (m.n_blocks() as u32, m.nx as u32);
-    let mut groups: Vec<u32> = (0..nx.div_ceil(WORKGROUP)).collect();
-    for m in models {
-        match m.driver {
-            Driver::TopVelocity { .. } => {
-                groups.extend((n - nx) / WORKGROUP..n.div_ceil(WORKGROUP))
-            }
-            Driver::SideSpring { row, .. } => groups.push((row * m.nx) as u32 / WORKGROUP),
-            _ => {}
+/// How a sample's partials split a lattice: each holds `WORKGROUP`
+/// consecutive blocks, or `WORKGROUP` items of the one-step kernels'
+/// patched threads (`shaders/patch_items.wgsl`: interface block t below
+/// nx, then the 2×2 patches of the rows above, ⌈nx/2⌉ a row).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Partials {
+    nx: u32,
+    nz: u32,
+    by_patches: bool,
+}
+
+impl Partials {
+    pub fn of(m: &Model, by_patches: bool) -> Partials {
+        Partials {
+            nx: m.nx as u32,
+            nz: m.nz as u32,
+            by_patches,
         }
     }
-    groups.sort_unstable();
-    groups.dedup();
-    groups
+
+    /// Blocks, or items.
+    fn items(self) -> u32 {
+        if self.by_patches {
+            self.nx + self.nx.div_ceil(2) * (self.nz - 1).div_ceil(2)
+        } else {
+            self.nx * self.nz
+        }
+    }
+
+    pub fn count(self) -> u32 {
+        self.items().div_ceil(WORKGROUP)
+    }
+
+    /// The partial that holds the block at `column` and `row`.
+    fn holding(self, column: u32, row: u32) -> u32 {
+        let item = if !self.by_patches || row == 0 {
+            row * self.nx + column
+        } else {
+            self.nx + (row - 1) / 2 * self.nx.div_ceil(2) + column / 2
+        };
+        item / WORKGROUP
+    }
+
+    /// The partials of any of the scenes that hold a block adding more
+    /// than kinetic energy to a sample: the interface row, the top row
+    /// where the top reaction is summed, the driven block. In increasing
+    /// order, each once (`record_special`).
+    fn special(self, models: &[Model]) -> Vec<u32> {
+        let (nx, nz) = (self.nx, self.nz);
+        let mut groups: Vec<u32> = (0..=self.holding(nx - 1, 0)).collect();
+        for m in models {
+            match m.driver {
+                Driver::TopVelocity { .. } => {
+                    groups.extend(self.holding(0, nz - 1)..=self.holding(nx - 1, nz - 1))
+                }
+                Driver::SideSpring { row, .. } => groups.push(self.holding(0, row as u32)),
+                _ => {}
+            }
+        }
+        groups.sort_unstable();
+        groups.dedup();
+        groups
+    }
 }
 
 impl<T: GpuReal> Recorder<T> {
@@ -130,8 +173,10 @@ impl<T: GpuReal> Recorder<T> {
     /// kernels), or None for the persistent kernel, which reads the
     /// entries as an array; `steps_sum_kinetic`: the step kernel has the
     /// recording variant (`RECORD_KINETIC`, the one-step kernels), which
-    /// a large lattice's samples then use; `checks`: the run-time checks
-    /// of the output kernels' module, as the step kernel's.
+    /// a large lattice's samples then use; `layout`: how the partials split
+    /// the lattice (as the step kernel's workgroups do); `checks`: the
+    /// run-time checks of the output kernels' module, as the step kernel's.
+    #[allow(clippy::too_many_arguments)]
     pub fn new(
         ctx: &GpuContext,
         models: &[Model],
@@ -139,6 +184,7 @@ impl<T: GpuReal> Recorder<T> {
         plan: &SamplePlan,
         stride: Option<u64>,
         steps_sum_kinetic: bool,
+        layout: Partials,
         checks: ShaderChecks,
     ) -> Result<Recorder<T>, String> {
         let stride_given = stride.is_some();
@@ -171,10 +217,10 @@ impl<T: GpuReal> Recorder<T> {
                 ctx.info.name
             ));
         }
-        let partials = (n as u32).div_ceil(WORKGROUP);
+        let partials = layout.count();
         let groups = (model.n_blocks() > RECORD_SMALL_BLOCKS).then(|| super::groups_for(partials));
         let kinetic_in_steps = groups.is_some() && stride_given && steps_sum_kinetic;
-        let special = special_groups(models);
+        let special = layout.special(models);
         let special_groups = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("record special groups"),
             contents: bytemuck::cast_slice(&special),
@@ -201,6 +247,8 @@ impl<T: GpuReal> Recorder<T> {
                     top_reaction: matches!(m.driver, Driver::TopVelocity { .. }) as u32,
                     junctions_per_block: (m.n_junctions() / m.nx.max(1)) as u32,
                     partials,
+                    partials_by_patches: layout.by_patches as u32,
+                    reserved: 0,
                     sums_offset: (k * sums_per_scene) as u32,
                     partials_offset: (k * sums_per_scene) as u32 + max_entries,
                     interface_offset: words::<T>(k * rows_per_scene) as u32,
@@ -635,5 +683,67 @@ impl<T: GpuReal> Recorder<T> {
             });
         }
         samples
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The first block (column, row) of the one-step kernels' patch item
+    /// `t` ≥ nx on a lattice `nx` wide (`shaders/patch_items.wgsl`, the
+    /// same name; the host needs only its inverse, `Partials::holding`);
+    /// its row is nz or more past the last patch.
+    fn patch_item_origin(t: u32, nx: u32) -> (u32, u32) {
+        let columns = nx.div_ceil(2);
+        let p = t - nx;
+        (2 * (p % columns), 1 + 2 * (p / columns))
+    }
+
+    /// Every block of odd and even lattices lies in one item of the
+    /// patched layout (patch_item_origin), and `Partials::holding` names
+    /// that item's partial; the plain layout holds WORKGROUP consecutive
+    /// blocks.
+    #[test]
+    fn partials_by_patches_hold_each_block_once() {
+        for (nx, nz) in [(57, 31), (256, 128), (15, 8), (130, 1), (3, 2)] {
+            let by_patches = Partials {
+                nx,
+                nz,
+                by_patches: true,
+            };
+            let mut seen = vec![0u32; (nx * nz) as usize];
+            let mut partial_of = vec![u32::MAX; (nx * nz) as usize];
+            for t in 0..by_patches.items() {
+                let blocks: Vec<(u32, u32)> = if t < nx {
+                    vec![(t, 0)]
+                } else {
+                    let (x0, z0) = patch_item_origin(t, nx);
+                    [(0, 0), (1, 0), (0, 1), (1, 1)]
+                        .iter()
+                        .map(|&(dx, dz)| (x0 + dx, z0 + dz))
+                        .filter(|&(x, z)| x < nx && z < nz)
+                        .collect()
+                };
+                assert!(!blocks.is_empty(), "{nx}×{nz}: item {t} is empty");
+                for (x, z) in blocks {
+                    seen[(z * nx + x) as usize] += 1;
+                    partial_of[(z * nx + x) as usize] = t / WORKGROUP;
+                }
+            }
+            assert!(seen.iter().all(|&n| n == 1), "{nx}×{nz}: {seen:?}");
+            for z in 0..nz {
+                for x in 0..nx {
+                    assert_eq!(by_patches.holding(x, z), partial_of[(z * nx + x) as usize]);
+                }
+            }
+            assert!(by_patches.count() * WORKGROUP >= by_patches.items());
+            let plain = Partials {
+                by_patches: false,
+                ..by_patches
+            };
+            assert_eq!(plain.holding(nx - 1, nz - 1), (nx * nz - 1) / WORKGROUP);
+            assert_eq!(plain.count(), (nx * nz).div_ceil(WORKGROUP));
+        }
     }
 }

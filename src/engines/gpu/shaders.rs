@@ -48,6 +48,7 @@ wgsl_files!(
     "lane_shuffle",
     "one_step",
     "one_step_lanes",
+    "patch_items",
     "persistent",
     "record",
     "record_buffers",
