@@ -21,19 +21,11 @@ fn one_step(
 ) {
     enter_scene(wid.z);
     let g = wid.x + wid.y * groups.x;
-    if BOND_PATCHES {
-        let kinetic = step_by_patches(g * WORKGROUP + local);
-        if RECORD_KINETIC {
-            let total = sum_kinetic(local, kinetic);
-            if local == 0u && g < plans[scene].partials {
-                write_kinetic_partial(g, total);
-            }
-        }
-        return;
-    }
     let i = g * WORKGROUP + local;
     var kinetic = real(0.0);
-    if i < c.n_blocks && !scene_stopped() {
+    if BOND_PATCHES {
+        kinetic = step_by_patches(i);
+    } else if i < c.n_blocks && !scene_stopped() {
         let ld = loads_at(step_offset);
         let ready = batch.forces_ready != 0u && step_offset == 0u;
         let ff = block_forces(i, ld, ready);
@@ -51,4 +43,3 @@ fn one_step(
         }
     }
 }
-

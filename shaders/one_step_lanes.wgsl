@@ -97,34 +97,20 @@ fn one_step_lanes(
             }
         }
     }
-    if BOND_PATCHES {
-        var g = w;
-        if FRICTION_LAW == LAW_JUNCTIONS {
-            g = c.nx / WORKGROUP + (w - c.nx);
-        }
-        // The interface blocks' items are the junction workgroups'.
-        let t = g * WORKGROUP + local;
-        var kinetic = real(0.0);
-        if !junction_group && (FRICTION_LAW != LAW_JUNCTIONS || t >= c.nx) {
-            kinetic = step_by_patches(t);
-        }
-        if RECORD_KINETIC {
-            let total = sum_kinetic(local, kinetic);
-            if local == 0u && !junction_group && g < plans[scene].partials {
-                write_kinetic_partial(g, total);
-            }
-        }
-        return;
-    }
-    // The bulk workgroups: partial g's blocks, less the interface's.
+    // The bulk workgroups: partial g's blocks (with patches, its items),
+    // less the interface's.
     var g = w;
     if FRICTION_LAW == LAW_JUNCTIONS {
         g = c.nx / WORKGROUP + (w - c.nx);
     }
     let i = g * WORKGROUP + local;
     var kinetic = real(0.0);
-    let bulk = !junction_group && i < c.n_blocks && (FRICTION_LAW != LAW_JUNCTIONS || i >= c.nx);
-    if bulk {
+    let not_interface = FRICTION_LAW != LAW_JUNCTIONS || i >= c.nx;
+    if BOND_PATCHES {
+        if !junction_group && not_interface {
+            kinetic = step_by_patches(i);
+        }
+    } else if !junction_group && i < c.n_blocks && not_interface {
         let ff = block_forces(i, ld, ready);
         if RECORD_KINETIC {
             kinetic = bulk_kinetic(i, load_vel(i), ff.xy);
