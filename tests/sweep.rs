@@ -2,6 +2,8 @@
 //! rerun finishes with the table of one that never stopped; shards (local
 //! and as a real Slurm job array) collect into the same table.
 
+use slipfront::engines::gpu::kernel_choice::Launch;
+use slipfront::engines::gpu::GpuPath;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
@@ -512,11 +514,22 @@ fn a_measured_sweep_runs_every_point_on_the_kernel_timed_on_its_ensemble() {
     }
     let cached = std::fs::read_to_string(cache.join("gpu-kernels.tsv")).unwrap();
     assert!(cached.contains("| ensemble of 4 |"), "{cached}");
-    // `resident/512` is `--gpu-path resident --gpu-threads 512`.
-    let mut named_args = vec!["--ensemble", "1", "--quiet", "--gpu-path"];
-    match chosen.split_once('/') {
-        Some((kernel, threads)) => named_args.extend([kernel, "--gpu-threads", threads]),
-        None => named_args.push(&chosen),
+    // `resident/512/bond-patches` is `--gpu-path resident --gpu-threads
+    // 512 --gpu-bond-patches` (a tile shape is `--gpu-tile`).
+    let launch = Launch::named(&chosen).unwrap_or_else(|| panic!("a launch's name: {chosen}"));
+    assert!(!launch.lanes_in_storage, "no flag runs {chosen}");
+    let path = GpuPath::of(launch.kernel).name();
+    let threads = launch.threads.map(|t| t.to_string());
+    let tile = launch.tile.map(|t| t.name());
+    let mut named_args = vec!["--ensemble", "1", "--quiet", "--gpu-path", &path];
+    if let Some(threads) = &threads {
+        named_args.extend(["--gpu-threads", threads]);
+    }
+    if let Some(tile) = &tile {
+        named_args.extend(["--gpu-tile", tile]);
+    }
+    if launch.bond_patches {
+        named_args.push("--gpu-bond-patches");
     }
     let (named, _) = run("named", &named_args);
     assert_eq!(measured, named, "every point ran {chosen}");
