@@ -60,8 +60,8 @@ fn measure_times_every_candidate_takes_the_fastest_and_caches_it() {
     let (opts, choice) = resolve::<f32>(&m, &ctx, options(GpuPath::Measure), &cache).unwrap();
     let choice = choice.expect("measure always measures");
     assert_eq!(choice.source, ChoiceSource::Measured);
-    // Last, the fastest persistent, resident or tiled launch is timed
-    // again with its bulk forces by patches of blocks.
+    // Last, the fastest launch is timed again with its bulk forces by
+    // patches of blocks.
     type Timed = (Launch, f64);
     let (patched, unpatched): (Vec<Timed>, Vec<Timed>) =
         choice.timings.iter().partition(|t| t.0.bond_patches);
@@ -69,7 +69,6 @@ fn measure_times_every_candidate_takes_the_fastest_and_caches_it() {
     assert_eq!(choice.timings.last(), patched.first());
     let fastest_patched = unpatched
         .iter()
-        .filter(|t| t.0.kernel.is_persistent() || t.0.kernel == Kernel::Tiled)
         .min_by(|a, b| a.1.total_cmp(&b.1))
         .map(|t| t.0.with_bond_patches());
     assert_eq!(fastest_patched, Some(patched[0].0));

@@ -13,7 +13,7 @@
 
 use super::{Point, SweepOptions, DEFAULT_ENSEMBLE};
 use crate::engines::backend::{Backend, Precision};
-use crate::engines::gpu::kernel_choice::{lattice_key, resolve_scenes, ChoiceCache};
+use crate::engines::gpu::kernel_choice::{lattice_key, resolve_scenes, ChoiceCache, Launch};
 use crate::engines::gpu::options::without_measuring;
 use crate::engines::gpu::{context, GpuEngine, GpuOptions, GpuPath};
 use crate::model::Model;
@@ -21,8 +21,9 @@ use crate::model::Model;
 /// The measured kernel of each lattice shape of a sweep.
 #[derive(Debug, Default)]
 pub struct SweepKernels {
-    /// (`lattice_key`, kernel, threads) per shape measured.
-    chosen: Vec<(String, GpuPath, Option<u32>)>,
+    /// (`lattice_key`, the launch timed fastest) per shape measured: its
+    /// kernel, threads, tile shape, lanes and patches.
+    chosen: Vec<(String, Launch)>,
     software: bool,
     /// What was measured, a line per shape (for the sweep's log).
     pub report: Vec<String>,
@@ -67,10 +68,8 @@ impl SweepKernels {
                 _ => resolve_scenes::<f32>(model, scenes, &ctx, opts.gpu, &cache),
             };
             let line = match resolved {
-                Ok((gpu, Some(choice))) => {
-                    kernels
-                        .chosen
-                        .push((key.clone(), gpu.path, gpu.persistent_threads));
+                Ok((_, Some(choice))) => {
+                    kernels.chosen.push((key.clone(), choice.launch));
                     choice.describe()
                 }
                 Ok((_, None)) => continue,
@@ -82,16 +81,13 @@ impl SweepKernels {
     }
 
     /// The options a point of `model` runs with, alone or in an ensemble:
-    /// its shape's measured kernel and threads, else the rule's kernel for
-    /// `gpu.path`.
+    /// its shape's measured launch (the whole launch, as `run` takes it:
+    /// a kernel without its measured patches or tile shape would step other
+    /// bits than the choice says), else the rule's kernel for `gpu.path`.
     pub fn options(&self, model: &Model, gpu: GpuOptions) -> GpuOptions {
         let key = lattice_key(model);
-        match self.chosen.iter().find(|(k, _, _)| *k == key) {
-            Some(&(_, path, threads)) => GpuOptions {
-                path,
-                persistent_threads: threads,
-                ..gpu
-            },
+        match self.chosen.iter().find(|(k, _)| *k == key) {
+            Some(&(_, launch)) => launch.options(gpu),
             None => GpuOptions {
                 path: without_measuring(gpu.path, self.software),
                 ..gpu
@@ -113,4 +109,49 @@ pub fn ensemble_limit(model: &Model, asked: usize, precision: Precision) -> usiz
         _ => GpuEngine::<f32>::scenes_that_fit(model, &ctx.limits),
     };
     asked.min(fit)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::engines::gpu::shaders::Kernel;
+    use crate::engines::gpu::tiles::TileShape;
+    use crate::model::scenario::Scenario;
+
+    /// Every point of a measured shape runs the launch that was timed, the
+    /// whole of it: the patches, tile shape and lanes in storage as well
+    /// as the kernel and its threads. (Keeping only the kernel and threads
+    /// ran `one-step` where `one-step/bond-patches` was chosen, and the
+    /// table then differed in the last bits from the named launch's.)
+    #[test]
+    fn a_measured_shape_runs_the_whole_launch_timed() {
+        let model = Model::from_scenario(&Scenario::default_scene(), false).unwrap();
+        let shape = TileShape { width: 16, halo: 2 };
+        let launches = [
+            Launch::of(Kernel::OneStep).with_bond_patches(),
+            Launch::with_threads(Kernel::Tiled, 256).with_tile(shape),
+            Launch::with_threads(Kernel::Persistent, 512).with_lanes_in_storage(),
+        ];
+        for launch in launches {
+            let kernels = SweepKernels {
+                chosen: vec![(lattice_key(&model), launch)],
+                ..SweepKernels::default()
+            };
+            let asked = GpuOptions {
+                path: GpuPath::Measure,
+                ..GpuOptions::default()
+            };
+            let runs = kernels.options(&model, asked);
+            assert_eq!(runs.path, GpuPath::of(launch.kernel), "{}", launch.name());
+            assert_eq!(runs.persistent_threads, launch.threads, "{}", launch.name());
+            assert_eq!(runs.bond_patches, launch.bond_patches, "{}", launch.name());
+            assert_eq!(runs.tile, launch.tile, "{}", launch.name());
+            assert_eq!(
+                runs.lane_shuffle,
+                !launch.lanes_in_storage,
+                "{}",
+                launch.name()
+            );
+        }
+    }
 }

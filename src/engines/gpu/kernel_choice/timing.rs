@@ -212,14 +212,9 @@ pub fn measure_within<T: GpuReal>(
         |launch: Launch| match time_launch::<T>(models, ctx, opts, launch, start.as_deref()) {
             Ok(timed) => {
                 timings.push((launch, timed.seconds));
-                // The one-step kernels' patches are asked for, not searched:
-                // an ensemble of them has not been shown bit for bit with
-                // its solo runs (BENCHMARKS.md, session 31).
-                if launch.kernel.is_persistent() || launch.kernel == Kernel::Tiled {
-                    let mut best = fastest.get();
-                    keep_faster(&mut best, launch, timed.seconds);
-                    fastest.set(best);
-                }
+                let mut best = fastest.get();
+                keep_faster(&mut best, launch, timed.seconds);
+                fastest.set(best);
                 Some(timed)
             }
             Err(e) => {
@@ -256,8 +251,8 @@ pub fn measure_within<T: GpuReal>(
     if let Some(&(launch, _)) = fastest_shuffled {
         time(launch.with_lanes_in_storage());
     }
-    // The bulk forces by patches, on the fastest persistent, resident or
-    // tiled launch so far (unless the options fix them on): the same forces to their last bits, and
+    // The bulk forces by patches, on the fastest launch so far (unless
+    // the options fix them on): the same forces to their last bits, and
     // no hardware figure yet says whether a quarter of the threads doing
     // 26 bonds' work each beats all of them doing 8.
     if let Some((launch, _)) = fastest.get().filter(|_| !opts.bond_patches) {
