@@ -48,6 +48,19 @@ fn forces_both_ways<T: GpuReal>(
     advance_to(&mut blocks, step).unwrap();
     let state = blocks.save_state().unwrap();
     let mut patches = engine::<T>(m, path, true);
+    // A run's file names its launch (the engine's description): patches
+    // step other bits, so a reader must be able to tell.
+    let patched = "bulk forces by 2x2 patches";
+    assert!(
+        patches.describe().contains(patched),
+        "{}",
+        patches.describe()
+    );
+    assert!(
+        !blocks.describe().contains(patched),
+        "{}",
+        blocks.describe()
+    );
     let end = |e: &mut GpuEngine<T>| {
         e.load_state(&state).unwrap();
         advance_to(e, step + STEPS_APART).unwrap();

@@ -68,7 +68,7 @@ pub use precision::GpuReal;
 use precision::{Coord, Packed};
 pub use record_pipelines::RECORD_SMALL_BLOCKS;
 
-use shaders::{Kernel, Variant};
+use shaders::{Kernel, LaneMerge, Variant};
 use std::collections::VecDeque;
 
 /// The kernel an engine steps with, as built: its workgroup's threads and
@@ -710,7 +710,20 @@ impl<T: GpuReal> GpuEngine<T> {
         }
     }
 
+    /// The kernel and what else of its launch changes its bits or its
+    /// speed: the bulk forces by patches, and where the lanes merge.
     fn kernel_alone(&self) -> String {
+        let mut text = self.kernel_shape();
+        if self.bond_patches {
+            text.push_str(", bulk forces by 2x2 patches of blocks");
+        }
+        if self.kernel.merges_lanes_through_storage() && self.build.lanes == LaneMerge::Shuffle {
+            text.push_str(", junction lanes merged in subgroups where they fit");
+        }
+        text
+    }
+
+    fn kernel_shape(&self) -> String {
         match self.kernel {
             Kernel::OneStep => "one-step kernel, 1 dispatch per step".to_string(),
             Kernel::OneStepLanes => {
