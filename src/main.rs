@@ -282,6 +282,10 @@ struct SweepRun {
     /// --gpu-bond-patches`.
     #[arg(long)]
     gpu_bond_patches: bool,
+    /// GPU backend: every junction lane's sum through storage, as `run
+    /// --gpu-lanes-in-storage`.
+    #[arg(long)]
+    gpu_lanes_in_storage: bool,
 }
 
 fn main() -> ExitCode {
@@ -429,6 +433,7 @@ fn main() -> ExitCode {
                     tile: run.gpu_tile,
                     shader_checks: run.gpu_shader_checks,
                     bond_patches: run.gpu_bond_patches,
+                    lane_shuffle: !run.gpu_lanes_in_storage,
                     ..Default::default()
                 },
             }),

@@ -554,3 +554,52 @@ fn a_run_with_gpu_path_measure_prints_the_figures() {
     assert!(dir.join(CACHE_FILE).exists());
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Every part of a launch's name has a flag, so a launch `auto` chose can
+/// be named again: `persistent/64/lanes-in-storage/bond-patches` is
+/// `--gpu-path persistent --gpu-threads 64 --gpu-lanes-in-storage
+/// --gpu-bond-patches`, and the run's header (the description its file
+/// keeps) says what ran.
+#[test]
+fn a_launch_named_by_its_flags_is_the_one_described() {
+    let header = |flags: &[&str]| {
+        let out = std::process::Command::new(env!("CARGO_BIN_EXE_slipfront"))
+            .args([
+                "run",
+                "--backend",
+                "gpu",
+                "--precision",
+                "f32",
+                "--t-end",
+                "1e-5",
+            ])
+            .args(["--gpu-path", "persistent", "--gpu-threads", "64"])
+            .args(flags)
+            .args(
+                slipfront::app::verify::SMALL_SCENE
+                    .iter()
+                    .flat_map(|s| ["--set", s]),
+            )
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&out.stderr).to_string();
+        assert!(out.status.success(), "{err}");
+        err.lines()
+            .find(|l| l.contains(" on gpu f32"))
+            .unwrap_or_else(|| panic!("a header line: {err}"))
+            .to_string()
+    };
+    let (merged, patches) = ("merged in subgroups", "bulk forces by 2x2 patches");
+    let plain = header(&[]);
+    assert!(
+        plain.contains("persistent kernel") && plain.contains("64 threads"),
+        "{plain}"
+    );
+    assert!(!plain.contains(patches), "{plain}");
+    // lavapipe and NVIDIA have subgroups; the lanes merge there unless asked.
+    let ctx = ctx();
+    assert_eq!(plain.contains(merged), ctx.has_subgroups(), "{plain}");
+    let named = header(&["--gpu-lanes-in-storage", "--gpu-bond-patches"]);
+    assert!(!named.contains(merged), "{named}");
+    assert!(named.contains(patches), "{named}");
+}

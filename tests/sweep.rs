@@ -515,9 +515,9 @@ fn a_measured_sweep_runs_every_point_on_the_kernel_timed_on_its_ensemble() {
     let cached = std::fs::read_to_string(cache.join("gpu-kernels.tsv")).unwrap();
     assert!(cached.contains("| ensemble of 4 |"), "{cached}");
     // `resident/512/bond-patches` is `--gpu-path resident --gpu-threads
-    // 512 --gpu-bond-patches` (a tile shape is `--gpu-tile`).
+    // 512 --gpu-bond-patches` (a tile shape is `--gpu-tile`, lanes in
+    // storage `--gpu-lanes-in-storage`).
     let launch = Launch::named(&chosen).unwrap_or_else(|| panic!("a launch's name: {chosen}"));
-    assert!(!launch.lanes_in_storage, "no flag runs {chosen}");
     let path = GpuPath::of(launch.kernel).name();
     let threads = launch.threads.map(|t| t.to_string());
     let tile = launch.tile.map(|t| t.name());
@@ -530,6 +530,9 @@ fn a_measured_sweep_runs_every_point_on_the_kernel_timed_on_its_ensemble() {
     }
     if launch.bond_patches {
         named_args.push("--gpu-bond-patches");
+    }
+    if launch.lanes_in_storage {
+        named_args.push("--gpu-lanes-in-storage");
     }
     let (named, _) = run("named", &named_args);
     assert_eq!(measured, named, "every point ran {chosen}");

@@ -55,6 +55,13 @@ pub struct RunArgs {
     /// this is not given).
     #[arg(long)]
     pub gpu_bond_patches: bool,
+    /// Every junction lane's sum crosses threads through storage, none
+    /// merged in subgroups first (persistent, resident and tiled kernels):
+    /// the same tree of sums (`auto` on a hardware GPU times both when
+    /// this is not given; its figures name such a launch
+    /// `…/lanes-in-storage`).
+    #[arg(long)]
+    pub gpu_lanes_in_storage: bool,
     #[arg(long, value_enum)]
     pub precision: Option<Precision>,
     /// Override a scenario key: --set loading.drive.velocity=1e-3
@@ -205,6 +212,7 @@ impl RunArgs {
             tile: self.gpu_tile,
             shader_checks: self.gpu_shader_checks,
             bond_patches: self.gpu_bond_patches,
+            lane_shuffle: !self.gpu_lanes_in_storage,
             ..GpuOptions::default()
         };
         Ok(make_engine_with(

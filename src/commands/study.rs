@@ -146,6 +146,7 @@ fn coulomb_precursors_study(a: &StudyArgs) -> anyhow::Result<()> {
                 gpu_run_ahead: slipfront::engines::gpu::options::RUN_AHEAD_BATCHES,
                 gpu_shader_checks: false,
                 gpu_bond_patches: false,
+                gpu_lanes_in_storage: false,
                 precision: Some(a.precision),
                 set: loading.overrides(),
                 t_end,
