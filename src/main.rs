@@ -255,13 +255,6 @@ struct SweepRun {
     /// run every point of that shape on the fastest, alone or in ensembles.
     #[arg(long, value_enum, default_value = "auto")]
     gpu_path: slipfront::engines::gpu::GpuPath,
-    /// GPU backend: threads of the persistent and resident kernels'
-    /// workgroup, as `run --gpu-threads`.
-    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
-    gpu_threads: Option<u32>,
-    /// GPU backend: the tiled kernel's tiles, as `run --gpu-tile`.
-    #[arg(long, value_name = "WIDTHxHALO", value_parser = slipfront::engines::gpu::tiles::TileShape::parse)]
-    gpu_tile: Option<slipfront::engines::gpu::tiles::TileShape>,
     /// GPU backend: where the points' samples are made, alone or as
     /// ensembles alike (so a table does not depend on --ensemble):
     /// `device` records every scene of an ensemble in one dispatch and
@@ -269,23 +262,8 @@ struct SweepRun {
     /// (the reference path).
     #[arg(long, value_enum, default_value = "device")]
     gpu_output: slipfront::engines::gpu::GpuOutput,
-    /// GPU backend: batches the device may go on stepping while the
-    /// points' samples are written, as `run --gpu-run-ahead`.
-    #[arg(long, default_value_t = slipfront::engines::gpu::options::RUN_AHEAD_BATCHES,
-          value_parser = commands::run::run_ahead_batches)]
-    gpu_run_ahead: usize,
-    /// GPU backend: wgpu's run-time checks in the kernels, as `run
-    /// --gpu-shader-checks`.
-    #[arg(long)]
-    gpu_shader_checks: bool,
-    /// GPU backend: the bulk forces by patches of blocks, as `run
-    /// --gpu-bond-patches`.
-    #[arg(long)]
-    gpu_bond_patches: bool,
-    /// GPU backend: every junction lane's sum through storage, as `run
-    /// --gpu-lanes-in-storage`.
-    #[arg(long)]
-    gpu_lanes_in_storage: bool,
+    #[command(flatten)]
+    gpu: commands::gpu_launch::GpuLaunchArgs,
 }
 
 fn main() -> ExitCode {
@@ -425,17 +403,7 @@ fn main() -> ExitCode {
                 quiet: run.quiet,
                 no_shared_loading: run.no_shared_loading,
                 ensemble: run.ensemble,
-                gpu: slipfront::engines::gpu::GpuOptions {
-                    path: run.gpu_path,
-                    output: run.gpu_output,
-                    persistent_threads: run.gpu_threads,
-                    run_ahead: run.gpu_run_ahead,
-                    tile: run.gpu_tile,
-                    shader_checks: run.gpu_shader_checks,
-                    bond_patches: run.gpu_bond_patches,
-                    lane_shuffle: !run.gpu_lanes_in_storage,
-                    ..Default::default()
-                },
+                gpu: run.gpu.options(run.gpu_path, run.gpu_output),
             }),
         },
     };

@@ -1,5 +1,6 @@
 pub mod check;
 pub mod compare;
+pub mod gpu_launch;
 pub mod info;
 pub mod plot;
 pub mod recover;

@@ -1,6 +1,6 @@
 use slipfront::app::runner::{run_scene, ProgressMode, RunOptions, StartFrom};
 use slipfront::engines::backend::{make_engine_with, Backend, Precision};
-use slipfront::engines::gpu::{GpuOptions, GpuOutput, GpuPath};
+use slipfront::engines::gpu::{GpuOutput, GpuPath};
 use slipfront::engines::Engine;
 use slipfront::io::checkpoint::{branch, path_for, Checkpoint};
 use slipfront::io::live::{largest_record, LiveAddress, DEFAULT_LIVE_ADDRESS};
@@ -30,38 +30,8 @@ pub struct RunArgs {
     /// channels due are read back) or host (a snapshot per sample).
     #[arg(long, value_enum, default_value = "device")]
     pub gpu_output: GpuOutput,
-    /// Threads of the persistent and resident kernels' workgroup
-    /// (default: 256 persistent, 1024 resident; at most the adapter's).
-    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
-    pub gpu_threads: Option<u32>,
-    /// The tiled kernel's tiles as WIDTHxHALO: columns each tile owns, and
-    /// halo columns each side, the most steps a dispatch runs (default 8x4;
-    /// `auto` on a hardware GPU searches a few shapes when this is not given).
-    #[arg(long, value_name = "WIDTHxHALO", value_parser = slipfront::engines::gpu::tiles::TileShape::parse)]
-    pub gpu_tile: Option<slipfront::engines::gpu::tiles::TileShape>,
-    /// Batches the GPU may go on stepping while the samples it recorded
-    /// are written (0: it waits for the output at every chunk; at most 64).
-    #[arg(long, default_value_t = slipfront::engines::gpu::options::RUN_AHEAD_BATCHES,
-          value_parser = crate::commands::run::run_ahead_batches)]
-    pub gpu_run_ahead: usize,
-    /// Let wgpu add its run-time checks to the GPU kernels (an index clamp
-    /// at each fixed-size array access, a counter in every loop): the same
-    /// results, slower; for checking a suspect kernel.
-    #[arg(long)]
-    pub gpu_shader_checks: bool,
-    /// The GPU kernels compute the bulk forces by 2×2 patches of blocks,
-    /// each bond inside a patch once: the same forces to their last bits,
-    /// another split of the work (`auto` on a hardware GPU times both when
-    /// this is not given).
-    #[arg(long)]
-    pub gpu_bond_patches: bool,
-    /// Every junction lane's sum crosses threads through storage, none
-    /// merged in subgroups first (persistent, resident and tiled kernels):
-    /// the same tree of sums (`auto` on a hardware GPU times both when
-    /// this is not given; its figures name such a launch
-    /// `…/lanes-in-storage`).
-    #[arg(long)]
-    pub gpu_lanes_in_storage: bool,
+    #[command(flatten)]
+    pub gpu: crate::commands::gpu_launch::GpuLaunchArgs,
     #[arg(long, value_enum)]
     pub precision: Option<Precision>,
     /// Override a scenario key: --set loading.drive.velocity=1e-3
@@ -204,17 +174,7 @@ impl RunArgs {
                 .check_memory(model, "pass --no-memory-check to try anyway")
                 .map_err(anyhow::Error::msg)?;
         }
-        let gpu = GpuOptions {
-            path: self.gpu_path,
-            output: self.gpu_output,
-            persistent_threads: self.gpu_threads,
-            run_ahead: self.gpu_run_ahead,
-            tile: self.gpu_tile,
-            shader_checks: self.gpu_shader_checks,
-            bond_patches: self.gpu_bond_patches,
-            lane_shuffle: !self.gpu_lanes_in_storage,
-            ..GpuOptions::default()
-        };
+        let gpu = self.gpu.options(self.gpu_path, self.gpu_output);
         Ok(make_engine_with(
             model,
             self.backend,

@@ -1,0 +1,74 @@
+//! The GPU launch flags `run` and `sweep` share (threads, tile shape,
+//! run-ahead, run-time checks, patches, where the lanes merge): one
+//! declaration, so a new part of a launch gets its flag in both at once.
+
+use slipfront::engines::gpu::tiles::TileShape;
+use slipfront::engines::gpu::{GpuOptions, GpuOutput, GpuPath};
+
+#[derive(clap::Args, Clone, Debug)]
+pub struct GpuLaunchArgs {
+    /// Threads of the persistent and resident kernels' workgroup
+    /// (default: 256 persistent, 1024 resident; at most the adapter's).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+    pub gpu_threads: Option<u32>,
+    /// The tiled kernel's tiles as WIDTHxHALO: columns each tile owns, and
+    /// halo columns each side, the most steps a dispatch runs (default 8x4;
+    /// `auto` on a hardware GPU searches a few shapes when this is not given).
+    #[arg(long, value_name = "WIDTHxHALO", value_parser = TileShape::parse)]
+    pub gpu_tile: Option<TileShape>,
+    /// Batches the GPU may go on stepping while the samples it recorded
+    /// are written (0: it waits for the output at every chunk; at most 64).
+    #[arg(long, default_value_t = slipfront::engines::gpu::options::RUN_AHEAD_BATCHES,
+          value_parser = crate::commands::run::run_ahead_batches)]
+    pub gpu_run_ahead: usize,
+    /// Let wgpu add its run-time checks to the GPU kernels (an index clamp
+    /// at each fixed-size array access, a counter in every loop): the same
+    /// results, slower; for checking a suspect kernel.
+    #[arg(long)]
+    pub gpu_shader_checks: bool,
+    /// The GPU kernels compute the bulk forces by 2×2 patches of blocks,
+    /// each bond inside a patch once: the same forces to their last bits,
+    /// another split of the work (`auto` on a hardware GPU times both when
+    /// this is not given).
+    #[arg(long)]
+    pub gpu_bond_patches: bool,
+    /// Every junction lane's sum crosses threads through storage, none
+    /// merged in subgroups first (persistent, resident and tiled kernels):
+    /// the same tree of sums (`auto` on a hardware GPU times both when
+    /// this is not given; its figures name such a launch
+    /// `…/lanes-in-storage`).
+    #[arg(long)]
+    pub gpu_lanes_in_storage: bool,
+}
+
+impl Default for GpuLaunchArgs {
+    /// The flags' defaults (none given).
+    fn default() -> Self {
+        GpuLaunchArgs {
+            gpu_threads: None,
+            gpu_tile: None,
+            gpu_run_ahead: slipfront::engines::gpu::options::RUN_AHEAD_BATCHES,
+            gpu_shader_checks: false,
+            gpu_bond_patches: false,
+            gpu_lanes_in_storage: false,
+        }
+    }
+}
+
+impl GpuLaunchArgs {
+    /// The engine's GPU options: these flags with the command's kernel
+    /// and output.
+    pub fn options(&self, path: GpuPath, output: GpuOutput) -> GpuOptions {
+        GpuOptions {
+            path,
+            output,
+            persistent_threads: self.gpu_threads,
+            run_ahead: self.gpu_run_ahead,
+            tile: self.gpu_tile,
+            shader_checks: self.gpu_shader_checks,
+            bond_patches: self.gpu_bond_patches,
+            lane_shuffle: !self.gpu_lanes_in_storage,
+            ..GpuOptions::default()
+        }
+    }
+}
