@@ -19,7 +19,7 @@ pub struct GpuLaunchArgs {
     /// Batches the GPU may go on stepping while the samples it recorded
     /// are written (0: it waits for the output at every chunk; at most 64).
     #[arg(long, default_value_t = slipfront::engines::gpu::options::RUN_AHEAD_BATCHES,
-          value_parser = crate::commands::run::run_ahead_batches)]
+          value_parser = run_ahead_batches)]
     pub gpu_run_ahead: usize,
     /// Let wgpu add its run-time checks to the GPU kernels (an index clamp
     /// at each fixed-size array access, a counter in every loop): the same
@@ -70,5 +70,18 @@ impl GpuLaunchArgs {
             lane_shuffle: !self.gpu_lanes_in_storage,
             ..GpuOptions::default()
         }
+    }
+}
+
+/// `--gpu-run-ahead`: a count of batches from 0 to
+/// `MAX_RUN_AHEAD_BATCHES` (more would hold a long run's samples and
+/// staging buffers back without bound).
+pub fn run_ahead_batches(text: &str) -> Result<usize, String> {
+    use slipfront::engines::gpu::options::{run_ahead_batches, MAX_RUN_AHEAD_BATCHES};
+    match text.parse::<i64>() {
+        Ok(n) => run_ahead_batches(n),
+        Err(_) => Err(format!(
+            "`{text}` is not a count of batches from 0 to {MAX_RUN_AHEAD_BATCHES}"
+        )),
     }
 }

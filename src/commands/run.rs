@@ -96,19 +96,6 @@ fn same_file(a: &Path, b: &Path) -> bool {
     }
 }
 
-/// `--gpu-run-ahead`: a count of batches from 0 to
-/// `MAX_RUN_AHEAD_BATCHES` (more would hold a long run's samples and
-/// staging buffers back without bound).
-pub fn run_ahead_batches(text: &str) -> Result<usize, String> {
-    use slipfront::engines::gpu::options::{run_ahead_batches, MAX_RUN_AHEAD_BATCHES};
-    match text.parse::<i64>() {
-        Ok(n) => run_ahead_batches(n),
-        Err(_) => Err(format!(
-            "`{text}` is not a count of batches from 0 to {MAX_RUN_AHEAD_BATCHES}"
-        )),
-    }
-}
-
 impl RunArgs {
     /// A new run's output: never one of its inputs; an existing file only
     /// with --force; a previous run's checkpoints beside it removed, so a
