@@ -72,12 +72,16 @@ step bits 90 gpu_ensemble --test-threads 1
 step ensembles 150 with SLIPFRONT_GPU_TABLE_SECTIONS=3 SLIPFRONT_GPU_TABLE_SCENES=1,256 \
   SLIPFRONT_GPU_TABLE_LAUNCHES=persistent/1024,resident/256,resident/512,resident/1024,resident/1024/bond-patches,persistent/1024/bond-patches,one-step,one-step/bond-patches \
   gpu_table
-# 4. Table S1 per kernel: kept sums, lane shuffles, run-time checks, bond patches.
+# 4. What limits an ensemble: 1 and 256 scenes at 256 and 1024 threads, for Ns = 100,
+#    Ns = 16 and Coulomb in mixed f32 and Ns = 100 in f64 (docs/gpu-kernels.md, "What
+#    limits an ensemble"): whether scenes sharing an SM contend for issue or for memory.
+step limits 150 with SLIPFRONT_GPU_TABLE_SECTIONS=8 gpu_table
+# 5. Table S1 per kernel: kept sums, lane shuffles, run-time checks, bond patches.
 step junctions 150 with SLIPFRONT_GPU_TABLE_SECTIONS=7 gpu_table
-# 5. Kernels against lattice size (the one-step kernels with and without bond patches),
+# 6. Kernels against lattice size (the one-step kernels with and without bond patches),
 #    and Table S1's thread counts and tile shapes.
 step kernels 200 with SLIPFRONT_GPU_TABLE_SECTIONS=1,2 gpu_table
-# 6. Accuracy: the GPU kernels' perturbation ensembles against CPU f64.
+# 7. Accuracy: the GPU kernels' perturbation ensembles against CPU f64.
 step precision 300 gpu_precision
 
 echo

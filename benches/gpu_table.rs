@@ -27,7 +27,15 @@
 //! 7. what the junctions cost on Table S1: Ns = 100 with every junction
 //!    summed every step (with runs of lanes merged in subgroups first, the
 //!    default, and with every lane's sum through storage) and with quiet
-//!    blocks' sums kept (the default), Ns = 16, and Coulomb friction.
+//!    blocks' sums kept (the default), Ns = 16, and Coulomb friction;
+//! 8. what limits an ensemble: the single-workgroup kernels at 256 and 1024
+//!    threads on one Table S1 scene and on 256, with Ns = 100 (as shipped),
+//!    Ns = 16 and Coulomb friction in mixed f32, and as shipped in f64. How
+//!    much longer an ensemble step is than one scene's, against the
+//!    junctions' share of the work and the precision, says whether scenes
+//!    that share an SM overlap or contend, and for what
+//!    (docs/gpu-kernels.md, "What limits an ensemble").
+//!    SLIPFRONT_GPU_TABLE_LIMIT_SCENES=1,132,256 sets its scene counts.
 //!
 //! Sections 1–3 also print the host's CPU time per wall second of each
 //! timed span: it says whether the host (encoding dispatches, waiting) or
@@ -58,14 +66,15 @@
 //! (`GpuOptions::bond_patches`).
 
 use gpu_timing::{
-    ensemble_step_seconds, output_run, solo_step_seconds, table_s1, timed_advance, Timed,
+    ensemble_step_seconds, ensemble_step_seconds_in, output_run, solo_step_seconds, table_s1,
+    timed_advance, Timed,
 };
 use slipfront::app::sweeps::{run_sweep, KeepMcap, Sweep, SweepOptions};
 use slipfront::engines::backend::{make_engine, Backend, Precision};
-use slipfront::engines::gpu::kernel_choice::{candidates, launches, measure_within};
+use slipfront::engines::gpu::kernel_choice::{candidates, launches, measure_within, Launch};
 use slipfront::engines::gpu::shaders::Kernel;
 use slipfront::engines::gpu::tiles::TileShape;
-use slipfront::engines::gpu::{context, GpuOptions, GpuPath};
+use slipfront::engines::gpu::{context, GpuOptions, GpuPath, GpuReal};
 use slipfront::model::scenario::built_in;
 use slipfront::{advance_to, Model, Scenario};
 use std::time::Instant;
@@ -244,6 +253,134 @@ fn junction_cost(min_seconds: f64) {
     println!();
 }
 
+/// Section 8: the single-workgroup kernels at 256 and 1024 threads on one
+/// Table S1 scene and on many (256 by default), for scenes with less and
+/// less junction work (Ns = 100 as shipped, Ns = 16, Coulomb) in mixed
+/// f32, and as shipped in f64. At 1024 threads a scene fills its SM's
+/// threads, so more scenes than SMs run in waves; at 256 threads up to four
+/// share an SM, and how much longer their ensemble step is than one
+/// scene's says whether they overlap (the SM had idle issue slots) or
+/// contend. Which one, for which scene and precision, points at the limit
+/// (docs/gpu-kernels.md, "What limits an ensemble").
+fn ensemble_limits(quick: bool, min_seconds: f64) {
+    let counts = counts_from_env(
+        "SLIPFRONT_GPU_TABLE_LIMIT_SCENES",
+        if quick { &[1, 4] } else { &[1, 256] },
+    );
+    let most = counts.iter().copied().max().unwrap_or(1);
+    let text = built_in("tromborg2014_precursors").expect("shipped scene");
+    println!(
+        "Each row: µs per ensemble step at each scene count, then each count's step over \
+         one scene's (1.0: the scenes overlap completely; the count itself: they run one \
+         after another).\n"
+    );
+    let header: String = counts
+        .iter()
+        .map(|&n| format!(" {n} scene{} |", if n == 1 { "" } else { "s" }))
+        .collect();
+    let ratios: String = counts[1..].iter().map(|n| format!(" {n} / 1 |")).collect();
+    let last = counts[counts.len() - 1];
+    println!("| scene | precision | launch |{header}{ratios} block-steps/s at {last} |");
+    let rule = " ---: |".repeat(2 * counts.len());
+    println!("| --- | --- | --- |{rule}");
+    // Why a launch did not run ("–" in the table), each reason once.
+    let mut not_run: Vec<String> = Vec::new();
+    let variants: [(&str, Option<&str>, bool); 3] = [
+        ("Ns = 100 (as shipped)", None, true),
+        ("Ns = 16", Some("friction.junctions.count=16"), false),
+        (
+            "Coulomb (no junctions)",
+            Some("friction.law=coulomb"),
+            false,
+        ),
+    ];
+    for (name, set, with_f64) in variants {
+        let models: Vec<Model> = (1..=most)
+            .map(|seed| {
+                let mut sets = vec![format!("time.seed={seed}")];
+                sets.extend(set.map(String::from));
+                let scenario =
+                    Scenario::parse(text, "table S1", &sets).expect("a Table S1 variant");
+                Model::from_scenario(&scenario, false).expect("a Table S1 variant")
+            })
+            .collect();
+        limit_rows::<f32>(
+            name,
+            "mixed f32",
+            &models,
+            &counts,
+            min_seconds,
+            &mut not_run,
+        );
+        if with_f64 {
+            limit_rows::<f64>(name, "f64", &models, &counts, min_seconds, &mut not_run);
+        }
+    }
+    println!();
+    for line in &not_run {
+        println!("{line}");
+    }
+}
+
+/// Section 8's rows of one scene variant in precision `T`: the resident and
+/// persistent kernels at 256 and 1024 threads, each on the first `n` of
+/// `models` for each of `counts`. A launch that does not run (resident in
+/// f64 at Table S1 does not fit) adds its reason to `not_run`.
+fn limit_rows<T: GpuReal>(
+    name: &str,
+    precision: &str,
+    models: &[Model],
+    counts: &[usize],
+    min_seconds: f64,
+    not_run: &mut Vec<String>,
+) {
+    let blocks = models[0].n_blocks() as f64;
+    for kernel in [Kernel::Resident, Kernel::Persistent] {
+        for threads in [256, 1024] {
+            let launch = Launch::with_threads(kernel, threads);
+            let steps: Vec<Result<f64, String>> = counts
+                .iter()
+                .map(|&n| {
+                    ensemble_step_seconds_in::<T>(
+                        &models[..n],
+                        launch.options(GpuOptions::default()),
+                        min_seconds,
+                    )
+                    .map(|(s, _)| s)
+                })
+                .collect();
+            let cells: String = steps
+                .iter()
+                .map(|r| match r {
+                    Ok(s) => format!(" {:.2} |", s * 1e6),
+                    Err(_) => " – |".to_string(),
+                })
+                .collect();
+            for e in steps.iter().filter_map(|r| r.as_ref().err()) {
+                let line = format!("- {}, {precision}: not run: {e}", launch.name());
+                if !not_run.contains(&line) {
+                    not_run.push(line);
+                }
+            }
+            let ratios: String = steps[1..]
+                .iter()
+                .map(|r| match (r, &steps[0]) {
+                    (Ok(s), Ok(one)) => format!(" {:.2} |", s / one),
+                    _ => " |".to_string(),
+                })
+                .collect();
+            let rate = match steps.last() {
+                Some(Ok(s)) => format!("{:.3e}", counts[counts.len() - 1] as f64 * blocks / s),
+                _ => String::new(),
+            };
+            println!(
+                "| {name} | {precision} | {} |{cells}{ratios} {rate} |",
+                launch.name()
+            );
+        }
+    }
+}
+
 /// The precursors scene as shipped.
 fn s1_model(text: &str) -> Model {
     let scenario = Scenario::parse(text, "table S1", &[]).expect("the shipped scene");
@@ -344,14 +481,14 @@ impl Drop for SectionTimer {
 
 impl Sections {
     fn from_env() -> Self {
-        let all = (1..=7).collect();
+        let all = (1..=8).collect();
         match std::env::var("SLIPFRONT_GPU_TABLE_SECTIONS") {
             Ok(list) => Sections(
                 list.split(',')
                     .map(|s| match s.trim().parse() {
-                        Ok(n @ 1..=7) => n,
+                        Ok(n @ 1..=8) => n,
                         _ => {
-                            panic!("SLIPFRONT_GPU_TABLE_SECTIONS: `{s}` is not a section (1 to 7)")
+                            panic!("SLIPFRONT_GPU_TABLE_SECTIONS: `{s}` is not a section (1 to 8)")
                         }
                     })
                     .collect(),
@@ -827,6 +964,11 @@ fn main() {
         // 7. What the junctions cost on Table S1.
         println!("\n## 7. What the junctions cost on Table S1\n");
         junction_cost(min_seconds);
+    }
+    if let Some(_timer) = sections.start(8) {
+        // 8. What limits an ensemble.
+        println!("\n## 8. What limits an ensemble of Table S1 scenes\n");
+        ensemble_limits(quick, min_seconds);
     }
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -150,7 +150,17 @@ pub fn ensemble_step_seconds(
     opts: GpuOptions,
     min_seconds: f64,
 ) -> Result<(f64, f64), String> {
-    let mut e = GpuEnsemble::new(models, opts).map_err(|e| e.to_string())?;
+    ensemble_step_seconds_in::<f32>(models, opts, min_seconds)
+}
+
+/// `ensemble_step_seconds` in precision `T` (f64 fails on an adapter
+/// without f64 shaders, with that reason).
+pub fn ensemble_step_seconds_in<T: GpuReal>(
+    models: &[Model],
+    opts: GpuOptions,
+    min_seconds: f64,
+) -> Result<(f64, f64), String> {
+    let mut e = GpuEnsemble::<T>::with_precision(models, opts).map_err(|e| e.to_string())?;
     e.advance(models[0].prep_steps + 16)
         .map_err(|e| e.to_string())?;
     let (dt, steps, cpu) =
