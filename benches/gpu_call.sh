@@ -67,15 +67,16 @@ with() { env "$@"; }
 step targets 180 gpu_targets
 # 2. Ensemble against solo, bit for bit (the issue's "the ensemble and solo tests pass").
 step bits 90 gpu_ensemble --test-threads 1
-# 3. The ensemble target's launches with and without bond patches, at 1 and 256 scenes:
-#    a 256-scene step well under twice the one-scene step means workgroups share an SM.
-step ensembles 150 with SLIPFRONT_GPU_TABLE_SECTIONS=3 SLIPFRONT_GPU_TABLE_SCENES=1,256 \
-  SLIPFRONT_GPU_TABLE_LAUNCHES=persistent/1024,resident/256,resident/512,resident/1024,resident/1024/bond-patches,persistent/1024/bond-patches,one-step,one-step/bond-patches \
-  gpu_table
-# 4. What limits an ensemble: 1 and 256 scenes at 256 and 1024 threads, for Ns = 100,
-#    Ns = 16 and Coulomb in mixed f32 and Ns = 100 in f64 (docs/gpu-kernels.md, "What
-#    limits an ensemble"): whether scenes sharing an SM contend for issue or for memory.
+# 3. What limits an ensemble: 1 and 256 scenes of resident and persistent at 256 and 1024
+#    threads, for Ns = 100, Ns = 16 and Coulomb in mixed f32 and Ns = 100 in f64
+#    (docs/gpu-kernels.md, "What limits an ensemble"): whether scenes that share an SM
+#    contend for issue slots or for L1, which decides what to build for the target.
 step limits 150 with SLIPFRONT_GPU_TABLE_SECTIONS=8 gpu_table
+# 4. The ensemble target's other launches, at 1 and 256 scenes: bond patches, and the
+#    one-step kernel (step 3 has resident and persistent without patches).
+step ensembles 150 with SLIPFRONT_GPU_TABLE_SECTIONS=3 SLIPFRONT_GPU_TABLE_SCENES=1,256 \
+  SLIPFRONT_GPU_TABLE_LAUNCHES=resident/512,resident/1024/bond-patches,persistent/1024/bond-patches,one-step,one-step/bond-patches \
+  gpu_table
 # 5. Table S1 per kernel: kept sums, lane shuffles, run-time checks, bond patches.
 step junctions 150 with SLIPFRONT_GPU_TABLE_SECTIONS=7 gpu_table
 # 6. Kernels against lattice size (the one-step kernels with and without bond patches),
