@@ -27,7 +27,8 @@
 //! 7. what the junctions cost on Table S1: Ns = 100 with every junction
 //!    summed every step (with runs of lanes merged in subgroups first, the
 //!    default, and with every lane's sum through storage) and with quiet
-//!    blocks' sums kept (the default), Ns = 16, and Coulomb friction;
+//!    blocks' sums kept (the default), Ns = 16, Coulomb friction, and no
+//!    friction (the bulk alone, the tiled kernel included);
 //! 8. what limits an ensemble: the single-workgroup kernels at 256 and 1024
 //!    threads on one Table S1 scene and on 256, with Ns = 100 (as shipped),
 //!    Ns = 16 and Coulomb friction in mixed f32, and as shipped in f64. How
@@ -165,8 +166,9 @@ fn tiled_grid(model: &Model, quick: bool, min_seconds: f64) {
 /// the same lattice with Ns = 100 (64 lanes per interface block, as
 /// shipped) with every junction summed every step and with quiet blocks'
 /// sums kept (the default; the timed span is after the normal-load phase,
-/// where the precursors scene is quiet), Ns = 16 (16 lanes) and Coulomb
-/// friction (no junctions), per kernel at its default threads; the
+/// where the precursors scene is quiet), Ns = 16 (16 lanes), Coulomb
+/// friction (no junctions) and no friction (the bulk alone), per kernel at
+/// its default threads; the
 /// shipped scene also with wgpu's run-time checks in the kernels. Where the junctions' share is large, the
 /// lane sums (one thread adds a block's lanes, in order) are the step's
 /// critical path; where it is small, the stencil and the barriers are.
@@ -216,6 +218,10 @@ fn junction_cost(min_seconds: f64) {
             Some("friction.junctions.count=16"),
         ),
         ("Coulomb (no junctions)", Some("friction.law=coulomb")),
+        // No friction at all: the bulk, the update and the step's overhead
+        // alone, on every kernel the tiled one included (it refuses
+        // Coulomb, a per-block law).
+        ("no friction (the bulk alone)", Some("friction.law=none")),
     ] {
         let set: Vec<String> = set.map(String::from).into_iter().collect();
         let scenario = Scenario::parse(text, "table S1", &set).expect("a Table S1 variant");
