@@ -70,7 +70,7 @@ step bits 90 gpu_ensemble --test-threads 1
 # 3. What limits an ensemble: 1 and 256 scenes of resident and persistent at 256 and 1024
 #    threads, for Ns = 100, Ns = 16 and Coulomb in mixed f32 and Ns = 100 in f64
 #    (docs/gpu-kernels.md, "What limits an ensemble"): whether scenes that share an SM
-#    contend for issue slots or for L1, which decides what to build for the target.
+#    contend in the bulk phase or in the junction phase, which decides what to build.
 step limits 150 with SLIPFRONT_GPU_TABLE_SECTIONS=8 gpu_table
 # 4. The ensemble target's other launches, at 1 and 256 scenes: bond patches, and the
 #    one-step kernel (step 3 has resident and persistent without patches).
