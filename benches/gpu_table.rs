@@ -29,14 +29,16 @@
 //!    default, and with every lane's sum through storage) and with quiet
 //!    blocks' sums kept (the default), Ns = 16, Coulomb friction, and no
 //!    friction (the bulk alone, the tiled kernel included);
-//! 8. what limits an ensemble: the single-workgroup kernels at 256 and 1024
-//!    threads on one Table S1 scene and on 256, with Ns = 100 (as shipped),
-//!    Ns = 16 and Coulomb friction in mixed f32, and as shipped in f64. How
-//!    much longer an ensemble step is than one scene's, against the
-//!    junctions' share of the work and the precision, says whether scenes
-//!    that share an SM overlap or contend, and for what
-//!    (docs/gpu-kernels.md, "What limits an ensemble").
-//!    SLIPFRONT_GPU_TABLE_LIMIT_SCENES=1,132,256 sets its scene counts.
+//! 8. what limits an ensemble: the single-workgroup kernels on one Table S1
+//!    scene and on 128, 192 and 256, at 256 threads (and 1024 on the
+//!    shipped scene), with Ns = 100 (as shipped), Ns = 16 and Coulomb
+//!    friction in mixed f32, and as shipped in f64. Where the step doubles
+//!    between the counts says how many scenes an SM holds at once; how much
+//!    longer than one scene's it is where they share, against the
+//!    junctions' share of the work and the precision, says whether they
+//!    overlap or contend, and for what (docs/gpu-kernels.md, "What limits
+//!    an ensemble"). SLIPFRONT_GPU_TABLE_LIMIT_SCENES=1,132,264 sets its
+//!    scene counts.
 //!
 //! Sections 1–3 also print the host's CPU time per wall second of each
 //! timed span: it says whether the host (encoding dispatches, waiting) or
@@ -259,26 +261,30 @@ fn junction_cost(min_seconds: f64) {
     println!();
 }
 
-/// Section 8: the single-workgroup kernels at 256 and 1024 threads on one
-/// Table S1 scene and on many (256 by default), for scenes with less and
-/// less junction work (Ns = 100 as shipped, Ns = 16, Coulomb) in mixed
-/// f32, and as shipped in f64. At 1024 threads a scene fills its SM's
-/// threads, so more scenes than SMs run in waves; at 256 threads up to four
-/// share an SM, and how much longer their ensemble step is than one
-/// scene's says whether they overlap (the SM had idle issue slots) or
-/// contend. Which one, for which scene and precision, points at the limit
-/// (docs/gpu-kernels.md, "What limits an ensemble").
+/// Section 8: the single-workgroup kernels on one Table S1 scene and on a
+/// staircase of scene counts (1, 128, 192, 256 by default), for scenes with
+/// less and less junction work (Ns = 100 as shipped, Ns = 16, Coulomb) in
+/// mixed f32, and as shipped in f64. More scenes than fit the GPU at once
+/// run in waves, so the step grows in stairs: from 128 to 192 scenes it
+/// doubles where one workgroup fills an SM (an H200 has 132), and stays
+/// where two fit. Where they fit, how much longer the step is than one
+/// scene's says whether scenes that share an SM overlap or contend, and the
+/// scene variants say in which phase (docs/gpu-kernels.md, "What limits an
+/// ensemble").
 fn ensemble_limits(quick: bool, min_seconds: f64) {
     let counts = counts_from_env(
         "SLIPFRONT_GPU_TABLE_LIMIT_SCENES",
-        if quick { &[1, 4] } else { &[1, 256] },
+        if quick { &[1, 4] } else { &[1, 128, 192, 256] },
     );
     let most = counts.iter().copied().max().unwrap_or(1);
+    // Half a second a figure: a step of tens of µs is then thousands of
+    // steps, and the section fits one step of gpu_call.sh.
+    let min_seconds = min_seconds.min(0.5);
     let text = built_in("tromborg2014_precursors").expect("shipped scene");
     println!(
         "Each row: µs per ensemble step at each scene count, then each count's step over \
-         one scene's (1.0: the scenes overlap completely; the count itself: they run one \
-         after another).\n"
+         one scene's (1.0: the scenes ran at once without slowing each other; 2.0: in two \
+         waves, or side by side at half speed).\n"
     );
     let header: String = counts
         .iter()
@@ -291,16 +297,23 @@ fn ensemble_limits(quick: bool, min_seconds: f64) {
     println!("| --- | --- | --- |{rule}");
     // Why a launch did not run ("–" in the table), each reason once.
     let mut not_run: Vec<String> = Vec::new();
-    let variants: [(&str, Option<&str>, bool); 3] = [
-        ("Ns = 100 (as shipped)", None, true),
-        ("Ns = 16", Some("friction.junctions.count=16"), false),
+    // (scene, its settings, precision, threads): 1024 threads (a scene a
+    // workgroup that fills its SM) as the control on the shipped scene,
+    // 256 threads (room for several scenes an SM) on every variant.
+    let both: &[u32] = &[256, 1024];
+    let few: &[u32] = &[256];
+    let variants: [(&str, Option<&str>, bool, &[u32]); 4] = [
+        ("Ns = 100 (as shipped)", None, false, both),
+        ("Ns = 100 (as shipped)", None, true, both),
+        ("Ns = 16", Some("friction.junctions.count=16"), false, few),
         (
             "Coulomb (no junctions)",
             Some("friction.law=coulomb"),
             false,
+            few,
         ),
     ];
-    for (name, set, with_f64) in variants {
+    for (name, set, f64_run, threads) in variants {
         let models: Vec<Model> = (1..=most)
             .map(|seed| {
                 let mut sets = vec![format!("time.seed={seed}")];
@@ -310,16 +323,17 @@ fn ensemble_limits(quick: bool, min_seconds: f64) {
                 Model::from_scenario(&scenario, false).expect("a Table S1 variant")
             })
             .collect();
-        limit_rows::<f32>(
+        let rows = LimitRows {
             name,
-            "mixed f32",
-            &models,
-            &counts,
+            models: &models,
+            counts: &counts,
+            threads,
             min_seconds,
-            &mut not_run,
-        );
-        if with_f64 {
-            limit_rows::<f64>(name, "f64", &models, &counts, min_seconds, &mut not_run);
+        };
+        if f64_run {
+            rows.print::<f64>("f64", &mut not_run);
+        } else {
+            rows.print::<f32>("mixed f32", &mut not_run);
         }
     }
     println!();
@@ -328,61 +342,68 @@ fn ensemble_limits(quick: bool, min_seconds: f64) {
     }
 }
 
-/// Section 8's rows of one scene variant in precision `T`: the resident and
-/// persistent kernels at 256 and 1024 threads, each on the first `n` of
-/// `models` for each of `counts`. A launch that does not run (resident in
-/// f64 at Table S1 does not fit) adds its reason to `not_run`.
-fn limit_rows<T: GpuReal>(
-    name: &str,
-    precision: &str,
-    models: &[Model],
-    counts: &[usize],
+/// Section 8's rows of one scene variant.
+struct LimitRows<'a> {
+    name: &'a str,
+    models: &'a [Model],
+    counts: &'a [usize],
+    threads: &'a [u32],
     min_seconds: f64,
-    not_run: &mut Vec<String>,
-) {
-    let blocks = models[0].n_blocks() as f64;
-    for kernel in [Kernel::Resident, Kernel::Persistent] {
-        for threads in [256, 1024] {
-            let launch = Launch::with_threads(kernel, threads);
-            let steps: Vec<Result<f64, String>> = counts
-                .iter()
-                .map(|&n| {
-                    ensemble_step_seconds_in::<T>(
-                        &models[..n],
-                        launch.options(GpuOptions::default()),
-                        min_seconds,
-                    )
-                    .map(|(s, _)| s)
-                })
-                .collect();
-            let cells: String = steps
-                .iter()
-                .map(|r| match r {
-                    Ok(s) => format!(" {:.2} |", s * 1e6),
-                    Err(_) => " – |".to_string(),
-                })
-                .collect();
-            for e in steps.iter().filter_map(|r| r.as_ref().err()) {
-                let line = format!("- {}, {precision}: not run: {e}", launch.name());
-                if !not_run.contains(&line) {
-                    not_run.push(line);
+}
+
+impl LimitRows<'_> {
+    /// The rows in precision `T`: the resident and persistent kernels at
+    /// each of the threads, each on the first `n` scenes for each count. A
+    /// launch that does not run (resident in f64 at Table S1 does not fit)
+    /// adds its reason to `not_run`.
+    fn print<T: GpuReal>(&self, precision: &str, not_run: &mut Vec<String>) {
+        let blocks = self.models[0].n_blocks() as f64;
+        for kernel in [Kernel::Resident, Kernel::Persistent] {
+            for &threads in self.threads {
+                let launch = Launch::with_threads(kernel, threads);
+                let steps: Vec<Result<f64, String>> = self
+                    .counts
+                    .iter()
+                    .map(|&n| {
+                        ensemble_step_seconds_in::<T>(
+                            &self.models[..n],
+                            launch.options(GpuOptions::default()),
+                            self.min_seconds,
+                        )
+                        .map(|(s, _)| s)
+                    })
+                    .collect();
+                let cells: String = steps
+                    .iter()
+                    .map(|r| match r {
+                        Ok(s) => format!(" {:.2} |", s * 1e6),
+                        Err(_) => " – |".to_string(),
+                    })
+                    .collect();
+                for e in steps.iter().filter_map(|r| r.as_ref().err()) {
+                    let line = format!("- {}, {precision}: not run: {e}", launch.name());
+                    if !not_run.contains(&line) {
+                        not_run.push(line);
+                    }
                 }
+                let ratios: String = steps[1..]
+                    .iter()
+                    .map(|r| match (r, &steps[0]) {
+                        (Ok(s), Ok(one)) => format!(" {:.2} |", s / one),
+                        _ => " |".to_string(),
+                    })
+                    .collect();
+                let last = self.counts[self.counts.len() - 1] as f64;
+                let rate = match steps.last() {
+                    Some(Ok(s)) => format!("{:.3e}", last * blocks / s),
+                    _ => String::new(),
+                };
+                println!(
+                    "| {} | {precision} | {} |{cells}{ratios} {rate} |",
+                    self.name,
+                    launch.name()
+                );
             }
-            let ratios: String = steps[1..]
-                .iter()
-                .map(|r| match (r, &steps[0]) {
-                    (Ok(s), Ok(one)) => format!(" {:.2} |", s / one),
-                    _ => " |".to_string(),
-                })
-                .collect();
-            let rate = match steps.last() {
-                Some(Ok(s)) => format!("{:.3e}", counts[counts.len() - 1] as f64 * blocks / s),
-                _ => String::new(),
-            };
-            println!(
-                "| {name} | {precision} | {} |{cells}{ratios} {rate} |",
-                launch.name()
-            );
         }
     }
 }
