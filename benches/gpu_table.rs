@@ -28,7 +28,9 @@
 //!    summed every step (with runs of lanes merged in subgroups first, the
 //!    default, and with every lane's sum through storage) and with quiet
 //!    blocks' sums kept (the default), Ns = 16, Coulomb friction, and no
-//!    friction (the bulk alone, the tiled kernel included);
+//!    friction (the bulk alone, the tiled kernel included); the resident
+//!    kernel also with each junction lane calling `junction_block` for its
+//!    block's kept flag, as before session 33 (`GpuOptions::lanes_read_kept`);
 //! 8. what limits an ensemble: the single-workgroup kernels on one Table S1
 //!    scene and on 128, 192 and 256, at 256 threads (and 1024 on the
 //!    shipped scene), with Ns = 100 (as shipped), Ns = 16 and Coulomb
@@ -233,25 +235,34 @@ fn junction_cost(min_seconds: f64) {
         // and with their bulk forces by patches of blocks
         // (`GpuOptions::bond_patches`).
         for kernel in candidates(&model) {
-            let mut variants = vec![(false, false)];
+            // (shader checks, bond patches, lanes read the kept bit)
+            let mut variants = vec![(false, false, true)];
             if set.is_empty() {
-                variants.push((true, false));
-                variants.push((false, true));
+                variants.push((true, false, true));
+                variants.push((false, true, true));
+                if kernel == Kernel::Resident {
+                    variants.push((false, false, false));
+                }
             }
-            for (shader_checks, bond_patches) in variants {
+            for (shader_checks, bond_patches, lanes_read_kept) in variants {
                 let kept = GpuOptions {
                     keep_junction_sums: true,
                     shader_checks,
                     bond_patches,
+                    lanes_read_kept,
                     ..options(kernel)
                 };
                 let figure = match solo_step_seconds(&model, kept, min_seconds) {
                     Ok((s, host)) => format!("{:.2} | {host:.2}", s * 1e6),
                     Err(e) => format!("not run: {e} |"),
                 };
-                let how = match (shader_checks, bond_patches) {
-                    (true, _) => ", wgpu's run-time checks in the kernels",
-                    (_, true) => ", bulk forces by 2×2 patches of blocks",
+                let how = match (shader_checks, bond_patches, lanes_read_kept) {
+                    (true, _, _) => ", wgpu's run-time checks in the kernels",
+                    (_, true, _) => ", bulk forces by 2×2 patches of blocks",
+                    (_, _, false) => {
+                        ", each lane calling junction_block for its block's kept flag \
+                         (before session 33)"
+                    }
                     _ => "",
                 };
                 println!("| {name}{how} | {} | {figure} |", path_name(kernel));

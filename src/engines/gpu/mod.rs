@@ -86,13 +86,13 @@ struct StepKernel {
 
 impl StepKernel {
     /// The override constants of the kernel's pipeline: the scene's terms
-    /// (`variant`), then what the kernel's layout needs; `blocks`: the
+    /// (`variant`), then what the kernel's layout needs; `shape`: the
     /// lattice's (the resident kernel's workgroup arrays).
     fn constants<T: GpuReal>(
         &self,
         variant: &Variant,
         opts: GpuOptions,
-        blocks: usize,
+        shape: Shape,
         software: bool,
     ) -> Vec<(&'static str, f64)> {
         let mut constants = variant.constants.clone();
@@ -105,8 +105,13 @@ impl StepKernel {
         }
         constants.push(("BOND_PATCHES", self.bond_patches as u8 as f64));
         if self.kernel == Kernel::Resident {
-            constants.push(("RESIDENT_BLOCKS", blocks as f64));
+            constants.push(("RESIDENT_BLOCKS", shape.blocks as f64));
             constants.push(("REDUCTION_WIDTH", resident_reduction_width::<T>() as f64));
+            // Its step ends at a workgroup barrier, so its lanes can read
+            // their block's kept flag from workgroup memory
+            // (shaders/persistent.wgsl, kept_bits).
+            constants.push(("LANES_READ_KEPT", opts.lanes_read_kept as u8 as f64));
+            constants.push(("KEPT_WORDS", options::kept_words(shape.nx) as f64));
         }
         if let Some(g) = self.geometry {
             constants.push(("TILE_WIDTH", g.width as f64));
@@ -472,7 +477,7 @@ impl<T: GpuReal> GpuEngine<T> {
             geometry,
             bond_patches: opts.bond_patches,
         };
-        let constants = step_kernel.constants::<T>(&variant, opts, shape.blocks, ctx.is_software());
+        let constants = step_kernel.constants::<T>(&variant, opts, shape, ctx.is_software());
         // One module (and one compiled pipeline) for the one-step kernels.
         let build = KernelBuild {
             lanes: ctx.lane_merge(opts.lane_shuffle && kernel.merges_lanes_through_storage()),
