@@ -29,8 +29,9 @@
 //!    default, and with every lane's sum through storage) and with quiet
 //!    blocks' sums kept (the default), Ns = 16, Coulomb friction, and no
 //!    friction (the bulk alone, the tiled kernel included); the resident
-//!    kernel also with each junction lane calling `junction_block` for its
-//!    block's kept flag, as before session 33 (`GpuOptions::lanes_read_kept`);
+//!    and tiled kernels also with each junction lane calling
+//!    `junction_block` for its block's kept flag, as before session 33
+//!    (`GpuOptions::lanes_read_kept`);
 //! 8. what limits an ensemble: the single-workgroup kernels on one Table S1
 //!    scene and on 128, 192 and 256, at 256 threads (and 1024 on the
 //!    shipped scene), with Ns = 100 (as shipped), Ns = 16 and Coulomb
@@ -240,7 +241,7 @@ fn junction_cost(min_seconds: f64) {
             if set.is_empty() {
                 variants.push((true, false, true));
                 variants.push((false, true, true));
-                if kernel == Kernel::Resident {
+                if matches!(kernel, Kernel::Resident | Kernel::Tiled) {
                     variants.push((false, false, false));
                 }
             }

@@ -10,7 +10,7 @@
 // start and written back at its end (state_resident.wgsl: the resident
 // kernel, for lattices that fit). Both run this same loop.
 // CPU twin: src/engines/cpu/mod.rs CpuEngine::one_step (one step of its loop).
-// import: bulk_forces, bulk_patch, common, coordinates, friction_law, junctions, lane_merge, lane_partials, record_buffers, record_common, scene, state, verlet
+// import: bulk_forces, bulk_patch, common, coordinates, friction_law, junctions, kept_bits, lane_merge, lane_partials, record_buffers, record_common, scene, state, verlet
 
 // With an output file, the samples of the batch (batch.records of them,
 // in step order; src/engines/gpu/recorder.rs): a sample of step s is recorded in
@@ -26,42 +26,6 @@ override TWO_LANES_A_ROUND: bool = true;
 // (bulk_patch.wgsl; GpuOptions::bond_patches): the same bits, fewer
 // bonds and loads a block, a quarter of the threads busy.
 override BOND_PATCHES: bool = false;
-
-// The resident kernel's junction lanes learn whether their block keeps
-// its junction sums this step (junction_block's `kept`) from one bit here,
-// where each of a block's 64 lane items would call junction_block (four
-// loads, a division) to learn it: the thread that updates an interface
-// block notes the bit for the next step after the update, and at the
-// dispatch's start every thread notes its blocks' bits for the first
-// step. A bit is read after the barrier that ends a step, which in the
-// resident kernel orders workgroup memory; the persistent kernel's orders
-// only storage, so its lanes call junction_block as before. The same
-// sums either way: a kept block's lanes make none.
-override LANES_READ_KEPT: bool = false;
-override KEPT_WORDS: u32 = 1u;
-var<workgroup> kept_bits: array<atomic<u32>, KEPT_WORDS>;
-
-// junction_block(ix, ld).kept, which depends on ld only through
-// ld.preparing, the same for every step of a batch, noted for the lanes.
-fn note_kept(ix: u32, ld: Loads) {
-    let bit = 1u << (ix & 31u);
-    if junction_block(ix, ld).kept {
-        atomicOr(&kept_bits[ix >> 5u], bit);
-    } else {
-        atomicAnd(&kept_bits[ix >> 5u], ~bit);
-    }
-}
-
-// Block ix's junction block for its lanes: where its noted bit says it
-// keeps its sums, only that (its lanes load nothing and make no sums).
-fn lanes_junction_block(ix: u32, ld: Loads) -> JunctionBlock {
-    if LANES_READ_KEPT && (atomicLoad(&kept_bits[ix >> 5u]) & (1u << (ix & 31u))) != 0u {
-        var kept: JunctionBlock;
-        kept.kept = true;
-        return kept;
-    }
-    return junction_block(ix, ld);
-}
 
 var<workgroup> stop: u32;
 // First and end step of this dispatch, samples in the batch, the first
@@ -113,10 +77,11 @@ fn persistent_steps(
         return;
     }
     state_enter(t, PERSISTENT_THREADS);
+    // The first step's kept bits (kept_bits.wgsl; resident only).
     if LANES_READ_KEPT && FRICTION_LAW == LAW_JUNCTIONS {
         let first = loads_at(steps.x);
         for (var ix = t; ix < c.nx; ix += PERSISTENT_THREADS) {
-            note_kept(ix, first);
+            note_kept(ix, ix, first);
         }
         workgroupBarrier();
     }
@@ -165,8 +130,8 @@ fn persistent_steps(
                     grid_walk_next(&lane2);
                     let ix = lane.row;
                     let ix2 = lane2.row;
-                    let jb = lanes_junction_block(ix, ld);
-                    let jb2 = lanes_junction_block(ix2, ld);
+                    let jb = lanes_junction_block(ix, ix, ld);
+                    let jb2 = lanes_junction_block(ix2, ix2, ld);
                     let first = lane_pair_of(ix, lane.column, jb);
                     let first2 = lane_pair_of(ix2, lane2.column, jb2);
                     // A kept block's partials are not merged: not written.
@@ -188,7 +153,7 @@ fn persistent_steps(
                     grid_walk_next(&lane);
                 }
                 for (; w < items; w += PERSISTENT_THREADS) {
-                    let jb = lanes_junction_block(lane.row, ld);
+                    let jb = lanes_junction_block(lane.row, lane.row, ld);
                     if !jb.kept {
                         let sum = lane_subtree(junction_lane(lane.row, lane.column, jb, ld), lane.column);
                         if (lane.column & (stride - 1u)) == 0u {
@@ -249,10 +214,11 @@ fn persistent_steps(
             if batch.forces_only == 0u {
                 verlet(i, b.column, b.row, force[block_base() + i], friction, ld, s);
             }
-            // From the state step s + 1 starts from: this block's update,
-            // its sums stored above, its junctions as the lanes left them.
+            // Its kept bit for step s + 1, from the state that step starts
+            // from: this block's update, its sums stored above, its
+            // junctions as the lanes left them.
             if LANES_READ_KEPT && FRICTION_LAW == LAW_JUNCTIONS && i < c.nx {
-                note_kept(i, ld);
+                note_kept(i, i, ld);
             }
         }
         if sampling {

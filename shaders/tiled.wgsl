@@ -26,7 +26,7 @@
 // the lanes merged as a tree (lane_tree8), and the update. Junction friction laws
 // only (the per-block laws keep state that a halo would race on).
 // CPU twin: src/engines/cpu/mod.rs CpuEngine::one_step (each step of the loop).
-// import: bulk_forces, bulk_patch, common, coordinates, junction_store, junctions, lane_merge, lane_partials, scene, state, verlet
+// import: bulk_forces, bulk_patch, common, coordinates, junction_store, junctions, kept_bits, lane_merge, lane_partials, scene, state, verlet
 
 override TILE_THREADS: u32 = 64u;
 // Bulk forces by 2×2 patches of blocks (bulk_patch.wgsl;
@@ -170,6 +170,15 @@ fn tiled_steps(
     load_tile(t, plan.x, d & 1u);
     storageBarrier();
     workgroupBarrier();
+    // The first step's kept bits, for every column of the tile
+    // (kept_bits.wgsl; a bit a column from tile_lo).
+    if LANES_READ_KEPT && FRICTION_LAW == LAW_JUNCTIONS {
+        let first = loads_at(plan.x);
+        for (var ix = tile_lo + t; ix < tile_hi; ix += TILE_THREADS) {
+            note_kept(ix - tile_lo, ix, first);
+        }
+        workgroupBarrier();
+    }
     let lane_first = tile_index() * tile_span() * lanes;
     for (var s = plan.x; s < plan.y; s++) {
         // The columns this step updates: one fewer each side than the last
@@ -210,7 +219,7 @@ fn tiled_steps(
                 for (var w = grid_walk(t, TILE_THREADS, lanes); w.row < cols; grid_walk_next(&w)) {
                     let ix = a + w.row;
                     let l = w.column;
-                    let jb = junction_block(ix, ld);
+                    let jb = lanes_junction_block(ix - tile_lo, ix, ld);
                     // A kept block's partials are not merged: not written.
                     // Where lanes merge in subgroups, a run's first lane
                     // writes its subtree.
@@ -257,6 +266,11 @@ fn tiled_steps(
                     store_copy(i, copy_of(s), load_disp_at(i, ix, iz), load_vel_at(i, ix, iz));
                 }
                 verlet(i, ix, iz, f, friction, ld, s);
+            }
+            // Its kept bit for step s + 1 (whose columns this step's
+            // contain), from the state that step starts from.
+            if LANES_READ_KEPT && FRICTION_LAW == LAW_JUNCTIONS && iz == 0u {
+                note_kept(ix - tile_lo, ix, ld);
             }
         }
         storageBarrier();

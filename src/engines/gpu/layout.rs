@@ -580,6 +580,13 @@ impl<T: GpuReal> From<crate::model::junction::JunctionSpring<Coord<T>, T>>
     }
 }
 
+/// Words of a workgroup's kept bits for `blocks` interface blocks, a bit
+/// each (`shaders/kept_bits.wgsl`: the resident kernel's lattice, the tiled
+/// kernel's tile).
+pub fn kept_words(blocks: usize) -> u32 {
+    blocks.div_ceil(32).max(1) as u32
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -109,11 +109,14 @@ impl StepKernel {
             constants.push(("REDUCTION_WIDTH", resident_reduction_width::<T>() as f64));
             // Its step ends at a workgroup barrier, so its lanes can read
             // their block's kept flag from workgroup memory
-            // (shaders/persistent.wgsl, kept_bits).
+            // (shaders/kept_bits.wgsl).
             constants.push(("LANES_READ_KEPT", opts.lanes_read_kept as u8 as f64));
-            constants.push(("KEPT_WORDS", options::kept_words(shape.nx) as f64));
+            constants.push(("KEPT_WORDS", layout::kept_words(shape.nx) as f64));
         }
         if let Some(g) = self.geometry {
+            // Its steps end at workgroup barriers too (kept_bits.wgsl).
+            constants.push(("LANES_READ_KEPT", opts.lanes_read_kept as u8 as f64));
+            constants.push(("KEPT_WORDS", layout::kept_words(g.span as usize) as f64));
             constants.push(("TILE_WIDTH", g.width as f64));
             constants.push(("TILE_HALO", g.halo as f64));
             constants.push(("TILE_BLOCKS", g.blocks as f64));

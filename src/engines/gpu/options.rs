@@ -139,11 +139,11 @@ pub struct GpuOptions {
     /// per block; `auto` on hardware times both (`--gpu-bond-patches`
     /// fixes it on).
     pub bond_patches: bool,
-    /// The resident kernel's junction lanes read whether their block keeps
-    /// its sums from a bit noted once per block and step
-    /// (`shaders/persistent.wgsl`, `kept_bits`), not from a
-    /// `junction_block` call per lane: the same bits. false: a call per
-    /// lane, as before session 33 (the comparison in benchmarks).
+    /// The resident and tiled kernels' junction lanes read whether their
+    /// block keeps its sums from a bit noted once per block and step
+    /// (`shaders/kept_bits.wgsl`), not from a `junction_block` call per
+    /// lane: the same bits. false: a call per lane, as before session 33
+    /// (the comparison in benchmarks).
     pub lanes_read_kept: bool,
 }
 
@@ -232,7 +232,7 @@ pub fn resident_fit<T: GpuReal>(model: &Model, limits: &wgpu::Limits) -> Result<
     let slots = resident_reduction_width::<T>() as usize;
     let bytes = (model.n_blocks() * per_block
         + slots * std::mem::size_of::<layout::GpuSampleSums<T>>()
-        + kept_words(model.nx) as usize * 4) as u64
+        + layout::kept_words(model.nx) as usize * 4) as u64
         + RESIDENT_OWN_BYTES;
     let allowed = limits.max_compute_workgroup_storage_size as u64;
     if bytes > allowed {
@@ -245,12 +245,6 @@ pub fn resident_fit<T: GpuReal>(model: &Model, limits: &wgpu::Limits) -> Result<
         ));
     }
     Ok(bytes)
-}
-
-/// Words of the resident kernel's kept flags, a bit per interface block
-/// (`kept_bits` in shaders/persistent.wgsl).
-pub fn kept_words(nx: usize) -> u32 {
-    nx.div_ceil(32).max(1) as u32
 }
 
 /// The resident kernel's reduction slots in precision `T`.

@@ -43,6 +43,7 @@ wgsl_files!(
     "junction_store",
     "junction_tiled",
     "junctions",
+    "kept_bits",
     "lane_no_shuffle",
     "lane_partials",
     "lane_shuffle",

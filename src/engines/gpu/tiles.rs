@@ -114,10 +114,12 @@ impl TileGeometry {
     }
 
     /// Bytes of workgroup memory a tile holds in precision `T`: its
-    /// blocks' u, v and force, and the kernel's own words.
+    /// blocks' u, v and force, its columns' kept bits and the kernel's own
+    /// words.
     pub fn workgroup_bytes<T: GpuReal>(&self) -> u64 {
         let per_block = std::mem::size_of::<[Coord<T>; 2]>() + 2 * std::mem::size_of::<[T; 2]>();
-        self.blocks as u64 * per_block as u64 + TILE_OWN_BYTES
+        let kept = 4 * super::layout::kept_words(self.span as usize) as u64;
+        self.blocks as u64 * per_block as u64 + kept + TILE_OWN_BYTES
     }
 
     /// Elements of each scratch buffer per scene of `blocks` blocks, `nx`
