@@ -59,8 +59,8 @@ step() {
   echo "=== $name: ${took} s, exit ${rc}"
 }
 
-# with VAR=VALUE... COMMAND: the environment for one step only.
-with() { env "$@"; }
+# A step's own environment goes through `env VAR=VALUE... COMMAND`: `timeout` runs an
+# executable, so a shell function there fails with exit 127.
 
 # 1. The targets, met or not: auto's pick against every launch timed again, Table S1
 #    µs/step, 256 scenes' aggregate, 64 scenes against one at a time, output cost.
@@ -71,17 +71,17 @@ step bits 90 gpu_ensemble --test-threads 1
 #    threads, for Ns = 100, Ns = 16 and Coulomb in mixed f32 and Ns = 100 in f64
 #    (docs/gpu-kernels.md, "What limits an ensemble"): whether scenes that share an SM
 #    contend in the bulk phase or in the junction phase, which decides what to build.
-step limits 150 with SLIPFRONT_GPU_TABLE_SECTIONS=8 gpu_table
+step limits 150 env SLIPFRONT_GPU_TABLE_SECTIONS=8 gpu_table
 # 4. The ensemble target's other launches, at 1 and 256 scenes: bond patches, and the
 #    one-step kernel (step 3 has resident and persistent without patches).
-step ensembles 150 with SLIPFRONT_GPU_TABLE_SECTIONS=3 SLIPFRONT_GPU_TABLE_SCENES=1,256 \
+step ensembles 150 env SLIPFRONT_GPU_TABLE_SECTIONS=3 SLIPFRONT_GPU_TABLE_SCENES=1,256 \
   SLIPFRONT_GPU_TABLE_LAUNCHES=resident/512,resident/1024/bond-patches,persistent/1024/bond-patches,one-step,one-step/bond-patches \
   gpu_table
 # 5. Table S1 per kernel: kept sums, lane shuffles, run-time checks, bond patches.
-step junctions 150 with SLIPFRONT_GPU_TABLE_SECTIONS=7 gpu_table
+step junctions 150 env SLIPFRONT_GPU_TABLE_SECTIONS=7 gpu_table
 # 6. Kernels against lattice size (the one-step kernels with and without bond patches),
 #    and Table S1's thread counts and tile shapes.
-step kernels 200 with SLIPFRONT_GPU_TABLE_SECTIONS=1,2 gpu_table
+step kernels 200 env SLIPFRONT_GPU_TABLE_SECTIONS=1,2 gpu_table
 # 7. Accuracy: the GPU kernels' perturbation ensembles against CPU f64.
 step precision 300 gpu_precision
 
