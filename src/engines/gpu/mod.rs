@@ -107,16 +107,21 @@ impl StepKernel {
         if self.kernel == Kernel::Resident {
             constants.push(("RESIDENT_BLOCKS", shape.blocks as f64));
             constants.push(("REDUCTION_WIDTH", resident_reduction_width::<T>() as f64));
-            // Its step ends at a workgroup barrier, so its lanes can read
-            // their block's kept flag from workgroup memory
-            // (shaders/kept_bits.wgsl).
+        }
+        // The kernels whose steps end at a workgroup barrier, so that their
+        // lanes can read their block's kept bit from workgroup memory
+        // (shaders/kept_bits.wgsl): a bit per interface block of the
+        // resident kernel's lattice, or of the tiled kernel's tile.
+        let kept_blocks = match (self.kernel, self.geometry) {
+            (Kernel::Resident, _) => Some(shape.nx),
+            (_, Some(g)) => Some(g.span as usize),
+            _ => None,
+        };
+        if let Some(blocks) = kept_blocks {
             constants.push(("LANES_READ_KEPT", opts.lanes_read_kept as u8 as f64));
-            constants.push(("KEPT_WORDS", layout::kept_words(shape.nx) as f64));
+            constants.push(("KEPT_WORDS", layout::kept_words(blocks) as f64));
         }
         if let Some(g) = self.geometry {
-            // Its steps end at workgroup barriers too (kept_bits.wgsl).
-            constants.push(("LANES_READ_KEPT", opts.lanes_read_kept as u8 as f64));
-            constants.push(("KEPT_WORDS", layout::kept_words(g.span as usize) as f64));
             constants.push(("TILE_WIDTH", g.width as f64));
             constants.push(("TILE_HALO", g.halo as f64));
             constants.push(("TILE_BLOCKS", g.blocks as f64));
