@@ -1,7 +1,7 @@
 //! How the engine's WGSL modules are compiled: where a kernel's junction
 //! lanes merge (the module's source) and which run-time checks wgpu adds.
 
-use super::shaders::LaneMerge;
+use super::shaders::{Kernel, LaneMerge};
 
 /// How a kernel's module is built: where its junction lanes merge, and
 /// which run-time checks wgpu adds.
@@ -61,5 +61,30 @@ impl ShaderChecks {
                 unsafe { device.create_shader_module_trusted(desc, checks) }
             }
         }
+    }
+}
+
+/// What one of the engine's pipelines is compiled from: its module's
+/// WGSL, the entry point and the override constants, as the engine gave
+/// them to wgpu. Enough to compile the same kernel again outside wgpu and
+/// ask the driver what it made of it (`driver_stats`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct KernelSource {
+    pub kernel: Kernel,
+    /// `GpuReal::NAME` of the kernel's precision.
+    pub precision: &'static str,
+    pub build: KernelBuild,
+    pub entry: String,
+    pub source: String,
+    pub constants: Vec<(String, f64)>,
+}
+
+impl KernelSource {
+    /// The value of override constant `name`, where the pipeline sets it.
+    pub fn constant(&self, name: &str) -> Option<f64> {
+        self.constants
+            .iter()
+            .find(|(n, _)| n == name)
+            .map(|&(_, v)| v)
     }
 }

@@ -4,7 +4,7 @@ use super::bindings::Bindings;
 use super::compile::{KernelBuild, ShaderChecks};
 use super::precision::GpuReal;
 use super::record_pipelines::RecordPipelines;
-use super::shaders::{Kernel, LaneMerge};
+use super::shaders::Kernel;
 use crate::engines::EngineError;
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex, OnceLock};
@@ -229,16 +229,6 @@ impl GpuContext {
     /// Whether the adapter was opened with subgroup operations.
     pub fn has_subgroups(&self) -> bool {
         self.device.features().contains(wgpu::Features::SUBGROUP)
-    }
-
-    /// How junction lanes merge where `wanted` asks for shuffles: in
-    /// subgroups only where the adapter has them.
-    pub fn lane_merge(&self, wanted: bool) -> LaneMerge {
-        if wanted && self.has_subgroups() {
-            LaneMerge::Shuffle
-        } else {
-            LaneMerge::Storage
-        }
     }
 
     /// The pipeline of entry point `entry` of `kernel`'s module (the tiled

@@ -39,6 +39,7 @@ mod buffers;
 pub mod compile;
 pub mod context;
 mod device_timer;
+pub mod driver_stats;
 pub mod ensemble;
 pub mod kernel_choice;
 pub mod layout;
@@ -58,7 +59,7 @@ use crate::model::real::precision_name;
 use crate::model::scenario::FrictionLaw;
 use crate::model::Model;
 use buffers::{state_group, Buffers, Shape};
-use compile::{KernelBuild, ShaderChecks};
+use compile::{KernelBuild, KernelSource, ShaderChecks};
 use context::GpuContext;
 pub use device_timer::DispatchTimes;
 use layout::{GpuBatch, GpuJunctionSpring, WORKGROUP};
@@ -168,6 +169,66 @@ impl StepKernel {
         let plain_groups = (model.n_blocks() as u32 - first_plain).div_ceil(WORKGROUP);
         groups_for(junction_groups + plain_groups)
     }
+}
+
+/// What decides which step kernel an adapter compiles, short of the
+/// device itself: its limits (workgroup memory and threads), whether it
+/// is a software adapter, and whether it has subgroup operations.
+#[derive(Debug, Clone)]
+pub struct AdapterTraits {
+    pub limits: wgpu::Limits,
+    pub software: bool,
+    pub subgroups: bool,
+}
+
+impl AdapterTraits {
+    pub fn of(ctx: &GpuContext) -> AdapterTraits {
+        AdapterTraits {
+            limits: ctx.limits.clone(),
+            software: ctx.is_software(),
+            subgroups: ctx.has_subgroups(),
+        }
+    }
+
+    /// How junction lanes merge where `wanted` asks for shuffles: in
+    /// subgroups only where the adapter has them.
+    pub fn lane_merge(&self, wanted: bool) -> LaneMerge {
+        if wanted && self.subgroups {
+            LaneMerge::Shuffle
+        } else {
+            LaneMerge::Storage
+        }
+    }
+}
+
+/// The step kernel of a scene as an adapter compiles it (`GpuEngine::plan`).
+struct KernelPlan {
+    step_kernel: StepKernel,
+    variant: Variant,
+    constants: Vec<(&'static str, f64)>,
+    build: KernelBuild,
+}
+
+/// The sources of `kernel`'s pipelines compiled with `build` and
+/// `constants`: its steps, and the tiled kernel's halo gather (`tiled`).
+fn kernel_sources<T: GpuReal>(
+    kernel: Kernel,
+    build: KernelBuild,
+    tiled: bool,
+    constants: &[(&'static str, f64)],
+) -> Vec<KernelSource> {
+    let gather = kernel.gather_entry_point().filter(|_| tiled);
+    std::iter::once(kernel.entry_point())
+        .chain(gather)
+        .map(|entry| KernelSource {
+            kernel,
+            precision: T::NAME,
+            build,
+            entry: entry.to_string(),
+            source: kernel.source_with::<T>(build.lanes),
+            constants: constants.iter().map(|&(n, v)| (n.to_string(), v)).collect(),
+        })
+        .collect()
 }
 
 /// Group 1 of `kernel`: the step offset (dynamic) and the scenes' batches.
@@ -421,27 +482,85 @@ impl<T: GpuReal> GpuEngine<T> {
     /// memory); the tiled kernel's geometry.
     fn kernel_fit(
         model: &Model,
-        ctx: &GpuContext,
+        adapter: &AdapterTraits,
         opts: GpuOptions,
         kernel: Kernel,
         threads: u32,
     ) -> Result<Option<tiles::TileGeometry>, EngineError> {
         match kernel {
             Kernel::Resident => {
-                resident_fit::<T>(model, &ctx.limits).map_err(EngineError::Gpu)?;
+                resident_fit::<T>(model, &adapter.limits).map_err(EngineError::Gpu)?;
                 Ok(None)
             }
             Kernel::Tiled => {
                 let shape = opts.tile.unwrap_or(tiles::TileShape::DEFAULT);
                 let g = tiles::TileGeometry::new(model, shape).map_err(EngineError::Gpu)?;
-                tiles::tiled_fit::<T>(model, &g, &ctx.limits).map_err(EngineError::Gpu)?;
-                if ctx.is_software() {
+                tiles::tiled_fit::<T>(model, &g, &adapter.limits).map_err(EngineError::Gpu)?;
+                if adapter.software {
                     tiles::software_fit(model, &g, threads).map_err(EngineError::Gpu)?;
                 }
                 Ok(Some(g))
             }
             _ => Ok(None),
         }
+    }
+
+    /// The step kernel `model` compiles with `opts` on an adapter like
+    /// `adapter`, decided without a device: the kernel, its threads and
+    /// tiles, its override constants and its module's build. `opts.path`
+    /// names the kernel (`auto`'s measurement is resolved before this).
+    fn plan(
+        model: &Model,
+        opts: GpuOptions,
+        adapter: &AdapterTraits,
+    ) -> Result<KernelPlan, EngineError> {
+        let kernel = choose_kernel(opts.path, adapter.software);
+        let threads = persistent_threads(
+            kernel,
+            opts.persistent_threads,
+            &adapter.limits,
+            adapter.software,
+        );
+        let geometry = Self::kernel_fit(model, adapter, opts, kernel, threads)?;
+        let variant = Variant::for_model(model);
+        let step_kernel = StepKernel {
+            kernel,
+            threads,
+            geometry,
+            bond_patches: opts.bond_patches,
+        };
+        let constants =
+            step_kernel.constants::<T>(&variant, opts, Shape::of(model), adapter.software);
+        // One module (and one compiled pipeline) for the one-step kernels.
+        let build = KernelBuild {
+            lanes: adapter.lane_merge(opts.lane_shuffle && kernel.merges_lanes_through_storage()),
+            checks: ShaderChecks::of(opts.shader_checks),
+        };
+        Ok(KernelPlan {
+            step_kernel,
+            variant,
+            constants,
+            build,
+        })
+    }
+
+    /// The sources of the pipelines `model` would step with under `opts` on
+    /// an adapter like `adapter` (what `kernel_sources` gives of an engine
+    /// built there), without a device: for asking another device's
+    /// compiler (`driver_stats`).
+    pub fn kernel_sources_on(
+        model: &Model,
+        opts: GpuOptions,
+        adapter: &AdapterTraits,
+    ) -> Result<Vec<KernelSource>, EngineError> {
+        let plan = Self::plan(model, opts, adapter)?;
+        let k = plan.step_kernel.kernel;
+        Ok(kernel_sources::<T>(
+            k,
+            plan.build,
+            plan.step_kernel.geometry.is_some(),
+            &plan.constants,
+        ))
     }
 
     /// The engine over `models`, which share one lattice shape and time
@@ -458,14 +577,15 @@ impl<T: GpuReal> GpuEngine<T> {
         let scene_count = models.len();
         let shape = Shape::of(model);
         Self::check_bindings(models, &ctx, ensemble)?;
-        let kernel = choose_kernel(opts.path, ctx.is_software());
-        let persistent_threads = persistent_threads(
-            kernel,
-            opts.persistent_threads,
-            &ctx.limits,
-            ctx.is_software(),
-        );
-        let geometry = Self::kernel_fit(model, &ctx, opts, kernel, persistent_threads)?;
+        let KernelPlan {
+            step_kernel,
+            variant,
+            constants,
+            build,
+        } = Self::plan(model, opts, &AdapterTraits::of(&ctx))?;
+        let kernel = step_kernel.kernel;
+        let persistent_threads = step_kernel.threads;
+        let geometry = step_kernel.geometry;
         let device = &ctx.device;
         let buffers = Buffers::new::<T>(device, models, shape, geometry);
         let (offsets, offset_stride) = buffers::step_offsets(device, &ctx.limits);
@@ -478,19 +598,6 @@ impl<T: GpuReal> GpuEngine<T> {
         let placeholders = buffers.record_placeholders.each_ref();
         let state_group = state_group(&ctx, kernel, &buffers, placeholders);
         let batch_group = batch_group(&ctx, kernel, &offsets, &batch_buffer);
-        let variant = Variant::for_model(model);
-        let step_kernel = StepKernel {
-            kernel,
-            threads: persistent_threads,
-            geometry,
-            bond_patches: opts.bond_patches,
-        };
-        let constants = step_kernel.constants::<T>(&variant, opts, shape, ctx.is_software());
-        // One module (and one compiled pipeline) for the one-step kernels.
-        let build = KernelBuild {
-            lanes: ctx.lane_merge(opts.lane_shuffle && kernel.merges_lanes_through_storage()),
-            checks: ShaderChecks::of(opts.shader_checks),
-        };
         let pipeline = ctx.pipeline::<T>(kernel, build, &constants);
         let tiles = geometry.map(|g| {
             let entry = kernel
@@ -585,6 +692,18 @@ impl<T: GpuReal> GpuEngine<T> {
 
     pub fn adapter(&self) -> String {
         self.ctx.describe()
+    }
+
+    /// The sources of the pipelines this engine steps with, as it gave them
+    /// to wgpu: the step kernel, and the tiled kernel's halo gather. Output
+    /// kernels are not among them.
+    pub fn kernel_sources(&self) -> Vec<KernelSource> {
+        kernel_sources::<T>(
+            self.kernel,
+            self.build,
+            self.tiles.is_some(),
+            &self.constants,
+        )
     }
 
     /// The host has the sample of `step` (or it is not one to take).

@@ -1,0 +1,431 @@
+//! A Vulkan device of its own (ash), opened with
+//! VK_KHR_pipeline_executable_properties, which wgpu neither enables nor
+//! exposes: it compiles a kernel's SPIR-V into a pipeline that captures
+//! the driver's statistics, reads them and destroys the pipeline. It never
+//! runs anything.
+
+use super::spirv::{buffer_bindings, kernel_spirv, language_version, ZeroWorkgroupMemory};
+use super::{Executable, StatValue, Statistic};
+use crate::engines::gpu::compile::KernelSource;
+use crate::engines::gpu::AdapterTraits;
+use ash::vk;
+use std::ffi::CStr;
+
+/// Which of the machine's Vulkan devices to ask.
+#[derive(Debug, Clone, Copy)]
+pub enum DeviceChoice<'a> {
+    /// The one with this PCI vendor and device id (wgpu's
+    /// `AdapterInfo::vendor` and `device`): the adapter the engine runs on.
+    Ids { vendor: u32, device: u32 },
+    /// The first whose name contains this text (`RADV` for Mesa's AMD
+    /// compiler on its null device, `RADV_FORCE_FAMILY`).
+    NameContains(&'a str),
+}
+
+/// An open device that reports shader statistics.
+pub struct StatsDevice {
+    // Dropped last: the instance's and device's functions live in its library.
+    _entry: ash::Entry,
+    instance: ash::Instance,
+    device: ash::Device,
+    executables: ash::khr::pipeline_executable_properties::Device,
+    pub name: String,
+    pub vendor_id: u32,
+    pub driver: String,
+    /// What the engine would decide its kernels by on this device.
+    pub traits: AdapterTraits,
+    language: (u8, u8),
+    zero: ZeroWorkgroupMemory,
+    varying_subgroups: bool,
+}
+
+fn c_text(s: Result<&CStr, std::ffi::FromBytesUntilNulError>) -> String {
+    s.map(|c| c.to_string_lossy().into_owned())
+        .unwrap_or_default()
+}
+
+impl StatsDevice {
+    /// Opens the device `choice` names; an error says why none could be
+    /// (no Vulkan loader, no such device, or one whose driver does not
+    /// report statistics: lavapipe).
+    pub fn open(choice: DeviceChoice) -> Result<StatsDevice, String> {
+        // SAFETY: loads the system's Vulkan loader; the entry outlives every
+        // object made from it (it is dropped last).
+        let entry = unsafe { ash::Entry::load() }
+            .map_err(|e| format!("no Vulkan loader (libvulkan): {e}"))?;
+        let app = vk::ApplicationInfo::default()
+            .application_name(c"slipfront driver statistics")
+            .api_version(vk::API_VERSION_1_3);
+        // SAFETY: a valid create info with no layers or extensions.
+        let instance = unsafe {
+            entry.create_instance(
+                &vk::InstanceCreateInfo::default().application_info(&app),
+                None,
+            )
+        }
+        .map_err(|e| format!("cannot create a Vulkan instance: {e}"))?;
+        match Self::open_on(&entry, &instance, choice) {
+            Ok(parts) => Ok(StatsDevice {
+                _entry: entry,
+                instance,
+                device: parts.device,
+                executables: parts.executables,
+                name: parts.name,
+                vendor_id: parts.vendor_id,
+                driver: parts.driver,
+                traits: parts.traits,
+                language: parts.language,
+                zero: parts.zero,
+                varying_subgroups: parts.varying_subgroups,
+            }),
+            Err(e) => {
+                // SAFETY: nothing made from the instance is alive.
+                unsafe { instance.destroy_instance(None) };
+                Err(e)
+            }
+        }
+    }
+
+    fn open_on(
+        _entry: &ash::Entry,
+        instance: &ash::Instance,
+        choice: DeviceChoice,
+    ) -> Result<OpenParts, String> {
+        // SAFETY: the instance is valid for these queries.
+        let physical = unsafe { instance.enumerate_physical_devices() }
+            .map_err(|e| format!("cannot list Vulkan devices: {e}"))?;
+        let mut seen = Vec::new();
+        let mut found = None;
+        for pd in physical {
+            // SAFETY: pd comes from this instance.
+            let props = unsafe { instance.get_physical_device_properties(pd) };
+            let name = c_text(props.device_name_as_c_str());
+            let wanted = match choice {
+                DeviceChoice::Ids { vendor, device } => {
+                    props.vendor_id == vendor && props.device_id == device
+                }
+                DeviceChoice::NameContains(text) => name.contains(text),
+            };
+            seen.push(name.clone());
+            if wanted {
+                found = Some((pd, props, name));
+                break;
+            }
+        }
+        let Some((pd, props, name)) = found else {
+            return Err(format!(
+                "no Vulkan device matches {choice:?} (devices: {})",
+                if seen.is_empty() {
+                    "none".to_string()
+                } else {
+                    seen.join(", ")
+                }
+            ));
+        };
+        // SAFETY: pd comes from this instance.
+        let extensions = unsafe { instance.enumerate_device_extension_properties(pd) }
+            .map_err(|e| format!("{name}: cannot list its extensions: {e}"))?;
+        let has = |ext: &CStr| {
+            extensions
+                .iter()
+                .any(|e| e.extension_name_as_c_str().is_ok_and(|n| n == ext))
+        };
+        let stats_ext = ash::khr::pipeline_executable_properties::NAME;
+        if !has(stats_ext) {
+            return Err(format!(
+                "{name} does not report shader statistics (no {})",
+                stats_ext.to_string_lossy()
+            ));
+        }
+        let api = (
+            vk::api_version_major(props.api_version),
+            vk::api_version_minor(props.api_version),
+        );
+        let vulkan13 = api >= (1, 3);
+        // What the device has, to enable what wgpu would: f64, robust
+        // buffer access (wgpu's bounds policy relies on it), workgroup
+        // memory zeroed natively, subgroups of the size the driver picks.
+        let mut exec_features =
+            vk::PhysicalDevicePipelineExecutablePropertiesFeaturesKHR::default();
+        let mut f13 = vk::PhysicalDeviceVulkan13Features::default();
+        let mut robust2 = vk::PhysicalDeviceRobustness2FeaturesEXT::default();
+        let has_robust2 = has(ash::ext::robustness2::NAME);
+        {
+            let mut query = vk::PhysicalDeviceFeatures2::default().push_next(&mut exec_features);
+            if vulkan13 {
+                query = query.push_next(&mut f13);
+            }
+            if has_robust2 {
+                query = query.push_next(&mut robust2);
+            }
+            // SAFETY: a valid chain of feature structs for pd.
+            unsafe { instance.get_physical_device_features2(pd, &mut query) };
+        }
+        if exec_features.pipeline_executable_info != vk::TRUE {
+            return Err(format!("{name}: pipelineExecutableInfo is not supported"));
+        }
+        // SAFETY: pd comes from this instance.
+        let core = unsafe { instance.get_physical_device_features(pd) };
+        let families = unsafe { instance.get_physical_device_queue_family_properties(pd) };
+        let family = families
+            .iter()
+            .position(|f| f.queue_flags.contains(vk::QueueFlags::COMPUTE))
+            .ok_or_else(|| format!("{name} has no compute queue"))? as u32;
+        let priorities = [1.0f32];
+        let queues = [vk::DeviceQueueCreateInfo::default()
+            .queue_family_index(family)
+            .queue_priorities(&priorities)];
+        let enabled_core = vk::PhysicalDeviceFeatures::default()
+            .shader_float64(core.shader_float64 == vk::TRUE)
+            .robust_buffer_access(core.robust_buffer_access == vk::TRUE);
+        let mut enable_exec = vk::PhysicalDevicePipelineExecutablePropertiesFeaturesKHR::default()
+            .pipeline_executable_info(true);
+        let zero_native = vulkan13 && f13.shader_zero_initialize_workgroup_memory == vk::TRUE;
+        let varying_subgroups = vulkan13 && f13.subgroup_size_control == vk::TRUE;
+        let mut enable13 = vk::PhysicalDeviceVulkan13Features::default()
+            .shader_zero_initialize_workgroup_memory(zero_native)
+            .subgroup_size_control(varying_subgroups);
+        let mut enable_robust2 = vk::PhysicalDeviceRobustness2FeaturesEXT::default()
+            .robust_buffer_access2(robust2.robust_buffer_access2 == vk::TRUE);
+        let mut names = vec![stats_ext.as_ptr()];
+        if has_robust2 {
+            names.push(ash::ext::robustness2::NAME.as_ptr());
+        }
+        let mut info = vk::DeviceCreateInfo::default()
+            .queue_create_infos(&queues)
+            .enabled_extension_names(&names)
+            .enabled_features(&enabled_core)
+            .push_next(&mut enable_exec);
+        if vulkan13 {
+            info = info.push_next(&mut enable13);
+        }
+        if has_robust2 {
+            info = info.push_next(&mut enable_robust2);
+        }
+        // SAFETY: every feature enabled was reported supported above.
+        let device = unsafe { instance.create_device(pd, &info, None) }
+            .map_err(|e| format!("cannot open {name}: {e}"))?;
+        let executables = ash::khr::pipeline_executable_properties::Device::new(instance, &device);
+        // The driver's name, as wgpu's AdapterInfo::driver_info gives it,
+        // and the subgroup operations wgpu's SUBGROUP feature needs.
+        let mut driver_props = vk::PhysicalDeviceDriverProperties::default();
+        let mut subgroup = vk::PhysicalDeviceSubgroupProperties::default();
+        let mut props2 = vk::PhysicalDeviceProperties2::default()
+            .push_next(&mut driver_props)
+            .push_next(&mut subgroup);
+        // SAFETY: a valid chain for pd.
+        unsafe { instance.get_physical_device_properties2(pd, &mut props2) };
+        let needed = vk::SubgroupFeatureFlags::BASIC
+            | vk::SubgroupFeatureFlags::VOTE
+            | vk::SubgroupFeatureFlags::ARITHMETIC
+            | vk::SubgroupFeatureFlags::BALLOT
+            | vk::SubgroupFeatureFlags::SHUFFLE
+            | vk::SubgroupFeatureFlags::SHUFFLE_RELATIVE;
+        let l = &props.limits;
+        let traits = AdapterTraits {
+            limits: wgpu::Limits {
+                max_compute_workgroup_storage_size: l.max_compute_shared_memory_size,
+                max_compute_invocations_per_workgroup: l.max_compute_work_group_invocations,
+                max_compute_workgroup_size_x: l.max_compute_work_group_size[0],
+                ..wgpu::Limits::default()
+            },
+            software: props.device_type == vk::PhysicalDeviceType::CPU,
+            subgroups: subgroup
+                .supported_stages
+                .contains(vk::ShaderStageFlags::COMPUTE)
+                && subgroup.supported_operations.contains(needed),
+        };
+        let driver = format!(
+            "{} {}",
+            c_text(driver_props.driver_name_as_c_str()),
+            c_text(driver_props.driver_info_as_c_str())
+        );
+        Ok(OpenParts {
+            device,
+            executables,
+            name,
+            vendor_id: props.vendor_id,
+            driver,
+            traits,
+            language: language_version(api.0, api.1),
+            zero: if zero_native {
+                ZeroWorkgroupMemory::Native
+            } else {
+                ZeroWorkgroupMemory::Polyfill
+            },
+            varying_subgroups,
+        })
+    }
+
+    /// Compiles `kernel` as wgpu would and returns what the driver reports
+    /// of each executable it made (a compute pipeline has one).
+    pub fn compile(&self, kernel: &KernelSource) -> Result<Vec<Executable>, String> {
+        let words = kernel_spirv(kernel, self.language, self.zero)?;
+        let bindings = buffer_bindings(kernel)?;
+        let d = &self.device;
+        let mut made = Made::new(d);
+        // SAFETY: every object is made on this device from valid create
+        // infos, and `made` destroys each once, after the pipeline.
+        unsafe {
+            made.module = d
+                .create_shader_module(&vk::ShaderModuleCreateInfo::default().code(&words), None)
+                .map_err(|e| format!("{}: the driver refused the module: {e}", kernel.entry))?;
+            let groups = bindings.iter().map(|b| b.0 + 1).max().unwrap_or(0);
+            for g in 0..groups {
+                let entries: Vec<vk::DescriptorSetLayoutBinding> = bindings
+                    .iter()
+                    .filter(|b| b.0 == g)
+                    .map(|&(_, binding, uniform)| {
+                        vk::DescriptorSetLayoutBinding::default()
+                            .binding(binding)
+                            .descriptor_type(if uniform {
+                                vk::DescriptorType::UNIFORM_BUFFER
+                            } else {
+                                vk::DescriptorType::STORAGE_BUFFER
+                            })
+                            .descriptor_count(1)
+                            .stage_flags(vk::ShaderStageFlags::COMPUTE)
+                    })
+                    .collect();
+                let layout = d
+                    .create_descriptor_set_layout(
+                        &vk::DescriptorSetLayoutCreateInfo::default().bindings(&entries),
+                        None,
+                    )
+                    .map_err(|e| format!("descriptor set layout: {e}"))?;
+                made.set_layouts.push(layout);
+            }
+            made.layout = d
+                .create_pipeline_layout(
+                    &vk::PipelineLayoutCreateInfo::default().set_layouts(&made.set_layouts),
+                    None,
+                )
+                .map_err(|e| format!("pipeline layout: {e}"))?;
+            let entry = std::ffi::CString::new(kernel.entry.as_str())
+                .map_err(|_| format!("{}: not an entry point name", kernel.entry))?;
+            // As wgpu: the driver picks the subgroup size where it may.
+            let stage_flags = if self.varying_subgroups {
+                vk::PipelineShaderStageCreateFlags::ALLOW_VARYING_SUBGROUP_SIZE
+            } else {
+                vk::PipelineShaderStageCreateFlags::empty()
+            };
+            let stage = vk::PipelineShaderStageCreateInfo::default()
+                .flags(stage_flags)
+                .stage(vk::ShaderStageFlags::COMPUTE)
+                .module(made.module)
+                .name(&entry);
+            let info = vk::ComputePipelineCreateInfo::default()
+                .flags(vk::PipelineCreateFlags::CAPTURE_STATISTICS_KHR)
+                .stage(stage)
+                .layout(made.layout);
+            let pipelines = d
+                .create_compute_pipelines(vk::PipelineCache::null(), &[info], None)
+                .map_err(|(_, e)| {
+                    format!("{}: the driver could not compile it: {e}", kernel.entry)
+                })?;
+            made.pipeline = pipelines[0];
+            let properties = self
+                .executables
+                .get_pipeline_executable_properties(
+                    &vk::PipelineInfoKHR::default().pipeline(made.pipeline),
+                )
+                .map_err(|e| format!("executable properties: {e}"))?;
+            let mut out = Vec::new();
+            for (index, p) in properties.iter().enumerate() {
+                let stats = self
+                    .executables
+                    .get_pipeline_executable_statistics(
+                        &vk::PipelineExecutableInfoKHR::default()
+                            .pipeline(made.pipeline)
+                            .executable_index(index as u32),
+                    )
+                    .map_err(|e| format!("executable statistics: {e}"))?;
+                out.push(Executable {
+                    name: c_text(p.name_as_c_str()),
+                    description: c_text(p.description_as_c_str()),
+                    subgroup_size: p.subgroup_size,
+                    statistics: stats.iter().map(statistic).collect(),
+                });
+            }
+            Ok(out)
+        }
+    }
+}
+
+fn statistic(s: &vk::PipelineExecutableStatisticKHR) -> Statistic {
+    // SAFETY: the union member read is the one `format` names.
+    let value = unsafe {
+        match s.format {
+            vk::PipelineExecutableStatisticFormatKHR::BOOL32 => {
+                StatValue::Bool(s.value.b32 == vk::TRUE)
+            }
+            vk::PipelineExecutableStatisticFormatKHR::INT64 => StatValue::Int(s.value.i64),
+            vk::PipelineExecutableStatisticFormatKHR::FLOAT64 => StatValue::Float(s.value.f64),
+            _ => StatValue::Uint(s.value.u64),
+        }
+    };
+    Statistic {
+        name: c_text(s.name_as_c_str()),
+        description: c_text(s.description_as_c_str()),
+        value,
+    }
+}
+
+struct OpenParts {
+    device: ash::Device,
+    executables: ash::khr::pipeline_executable_properties::Device,
+    name: String,
+    vendor_id: u32,
+    driver: String,
+    traits: AdapterTraits,
+    language: (u8, u8),
+    zero: ZeroWorkgroupMemory,
+    varying_subgroups: bool,
+}
+
+/// The objects one compile makes, destroyed together (a failed step
+/// leaves null handles, which Vulkan's destroy calls ignore).
+struct Made<'a> {
+    device: &'a ash::Device,
+    module: vk::ShaderModule,
+    set_layouts: Vec<vk::DescriptorSetLayout>,
+    layout: vk::PipelineLayout,
+    pipeline: vk::Pipeline,
+}
+
+impl<'a> Made<'a> {
+    fn new(device: &'a ash::Device) -> Made<'a> {
+        Made {
+            device,
+            module: vk::ShaderModule::null(),
+            set_layouts: Vec::new(),
+            layout: vk::PipelineLayout::null(),
+            pipeline: vk::Pipeline::null(),
+        }
+    }
+}
+
+impl Drop for Made<'_> {
+    fn drop(&mut self) {
+        // SAFETY: each handle was made on this device (or is null) and is
+        // destroyed once; nothing uses them after.
+        unsafe {
+            self.device.destroy_pipeline(self.pipeline, None);
+            self.device.destroy_pipeline_layout(self.layout, None);
+            for &l in &self.set_layouts {
+                self.device.destroy_descriptor_set_layout(l, None);
+            }
+            self.device.destroy_shader_module(self.module, None);
+        }
+    }
+}
+
+impl Drop for StatsDevice {
+    fn drop(&mut self) {
+        // SAFETY: every pipeline made on the device is already destroyed.
+        unsafe {
+            self.device.destroy_device(None);
+            self.instance.destroy_instance(None);
+        }
+    }
+}
