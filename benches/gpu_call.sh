@@ -6,7 +6,7 @@
 #
 # On the GPU machine, after a release build and packing here:
 #   cargo build --release --bins --benches --tests
-#   ../shared/device/pack.sh gpu_targets gpu_ensemble gpu_table gpu_precision
+#   ../shared/device/pack.sh gpu_registers gpu_targets gpu_ensemble gpu_table gpu_precision
 #   device call, carry [".devbin"]: bash .devbin/on-gpu.sh 'bash ../benches/gpu_call.sh 420'
 # (on-gpu.sh runs its command from .devbin/, with the packed binaries on PATH).
 #
@@ -62,6 +62,10 @@ step() {
 # A step's own environment goes through `env VAR=VALUE... COMMAND`: `timeout` runs an
 # executable, so a shell function there fails with exit 127.
 
+# 0. The registers each kernel's thread holds, as NVIDIA's driver reports them, and the
+#    workgroups an SM holds by them: whether Table S1 scenes can share an SM at all. It
+#    compiles, runs nothing, and takes seconds (benches/gpu_registers.rs).
+step registers 60 gpu_registers
 # 1. The targets, met or not: auto's pick against every launch timed again, Table S1
 #    µs/step, 256 scenes' aggregate, 64 scenes against one at a time, output cost.
 step targets 180 gpu_targets

@@ -27,6 +27,9 @@
 //! an SM.
 //! SLIPFRONT_GPU_REGISTERS_LAUNCHES=resident/1024,persistent/256 compiles
 //! only those launches.
+//! SLIPFRONT_GPU_REGISTERS_SET=TWO_LANES_A_ROUND=0,KEEP_JUNCTION_SUMS=0
+//! compiles every kernel with those override constants changed, where it
+//! has them: what a kernel's options cost in registers.
 
 use slipfront::engines::gpu::compile::KernelSource;
 use slipfront::engines::gpu::driver_stats::{
@@ -70,6 +73,25 @@ fn launches() -> Vec<Launch> {
             Launch::named(n).unwrap_or_else(|| {
                 panic!("SLIPFRONT_GPU_REGISTERS_LAUNCHES: `{n}` is not a launch name")
             })
+        })
+        .collect()
+}
+
+/// `SLIPFRONT_GPU_REGISTERS_SET`: NAME=VALUE pairs, comma-separated.
+fn constants_set() -> Vec<(String, f64)> {
+    let Ok(list) = std::env::var("SLIPFRONT_GPU_REGISTERS_SET") else {
+        return Vec::new();
+    };
+    list.split(',')
+        .filter(|pair| !pair.trim().is_empty())
+        .map(|pair| {
+            let (name, value) = pair.split_once('=').unwrap_or_else(|| {
+                panic!("SLIPFRONT_GPU_REGISTERS_SET: `{pair}` is not NAME=VALUE")
+            });
+            let value = value.trim().parse().unwrap_or_else(|_| {
+                panic!("SLIPFRONT_GPU_REGISTERS_SET: `{value}` is not a number")
+            });
+            (name.trim().to_string(), value)
         })
         .collect()
 }
@@ -120,6 +142,8 @@ fn all_statistics(e: &Executable) -> String {
 struct Table<'a> {
     device: &'a StatsDevice,
     traits: AdapterTraits,
+    /// Override constants changed from the engine's (`SLIPFRONT_GPU_REGISTERS_SET`).
+    set: Vec<(String, f64)>,
     /// Why a row did not compile, each reason once.
     not_built: Vec<String>,
 }
@@ -134,7 +158,13 @@ impl Table<'_> {
                 return;
             }
         };
-        for k in &sources {
+        for mut k in sources {
+            for (name, value) in &self.set {
+                if let Some(slot) = k.constants.iter_mut().find(|(n, _)| n == name) {
+                    slot.1 = *value;
+                }
+            }
+            let k = &k;
             match self.device.compile(k) {
                 Ok(executables) => {
                     for e in &executables {
@@ -218,6 +248,7 @@ fn main() {
     let mut table = Table {
         device: &device,
         traits,
+        set: constants_set(),
         not_built: Vec::new(),
     };
     let scenes = [

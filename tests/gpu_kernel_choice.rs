@@ -603,3 +603,50 @@ fn a_launch_named_by_its_flags_is_the_one_described() {
     assert!(!named.contains(merged), "{named}");
     assert!(named.contains(patches), "{named}");
 }
+
+/// The kernels the driver statistics compile (`GpuEngine::kernel_sources_on`,
+/// decided without a device) are the ones an engine built with the same
+/// launch compiles: the same WGSL, entry points and override constants,
+/// for every kernel (the tiled kernel's gather too) and in f64. The
+/// control: another thread count gives other constants.
+#[test]
+fn kernel_sources_without_a_device_are_the_engines_own() {
+    use slipfront::engines::gpu::AdapterTraits;
+    let ctx = ctx();
+    let traits = AdapterTraits::of(&ctx);
+    let m = small(&[]);
+    for name in [
+        "one-step",
+        "one-step/bond-patches",
+        "one-step-lanes",
+        "persistent/64",
+        "persistent/128/lanes-in-storage",
+        "resident/64/bond-patches",
+        "tiled/64/8x4",
+    ] {
+        let opts = Launch::named(name).unwrap().options(GpuOptions::default());
+        let engine = GpuEngine::with_context(&m, ctx.clone(), opts).unwrap();
+        let planned = GpuEngine::<f32>::kernel_sources_on(&m, opts, &traits).unwrap();
+        assert_eq!(engine.kernel_sources(), planned, "{name}");
+        let entries: Vec<&str> = planned.iter().map(|k| k.entry.as_str()).collect();
+        let tiled = name.starts_with("tiled");
+        assert_eq!(
+            entries.len(),
+            if tiled { 2 } else { 1 },
+            "{name}: {entries:?}"
+        );
+    }
+    let opts = Launch::named("persistent/64")
+        .unwrap()
+        .options(GpuOptions::default());
+    let engine = GpuEngine::<f64>::with_precision_and_context(&m, ctx.clone(), opts).unwrap();
+    let planned = GpuEngine::<f64>::kernel_sources_on(&m, opts, &traits).unwrap();
+    assert_eq!(engine.kernel_sources(), planned);
+    assert_eq!(planned[0].precision, "f64");
+    let other = Launch::named("persistent/128")
+        .unwrap()
+        .options(GpuOptions::default());
+    let other = GpuEngine::<f64>::kernel_sources_on(&m, other, &traits).unwrap();
+    assert_ne!(other, planned, "the thread count is in the constants");
+    assert_eq!(other[0].constant("PERSISTENT_THREADS"), Some(128.0));
+}

@@ -1,0 +1,153 @@
+//! The driver's own figures for the kernels (`driver_stats`), from a real
+//! production compiler on a machine without a GPU: Mesa's RADV on its null
+//! device (`RADV_FORCE_FAMILY`), AMD's ACO compiler, which reports its
+//! registers through VK_KHR_pipeline_executable_properties. The same
+//! Debian package as lavapipe (mesa-vulkan-drivers) ships it. In CI
+//! (`CI=true`) these tests fail, never skip, without it.
+//!
+//! This binary never opens wgpu: with RADV_FORCE_FAMILY set, wgpu would
+//! list the null device as a discrete GPU and pick it. The engine's own
+//! kernels are taken device-free (`GpuEngine::kernel_sources_on`);
+//! `tests/gpu_engine.rs` checks they are the ones an engine compiles.
+
+use slipfront::engines::gpu::compile::{KernelBuild, KernelSource, ShaderChecks};
+use slipfront::engines::gpu::driver_stats::{DeviceChoice, StatsDevice};
+use slipfront::engines::gpu::kernel_choice::Launch;
+use slipfront::engines::gpu::shaders::{Kernel, LaneMerge};
+use slipfront::engines::gpu::{GpuEngine, GpuOptions};
+use slipfront::model::scenario::built_in;
+use slipfront::{Model, Scenario};
+
+/// RADV's null device for one RDNA2 family, or None (outside CI) where
+/// Mesa's radv is not installed.
+fn radv() -> Option<StatsDevice> {
+    // SAFETY (of set_var): every test of this binary sets the same value
+    // before any Vulkan call, so a concurrent read sees it either way.
+    if std::env::var_os("RADV_FORCE_FAMILY").is_none() {
+        std::env::set_var("RADV_FORCE_FAMILY", "navi21");
+    }
+    match StatsDevice::open(DeviceChoice::NameContains("RADV")) {
+        Ok(d) => Some(d),
+        Err(why) => {
+            assert!(
+                std::env::var("CI").map_or(true, |v| v != "true"),
+                "Mesa's RADV null device is required in CI (apt-get install \
+                 mesa-vulkan-drivers): {why}"
+            );
+            eprintln!("skipped: {why}");
+            None
+        }
+    }
+}
+
+fn table_s1(set: &[&str]) -> Model {
+    let text = built_in("tromborg2014_precursors").unwrap();
+    let set: Vec<String> = set.iter().map(|s| s.to_string()).collect();
+    Model::from_scenario(&Scenario::parse(text, "table S1", &set).unwrap(), false).unwrap()
+}
+
+fn step_source<T: slipfront::engines::gpu::GpuReal>(
+    dev: &StatsDevice,
+    model: &Model,
+    launch: &str,
+) -> KernelSource {
+    let opts = Launch::named(launch)
+        .unwrap()
+        .options(GpuOptions::default());
+    let mut sources = GpuEngine::<T>::kernel_sources_on(model, opts, &dev.traits).unwrap();
+    sources.remove(0)
+}
+
+fn registers(dev: &StatsDevice, k: &KernelSource) -> u64 {
+    let executables = dev.compile(k).unwrap();
+    assert_eq!(executables.len(), 1, "a compute pipeline is one executable");
+    executables[0]
+        .registers()
+        .unwrap_or_else(|| panic!("{}: no register count in {:?}", k.entry, executables[0]))
+}
+
+/// Every kernel of Table S1 compiles on the driver as the engine builds it
+/// there, and reports the registers a thread holds. The figures are the
+/// compiler's, not constants: a kernel with the junction phase needs more
+/// registers than the same kernel with Coulomb friction, and a kernel
+/// that stores one number fewer than any of them.
+#[test]
+fn the_driver_reports_each_kernels_registers() {
+    let Some(dev) = radv() else { return };
+    let shipped = table_s1(&[]);
+    let coulomb = table_s1(&["friction.law=coulomb"]);
+    for launch in [
+        "one-step",
+        "one-step-lanes",
+        "persistent/256",
+        "resident/256",
+        "tiled/256/8x4",
+    ] {
+        let k = step_source::<f32>(&dev, &shipped, launch);
+        let r = registers(&dev, &k);
+        assert!(r > 0 && r <= 256, "{launch}: {r} registers");
+    }
+    for launch in ["persistent/256", "resident/1024"] {
+        let junctions = registers(&dev, &step_source::<f32>(&dev, &shipped, launch));
+        let plain = registers(&dev, &step_source::<f32>(&dev, &coulomb, launch));
+        assert!(
+            plain < junctions,
+            "{launch}: Coulomb {plain} registers, junctions {junctions}"
+        );
+    }
+    // f64 compiles too (RADV has f64 shaders).
+    let r64 = registers(&dev, &step_source::<f64>(&dev, &shipped, "persistent/256"));
+    assert!(r64 > 0);
+    let trivial = KernelSource {
+        kernel: Kernel::OneStep,
+        precision: "f32",
+        build: KernelBuild {
+            lanes: LaneMerge::Storage,
+            checks: ShaderChecks::Trusted,
+        },
+        entry: "store_one".into(),
+        source: "@group(0) @binding(0) var<storage, read_write> out: array<u32>;\n\
+                 @compute @workgroup_size(64) fn store_one(@builtin(global_invocation_id) id: \
+                 vec3<u32>) { out[id.x] = 1u; }"
+            .into(),
+        constants: vec![],
+    };
+    let least = registers(&dev, &trivial);
+    let one_step = registers(&dev, &step_source::<f32>(&dev, &shipped, "one-step"));
+    assert!(
+        least < one_step,
+        "a single store: {least}, one-step: {one_step}"
+    );
+}
+
+/// A kernel the driver cannot be given is an error naming it, not a
+/// panic: WGSL that does not parse, and an override constant the module
+/// does not declare.
+#[test]
+fn a_kernel_that_cannot_compile_is_an_error_naming_it() {
+    let Some(dev) = radv() else { return };
+    let shipped = table_s1(&[]);
+    let mut k = step_source::<f32>(&dev, &shipped, "persistent/256");
+    k.constants.push(("NO_SUCH_CONSTANT".into(), 1.0));
+    let e = dev.compile(&k).unwrap_err();
+    assert!(
+        e.contains("persistent_steps") && e.contains("override"),
+        "{e}"
+    );
+    let mut k = step_source::<f32>(&dev, &shipped, "one-step");
+    k.source.push_str("\nfn broken( {");
+    let e = dev.compile(&k).unwrap_err();
+    assert!(e.contains("one_step"), "{e}");
+}
+
+/// A device that is not there is an error listing the devices seen.
+#[test]
+fn a_missing_device_is_named_with_those_seen() {
+    if radv().is_none() {
+        return;
+    }
+    let e = StatsDevice::open(DeviceChoice::NameContains("no such GPU"))
+        .err()
+        .expect("no device has that name");
+    assert!(e.contains("no such GPU") && e.contains("RADV"), "{e}");
+}
