@@ -146,6 +146,31 @@ fn lane_tree_add(t: ptr<function, LaneTree>, k: u32, leaf: LaneSum) -> LaneSum {
     return lane_sum_merge((*t).l5, s);
 }
 
+// The whole tree of the n leaves added (n ≥ 1; `last`: what the last
+// lane_tree_add returned), as the complete tree of 64 leaves with the
+// missing ones zero, which a merge leaves as they are: the subtrees still
+// waiting for a sibling, merged from the lowest up, each on the left.
+fn lane_tree_close(t: ptr<function, LaneTree>, n: u32, last: LaneSum) -> LaneSum {
+    var total = last;
+    let low = countTrailingZeros(n);
+    if low < 1u && (n & 2u) != 0u {
+        total = lane_sum_merge((*t).l1, total);
+    }
+    if low < 2u && (n & 4u) != 0u {
+        total = lane_sum_merge((*t).l2, total);
+    }
+    if low < 3u && (n & 8u) != 0u {
+        total = lane_sum_merge((*t).l3, total);
+    }
+    if low < 4u && (n & 16u) != 0u {
+        total = lane_sum_merge((*t).l4, total);
+    }
+    if low < 5u && (n & 32u) != 0u {
+        total = lane_sum_merge((*t).l5, total);
+    }
+    return total;
+}
+
 fn lane_sum_merge(a: LaneSum, b: LaneSum) -> LaneSum {
     return LaneSum(
         force_sum_merge(a.anchored, b.anchored),
@@ -177,16 +202,23 @@ fn pinned_friction(jb: JunctionBlock, total: LaneSum) -> real {
     return force_sum_value(force_sum_add(total.anchored, -moved));
 }
 
-// The friction on interface block ix from its merged lane sums, its other
+// What a kept block's friction is made from, in place of its merged lane
+// sums: its kept sums. Taken before a block's lane sums would be merged,
+// and only for a kept block, so the kept sums are not held through the
+// merge of a block that is summed (a thread's registers: benches/gpu_registers.rs).
+fn kept_lane_sum(jb: JunctionBlock) -> LaneSum {
+    return LaneSum(jb.sums.anchored, force_sum_add(force_sum_zero(), jb.sums.stiffness), 0.0, 0.0, 0u, 0u);
+}
+
+// The friction on interface block ix from its merged lane sums (a kept
+// block's: kept_lane_sum), its other
 // force along x and its velocity v(n-1/2): the pinned junctions' force plus
 // the slipping junctions' n mu_d f_N, which under the at-rest rule `hold`
 // (c.law0 != 0) stops the block this step when that bound allows, and
 // under `sign` pushes against v (the thesis's rule).
 fn junction_friction(ix: u32, jb: JunctionBlock, lanes: LaneSum, other: real) -> real {
-    var total = lanes;
-    if jb.kept {
-        total = LaneSum(jb.sums.anchored, force_sum_add(force_sum_zero(), jb.sums.stiffness), 0.0, 0.0, 0u, 0u);
-    } else if jb.keeps {
+    let total = lanes;
+    if !jb.kept && jb.keeps {
         // Kept only while every junction is pinned (stiffness_max 0: empty).
         let k_max = select(0.0, total.stiffness_max, total.slipping == 0u);
         let sums = JunctionCache(total.anchored, jb.reference, force_sum_value(total.stiffness), total.stretch_max, k_max, 0.0);

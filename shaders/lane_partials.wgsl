@@ -7,50 +7,29 @@
 // CPU twin: src/engines/kernels/junctions.rs merge_lanes.
 // import: junctions, lane_merge, state
 
-// Lane l of the block whose lanes start at `first`, or the zero sum past
-// its last lane.
-fn lane_partial_or_zero(first: u32, l: u32, lanes: u32) -> LaneSum {
-    if l < lanes {
-        return lane_partial[first + l];
-    }
-    return lane_sum_zero();
-}
-
 // The lane sums of one interface block, lanes first .. first + lanes of
-// lane_partial, merged as the CPU twin's tree: eight subtrees of eight
-// lanes. Each subtree's eight loads go out together ahead of its merges,
-// and no merge waits on more than six before it.
+// lane_partial, merged as the CPU twin's tree: its subtrees (lanes, or
+// runs merged in subgroups, lane_subtree_stride apart) added to the tree
+// one at a time (lane_tree_add), two loaded together a round, and the
+// tree closed over the subtrees there are (lane_tree_close), as if the
+// missing ones were zero. Two lane sums live at a time, not eight: eight
+// held sixty-four values a thread through the merge, the kernel's most
+// (benches/gpu_registers.rs), on a path that on NVIDIA loads two. Where a
+// subgroup merges 32 lanes, a block's two subtrees take one round trip.
 fn merged_lane_partials(first: u32, lanes: u32) -> LaneSum {
     let k = lane_subtree_stride();
-    if k >= 8u {
-        // At most eight subtrees (JUNCTION_LANES / k), all loaded before
-        // the first merge; past the block's lanes, the zero sum.
-        return lane_tree8(
-            lane_partial_or_zero(first, 0u, lanes),
-            lane_partial_or_zero(first, k, lanes),
-            lane_partial_or_zero(first, 2u * k, lanes),
-            lane_partial_or_zero(first, 3u * k, lanes),
-            lane_partial_or_zero(first, 4u * k, lanes),
-            lane_partial_or_zero(first, 5u * k, lanes),
-            lane_partial_or_zero(first, 6u * k, lanes),
-            lane_partial_or_zero(first, 7u * k, lanes),
-        );
-    }
+    let n = (lanes + k - 1u) / k;
     var tree: LaneTree;
-    var total = lane_sum_zero();
-    for (var k = 0u; k < 8u; k++) {
-        let l = 8u * k;
-        total = lane_tree_add(&tree, k, lane_tree8(
-            lane_partial_or_zero(first, l, lanes),
-            lane_partial_or_zero(first, l + 1u, lanes),
-            lane_partial_or_zero(first, l + 2u, lanes),
-            lane_partial_or_zero(first, l + 3u, lanes),
-            lane_partial_or_zero(first, l + 4u, lanes),
-            lane_partial_or_zero(first, l + 5u, lanes),
-            lane_partial_or_zero(first, l + 6u, lanes),
-            lane_partial_or_zero(first, l + 7u, lanes),
-        ));
+    var last = lane_sum_zero();
+    var i = 0u;
+    for (; i + 1u < n; i += 2u) {
+        let a = lane_partial[first + i * k];
+        let b = lane_partial[first + (i + 1u) * k];
+        last = lane_tree_add(&tree, i, a);
+        last = lane_tree_add(&tree, i + 1u, b);
     }
-    // Leaf 7 completed the tree of the eight subtrees.
-    return total;
+    if i < n {
+        last = lane_tree_add(&tree, i, lane_partial[first + i * k]);
+    }
+    return lane_tree_close(&tree, n, last);
 }

@@ -84,8 +84,10 @@ fn one_step_lanes(
                 friction = contact[interface_base() + w].x;
             } else {
                 f = interface_bulk;
-                var lane_sums = lane_sum_zero();
-                if !jb.kept {
+                var lane_sums: LaneSum;
+                if jb.kept {
+                    lane_sums = kept_lane_sum(jb);
+                } else {
                     lane_sums = lane_tree8(lane_sum[0], lane_sum[8], lane_sum[16], lane_sum[24], lane_sum[32], lane_sum[40], lane_sum[48], lane_sum[56]);
                 }
                 friction = junction_friction(w, jb, lane_sums, f.x);

@@ -193,8 +193,10 @@ fn persistent_steps(
             if FRICTION_LAW != LAW_NONE && i < c.nx {
                 if FRICTION_LAW == LAW_JUNCTIONS && !ready {
                     let jb = junction_block(i, ld);
-                    var lane_sums = lane_sum_zero();
-                    if !jb.kept {
+                    var lane_sums: LaneSum;
+                    if jb.kept {
+                        lane_sums = kept_lane_sum(jb);
+                    } else {
                         lane_sums = merged_lane_partials(lane_base() + i * lanes, lanes);
                     }
                     friction = junction_friction(i, jb, lane_sums, force[block_base() + i].x);

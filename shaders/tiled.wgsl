@@ -249,8 +249,10 @@ fn tiled_steps(
                 f = tile_force[tile_slot_at(ix, iz)];
                 if FRICTION_LAW == LAW_JUNCTIONS && iz == 0u {
                     let jb = junction_block(ix, ld);
-                    var sums = lane_sum_zero();
-                    if !jb.kept {
+                    var sums: LaneSum;
+                    if jb.kept {
+                        sums = kept_lane_sum(jb);
+                    } else {
                         sums = merged_lane_partials(lane_first + (ix - tile_lo) * lanes, lanes);
                     }
                     friction = junction_friction(ix, jb, sums, f.x);

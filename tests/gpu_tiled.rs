@@ -132,6 +132,73 @@ fn every_kernel_is_the_one_step_kernel_bit_for_bit() {
     assert_ne!(other.disp, reference.disp, "control");
 }
 
+/// A block's lane subtrees merge as the complete tree of 64 lanes, the
+/// missing ones zero, whatever their count (`merged_lane_partials`, which
+/// adds them to the tree one at a time and closes it). Junction counts of
+/// 24 and 56 leave 3 and 7 subtrees of 8 lanes where lanes merge in
+/// subgroups of 8 (lavapipe), and 24 and 56 single lanes where every
+/// lane's sum goes through storage; 7 and 56 leave three subtrees waiting
+/// to be closed. On the kernels that merge partials from storage
+/// (persistent, resident, tiled) they end in the one-step kernel's bits,
+/// whose one thread adds all 64 lane slots. A close that drops a waiting
+/// subtree fails here (tried); one that closes the same subtrees in
+/// another association gave the same bits over this run (the compensated
+/// merge rounds alike there), so the association rests on the tree's
+/// definition (`lane_tree_close`). Negative control: a drive 1e-9 faster
+/// is flagged.
+#[test]
+fn lane_subtrees_of_any_count_merge_as_the_one_step_kernels_tree() {
+    let small: &[&str] = &slipfront::app::verify::SMALL_SCENE;
+    for count in [24, 56] {
+        let ns = format!("friction.junctions.count={count}");
+        let m = model(&[small, &["loading.drive.velocity=0.4", ns.as_str()]].concat());
+        let end = m.prep_steps + 2500;
+        let reference = run_to(&mut one_step(&m), end);
+        println!(
+            "Ns = {count}: {} ruptures by step {end}",
+            reference.total_ruptures()
+        );
+        assert!(
+            reference.total_ruptures() > 100,
+            "Ns = {count}: junctions broke"
+        );
+        for path in [GpuPath::Persistent, GpuPath::Resident, GpuPath::Tiled] {
+            for lane_shuffle in [true, false] {
+                let opts = GpuOptions {
+                    path,
+                    lane_shuffle,
+                    ..GpuOptions::default()
+                };
+                let mut e = GpuEngine::with_options(&m, opts).unwrap();
+                let got = run_to(&mut e, end);
+                let levels = e.lane_shuffle_levels();
+                // Runs of 8 (lavapipe) or more: 3 or more levels merged in
+                // subgroups; none through storage.
+                assert!(
+                    if lane_shuffle {
+                        levels >= 3
+                    } else {
+                        levels == 0
+                    },
+                    "Ns = {count}, {path:?}, shuffle {lane_shuffle}: {levels} levels"
+                );
+                assert!(
+                    got == reference,
+                    "Ns = {count}, {path:?}, shuffle {lane_shuffle}: {} ruptures against {}",
+                    got.total_ruptures(),
+                    reference.total_ruptures()
+                );
+            }
+        }
+        let mut faster = m.clone();
+        if let slipfront::model::Driver::SideSpring { velocity, .. } = &mut faster.driver {
+            *velocity *= 1.0 + 1e-9;
+        }
+        let other = run_to(&mut on_path(&faster, GpuPath::Persistent), end);
+        assert_ne!(other.disp, reference.disp, "control");
+    }
+}
+
 /// Batches cut every 37 steps, each followed by a snapshot (whose forces
 /// the next batch's first step reads from storage), give the bits of one
 /// long run.
