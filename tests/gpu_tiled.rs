@@ -49,6 +49,15 @@ fn on_path(m: &Model, path: GpuPath) -> GpuEngine {
         .unwrap_or_else(|e| panic!("a GPU adapter is required (lavapipe in CI): {e}"))
 }
 
+/// `m` driven 1e-9 faster: the negative control of the bit-for-bit tests.
+fn drive_faster(m: &Model) -> Model {
+    let mut faster = m.clone();
+    if let slipfront::model::Driver::SideSpring { velocity, .. } = &mut faster.driver {
+        *velocity *= 1.0 + 1e-9;
+    }
+    faster
+}
+
 fn run_to(e: &mut GpuEngine, end: u64) -> Snapshot {
     advance_to(e, end).unwrap();
     e.snapshot().unwrap()
@@ -88,10 +97,7 @@ fn the_tiled_kernel_is_the_one_step_kernel_bit_for_bit() {
             assert!(dispatches < end, "{dispatches} dispatches for {end} steps");
         }
     }
-    let mut faster = m.clone();
-    if let slipfront::model::Driver::SideSpring { velocity, .. } = &mut faster.driver {
-        *velocity *= 1.0 + 1e-9;
-    }
+    let faster = drive_faster(&m);
     let other = run_to(&mut tiled(&faster, 8, 4), end);
     assert_ne!(other.disp, reference.disp, "control");
 }
@@ -124,10 +130,7 @@ fn every_kernel_is_the_one_step_kernel_bit_for_bit() {
             reference.total_ruptures()
         );
     }
-    let mut faster = m.clone();
-    if let slipfront::model::Driver::SideSpring { velocity, .. } = &mut faster.driver {
-        *velocity *= 1.0 + 1e-9;
-    }
+    let faster = drive_faster(&m);
     let other = run_to(&mut on_path(&faster, GpuPath::OneStepLanes), end);
     assert_ne!(other.disp, reference.disp, "control");
 }
@@ -190,10 +193,7 @@ fn lane_subtrees_of_any_count_merge_as_the_one_step_kernels_tree() {
                 );
             }
         }
-        let mut faster = m.clone();
-        if let slipfront::model::Driver::SideSpring { velocity, .. } = &mut faster.driver {
-            *velocity *= 1.0 + 1e-9;
-        }
+        let faster = drive_faster(&m);
         let other = run_to(&mut on_path(&faster, GpuPath::Persistent), end);
         assert_ne!(other.disp, reference.disp, "control");
     }

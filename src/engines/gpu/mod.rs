@@ -51,185 +51,28 @@ mod record_pipelines;
 mod recorder;
 mod scene_state;
 pub mod shaders;
+mod step_kernel;
 pub mod tiles;
 
 use crate::engines::step_params::Consts;
 use crate::engines::{Engine, EngineError, EngineState, Sample, SamplePlan, Snapshot};
 use crate::model::real::precision_name;
-use crate::model::scenario::FrictionLaw;
 use crate::model::Model;
 use buffers::{state_group, Buffers, Shape};
-use compile::{KernelBuild, KernelSource, ShaderChecks};
+use compile::{KernelBuild, KernelSource};
 use context::GpuContext;
 pub use device_timer::DispatchTimes;
-use layout::{GpuBatch, GpuJunctionSpring, WORKGROUP};
+use layout::{GpuBatch, GpuJunctionSpring};
 use options::*;
 pub use options::{GpuOptions, GpuOutput, GpuPath, PERSISTENT_THREADS, RESIDENT_THREADS};
 pub use precision::GpuReal;
 use precision::{Coord, Packed};
 pub use record_pipelines::RECORD_SMALL_BLOCKS;
+pub use step_kernel::AdapterTraits;
+use step_kernel::{kernel_sources, KernelPlan};
 
 use shaders::{Kernel, LaneMerge, Variant};
 use std::collections::VecDeque;
-
-/// The kernel an engine steps with, as built: its workgroup's threads and
-/// the tiled kernel's geometry resolved (`kernel_choice::Launch` is what
-/// a choice asks for).
-#[derive(Debug, Clone, Copy)]
-struct StepKernel {
-    kernel: Kernel,
-    threads: u32,
-    geometry: Option<tiles::TileGeometry>,
-    /// Bulk forces by 2×2 patches (`GpuOptions::bond_patches`, on a kernel
-    /// that has them).
-    bond_patches: bool,
-}
-
-impl StepKernel {
-    /// The override constants of the kernel's pipeline: the scene's terms
-    /// (`variant`), then what the kernel's layout needs; `shape`: the
-    /// lattice's (the resident kernel's workgroup arrays).
-    fn constants<T: GpuReal>(
-        &self,
-        variant: &Variant,
-        opts: GpuOptions,
-        shape: Shape,
-        software: bool,
-    ) -> Vec<(&'static str, f64)> {
-        let mut constants = variant.constants.clone();
-        constants.push(("KEEP_JUNCTION_SUMS", opts.keep_junction_sums as u8 as f64));
-        if self.kernel.is_persistent() {
-            constants.push(("PERSISTENT_THREADS", self.threads as f64));
-            // llvmpipe counts the iterations of every inlined loop against
-            // its limit: one junction lane a round there.
-            constants.push(("TWO_LANES_A_ROUND", !software as u8 as f64));
-        }
-        constants.push(("BOND_PATCHES", self.bond_patches as u8 as f64));
-        if self.kernel == Kernel::Resident {
-            constants.push(("RESIDENT_BLOCKS", shape.blocks as f64));
-            constants.push(("REDUCTION_WIDTH", resident_reduction_width::<T>() as f64));
-        }
-        // The kernels whose steps end at a workgroup barrier, so that their
-        // lanes can read their block's kept bit from workgroup memory
-        // (shaders/kept_bits.wgsl): a bit per interface block of the
-        // resident kernel's lattice, or of the tiled kernel's tile.
-        let kept_blocks = match (self.kernel, self.geometry) {
-            (Kernel::Resident, _) => Some(shape.nx),
-            (_, Some(g)) => Some(g.span as usize),
-            _ => None,
-        };
-        if let Some(blocks) = kept_blocks {
-            constants.push(("LANES_READ_KEPT", opts.lanes_read_kept as u8 as f64));
-            constants.push(("KEPT_WORDS", layout::kept_words(blocks) as f64));
-        }
-        if let Some(g) = self.geometry {
-            constants.push(("TILE_WIDTH", g.width as f64));
-            constants.push(("TILE_HALO", g.halo as f64));
-            constants.push(("TILE_BLOCKS", g.blocks as f64));
-            constants.push(("TILE_THREADS", self.threads as f64));
-        }
-        constants
-    }
-
-    /// Workgroups of a step dispatch in x and y (z: the scenes): a tile
-    /// each for the tiled kernel; else a workgroup per interface block's
-    /// junctions (one-step-lanes) and one per `WORKGROUP` blocks (one-step
-    /// with patches: per `WORKGROUP` threads of the interface row's blocks
-    /// and the 2×2 patches above it).
-    fn groups(&self, model: &Model) -> (u32, u32) {
-        if let Some(g) = self.geometry {
-            return (g.tiles, 1);
-        }
-        let junction_groups = match (self.kernel, model.law) {
-            (Kernel::OneStepLanes, FrictionLaw::Junctions | FrictionLaw::SingleJunction) => {
-                model.nx as u32
-            }
-            _ => 0,
-        };
-        if self.bond_patches {
-            // The items of step_patches.wgsl: the interface row a thread a
-            // block, then the patches; with junction workgroups, from the
-            // run of WORKGROUP items that holds item nx (one_step_lanes.wgsl).
-            let (nx, nz) = (model.nx as u32, model.nz as u32);
-            let items = nx + nx.div_ceil(2) * (nz - 1).div_ceil(2);
-            let first = if junction_groups > 0 {
-                nx / WORKGROUP * WORKGROUP
-            } else {
-                0
-            };
-            return groups_for(junction_groups + (items - first).div_ceil(WORKGROUP));
-        }
-        // With junction workgroups, the others start at the first block of
-        // the workgroup-sized run that holds block nx (one_step_lanes.wgsl).
-        let first_plain = if junction_groups > 0 {
-            model.nx as u32 / WORKGROUP * WORKGROUP
-        } else {
-            0
-        };
-        let plain_groups = (model.n_blocks() as u32 - first_plain).div_ceil(WORKGROUP);
-        groups_for(junction_groups + plain_groups)
-    }
-}
-
-/// What decides which step kernel an adapter compiles, short of the
-/// device itself: its limits (workgroup memory and threads), whether it
-/// is a software adapter, and whether it has subgroup operations.
-#[derive(Debug, Clone)]
-pub struct AdapterTraits {
-    pub limits: wgpu::Limits,
-    pub software: bool,
-    pub subgroups: bool,
-}
-
-impl AdapterTraits {
-    pub fn of(ctx: &GpuContext) -> AdapterTraits {
-        AdapterTraits {
-            limits: ctx.limits.clone(),
-            software: ctx.is_software(),
-            subgroups: ctx.has_subgroups(),
-        }
-    }
-
-    /// How junction lanes merge where `wanted` asks for shuffles: in
-    /// subgroups only where the adapter has them.
-    pub fn lane_merge(&self, wanted: bool) -> LaneMerge {
-        if wanted && self.subgroups {
-            LaneMerge::Shuffle
-        } else {
-            LaneMerge::Storage
-        }
-    }
-}
-
-/// The step kernel of a scene as an adapter compiles it (`GpuEngine::plan`).
-struct KernelPlan {
-    step_kernel: StepKernel,
-    variant: Variant,
-    constants: Vec<(&'static str, f64)>,
-    build: KernelBuild,
-}
-
-/// The sources of `kernel`'s pipelines compiled with `build` and
-/// `constants`: its steps, and the tiled kernel's halo gather (`tiled`).
-fn kernel_sources<T: GpuReal>(
-    kernel: Kernel,
-    build: KernelBuild,
-    tiled: bool,
-    constants: &[(&'static str, f64)],
-) -> Vec<KernelSource> {
-    let gather = kernel.gather_entry_point().filter(|_| tiled);
-    std::iter::once(kernel.entry_point())
-        .chain(gather)
-        .map(|entry| KernelSource {
-            kernel,
-            precision: T::NAME,
-            build,
-            entry: entry.to_string(),
-            source: kernel.source_with::<T>(build.lanes),
-            constants: constants.iter().map(|&(n, v)| (n.to_string(), v)).collect(),
-        })
-        .collect()
-}
 
 /// Group 1 of `kernel`: the step offset (dynamic) and the scenes' batches.
 fn batch_group(
@@ -344,12 +187,6 @@ pub struct GpuEngine<T: GpuReal = f32> {
 /// multiple of the adapter's offset alignment, and at least one entry.
 fn record_entry_stride(offset_stride: u64) -> u64 {
     (std::mem::size_of::<layout::GpuRecordEntry>() as u64).next_multiple_of(offset_stride)
-}
-
-pub(crate) fn groups_for(workgroups: u32) -> (u32, u32) {
-    let groups = workgroups.max(1);
-    let x = groups.min(65_535);
-    (x, groups.div_ceil(x))
 }
 
 /// The mixed-precision engine (every adapter).
@@ -477,73 +314,6 @@ impl<T: GpuReal> GpuEngine<T> {
         Ok(())
     }
 
-    /// Fails where `kernel` cannot hold `model` on this adapter (the
-    /// resident kernel's lattice, the tiled kernel's tile in workgroup
-    /// memory); the tiled kernel's geometry.
-    fn kernel_fit(
-        model: &Model,
-        adapter: &AdapterTraits,
-        opts: GpuOptions,
-        kernel: Kernel,
-        threads: u32,
-    ) -> Result<Option<tiles::TileGeometry>, EngineError> {
-        match kernel {
-            Kernel::Resident => {
-                resident_fit::<T>(model, &adapter.limits).map_err(EngineError::Gpu)?;
-                Ok(None)
-            }
-            Kernel::Tiled => {
-                let shape = opts.tile.unwrap_or(tiles::TileShape::DEFAULT);
-                let g = tiles::TileGeometry::new(model, shape).map_err(EngineError::Gpu)?;
-                tiles::tiled_fit::<T>(model, &g, &adapter.limits).map_err(EngineError::Gpu)?;
-                if adapter.software {
-                    tiles::software_fit(model, &g, threads).map_err(EngineError::Gpu)?;
-                }
-                Ok(Some(g))
-            }
-            _ => Ok(None),
-        }
-    }
-
-    /// The step kernel `model` compiles with `opts` on an adapter like
-    /// `adapter`, decided without a device: the kernel, its threads and
-    /// tiles, its override constants and its module's build. `opts.path`
-    /// names the kernel (`auto`'s measurement is resolved before this).
-    fn plan(
-        model: &Model,
-        opts: GpuOptions,
-        adapter: &AdapterTraits,
-    ) -> Result<KernelPlan, EngineError> {
-        let kernel = choose_kernel(opts.path, adapter.software);
-        let threads = persistent_threads(
-            kernel,
-            opts.persistent_threads,
-            &adapter.limits,
-            adapter.software,
-        );
-        let geometry = Self::kernel_fit(model, adapter, opts, kernel, threads)?;
-        let variant = Variant::for_model(model);
-        let step_kernel = StepKernel {
-            kernel,
-            threads,
-            geometry,
-            bond_patches: opts.bond_patches,
-        };
-        let constants =
-            step_kernel.constants::<T>(&variant, opts, Shape::of(model), adapter.software);
-        // One module (and one compiled pipeline) for the one-step kernels.
-        let build = KernelBuild {
-            lanes: adapter.lane_merge(opts.lane_shuffle && kernel.merges_lanes_through_storage()),
-            checks: ShaderChecks::of(opts.shader_checks),
-        };
-        Ok(KernelPlan {
-            step_kernel,
-            variant,
-            constants,
-            build,
-        })
-    }
-
     /// The sources of the pipelines `model` would step with under `opts` on
     /// an adapter like `adapter` (what `kernel_sources` gives of an engine
     /// built there), without a device: for asking another device's
@@ -553,7 +323,7 @@ impl<T: GpuReal> GpuEngine<T> {
         opts: GpuOptions,
         adapter: &AdapterTraits,
     ) -> Result<Vec<KernelSource>, EngineError> {
-        let plan = Self::plan(model, opts, adapter)?;
+        let plan = step_kernel::plan::<T>(model, opts, adapter)?;
         let k = plan.step_kernel.kernel;
         Ok(kernel_sources::<T>(
             k,
@@ -582,7 +352,7 @@ impl<T: GpuReal> GpuEngine<T> {
             variant,
             constants,
             build,
-        } = Self::plan(model, opts, &AdapterTraits::of(&ctx))?;
+        } = step_kernel::plan::<T>(model, opts, &AdapterTraits::of(&ctx))?;
         let kernel = step_kernel.kernel;
         let persistent_threads = step_kernel.threads;
         let geometry = step_kernel.geometry;

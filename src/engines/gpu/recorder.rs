@@ -218,7 +218,8 @@ impl<T: GpuReal> Recorder<T> {
             ));
         }
         let partials = layout.count();
-        let groups = (model.n_blocks() > RECORD_SMALL_BLOCKS).then(|| super::groups_for(partials));
+        let groups = (model.n_blocks() > RECORD_SMALL_BLOCKS)
+            .then(|| super::step_kernel::groups_for(partials));
         let kinetic_in_steps = groups.is_some() && stride_given && steps_sum_kinetic;
         let special = layout.special(models);
         let special_groups = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
