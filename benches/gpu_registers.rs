@@ -176,7 +176,7 @@ impl Table<'_> {
                             _ => "–".into(),
                         };
                         println!(
-                            "| {scene_name} | {} | {} | {} | {} | {:?} | {} | {} | {per_sm} | {} | {} |",
+                            "| {scene_name} | {} | {} | {} | {} | {:?} | {} | {} | {} | {per_sm} | {} |",
                             T::NAME,
                             launch.name(),
                             k.entry,
