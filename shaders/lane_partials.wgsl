@@ -18,7 +18,8 @@
 // subgroup merges 32 lanes, a block's two subtrees take one round trip.
 fn merged_lane_partials(first: u32, lanes: u32) -> LaneSum {
     let k = lane_subtree_stride();
-    let n = (lanes + k - 1u) / k;
+    // k is a power of two: a shift, not a division on the merging thread's path.
+    let n = (lanes + k - 1u) >> countTrailingZeros(k);
     var tree: LaneTree;
     var last = lane_sum_zero();
     var i = 0u;
