@@ -170,7 +170,7 @@ impl Table<'_> {
                     for e in &executables {
                         let regs = e.registers();
                         let per_sm = match regs {
-                            Some(r) if self.device.vendor_id == NVIDIA => {
+                            Some(r) if self.device.vendor_id() == NVIDIA => {
                                 nvidia_workgroups_per_sm(r, threads(k)).to_string()
                             }
                             _ => "–".into(),
@@ -212,7 +212,7 @@ fn main() {
     // is not opened at all (Mesa's null devices cannot run it).
     let (device, traits) = match &named {
         Some(text) => StatsDevice::open(DeviceChoice::NameContains(text)).map(|d| {
-            let t = d.traits.clone();
+            let t = d.traits().clone();
             (d, t)
         }),
         None => context::shared()
@@ -231,7 +231,8 @@ fn main() {
     });
     println!(
         "## The driver's figures for each kernel: {} ({})\n",
-        device.name, device.driver
+        device.name(),
+        device.driver()
     );
     println!(
         "Compiled as the engine builds them on this device (software adapter: {}, subgroups: \

@@ -54,7 +54,7 @@ fn step_source<T: slipfront::engines::gpu::GpuReal>(
     let opts = Launch::named(launch)
         .unwrap()
         .options(GpuOptions::default());
-    let mut sources = GpuEngine::<T>::kernel_sources_on(model, opts, &dev.traits).unwrap();
+    let mut sources = GpuEngine::<T>::kernel_sources_on(model, opts, dev.traits()).unwrap();
     sources.remove(0)
 }
 

@@ -25,15 +25,21 @@ pub enum ZeroWorkgroupMemory {
     Polyfill,
 }
 
-/// The SPIR-V words of `kernel`'s entry point.
+/// A buffer binding a module declares: (group, binding, is uniform).
+pub type BufferBinding = (u32, u32, bool);
+
+/// The SPIR-V words of `kernel`'s entry point, and the buffer bindings its
+/// module declares: the pipeline layout a driver compiles it against. One
+/// parse for both.
 pub fn kernel_spirv(
     kernel: &KernelSource,
     language: (u8, u8),
     zero: ZeroWorkgroupMemory,
-) -> Result<Vec<u32>, String> {
+) -> Result<(Vec<u32>, Vec<BufferBinding>), String> {
     let src = &kernel.source;
     let module = naga::front::wgsl::parse_str(src)
         .map_err(|e| format!("{}: {}", kernel.entry, e.emit_to_string(src)))?;
+    let bindings = buffer_bindings(&module);
     let info = naga::valid::Validator::new(
         naga::valid::ValidationFlags::all(),
         naga::valid::Capabilities::all(),
@@ -81,16 +87,14 @@ pub fn kernel_spirv(
         shader_stage: naga::ShaderStage::Compute,
         entry_point: kernel.entry.clone(),
     };
-    spv::write_vec(&module, &info, &options, Some(&pipeline))
-        .map_err(|e| format!("{}: SPIR-V: {e}", kernel.entry))
+    let words = spv::write_vec(&module, &info, &options, Some(&pipeline))
+        .map_err(|e| format!("{}: SPIR-V: {e}", kernel.entry))?;
+    Ok((words, bindings))
 }
 
-/// The buffer bindings the entry point's module declares, as (group,
-/// binding, is uniform): the pipeline layout a driver compiles it against.
-pub fn buffer_bindings(kernel: &KernelSource) -> Result<Vec<(u32, u32, bool)>, String> {
-    let module = naga::front::wgsl::parse_str(&kernel.source)
-        .map_err(|e| format!("{}: {}", kernel.entry, e.emit_to_string(&kernel.source)))?;
-    let mut out: Vec<(u32, u32, bool)> = module
+/// The buffer bindings `module` declares.
+fn buffer_bindings(module: &naga::Module) -> Vec<BufferBinding> {
+    let mut out: Vec<BufferBinding> = module
         .global_variables
         .iter()
         .filter_map(|(_, var)| {
@@ -104,5 +108,5 @@ pub fn buffer_bindings(kernel: &KernelSource) -> Result<Vec<(u32, u32, bool)>, S
         .collect();
     out.sort();
     out.dedup();
-    Ok(out)
+    out
 }

@@ -4,7 +4,7 @@
 //! the driver's statistics, reads them and destroys the pipeline. It never
 //! runs anything.
 
-use super::spirv::{buffer_bindings, kernel_spirv, language_version, ZeroWorkgroupMemory};
+use super::spirv::{kernel_spirv, language_version, ZeroWorkgroupMemory};
 use super::{Executable, StatValue, Statistic};
 use crate::engines::gpu::compile::KernelSource;
 use crate::engines::gpu::AdapterTraits;
@@ -27,16 +27,7 @@ pub struct StatsDevice {
     // Dropped last: the instance's and device's functions live in its library.
     _entry: ash::Entry,
     instance: ash::Instance,
-    device: ash::Device,
-    executables: ash::khr::pipeline_executable_properties::Device,
-    pub name: String,
-    pub vendor_id: u32,
-    pub driver: String,
-    /// What the engine would decide its kernels by on this device.
-    pub traits: AdapterTraits,
-    language: (u8, u8),
-    zero: ZeroWorkgroupMemory,
-    varying_subgroups: bool,
+    open: OpenDevice,
 }
 
 fn c_text(s: Result<&CStr, std::ffi::FromBytesUntilNulError>) -> String {
@@ -64,19 +55,11 @@ impl StatsDevice {
             )
         }
         .map_err(|e| format!("cannot create a Vulkan instance: {e}"))?;
-        match Self::open_on(&entry, &instance, choice) {
-            Ok(parts) => Ok(StatsDevice {
+        match Self::open_on(&instance, choice) {
+            Ok(open) => Ok(StatsDevice {
                 _entry: entry,
                 instance,
-                device: parts.device,
-                executables: parts.executables,
-                name: parts.name,
-                vendor_id: parts.vendor_id,
-                driver: parts.driver,
-                traits: parts.traits,
-                language: parts.language,
-                zero: parts.zero,
-                varying_subgroups: parts.varying_subgroups,
+                open,
             }),
             Err(e) => {
                 // SAFETY: nothing made from the instance is alive.
@@ -86,11 +69,27 @@ impl StatsDevice {
         }
     }
 
-    fn open_on(
-        _entry: &ash::Entry,
-        instance: &ash::Instance,
-        choice: DeviceChoice,
-    ) -> Result<OpenParts, String> {
+    /// The device's name, as the driver gives it.
+    pub fn name(&self) -> &str {
+        &self.open.name
+    }
+
+    /// Its PCI vendor id (`NVIDIA`).
+    pub fn vendor_id(&self) -> u32 {
+        self.open.vendor_id
+    }
+
+    /// Its driver's name and version.
+    pub fn driver(&self) -> &str {
+        &self.open.driver
+    }
+
+    /// What the engine would decide its kernels by on this device.
+    pub fn traits(&self) -> &AdapterTraits {
+        &self.open.traits
+    }
+
+    fn open_on(instance: &ash::Instance, choice: DeviceChoice) -> Result<OpenDevice, String> {
         // SAFETY: the instance is valid for these queries.
         let physical = unsafe { instance.enumerate_physical_devices() }
             .map_err(|e| format!("cannot list Vulkan devices: {e}"))?;
@@ -240,7 +239,7 @@ impl StatsDevice {
             c_text(driver_props.driver_name_as_c_str()),
             c_text(driver_props.driver_info_as_c_str())
         );
-        Ok(OpenParts {
+        Ok(OpenDevice {
             device,
             executables,
             name,
@@ -260,9 +259,9 @@ impl StatsDevice {
     /// Compiles `kernel` as wgpu would and returns what the driver reports
     /// of each executable it made (a compute pipeline has one).
     pub fn compile(&self, kernel: &KernelSource) -> Result<Vec<Executable>, String> {
-        let words = kernel_spirv(kernel, self.language, self.zero)?;
-        let bindings = buffer_bindings(kernel)?;
-        let d = &self.device;
+        let open = &self.open;
+        let (words, bindings) = kernel_spirv(kernel, open.language, open.zero)?;
+        let d = &open.device;
         let mut made = Made::new(d);
         // SAFETY: every object is made on this device from valid create
         // infos, and `made` destroys each once, after the pipeline.
@@ -304,7 +303,7 @@ impl StatsDevice {
             let entry = std::ffi::CString::new(kernel.entry.as_str())
                 .map_err(|_| format!("{}: not an entry point name", kernel.entry))?;
             // As wgpu: the driver picks the subgroup size where it may.
-            let stage_flags = if self.varying_subgroups {
+            let stage_flags = if open.varying_subgroups {
                 vk::PipelineShaderStageCreateFlags::ALLOW_VARYING_SUBGROUP_SIZE
             } else {
                 vk::PipelineShaderStageCreateFlags::empty()
@@ -324,7 +323,7 @@ impl StatsDevice {
                     format!("{}: the driver could not compile it: {e}", kernel.entry)
                 })?;
             made.pipeline = pipelines[0];
-            let properties = self
+            let properties = open
                 .executables
                 .get_pipeline_executable_properties(
                     &vk::PipelineInfoKHR::default().pipeline(made.pipeline),
@@ -332,7 +331,7 @@ impl StatsDevice {
                 .map_err(|e| format!("executable properties: {e}"))?;
             let mut out = Vec::new();
             for (index, p) in properties.iter().enumerate() {
-                let stats = self
+                let stats = open
                     .executables
                     .get_pipeline_executable_statistics(
                         &vk::PipelineExecutableInfoKHR::default()
@@ -371,7 +370,8 @@ fn statistic(s: &vk::PipelineExecutableStatisticKHR) -> Statistic {
     }
 }
 
-struct OpenParts {
+/// The device and what a compile needs to know of it.
+struct OpenDevice {
     device: ash::Device,
     executables: ash::khr::pipeline_executable_properties::Device,
     name: String,
@@ -424,7 +424,7 @@ impl Drop for StatsDevice {
     fn drop(&mut self) {
         // SAFETY: every pipeline made on the device is already destroyed.
         unsafe {
-            self.device.destroy_device(None);
+            self.open.device.destroy_device(None);
             self.instance.destroy_instance(None);
         }
     }
