@@ -171,6 +171,25 @@ fn lane_tree_close(t: ptr<function, LaneTree>, n: u32, last: LaneSum) -> LaneSum
     return total;
 }
 
+// A lane sum's two maxima (stretch, stiffness) are the same in whatever
+// order they are taken, so a tree of lane sums carries them beside it as
+// one running max (lane_maxima), its levels holding the sums alone
+// (lane_sum_unbounded): in every level they cost the junction kernels 16
+// registers a thread (benches/gpu_registers.rs). The same bits.
+fn lane_maxima(a: LaneSum) -> vec2<real> {
+    return vec2<real>(a.stretch_max, a.stiffness_max);
+}
+
+// The sums and the count of a, its maxima zero (what a tree level holds).
+fn lane_sum_unbounded(a: LaneSum) -> LaneSum {
+    return LaneSum(a.anchored, a.stiffness, 0.0, 0.0, a.slipping, 0u);
+}
+
+// A tree's sums with the maxima taken beside it.
+fn lane_sum_bounded(a: LaneSum, maxima: vec2<real>) -> LaneSum {
+    return LaneSum(a.anchored, a.stiffness, maxima.x, maxima.y, a.slipping, 0u);
+}
+
 fn lane_sum_merge(a: LaneSum, b: LaneSum) -> LaneSum {
     return LaneSum(
         force_sum_merge(a.anchored, b.anchored),

@@ -16,21 +16,26 @@
 // held sixty-four values a thread through the merge, the kernel's most
 // (benches/gpu_registers.rs), on a path that on NVIDIA loads two. Where a
 // subgroup merges 32 lanes, a block's two subtrees take one round trip.
+// The maxima go beside the tree (lane_maxima).
 fn merged_lane_partials(first: u32, lanes: u32) -> LaneSum {
     let k = lane_subtree_stride();
     // k is a power of two: a shift, not a division on the merging thread's path.
     let n = (lanes + k - 1u) >> countTrailingZeros(k);
     var tree: LaneTree;
     var last = lane_sum_zero();
+    var maxima = vec2<real>(0.0, 0.0);
     var i = 0u;
     for (; i + 1u < n; i += 2u) {
         let a = lane_partial[first + i * k];
         let b = lane_partial[first + (i + 1u) * k];
-        last = lane_tree_add(&tree, i, a);
-        last = lane_tree_add(&tree, i + 1u, b);
+        maxima = max(maxima, max(lane_maxima(a), lane_maxima(b)));
+        last = lane_tree_add(&tree, i, lane_sum_unbounded(a));
+        last = lane_tree_add(&tree, i + 1u, lane_sum_unbounded(b));
     }
     if i < n {
-        last = lane_tree_add(&tree, i, lane_partial[first + i * k]);
+        let a = lane_partial[first + i * k];
+        maxima = max(maxima, lane_maxima(a));
+        last = lane_tree_add(&tree, i, lane_sum_unbounded(a));
     }
-    return lane_tree_close(&tree, n, last);
+    return lane_sum_bounded(lane_tree_close(&tree, n, last), maxima);
 }

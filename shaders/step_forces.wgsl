@@ -26,18 +26,22 @@ fn block_forces(i: u32, ld: Loads, ready: bool) -> vec3<real> {
         let jb = junction_block(i, ld);
         // Every lane slot into the tree in order (the CPU twin's
         // merge_lanes), the slots past the last lane as the zero sum.
+        // The maxima beside the tree (lane_maxima).
         var tree: LaneTree;
         var lane_sums: LaneSum;
         if jb.kept {
             lane_sums = kept_lane_sum(jb);
         } else {
+            var maxima = vec2<real>(0.0, 0.0);
             for (var l = 0u; l < JUNCTION_LANES; l++) {
                 var leaf = lane_sum_zero();
                 if l < lanes {
                     leaf = junction_lane(i, l, jb, ld);
                 }
-                lane_sums = lane_tree_add(&tree, l, leaf);
+                maxima = max(maxima, lane_maxima(leaf));
+                lane_sums = lane_tree_add(&tree, l, lane_sum_unbounded(leaf));
             }
+            lane_sums = lane_sum_bounded(lane_sums, maxima);
         }
         friction = junction_friction(i, jb, lane_sums, f.x);
         contact[interface_base() + i] = vec2<real>(friction, foundation_normal(coord_value(load_disp(i).z)));

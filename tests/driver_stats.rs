@@ -120,6 +120,39 @@ fn the_driver_reports_each_kernels_registers() {
     );
 }
 
+/// `kernel` with the override constant `name` set to `value`.
+fn with_constant(kernel: &KernelSource, name: &str, value: f64) -> KernelSource {
+    let mut k = kernel.clone();
+    k.constants.retain(|(n, _)| n != name);
+    k.constants.push((name.into(), value));
+    k
+}
+
+/// Kept junction sums cost the single-workgroup kernels no registers: the
+/// lane sums' two maxima, which only the kept bound reads, go beside the
+/// lane tree as one running max (`lane_maxima`), not in each of its six
+/// levels. Carried in the levels they took 16 VGPRs a thread on this
+/// compiler (88 against 72 with `KEEP_JUNCTION_SUMS` off, session 34).
+#[test]
+fn kept_sums_cost_the_single_workgroup_kernels_no_registers() {
+    let Some(dev) = radv() else { return };
+    let shipped = table_s1(&[]);
+    for launch in ["persistent/256", "resident/1024", "tiled/256/8x4"] {
+        let kept = step_source::<f32>(&dev, &shipped, launch);
+        assert_ne!(
+            kept.constant("KEEP_JUNCTION_SUMS"),
+            Some(0.0),
+            "{launch}: the engine keeps sums"
+        );
+        let with = registers(&dev, &kept);
+        let without = registers(&dev, &with_constant(&kept, "KEEP_JUNCTION_SUMS", 0.0));
+        assert!(
+            with <= without,
+            "{launch}: {with} registers with kept sums, {without} without"
+        );
+    }
+}
+
 /// A kernel the driver cannot be given is an error naming it, not a
 /// panic: WGSL that does not parse, and an override constant the module
 /// does not declare.
