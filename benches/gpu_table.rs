@@ -33,7 +33,8 @@
 //!    `junction_block` for its block's kept flag, as before session 33
 //!    (`GpuOptions::lanes_read_kept`);
 //! 8. what limits an ensemble: the single-workgroup kernels on one Table S1
-//!    scene and on 128, 192 and 256, at 256 threads (and 1024 on the
+//!    scene and on 132, 264 and 528 (one, two and four an SM of an H200 or
+//!    an H100 SXM, 132 SMs), at 256 threads (and 1024 on the
 //!    shipped scene), with Ns = 100 (as shipped), Ns = 16 and Coulomb
 //!    friction in mixed f32, and as shipped in f64. Where the step doubles
 //!    between the counts says how many scenes an SM holds at once; how much
@@ -286,7 +287,7 @@ fn junction_cost(min_seconds: f64) {
 fn ensemble_limits(quick: bool, min_seconds: f64) {
     let counts = counts_from_env(
         "SLIPFRONT_GPU_TABLE_LIMIT_SCENES",
-        if quick { &[1, 4] } else { &[1, 128, 192, 256] },
+        if quick { &[1, 4] } else { &[1, 132, 264, 528] },
     );
     let most = counts.iter().copied().max().unwrap_or(1);
     // Half a second a figure: a step of tens of µs is then thousands of

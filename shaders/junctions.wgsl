@@ -171,6 +171,50 @@ fn lane_tree_close(t: ptr<function, LaneTree>, n: u32, last: LaneSum) -> LaneSum
     return total;
 }
 
+// The tree of at most eight leaves, built one leaf at a time as
+// lane_tree_add builds its first three levels: what a thread holds while
+// it merges lane partials from storage (lane_partials.wgsl), three
+// pending subtrees where the tree of 64 holds six.
+struct LaneTree8 {
+    l0: LaneSum,
+    l1: LaneSum,
+    l2: LaneSum,
+}
+
+// Adds leaf k (k < 8); returns the subtree that leaf completes.
+fn lane_tree8_add(t: ptr<function, LaneTree8>, k: u32, leaf: LaneSum) -> LaneSum {
+    var s = leaf;
+    if (k & 1u) == 0u {
+        (*t).l0 = s;
+        return s;
+    }
+    s = lane_sum_merge((*t).l0, s);
+    if (k & 2u) == 0u {
+        (*t).l1 = s;
+        return s;
+    }
+    s = lane_sum_merge((*t).l1, s);
+    if (k & 4u) == 0u {
+        (*t).l2 = s;
+        return s;
+    }
+    return lane_sum_merge((*t).l2, s);
+}
+
+// The tree of the n leaves added (1 ≤ n ≤ 8), as the complete tree of
+// eight with the missing leaves zero (lane_tree_close's rule).
+fn lane_tree8_close(t: ptr<function, LaneTree8>, n: u32, last: LaneSum) -> LaneSum {
+    var total = last;
+    let low = countTrailingZeros(n);
+    if low < 1u && (n & 2u) != 0u {
+        total = lane_sum_merge((*t).l1, total);
+    }
+    if low < 2u && (n & 4u) != 0u {
+        total = lane_sum_merge((*t).l2, total);
+    }
+    return total;
+}
+
 // A lane sum's two maxima (stretch, stiffness) are the same in whatever
 // order they are taken, so a tree of lane sums carries them beside it as
 // one running max (lane_maxima), its levels holding the sums alone

@@ -8,34 +8,56 @@
 // import: junctions, lane_merge, state
 
 // The lane sums of one interface block, lanes first .. first + lanes of
-// lane_partial, merged as the CPU twin's tree: its subtrees (lanes, or
-// runs merged in subgroups, lane_subtree_stride apart) added to the tree
-// one at a time (lane_tree_add), two loaded together a round, and the
-// tree closed over the subtrees there are (lane_tree_close), as if the
-// missing ones were zero. Two lane sums live at a time, not eight: eight
-// held sixty-four values a thread through the merge, the kernel's most
-// (benches/gpu_registers.rs), on a path that on NVIDIA loads two. Where a
-// subgroup merges 32 lanes, a block's two subtrees take one round trip.
-// The maxima go beside the tree (lane_maxima).
+// lane_partial, merged as the CPU twin's tree. Its subtrees (lanes, or
+// runs merged in subgroups, lane_subtree_stride apart) are added to a
+// tree of at most eight one at a time, two loaded together a round
+// (merged_run), and the tree is closed over the subtrees there are, as if
+// the missing ones were zero. Where no subgroup merged the lanes (64
+// single lanes), runs of eight are merged first and each written over its
+// first slot, then those merged: the same tree of 64, with three pending
+// subtrees on the merging thread, not six. A register is allocated for
+// the deepest tree the code allows, whether or not it runs, and six
+// levels cost the single-workgroup kernels 8 VGPRs a thread
+// (benches/gpu_registers.rs). Eight sums loaded at once had cost 64
+// values (session 34). The maxima go beside the tree (lane_maxima).
 fn merged_lane_partials(first: u32, lanes: u32) -> LaneSum {
     let k = lane_subtree_stride();
     // k is a power of two: a shift, not a division on the merging thread's path.
     let n = (lanes + k - 1u) >> countTrailingZeros(k);
-    var tree: LaneTree;
-    var last = lane_sum_zero();
     var maxima = vec2<real>(0.0, 0.0);
+    let runs = (n + 7u) >> 3u;
+    var total = lane_sum_zero();
+    for (var r = 0u; r < runs; r++) {
+        let at = first + r * 8u * k;
+        total = merged_run(at, k, min(n - 8u * r, 8u), &maxima);
+        if runs > 1u {
+            lane_partial[at] = total;
+        }
+    }
+    if runs > 1u {
+        var none = vec2<real>(0.0, 0.0);
+        total = merged_run(first, 8u * k, runs, &none);
+    }
+    return lane_sum_bounded(total, maxima);
+}
+
+// The n (1 to 8) lane sums at first, first + stride, ... merged as the
+// tree of eight, their maxima taken into *maxima.
+fn merged_run(first: u32, stride: u32, n: u32, maxima: ptr<function, vec2<real>>) -> LaneSum {
+    var tree: LaneTree8;
+    var last = lane_sum_zero();
     var i = 0u;
     for (; i + 1u < n; i += 2u) {
-        let a = lane_partial[first + i * k];
-        let b = lane_partial[first + (i + 1u) * k];
-        maxima = max(maxima, max(lane_maxima(a), lane_maxima(b)));
-        last = lane_tree_add(&tree, i, lane_sum_unbounded(a));
-        last = lane_tree_add(&tree, i + 1u, lane_sum_unbounded(b));
+        let a = lane_partial[first + i * stride];
+        let b = lane_partial[first + (i + 1u) * stride];
+        *maxima = max(*maxima, max(lane_maxima(a), lane_maxima(b)));
+        last = lane_tree8_add(&tree, i, lane_sum_unbounded(a));
+        last = lane_tree8_add(&tree, i + 1u, lane_sum_unbounded(b));
     }
     if i < n {
-        let a = lane_partial[first + i * k];
-        maxima = max(maxima, lane_maxima(a));
-        last = lane_tree_add(&tree, i, lane_sum_unbounded(a));
+        let a = lane_partial[first + i * stride];
+        *maxima = max(*maxima, lane_maxima(a));
+        last = lane_tree8_add(&tree, i, lane_sum_unbounded(a));
     }
-    return lane_sum_bounded(lane_tree_close(&tree, n, last), maxima);
+    return lane_tree8_close(&tree, n, last);
 }

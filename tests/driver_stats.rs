@@ -68,9 +68,9 @@ fn registers(dev: &StatsDevice, k: &KernelSource) -> u64 {
 
 /// Every kernel of Table S1 compiles on the driver as the engine builds it
 /// there, and reports the registers a thread holds. The figures are the
-/// compiler's, not constants: a kernel with the junction phase needs more
-/// registers than the same kernel with Coulomb friction, and a kernel
-/// that stores one number fewer than any of them.
+/// compiler's, not constants: a one-step kernel with the junction phase
+/// needs more registers than the same kernel with Coulomb friction, and a
+/// kernel that stores one number fewer than any of them.
 #[test]
 fn the_driver_reports_each_kernels_registers() {
     let Some(dev) = radv() else { return };
@@ -87,7 +87,7 @@ fn the_driver_reports_each_kernels_registers() {
         let r = registers(&dev, &k);
         assert!(r > 0 && r <= 256, "{launch}: {r} registers");
     }
-    for launch in ["persistent/256", "resident/1024"] {
+    for launch in ["one-step", "one-step-lanes"] {
         let junctions = registers(&dev, &step_source::<f32>(&dev, &shipped, launch));
         let plain = registers(&dev, &step_source::<f32>(&dev, &coulomb, launch));
         assert!(
@@ -149,6 +149,28 @@ fn kept_sums_cost_the_single_workgroup_kernels_no_registers() {
         assert!(
             with <= without,
             "{launch}: {with} registers with kept sums, {without} without"
+        );
+    }
+}
+
+/// The single-workgroup kernels hold a thread's junction phase in the
+/// registers their bulk phase needs anyway: no more than the same kernel
+/// with Coulomb friction (64 VGPRs on this compiler). The lane partials
+/// are merged as a tree of at most eight pending subtrees
+/// (`merged_lane_partials`, runs of eight first where no subgroup merged
+/// them), with the maxima beside it; before session 35 the tree of 64
+/// took them to 72, and to 88 with the maxima in its levels.
+#[test]
+fn the_junction_phase_costs_the_single_workgroup_kernels_no_registers() {
+    let Some(dev) = radv() else { return };
+    let shipped = table_s1(&[]);
+    let coulomb = table_s1(&["friction.law=coulomb"]);
+    for launch in ["persistent/256", "resident/256", "resident/1024"] {
+        let junctions = registers(&dev, &step_source::<f32>(&dev, &shipped, launch));
+        let plain = registers(&dev, &step_source::<f32>(&dev, &coulomb, launch));
+        assert!(
+            junctions <= plain,
+            "{launch}: junctions {junctions} registers, Coulomb {plain}"
         );
     }
 }
