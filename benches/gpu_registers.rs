@@ -262,9 +262,11 @@ fn main() {
             table.rows::<f32>(name, model, launch);
         }
     }
-    let (name, model) = &scenes[0];
-    for &launch in &launches {
-        table.rows::<f64>(name, model, launch);
+    // f64 with its own control: Coulomb friction's kernels in f64.
+    for (name, model) in &scenes {
+        for &launch in &launches {
+            table.rows::<f64>(name, model, launch);
+        }
     }
     if !table.not_built.is_empty() {
         println!("\nNot built:");
