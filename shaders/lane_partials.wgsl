@@ -21,43 +21,50 @@
 // (benches/gpu_registers.rs). Eight sums loaded at once had cost 64
 // values (session 34). The maxima go beside the tree (lane_maxima).
 fn merged_lane_partials(first: u32, lanes: u32) -> LaneSum {
-    let k = lane_subtree_stride();
-    // k is a power of two: a shift, not a division on the merging thread's path.
-    let n = (lanes + k - 1u) >> countTrailingZeros(k);
-    var maxima = vec2<real>(0.0, 0.0);
-    let runs = (n + 7u) >> 3u;
+    var stride = lane_subtree_stride();
+    // A power of two: a shift, not a division on the merging thread's path.
+    var count = (lanes + stride - 1u) >> countTrailingZeros(stride);
+    // One pass where there are at most eight subtrees; else runs of eight,
+    // each written over its first slot, and then a pass over those. One
+    // copy of merged_run for every pass: llvmpipe steps a larger kernel
+    // slower (BENCHMARKS.md, session 35).
     var total = lane_sum_zero();
-    for (var r = 0u; r < runs; r++) {
-        let at = first + r * 8u * k;
-        total = merged_run(at, k, min(n - 8u * r, 8u), &maxima);
-        if runs > 1u {
-            lane_partial[at] = total;
+    loop {
+        let runs = (count + 7u) >> 3u;
+        for (var r = 0u; r < runs; r++) {
+            let at = first + r * 8u * stride;
+            total = merged_run(at, stride, min(count - 8u * r, 8u));
+            if runs > 1u {
+                lane_partial[at] = total;
+            }
         }
+        if runs == 1u {
+            break;
+        }
+        stride *= 8u;
+        count = runs;
     }
-    if runs > 1u {
-        var none = vec2<real>(0.0, 0.0);
-        total = merged_run(first, 8u * k, runs, &none);
-    }
-    return lane_sum_bounded(total, maxima);
+    return total;
 }
 
 // The n (1 to 8) lane sums at first, first + stride, ... merged as the
-// tree of eight, their maxima taken into *maxima.
-fn merged_run(first: u32, stride: u32, n: u32, maxima: ptr<function, vec2<real>>) -> LaneSum {
+// tree of eight, with their maxima.
+fn merged_run(first: u32, stride: u32, n: u32) -> LaneSum {
     var tree: LaneTree8;
     var last = lane_sum_zero();
+    var maxima = vec2<real>(0.0, 0.0);
     var i = 0u;
     for (; i + 1u < n; i += 2u) {
         let a = lane_partial[first + i * stride];
         let b = lane_partial[first + (i + 1u) * stride];
-        *maxima = max(*maxima, max(lane_maxima(a), lane_maxima(b)));
+        maxima = max(maxima, max(lane_maxima(a), lane_maxima(b)));
         last = lane_tree8_add(&tree, i, lane_sum_unbounded(a));
         last = lane_tree8_add(&tree, i + 1u, lane_sum_unbounded(b));
     }
     if i < n {
         let a = lane_partial[first + i * stride];
-        *maxima = max(*maxima, lane_maxima(a));
+        maxima = max(maxima, lane_maxima(a));
         last = lane_tree8_add(&tree, i, lane_sum_unbounded(a));
     }
-    return lane_tree8_close(&tree, n, last);
+    return lane_sum_bounded(lane_tree8_close(&tree, n, last), maxima);
 }
