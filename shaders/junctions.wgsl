@@ -146,35 +146,12 @@ fn lane_tree_add(t: ptr<function, LaneTree>, k: u32, leaf: LaneSum) -> LaneSum {
     return lane_sum_merge((*t).l5, s);
 }
 
-// The whole tree of the n leaves added (n ≥ 1; `last`: what the last
-// lane_tree_add returned), as the complete tree of 64 leaves with the
-// missing ones zero, which a merge leaves as they are: the subtrees still
-// waiting for a sibling, merged from the lowest up, each on the left.
-fn lane_tree_close(t: ptr<function, LaneTree>, n: u32, last: LaneSum) -> LaneSum {
-    var total = last;
-    let low = countTrailingZeros(n);
-    if low < 1u && (n & 2u) != 0u {
-        total = lane_sum_merge((*t).l1, total);
-    }
-    if low < 2u && (n & 4u) != 0u {
-        total = lane_sum_merge((*t).l2, total);
-    }
-    if low < 3u && (n & 8u) != 0u {
-        total = lane_sum_merge((*t).l3, total);
-    }
-    if low < 4u && (n & 16u) != 0u {
-        total = lane_sum_merge((*t).l4, total);
-    }
-    if low < 5u && (n & 32u) != 0u {
-        total = lane_sum_merge((*t).l5, total);
-    }
-    return total;
-}
-
 // The tree of at most eight leaves, built one leaf at a time as
 // lane_tree_add builds its first three levels: what a thread holds while
 // it merges lane partials from storage (lane_partials.wgsl), three
-// pending subtrees where the tree of 64 holds six.
+// pending subtrees where the tree of 64 holds six. Not the tree of 64
+// rebuilt from two of these: the same merges, but llvmpipe then compiles
+// the one-step kernel to other bits at a rounding tie (session 35).
 struct LaneTree8 {
     l0: LaneSum,
     l1: LaneSum,
@@ -201,8 +178,10 @@ fn lane_tree8_add(t: ptr<function, LaneTree8>, k: u32, leaf: LaneSum) -> LaneSum
     return lane_sum_merge((*t).l2, s);
 }
 
-// The tree of the n leaves added (1 ≤ n ≤ 8), as the complete tree of
-// eight with the missing leaves zero (lane_tree_close's rule).
+// The whole tree of the n leaves added (1 ≤ n ≤ 8; `last`: what the last
+// lane_tree8_add returned), as the complete tree of eight with the
+// missing leaves zero, which a merge leaves as they are: the subtrees
+// still waiting for a sibling, merged from the lowest up, each on the left.
 fn lane_tree8_close(t: ptr<function, LaneTree8>, n: u32, last: LaneSum) -> LaneSum {
     var total = last;
     let low = countTrailingZeros(n);

@@ -66,6 +66,17 @@ fn registers(dev: &StatsDevice, k: &KernelSource) -> u64 {
         .unwrap_or_else(|| panic!("{}: no register count in {:?}", k.entry, executables[0]))
 }
 
+/// The registers of `launch` on Table S1 in mixed f32: as shipped
+/// (junctions), and with Coulomb friction.
+fn with_and_without_junctions(dev: &StatsDevice, launch: &str) -> (u64, u64) {
+    let shipped = table_s1(&[]);
+    let coulomb = table_s1(&["friction.law=coulomb"]);
+    (
+        registers(dev, &step_source::<f32>(dev, &shipped, launch)),
+        registers(dev, &step_source::<f32>(dev, &coulomb, launch)),
+    )
+}
+
 /// Every kernel of Table S1 compiles on the driver as the engine builds it
 /// there, and reports the registers a thread holds. The figures are the
 /// compiler's, not constants: a one-step kernel with the junction phase
@@ -75,7 +86,6 @@ fn registers(dev: &StatsDevice, k: &KernelSource) -> u64 {
 fn the_driver_reports_each_kernels_registers() {
     let Some(dev) = radv() else { return };
     let shipped = table_s1(&[]);
-    let coulomb = table_s1(&["friction.law=coulomb"]);
     for launch in [
         "one-step",
         "one-step-lanes",
@@ -88,8 +98,7 @@ fn the_driver_reports_each_kernels_registers() {
         assert!(r > 0 && r <= 256, "{launch}: {r} registers");
     }
     for launch in ["one-step", "one-step-lanes"] {
-        let junctions = registers(&dev, &step_source::<f32>(&dev, &shipped, launch));
-        let plain = registers(&dev, &step_source::<f32>(&dev, &coulomb, launch));
+        let (junctions, plain) = with_and_without_junctions(&dev, launch);
         assert!(
             plain < junctions,
             "{launch}: Coulomb {plain} registers, junctions {junctions}"
@@ -163,11 +172,8 @@ fn kept_sums_cost_the_single_workgroup_kernels_no_registers() {
 #[test]
 fn the_junction_phase_costs_the_single_workgroup_kernels_no_registers() {
     let Some(dev) = radv() else { return };
-    let shipped = table_s1(&[]);
-    let coulomb = table_s1(&["friction.law=coulomb"]);
     for launch in ["persistent/256", "resident/256", "resident/1024"] {
-        let junctions = registers(&dev, &step_source::<f32>(&dev, &shipped, launch));
-        let plain = registers(&dev, &step_source::<f32>(&dev, &coulomb, launch));
+        let (junctions, plain) = with_and_without_junctions(&dev, launch);
         assert!(
             junctions <= plain,
             "{launch}: junctions {junctions} registers, Coulomb {plain}"
