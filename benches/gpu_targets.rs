@@ -3,9 +3,14 @@
 //!
 //!     cargo bench --bench gpu_targets
 //!
-//! (on the lent GPU machine: the packed `gpu_targets` binary). Mixed f32,
-//! the precursors scene (Table S1: 57×31, Ns = 100), every figure timed
-//! past the normal-load phase:
+//! (on the lent GPU machine: the packed `gpu_targets` binary). The
+//! precursors scene (Table S1: 57×31, Ns = 100), every figure timed past
+//! the normal-load phase, in f64 and then in mixed f32: f64 is what `run`
+//! and `sweep` compute in by default on an adapter with f64 shaders
+//! (`Backend::default_precision`), so `auto`'s pick for a default job is
+//! the f64 one; mixed f32 is what every earlier GPU figure measured. Each
+//! precision's table is printed when its targets are done, so a call cut
+//! short still brings back the first.
 //!
 //! 1. `auto` picks the fastest kernel: its measurement as a run makes it,
 //!    then every launch it timed, timed again alone over at least `SECONDS`.
@@ -23,6 +28,10 @@
 //!    without (what a run pays once, the file's creation and its final
 //!    checkpoint, left out).
 //!
+//! SLIPFRONT_GPU_TARGETS_PRECISIONS=f32 (or f64, or f64,f32, the default)
+//! runs those precisions only, in that order; f64 on an adapter without
+//! f64 shaders is listed as not measured, with the reason.
+//!
 //! The ensemble-against-solo bits are `tests/gpu_ensemble.rs`: run its
 //! binary on the same machine. SLIPFRONT_GPU_TARGETS_QUICK=1 (a software
 //! adapter) runs 16 and 4 scenes and the output at 57×31, over shorter
@@ -30,7 +39,7 @@
 
 use slipfront::engines::gpu::context::{self, GpuContext};
 use slipfront::engines::gpu::kernel_choice::{measure, KernelChoice, Launch};
-use slipfront::engines::gpu::GpuOptions;
+use slipfront::engines::gpu::{GpuOptions, GpuReal};
 use slipfront::Model;
 use std::time::Instant;
 
@@ -41,7 +50,7 @@ mod gpu_timing;
 #[path = "support/thread_cpu.rs"]
 mod thread_cpu;
 
-use gpu_timing::{ensemble_step_seconds, output_run, solo_step_seconds, table_s1};
+use gpu_timing::{ensemble_step_seconds_in, output_run, solo_step_seconds_in, table_s1};
 
 /// How much slower than the fastest launch `auto`'s pick may be, timed
 /// again, and still count as the fastest: two launches this close swap
@@ -79,19 +88,19 @@ impl Target {
 
 /// `auto`'s choice on `s1` and each launch it timed, timed again alone:
 /// (choice, [(launch, seconds per step)]).
-fn solo_figures(
+fn solo_figures<T: GpuReal>(
     ctx: &GpuContext,
     s1: &Model,
     min_seconds: f64,
 ) -> Result<(KernelChoice, Vec<(Launch, f64)>), String> {
-    let choice = measure::<f32>(std::slice::from_ref(s1), ctx, GpuOptions::default())
+    let choice = measure::<T>(std::slice::from_ref(s1), ctx, GpuOptions::default())
         .map_err(|e| e.to_string())?;
     println!("`auto` on Table S1: {}\n", choice.describe());
     println!("| launch | auto's figure (µs/step) | timed again (µs/step) | host CPU / wall |");
     println!("| --- | ---: | ---: | ---: |");
     let mut again = Vec::new();
     for &(launch, seconds) in &choice.timings {
-        match solo_step_seconds(s1, launch.options(GpuOptions::default()), min_seconds) {
+        match solo_step_seconds_in::<T>(s1, launch.options(GpuOptions::default()), min_seconds) {
             Ok((s, host)) => {
                 println!(
                     "| {} | {:.2} | {:.2} | {host:.2} |",
@@ -114,21 +123,27 @@ fn solo_figures(
 
 /// The launch a sweep of `models` takes (timed on that ensemble) and the
 /// ensemble's seconds per step with it.
-fn ensemble_step(
+fn ensemble_step<T: GpuReal>(
     ctx: &GpuContext,
     models: &[Model],
     min_seconds: f64,
 ) -> Result<(Launch, f64), String> {
     let opts = slipfront::app::sweeps::default_gpu();
-    let choice = measure::<f32>(models, ctx, opts).map_err(|e| e.to_string())?;
+    let choice = measure::<T>(models, ctx, opts).map_err(|e| e.to_string())?;
     println!("{} scenes: {}\n", models.len(), choice.describe());
-    let (per_step, _) = ensemble_step_seconds(models, choice.launch.options(opts), min_seconds)?;
+    let (per_step, _) =
+        ensemble_step_seconds_in::<T>(models, choice.launch.options(opts), min_seconds)?;
     Ok((choice.launch, per_step))
 }
 
 /// The output's cost at `nx`×`nz`: the wall seconds of the second `steps`
 /// steps of a run without an output file and with one (`-o`).
-fn output_cost(nx: u32, nz: u32, steps: u64, dir: &std::path::Path) -> Result<(f64, f64), String> {
+fn output_cost<T: GpuReal>(
+    nx: u32,
+    nz: u32,
+    steps: u64,
+    dir: &std::path::Path,
+) -> Result<(f64, f64), String> {
     let file = dir.join("run.mcap");
     let ahead = GpuOptions::default().run_ahead;
     let scenario_of = |n: u64| {
@@ -136,26 +151,19 @@ fn output_cost(nx: u32, nz: u32, steps: u64, dir: &std::path::Path) -> Result<(f
         bench_scene::scenario(nx, nz, &[&format!("time.end={t_end:e}")])
     };
     // Untimed first: the first run with output builds the record pipelines.
-    output_run::<f32>(&scenario_of(steps), Some(&file), ahead, false)?;
+    output_run::<T>(&scenario_of(steps), Some(&file), ahead, false)?;
     let mut walls = Vec::new();
     for n in [steps, 2 * steps] {
         let scenario = scenario_of(n);
-        let without = output_run::<f32>(&scenario, None, ahead, false)?.wall;
-        let with = output_run::<f32>(&scenario, Some(&file), ahead, false)?.wall;
+        let without = output_run::<T>(&scenario, None, ahead, false)?.wall;
+        let with = output_run::<T>(&scenario, Some(&file), ahead, false)?.wall;
         walls.push((without, with));
     }
     Ok((walls[1].0 - walls[0].0, walls[1].1 - walls[0].1))
 }
 
-fn main() {
-    let quick = std::env::var("SLIPFRONT_GPU_TARGETS_QUICK").is_ok();
-    let min_seconds = if quick { 0.3 } else { 1.0 };
-    let started = Instant::now();
-    let ctx = context::shared().expect("a GPU adapter (lavapipe counts)");
-    println!("# GPU targets: {}\n", ctx.describe());
-    if quick {
-        println!("Quick: 16 and 4 scenes, output at 57×31: not the targets' sizes.\n");
-    }
+/// Every target in precision `T`, in the summary's order.
+fn targets_in<T: GpuReal>(ctx: &GpuContext, quick: bool, min_seconds: f64) -> Vec<Target> {
     let s1 = table_s1(1);
     let blocks = s1.n_blocks() as f64;
     let mut targets = Vec::new();
@@ -167,7 +175,7 @@ fn main() {
     );
     let speed = format!("Table S1 ≤ {:.0} µs/step", TABLE_S1_STEP_SECONDS * 1e6);
     let mut fastest_solo = None;
-    match solo_figures(&ctx, &s1, min_seconds) {
+    match solo_figures::<T>(ctx, &s1, min_seconds) {
         Ok((choice, again)) => {
             let fastest = again.iter().copied().min_by(|a, b| a.1.total_cmp(&b.1));
             let chosen = again.iter().find(|(l, _)| *l == choice.launch).map(|t| t.1);
@@ -208,7 +216,7 @@ fn main() {
     let (many, some) = if quick { (16, 4) } else { (256, 64) };
     let what = format!("{many} scenes ≥ {ENSEMBLE_RATE:.0e} block-steps/s");
     let models: Vec<Model> = (1..=many).map(table_s1).collect();
-    targets.push(match ensemble_step(&ctx, &models, min_seconds) {
+    targets.push(match ensemble_step::<T>(ctx, &models, min_seconds) {
         Ok((launch, s)) => {
             let rate = many as f64 * blocks / s;
             Target::new(
@@ -226,7 +234,7 @@ fn main() {
     let what = format!("{some} scenes ≥ {ENSEMBLE_SPEED_UP:.0}× one at a time");
     let models: Vec<Model> = (1..=some).map(table_s1).collect();
     targets.push(
-        match (ensemble_step(&ctx, &models, min_seconds), fastest_solo) {
+        match (ensemble_step::<T>(ctx, &models, min_seconds), fastest_solo) {
             (Ok((launch, s)), Some(solo)) => {
                 let speed_up = some as f64 * solo / s;
                 Target::new(
@@ -254,7 +262,7 @@ fn main() {
     let what = format!("output at {nx}×{nz} ≤ {OUTPUT_RATIO}× none");
     let dir = std::env::temp_dir().join(format!("slipfront-gpu-targets-{}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("temp dir");
-    targets.push(match output_cost(nx, nz, steps, &dir) {
+    targets.push(match output_cost::<T>(nx, nz, steps, &dir) {
         Ok((without, with)) => Target::new(
             what,
             format!(
@@ -266,20 +274,81 @@ fn main() {
         Err(e) => Target::not_measured(what, e),
     });
     let _ = std::fs::remove_dir_all(&dir);
+    targets
+}
 
-    println!("## Targets\n");
-    println!("| target | measured | met |");
-    println!("| --- | --- | --- |");
-    for t in &targets {
+/// The precisions asked (SLIPFRONT_GPU_TARGETS_PRECISIONS), in order.
+fn precisions() -> Vec<&'static str> {
+    const NAME: &str = "SLIPFRONT_GPU_TARGETS_PRECISIONS";
+    let Ok(text) = std::env::var(NAME) else {
+        return vec!["f64", "f32"];
+    };
+    let asked: Vec<&'static str> = text
+        .split(',')
+        .map(|p| match p.trim() {
+            "f64" => "f64",
+            "f32" => "f32",
+            other => {
+                eprintln!("{NAME}: {other:?} is not a precision (allowed: f64, f32)");
+                std::process::exit(2);
+            }
+        })
+        .collect();
+    asked
+}
+
+/// A table of targets, a row each, under `title`.
+fn print_targets(title: &str, rows: &[(&str, &Target)]) {
+    println!("## {title}\n");
+    println!("| precision | target | measured | met |");
+    println!("| --- | --- | --- | --- |");
+    for (precision, t) in rows {
         let met = match t.met {
             Some(true) => "yes",
             Some(false) => "no",
             None => "–",
         };
-        println!("| {} | {} | {met} |", t.what, t.figure);
+        println!("| {precision} | {} | {} | {met} |", t.what, t.figure);
     }
+    println!();
+}
+
+fn main() {
+    let quick = std::env::var("SLIPFRONT_GPU_TARGETS_QUICK").is_ok();
+    let min_seconds = if quick { 0.3 } else { 1.0 };
+    let asked = precisions();
+    let started = Instant::now();
+    let ctx = context::shared().expect("a GPU adapter (lavapipe counts)");
+    println!("# GPU targets: {}\n", ctx.describe());
+    if quick {
+        println!("Quick: 16 and 4 scenes, output at 57×31: not the targets' sizes.\n");
+    }
+    let mut all = Vec::new();
+    for precision in asked {
+        let label = if precision == "f32" {
+            "mixed f32"
+        } else {
+            "f64"
+        };
+        println!("# {label}\n");
+        let targets = match precision {
+            "f64" => match ctx.check_precision::<f64>() {
+                Ok(()) => targets_in::<f64>(&ctx, quick, min_seconds),
+                Err(e) => vec![Target::not_measured("every target".into(), e.to_string())],
+            },
+            _ => targets_in::<f32>(&ctx, quick, min_seconds),
+        };
+        let rows: Vec<_> = targets.iter().map(|t| (label, t)).collect();
+        print_targets(&format!("Targets, {label}"), &rows);
+        all.push((label, targets));
+    }
+    let rows: Vec<_> = all
+        .iter()
+        .flat_map(|(label, targets)| targets.iter().map(move |t| (*label, t)))
+        .collect();
+    print_targets("Targets", &rows);
     println!(
-        "\n({:.1} s of wall time; the ensemble-against-solo bits: tests/gpu_ensemble.rs)",
+        "({:.1} s of wall time; the ensemble-against-solo bits: tests/gpu_ensemble.rs)",
         started.elapsed().as_secs_f64()
     );
 }

@@ -128,7 +128,17 @@ pub fn solo_step_seconds(
     opts: GpuOptions,
     min_seconds: f64,
 ) -> Result<(f64, f64), String> {
-    let mut e = GpuEngine::with_options(model, opts).map_err(|e| e.to_string())?;
+    solo_step_seconds_in::<f32>(model, opts, min_seconds)
+}
+
+/// `solo_step_seconds` in precision `T` (f64 fails on an adapter without
+/// f64 shaders, with that reason).
+pub fn solo_step_seconds_in<T: GpuReal>(
+    model: &Model,
+    opts: GpuOptions,
+    min_seconds: f64,
+) -> Result<(f64, f64), String> {
+    let mut e = GpuEngine::<T>::with_precision(model, opts).map_err(|e| e.to_string())?;
     advance_to(&mut e, model.prep_steps + 16).map_err(|e| e.to_string())?;
     let (dt, steps, cpu) =
         timed_with_cpu(|n| e.advance(n), min_seconds).map_err(|e| e.to_string())?;
