@@ -36,7 +36,9 @@
 //!    scene and on 132, 264 and 528 (one, two and four an SM of an H200 or
 //!    an H100 SXM, 132 SMs), at 256 threads (and 1024 on the
 //!    shipped scene), with Ns = 100 (as shipped), Ns = 16 and Coulomb
-//!    friction in mixed f32, and as shipped in f64. Where the step doubles
+//!    friction in mixed f32, and as shipped in f64 (each launch also with
+//!    one junction lane a round, which needs fewer registers in f64, so
+//!    may fit more scenes an SM). Where the step doubles
 //!    between the counts says how many scenes an SM holds at once; how much
 //!    longer than one scene's it is where they share, against the
 //!    junctions' share of the work and the precision, says whether they
@@ -342,6 +344,9 @@ fn ensemble_limits(quick: bool, min_seconds: f64) {
             counts: &counts,
             threads,
             min_seconds,
+            // In f64 one lane a round needs fewer registers (AMD: 72–80
+            // VGPRs against 88), so it may fit more scenes an SM.
+            one_lane_too: f64_run,
         };
         if f64_run {
             rows.print::<f64>("f64", &mut not_run);
@@ -362,61 +367,72 @@ struct LimitRows<'a> {
     counts: &'a [usize],
     threads: &'a [u32],
     min_seconds: f64,
+    /// Each launch again with one junction lane a round.
+    one_lane_too: bool,
 }
 
 impl LimitRows<'_> {
     /// The rows in precision `T`: the resident and persistent kernels at
-    /// each of the threads, each on the first `n` scenes for each count. A
+    /// each of the threads (and each with one junction lane a round, where
+    /// asked), each on the first `n` scenes for each count. A
     /// launch that does not run (resident in f64 at Table S1 does not fit)
     /// adds its reason to `not_run`.
     fn print<T: GpuReal>(&self, precision: &str, not_run: &mut Vec<String>) {
         let blocks = self.models[0].n_blocks() as f64;
-        for kernel in [Kernel::Resident, Kernel::Persistent] {
-            for &threads in self.threads {
-                let launch = Launch::with_threads(kernel, threads);
-                let steps: Vec<Result<f64, String>> = self
-                    .counts
+        let launches = [Kernel::Resident, Kernel::Persistent]
+            .into_iter()
+            .flat_map(|kernel| {
+                self.threads
                     .iter()
-                    .map(|&n| {
-                        ensemble_step_seconds_in::<T>(
-                            &self.models[..n],
-                            launch.options(GpuOptions::default()),
-                            self.min_seconds,
-                        )
-                        .map(|(s, _)| s)
-                    })
-                    .collect();
-                let cells: String = steps
-                    .iter()
-                    .map(|r| match r {
-                        Ok(s) => format!(" {:.2} |", s * 1e6),
-                        Err(_) => " – |".to_string(),
-                    })
-                    .collect();
-                for e in steps.iter().filter_map(|r| r.as_ref().err()) {
-                    let line = format!("- {}, {precision}: not run: {e}", launch.name());
-                    if !not_run.contains(&line) {
-                        not_run.push(line);
-                    }
+                    .map(move |&t| Launch::with_threads(kernel, t))
+            })
+            .flat_map(|launch| {
+                let one = self.one_lane_too.then(|| launch.with_one_lane_a_round());
+                std::iter::once(launch).chain(one)
+            });
+        for launch in launches {
+            let steps: Vec<Result<f64, String>> = self
+                .counts
+                .iter()
+                .map(|&n| {
+                    ensemble_step_seconds_in::<T>(
+                        &self.models[..n],
+                        launch.options(GpuOptions::default()),
+                        self.min_seconds,
+                    )
+                    .map(|(s, _)| s)
+                })
+                .collect();
+            let cells: String = steps
+                .iter()
+                .map(|r| match r {
+                    Ok(s) => format!(" {:.2} |", s * 1e6),
+                    Err(_) => " – |".to_string(),
+                })
+                .collect();
+            for e in steps.iter().filter_map(|r| r.as_ref().err()) {
+                let line = format!("- {}, {precision}: not run: {e}", launch.name());
+                if !not_run.contains(&line) {
+                    not_run.push(line);
                 }
-                let ratios: String = steps[1..]
-                    .iter()
-                    .map(|r| match (r, &steps[0]) {
-                        (Ok(s), Ok(one)) => format!(" {:.2} |", s / one),
-                        _ => " |".to_string(),
-                    })
-                    .collect();
-                let last = self.counts[self.counts.len() - 1] as f64;
-                let rate = match steps.last() {
-                    Some(Ok(s)) => format!("{:.3e}", last * blocks / s),
-                    _ => String::new(),
-                };
-                println!(
-                    "| {} | {precision} | {} |{cells}{ratios} {rate} |",
-                    self.name,
-                    launch.name()
-                );
             }
+            let ratios: String = steps[1..]
+                .iter()
+                .map(|r| match (r, &steps[0]) {
+                    (Ok(s), Ok(one)) => format!(" {:.2} |", s / one),
+                    _ => " |".to_string(),
+                })
+                .collect();
+            let last = self.counts[self.counts.len() - 1] as f64;
+            let rate = match steps.last() {
+                Some(Ok(s)) => format!("{:.3e}", last * blocks / s),
+                _ => String::new(),
+            };
+            println!(
+                "| {} | {precision} | {} |{cells}{ratios} {rate} |",
+                self.name,
+                launch.name()
+            );
         }
     }
 }

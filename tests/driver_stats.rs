@@ -181,6 +181,28 @@ fn the_junction_phase_costs_the_single_workgroup_kernels_no_registers() {
     }
 }
 
+/// `auto`'s one-lane-a-round launches reach the compiled kernel: on
+/// hardware the persistent kernels step two junction lanes a round unless
+/// the launch says one (`TWO_LANES_A_ROUND`), and in f64 one lane a round
+/// needs fewer registers a thread on this compiler (72–80 VGPRs against
+/// 88), which is why `auto` times it.
+#[test]
+fn one_lane_a_round_is_compiled_in_and_needs_fewer_f64_registers() {
+    let Some(dev) = radv() else { return };
+    let shipped = table_s1(&[]);
+    for launch in ["persistent/256", "resident/256", "resident/1024"] {
+        let two = step_source::<f64>(&dev, &shipped, launch);
+        let one = step_source::<f64>(&dev, &shipped, &format!("{launch}/one-lane-a-round"));
+        assert_eq!(two.constant("TWO_LANES_A_ROUND"), Some(1.0), "{launch}");
+        assert_eq!(one.constant("TWO_LANES_A_ROUND"), Some(0.0), "{launch}");
+        let (two, one) = (registers(&dev, &two), registers(&dev, &one));
+        assert!(
+            one < two,
+            "{launch}, f64: {one} registers with one lane a round, {two} with two"
+        );
+    }
+}
+
 /// A kernel the driver cannot be given is an error naming it, not a
 /// panic: WGSL that does not parse, and an override constant the module
 /// does not declare.

@@ -420,9 +420,21 @@ fn launch_names_read_back() {
             .with_bond_patches(),
         Launch::of(Kernel::OneStep).with_bond_patches(),
         Launch::of(Kernel::OneStepLanes).with_bond_patches(),
+        Launch::with_threads(Kernel::Resident, 256).with_one_lane_a_round(),
+        Launch::of(Kernel::Persistent)
+            .with_lanes_in_storage()
+            .with_bond_patches()
+            .with_one_lane_a_round(),
     ] {
         assert_eq!(Launch::named(&l.name()), Some(l));
     }
+    assert_eq!(
+        Launch::with_threads(Kernel::Resident, 1024)
+            .with_bond_patches()
+            .with_one_lane_a_round()
+            .name(),
+        "resident/1024/bond-patches/one-lane-a-round"
+    );
     assert_eq!(
         Launch::with_threads(Kernel::Resident, 512)
             .with_lanes_in_storage()
@@ -464,6 +476,11 @@ fn launch_names_read_back() {
         "tiled/256/bond-patches/8x4",
         "resident/bond-patches/lanes-in-storage",
         "resident/256/bond-patches/bond-patches",
+        // Only the persistent kernels step lanes two a round.
+        "tiled/256/8x4/one-lane-a-round",
+        "one-step-lanes/one-lane-a-round",
+        "resident/one-lane-a-round/bond-patches",
+        "resident/256/one-lane-a-round/one-lane-a-round",
     ] {
         assert_eq!(Launch::named(bad), None, "{bad}");
     }
@@ -558,8 +575,9 @@ fn a_run_with_gpu_path_measure_prints_the_figures() {
 /// Every part of a launch's name has a flag, so a launch `auto` chose can
 /// be named again: `persistent/64/lanes-in-storage/bond-patches` is
 /// `--gpu-path persistent --gpu-threads 64 --gpu-lanes-in-storage
-/// --gpu-bond-patches`, and the run's header (the description its file
-/// keeps) says what ran.
+/// --gpu-bond-patches` (and `…/one-lane-a-round` adds
+/// `--gpu-one-lane-a-round`), and the run's header (the description its
+/// file keeps) says what ran.
 #[test]
 fn a_launch_named_by_its_flags_is_the_one_described() {
     let header = |flags: &[&str]| {
@@ -602,6 +620,13 @@ fn a_launch_named_by_its_flags_is_the_one_described() {
     let named = header(&["--gpu-lanes-in-storage", "--gpu-bond-patches"]);
     assert!(!named.contains(merged), "{named}");
     assert!(named.contains(patches), "{named}");
+    // Junction lanes a round are a choice on hardware only (software
+    // adapters always step one), and the header says which ran there.
+    let hardware = !ctx.is_software();
+    let one = header(&["--gpu-one-lane-a-round"]);
+    assert_eq!(one.contains("one junction lane a round"), hardware, "{one}");
+    assert_eq!(plain.contains("two junction lanes a round"), hardware, "{plain}");
+    assert!(!one.contains("two junction lanes"), "{one}");
 }
 
 /// The kernels the driver statistics compile (`GpuEngine::kernel_sources_on`,

@@ -1,5 +1,6 @@
 //! The GPU launch flags `run` and `sweep` share (threads, tile shape,
-//! run-ahead, run-time checks, patches, where the lanes merge): one
+//! run-ahead, run-time checks, patches, where the lanes merge, junction
+//! lanes a round): one
 //! declaration, so a new part of a launch gets its flag in both at once.
 
 use slipfront::engines::gpu::tiles::TileShape;
@@ -39,6 +40,13 @@ pub struct GpuLaunchArgs {
     /// `…/lanes-in-storage`).
     #[arg(long)]
     pub gpu_lanes_in_storage: bool,
+    /// The persistent and resident kernels step one junction lane a round
+    /// on a hardware GPU, not two: the same results, fewer registers a
+    /// thread, longer chains of loads (`auto` on a hardware GPU times both
+    /// when this is not given; its figures name such a launch
+    /// `…/one-lane-a-round`; software adapters always step one).
+    #[arg(long)]
+    pub gpu_one_lane_a_round: bool,
 }
 
 impl Default for GpuLaunchArgs {
@@ -51,6 +59,7 @@ impl Default for GpuLaunchArgs {
             gpu_shader_checks: false,
             gpu_bond_patches: false,
             gpu_lanes_in_storage: false,
+            gpu_one_lane_a_round: false,
         }
     }
 }
@@ -68,6 +77,7 @@ impl GpuLaunchArgs {
             shader_checks: self.gpu_shader_checks,
             bond_patches: self.gpu_bond_patches,
             lane_shuffle: !self.gpu_lanes_in_storage,
+            two_lanes_a_round: !self.gpu_one_lane_a_round,
             ..GpuOptions::default()
         }
     }

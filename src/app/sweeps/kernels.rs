@@ -131,6 +131,7 @@ mod tests {
             Launch::of(Kernel::OneStep).with_bond_patches(),
             Launch::with_threads(Kernel::Tiled, 256).with_tile(shape),
             Launch::with_threads(Kernel::Persistent, 512).with_lanes_in_storage(),
+            Launch::with_threads(Kernel::Resident, 256).with_one_lane_a_round(),
         ];
         for launch in launches {
             let kernels = SweepKernels {
@@ -149,6 +150,12 @@ mod tests {
             assert_eq!(
                 runs.lane_shuffle,
                 !launch.lanes_in_storage,
+                "{}",
+                launch.name()
+            );
+            assert_eq!(
+                runs.two_lanes_a_round,
+                !launch.one_lane_a_round,
                 "{}",
                 launch.name()
             );

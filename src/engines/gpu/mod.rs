@@ -57,6 +57,7 @@ pub mod tiles;
 use crate::engines::step_params::Consts;
 use crate::engines::{Engine, EngineError, EngineState, Sample, SamplePlan, Snapshot};
 use crate::model::real::precision_name;
+use crate::model::scenario::FrictionLaw;
 use crate::model::Model;
 use buffers::{state_group, Buffers, Shape};
 use compile::{KernelBuild, KernelSource};
@@ -613,7 +614,8 @@ impl<T: GpuReal> GpuEngine<T> {
     }
 
     /// The kernel and what else of its launch changes its bits or its
-    /// speed: the bulk forces by patches, and where the lanes merge.
+    /// speed: the bulk forces by patches, where the lanes merge, and (on
+    /// hardware, where it is a choice) the junction lanes a round.
     fn kernel_alone(&self) -> String {
         let mut text = self.kernel_shape();
         if self.bond_patches {
@@ -621,6 +623,22 @@ impl<T: GpuReal> GpuEngine<T> {
         }
         if self.kernel.merges_lanes_through_storage() && self.build.lanes == LaneMerge::Shuffle {
             text.push_str(", junction lanes merged in subgroups where they fit");
+        }
+        let lanes_a_round = self
+            .constants
+            .iter()
+            .find(|(name, _)| *name == "TWO_LANES_A_ROUND")
+            .map(|&(_, v)| v);
+        let junctions = matches!(
+            self.scenes[0].model.law,
+            FrictionLaw::Junctions | FrictionLaw::SingleJunction
+        );
+        if !self.ctx.is_software() && junctions {
+            match lanes_a_round {
+                Some(1.0) => text.push_str(", two junction lanes a round"),
+                Some(_) => text.push_str(", one junction lane a round"),
+                None => {}
+            }
         }
         text
     }

@@ -145,6 +145,15 @@ pub struct GpuOptions {
     /// lane: the same bits. false: a call per lane, as before session 33
     /// (the comparison in benchmarks).
     pub lanes_read_kept: bool,
+    /// The persistent and resident kernels step two junction lanes a round
+    /// on hardware, both lanes' first junctions loaded before either is
+    /// stepped: half the chains of storage round trips on a thread's path,
+    /// for more registers a thread (on AMD's compiler 8–16 more in f64,
+    /// none in mixed f32: BENCHMARKS.md, session 36), which can leave an
+    /// SM room for fewer of an ensemble's scenes. false: one lane a round, as
+    /// software adapters always run (`TWO_LANES_A_ROUND`). The same bits.
+    /// `auto` on hardware times its fastest persistent launch both ways.
+    pub two_lanes_a_round: bool,
 }
 
 impl Default for GpuOptions {
@@ -161,6 +170,7 @@ impl Default for GpuOptions {
             shader_checks: false,
             bond_patches: false,
             lanes_read_kept: true,
+            two_lanes_a_round: true,
         }
     }
 }

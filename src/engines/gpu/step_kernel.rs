@@ -45,7 +45,8 @@ impl StepKernel {
             constants.push(("PERSISTENT_THREADS", self.threads as f64));
             // llvmpipe counts the iterations of every inlined loop against
             // its limit: one junction lane a round there.
-            constants.push(("TWO_LANES_A_ROUND", !software as u8 as f64));
+            let two_lanes = !software && opts.two_lanes_a_round;
+            constants.push(("TWO_LANES_A_ROUND", two_lanes as u8 as f64));
         }
         constants.push(("BOND_PATCHES", self.bond_patches as u8 as f64));
         if self.kernel == Kernel::Resident {

@@ -126,7 +126,8 @@ impl ChoiceCache {
 /// What a measured choice depends on: the adapter and its driver, the
 /// precision, the lattice (`lattice_key`), the persistent kernels' threads,
 /// the tile shape where one is fixed, whether the lanes' merge was
-/// searched, wgpu's run-time checks, and the kernels' sources (a new
+/// searched, wgpu's run-time checks, whether the bond patches and the
+/// junction lanes a round were searched, and the kernels' sources (a new
 /// version of slipfront measures again).
 pub fn cache_key<T: GpuReal>(model: &Model, ctx: &GpuContext, opts: GpuOptions) -> String {
     scenes_cache_key::<T>(model, 1, ctx, opts)
@@ -165,7 +166,7 @@ pub fn scenes_cache_key<T: GpuReal>(
         String::new()
     };
     format!(
-        "{} | {:?} | {} {} | {} | {}{ensemble} | threads {} | tiles {} | lanes {} | checks {} | patches {} | kernels {:016x}",
+        "{} | {:?} | {} {} | {} | {}{ensemble} | threads {} | tiles {} | lanes {} | checks {} | patches {} | lane rounds {} | kernels {:016x}",
         info.name,
         info.backend,
         info.driver,
@@ -197,6 +198,13 @@ pub fn scenes_cache_key<T: GpuReal>(
             "on"
         } else {
             "searched"
+        },
+        // Nor one that searched the junction lanes a round one with one
+        // lane a round fixed.
+        if opts.two_lanes_a_round {
+            "searched"
+        } else {
+            "one"
         },
         sources.finish()
     )

@@ -81,12 +81,18 @@ pub struct Launch {
     /// Bulk forces by 2×2 patches of blocks (`GpuOptions::bond_patches`):
     /// the same forces to their last bits, another split of the work.
     pub bond_patches: bool,
+    /// One junction lane a round (`GpuOptions::two_lanes_a_round` false):
+    /// the same bits, fewer registers a thread. Only for the persistent
+    /// and resident kernels.
+    pub one_lane_a_round: bool,
 }
 
 /// The name's last part for `Launch::lanes_in_storage`.
 const LANES_IN_STORAGE: &str = "lanes-in-storage";
 /// The name's last part for `Launch::bond_patches`.
 const BOND_PATCHES: &str = "bond-patches";
+/// The name's last part for `Launch::one_lane_a_round`.
+const ONE_LANE_A_ROUND: &str = "one-lane-a-round";
 
 impl Launch {
     pub fn of(kernel: Kernel) -> Launch {
@@ -96,6 +102,7 @@ impl Launch {
             tile: None,
             lanes_in_storage: false,
             bond_patches: false,
+            one_lane_a_round: false,
         }
     }
 
@@ -131,8 +138,17 @@ impl Launch {
         }
     }
 
+    /// This launch with one junction lane a round.
+    pub fn with_one_lane_a_round(self) -> Launch {
+        Launch {
+            one_lane_a_round: true,
+            ..self
+        }
+    }
+
     /// `one-step-lanes`, `resident/512`, `tiled/1024/16x4`,
-    /// `resident/1024/lanes-in-storage`, `persistent/1024/bond-patches`.
+    /// `resident/1024/lanes-in-storage`, `persistent/1024/bond-patches`,
+    /// `resident/256/bond-patches/one-lane-a-round`.
     pub fn name(self) -> String {
         let mut name = path_name(self.kernel);
         if let Some(t) = self.threads {
@@ -147,6 +163,9 @@ impl Launch {
         if self.bond_patches {
             name += &format!("/{BOND_PATCHES}");
         }
+        if self.one_lane_a_round {
+            name += &format!("/{ONE_LANE_A_ROUND}");
+        }
         name
     }
 
@@ -160,7 +179,9 @@ impl Launch {
         {
             launch.threads = Some(t.parse().ok().filter(|&t: &u32| t > 0)?);
         }
-        if let Some(shape) = rest.next_if(|p| *p != LANES_IN_STORAGE && *p != BOND_PATCHES) {
+        if let Some(shape) =
+            rest.next_if(|p| ![LANES_IN_STORAGE, BOND_PATCHES, ONE_LANE_A_ROUND].contains(p))
+        {
             if launch.kernel != Kernel::Tiled {
                 return None;
             }
@@ -175,6 +196,12 @@ impl Launch {
         if rest.next_if(|p| *p == BOND_PATCHES).is_some() {
             launch.bond_patches = true;
         }
+        if rest.next_if(|p| *p == ONE_LANE_A_ROUND).is_some() {
+            if !launch.kernel.is_persistent() {
+                return None;
+            }
+            launch.one_lane_a_round = true;
+        }
         rest.next().is_none().then_some(launch)
     }
 
@@ -186,6 +213,7 @@ impl Launch {
             tile: self.tile.or(opts.tile),
             lane_shuffle: opts.lane_shuffle && !self.lanes_in_storage,
             bond_patches: opts.bond_patches || self.bond_patches,
+            two_lanes_a_round: opts.two_lanes_a_round && !self.one_lane_a_round,
             ..opts
         }
     }

@@ -258,6 +258,14 @@ pub fn measure_within<T: GpuReal>(
     if let Some((launch, _)) = fastest.get().filter(|_| !opts.bond_patches) {
         time(launch.with_bond_patches());
     }
+    // One junction lane a round, on the fastest launch so far: the same
+    // bits, and registers a thread against chains of round trips, which
+    // no hardware figure has weighed yet.
+    if let Some((launch, _)) = fastest.get() {
+        if times_one_lane_a_round(launch, opts, ctx.is_software()) {
+            time(launch.with_one_lane_a_round());
+        }
+    }
     let Some(&(launch, _)) = timings.iter().min_by(|a, b| a.1.total_cmp(&b.1)) else {
         return Err(first_error.expect("at least one candidate (one-step always is)"));
     };
@@ -269,6 +277,14 @@ pub fn measure_within<T: GpuReal>(
         scenes: models.len(),
         phase,
     })
+}
+
+/// Whether `measure` times `launch` (the fastest so far) again with one
+/// junction lane a round: a persistent kernel on hardware, unless the
+/// options fix one lane a round already. Software adapters always step
+/// one (`TWO_LANES_A_ROUND`), so there both would be the same pipeline.
+fn times_one_lane_a_round(launch: Launch, opts: GpuOptions, software: bool) -> bool {
+    launch.kernel.is_persistent() && !launch.one_lane_a_round && opts.two_lanes_a_round && !software
 }
 
 /// `best` becomes (`launch`, `seconds`) if that is faster or it was empty.
@@ -322,6 +338,43 @@ mod tests {
 
     /// A launch with patches turns them on in the options it builds; one
     /// without keeps what the options asked for.
+    /// One lane a round is timed on a persistent kernel's launch on
+    /// hardware only, and sets the option off in the launch's options.
+    #[test]
+    fn one_lane_a_round_is_timed_on_hardware_persistent_launches_only() {
+        let plain = GpuOptions::default();
+        for kernel in [Kernel::Persistent, Kernel::Resident] {
+            let launch = Launch::with_threads(kernel, 256);
+            assert!(times_one_lane_a_round(launch, plain, false), "{kernel:?}");
+            assert!(
+                !times_one_lane_a_round(launch, plain, true),
+                "software: {kernel:?}"
+            );
+            let one = launch.with_one_lane_a_round();
+            assert!(
+                !times_one_lane_a_round(one, plain, false),
+                "twice: {kernel:?}"
+            );
+            assert!(!one.options(plain).two_lanes_a_round);
+            assert!(launch.options(plain).two_lanes_a_round);
+        }
+        for kernel in [Kernel::OneStep, Kernel::OneStepLanes, Kernel::Tiled] {
+            assert!(
+                !times_one_lane_a_round(Launch::of(kernel), plain, false),
+                "{kernel:?}"
+            );
+        }
+        let fixed = GpuOptions {
+            two_lanes_a_round: false,
+            ..plain
+        };
+        assert!(!times_one_lane_a_round(
+            Launch::of(Kernel::Resident),
+            fixed,
+            false
+        ));
+    }
+
     #[test]
     fn a_launch_with_bond_patches_sets_them_in_the_options() {
         let plain = GpuOptions::default();
