@@ -240,8 +240,11 @@ fn a_lattice_beyond_the_adapter_limits_is_refused_clearly() {
 /// workgroup memory: the same arithmetic in the same order, so with the
 /// same threads it matches the persistent kernel bit for bit, through
 /// junction ruptures and across dispatches (llvmpipe cuts them short, so
-/// the state goes to storage and back every few hundred steps). Negative
-/// control: V × (1 + 1e-9) differs.
+/// the state goes to storage and back every few hundred steps). The
+/// resident run steps one junction lane a round: on hardware the
+/// persistent one steps two, which must not change a bit either
+/// (software adapters always step one). Negative control: V × (1 + 1e-9)
+/// differs.
 #[test]
 fn the_resident_kernel_is_the_persistent_kernel_bit_for_bit() {
     let m = model(&[SMALL, &["loading.drive.velocity=0.4"]].concat());
@@ -250,6 +253,7 @@ fn the_resident_kernel_is_the_persistent_kernel_bit_for_bit() {
         let opts = GpuOptions {
             path,
             persistent_threads: Some(64),
+            two_lanes_a_round: path != GpuPath::Resident,
             ..GpuOptions::default()
         };
         let mut g = GpuEngine::with_options(m, opts).expect("a GPU adapter (lavapipe in CI)");

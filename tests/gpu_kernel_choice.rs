@@ -625,7 +625,11 @@ fn a_launch_named_by_its_flags_is_the_one_described() {
     let hardware = !ctx.is_software();
     let one = header(&["--gpu-one-lane-a-round"]);
     assert_eq!(one.contains("one junction lane a round"), hardware, "{one}");
-    assert_eq!(plain.contains("two junction lanes a round"), hardware, "{plain}");
+    assert_eq!(
+        plain.contains("two junction lanes a round"),
+        hardware,
+        "{plain}"
+    );
     assert!(!one.contains("two junction lanes"), "{one}");
 }
 

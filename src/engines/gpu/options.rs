@@ -151,8 +151,11 @@ pub struct GpuOptions {
     /// for more registers a thread (on AMD's compiler 8–16 more in f64,
     /// none in mixed f32: BENCHMARKS.md, session 36), which can leave an
     /// SM room for fewer of an ensemble's scenes. false: one lane a round, as
-    /// software adapters always run (`TWO_LANES_A_ROUND`). The same bits.
-    /// `auto` on hardware times its fastest persistent launch both ways.
+    /// software adapters always run (`TWO_LANES_A_ROUND`). The same
+    /// operations on the same values: the same bits
+    /// (`tests/gpu_engine.rs`, resident with one against persistent with
+    /// two, on hardware). `auto` on hardware times its fastest persistent
+    /// launch both ways.
     pub two_lanes_a_round: bool,
 }
 
