@@ -283,8 +283,7 @@ fn precisions() -> Vec<&'static str> {
     let Ok(text) = std::env::var(NAME) else {
         return vec!["f64", "f32"];
     };
-    let asked: Vec<&'static str> = text
-        .split(',')
+    text.split(',')
         .map(|p| match p.trim() {
             "f64" => "f64",
             "f32" => "f32",
@@ -293,8 +292,7 @@ fn precisions() -> Vec<&'static str> {
                 std::process::exit(2);
             }
         })
-        .collect();
-    asked
+        .collect()
 }
 
 /// A table of targets, a row each, under `title`.

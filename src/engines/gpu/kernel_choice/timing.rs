@@ -336,8 +336,6 @@ mod tests {
         assert_eq!(timed, ["4x4", "16x4", "8x2", "8x8"]);
     }
 
-    /// A launch with patches turns them on in the options it builds; one
-    /// without keeps what the options asked for.
     /// One lane a round is timed on a persistent kernel's launch on
     /// hardware only, and sets the option off in the launch's options.
     #[test]
@@ -375,6 +373,8 @@ mod tests {
         ));
     }
 
+    /// A launch with patches turns them on in the options it builds; one
+    /// without keeps what the options asked for.
     #[test]
     fn a_launch_with_bond_patches_sets_them_in_the_options() {
         let plain = GpuOptions::default();
