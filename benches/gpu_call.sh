@@ -6,7 +6,7 @@
 #
 # On the GPU machine, after a release build and packing here:
 #   cargo build --release --bins --benches --tests
-#   ../shared/device/pack.sh gpu_registers gpu_targets gpu_ensemble gpu_table gpu_precision
+#   ../shared/device/pack.sh gpu_registers gpu_targets gpu_ensemble gpu_chained_tiles gpu_table gpu_precision
 #   device call, carry [".devbin"]: bash .devbin/on-gpu.sh 'bash ../benches/gpu_call.sh 420'
 # (on-gpu.sh runs its command from .devbin/, with the packed binaries on PATH).
 #
@@ -72,6 +72,10 @@ step registers 60 gpu_registers
 step targets 270 gpu_targets
 # 2. Ensemble against solo, bit for bit (the issue's "the ensemble and solo tests pass").
 step bits 90 gpu_ensemble --test-threads 1
+# 2b. Chained tiles on hardware: the same bits as a dispatch a round, a scene of 64 tiles
+#     at once, and an ensemble of chained scenes against their solo runs (lavapipe can
+#     check only one scene at a time).
+step chained 60 gpu_chained_tiles --test-threads 1
 # 3. What limits an ensemble: 1 to 528 scenes of resident and persistent at 256 and 1024
 #    threads, for Ns = 100, Ns = 16 and Coulomb in mixed f32 and Ns = 100 in f64 (there
 #    with one junction lane a round too) (docs/gpu-kernels.md, "What limits an

@@ -31,7 +31,8 @@
 //!    friction (the bulk alone, the tiled kernel included); the resident
 //!    and tiled kernels also with each junction lane calling
 //!    `junction_block` for its block's kept flag, as before session 33
-//!    (`GpuOptions::lanes_read_kept`);
+//!    (`GpuOptions::lanes_read_kept`), and the tiled kernel with its
+//!    rounds chained in one dispatch (`GpuOptions::chained_tiles`);
 //! 8. what limits an ensemble: the single-workgroup kernels on one Table S1
 //!    scene and on 132, 264 and 528 (one, two and four an SM of an H200 or
 //!    an H100 SXM, 132 SMs), at 256 threads (and 1024 on the
@@ -239,21 +240,28 @@ fn junction_cost(min_seconds: f64) {
         // and with their bulk forces by patches of blocks
         // (`GpuOptions::bond_patches`).
         for kernel in candidates(&model) {
-            // (shader checks, bond patches, lanes read the kept bit)
-            let mut variants = vec![(false, false, true)];
+            // (shader checks, bond patches, lanes read the kept bit,
+            // chained tiles)
+            let mut variants = vec![(false, false, true, false)];
             if set.is_empty() {
-                variants.push((true, false, true));
-                variants.push((false, true, true));
+                variants.push((true, false, true, false));
+                variants.push((false, true, true, false));
                 if matches!(kernel, Kernel::Resident | Kernel::Tiled) {
-                    variants.push((false, false, false));
+                    variants.push((false, false, false, false));
                 }
             }
-            for (shader_checks, bond_patches, lanes_read_kept) in variants {
+            // The tiled kernel's rounds chained in one dispatch, on every
+            // scene (the bulk alone too): what a dispatch a round costs.
+            if kernel == Kernel::Tiled {
+                variants.push((false, false, true, true));
+            }
+            for (shader_checks, bond_patches, lanes_read_kept, chained_tiles) in variants {
                 let kept = GpuOptions {
                     keep_junction_sums: true,
                     shader_checks,
                     bond_patches,
                     lanes_read_kept,
+                    chained_tiles,
                     ..options(kernel)
                 };
                 let figure = match solo_step_seconds(&model, kept, min_seconds) {
@@ -261,6 +269,7 @@ fn junction_cost(min_seconds: f64) {
                     Err(e) => format!("not run: {e} |"),
                 };
                 let how = match (shader_checks, bond_patches, lanes_read_kept) {
+                    _ if chained_tiles => ", rounds chained in one dispatch",
                     (true, _, _) => ", wgpu's run-time checks in the kernels",
                     (_, true, _) => ", bulk forces by 2×2 patches of blocks",
                     (_, _, false) => {

@@ -21,6 +21,17 @@
 //   may be a snapshot's, read from `force` by every tile while no tile
 //   writes it) and after a sample's step, which the output kernels then
 //   record as after a one-step dispatch (`tiles::dispatch_ends`).
+// - Chained tiles (TILE_CHAINED; GpuOptions::chained_tiles): one dispatch
+//   runs several of those dispatches' rounds in turn, up to the round
+//   whose end carries ROUND_ENDS_DISPATCH (a sample's step, the batch's
+//   end). Before its round k > 0, a tile waits until every tile whose
+//   columns reach into its halo has finished round k − 1 (their counters
+//   in tile_progress), so it reads what the next dispatch would have read;
+//   its neighbours wait on it in turn before they overwrite the copy it
+//   reads. The same rounds, so the same bits as a dispatch a round; one
+//   dispatch where there were many. It needs a scene's tiles on the GPU at
+//   once: a tile that has polled CHAIN_POLLS times in a dispatch gives up
+//   and reports itself (GpuStatus::stalled_tile) instead of hanging.
 // Each step runs the one-step kernels' phase functions in their order:
 // bulk force and junction lanes, then (after a barrier) friction from
 // the lanes merged as a tree (lane_tree8), and the update. Junction friction laws
@@ -33,10 +44,29 @@ override TILE_THREADS: u32 = 64u;
 // GpuOptions::bond_patches), as in the persistent kernel.
 override BOND_PATCHES: bool = false;
 
+// Chained tiles (above): rounds a dispatch, and the most polls a tile makes
+// for its neighbours in one dispatch (a software adapter's loop budget).
+override TILE_CHAINED: bool = false;
+override CHAIN_POLLS: u32 = 16777216u;
+// Each poll first waits at eight workgroup barriers: on a software adapter
+// they take time and no loop iteration, so the budget of polls lasts.
+override CHAIN_POLL_PAUSE: bool = false;
+// A round's end step is its tile_ends entry without this bit; the bit
+// marks the round that ends its dispatch (chained tiles).
+const ROUND_ENDS_DISPATCH: u32 = 0x80000000u;
+
+// Rounds each tile of each scene has finished, all dispatches (mod 2³²):
+// equal for a scene's tiles between dispatches.
+@group(0) @binding(24) var<storage, read_write> tile_progress: array<atomic<u32>>;
+
 // The forces of the held blocks at the step under way.
 var<workgroup> tile_force: array<vec2<real>, TILE_BLOCKS>;
 // First step, end step and whether the scene has stopped.
 var<workgroup> tile_plan: vec4<u32>;
+// The dispatch's rounds and this tile's counter at its start.
+var<workgroup> tile_chain: vec2<u32>;
+// Whether every neighbour has finished the round awaited.
+var<workgroup> tile_neighbours_done: u32;
 
 // Publishes this tile's edge columns (every row: those in a neighbour's
 // halo) in published copy `copy`: u and v from the tile's state, the
@@ -140,6 +170,33 @@ fn store_tile_force(ix: u32, iz: u32, f: vec2<real>) {
     }
 }
 
+// Whether every tile whose columns reach into this tile's halo has
+// finished `rounds` rounds of this dispatch (its counter was `base` at the
+// start, as was theirs). Thread 0's.
+fn neighbours_finished(base: u32, rounds: u32) -> bool {
+    let first = tile_lo / TILE_WIDTH;
+    let last = (tile_hi - 1u) / TILE_WIDTH;
+    for (var n = first; n <= last; n++) {
+        let done = atomicLoad(&tile_progress[scene * tile_count() + n]) - base;
+        if n != tile && done < rounds {
+            return false;
+        }
+    }
+    return true;
+}
+
+// Eight workgroup barriers in a row, no loop (CHAIN_POLL_PAUSE).
+fn poll_pause() {
+    workgroupBarrier();
+    workgroupBarrier();
+    workgroupBarrier();
+    workgroupBarrier();
+    workgroupBarrier();
+    workgroupBarrier();
+    workgroupBarrier();
+    workgroupBarrier();
+}
+
 @compute @workgroup_size(TILE_THREADS)
 fn tiled_steps(
     @builtin(local_invocation_index) t: u32,
@@ -150,21 +207,79 @@ fn tiled_steps(
     let lanes = min(JUNCTION_LANES, c.junction_count);
     // Before the barrier of workgroupUniformLoad below.
     lane_shuffle_enter(t, lanes);
-    // Dispatch d runs steps tile_ends[d − 1] .. tile_ends[d], reads
-    // published copy d mod 2 and publishes in the other.
-    let d = step_offset;
+    // This dispatch runs rounds d0 .. d0 + rounds of the batch: one, or
+    // with chained tiles up to the one that ends the dispatch.
+    let d0 = step_offset;
     if t == 0u {
-        let first = select(tile_ends[max(d, 1u) - 1u], 0u, d == 0u);
-        tile_plan = vec4<u32>(first, tile_ends[d], u32(scene_stopped()), 0u);
+        var last = d0;
+        if TILE_CHAINED {
+            while (tile_ends[last] & ROUND_ENDS_DISPATCH) == 0u {
+                last++;
+            }
+        }
+        tile_chain = vec2<u32>(last + 1u - d0, atomicLoad(&tile_progress[tile_index()]));
     }
-    let plan = workgroupUniformLoad(&tile_plan);
-    if plan.z != 0u {
-        return;
-    }
+    let chain = workgroupUniformLoad(&tile_chain);
     lane_shuffle_ready();
     let stride = lane_subtree_stride();
     if t == 0u && wid.x == 0u {
         atomicMax(&status[status_base() + 8u], lane_levels_used());
+    }
+    var polls = 0u;
+    for (var k = 0u; k < chain.x; k++) {
+        if k > 0u {
+            // Its neighbours' round k − 1 published what round k reads.
+            loop {
+                if t == 0u {
+                    tile_neighbours_done = u32(neighbours_finished(chain.y, k));
+                }
+                if workgroupUniformLoad(&tile_neighbours_done) != 0u {
+                    break;
+                }
+                polls++;
+                if CHAIN_POLL_PAUSE {
+                    poll_pause();
+                }
+                if polls >= CHAIN_POLLS {
+                    // They never came: this adapter does not run the scene's
+                    // tiles at once. The scene stops, its neighbours go on.
+                    if t == 0u {
+                        atomicMax(&status[status_base() + 9u], tile + 1u);
+                    }
+                    break;
+                }
+            }
+            // What they published, visible to every thread here.
+            storageBarrier();
+        }
+        if !tile_round(t, d0 + k, lanes, stride) {
+            break;
+        }
+        // This round's publication before its counter.
+        storageBarrier();
+        if t == 0u {
+            atomicStore(&tile_progress[tile_index()], chain.y + k + 1u);
+        }
+    }
+    // A tile that stopped early counts every round done: its neighbours
+    // must not wait on it.
+    if t == 0u {
+        atomicStore(&tile_progress[tile_index()], chain.y + chain.x);
+    }
+}
+
+// Round d of the batch: steps tile_ends[d − 1] .. tile_ends[d] (0 for the
+// first), reading published copy d mod 2 and publishing in the other.
+// False where the scene has stopped (a blow-up, a stalled tile): no step.
+fn tile_round(t: u32, d: u32, lanes: u32, stride: u32) -> bool {
+    if t == 0u {
+        let first = select(tile_ends[max(d, 1u) - 1u] & ~ROUND_ENDS_DISPATCH, 0u, d == 0u);
+        let stalled = atomicLoad(&status[status_base() + 9u]) != 0u;
+        tile_plan = vec4<u32>(first, tile_ends[d] & ~ROUND_ENDS_DISPATCH, u32(scene_stopped() || stalled), 0u);
+    }
+    let plan = workgroupUniformLoad(&tile_plan);
+    if plan.z != 0u {
+        return false;
     }
     let update = batch.forces_only == 0u;
     load_tile(t, plan.x, d & 1u);
@@ -287,4 +402,5 @@ fn tiled_steps(
         }
     }
     publish_edges(t, (d + 1u) & 1u);
+    return true;
 }

@@ -103,9 +103,23 @@ fn measure_times_every_candidate_takes_the_fastest_and_caches_it() {
         let tiled = launch.kernel == Kernel::Tiled;
         assert_eq!(launch.threads.is_some(), tiled, "{}", launch.name());
     }
+    // Then the fastest tiled launch once more with its rounds chained.
+    let chained: Vec<Launch> = choice_timings
+        .iter()
+        .map(|t| t.0)
+        .chain(choice.skipped.iter().map(|s| s.0))
+        .filter(|l| l.chained_tiles)
+        .collect();
+    assert_eq!(chained.len(), 1, "{}", choice.describe());
+    let fastest_tiled = choice_timings
+        .iter()
+        .filter(|t| t.0.kernel == Kernel::Tiled && !t.0.chained_tiles)
+        .min_by(|a, b| a.1.total_cmp(&b.1))
+        .map(|t| t.0.with_chained_tiles());
+    assert_eq!(fastest_tiled, Some(chained[0]));
     let (plain, shaped): (Vec<&Timed>, Vec<&Timed>) = choice_timings
         .iter()
-        .filter(|t| t.0.kernel == Kernel::Tiled)
+        .filter(|t| t.0.kernel == Kernel::Tiled && !t.0.chained_tiles)
         .partition(|t| t.0.tile.is_none());
     assert_eq!(plain.len(), 3);
     let threads = plain
@@ -122,7 +136,7 @@ fn measure_times_every_candidate_takes_the_fastest_and_caches_it() {
                 .skipped
                 .iter()
                 .map(|s| s.0)
-                .filter(|l| l.tile.is_some()),
+                .filter(|l| l.tile.is_some() && !l.chained_tiles),
         )
         .collect();
     assert_eq!(searched.len(), 4, "{}", choice.describe());
@@ -320,13 +334,24 @@ fn an_ensemble_times_the_single_workgroup_kernels_at_several_threads() {
         .timings
         .iter()
         .map(|t| t.0)
-        .filter(|l| !l.lanes_in_storage && !l.bond_patches)
+        .filter(|l| !l.lanes_in_storage && !l.bond_patches && !l.chained_tiles)
         .collect();
     let (timed, shaped): (Vec<Launch>, Vec<Launch>) =
         timed.into_iter().partition(|l| l.tile.is_none());
     assert_eq!(timed, launches(&m, 3, opts, &ctx.limits));
-    let skipped_shapes = choice.skipped.iter().filter(|s| s.0.tile.is_some()).count();
+    let skipped_shapes = choice
+        .skipped
+        .iter()
+        .filter(|s| s.0.tile.is_some() && !s.0.chained_tiles)
+        .count();
     assert_eq!(shaped.len() + skipped_shapes, 4, "{}", choice.describe());
+    // Chained tiles, timed once more on the fastest tiled launch, cannot
+    // run an ensemble on a software adapter: skipped with the reason.
+    let chained = choice.skipped.iter().find(|s| s.0.chained_tiles);
+    if ctx.is_software() {
+        let why = &chained.expect("chained tiles skipped").1;
+        assert!(why.contains("one scene at a time"), "{why}");
+    }
     for kernel in [Kernel::Persistent, Kernel::Resident, Kernel::Tiled] {
         let threads: Vec<Option<u32>> = timed
             .iter()
@@ -425,6 +450,14 @@ fn launch_names_read_back() {
             .with_lanes_in_storage()
             .with_bond_patches()
             .with_one_lane_a_round(),
+        Launch::with_threads(Kernel::Tiled, 256)
+            .with_tile(shape)
+            .with_chained_tiles(),
+        Launch::of(Kernel::Tiled).with_chained_tiles(),
+        Launch::of(Kernel::Tiled)
+            .with_chained_tiles()
+            .with_lanes_in_storage()
+            .with_bond_patches(),
     ] {
         assert_eq!(Launch::named(&l.name()), Some(l));
     }
@@ -455,6 +488,14 @@ fn launch_names_read_back() {
             .name(),
         "tiled/1024/16x2"
     );
+    assert_eq!(
+        Launch::with_threads(Kernel::Tiled, 256)
+            .with_tile(shape)
+            .with_chained_tiles()
+            .with_bond_patches()
+            .name(),
+        "tiled/256/16x2/chained/bond-patches"
+    );
     for bad in [
         "resident/0",
         "resident/x",
@@ -481,6 +522,12 @@ fn launch_names_read_back() {
         "one-step-lanes/one-lane-a-round",
         "resident/one-lane-a-round/bond-patches",
         "resident/256/one-lane-a-round/one-lane-a-round",
+        // Only the tiled kernel chains its rounds, after its shape.
+        "resident/256/chained",
+        "one-step/chained",
+        "tiled/chained/8x4",
+        "tiled/256/8x4/bond-patches/chained",
+        "tiled/chained/chained",
     ] {
         assert_eq!(Launch::named(bad), None, "{bad}");
     }

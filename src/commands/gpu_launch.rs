@@ -47,6 +47,14 @@ pub struct GpuLaunchArgs {
     /// `…/one-lane-a-round`; software adapters always step one).
     #[arg(long)]
     pub gpu_one_lane_a_round: bool,
+    /// The tiled kernel runs a batch's rounds (up to a halo's steps each)
+    /// in one dispatch, each tile waiting for its neighbours' edges
+    /// between them: the same results, fewer dispatches. It needs a
+    /// scene's tiles on the GPU at once, and stops with an error where
+    /// they are not (`auto` on a hardware GPU times both when this is not
+    /// given; its figures name such a launch `tiled/…/chained`).
+    #[arg(long)]
+    pub gpu_chained_tiles: bool,
 }
 
 impl Default for GpuLaunchArgs {
@@ -60,6 +68,7 @@ impl Default for GpuLaunchArgs {
             gpu_bond_patches: false,
             gpu_lanes_in_storage: false,
             gpu_one_lane_a_round: false,
+            gpu_chained_tiles: false,
         }
     }
 }
@@ -78,6 +87,7 @@ impl GpuLaunchArgs {
             bond_patches: self.gpu_bond_patches,
             lane_shuffle: !self.gpu_lanes_in_storage,
             two_lanes_a_round: !self.gpu_one_lane_a_round,
+            chained_tiles: self.gpu_chained_tiles,
             ..GpuOptions::default()
         }
     }

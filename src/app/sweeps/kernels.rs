@@ -132,6 +132,9 @@ mod tests {
             Launch::with_threads(Kernel::Tiled, 256).with_tile(shape),
             Launch::with_threads(Kernel::Persistent, 512).with_lanes_in_storage(),
             Launch::with_threads(Kernel::Resident, 256).with_one_lane_a_round(),
+            Launch::with_threads(Kernel::Tiled, 256)
+                .with_tile(shape)
+                .with_chained_tiles(),
         ];
         for launch in launches {
             let kernels = SweepKernels {
@@ -156,6 +159,12 @@ mod tests {
             assert_eq!(
                 runs.two_lanes_a_round,
                 !launch.one_lane_a_round,
+                "{}",
+                launch.name()
+            );
+            assert_eq!(
+                runs.chained_tiles,
+                launch.chained_tiles,
                 "{}",
                 launch.name()
             );

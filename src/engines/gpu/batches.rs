@@ -73,8 +73,12 @@ impl<T: GpuReal> GpuEngine<T> {
                 super::tiles::dispatch_ends(self.kernel, steps, self.steps_per_dispatch, &offsets)
             }
         };
+        // Which of them end a dispatch: all but where the tiled kernel
+        // chains its rounds.
+        let ending = super::tiles::rounds_ending_dispatches(&ends, &offsets, self.chain);
+        let dispatch_count = ending.iter().filter(|&&e| e).count() as u64;
         if self.tiles.is_some() {
-            let words: Vec<u32> = ends.iter().map(|&e| e as u32).collect();
+            let words = super::tiles::tile_end_words(&ends, &ending);
             self.ctx.queue.write_buffer(
                 &self.buffers.tile_scratch[4],
                 0,
@@ -114,14 +118,27 @@ impl<T: GpuReal> GpuEngine<T> {
                     }
                     let mut samples = planned.iter().enumerate().peekable();
                     let mut first = 0;
+                    // The first round of the dispatch under way.
+                    let mut first_round = 0;
                     for (d, &end) in ends.iter().enumerate() {
-                        // The tiled kernel's dispatch d finds its steps in
-                        // tile_ends[d]; a one-step dispatch is its step.
+                        if !ending[d] {
+                            // A chained round: its dispatch is the one of
+                            // the round that ends it.
+                            if !forces_only {
+                                self.current = (self.current + (end - first) as usize) % 2;
+                            }
+                            first = end;
+                            continue;
+                        }
+                        // The tiled kernel's dispatch finds its rounds'
+                        // steps in tile_ends from its first round's; a
+                        // one-step dispatch is its step.
                         let index = if self.tiles.is_some() {
-                            d as u64
+                            first_round as u64
                         } else {
                             first
                         };
+                        first_round = d + 1;
                         let offset = (index * self.offset_stride) as u32;
                         pass.set_bind_group(1, &self.batch_group, &[offset]);
                         // The step that ends this dispatch.
@@ -180,9 +197,9 @@ impl<T: GpuReal> GpuEngine<T> {
                         }
                         first = end;
                     }
-                    self.dispatches += ends.len() as u64;
+                    self.dispatches += dispatch_count;
                     if let Some(m) = marks.as_mut() {
-                        m.set_steps(ends.len() as u64);
+                        m.set_steps(dispatch_count);
                     }
                 }
                 Kernel::Persistent | Kernel::Resident => {
@@ -317,6 +334,18 @@ impl<T: GpuReal> GpuEngine<T> {
         }
         for status in &statuses {
             self.lane_levels = self.lane_levels.max(status.lane_levels);
+        }
+        if let Some(status) = statuses.iter().find(|s| s.stalled_tile != 0) {
+            // The adapter, not a scene: every scene's run is in doubt.
+            self.in_flight.clear();
+            return Err(EngineError::Gpu(format!(
+                "{} did not run a scene's chained tiles at once: tile {} waited for its \
+                 neighbours past {} polls; run the tiled kernel unchained (without \
+                 --gpu-chained-tiles) or another --gpu-path",
+                self.ctx.info.name,
+                status.stalled_tile - 1,
+                self.chain.map_or(0, |c| c.polls)
+            )));
         }
         for (scene, status) in self.scenes.iter_mut().zip(&statuses) {
             if scene.failure.is_some() {

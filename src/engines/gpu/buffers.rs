@@ -74,9 +74,9 @@ pub(super) struct Buffers {
     pub(super) record_placeholders: [wgpu::Buffer; 4],
     /// The tiled kernel's: two published copies of the blocks (u, v), of
     /// the junctions (state, spring; then each tile's private halo
-    /// junctions), and the ends of a batch's dispatches; placeholders for
-    /// the other kernels.
-    pub(super) tile_scratch: [wgpu::Buffer; 5],
+    /// junctions), the ends of a batch's dispatches and each tile's rounds
+    /// done; placeholders for the other kernels.
+    pub(super) tile_scratch: [wgpu::Buffer; 6],
 }
 
 impl Buffers {
@@ -210,6 +210,11 @@ impl Buffers {
                         &zeros(scratch[1], GpuEngine::<T>::SPRING_BYTES),
                     ),
                     storage("tile dispatch ends", &vec![0u8; ends * 4]),
+                    // Each tile's rounds done (chained tiles).
+                    storage(
+                        "tile progress",
+                        &vec![0u8; s * geometry.map_or(0, |g| g.tiles as usize) * 4],
+                    ),
                 ]
             },
             // One element of the largest record struct in this precision.
@@ -258,6 +263,7 @@ pub(super) fn state_group(
         ("tile_junction_state", &b.tile_scratch[2]),
         ("tile_junction_spring", &b.tile_scratch[3]),
         ("tile_ends", &b.tile_scratch[4]),
+        ("tile_progress", &b.tile_scratch[5]),
         ("plans", plan),
         ("sums", sums),
         ("rows", rows),

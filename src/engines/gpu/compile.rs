@@ -1,6 +1,7 @@
 //! How the engine's WGSL modules are compiled: where a kernel's junction
 //! lanes merge (the module's source) and which run-time checks wgpu adds.
 
+use super::precision::GpuReal;
 use super::shaders::{Kernel, LaneMerge};
 
 /// How a kernel's module is built: where its junction lanes merge, and
@@ -9,6 +10,55 @@ use super::shaders::{Kernel, LaneMerge};
 pub struct KernelBuild {
     pub lanes: LaneMerge,
     pub checks: ShaderChecks,
+    /// The tiled kernel's rounds chained in one dispatch
+    /// (`GpuOptions::chained_tiles`): its published halos are read
+    /// `@coherent`, past the multiprocessor's own cache, since a
+    /// neighbour writes them within the dispatch.
+    pub chained_tiles: bool,
+}
+
+impl KernelBuild {
+    /// The WGSL module of `kernel` built this way.
+    pub fn source<T: GpuReal>(self, kernel: Kernel) -> String {
+        let source = kernel.source_with::<T>(self.lanes);
+        match self.chained_tiles && kernel == Kernel::Tiled {
+            true => coherent_halos(&source),
+            false => source,
+        }
+    }
+
+    /// What naga needs to validate the module of this build.
+    pub fn capabilities(self) -> naga::valid::Capabilities {
+        let mut caps = self.lanes.capabilities();
+        if self.chained_tiles {
+            caps |= naga::valid::Capabilities::MEMORY_DECORATION_COHERENT;
+        }
+        caps
+    }
+}
+
+/// The buffers a tiled kernel's tiles publish for their neighbours' halos.
+pub const PUBLISHED_HALOS: [&str; 4] = [
+    "pub_disp",
+    "pub_vel",
+    "tile_junction_state",
+    "tile_junction_spring",
+];
+
+/// `source` with the published halos' bindings declared `@coherent`.
+fn coherent_halos(source: &str) -> String {
+    source
+        .lines()
+        .map(|line| {
+            let published = PUBLISHED_HALOS
+                .iter()
+                .any(|name| line.contains(&format!("> {name}:")) && line.contains("@binding("));
+            match published {
+                true => format!("@coherent {line}\n"),
+                false => format!("{line}\n"),
+            }
+        })
+        .collect()
 }
 
 /// Whether wgpu adds its own run-time checks to the engine's kernels

@@ -57,7 +57,7 @@ pub fn shared() -> Result<GpuContext, EngineError> {
 
 /// Storage bindings the tiled kernel uses (the most of them: the scenes'
 /// constants, the state, its halo's scratch buffers and the record entries).
-const STORAGE_BINDINGS: u32 = 20;
+const STORAGE_BINDINGS: u32 = 21;
 
 /// Group 0's layout of one kernel family and the pipeline layout using it.
 struct KernelLayout {
@@ -125,11 +125,14 @@ impl GpuContext {
         // each dispatch (GpuEngine::time_each_dispatch).
         // Subgroup operations where the adapter has them: the junction
         // lanes' sums merged in registers (lane_shuffle.wgsl).
+        // Coherent storage where the adapter has it (every Vulkan one): the
+        // tiled kernel's halos read within a chained dispatch.
         let features = adapter.features()
             & (wgpu::Features::SHADER_F64
                 | wgpu::Features::TIMESTAMP_QUERY
                 | wgpu::Features::TIMESTAMP_QUERY_INSIDE_PASSES
-                | wgpu::Features::SUBGROUP);
+                | wgpu::Features::SUBGROUP
+                | wgpu::Features::MEMORY_DECORATION_COHERENT);
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("slipfront"),
             required_features: features,
@@ -226,6 +229,14 @@ impl GpuContext {
         self.pipeline_of::<T>(kernel, build, kernel.entry_point(), constants)
     }
 
+    /// Whether the adapter was opened with `@coherent` storage buffers
+    /// (the chained tiled kernel's published halos).
+    pub fn has_coherent_storage(&self) -> bool {
+        self.device
+            .features()
+            .contains(wgpu::Features::MEMORY_DECORATION_COHERENT)
+    }
+
     /// Whether the adapter was opened with subgroup operations.
     pub fn has_subgroups(&self) -> bool {
         self.device.features().contains(wgpu::Features::SUBGROUP)
@@ -241,9 +252,13 @@ impl GpuContext {
         constants: &[(&str, f64)],
     ) -> wgpu::ComputePipeline {
         let layout = &self.layouts[layout_index(kernel)].pipeline;
-        let KernelBuild { lanes, checks } = build;
+        let KernelBuild {
+            lanes,
+            checks,
+            chained_tiles,
+        } = build;
         let key = format!(
-            "{}{kernel:?}{lanes:?}{checks:?}{entry}{constants:?}",
+            "{}{kernel:?}{lanes:?}{checks:?}{chained_tiles}{entry}{constants:?}",
             T::NAME
         );
         let mut cache = self.pipelines.lock().expect("pipeline cache");
@@ -253,7 +268,7 @@ impl GpuContext {
                 let module = checks.module(
                     &self.device,
                     kernel.entry_point(),
-                    kernel.source_with::<T>(lanes),
+                    build.source::<T>(kernel),
                 );
                 self.device
                     .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {

@@ -274,9 +274,11 @@ gpu_struct! {
         /// subgroups (`lane_shuffle.wgsl`; 0: none, each lane's sum through
         /// storage), over the scene's dispatches.
         pub lane_levels: u32,
-        /// Unused: an even count of words (the status copies are followed
-        /// by 8-byte timestamps).
-        pub reserved: u32,
+        /// A chained tiled kernel's tile that gave up waiting for its
+        /// neighbours, plus one (0: none; `tiles::TileChain`). Also keeps
+        /// the count of words even (the status copies are followed by
+        /// 8-byte timestamps).
+        pub stalled_tile: u32,
     }
 }
 

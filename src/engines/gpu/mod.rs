@@ -132,6 +132,8 @@ pub struct GpuEngine<T: GpuReal = f32> {
     /// The tiled kernel's tiles and its halo gather, dispatched before
     /// each of its dispatches.
     tiles: Option<(tiles::TileGeometry, wgpu::ComputePipeline)>,
+    /// The tiled kernel's rounds chained in one dispatch, and how.
+    chain: Option<tiles::TileChain>,
     /// Both state copies (one step) or copy 0 (persistent).
     state_group: wgpu::BindGroup,
     batch_group: wgpu::BindGroup,
@@ -355,6 +357,17 @@ impl<T: GpuReal> GpuEngine<T> {
             build,
         } = step_kernel::plan::<T>(model, opts, &AdapterTraits::of(&ctx))?;
         let kernel = step_kernel.kernel;
+        if step_kernel.chain.is_some() && ctx.is_software() && scene_count > 1 {
+            // llvmpipe hands each of its threads a run of a dispatch's
+            // workgroups, so two scenes' tiles share a thread and wait on
+            // each other's.
+            return Err(EngineError::Gpu(format!(
+                "{} runs a run of a dispatch's workgroups on each of its threads, so the chained \
+                 tiles of {scene_count} scenes would wait on tiles queued behind them: chained \
+                 tiles run one scene at a time on a software adapter",
+                ctx.info.name
+            )));
+        }
         let persistent_threads = step_kernel.threads;
         let geometry = step_kernel.geometry;
         let device = &ctx.device;
@@ -413,6 +426,7 @@ impl<T: GpuReal> GpuEngine<T> {
             bond_patches: step_kernel.bond_patches,
             pipeline,
             tiles,
+            chain: step_kernel.chain,
             state_group,
             batch_group,
             batch_buffer,
@@ -459,6 +473,16 @@ impl<T: GpuReal> GpuEngine<T> {
     /// The tiled kernel's tiles (None for the other kernels).
     pub fn tile_geometry(&self) -> Option<tiles::TileGeometry> {
         self.tiles.as_ref().map(|(g, _)| *g)
+    }
+
+    /// The tiled kernel's chain of rounds a dispatch, where chained.
+    pub fn tile_chain(&self) -> Option<tiles::TileChain> {
+        self.chain
+    }
+
+    /// Whether this engine runs on a software adapter (lavapipe).
+    pub fn is_software(&self) -> bool {
+        self.ctx.is_software()
     }
 
     pub fn adapter(&self) -> String {
@@ -662,14 +686,20 @@ impl<T: GpuReal> GpuEngine<T> {
             ),
             Kernel::Tiled => {
                 let (g, _) = self.tiles.as_ref().expect("the tiled kernel has tiles");
+                let per_dispatch = match self.chain {
+                    Some(c) => format!(
+                        "rounds of up to {} steps chained, up to {} rounds per dispatch",
+                        g.halo, c.rounds
+                    ),
+                    None => format!("up to {} steps per dispatch", g.halo),
+                };
                 format!(
                     "tiled kernel ({} tiles of {} columns, halo {}, {} bytes of workgroup memory \
-                     each), up to {} steps per dispatch, {} threads",
+                     each), {per_dispatch}, {} threads",
                     g.tiles,
                     g.width,
                     g.halo,
                     g.workgroup_bytes::<T>(),
-                    g.halo,
                     self.persistent_threads
                 )
             }

@@ -157,6 +157,16 @@ pub struct GpuOptions {
     /// two, on hardware). `auto` on hardware times its fastest persistent
     /// launch both ways.
     pub two_lanes_a_round: bool,
+    /// The tiled kernel runs the rounds of a batch (its dispatches of up
+    /// to a halo's steps) in one dispatch, each tile waiting for the
+    /// tiles in its halo to finish a round before it reads their edges
+    /// (`tiled.wgsl`, `tiles::TileChain`): the same rounds, so the same
+    /// bits, in one dispatch where there were many. It needs a scene's
+    /// tiles on the GPU at once; a tile that waits past its polls stops
+    /// the run with an error rather than hang. false (the default): a
+    /// dispatch a round; `auto` on hardware times its fastest tiled
+    /// launch both ways (`--gpu-chained-tiles` fixes it on).
+    pub chained_tiles: bool,
 }
 
 impl Default for GpuOptions {
@@ -174,6 +184,7 @@ impl Default for GpuOptions {
             bond_patches: false,
             lanes_read_kept: true,
             two_lanes_a_round: true,
+            chained_tiles: false,
         }
     }
 }

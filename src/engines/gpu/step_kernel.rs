@@ -26,6 +26,9 @@ pub struct StepKernel {
     /// Bulk forces by 2×2 patches (`GpuOptions::bond_patches`, on a kernel
     /// that has them).
     pub bond_patches: bool,
+    /// The tiled kernel's rounds chained in one dispatch
+    /// (`GpuOptions::chained_tiles`).
+    pub chain: Option<tiles::TileChain>,
 }
 
 impl StepKernel {
@@ -71,6 +74,11 @@ impl StepKernel {
             constants.push(("TILE_HALO", g.halo as f64));
             constants.push(("TILE_BLOCKS", g.blocks as f64));
             constants.push(("TILE_THREADS", self.threads as f64));
+        }
+        if let Some(chain) = self.chain {
+            constants.push(("TILE_CHAINED", 1.0));
+            constants.push(("CHAIN_POLLS", chain.polls as f64));
+            constants.push(("CHAIN_POLL_PAUSE", chain.pause as u8 as f64));
         }
         constants
     }
@@ -123,6 +131,8 @@ pub struct AdapterTraits {
     pub limits: wgpu::Limits,
     pub software: bool,
     pub subgroups: bool,
+    /// `@coherent` storage buffers (the chained tiled kernel's halos).
+    pub coherent_storage: bool,
 }
 
 impl AdapterTraits {
@@ -131,6 +141,7 @@ impl AdapterTraits {
             limits: ctx.limits.clone(),
             software: ctx.is_software(),
             subgroups: ctx.has_subgroups(),
+            coherent_storage: ctx.has_coherent_storage(),
         }
     }
 
@@ -169,7 +180,7 @@ pub fn kernel_sources<T: GpuReal>(
             precision: T::NAME,
             build,
             entry: entry.to_string(),
-            source: kernel.source_with::<T>(build.lanes),
+            source: build.source::<T>(kernel),
             constants: constants.iter().map(|&(n, v)| (n.to_string(), v)).collect(),
         })
         .collect()
@@ -203,6 +214,24 @@ fn kernel_fit<T: GpuReal>(
     }
 }
 
+/// The chain of the tiled kernel's rounds on this adapter: it needs
+/// `@coherent` storage for the halos its tiles publish within a dispatch.
+fn chain_fit(
+    model: &Model,
+    adapter: &AdapterTraits,
+    geometry: &tiles::TileGeometry,
+    threads: u32,
+) -> Result<tiles::TileChain, EngineError> {
+    if !adapter.coherent_storage {
+        return Err(EngineError::Gpu(
+            "chained tiles read their neighbours' halos within a dispatch, from @coherent \
+             storage buffers, which this adapter does not offer: use the tiled kernel unchained"
+                .into(),
+        ));
+    }
+    tiles::TileChain::new(model, geometry, threads, adapter.software).map_err(EngineError::Gpu)
+}
+
 /// The step kernel `model` compiles with `opts` on an adapter like
 /// `adapter`, decided without a device: the kernel, its threads and
 /// tiles, its override constants and its module's build. `opts.path`
@@ -220,18 +249,24 @@ pub fn plan<T: GpuReal>(
         adapter.software,
     );
     let geometry = kernel_fit::<T>(model, adapter, opts, kernel, threads)?;
+    let chain = match geometry.filter(|_| opts.chained_tiles) {
+        Some(g) => Some(chain_fit(model, adapter, &g, threads)?),
+        None => None,
+    };
     let variant = Variant::for_model(model);
     let step_kernel = StepKernel {
         kernel,
         threads,
         geometry,
         bond_patches: opts.bond_patches,
+        chain,
     };
     let constants = step_kernel.constants::<T>(&variant, opts, Shape::of(model), adapter.software);
     // One module (and one compiled pipeline) for the one-step kernels.
     let build = KernelBuild {
         lanes: adapter.lane_merge(opts.lane_shuffle && kernel.merges_lanes_through_storage()),
         checks: ShaderChecks::of(opts.shader_checks),
+        chained_tiles: chain.is_some(),
     };
     Ok(KernelPlan {
         step_kernel,

@@ -3,6 +3,7 @@
 //! workgroup memory and in its scratch buffers, whether a scene fits, and
 //! where each dispatch of a batch ends.
 
+use super::options::ONE_STEP_BATCH;
 use super::precision::{Coord, GpuReal};
 use super::shaders::Kernel;
 use crate::model::Model;
@@ -219,6 +220,69 @@ pub fn software_fit(model: &Model, geometry: &TileGeometry, threads: u32) -> Res
     Ok(())
 }
 
+/// A chained tiled dispatch (`GpuOptions::chained_tiles`): the most rounds
+/// it runs, and the most polls each tile makes for its neighbours in it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct TileChain {
+    /// Rounds (dispatches of the unchained kernel) one dispatch runs at
+    /// most; a sample's step and the batch's end end one anyway.
+    pub rounds: usize,
+    /// Polls a tile makes in one dispatch before it gives up
+    /// (`CHAIN_POLLS`; `GpuStatus::stalled_tile`).
+    pub polls: u32,
+    /// Each poll waits at a run of workgroup barriers (`CHAIN_POLL_PAUSE`):
+    /// on a software adapter a barrier takes time and no loop iteration,
+    /// so a tile's loop budget waits longer.
+    pub pause: bool,
+}
+
+/// Rounds a chained dispatch runs at most on a software adapter: few, so
+/// that the polls of its waits keep most of the loop budget.
+pub const SOFTWARE_CHAINED_ROUNDS: usize = 4;
+
+/// Polls a tile makes in a chained dispatch on hardware before it gives up:
+/// about ten seconds at a microsecond a poll, far past any wait of a scene
+/// whose tiles are all on the GPU.
+pub const HARDWARE_CHAIN_POLLS: u32 = 1 << 24;
+
+impl TileChain {
+    /// The chain of `model`'s tiles of `geometry` at `threads` threads: a
+    /// whole batch's rounds a dispatch on hardware; on a software adapter
+    /// `SOFTWARE_CHAINED_ROUNDS`, with the rest of the loop budget for
+    /// polls (each a loop round and one per tile it reads), or an error
+    /// where no poll is left.
+    pub fn new(
+        model: &Model,
+        geometry: &TileGeometry,
+        threads: u32,
+        software: bool,
+    ) -> Result<TileChain, String> {
+        if !software {
+            return Ok(TileChain {
+                rounds: ONE_STEP_BATCH as usize,
+                polls: HARDWARE_CHAIN_POLLS,
+                pause: false,
+            });
+        }
+        let per_round = loop_iterations(model, geometry, threads);
+        let rounds = SOFTWARE_CHAINED_ROUNDS;
+        // The tiles whose columns reach into a halo, and the loop round.
+        let per_poll = 2 * geometry.halo.div_ceil(geometry.width) as usize + 2;
+        let left = SOFTWARE_LOOP_BUDGET.saturating_sub(rounds * per_round) / per_poll;
+        if left < 64 {
+            return Err(format!(
+                "chained tiles of {} steps with {threads} threads would leave {left} polls of a                  software adapter's loop budget for the tiles' waits: use fewer steps per                  dispatch, more threads, or the tiled kernel unchained",
+                geometry.halo
+            ));
+        }
+        Ok(TileChain {
+            rounds,
+            polls: left as u32,
+            pause: true,
+        })
+    }
+}
+
 /// The step after the last of the dispatch that starts at step `first` of
 /// a batch of `steps` steps with samples at `sample_offsets` (ascending):
 /// after `halo` steps, at the batch's end, after the batch's first step
@@ -246,6 +310,48 @@ pub fn dispatch_ends(kernel: Kernel, steps: u64, halo: u64, sample_offsets: &[u6
         first = end;
     }
     ends
+}
+
+/// The bit of a `tile_ends` word that marks the round ending its dispatch
+/// (`ROUND_ENDS_DISPATCH` in tiled.wgsl).
+pub const ROUND_ENDS_DISPATCH: u32 = 0x8000_0000;
+
+/// Whether each round of a batch (its end steps `ends`, from
+/// `dispatch_ends`) ends its dispatch: every round unchained; chained
+/// (`chain`), the round of a sample's step (the output kernels record
+/// after it), the batch's last, and any that would make a dispatch longer
+/// than `chain.rounds`.
+pub fn rounds_ending_dispatches(
+    ends: &[u64],
+    sample_offsets: &[u64],
+    chain: Option<TileChain>,
+) -> Vec<bool> {
+    let Some(chain) = chain else {
+        return vec![true; ends.len()];
+    };
+    let mut run = 0;
+    ends.iter()
+        .enumerate()
+        .map(|(d, &end)| {
+            run += 1;
+            let last = d + 1 == ends.len()
+                || run == chain.rounds
+                || sample_offsets.binary_search(&(end - 1)).is_ok();
+            if last {
+                run = 0;
+            }
+            last
+        })
+        .collect()
+}
+
+/// The `tile_ends` words of a batch: each round's end step, with
+/// `ROUND_ENDS_DISPATCH` where it ends its dispatch.
+pub fn tile_end_words(ends: &[u64], ending: &[bool]) -> Vec<u32> {
+    ends.iter()
+        .zip(ending)
+        .map(|(&end, &last)| end as u32 | if last { ROUND_ENDS_DISPATCH } else { 0 })
+        .collect()
 }
 
 #[cfg(test)]
@@ -340,5 +446,63 @@ mod tests {
         assert_eq!(dispatch_ends(Kernel::OneStep, 3, 4, &[1]), vec![1, 2, 3]);
         // A sample at the first step ends the first dispatch anyway.
         assert_eq!(dispatch_ends(Kernel::Tiled, 6, 8, &[0, 5]), vec![1, 6]);
+    }
+
+    /// Chained, a dispatch runs rounds up to a sample's step, the batch's
+    /// end or its most rounds; unchained, a round is a dispatch.
+    #[test]
+    fn a_chained_dispatch_ends_at_a_sample_the_batch_or_its_most_rounds() {
+        let samples = [6, 7, 15];
+        let ends = dispatch_ends(Kernel::Tiled, 30, 4, &samples);
+        assert_eq!(ends, vec![1, 5, 7, 8, 12, 16, 20, 24, 28, 30]);
+        let chain = TileChain {
+            rounds: 3,
+            polls: 1,
+            pause: false,
+        };
+        let ending = rounds_ending_dispatches(&ends, &samples, Some(chain));
+        let t = true;
+        let f = false;
+        assert_eq!(ending, vec![f, f, t, t, f, t, f, f, t, t]);
+        assert!(rounds_ending_dispatches(&ends, &samples, None)
+            .iter()
+            .all(|&e| e));
+        let words = tile_end_words(&ends, &ending);
+        assert_eq!(words[0], 1);
+        assert_eq!(words[2], 7 | ROUND_ENDS_DISPATCH);
+    }
+
+    /// Table S1 on a software adapter leaves its chained tiles polls to
+    /// spare; on hardware a dispatch chains a whole batch.
+    #[test]
+    fn chained_tiles_keep_polls_within_a_software_loop_budget() {
+        let s = crate::model::scenario::Scenario::parse(
+            crate::model::scenario::built_in("tromborg2014_precursors").unwrap(),
+            "s1",
+            &[] as &[String],
+        )
+        .unwrap();
+        let m = Model::from_scenario(&s, false).unwrap();
+        let g = TileGeometry::new(&m, TileShape::DEFAULT).unwrap();
+        let soft = TileChain::new(&m, &g, 256, true).unwrap();
+        assert_eq!(soft.rounds, SOFTWARE_CHAINED_ROUNDS);
+        assert!(soft.pause);
+        let per_poll = 4;
+        let used = soft.rounds * loop_iterations(&m, &g, 256) + soft.polls as usize * per_poll;
+        assert!(used <= SOFTWARE_LOOP_BUDGET, "{used}");
+        assert!(soft.polls > 1000, "{soft:?}");
+        let hard = TileChain::new(&m, &g, 256, false).unwrap();
+        assert_eq!(hard.polls, HARDWARE_CHAIN_POLLS);
+        assert!(!hard.pause);
+        let wide = TileGeometry::new(
+            &m,
+            TileShape {
+                width: 16,
+                halo: MAX_TILE_HALO,
+            },
+        )
+        .unwrap();
+        let err = TileChain::new(&m, &wide, 1, true).unwrap_err();
+        assert!(err.contains("polls"), "{err}");
     }
 }

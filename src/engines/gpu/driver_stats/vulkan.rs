@@ -233,6 +233,8 @@ impl StatsDevice {
                 .supported_stages
                 .contains(vk::ShaderStageFlags::COMPUTE)
                 && subgroup.supported_operations.contains(needed),
+            // wgpu offers @coherent on every Vulkan device.
+            coherent_storage: true,
         };
         let driver = format!(
             "{} {}",

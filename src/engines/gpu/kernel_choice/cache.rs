@@ -126,8 +126,8 @@ impl ChoiceCache {
 /// What a measured choice depends on: the adapter and its driver, the
 /// precision, the lattice (`lattice_key`), the persistent kernels' threads,
 /// the tile shape where one is fixed, whether the lanes' merge was
-/// searched, wgpu's run-time checks, whether the bond patches and the
-/// junction lanes a round were searched, and the kernels' sources (a new
+/// searched, wgpu's run-time checks, whether the bond patches, the
+/// junction lanes a round and chained tiles were searched, and the kernels' sources (a new
 /// version of slipfront measures again).
 pub fn cache_key<T: GpuReal>(model: &Model, ctx: &GpuContext, opts: GpuOptions) -> String {
     scenes_cache_key::<T>(model, 1, ctx, opts)
@@ -166,7 +166,7 @@ pub fn scenes_cache_key<T: GpuReal>(
         String::new()
     };
     format!(
-        "{} | {:?} | {} {} | {} | {}{ensemble} | threads {} | tiles {} | lanes {} | checks {} | patches {} | lane rounds {} | kernels {:016x}",
+        "{} | {:?} | {} {} | {} | {}{ensemble} | threads {} | tiles {} | lanes {} | checks {} | patches {} | lane rounds {} | chained tiles {} | kernels {:016x}",
         info.name,
         info.backend,
         info.driver,
@@ -205,6 +205,12 @@ pub fn scenes_cache_key<T: GpuReal>(
             "searched"
         } else {
             "one"
+        },
+        // Nor one that searched chained tiles one with them fixed on.
+        if opts.chained_tiles {
+            "on"
+        } else {
+            "searched"
         },
         sources.finish()
     )

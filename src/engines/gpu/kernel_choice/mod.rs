@@ -85,6 +85,9 @@ pub struct Launch {
     /// the same bits, fewer registers a thread. Only for the persistent
     /// and resident kernels.
     pub one_lane_a_round: bool,
+    /// The tiled kernel's rounds chained in one dispatch
+    /// (`GpuOptions::chained_tiles`): the same bits, fewer dispatches.
+    pub chained_tiles: bool,
 }
 
 /// The name's last part for `Launch::lanes_in_storage`.
@@ -93,6 +96,8 @@ const LANES_IN_STORAGE: &str = "lanes-in-storage";
 const BOND_PATCHES: &str = "bond-patches";
 /// The name's last part for `Launch::one_lane_a_round`.
 const ONE_LANE_A_ROUND: &str = "one-lane-a-round";
+/// The name's part (after the tile shape) for `Launch::chained_tiles`.
+const CHAINED: &str = "chained";
 
 impl Launch {
     pub fn of(kernel: Kernel) -> Launch {
@@ -103,6 +108,7 @@ impl Launch {
             lanes_in_storage: false,
             bond_patches: false,
             one_lane_a_round: false,
+            chained_tiles: false,
         }
     }
 
@@ -146,7 +152,15 @@ impl Launch {
         }
     }
 
-    /// `one-step-lanes`, `resident/512`, `tiled/1024/16x4`,
+    /// This launch with the tiled kernel's rounds chained.
+    pub fn with_chained_tiles(self) -> Launch {
+        Launch {
+            chained_tiles: true,
+            ..self
+        }
+    }
+
+    /// `one-step-lanes`, `resident/512`, `tiled/1024/16x4`, `tiled/256/8x4/chained`,
     /// `resident/1024/lanes-in-storage`, `persistent/1024/bond-patches`,
     /// `resident/256/bond-patches/one-lane-a-round`.
     pub fn name(self) -> String {
@@ -156,6 +170,9 @@ impl Launch {
         }
         if let Some(shape) = self.tile {
             name += &format!("/{}", shape.name());
+        }
+        if self.chained_tiles {
+            name += &format!("/{CHAINED}");
         }
         if self.lanes_in_storage {
             name += &format!("/{LANES_IN_STORAGE}");
@@ -179,13 +196,19 @@ impl Launch {
         {
             launch.threads = Some(t.parse().ok().filter(|&t: &u32| t > 0)?);
         }
-        if let Some(shape) =
-            rest.next_if(|p| ![LANES_IN_STORAGE, BOND_PATCHES, ONE_LANE_A_ROUND].contains(p))
+        if let Some(shape) = rest
+            .next_if(|p| ![CHAINED, LANES_IN_STORAGE, BOND_PATCHES, ONE_LANE_A_ROUND].contains(p))
         {
             if launch.kernel != Kernel::Tiled {
                 return None;
             }
             launch.tile = Some(TileShape::parse(shape).ok()?);
+        }
+        if rest.next_if(|p| *p == CHAINED).is_some() {
+            if launch.kernel != Kernel::Tiled {
+                return None;
+            }
+            launch.chained_tiles = true;
         }
         if rest.next_if(|p| *p == LANES_IN_STORAGE).is_some() {
             if !launch.kernel.merges_lanes_through_storage() {
@@ -214,6 +237,7 @@ impl Launch {
             lane_shuffle: opts.lane_shuffle && !self.lanes_in_storage,
             bond_patches: opts.bond_patches || self.bond_patches,
             two_lanes_a_round: opts.two_lanes_a_round && !self.one_lane_a_round,
+            chained_tiles: opts.chained_tiles || self.chained_tiles,
             ..opts
         }
     }

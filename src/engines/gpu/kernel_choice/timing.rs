@@ -242,7 +242,13 @@ pub fn measure_within<T: GpuReal>(
     }
     // The tile's shape is searched unless the options fix it.
     if let Some(best) = tiled_best.filter(|_| opts.tile.is_none()) {
-        search_tile_shapes(best, &mut time_noting_merges);
+        tiled_best = Some(search_tile_shapes(best, &mut time_noting_merges));
+    }
+    // The fastest tiled launch with its rounds chained in one dispatch
+    // (unless the options fix that): the same bits, a dispatch where
+    // there were many, for tiles that wait on their neighbours instead.
+    if let Some((launch, _)) = tiled_best.filter(|_| !opts.chained_tiles) {
+        time_noting_merges(launch.with_chained_tiles());
     }
     // Where the lanes merge: the same tree of sums either way, and
     // subgroup merges have no hardware figure yet. Only the fastest launch
