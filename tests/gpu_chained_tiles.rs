@@ -213,3 +213,31 @@ fn each_chained_scene_of_an_ensemble_matches_its_solo_run() {
     }
     assert!(e.snapshot(1).unwrap() != alone[0], "control");
 }
+
+/// A chained run that blows up stops where the unchained kernel's does: the
+/// same step and block (the same rounds), and the tiles past it neither
+/// hang nor report a stall. Junctions 10⁴× too stiff for the time step
+/// (forced past the stability check) blow up within a few hundred steps.
+#[test]
+fn a_chained_blow_up_stops_at_the_step_and_block_of_the_tiled_kernel() {
+    let s = slipfront::app::verify::small_scene(&[
+        "loading.drive.velocity=0.4",
+        "friction.junctions.stiffness_coefficient=39.2e17",
+        "time.end=1e-3",
+    ])
+    .unwrap();
+    let m = Model::from_scenario(&s, true).unwrap();
+    let shape = TileShape { width: 16, halo: 4 };
+    let stop = |chained| {
+        let mut e = tiled(&m, shape, chained, GpuOutput::Device);
+        let err = advance_to(&mut e, m.total_steps()).unwrap_err();
+        let text = err.to_string();
+        let slipfront::EngineError::BlowUp { step, ix, iz, .. } = err else {
+            panic!("chained {chained}: {text}");
+        };
+        assert_eq!(e.steps_done(), step);
+        (step, ix, iz)
+    };
+    let plain = stop(false);
+    assert_eq!(stop(true), plain);
+}
