@@ -25,6 +25,11 @@ pub const WIDTHS_SEARCHED: [u32; 2] = [4, 16];
 /// Halos (steps per dispatch) `auto` then times at the fastest width:
 /// fewer dispatches a step against more redundant halo work.
 pub const HALOS_SEARCHED: [u32; 2] = [2, 8];
+/// Halos `auto` times chained at the chained launch's width where chaining
+/// beat the unchained launch (smaller ones than its own only): a chained
+/// round costs a neighbour's wait, not a dispatch, so less redundant halo
+/// work may win there.
+pub const CHAINED_HALOS_SEARCHED: [u32; 2] = [1, 2];
 
 /// A tile's shape: the columns it owns and its halo columns each side,
 /// the most steps one dispatch runs. Written `16x4` (width x halo) in

@@ -36,7 +36,8 @@ mod timing;
 
 pub use cache::{cache_key, lattice_key, scenes_cache_key, ChoiceCache, CACHE_FILE};
 pub use timing::{
-    driving_start, measure, measure_within, search_tile_shapes, time_kernel, PREPARE_BUDGET_SECONDS,
+    chained_halo_search, driving_start, measure, measure_within, search_tile_shapes, time_kernel,
+    PREPARE_BUDGET_SECONDS,
 };
 
 use super::context::GpuContext;

@@ -7,7 +7,9 @@ use crate::engines::gpu::context::GpuContext;
 use crate::engines::gpu::options::GpuOptions;
 use crate::engines::gpu::precision::GpuReal;
 use crate::engines::gpu::shaders::Kernel;
-use crate::engines::gpu::tiles::{TileShape, HALOS_SEARCHED, WIDTHS_SEARCHED};
+use crate::engines::gpu::tiles::{
+    TileShape, CHAINED_HALOS_SEARCHED, HALOS_SEARCHED, WIDTHS_SEARCHED,
+};
 use crate::engines::gpu::GpuEngine;
 use crate::engines::{EngineError, EngineState};
 use crate::model::Model;
@@ -247,8 +249,17 @@ pub fn measure_within<T: GpuReal>(
     // The fastest tiled launch with its rounds chained in one dispatch
     // (unless the options fix that): the same bits, a dispatch where
     // there were many, for tiles that wait on their neighbours instead.
-    if let Some((launch, _)) = tiled_best.filter(|_| !opts.chained_tiles) {
-        time_noting_merges(launch.with_chained_tiles());
+    // Where chaining wins, smaller halos are timed chained too.
+    if let Some((launch, unchained)) = tiled_best.filter(|_| !opts.chained_tiles) {
+        let chained = time_noting_merges(launch.with_chained_tiles());
+        if chained.is_some_and(|s| s < unchained) {
+            for smaller in chained_halo_search(launch)
+                .into_iter()
+                .filter(|_| opts.tile.is_none())
+            {
+                time_noting_merges(smaller);
+            }
+        }
     }
     // Where the lanes merge: the same tree of sums either way, and
     // subgroup merges have no hardware figure yet. Only the fastest launch
@@ -293,6 +304,22 @@ fn times_one_lane_a_round(launch: Launch, opts: GpuOptions, software: bool) -> b
     launch.kernel.is_persistent() && !launch.one_lane_a_round && opts.two_lanes_a_round && !software
 }
 
+/// The chained launches `measure` times after chaining `launch` (the
+/// fastest tiled launch) beat it unchained: its width and threads with
+/// each of `CHAINED_HALOS_SEARCHED` smaller than its halo.
+pub fn chained_halo_search(launch: Launch) -> Vec<Launch> {
+    let shape = launch.tile.unwrap_or(TileShape::DEFAULT);
+    CHAINED_HALOS_SEARCHED
+        .into_iter()
+        .filter(|&h| h < shape.halo)
+        .map(|halo| {
+            launch
+                .with_tile(TileShape { halo, ..shape })
+                .with_chained_tiles()
+        })
+        .collect()
+}
+
 /// `best` becomes (`launch`, `seconds`) if that is faster or it was empty.
 fn keep_faster(best: &mut Option<(Launch, f64)>, launch: Launch, seconds: f64) {
     if best.is_none_or(|(_, b)| seconds < b) {
@@ -303,6 +330,25 @@ fn keep_faster(best: &mut Option<(Launch, f64)>, launch: Launch, seconds: f64) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Chained, the halos below the launch's own are searched at its width
+    /// and threads: 1 and 2 below the default 4, 1 below 2, none below 1.
+    #[test]
+    fn a_winning_chain_searches_the_smaller_halos_at_its_width() {
+        let base =
+            Launch::with_threads(Kernel::Tiled, 256).with_tile(TileShape { width: 16, halo: 4 });
+        let names: Vec<String> = chained_halo_search(base).iter().map(|l| l.name()).collect();
+        assert_eq!(names, ["tiled/256/16x1/chained", "tiled/256/16x2/chained"]);
+        let two = base.with_tile(TileShape { width: 16, halo: 2 });
+        assert_eq!(chained_halo_search(two).len(), 1);
+        let one = base.with_tile(TileShape { width: 16, halo: 1 });
+        assert!(chained_halo_search(one).is_empty());
+        let default = Launch::with_threads(Kernel::Tiled, 512);
+        assert_eq!(
+            chained_halo_search(default)[0].name(),
+            "tiled/512/8x1/chained"
+        );
+    }
 
     /// A made-up landscape of step times by shape: the search times the
     /// widths at the default halo, then the halos at the fastest width,
