@@ -101,10 +101,11 @@ fn publish_edge_junctions(t: u32, copy: u32) {
     }
 }
 
-// Loads this tile's own columns from the state copy of step `first`, its
-// halo from published copy `copy`, and its halo's junctions into its
-// private copy. Before a barrier.
-fn load_tile(t: u32, first: u32, copy: u32) {
+// Loads this tile's own columns from the state copy of step `first`
+// (unless `own` is false: a chained round finds them where the round
+// before left them), its halo from published copy `copy`, and its halo's
+// junctions into its private copy. Before a barrier.
+fn load_tile(t: u32, first: u32, copy: u32, own: bool) {
     let held = tile_hi - tile_lo;
     let state = copy_of(first);
     for (var b = grid_walk(t, TILE_THREADS, held); b.row < c.nz; grid_walk_next(&b)) {
@@ -112,8 +113,10 @@ fn load_tile(t: u32, first: u32, copy: u32) {
         let i = b.row * c.nx + ix;
         let at = tile_slot_at(ix, b.row);
         if tile_owns(ix) {
-            tile_disp[at] = stored_disp(i, state);
-            tile_vel[at] = stored_vel(i, state);
+            if own {
+                tile_disp[at] = stored_disp(i, state);
+                tile_vel[at] = stored_vel(i, state);
+            }
         } else {
             tile_disp[at] = pub_disp[pub_slot(copy, i)];
             tile_vel[at] = pub_vel[pub_slot(copy, i)];
@@ -252,13 +255,23 @@ fn tiled_steps(
             // What they published, visible to every thread here.
             storageBarrier();
         }
-        if !tile_round(t, d0 + k, lanes, stride) {
+        // Chained, a round's own columns stay in workgroup memory for the
+        // next: loaded at the dispatch's first round, stored at its last.
+        let update = batch.forces_only == 0u;
+        let first = k == 0u || !update;
+        let last = k + 1u == chain.x;
+        let end = tile_round(t, d0 + k, lanes, stride, first, last);
+        if end == 0u {
             break;
         }
-        // This round's publication before its counter.
+        // This round's publication before its counter, and its counter
+        // before its own columns' store, which no neighbour reads.
         storageBarrier();
         if t == 0u {
             atomicStore(&tile_progress[tile_index()], chain.y + k + 1u);
+        }
+        if update && last {
+            store_tile_end(t, end - 1u);
         }
     }
     // A tile that stopped early counts every round done: its neighbours
@@ -268,10 +281,23 @@ fn tiled_steps(
     }
 }
 
+// This tile's own columns' state at step `end` into that step's copy.
+fn store_tile_end(t: u32, end: u32) {
+    let copy = copy_of(end);
+    for (var b = grid_walk(t, TILE_THREADS, tile_x1 - tile_x0); b.row < c.nz; grid_walk_next(&b)) {
+        let ix = tile_x0 + b.column;
+        let i = b.row * c.nx + ix;
+        store_copy(i, copy, load_disp_at(i, ix, b.row), load_vel_at(i, ix, b.row));
+    }
+}
+
 // Round d of the batch: steps tile_ends[d − 1] .. tile_ends[d] (0 for the
 // first), reading published copy d mod 2 and publishing in the other.
-// False where the scene has stopped (a blow-up, a stalled tile): no step.
-fn tile_round(t: u32, d: u32, lanes: u32, stride: u32) -> bool {
+// `first`: its own columns come from storage; `last`: the state its last
+// step starts from goes to storage (output samples read it), as does its
+// end state after it (`store_tile_end`). Returns its end step plus one, or
+// 0 where the scene has stopped (a blow-up, a stalled tile): no step.
+fn tile_round(t: u32, d: u32, lanes: u32, stride: u32, first: bool, last: bool) -> u32 {
     if t == 0u {
         let first = select(tile_ends[max(d, 1u) - 1u] & ~ROUND_ENDS_DISPATCH, 0u, d == 0u);
         let stalled = atomicLoad(&status[status_base() + 9u]) != 0u;
@@ -279,10 +305,10 @@ fn tile_round(t: u32, d: u32, lanes: u32, stride: u32) -> bool {
     }
     let plan = workgroupUniformLoad(&tile_plan);
     if plan.z != 0u {
-        return false;
+        return 0u;
     }
     let update = batch.forces_only == 0u;
-    load_tile(t, plan.x, d & 1u);
+    load_tile(t, plan.x, d & 1u, first);
     storageBarrier();
     workgroupBarrier();
     // The first step's kept bits, for every column of the tile
@@ -379,7 +405,7 @@ fn tile_round(t: u32, d: u32, lanes: u32, stride: u32) -> bool {
             if update {
                 // The last step's starting state stays in its copy, where a
                 // run of one-step dispatches leaves it (output samples read it).
-                if s + 1u == plan.y && tile_owns(ix) {
+                if last && s + 1u == plan.y && tile_owns(ix) {
                     store_copy(i, copy_of(s), load_disp_at(i, ix, iz), load_vel_at(i, ix, iz));
                 }
                 verlet(i, ix, iz, f, friction, ld, s);
@@ -393,14 +419,6 @@ fn tile_round(t: u32, d: u32, lanes: u32, stride: u32) -> bool {
         storageBarrier();
         workgroupBarrier();
     }
-    if update {
-        let last = copy_of(plan.y);
-        for (var b = grid_walk(t, TILE_THREADS, tile_x1 - tile_x0); b.row < c.nz; grid_walk_next(&b)) {
-            let ix = tile_x0 + b.column;
-            let i = b.row * c.nx + ix;
-            store_copy(i, last, load_disp_at(i, ix, b.row), load_vel_at(i, ix, b.row));
-        }
-    }
     publish_edges(t, (d + 1u) & 1u);
-    return true;
+    return plan.y + 1u;
 }

@@ -215,9 +215,12 @@ fn each_chained_scene_of_an_ensemble_matches_its_solo_run() {
 }
 
 /// A chained run that blows up stops where the unchained kernel's does: the
-/// same step and block (the same rounds), and the tiles past it neither
-/// hang nor report a stall. Junctions 10⁴× too stiff for the time step
-/// (forced past the stability check) blow up within a few hundred steps.
+/// same step (the same rounds), at an interface block, and the tiles past
+/// it neither hang nor report a stall. Junctions 10⁴× too stiff for the
+/// time step (forced past the stability check) blow up within a few
+/// hundred steps. Several blocks of both tiles blow up at that step, and
+/// the first to report it is named, in either kernel: the block is not
+/// compared.
 #[test]
 fn a_chained_blow_up_stops_at_the_step_and_block_of_the_tiled_kernel() {
     let s = slipfront::app::verify::small_scene(&[
@@ -238,6 +241,8 @@ fn a_chained_blow_up_stops_at_the_step_and_block_of_the_tiled_kernel() {
         assert_eq!(e.steps_done(), step);
         (step, ix, iz)
     };
-    let plain = stop(false);
-    assert_eq!(stop(true), plain);
+    let (step, _, iz) = stop(false);
+    let (chained_step, _, chained_iz) = stop(true);
+    assert_eq!(chained_step, step);
+    assert!(iz <= 1 && chained_iz <= 1, "rows {iz} and {chained_iz}");
 }
