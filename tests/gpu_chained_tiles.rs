@@ -13,6 +13,11 @@ use slipfront::engines::gpu::{GpuEngine, GpuOptions, GpuOutput, GpuPath};
 use slipfront::model::scenario::{Scenario, DEFAULT_SCENARIO};
 use slipfront::{advance_to, Engine, Model};
 
+#[allow(dead_code)]
+#[path = "support/record_twins.rs"]
+mod record_twins;
+use record_twins::plan;
+
 fn scenario(extra: &[&str]) -> Scenario {
     let small: &[&str] = &slipfront::app::verify::SMALL_SCENE;
     let set: Vec<String> = [small, &["loading.drive.velocity=0.4"], extra]
@@ -116,26 +121,6 @@ fn chained_tiles_record_the_samples_of_the_tiled_kernel() {
         chained[1..] != plain[..plain.len() - 1],
         "a shift is flagged"
     );
-}
-
-/// The sample plan of scenario `s`'s output cadences.
-fn plan(m: &Model, s: &Scenario) -> slipfront::engines::SamplePlan {
-    let every = |t: f64| {
-        if t > 0.0 {
-            ((t / m.dt).round() as u64).max(1)
-        } else {
-            0
-        }
-    };
-    slipfront::engines::SamplePlan {
-        prep_steps: m.prep_steps,
-        every_global: every(s.output.global_interval),
-        every_interface: every(s.output.interface_interval),
-        every_bulk: every(s.output.bulk_interval),
-        every_fast: every(s.output.fast_interval),
-        fast_slip_speed: s.output.fast_slip_speed,
-        fast: false,
-    }
 }
 
 /// A scene of 64 one-column tiles: far more than lavapipe runs at once
