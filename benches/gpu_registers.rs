@@ -42,7 +42,9 @@ use slipfront::{Model, Scenario};
 
 /// The launches compiled by default: every kernel at the thread counts
 /// `auto` and the ensemble bench time, with and without bond patches and
-/// lane shuffles where they change the module.
+/// lane shuffles where they change the module, and the tiled kernel with
+/// its rounds chained (at a small halo too, as `auto` times it where
+/// chaining wins).
 const LAUNCHES: &[&str] = &[
     "one-step",
     "one-step/bond-patches",
@@ -60,6 +62,8 @@ const LAUNCHES: &[&str] = &[
     "tiled/256/8x4",
     "tiled/256/16x4",
     "tiled/1024/16x4",
+    "tiled/256/8x4/chained",
+    "tiled/256/16x1/chained",
 ];
 
 fn launches() -> Vec<Launch> {
