@@ -326,9 +326,9 @@ fn store_tile_end(t: u32, end: u32) {
 // 0 where the scene has stopped (a blow-up, a stalled tile): no step.
 fn tile_round(t: u32, d: u32, lanes: u32, stride: u32, first: bool, last: bool) -> u32 {
     if t == 0u {
-        let first = select(tile_ends[max(d, 1u) - 1u] & ~ROUND_ENDS_DISPATCH, 0u, d == 0u);
+        let start = select(tile_ends[max(d, 1u) - 1u] & ~ROUND_ENDS_DISPATCH, 0u, d == 0u);
         let stalled = atomicLoad(&status[status_base() + 9u]) != 0u;
-        tile_plan = vec4<u32>(first, tile_ends[d] & ~ROUND_ENDS_DISPATCH, u32(scene_stopped() || stalled), 0u);
+        tile_plan = vec4<u32>(start, tile_ends[d] & ~ROUND_ENDS_DISPATCH, u32(scene_stopped() || stalled), 0u);
     }
     let plan = workgroupUniformLoad(&tile_plan);
     if plan.z != 0u {

@@ -208,12 +208,8 @@ fn each_chained_scene_of_an_ensemble_matches_its_solo_run() {
 /// compared.
 #[test]
 fn a_chained_blow_up_stops_at_the_step_and_block_of_the_tiled_kernel() {
-    let s = slipfront::app::verify::small_scene(&[
-        "loading.drive.velocity=0.4",
-        "friction.junctions.stiffness_coefficient=39.2e17",
-        "time.end=1e-3",
-    ])
-    .unwrap();
+    let s = slipfront::app::verify::small_scene(&slipfront::app::verify::STIFF_JUNCTIONS_BLOW_UP)
+        .unwrap();
     let m = Model::from_scenario(&s, true).unwrap();
     let shape = TileShape { width: 16, halo: 4 };
     let stop = |chained| {
@@ -230,4 +226,31 @@ fn a_chained_blow_up_stops_at_the_step_and_block_of_the_tiled_kernel() {
     let (chained_step, _, chained_iz) = stop(true);
     assert_eq!(chained_step, step);
     assert!(iz <= 1 && chained_iz <= 1, "rows {iz} and {chained_iz}");
+}
+
+/// `--gpu-chained-tiles` with a kernel named that has no rounds to chain is
+/// refused, naming the flag, the kernel and what to use; `auto` and
+/// `measure` take it (they chain only the tiled kernel).
+#[test]
+fn chained_tiles_with_another_kernel_are_refused() {
+    let m = driven();
+    let opts = GpuOptions {
+        path: GpuPath::Persistent,
+        chained_tiles: true,
+        ..GpuOptions::default()
+    };
+    let err = GpuEngine::with_options(&m, opts)
+        .err()
+        .expect("refused")
+        .to_string();
+    assert!(
+        err.contains("--gpu-chained-tiles") && err.contains("--gpu-path persistent"),
+        "{err}"
+    );
+    assert!(err.contains("use --gpu-path tiled"), "{err}");
+    let auto = GpuOptions {
+        path: GpuPath::Auto,
+        ..opts
+    };
+    GpuEngine::with_options(&m, auto).expect("auto takes the flag");
 }

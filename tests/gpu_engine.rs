@@ -468,12 +468,8 @@ fn a_persistent_dispatch_cut_short_is_an_error() {
 /// an interface block, and stop there.
 #[test]
 fn a_blow_up_stops_the_run_at_its_step_and_block_on_every_kernel() {
-    let s = slipfront::app::verify::small_scene(&[
-        "loading.drive.velocity=0.4",
-        "friction.junctions.stiffness_coefficient=39.2e17",
-        "time.end=1e-3",
-    ])
-    .unwrap();
+    let s = slipfront::app::verify::small_scene(&slipfront::app::verify::STIFF_JUNCTIONS_BLOW_UP)
+        .unwrap();
     let m = Model::from_scenario(&s, true).unwrap();
     let mut c = cpu_engine(&m, Precision::F32, 1).unwrap();
     let Err(EngineError::BlowUp { step: at, .. }) = advance_to(c.as_mut(), m.total_steps()) else {

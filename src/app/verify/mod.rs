@@ -141,6 +141,15 @@ pub const SMALL_SCENE: [&str; 6] = [
     "loading.normal.relax_time=3e-4",
 ];
 
+/// Overrides that make the small scene blow up within a few hundred steps:
+/// junctions 10⁴× too stiff for the time step (a run must be forced past
+/// the stability check), driven fast (the GPU blow-up tests).
+pub const STIFF_JUNCTIONS_BLOW_UP: [&str; 3] = [
+    "loading.drive.velocity=0.4",
+    "friction.junctions.stiffness_coefficient=39.2e17",
+    "time.end=1e-3",
+];
+
 /// Overrides for a stick-slip window in the small scene: a fast drive and
 /// short slip times, so junctions break, re-pin and break again within a
 /// few thousand steps of driving (the GPU, stability and sweep-engine

@@ -249,6 +249,18 @@ pub fn plan<T: GpuReal>(
         adapter.software,
     );
     let geometry = kernel_fit::<T>(model, adapter, opts, kernel, threads)?;
+    // Asked for with a kernel named that has no rounds to chain: refused
+    // (auto and measure leave the other kernels unchained).
+    if opts.chained_tiles
+        && kernel != Kernel::Tiled
+        && !matches!(opts.path, GpuPath::Auto | GpuPath::Measure)
+    {
+        return Err(EngineError::Gpu(format!(
+            "--gpu-chained-tiles chains the tiled kernel's rounds, and --gpu-path {} has none: \
+             use --gpu-path tiled, auto or measure, or leave the flag out",
+            super::kernel_choice::path_name(kernel)
+        )));
+    }
     let chain = match geometry.filter(|_| opts.chained_tiles) {
         Some(g) => Some(chain_fit(model, adapter, &g, threads)?),
         None => None,

@@ -367,18 +367,23 @@ pub fn tile_end_words(ends: &[u64], ending: &[bool]) -> Vec<u32> {
 mod tests {
     use super::*;
 
-    /// Table S1 at the defaults is far inside llvmpipe's loop budget;
-    /// one thread and a 32-step halo on a tall lattice is past it, and is
-    /// refused with the count.
-    #[test]
-    fn a_dispatch_past_the_software_loop_budget_is_refused() {
+    /// The shipped Table S1 scene (57 × 31).
+    fn table_s1() -> Model {
         let s = crate::model::scenario::Scenario::parse(
             crate::model::scenario::built_in("tromborg2014_precursors").unwrap(),
             "s1",
             &[] as &[String],
         )
         .unwrap();
-        let m = Model::from_scenario(&s, false).unwrap();
+        Model::from_scenario(&s, false).unwrap()
+    }
+
+    /// Table S1 at the defaults is far inside llvmpipe's loop budget;
+    /// one thread and a 32-step halo on a tall lattice is past it, and is
+    /// refused with the count.
+    #[test]
+    fn a_dispatch_past_the_software_loop_budget_is_refused() {
+        let m = table_s1();
         let defaults = TileGeometry::new(&m, TileShape::DEFAULT).unwrap();
         let n = loop_iterations(&m, &defaults, 256);
         assert!(n < SOFTWARE_LOOP_BUDGET / 10, "{n}");
@@ -485,13 +490,7 @@ mod tests {
     /// spare; on hardware a dispatch chains a whole batch.
     #[test]
     fn chained_tiles_keep_polls_within_a_software_loop_budget() {
-        let s = crate::model::scenario::Scenario::parse(
-            crate::model::scenario::built_in("tromborg2014_precursors").unwrap(),
-            "s1",
-            &[] as &[String],
-        )
-        .unwrap();
-        let m = Model::from_scenario(&s, false).unwrap();
+        let m = table_s1();
         let g = TileGeometry::new(&m, TileShape::DEFAULT).unwrap();
         let soft = TileChain::new(&m, &g, 256, true).unwrap();
         assert_eq!(soft.rounds, SOFTWARE_CHAINED_ROUNDS);

@@ -238,7 +238,9 @@ impl Launch {
             lane_shuffle: opts.lane_shuffle && !self.lanes_in_storage,
             bond_patches: opts.bond_patches || self.bond_patches,
             two_lanes_a_round: opts.two_lanes_a_round && !self.one_lane_a_round,
-            chained_tiles: opts.chained_tiles || self.chained_tiles,
+            // Only the tiled kernel has rounds to chain.
+            chained_tiles: (opts.chained_tiles || self.chained_tiles)
+                && self.kernel == Kernel::Tiled,
             ..opts
         }
     }
