@@ -32,6 +32,9 @@
 //! runs those precisions only, in that order; f64 on an adapter without
 //! f64 shaders is listed as not measured, with the reason.
 //!
+//! SLIPFRONT_GPU_TARGETS_SOLO=1 measures targets 1 and 2 only (a scene
+//! alone: `auto`'s figures against each launch timed again).
+//!
 //! The ensemble-against-solo bits are `tests/gpu_ensemble.rs`: run its
 //! binary on the same machine. SLIPFRONT_GPU_TARGETS_QUICK=1 (a software
 //! adapter) runs 16 and 4 scenes and the output at 57×31, over shorter
@@ -210,6 +213,10 @@ fn targets_in<T: GpuReal>(ctx: &GpuContext, quick: bool, min_seconds: f64) -> Ve
             targets.push(Target::not_measured(pick, e.clone()));
             targets.push(Target::not_measured(speed, e));
         }
+    }
+
+    if std::env::var("SLIPFRONT_GPU_TARGETS_SOLO").is_ok() {
+        return targets;
     }
 
     // 3 and 4: ensembles.

@@ -421,6 +421,18 @@ impl<T: GpuReal> GpuEngine<T> {
         Ok(())
     }
 
+    /// The most steps one batch (one submit) holds with this kernel: an
+    /// advance of more is cut into batches, which the device runs while
+    /// the host encodes the next.
+    pub(super) fn batch_steps(&self) -> u64 {
+        match self.kernel {
+            Kernel::OneStep | Kernel::OneStepLanes | Kernel::Tiled => ONE_STEP_BATCH,
+            Kernel::Persistent | Kernel::Resident => {
+                PERSISTENT_BATCH.min(self.steps_per_dispatch * ONE_STEP_BATCH)
+            }
+        }
+    }
+
     /// Advances every scene `n` steps, in batches that never cross the end
     /// of the ramp or of the normal-load phase.
     pub(super) fn advance_steps(&mut self, n: u64) -> Result<(), EngineError> {
@@ -428,12 +440,7 @@ impl<T: GpuReal> GpuEngine<T> {
             self.scenes[0].model.prep_steps,
             self.scenes[0].model.ramp_steps,
         );
-        let max_batch = match self.kernel {
-            Kernel::OneStep | Kernel::OneStepLanes | Kernel::Tiled => ONE_STEP_BATCH,
-            Kernel::Persistent | Kernel::Resident => {
-                PERSISTENT_BATCH.min(self.steps_per_dispatch * ONE_STEP_BATCH)
-            }
-        };
+        let max_batch = self.batch_steps();
         let mut left = n;
         while left > 0 {
             // A batch's loads are of one kind throughout, and while driving

@@ -127,8 +127,9 @@ impl ChoiceCache {
 /// precision, the lattice (`lattice_key`), the persistent kernels' threads,
 /// the tile shape where one is fixed, whether the lanes' merge was
 /// searched, wgpu's run-time checks, whether the bond patches, the
-/// junction lanes a round and chained tiles were searched, and the kernels' sources (a new
-/// version of slipfront measures again).
+/// junction lanes a round and chained tiles were searched, how a step was
+/// timed (`timing::TIMING`), and the kernels' sources (a new version of
+/// slipfront measures again).
 pub fn cache_key<T: GpuReal>(model: &Model, ctx: &GpuContext, opts: GpuOptions) -> String {
     scenes_cache_key::<T>(model, 1, ctx, opts)
 }
@@ -166,7 +167,7 @@ pub fn scenes_cache_key<T: GpuReal>(
         String::new()
     };
     format!(
-        "{} | {:?} | {} {} | {} | {}{ensemble} | threads {} | tiles {} | lanes {} | checks {} | patches {} | lane rounds {} | chained tiles {} | kernels {:016x}",
+        "{} | {:?} | {} {} | {} | {}{ensemble} | threads {} | tiles {} | lanes {} | checks {} | patches {} | lane rounds {} | chained tiles {} | timed by {} | kernels {:016x}",
         info.name,
         info.backend,
         info.driver,
@@ -212,6 +213,9 @@ pub fn scenes_cache_key<T: GpuReal>(
         } else {
             "searched"
         },
+        // Choices timed by a span's mean step (before session 38) carry
+        // each advance's fixed costs: measured again.
+        super::timing::TIMING,
         sources.finish()
     )
     .replace(['\t', '\n'], " ")
