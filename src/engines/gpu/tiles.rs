@@ -246,9 +246,13 @@ pub struct TileChain {
 pub const SOFTWARE_CHAINED_ROUNDS: usize = 4;
 
 /// Polls a tile makes in a chained dispatch on hardware before it gives up:
-/// about ten seconds at a microsecond a poll, far past any wait of a scene
-/// whose tiles are all on the GPU.
-pub const HARDWARE_CHAIN_POLLS: u32 = 1 << 24;
+/// about a second at a microsecond a poll (two L2 loads and a barrier).
+/// That is far past any wait of a scene whose tiles are all on the GPU (a
+/// neighbour's round: microseconds), and past a wait for a slot freed by a
+/// scene before it (a batch: milliseconds). A GPU that cannot run a
+/// scene's tiles at once then costs `auto` about a second, not ten, when it
+/// times the chained kernel (once a wave of stalled workgroups).
+pub const HARDWARE_CHAIN_POLLS: u32 = 1 << 20;
 
 impl TileChain {
     /// The chain of `model`'s tiles of `geometry` at `threads` threads: a
@@ -280,7 +284,9 @@ impl TileChain {
         let left = SOFTWARE_LOOP_BUDGET.saturating_sub(rounds * per_round) / per_poll;
         if left < 64 {
             return Err(format!(
-                "chained tiles of {} steps with {threads} threads would leave {left} polls of a                  software adapter's loop budget for the tiles' waits: use fewer steps per                  dispatch, more threads, or the tiled kernel unchained",
+                "chained tiles of {} steps with {threads} threads would leave {left} polls of a \
+                 software adapter's loop budget for the tiles' waits: use fewer steps per \
+                 dispatch, more threads, or the tiled kernel unchained",
                 geometry.halo
             ));
         }
