@@ -112,14 +112,15 @@ fn short_span_steps(rough: f64, batch: u64) -> u64 {
 /// span's time beyond the short one's, over its extra steps.
 ///
 /// Why not a span's mean step: each advance also pays costs a run pays
-/// once, not a step. Its first batch is encoded before the device starts,
-/// and its status is read back after the device ends. On the H200 that
-/// put `auto`'s figures 1.2–2.1× above the same launches timed for a
-/// second (BENCHMARKS.md, sessions 14 and 16: one-step-lanes 13.8 against
-/// 10.1 µs a step, about the host's 3.7 µs of encoding a step added to the
-/// device's 10.1), and by different amounts for different launches: a
-/// dispatch a step pays the host's encoding, a persistent dispatch does
-/// not. Those costs are in both spans and drop out of the difference.
+/// once, not a step, and a span within one batch pays the host's encoding
+/// and the device's steps one after the other (the batch is encoded whole,
+/// then run), where a run overlaps them. On the H200 the host did about
+/// 3.7 µs of work a step of one-step-lanes on Table S1's lattice, which
+/// the device stepped in 10.1 (BENCHMARKS.md, session 14): a mean step
+/// would have been about 13.8 µs. A persistent or chained dispatch has
+/// almost nothing to encode, so the mean step favoured it. What an advance
+/// pays once is in both spans and drops out of the difference; the long
+/// span's extra batches overlap as a run's do.
 /// Where noise leaves the long span no slower than the short one, the
 /// long span's mean step is the figure.
 fn marginal_step_seconds(
@@ -402,11 +403,10 @@ mod tests {
     }
 
     /// The H200's one-step-lanes on Table S1, modelled: the device's 10.1
-    /// µs a step, the host's 3.7 µs of encoding a step, 200 µs an advance
-    /// to wait, batches of 1024. A span's mean step gives about the 13.8
-    /// µs `auto` measured in session 14; the marginal step gives the
-    /// device's, what a run pays, to within the encoding of the short
-    /// span's last steps.
+    /// µs a step, the host's 3.7 µs of work a step, 200 µs an advance to
+    /// wait, batches of 1024. A span's mean step gives 14.0 µs; the
+    /// marginal step gives the device's, what a run pays, to within the
+    /// encoding of the short span's last steps.
     #[test]
     fn the_marginal_step_leaves_out_what_each_advance_pays_once() {
         let (fixed, encode, device) = (200e-6, 3.7e-6, 10.1e-6);
