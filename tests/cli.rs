@@ -2,6 +2,9 @@
 
 use std::process::Command;
 
+#[path = "support/f64_adapter.rs"]
+mod f64_adapter;
+
 fn slipfront_cmd() -> Command {
     let mut c = Command::new(env!("CARGO_BIN_EXE_slipfront"));
     c.current_dir(env!("CARGO_MANIFEST_DIR"));
@@ -221,6 +224,20 @@ fn check_estimates_the_wall_time_and_fails_when_unstable() {
     assert_eq!(out.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&out.stdout).contains("UNSTABLE"));
     assert!(String::from_utf8_lossy(&out.stderr).contains("stability limit"));
+}
+
+/// `check` times the GPU in the precision `run --backend gpu` takes, f64
+/// where the adapter has f64 shaders, as well as in mixed f32 (it timed
+/// mixed f32 only, so a GPU run's estimate was of another precision).
+#[test]
+fn check_times_the_gpu_in_the_precision_a_gpu_run_takes() {
+    let out = slipfront(&["check", "--set", "time.end=0.01"]);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{text}");
+    assert!(text.contains("on gpu f32 mixed"), "{text}");
+    if f64_adapter::f64_adapter() {
+        assert!(text.contains("on gpu f64,"), "{text}");
+    }
 }
 
 /// `check` refuses to measure what `run` would refuse (memory), and times a

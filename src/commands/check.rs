@@ -14,8 +14,9 @@ struct Estimate {
 }
 
 /// Measures every engine this machine can run the scene on (the CPU in f64
-/// and mixed f32, with the threads `run` would use; the GPU in mixed f32
-/// when an adapter is found), at the start of the scene: the speed of quiet
+/// and mixed f32, with the threads `run` would use; the GPU, when an
+/// adapter is found, in f64 where it has f64 shaders, the precision `run
+/// --backend gpu` then takes, and in mixed f32), at the start of the scene: the speed of quiet
 /// loading (events cost more, fast-forward skips some). An engine that
 /// cannot run the scene here (more memory than the machine has, beyond the
 /// adapter's limits) is not measured, and the second list says why, as
@@ -25,7 +26,10 @@ fn estimates(m: &Model) -> (Vec<Estimate>, Vec<String>) {
         (Backend::Cpu, Precision::F64),
         (Backend::Cpu, Precision::F32),
     ];
-    if slipfront::engines::gpu::context::shared().is_ok() {
+    if let Ok(ctx) = slipfront::engines::gpu::context::shared() {
+        if ctx.check_precision::<f64>().is_ok() {
+            engines.push((Backend::Gpu, Precision::F64));
+        }
         engines.push((Backend::Gpu, Precision::F32));
     }
     let mut measured = Vec::new();
