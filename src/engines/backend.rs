@@ -243,7 +243,7 @@ pub fn resolve_auto(precision: Precision) -> (Backend, String) {
                 ctx.info.name
             ),
         ),
-        // (GPU ensembles are mixed f32; f64 points run one at a time on it.)
+        // Mixed f32 on any adapter; f64 (ensembles too) where it has f64 shaders.
         Ok(ctx)
             if precision == Precision::F32
                 || (precision == Precision::F64 && ctx.check_precision::<f64>().is_ok()) =>
