@@ -15,9 +15,10 @@ struct Estimate {
 
 /// Measures every engine this machine can run the scene on (the CPU in f64
 /// and mixed f32, with the threads `run` would use; the GPU, when an
-/// adapter is found, in f64 where it has f64 shaders, the precision `run
-/// --backend gpu` then takes, and in mixed f32), at the start of the scene: the speed of quiet
-/// loading (events cost more, fast-forward skips some). An engine that
+/// adapter is found, in f64 where it has f64 shaders, the precision
+/// `run --backend gpu` then takes, and in mixed f32), at the start of the
+/// scene: the speed of quiet loading (events cost more, fast-forward skips
+/// some). An engine that
 /// cannot run the scene here (more memory than the machine has, beyond the
 /// adapter's limits) is not measured, and the second list says why, as
 /// `run` would refuse it.
