@@ -1,8 +1,9 @@
 //! `--gpu-path auto` on a hardware adapter: every kernel that fits the
 //! scene is timed on the scene itself, and the fastest steps the run. A
 //! launch's figure is what a step costs in a run: the time a long span of
-//! steps takes beyond a short one (up to a batch, and three), which leaves
-//! out what each timed advance pays once (`timing::marginal_step_seconds`). The choice and its figures are cached per
+//! steps takes beyond a short one, over the extra steps, which leaves out
+//! what each timed advance pays once (`timing::marginal_step_seconds`).
+//! The choice and its figures are cached per
 //! adapter, driver, precision, lattice, compiled terms and kernel sources,
 //! so a second run of the same shape starts at once.
 //!
