@@ -35,6 +35,10 @@
 //! SLIPFRONT_GPU_TARGETS_SOLO=1 measures targets 1 and 2 only (a scene
 //! alone: `auto`'s figures against each launch timed again).
 //!
+//! SLIPFRONT_GPU_TARGETS_WITH_OUTPUT=1 adds target 1 with an output file
+//! (after 2): `auto` timed recording Table S1's samples at its cadences,
+//! as a run with `-o` is, against each launch timed again recording them.
+//!
 //! The ensemble-against-solo bits are `tests/gpu_ensemble.rs`: run its
 //! binary on the same machine. SLIPFRONT_GPU_TARGETS_QUICK=1 (a software
 //! adapter) runs 16 and 4 scenes and the output at 57×31, over shorter
@@ -53,7 +57,10 @@ mod gpu_timing;
 #[path = "support/thread_cpu.rs"]
 mod thread_cpu;
 
-use gpu_timing::{ensemble_step_seconds_in, output_run, solo_step_seconds_in, table_s1};
+use gpu_timing::{
+    ensemble_step_seconds_in, output_run, solo_step_seconds_in, table_s1, table_s1_scenario,
+};
+use slipfront::app::runner::sample_plan;
 
 /// How much slower than the fastest launch `auto`'s pick may be, timed
 /// again, and still count as the fastest: two launches this close swap
@@ -91,19 +98,26 @@ impl Target {
 
 /// `auto`'s choice on `s1` and each launch it timed, timed again alone:
 /// (choice, [(launch, seconds per step)]).
+/// With `opts.samples`, both timings record the samples of a run with an
+/// output file at those cadences.
 fn solo_figures<T: GpuReal>(
     ctx: &GpuContext,
     s1: &Model,
+    opts: GpuOptions,
     min_seconds: f64,
 ) -> Result<(KernelChoice, Vec<(Launch, f64)>), String> {
-    let choice = measure::<T>(std::slice::from_ref(s1), ctx, GpuOptions::default())
-        .map_err(|e| e.to_string())?;
-    println!("`auto` on Table S1: {}\n", choice.describe());
+    let choice = measure::<T>(std::slice::from_ref(s1), ctx, opts).map_err(|e| e.to_string())?;
+    let with = if opts.samples.is_some() {
+        " with -o"
+    } else {
+        ""
+    };
+    println!("`auto` on Table S1{with}: {}\n", choice.describe());
     println!("| launch | auto's figure (µs/step) | timed again (µs/step) | host CPU / wall |");
     println!("| --- | ---: | ---: | ---: |");
     let mut again = Vec::new();
     for &(launch, seconds) in &choice.timings {
-        match solo_step_seconds_in::<T>(s1, launch.options(GpuOptions::default()), min_seconds) {
+        match solo_step_seconds_in::<T>(s1, launch.options(opts), min_seconds) {
             Ok((s, host)) => {
                 println!(
                     "| {} | {:.2} | {:.2} | {host:.2} |",
@@ -165,6 +179,37 @@ fn output_cost<T: GpuReal>(
     Ok((walls[1].0 - walls[0].0, walls[1].1 - walls[0].1))
 }
 
+const NOT_AGAIN: &str = "the chosen launch did not run again";
+
+/// Whether `choice` is within `PICK_TOLERANCE` of the fastest launch
+/// timed `again`, and that launch with its seconds a step (None where the
+/// chosen launch did not run again).
+fn pick_target(
+    what: String,
+    choice: &KernelChoice,
+    again: &[(Launch, f64)],
+) -> (Target, Option<(Launch, f64)>) {
+    let fastest = again.iter().copied().min_by(|a, b| a.1.total_cmp(&b.1));
+    let chosen = again.iter().find(|(l, _)| *l == choice.launch).map(|t| t.1);
+    match (fastest, chosen) {
+        (Some((best, best_s)), Some(chosen_s)) => (
+            Target::new(
+                what,
+                format!(
+                    "chose {} ({:.2} µs/step timed again); fastest {} ({:.2})",
+                    choice.launch.name(),
+                    chosen_s * 1e6,
+                    best.name(),
+                    best_s * 1e6
+                ),
+                chosen_s <= best_s * (1.0 + PICK_TOLERANCE),
+            ),
+            fastest,
+        ),
+        _ => (Target::not_measured(what, NOT_AGAIN.into()), None),
+    }
+}
+
 /// Every target in precision `T`, in the summary's order.
 fn targets_in<T: GpuReal>(ctx: &GpuContext, quick: bool, min_seconds: f64) -> Vec<Target> {
     let s1 = table_s1(1);
@@ -178,41 +223,42 @@ fn targets_in<T: GpuReal>(ctx: &GpuContext, quick: bool, min_seconds: f64) -> Ve
     );
     let speed = format!("Table S1 ≤ {:.0} µs/step", TABLE_S1_STEP_SECONDS * 1e6);
     let mut fastest_solo = None;
-    match solo_figures::<T>(ctx, &s1, min_seconds) {
+    match solo_figures::<T>(ctx, &s1, GpuOptions::default(), min_seconds) {
         Ok((choice, again)) => {
-            let fastest = again.iter().copied().min_by(|a, b| a.1.total_cmp(&b.1));
-            let chosen = again.iter().find(|(l, _)| *l == choice.launch).map(|t| t.1);
-            match (fastest, chosen) {
-                (Some((best, best_s)), Some(chosen_s)) => {
+            let (target, fastest) = pick_target(pick, &choice, &again);
+            targets.push(target);
+            targets.push(match fastest {
+                Some((best, best_s)) => {
                     fastest_solo = Some(best_s);
-                    targets.push(Target::new(
-                        pick,
-                        format!(
-                            "chose {} ({:.2} µs/step timed again); fastest {} ({:.2})",
-                            choice.launch.name(),
-                            chosen_s * 1e6,
-                            best.name(),
-                            best_s * 1e6
-                        ),
-                        chosen_s <= best_s * (1.0 + PICK_TOLERANCE),
-                    ));
-                    targets.push(Target::new(
+                    Target::new(
                         speed,
                         format!("{:.2} µs/step ({})", best_s * 1e6, best.name()),
                         best_s <= TABLE_S1_STEP_SECONDS,
-                    ));
+                    )
                 }
-                _ => {
-                    let why = "the chosen launch did not run again".to_string();
-                    targets.push(Target::not_measured(pick, why.clone()));
-                    targets.push(Target::not_measured(speed, why));
-                }
-            }
+                None => Target::not_measured(speed, NOT_AGAIN.into()),
+            });
         }
         Err(e) => {
             targets.push(Target::not_measured(pick, e.clone()));
             targets.push(Target::not_measured(speed, e));
         }
+    }
+
+    // 1b: `auto` with an output file, timed recording (`GpuOptions::samples`).
+    if std::env::var("SLIPFRONT_GPU_TARGETS_WITH_OUTPUT").is_ok() {
+        let what = format!(
+            "with -o, `auto` picks the fastest launch with -o (within {:.0} %)",
+            PICK_TOLERANCE * 100.0
+        );
+        let recording = GpuOptions {
+            samples: Some(sample_plan(&s1, &table_s1_scenario(1))),
+            ..GpuOptions::default()
+        };
+        targets.push(match solo_figures::<T>(ctx, &s1, recording, min_seconds) {
+            Ok((choice, again)) => pick_target(what, &choice, &again).0,
+            Err(e) => Target::not_measured(what, e),
+        });
     }
 
     if std::env::var("SLIPFRONT_GPU_TARGETS_SOLO").is_ok() {

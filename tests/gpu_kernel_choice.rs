@@ -3,6 +3,7 @@
 //! for real, the cache is written and read back, and the run header shows
 //! the figures. These tests fail, never skip, when no adapter exists.
 
+use slipfront::app::runner::sample_plan;
 use slipfront::engines::gpu::context::{self, GpuContext};
 use slipfront::engines::gpu::kernel_choice::{
     cache_key, candidates, chained_halo_search, driving_start, launches, resolve, resolve_scenes,
@@ -12,7 +13,8 @@ use slipfront::engines::gpu::kernel_choice::{
 use slipfront::engines::gpu::shaders::Kernel;
 use slipfront::engines::gpu::tiles::TileShape;
 use slipfront::engines::gpu::{GpuEngine, GpuOptions, GpuPath};
-use slipfront::engines::Engine;
+use slipfront::engines::{Engine, SamplePlan};
+use slipfront::model::scenario::Scenario;
 use slipfront::Model;
 use std::path::PathBuf;
 
@@ -20,9 +22,12 @@ fn ctx() -> GpuContext {
     context::shared().unwrap_or_else(|e| panic!("a GPU adapter is required (lavapipe in CI): {e}"))
 }
 
+fn small_scenario(extra: &[&str]) -> Scenario {
+    slipfront::app::verify::small_scene(extra).unwrap()
+}
+
 fn small(extra: &[&str]) -> Model {
-    let s = slipfront::app::verify::small_scene(extra).unwrap();
-    Model::from_scenario(&s, false).unwrap()
+    Model::from_scenario(&small_scenario(extra), false).unwrap()
 }
 
 fn scratch(name: &str) -> PathBuf {
@@ -208,6 +213,8 @@ fn measure_times_every_candidate_takes_the_fastest_and_caches_it() {
     assert_eq!(cached.launch, choice.launch);
     assert_eq!(cached.timings, choice.timings);
     assert_eq!(cached.phase, choice.phase);
+    // Timed without output (no `GpuOptions::samples`): none recorded.
+    assert_eq!((choice.recorded, cached.recorded), (None, None));
 
     // Another seed is the same shape (the same choice); controls: other
     // junction counts, another precision and damaged lines are not.
@@ -244,26 +251,50 @@ fn measure_times_every_candidate_takes_the_fastest_and_caches_it() {
         ..options(GpuPath::Measure)
     };
     assert_eq!(cache.lookup(&cache_key::<f32>(&m, &ctx, checked)), None);
+    // Nor one timed without output one for a run that records its samples
+    // on the device (output weighs on the launches unequally), nor one
+    // timed at other cadences.
+    let plan = sample_plan(&m, &small_scenario(&[]));
+    let recording = GpuOptions {
+        samples: Some(plan),
+        ..options(GpuPath::Measure)
+    };
+    assert_eq!(cache.lookup(&cache_key::<f32>(&m, &ctx, recording)), None);
+    let faster = GpuOptions {
+        samples: Some(SamplePlan {
+            every_fast: plan.every_fast + 1,
+            ..plan
+        }),
+        ..options(GpuPath::Measure)
+    };
+    assert_ne!(
+        cache_key::<f32>(&m, &ctx, faster),
+        cache_key::<f32>(&m, &ctx, recording)
+    );
     let driving = "timed in driving from step 10";
     for damaged in [
-        format!("{key}\tone-step\tone-step=oops\t{driving}\n"),
-        format!("{key}\twarp\tone-step=1e-4\t{driving}\n"),
+        format!("{key}\tone-step\tone-step=oops\t{driving}\tno output\n"),
+        format!("{key}\twarp\tone-step=1e-4\t{driving}\tno output\n"),
         // An older build's line, timed in the load phase without saying so.
         format!("{key}\tone-step\tone-step=1e-4\n"),
-        format!("{key}\tone-step\tone-step=1e-4\ttimed somewhere\n"),
+        format!("{key}\tone-step\tone-step=1e-4\ttimed somewhere\tno output\n"),
+        // One without its output field (before session 39), or a damaged one.
+        format!("{key}\tone-step\tone-step=1e-4\t{driving}\n"),
+        format!("{key}\tone-step\tone-step=1e-4\t{driving}\trecorded some\n"),
     ] {
         std::fs::write(dir.join(CACHE_FILE), &damaged).unwrap();
         assert_eq!(cache.lookup(&key), None, "{damaged}");
     }
-    std::fs::write(
-        dir.join(CACHE_FILE),
-        format!("{key}\tone-step\tone-step=1e-4\t{driving}\n"),
-    )
-    .unwrap();
-    assert_eq!(
-        cache.lookup(&key).map(|c| c.phase),
-        Some(TimedPhase::Driving { from_step: 10 })
-    );
+    for (field, recorded) in [("no output", None), ("recorded 12", Some(12))] {
+        std::fs::write(
+            dir.join(CACHE_FILE),
+            format!("{key}\tone-step\tone-step=1e-4\t{driving}\t{field}\n"),
+        )
+        .unwrap();
+        let read = cache.lookup(&key).unwrap();
+        assert_eq!(read.phase, TimedPhase::Driving { from_step: 10 });
+        assert_eq!(read.recorded, recorded, "{field}");
+    }
     let _ = std::fs::remove_dir_all(&dir);
 }
 
@@ -578,8 +609,9 @@ fn a_cached_choice_is_taken_and_measure_refreshes_it() {
     std::fs::write(
         dir.join(CACHE_FILE),
         format!(
-            "other key\tone-step\tone-step=1e-3\ttimed in driving from step 5\n\
-             {key}\tpersistent\tone-step=2e-3,persistent=1e-3\ttimed in driving from step 5\n"
+            "other key\tone-step\tone-step=1e-3\ttimed in driving from step 5\tno output\n\
+             {key}\tpersistent\tone-step=2e-3,persistent=1e-3\ttimed in driving from step 5\t\
+             no output\n"
         ),
     )
     .unwrap();
@@ -600,10 +632,14 @@ fn a_cached_choice_is_taken_and_measure_refreshes_it() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
-/// The run header shows the figures behind the choice.
+/// The run header shows the figures behind the choice. A run with an
+/// output file is timed recording its samples on the device, as it runs
+/// (without one: `measure_times_every_candidate_takes_the_fastest_and_caches_it`).
 #[test]
 fn a_run_with_gpu_path_measure_prints_the_figures() {
     let dir = scratch("cli");
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("run.mcap");
     let out = std::process::Command::new(env!("CARGO_BIN_EXE_slipfront"))
         .args([
             "run",
@@ -615,7 +651,9 @@ fn a_run_with_gpu_path_measure_prints_the_figures() {
             "f32",
             "--t-end",
             "1e-5",
+            "-o",
         ])
+        .arg(&file)
         .args(
             slipfront::app::verify::SMALL_SCENE
                 .iter()
@@ -628,6 +666,10 @@ fn a_run_with_gpu_path_measure_prints_the_figures() {
     assert!(out.status.success(), "{err}");
     assert!(err.contains("; auto chose "), "{err}");
     assert!(err.contains("one-step-lanes "), "{err}");
+    assert!(
+        err.contains("recording the run's output on the device ("),
+        "{err}"
+    );
     assert!(dir.join(CACHE_FILE).exists());
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -132,24 +132,42 @@ pub fn solo_step_seconds(
 }
 
 /// `solo_step_seconds` in precision `T` (f64 fails on an adapter without
-/// f64 shaders, with that reason).
+/// f64 shaders, with that reason). With `opts.samples` the engine records
+/// its samples on the device at those cadences, as a run with an output
+/// file does, and drops them (an error where it cannot).
 pub fn solo_step_seconds_in<T: GpuReal>(
     model: &Model,
     opts: GpuOptions,
     min_seconds: f64,
 ) -> Result<(f64, f64), String> {
     let mut e = GpuEngine::<T>::with_precision(model, opts).map_err(|e| e.to_string())?;
+    if let Some(plan) = opts.samples.as_ref() {
+        if !e.record_samples(plan).map_err(|e| e.to_string())? {
+            return Err("cannot record samples on the device".into());
+        }
+    }
     advance_to(&mut e, model.prep_steps + 16).map_err(|e| e.to_string())?;
-    let (dt, steps, cpu) =
-        timed_with_cpu(|n| e.advance(n), min_seconds).map_err(|e| e.to_string())?;
+    let (dt, steps, cpu) = timed_with_cpu(
+        |n| {
+            let stepped = e.advance(n);
+            e.take_samples();
+            stepped
+        },
+        min_seconds,
+    )
+    .map_err(|e| e.to_string())?;
     Ok((dt / steps as f64, cpu / dt))
 }
 
 /// The precursors scene (Table S1, Ns = 100) with seed `seed`.
 pub fn table_s1(seed: usize) -> Model {
+    Model::from_scenario(&table_s1_scenario(seed), false).expect("model")
+}
+
+/// The scenario of `table_s1(seed)`.
+pub fn table_s1_scenario(seed: usize) -> Scenario {
     let text = built_in("tromborg2014_precursors").expect("shipped scene");
-    let s = Scenario::parse(text, "table S1", &[format!("time.seed={seed}")]).expect("scene");
-    Model::from_scenario(&s, false).expect("model")
+    Scenario::parse(text, "table S1", &[format!("time.seed={seed}")]).expect("scene")
 }
 
 /// Seconds per step of the ensemble of `models` (one dispatch steps them

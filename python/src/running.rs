@@ -178,6 +178,11 @@ pub fn run_scene<'py>(
         let _ = std::fs::remove_file(&stale);
     }
     let precision = choice.precision();
+    // The run writes its file: `auto` times the GPU's launches recording
+    // its samples at its cadences, as the run will.
+    if choice.gpu.output == GpuOutput::Device {
+        choice.gpu.samples = Some(runner::sample_plan(&model, sc));
+    }
     let mut engine = py.detach(|| choice.build(&model, precision))?;
     let history = vec![format!(
         "started from Python: scenario `{}` ({}, hash {:016x}) on {}",

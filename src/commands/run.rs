@@ -1,7 +1,7 @@
-use slipfront::app::runner::{run_scene, ProgressMode, RunOptions, StartFrom};
+use slipfront::app::runner::{run_scene, sample_plan, ProgressMode, RunOptions, StartFrom};
 use slipfront::engines::backend::{make_engine_with, Backend, Precision};
 use slipfront::engines::gpu::{GpuOutput, GpuPath};
-use slipfront::engines::Engine;
+use slipfront::engines::{Engine, SamplePlan};
 use slipfront::io::checkpoint::{branch, path_for, Checkpoint};
 use slipfront::io::live::{largest_record, LiveAddress, DEFAULT_LIVE_ADDRESS};
 use slipfront::io::output::fnv1a;
@@ -138,7 +138,15 @@ impl RunArgs {
         set
     }
 
-    fn engine(&self, model: &Model, precision: Precision) -> anyhow::Result<Box<dyn Engine>> {
+    /// The run's engine. `samples`: the cadences of the output file it
+    /// writes, if any, which `auto` times the GPU's launches recording at
+    /// (output weighs on them unequally).
+    fn engine(
+        &self,
+        model: &Model,
+        precision: Precision,
+        samples: Option<SamplePlan>,
+    ) -> anyhow::Result<Box<dyn Engine>> {
         let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
         if self.threads > 4 * cores {
             anyhow::bail!(
@@ -161,7 +169,8 @@ impl RunArgs {
                 .check_memory(model, "pass --no-memory-check to try anyway")
                 .map_err(anyhow::Error::msg)?;
         }
-        let gpu = self.gpu.options(self.gpu_path, self.gpu_output);
+        let mut gpu = self.gpu.options(self.gpu_path, self.gpu_output);
+        gpu.samples = samples.filter(|_| gpu.output == GpuOutput::Device);
         Ok(make_engine_with(
             model,
             self.backend,
@@ -184,7 +193,8 @@ pub fn run(a: RunArgs) -> anyhow::Result<ExitCode> {
     a.claim_output(&a.scenario.iter().map(PathBuf::as_path).collect::<Vec<_>>())?;
     let _lock = lock_output(&a, "run")?;
     let precision = a.precision.unwrap_or(a.backend.default_precision());
-    let mut engine = a.engine(&model, precision)?;
+    let samples = a.output.is_some().then(|| sample_plan(&model, &scenario));
+    let mut engine = a.engine(&model, precision, samples)?;
     eprintln!("slipfront: {name} on {}", engine.describe());
     let history = vec![format!(
         "started: scenario `{}` ({name}, hash {:016x}) on {}",
@@ -414,7 +424,8 @@ fn resume(mut a: RunArgs) -> anyhow::Result<ExitCode> {
         );
     }
     let precision = precision_of(&ckpt, a.precision)?;
-    let mut engine = a.engine(&model, precision)?;
+    // A resumed run always writes its file.
+    let mut engine = a.engine(&model, precision, Some(sample_plan(&model, &scenario)))?;
     engine.load_state(&ckpt.engine)?;
     let note = precision_note(&ckpt, engine.as_mut())?;
     let mut history = ckpt.header.history.clone();
@@ -493,7 +504,11 @@ fn branch_run(a: RunArgs) -> anyhow::Result<ExitCode> {
     let mut runner = ckpt.header.runner.clone();
     branch::rebase_drive(&parent_model, &child_model, &mut state, &mut runner);
     let precision = precision_of(&ckpt, a.precision)?;
-    let mut engine = a.engine(&child_model, precision)?;
+    let samples = a
+        .output
+        .is_some()
+        .then(|| sample_plan(&child_model, &child));
+    let mut engine = a.engine(&child_model, precision, samples)?;
     engine.load_state(&state)?;
     let note = precision_note(&ckpt, engine.as_mut())?;
     let mut history = ckpt.header.history.clone();

@@ -8,7 +8,7 @@ mod outputs;
 mod progress;
 
 pub use jump::{path_work, relaxation_drop};
-pub use outputs::{drive_force, drive_origin, global_of, global_sample};
+pub use outputs::{drive_force, drive_origin, global_of, global_sample, sample_plan};
 pub use progress::ProgressMode;
 
 use crate::engines::quasistatic::{FastForward, FastForwardSettings, FastForwardStats};

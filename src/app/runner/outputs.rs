@@ -90,6 +90,21 @@ pub(super) fn next_multiple(step: u64, every: u64) -> u64 {
         .map_or(u64::MAX, |n| (n + 1) * every)
 }
 
+/// The output cadences `scenario` gives a run of `model`, in steps, with
+/// the fast cadence off (as at the start of driving).
+pub fn sample_plan(model: &Model, scenario: &Scenario) -> SamplePlan {
+    let o = &scenario.output;
+    SamplePlan {
+        prep_steps: model.prep_steps,
+        every_global: interval_steps(model, o.global_interval),
+        every_interface: interval_steps(model, o.interface_interval),
+        every_bulk: interval_steps(model, o.bulk_interval),
+        every_fast: interval_steps(model, o.fast_interval),
+        fast_slip_speed: o.fast_slip_speed,
+        fast: false,
+    }
+}
+
 /// The output side of a run: cadences, the sinks (the run file, the live
 /// view), and what the summary reports (peak and last F/F_N, ruptures).
 pub(super) struct Outputs {
@@ -124,18 +139,18 @@ impl Outputs {
         sink: Option<McapSink>,
         live: Option<LiveView>,
     ) -> Self {
-        let o = &scenario.output;
+        let plan = sample_plan(model, scenario);
         Outputs {
             model: model.clone(),
             sink,
             live,
             records: RecordBuilder::default(),
-            every_global: interval_steps(model, o.global_interval),
-            every_interface: interval_steps(model, o.interface_interval),
-            every_bulk: interval_steps(model, o.bulk_interval),
-            every_fast: interval_steps(model, o.fast_interval),
-            fast_slip_speed: o.fast_slip_speed,
-            fast: false,
+            every_global: plan.every_global,
+            every_interface: plan.every_interface,
+            every_bulk: plan.every_bulk,
+            every_fast: plan.every_fast,
+            fast_slip_speed: plan.fast_slip_speed,
+            fast: plan.fast,
             origin: 0.0,
             peak: 0.0,
             last: 0.0,

@@ -5,6 +5,7 @@ use super::layout;
 use super::precision::{Coord, GpuReal};
 use super::shaders::Kernel;
 use super::tiles::TileShape;
+use crate::engines::SamplePlan;
 use crate::model::scenario::FrictionLaw;
 use crate::model::Model;
 
@@ -167,6 +168,17 @@ pub struct GpuOptions {
     /// dispatch a round; `auto` on hardware times its fastest tiled
     /// launch both ways (`--gpu-chained-tiles` fixes it on).
     pub chained_tiles: bool,
+    /// The output cadences of the run this engine steps, where it records
+    /// its samples on the device (a run with an output file): `auto`
+    /// times each launch recording at them, the records dropped. Every
+    /// multiple of the fast cadence is a planned sample, whether the
+    /// interface turns out fast or not (the device decides at each
+    /// sample): at Table S1's defaults every 4 or 5 steps. There a tiled
+    /// launch, chained or not, ends a dispatch; a one-step launch adds
+    /// the record dispatches; a persistent one reduces the sample across
+    /// its workgroup. So output weighs on the launches unequally. None:
+    /// timed without output.
+    pub samples: Option<SamplePlan>,
 }
 
 impl Default for GpuOptions {
@@ -185,6 +197,7 @@ impl Default for GpuOptions {
             lanes_read_kept: true,
             two_lanes_a_round: true,
             chained_tiles: false,
+            samples: None,
         }
     }
 }

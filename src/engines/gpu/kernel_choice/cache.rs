@@ -6,6 +6,7 @@ use crate::engines::gpu::context::GpuContext;
 use crate::engines::gpu::options::GpuOptions;
 use crate::engines::gpu::precision::GpuReal;
 use crate::engines::gpu::shaders::{Kernel, LaneMerge, Variant};
+use crate::engines::SamplePlan;
 use crate::model::Model;
 use std::hash::{Hash, Hasher};
 use std::path::{Path, PathBuf};
@@ -14,10 +15,11 @@ use std::path::{Path, PathBuf};
 pub const CACHE_FILE: &str = "gpu-kernels.tsv";
 
 /// The measured choices of this machine, one line per adapter and lattice:
-/// `key <TAB> launch <TAB> launch=seconds,... <TAB> phase` (a launch:
-/// `resident`, or `resident/512` with its threads; the phase as
-/// `TimedPhase::describe` writes it). A line without its phase (an older
-/// build's, timed in the load phase) is measured again.
+/// `key <TAB> launch <TAB> launch=seconds,... <TAB> phase <TAB> output`
+/// (a launch: `resident`, or `resident/512` with its threads; the phase
+/// as `TimedPhase::describe` writes it; the output `no output` or
+/// `recorded N`, `KernelChoice::recorded`). A line without its phase or
+/// its output (an older build's) is measured again.
 #[derive(Debug, Clone)]
 pub struct ChoiceCache {
     /// None: no cache directory could be found (nothing is kept).
@@ -76,6 +78,7 @@ impl ChoiceCache {
                 })
                 .collect::<Option<Vec<_>>>()?;
             let phase = TimedPhase::described(fields.next()?)?;
+            let recorded = recorded_named(fields.next()?)?;
             timings
                 .iter()
                 .any(|(l, _)| *l == launch)
@@ -86,6 +89,7 @@ impl ChoiceCache {
                     skipped: Vec::new(),
                     scenes: 1,
                     phase,
+                    recorded,
                 })
         })
     }
@@ -108,10 +112,11 @@ impl ChoiceCache {
             .map(|(l, s)| format!("{}={s:e}", l.name()))
             .collect();
         lines.push(format!(
-            "{key}\t{}\t{}\t{}",
+            "{key}\t{}\t{}\t{}\t{}",
             choice.launch.name(),
             figures.join(","),
-            choice.phase.describe().replace(['\t', '\n'], " ")
+            choice.phase.describe().replace(['\t', '\n'], " "),
+            recorded_name(choice.recorded)
         ));
         let write = || -> std::io::Result<()> {
             std::fs::create_dir_all(dir)?;
@@ -123,13 +128,45 @@ impl ChoiceCache {
     }
 }
 
+/// The cache's output field: `no output`, or `recorded N`.
+fn recorded_name(recorded: Option<u64>) -> String {
+    recorded.map_or_else(|| NO_OUTPUT.to_string(), |n| format!("{RECORDED}{n}"))
+}
+
+/// The inverse of `recorded_name` (None: not one).
+fn recorded_named(text: &str) -> Option<Option<u64>> {
+    if text == NO_OUTPUT {
+        return Some(None);
+    }
+    text.strip_prefix(RECORDED)?.parse().ok().map(Some)
+}
+
+const NO_OUTPUT: &str = "no output";
+const RECORDED: &str = "recorded ";
+
+/// The output cadences a choice was timed at, in its key: `none`, or
+/// `every 45/90/45000/4 steps` (global, interface, bulk and fast cadences
+/// from the start of driving; 0: off).
+fn samples_key(samples: Option<&SamplePlan>) -> String {
+    samples.map_or_else(
+        || "none".to_string(),
+        |p| {
+            format!(
+                "every {}/{}/{}/{} steps",
+                p.every_global, p.every_interface, p.every_bulk, p.every_fast
+            )
+        },
+    )
+}
+
 /// What a measured choice depends on: the adapter and its driver, the
 /// precision, the lattice (`lattice_key`), the persistent kernels' threads,
 /// the tile shape where one is fixed, whether the lanes' merge was
 /// searched, wgpu's run-time checks, whether the bond patches, the
 /// junction lanes a round and chained tiles were searched, how a step was
-/// timed (`timing::TIMING`), and the kernels' sources (a new version of
-/// slipfront measures again).
+/// timed (`timing::TIMING`), the output cadences it was timed recording
+/// at (`GpuOptions::samples`), and the kernels' sources (a new version
+/// of slipfront measures again).
 pub fn cache_key<T: GpuReal>(model: &Model, ctx: &GpuContext, opts: GpuOptions) -> String {
     scenes_cache_key::<T>(model, 1, ctx, opts)
 }
@@ -167,7 +204,7 @@ pub fn scenes_cache_key<T: GpuReal>(
         String::new()
     };
     format!(
-        "{} | {:?} | {} {} | {} | {}{ensemble} | threads {} | tiles {} | lanes {} | checks {} | patches {} | lane rounds {} | chained tiles {} | timed by {} | kernels {:016x}",
+        "{} | {:?} | {} {} | {} | {}{ensemble} | threads {} | tiles {} | lanes {} | checks {} | patches {} | lane rounds {} | chained tiles {} | timed by {} | samples {} | kernels {:016x}",
         info.name,
         info.backend,
         info.driver,
@@ -216,6 +253,8 @@ pub fn scenes_cache_key<T: GpuReal>(
         // Choices timed by a span's mean step (before session 38) carry
         // each advance's fixed costs: measured again.
         super::timing::TIMING,
+        // Output weighs on the launches unequally (`GpuOptions::samples`).
+        samples_key(opts.samples.as_ref()),
         sources.finish()
     )
     .replace(['\t', '\n'], " ")

@@ -304,6 +304,11 @@ pub struct KernelChoice {
     pub scenes: usize,
     /// The state the launches were timed from.
     pub phase: TimedPhase,
+    /// Where the launches were timed recording the run's output samples
+    /// on the device (`GpuOptions::samples`): the fewest samples a launch
+    /// recorded (0: none fell in its timed steps, as in the normal-load
+    /// phase). None: timed without output.
+    pub recorded: Option<u64>,
 }
 
 impl KernelChoice {
@@ -336,6 +341,13 @@ impl KernelChoice {
             figures.join(", "),
             self.phase.describe()
         );
+        text += &match self.recorded {
+            None => String::new(),
+            Some(0) => ", with the run's output cadences but no sample in the timed steps".into(),
+            Some(n) => {
+                format!(", recording the run's output on the device ({n} samples or more a launch)")
+            }
+        };
         for (l, why) in &self.skipped {
             text += &format!("; {} not timed: {why}", l.name());
         }

@@ -55,13 +55,16 @@ pub fn time_kernel<T: GpuReal>(
     time_launch::<T>(models, ctx, opts, launch, start).map(|t| t.seconds)
 }
 
-/// What timing a launch found: its wall time a step, and the levels of
-/// the junction lane tree its workgroups merged in subgroups
-/// (`GpuEngine::lane_shuffle_levels`; 0: every lane's sum through storage).
+/// What timing a launch found: its wall time a step, the levels of the
+/// junction lane tree its workgroups merged in subgroups
+/// (`GpuEngine::lane_shuffle_levels`; 0: every lane's sum through
+/// storage), and the output samples it recorded on the device while
+/// timed (`GpuOptions::samples`; 0 without).
 #[derive(Debug, Clone, Copy)]
 struct Timed {
     seconds: f64,
     lane_levels: u32,
+    samples: u64,
 }
 
 /// `time_kernel`, with the lane levels the engine used.
@@ -77,22 +80,55 @@ fn time_launch<T: GpuReal>(
     if let Some(states) = start {
         engine.start_scenes_from(&states.iter().collect::<Vec<_>>())?;
     }
+    if let Some(plan) = opts.samples.as_ref() {
+        record_while_timed(&mut engine, plan)?;
+    }
+    let mut samples = 0;
+    let mut drop_samples = |engine: &mut GpuEngine<T>| {
+        for k in 0..models.len() {
+            samples += engine.take_samples_of(k).len() as u64;
+        }
+    };
     let started = Instant::now();
     engine.advance_steps(WARM_UP_STEPS)?;
     let rough = started.elapsed().as_secs_f64() / WARM_UP_STEPS as f64;
+    drop_samples(&mut engine);
     let short = short_span_steps(rough, engine.batch_steps());
     let seconds = marginal_step_seconds(
         |steps| {
             let t = Instant::now();
             engine.advance_steps(steps)?;
-            Ok(t.elapsed().as_secs_f64())
+            let seconds = t.elapsed().as_secs_f64();
+            drop_samples(&mut engine);
+            Ok(seconds)
         },
         short,
     )?;
     Ok(Timed {
         seconds,
         lane_levels: engine.lane_shuffle_levels(),
+        samples,
     })
+}
+
+/// Every scene of `engine` records its samples on the device at `plan`'s
+/// cadences, as the run will; a launch that cannot is not one the run
+/// could take at this speed (its samples would be host snapshots), so
+/// that is an error (the launch is skipped, with it as the reason).
+fn record_while_timed<T: GpuReal>(
+    engine: &mut GpuEngine<T>,
+    plan: &crate::engines::SamplePlan,
+) -> Result<(), EngineError> {
+    for k in 0..engine.scenes.len() {
+        if !engine.record_samples_of(k, plan)? {
+            return Err(EngineError::Gpu(
+                "cannot record the run's output samples on the device (they would be host \
+                 snapshots)"
+                    .into(),
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// The short span's steps, from a rough step time: about
@@ -266,10 +302,13 @@ pub fn measure_within<T: GpuReal>(
     // first one is the error if none runs. The fastest so far is kept
     // apart (the closure holds `timings`).
     let fastest = Cell::new(None);
+    // The fewest samples a launch recorded while timed.
+    let mut recorded: Option<u64> = None;
     let mut time =
         |launch: Launch| match time_launch::<T>(models, ctx, opts, launch, start.as_deref()) {
             Ok(timed) => {
                 timings.push((launch, timed.seconds));
+                recorded = Some(recorded.map_or(timed.samples, |r| r.min(timed.samples)));
                 let mut best = fastest.get();
                 keep_faster(&mut best, launch, timed.seconds);
                 fastest.set(best);
@@ -349,6 +388,7 @@ pub fn measure_within<T: GpuReal>(
         skipped,
         scenes: models.len(),
         phase,
+        recorded: opts.samples.and(recorded),
     })
 }
 
