@@ -461,8 +461,9 @@ fn gpu_ensemble_sweep_matches_points_run_alone(precision: &str) {
 }
 
 /// `--gpu-path measure` (and `auto` on hardware) times the kernels on an
-/// ensemble of the sweep's own lattice, once, caches the choice under the
-/// ensemble's key and runs every point on it: the table is the one of the
+/// ensemble of the sweep's own lattice, recording the points' samples,
+/// once, caches the choice under the ensemble's key and runs every point
+/// on it: the table is the one of the
 /// same sweep naming that kernel with its points run one at a time. The
 /// timed ensemble does not follow --ensemble (so neither does the table).
 #[test]
@@ -495,6 +496,15 @@ fn a_measured_sweep_runs_every_point_on_the_kernel_timed_on_its_ensemble() {
         .unwrap_or_else(|| panic!("the choice is printed: {text}"));
     assert!(
         line.contains("measured now on an ensemble of 4 scenes"),
+        "{line}"
+    );
+    // Every point writes its run file, so the launches were timed
+    // recording the samples on the device, as the points record them
+    // (where the load phase took more than its budget to step, as on a
+    // busy machine here, they were timed before any sample was due).
+    assert!(
+        line.contains("recording the run's output on the device (")
+            || line.contains("with the run's output cadences but no sample in the timed steps"),
         "{line}"
     );
     let chosen = line

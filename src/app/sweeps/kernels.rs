@@ -12,10 +12,11 @@
 //! `options::choose_kernel` holds.
 
 use super::{Point, SweepOptions, DEFAULT_ENSEMBLE};
+use crate::app::runner::sample_plan;
 use crate::engines::backend::{Backend, Precision};
 use crate::engines::gpu::kernel_choice::{lattice_key, resolve_scenes, ChoiceCache, Launch};
 use crate::engines::gpu::options::without_measuring;
-use crate::engines::gpu::{context, GpuEngine, GpuOptions, GpuPath};
+use crate::engines::gpu::{context, GpuEngine, GpuOptions, GpuOutput, GpuPath};
 use crate::model::Model;
 
 /// The measured kernel of each lattice shape of a sweep.
@@ -48,24 +49,32 @@ impl SweepKernels {
         if opts.gpu.path == GpuPath::Auto && kernels.software {
             return Ok(kernels);
         }
-        let models: Vec<Model> = points
+        let models: Vec<(Model, &Point)> = points
             .iter()
-            .filter_map(|p| Model::from_scenario(&p.scenario, false).ok())
+            .filter_map(|p| Some((Model::from_scenario(&p.scenario, false).ok()?, p)))
             .collect();
         let cache = ChoiceCache::default_location();
-        let mut shapes: Vec<(String, &Model, usize)> = Vec::new();
-        for m in &models {
+        let mut shapes: Vec<(String, &Model, &Point, usize)> = Vec::new();
+        for (m, p) in &models {
             let key = lattice_key(m);
-            match shapes.iter_mut().find(|(k, _, _)| *k == key) {
-                Some(shape) => shape.2 += 1,
-                None => shapes.push((key, m, 1)),
+            match shapes.iter_mut().find(|(k, ..)| *k == key) {
+                Some(shape) => shape.3 += 1,
+                None => shapes.push((key, m, p, 1)),
             }
         }
-        for (key, model, count) in shapes {
+        for (key, model, point, count) in shapes {
             let scenes = ensemble_limit(model, count.min(DEFAULT_ENSEMBLE), opts.precision);
+            // Every point writes its run file: the launches are timed
+            // recording the samples of the shape's first point, as its
+            // ensemble records them (an ensemble records at one plan).
+            let gpu = GpuOptions {
+                samples: (opts.gpu.output == GpuOutput::Device)
+                    .then(|| sample_plan(model, &point.scenario)),
+                ..opts.gpu
+            };
             let resolved = match opts.precision {
-                Precision::F64 => resolve_scenes::<f64>(model, scenes, &ctx, opts.gpu, &cache),
-                _ => resolve_scenes::<f32>(model, scenes, &ctx, opts.gpu, &cache),
+                Precision::F64 => resolve_scenes::<f64>(model, scenes, &ctx, gpu, &cache),
+                _ => resolve_scenes::<f32>(model, scenes, &ctx, gpu, &cache),
             };
             let line = match resolved {
                 Ok((_, Some(choice))) => {
