@@ -70,16 +70,17 @@ step registers 60 gpu_registers
 #    µs/step, 256 scenes' aggregate, 64 scenes against one at a time, output cost; in f64
 #    (what a default run computes in on a GPU with f64 shaders) and then in mixed f32.
 step targets 270 gpu_targets
-# 1b. auto's pick for a run with an output file (the default job's `-o`): timed recording
-#     Table S1's samples at its cadences, against each launch timed again recording them.
-step output-pick 120 env SLIPFRONT_GPU_TARGETS_SOLO=1 SLIPFRONT_GPU_TARGETS_WITH_OUTPUT=1 \
-  SLIPFRONT_GPU_TARGETS_PRECISIONS=f64 gpu_targets
 # 2. Ensemble against solo, bit for bit (the issue's "the ensemble and solo tests pass").
 step bits 90 gpu_ensemble --test-threads 1
 # 2b. Chained tiles on hardware: the same bits as a dispatch a round, a scene of 64 tiles
 #     at once, and an ensemble of chained scenes against their solo runs (lavapipe can
 #     check only one scene at a time).
 step chained 60 gpu_chained_tiles --test-threads 1
+# 2c. auto's pick for a run with an output file (the default job's `-o`), in f64: timed
+#     recording Table S1's samples at its cadences, against each launch timed again
+#     recording them (output weighs on the launches unequally: BENCHMARKS.md, session 39).
+step output-pick 90 env SLIPFRONT_GPU_TARGETS_WITH_OUTPUT=only SLIPFRONT_GPU_TARGETS_PRECISIONS=f64 \
+  gpu_targets
 # 3. What limits an ensemble: 1 to 528 scenes of resident and persistent at 256 and 1024
 #    threads, for Ns = 100, Ns = 16 and Coulomb in mixed f32 and Ns = 100 in f64 (there
 #    with one junction lane a round too) (docs/gpu-kernels.md, "What limits an

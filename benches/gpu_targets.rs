@@ -38,6 +38,7 @@
 //! SLIPFRONT_GPU_TARGETS_WITH_OUTPUT=1 adds target 1 with an output file
 //! (after 2): `auto` timed recording Table S1's samples at its cadences,
 //! as a run with `-o` is, against each launch timed again recording them.
+//! SLIPFRONT_GPU_TARGETS_WITH_OUTPUT=only measures that target alone.
 //!
 //! The ensemble-against-solo bits are `tests/gpu_ensemble.rs`: run its
 //! binary on the same machine. SLIPFRONT_GPU_TARGETS_QUICK=1 (a software
@@ -223,8 +224,13 @@ fn targets_in<T: GpuReal>(ctx: &GpuContext, quick: bool, min_seconds: f64) -> Ve
     );
     let speed = format!("Table S1 ≤ {:.0} µs/step", TABLE_S1_STEP_SECONDS * 1e6);
     let mut fastest_solo = None;
-    match solo_figures::<T>(ctx, &s1, GpuOptions::default(), min_seconds) {
-        Ok((choice, again)) => {
+    let with_output = std::env::var("SLIPFRONT_GPU_TARGETS_WITH_OUTPUT").ok();
+    let output_only = with_output.as_deref() == Some("only");
+    let solo =
+        (!output_only).then(|| solo_figures::<T>(ctx, &s1, GpuOptions::default(), min_seconds));
+    match solo {
+        None => {}
+        Some(Ok((choice, again))) => {
             let (target, fastest) = pick_target(pick, &choice, &again);
             targets.push(target);
             targets.push(match fastest {
@@ -239,14 +245,14 @@ fn targets_in<T: GpuReal>(ctx: &GpuContext, quick: bool, min_seconds: f64) -> Ve
                 None => Target::not_measured(speed, NOT_AGAIN.into()),
             });
         }
-        Err(e) => {
+        Some(Err(e)) => {
             targets.push(Target::not_measured(pick, e.clone()));
             targets.push(Target::not_measured(speed, e));
         }
     }
 
     // 1b: `auto` with an output file, timed recording (`GpuOptions::samples`).
-    if std::env::var("SLIPFRONT_GPU_TARGETS_WITH_OUTPUT").is_ok() {
+    if with_output.is_some() {
         let what = format!(
             "with -o, `auto` picks the fastest launch with -o (within {:.0} %)",
             PICK_TOLERANCE * 100.0
@@ -261,7 +267,7 @@ fn targets_in<T: GpuReal>(ctx: &GpuContext, quick: bool, min_seconds: f64) -> Ve
         });
     }
 
-    if std::env::var("SLIPFRONT_GPU_TARGETS_SOLO").is_ok() {
+    if output_only || std::env::var("SLIPFRONT_GPU_TARGETS_SOLO").is_ok() {
         return targets;
     }
 
