@@ -3,8 +3,12 @@
 //! launch's figure is what a step costs in a run: the time a long span of
 //! steps takes beyond a short one, over the extra steps, which leaves out
 //! what each timed advance pays once (`timing::marginal_step_seconds`).
+//! A run with an output file is timed recording its samples on the
+//! device at its cadences (`GpuOptions::samples`): output weighs on the
+//! launches unequally (a tiled launch ends its dispatch at every sample).
 //! The choice and its figures are cached per
-//! adapter, driver, precision, lattice, compiled terms and kernel sources,
+//! adapter, driver, precision, lattice, compiled terms, output cadences
+//! and kernel sources,
 //! so a second run of the same shape starts at once.
 //!
 //! The kernels are timed from the end of the scene's normal-load phase,

@@ -1,7 +1,8 @@
 //! Timing the launches on the scene: from the end of its normal-load
 //! phase where that is reached within a budget, a warm-up, then what a
 //! step costs in a run: the time a long span of steps takes beyond a
-//! short one (`marginal_step_seconds`).
+//! short one (`marginal_step_seconds`), recording the run's output samples
+//! on the device where the run will (`GpuOptions::samples`).
 
 use super::{launches, ChoiceSource, KernelChoice, Launch, TimedPhase};
 use crate::engines::gpu::context::GpuContext;
@@ -67,7 +68,8 @@ struct Timed {
     samples: u64,
 }
 
-/// `time_kernel`, with the lane levels the engine used.
+/// `time_kernel`, with the lane levels the engine used and the samples it
+/// recorded (where `opts.samples` asks it to record, as the run will).
 fn time_launch<T: GpuReal>(
     models: &[Model],
     ctx: &GpuContext,
