@@ -298,3 +298,25 @@ impl Outputs {
         Ok(())
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The plan the GPU's launches are timed recording at is the one the
+    /// run samples at from the start of driving; another scenario's
+    /// cadences give another plan.
+    #[test]
+    fn the_timed_plan_is_the_runs_own() {
+        let scenario = Scenario::default_scene();
+        let model = Model::from_scenario(&scenario, false).unwrap();
+        let plan = sample_plan(&model, &scenario);
+        assert_eq!(plan, Outputs::new(&model, &scenario, None, None).plan());
+        assert!(!plan.fast);
+        assert!(plan.every_global > 0 && plan.every_fast > 0);
+        assert!(plan.every_fast < plan.every_global);
+        let mut slower = scenario.clone();
+        slower.output.fast_interval *= 2.0;
+        assert_ne!(sample_plan(&model, &slower), plan);
+    }
+}

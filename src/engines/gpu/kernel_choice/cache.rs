@@ -259,3 +259,41 @@ pub fn scenes_cache_key<T: GpuReal>(
     )
     .replace(['\t', '\n'], " ")
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The output field reads back as written; anything else is not one
+    /// (the line is measured again).
+    #[test]
+    fn the_output_field_reads_back() {
+        for recorded in [None, Some(0), Some(12)] {
+            assert_eq!(recorded_named(&recorded_name(recorded)), Some(recorded));
+        }
+        for damaged in ["", "recorded", "recorded -1", "recorded some", "no outputs"] {
+            assert_eq!(recorded_named(damaged), None, "{damaged}");
+        }
+    }
+
+    /// Choices timed at other cadences, or without output, are kept apart.
+    #[test]
+    fn the_cadences_are_in_the_key() {
+        let plan = SamplePlan {
+            prep_steps: 100,
+            every_global: 45,
+            every_interface: 90,
+            every_bulk: 45_000,
+            every_fast: 4,
+            fast_slip_speed: 1e-3,
+            fast: false,
+        };
+        assert_eq!(samples_key(Some(&plan)), "every 45/90/45000/4 steps");
+        assert_eq!(samples_key(None), "none");
+        let faster = SamplePlan {
+            every_fast: 5,
+            ..plan
+        };
+        assert_ne!(samples_key(Some(&faster)), samples_key(Some(&plan)));
+    }
+}
