@@ -211,7 +211,7 @@ fn persistent_steps(
                     normal = contact[interface_base() + i].y;
                 }
                 let f = force[block_base() + i];
-                acc = combine(acc, block_sample(i, e, flags[i], load_disp(i), load_vel(i), f, friction, normal));
+                acc = combine(acc, block_sample(i, e, flags[i], load_disp(i), load_vel(i), f, friction, normal, interface_due(e)));
             }
             if batch.forces_only == 0u {
                 verlet(i, b.column, b.row, force[block_base() + i], friction, ld, s);

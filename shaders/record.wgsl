@@ -61,7 +61,7 @@ fn inputs_of_entry(i: u32) -> BlockInputs {
 }
 
 fn sample_of(i: u32, x: BlockInputs) -> SampleSums {
-    return block_sample(i, entry, x.fl, x.u, x.v_half, x.f, x.contact.x, x.contact.y);
+    return block_sample(i, entry, x.fl, x.u, x.v_half, x.f, x.contact.x, x.contact.y, interface_due(entry));
 }
 
 // Block i of the sample the entry names.

@@ -17,6 +17,14 @@ fn interface_due(e: RecordEntry) -> bool {
         || ((e.channels & RECORD_FAST) != 0u && plans[scene].fast != 0u);
 }
 
+// The fixed cadence makes the interface row due, or the fast one plans it
+// whether it turns out on or not: the tiled kernel writes such a row
+// before the samples before it have decided the fast flag
+// (tile_record_finish decides it afterwards, in order).
+fn interface_planned(e: RecordEntry) -> bool {
+    return (e.channels & (RECORD_INTERFACE | RECORD_FAST)) != 0u;
+}
+
 fn combine(a: SampleSums, b: SampleSums) -> SampleSums {
     var s = a;
     let lo = a.ruptures_lo + b.ruptures_lo;
@@ -91,7 +99,8 @@ fn tally_eight_of(first: u32, count: u32) -> vec2<u32> {
 }
 
 // Block i's sums at the instant of sample e (u(s), v(s−½), the forces,
-// friction and normal force of s), and its rows if due.
+// friction and normal force of s), its interface row where `row` says
+// (interface_due, or interface_planned), and its bulk field if due.
 fn block_sample(
     i: u32,
     e: RecordEntry,
@@ -101,6 +110,7 @@ fn block_sample(
     f: vec2<real>,
     friction: real,
     normal: real,
+    row: bool,
 ) -> SampleSums {
     let v = sampled_velocity(fl, v_half, f, friction);
     var s = no_sums();
@@ -139,7 +149,7 @@ fn block_sample(
         s.min_pinned = fraction;
         s.max_slip_speed = abs(v.x);
         s.ruptures_lo = ruptures;
-        if interface_due(e) {
+        if row {
             let at = plans[scene].interface_offset + (e.interface_slot * c.nx + i) * RECORD_INTERFACE_WORDS;
             rows[at] = coord_hi(u.x);
             rows[at + 1u] = coord_lo(u.x);
@@ -206,9 +216,16 @@ fn reduce_threads(local: u32, width: u32, acc: SampleSums) {
 
 // Thread 0 of a workgroup whose wg_sums[0] holds the sample's sums: writes
 // them and decides the fast interface cadence for the samples after this
-// one (the host's rule, runner::outputs::Outputs::emit_sample).
+// one (settle_sample).
 fn finish_sample(e: RecordEntry) {
-    var out = wg_sums[0];
+    settle_sample(e, wg_sums[0]);
+}
+
+// Writes the sums `total` of due sample e, and decides the fast interface
+// cadence for the samples after it (the host's rule,
+// runner::outputs::Outputs::emit_sample).
+fn settle_sample(e: RecordEntry, total: SampleSums) {
+    var out = total;
     out.recorded = 1u;
     out.interface_row = select(0u, 1u, interface_due(e));
     let fast = plans[scene].every_fast != 0u && out.max_slip_speed > plans[scene].fast_slip_speed;

@@ -17,14 +17,20 @@
 //   junction, count), so the copy evolves as its owner's original does.
 // - Dispatch d of a batch (its dynamic offset) runs the steps from
 //   tile_ends[d − 1] (0 for the first) to tile_ends[d], which the host
-//   cuts after TILE_HALO steps, after the batch's first step (whose forces
-//   may be a snapshot's, read from `force` by every tile while no tile
-//   writes it) and after a sample's step, which the output kernels then
-//   record as after a one-step dispatch (`tiles::dispatch_ends`).
+//   cuts after TILE_HALO steps and after the batch's first step (whose
+//   forces may be a snapshot's, read from `force` by every tile while no
+//   tile writes it) (`tiles::dispatch_ends`).
+// - Output samples are recorded here, in the step of the sample, so that
+//   no sample ends a dispatch: each tile sums its own columns' part of the
+//   sample (record_common.wgsl block_sample) into a partial of its own,
+//   and writes their rows. A planned fast-cadence row is written whether
+//   the fast cadence turns out on or not: that is decided by the samples
+//   before it, which other tiles may not have finished. After the batch,
+//   tile_record_finish adds each sample's partials in tile order and
+//   decides, sample by sample in order, which were due.
 // - Chained tiles (TILE_CHAINED; GpuOptions::chained_tiles): one dispatch
 //   runs several of those dispatches' rounds in turn, up to the round
-//   whose end carries ROUND_ENDS_DISPATCH (a sample's step, the batch's
-//   end). Before its round k > 0, a tile waits until every tile whose
+//   whose end carries ROUND_ENDS_DISPATCH (the batch's end). Before its round k > 0, a tile waits until every tile whose
 //   columns reach into its halo has finished round k − 1 (their counters
 //   in tile_progress), so it reads what the next dispatch would have read;
 //   its neighbours wait on it in turn before they overwrite the copy it
@@ -37,7 +43,7 @@
 // the lanes merged as a tree (lane_tree8), and the update. Junction friction laws
 // only (the per-block laws keep state that a halo would race on).
 // CPU twin: src/engines/cpu/mod.rs CpuEngine::one_step (each step of the loop).
-// import: bulk_forces, bulk_patch, common, coordinates, junction_store, junctions, kept_bits, lane_merge, lane_partials, scene, state, verlet
+// import: bulk_forces, bulk_patch, common, coordinates, junction_store, junctions, kept_bits, lane_merge, lane_partials, record_buffers, record_common, scene, state, verlet
 
 override TILE_THREADS: u32 = 64u;
 // Bulk forces by 2×2 patches of blocks (bulk_patch.wgsl;
@@ -59,6 +65,12 @@ const ROUND_ENDS_DISPATCH: u32 = 0x80000000u;
 // Rounds each tile of each scene has finished, all dispatches (mod 2³²):
 // equal for a scene's tiles between dispatches.
 @group(0) @binding(24) var<storage, read_write> tile_progress: array<atomic<u32>>;
+// The batch's output samples (batch.records of them, in step order;
+// src/engines/gpu/recorder.rs). Sample k's partial of tile g is
+// sums[plans[scene].partials_offset + k · tile_count() + g].
+@group(0) @binding(25) var<storage, read> record_entries: array<RecordEntry>;
+// A step offset no sample has.
+const NO_SAMPLE: u32 = 0xffffffffu;
 
 // The forces of the held blocks at the step under way.
 var<workgroup> tile_force: array<vec2<real>, TILE_BLOCKS>;
@@ -68,6 +80,9 @@ var<workgroup> tile_plan: vec4<u32>;
 var<workgroup> tile_chain: vec2<u32>;
 // Whether every neighbour has finished the round awaited.
 var<workgroup> tile_neighbours_done: u32;
+// The next sample of the round: its index among the batch's and its step
+// (NO_SAMPLE: none).
+var<workgroup> tile_next_sample: vec2<u32>;
 
 // Publishes this tile's edge columns (every row: those in a neighbour's
 // halo) in published copy `copy`: u and v from the tile's state, the
@@ -335,6 +350,10 @@ fn tile_round(t: u32, d: u32, lanes: u32, stride: u32, first: bool, last: bool) 
         return 0u;
     }
     let update = batch.forces_only == 0u;
+    if t == 0u {
+        tile_next_sample = sample_at_or_after(0u, plan.x);
+    }
+    var next = workgroupUniformLoad(&tile_next_sample);
     load_tile(t, plan.x, d & 1u, first);
     storageBarrier();
     workgroupBarrier();
@@ -357,6 +376,14 @@ fn tile_round(t: u32, d: u32, lanes: u32, stride: u32, first: bool, last: bool) 
         let cols = b - a;
         let ld = loads_at(s);
         let ready = batch.forces_ready != 0u && s == 0u;
+        // Step s is a sample: its own columns' part of it, from the state
+        // before their update.
+        let sampling = next.y == s;
+        var e: RecordEntry;
+        if sampling {
+            e = record_entries[next.x];
+        }
+        var acc = no_sums();
         if !ready {
             if BOND_PATCHES {
                 // Patches from column a; the last is half one where cols
@@ -429,6 +456,15 @@ fn tile_round(t: u32, d: u32, lanes: u32, stride: u32, first: bool, last: bool) 
                     }
                 }
             }
+            if sampling && tile_owns(ix) {
+                var normal: real = 0.0;
+                if iz == 0u {
+                    normal = contact[interface_base() + ix].y;
+                }
+                let u = load_disp_at(i, ix, iz);
+                let v = load_vel_at(i, ix, iz);
+                acc = combine(acc, block_sample(i, e, flags[i], u, v, f, friction, normal, interface_planned(e)));
+            }
             if update {
                 // The last step's starting state stays in its copy, where a
                 // run of one-step dispatches leaves it (output samples read it).
@@ -443,9 +479,72 @@ fn tile_round(t: u32, d: u32, lanes: u32, stride: u32, first: bool, last: bool) 
                 note_kept(ix - tile_lo, ix, ld);
             }
         }
+        if sampling {
+            reduce_threads(t, TILE_THREADS, acc);
+            if t == 0u {
+                sums[plans[scene].partials_offset + e.sums_slot * tile_count() + tile] = wg_sums[0];
+                tile_next_sample = sample_at_or_after(next.x + 1u, s + 1u);
+            }
+            next = workgroupUniformLoad(&tile_next_sample);
+        }
         storageBarrier();
         workgroupBarrier();
     }
     publish_edges(t, (d + 1u) & 1u);
     return plan.y + 1u;
+}
+
+// The first of the batch's samples from index `first` on whose step is
+// `step` or later: (its index, its step), or (batch.records, NO_SAMPLE).
+// The entries are in step order: a binary search (no loop of a sample a
+// round: llvmpipe counts every iteration against its limit).
+fn sample_at_or_after(first: u32, step: u32) -> vec2<u32> {
+    var lo = first;
+    var hi = batch.records;
+    while lo < hi {
+        let mid = (lo + hi) / 2u;
+        if record_entries[mid].offset < step {
+            lo = mid + 1u;
+        } else {
+            hi = mid;
+        }
+    }
+    if lo < batch.records {
+        return vec2<u32>(lo, record_entries[lo].offset);
+    }
+    return vec2<u32>(lo, NO_SAMPLE);
+}
+
+// After a batch's tiled dispatches, one workgroup per scene: each sample's
+// partials added in tile order (a fixed order: the same bits every run),
+// then, sample by sample in step order, the fast cadence's rule decides
+// which were due (a planned fast-cadence sample is due only if the
+// sample before it left the cadence on), as the output kernels and the
+// persistent kernel decide it at each sample.
+@compute @workgroup_size(TILE_THREADS)
+fn tile_record_finish(
+    @builtin(local_invocation_index) t: u32,
+    @builtin(workgroup_id) wid: vec3<u32>,
+) {
+    enter_scene(wid.z);
+    let tiles = tile_count();
+    let partials = plans[scene].partials_offset;
+    for (var k = t; k < batch.records; k += TILE_THREADS) {
+        var total = no_sums();
+        for (var g = 0u; g < tiles; g++) {
+            total = combine(total, sums[partials + k * tiles + g]);
+        }
+        sums[sums_slot(record_entries[k])] = total;
+    }
+    storageBarrier();
+    if t == 0u {
+        for (var k = 0u; k < batch.records; k++) {
+            let e = record_entries[k];
+            if sample_due(e) {
+                settle_sample(e, sums[sums_slot(e)]);
+            } else {
+                sums[sums_slot(e)].recorded = 0u;
+            }
+        }
+    }
 }

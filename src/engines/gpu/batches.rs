@@ -55,7 +55,7 @@ impl<T: GpuReal> GpuEngine<T> {
                 batch.forces_only = forces_only as u32;
                 batch.steps_per_dispatch = self.steps_per_dispatch as u32;
                 batch.parity = self.current as u32;
-                if self.kernel.is_persistent() {
+                if self.kernel.is_persistent() || self.kernel == Kernel::Tiled {
                     batch.records = planned.len() as u32;
                 }
                 batch
@@ -66,16 +66,22 @@ impl<T: GpuReal> GpuEngine<T> {
             .write_buffer(&self.batch_buffer, 0, bytemuck::cast_slice(&batches));
         // The step after each dispatch (one-step and tiled kernels), which
         // the tiled kernel reads.
-        let offsets: Vec<u64> = planned.iter().map(|p| p.offset).collect();
         let ends = match self.kernel.is_persistent() {
             true => Vec::new(),
-            false => {
-                super::tiles::dispatch_ends(self.kernel, steps, self.steps_per_dispatch, &offsets)
-            }
+            false => super::tiles::dispatch_ends(self.kernel, steps, self.steps_per_dispatch),
         };
         // Which of them end a dispatch: all but where the tiled kernel
         // chains its rounds.
-        let ending = super::tiles::rounds_ending_dispatches(&ends, &offsets, self.chain);
+        let ending = super::tiles::rounds_ending_dispatches(&ends, self.chain);
+        // The samples the output kernels record after their step
+        // dispatches: the one-step kernels'. The tiled kernel records its
+        // own in its steps, and tile_record_finish ends them after the
+        // batch's dispatches.
+        let tiled = self.tiles.as_ref();
+        let after_steps = match tiled {
+            Some(_) => &planned[..0],
+            None => &planned[..],
+        };
         let dispatch_count = ending.iter().filter(|&&e| e).count() as u64;
         if self.tiles.is_some() {
             let words = super::tiles::tile_end_words(&ends, &ending);
@@ -110,13 +116,13 @@ impl<T: GpuReal> GpuEngine<T> {
                     // A dispatch per step, or the tiled kernel's of up to
                     // its halo's steps after one gather; a sample's step
                     // always ends a dispatch.
-                    if let Some((_, gather)) = self.tiles.as_ref() {
+                    if let Some(tiled) = tiled {
                         pass.set_bind_group(1, &self.batch_group, &[0]);
-                        pass.set_pipeline(gather);
+                        pass.set_pipeline(&tiled.gather);
                         pass.dispatch_workgroups(self.groups.0, self.groups.1, scene_count);
                         pass.set_pipeline(&self.pipeline);
                     }
-                    let mut samples = planned.iter().enumerate().peekable();
+                    let mut samples = after_steps.iter().enumerate().peekable();
                     let mut first = 0;
                     // The first round of the dispatch under way.
                     let mut first_round = 0;
@@ -133,7 +139,7 @@ impl<T: GpuReal> GpuEngine<T> {
                         // The tiled kernel's dispatch finds its rounds'
                         // steps in tile_ends from its first round's; a
                         // one-step dispatch is its step.
-                        let index = if self.tiles.is_some() {
+                        let index = if tiled.is_some() {
                             first_round as u64
                         } else {
                             first
@@ -196,6 +202,12 @@ impl<T: GpuReal> GpuEngine<T> {
                             pass.set_bind_group(0, &self.state_group, &[]);
                         }
                         first = end;
+                    }
+                    if let Some(tiled) = tiled.filter(|_| !planned.is_empty()) {
+                        pass.set_bind_group(1, &self.batch_group, &[0]);
+                        pass.set_pipeline(&tiled.record_finish);
+                        pass.dispatch_workgroups(1, 1, scene_count);
+                        self.output_dispatches += 1;
                     }
                     self.dispatches += dispatch_count;
                     if let Some(m) = marks.as_mut() {

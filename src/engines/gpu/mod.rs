@@ -114,6 +114,20 @@ struct Scene<T: GpuReal> {
     failure: Option<EngineError>,
 }
 
+/// The tiled kernel's entry point that finishes a batch's samples
+/// (shaders/tiled.wgsl).
+const TILE_RECORD_FINISH: &str = "tile_record_finish";
+
+/// The tiled kernel's tiles and its entry points besides its steps.
+struct TiledKernel {
+    geometry: tiles::TileGeometry,
+    /// The halo gather, dispatched before a batch's first dispatch.
+    gather: wgpu::ComputePipeline,
+    /// After a batch's dispatches: each sample's tile partials added, and
+    /// which samples were due decided in order (the fast cadence).
+    record_finish: wgpu::ComputePipeline,
+}
+
 /// The GPU engine over one scene (`GpuEngine::new`), or over an ensemble of
 /// scenes of one lattice shape stepped together (`ensemble::GpuEnsemble`),
 /// computing in `T`: f32 (mixed, double-single coordinates) or f64.
@@ -129,9 +143,8 @@ pub struct GpuEngine<T: GpuReal = f32> {
     /// Its bulk forces by 2×2 patches (`GpuOptions::bond_patches`).
     bond_patches: bool,
     pipeline: wgpu::ComputePipeline,
-    /// The tiled kernel's tiles and its halo gather, dispatched before
-    /// each of its dispatches.
-    tiles: Option<(tiles::TileGeometry, wgpu::ComputePipeline)>,
+    /// The tiled kernel's tiles and its other entry points.
+    tiles: Option<TiledKernel>,
     /// The tiled kernel's rounds chained in one dispatch, and how.
     chain: Option<tiles::TileChain>,
     /// Both state copies (one step) or copy 0 (persistent).
@@ -383,11 +396,17 @@ impl<T: GpuReal> GpuEngine<T> {
         let state_group = state_group(&ctx, kernel, &buffers, placeholders);
         let batch_group = batch_group(&ctx, kernel, &offsets, &batch_buffer);
         let pipeline = ctx.pipeline::<T>(kernel, build, &constants);
-        let tiles = geometry.map(|g| {
-            let entry = kernel
-                .gather_entry_point()
-                .expect("the tiled kernel gathers");
-            (g, ctx.pipeline_of::<T>(kernel, build, entry, &constants))
+        let tiles = geometry.map(|geometry| {
+            let entry = |name| ctx.pipeline_of::<T>(kernel, build, name, &constants);
+            TiledKernel {
+                geometry,
+                gather: entry(
+                    kernel
+                        .gather_entry_point()
+                        .expect("the tiled kernel gathers"),
+                ),
+                record_finish: entry(TILE_RECORD_FINISH),
+            }
         });
         let groups = step_kernel.groups(model);
         let steps_per_dispatch = match geometry {
@@ -472,7 +491,7 @@ impl<T: GpuReal> GpuEngine<T> {
 
     /// The tiled kernel's tiles (None for the other kernels).
     pub fn tile_geometry(&self) -> Option<tiles::TileGeometry> {
-        self.tiles.as_ref().map(|(g, _)| *g)
+        self.tiles.as_ref().map(|t| t.geometry)
     }
 
     /// The tiled kernel's chain of rounds a dispatch, where chained.
@@ -514,11 +533,12 @@ impl<T: GpuReal> GpuEngine<T> {
     /// scene at the first plan asked for; a scene asking for other
     /// cadences gets false.
     fn record_samples_of(&mut self, scene: usize, plan: &SamplePlan) -> Result<bool, EngineError> {
-        let persistent = self.kernel.is_persistent();
-        // The persistent kernels reduce a sample across the workgroup: a
-        // power of two of threads (shaders/record_common.wgsl).
+        // The persistent and tiled kernels record in their steps, each
+        // reducing a sample across its workgroup: a power of two of
+        // threads (shaders/record_common.wgsl).
+        let in_steps = self.kernel.is_persistent() || self.kernel == Kernel::Tiled;
         let reducible = self.persistent_threads.is_power_of_two();
-        if self.output == GpuOutput::Host || (persistent && !reducible) {
+        if self.output == GpuOutput::Host || (in_steps && !reducible) {
             return Ok(false);
         }
         // The batches in flight finish first (a blow-up among them is
@@ -544,26 +564,25 @@ impl<T: GpuReal> GpuEngine<T> {
         };
         let models: Vec<Model> = self.scenes.iter().map(|s| s.model.clone()).collect();
         let model = &models[0];
-        let stride = (!persistent).then_some(record_entry_stride(self.offset_stride));
-        let steps_sum_kinetic = matches!(self.kernel, Kernel::OneStep | Kernel::OneStepLanes);
-        // The one-step kernels' partials follow their patched threads.
-        let partials = recorder::Partials::of(model, steps_sum_kinetic && self.bond_patches);
+        let site = match (self.kernel, self.tiles.as_ref()) {
+            (Kernel::Tiled, Some(tiles)) => recorder::RecordSite::Tiles {
+                tiles: tiles.geometry.tiles,
+            },
+            (k, _) if k.is_persistent() => recorder::RecordSite::Persistent,
+            _ => recorder::RecordSite::Dispatches {
+                stride: record_entry_stride(self.offset_stride),
+                steps_sum_kinetic: true,
+                // The one-step kernels' partials follow their patched threads.
+                partials: recorder::Partials::of(model, self.bond_patches),
+            },
+        };
         let checks = self.build.checks;
-        match recorder::Recorder::new(
-            &self.ctx,
-            &models,
-            state,
-            plan,
-            stride,
-            steps_sum_kinetic,
-            partials,
-            checks,
-        ) {
+        match recorder::Recorder::new(&self.ctx, &models, state, plan, site, checks) {
             Ok(mut rec) => {
                 // The host has taken the samples up to here (none before
                 // driving, and none at its first step).
                 rec.recorded_through = Some(self.step.max(model.prep_steps));
-                if persistent || rec.kinetic_in_steps() {
+                if in_steps || rec.kinetic_in_steps() {
                     let records = rec.state_bindings();
                     self.state_group = state_group(&self.ctx, self.kernel, &self.buffers, records);
                 }
@@ -685,7 +704,11 @@ impl<T: GpuReal> GpuEngine<T> {
                 self.persistent_threads
             ),
             Kernel::Tiled => {
-                let (g, _) = self.tiles.as_ref().expect("the tiled kernel has tiles");
+                let g = self
+                    .tiles
+                    .as_ref()
+                    .expect("the tiled kernel has tiles")
+                    .geometry;
                 let per_dispatch = match self.chain {
                     Some(c) => format!(
                         "rounds of up to {} steps chained, up to {} rounds per dispatch",

@@ -53,9 +53,10 @@ pub const RESIDENT_THREADS: u32 = 1024;
 /// (`persistent_steps_per_dispatch`: with 64 threads the f64 RNG's loops
 /// at a burst of ruptures overrun it).
 pub const RESIDENT_THREADS_SOFTWARE: u32 = PERSISTENT_THREADS;
-/// Reduction slots of the resident kernel's output samples (its threads
-/// fold into them first): its workgroup memory holds the lattice.
-pub const RESIDENT_REDUCTION_WIDTH: u32 = 64;
+/// Reduction slots of the resident and tiled kernels' output samples
+/// (their threads fold into them first): their workgroup memory holds the
+/// lattice, or a tile of it.
+pub const WORKGROUP_STATE_REDUCTION_WIDTH: u32 = 64;
 /// The resident kernel's own workgroup words (its step span, stop and
 /// sample flags, and the lane shuffles' levels: 28 bytes), rounded up.
 const RESIDENT_OWN_BYTES: u64 = 64;
@@ -233,7 +234,7 @@ pub fn persistent_steps_per_dispatch(
     let mut per_step = 3 + blocks * 10 + items * (1 + ns.div_ceil(lanes.max(1))) + lanes + friction;
     let mut budget = 32_768;
     if kernel == Kernel::Resident {
-        let slots = RESIDENT_REDUCTION_WIDTH as usize;
+        let slots = WORKGROUP_STATE_REDUCTION_WIDTH as usize;
         per_step += t.div_ceil(slots) + slots.ilog2() as usize;
         budget -= 2 * blocks;
     }
@@ -266,7 +267,7 @@ pub fn persistent_threads(
 /// less.
 pub fn resident_fit<T: GpuReal>(model: &Model, limits: &wgpu::Limits) -> Result<u64, String> {
     let per_block = std::mem::size_of::<[Coord<T>; 2]>() + std::mem::size_of::<[T; 2]>();
-    let slots = resident_reduction_width::<T>() as usize;
+    let slots = workgroup_state_reduction_width::<T>() as usize;
     let bytes = (model.n_blocks() * per_block
         + slots * std::mem::size_of::<layout::GpuSampleSums<T>>()
         + layout::kept_words(model.nx) as usize * 4) as u64
@@ -284,9 +285,9 @@ pub fn resident_fit<T: GpuReal>(model: &Model, limits: &wgpu::Limits) -> Result<
     Ok(bytes)
 }
 
-/// The resident kernel's reduction slots in precision `T`.
-pub fn resident_reduction_width<T: GpuReal>() -> u32 {
-    RESIDENT_REDUCTION_WIDTH.min(layout::reduction_slots::<T>())
+/// The resident and tiled kernels' reduction slots in precision `T`.
+pub fn workgroup_state_reduction_width<T: GpuReal>() -> u32 {
+    WORKGROUP_STATE_REDUCTION_WIDTH.min(layout::reduction_slots::<T>())
 }
 
 impl GpuPath {

@@ -166,27 +166,49 @@ impl Partials {
     }
 }
 
+/// Where a step kernel's output samples are recorded.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum RecordSite {
+    /// By the output kernels, after a sample's step dispatch (the one-step
+    /// kernels). `stride`: the dynamic-offset alignment of the entries;
+    /// `steps_sum_kinetic`: the step kernel has the recording variant
+    /// (`RECORD_KINETIC`), which a large lattice's samples then use;
+    /// `partials`: how the partials split the lattice (as the step
+    /// kernel's workgroups do).
+    Dispatches {
+        stride: u64,
+        steps_sum_kinetic: bool,
+        partials: Partials,
+    },
+    /// Inside the persistent kernel's loop, which reads the entries as an
+    /// array.
+    Persistent,
+    /// Inside the tiled kernel's steps: a partial per tile (`tiles` a
+    /// scene) and sample, added after the batch (`tile_record_finish`).
+    Tiles { tiles: u32 },
+}
+
 impl<T: GpuReal> Recorder<T> {
-    /// The recorder of an engine's scenes (`models`, one lattice), or why
-    /// the device cannot hold the records of one batch.
-    /// `stride`: the dynamic-offset alignment (one-step and tiled
-    /// kernels), or None for the persistent kernel, which reads the
-    /// entries as an array; `steps_sum_kinetic`: the step kernel has the
-    /// recording variant (`RECORD_KINETIC`, the one-step kernels), which
-    /// a large lattice's samples then use; `layout`: how the partials split
-    /// the lattice (as the step kernel's workgroups do); `checks`: the
-    /// run-time checks of the output kernels' module, as the step kernel's.
-    #[allow(clippy::too_many_arguments)]
+    /// The recorder of an engine's scenes (`models`, one lattice) whose
+    /// step kernel records at `site`, or why the device cannot hold the
+    /// records of one batch. `checks`: the run-time checks of the output
+    /// kernels' module, as the step kernel's.
     pub fn new(
         ctx: &GpuContext,
         models: &[Model],
         state: StateBuffers,
         plan: &SamplePlan,
-        stride: Option<u64>,
-        steps_sum_kinetic: bool,
-        layout: Partials,
+        site: RecordSite,
         checks: ShaderChecks,
     ) -> Result<Recorder<T>, String> {
+        let (stride, steps_sum_kinetic, layout) = match site {
+            RecordSite::Dispatches {
+                stride,
+                steps_sum_kinetic,
+                partials,
+            } => (Some(stride), steps_sum_kinetic, partials),
+            _ => (None, false, Partials::of(&models[0], false)),
+        };
         let stride_given = stride.is_some();
         let stride = stride.unwrap_or(size_of::<GpuRecordEntry>() as u64);
         let device = &ctx.device;
@@ -217,9 +239,18 @@ impl<T: GpuReal> Recorder<T> {
                 ctx.info.name
             ));
         }
-        let partials = layout.count();
-        let groups = (model.n_blocks() > RECORD_SMALL_BLOCKS)
-            .then(|| super::step_kernel::groups_for(partials));
+        // The output kernels' partials, or the tiled kernel's: a tile's
+        // each of a batch's samples.
+        let (partials, groups) = match site {
+            RecordSite::Dispatches { .. } => {
+                let partials = layout.count();
+                let groups = (model.n_blocks() > RECORD_SMALL_BLOCKS)
+                    .then(|| super::step_kernel::groups_for(partials));
+                (partials, groups)
+            }
+            RecordSite::Persistent => (0, None),
+            RecordSite::Tiles { tiles } => (max_entries * tiles, None),
+        };
         let kinetic_in_steps = groups.is_some() && stride_given && steps_sum_kinetic;
         let special = layout.special(models);
         let special_groups = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
@@ -229,6 +260,12 @@ impl<T: GpuReal> Recorder<T> {
         });
         let sums_per_scene = (max_entries + partials) as u64;
         let sums_bytes = scenes * sums_per_scene * size_of::<GpuSampleSums<T>>() as u64;
+        if sums_bytes > limit {
+            return Err(format!(
+                "the sums of one batch's samples need {sums_bytes} bytes, {} binds at most {limit}",
+                ctx.info.name
+            ));
+        }
         if words::<T>(rows_bytes) > u32::MAX as u64 || scenes * sums_per_scene > u32::MAX as u64 {
             return Err("the records of one batch need more than 2^32 words".into());
         }

@@ -54,7 +54,14 @@ impl StepKernel {
         constants.push(("BOND_PATCHES", self.bond_patches as u8 as f64));
         if self.kernel == Kernel::Resident {
             constants.push(("RESIDENT_BLOCKS", shape.blocks as f64));
-            constants.push(("REDUCTION_WIDTH", resident_reduction_width::<T>() as f64));
+        }
+        // Their workgroup memory holds the state: fewer slots for the
+        // samples they record.
+        if matches!(self.kernel, Kernel::Resident | Kernel::Tiled) {
+            constants.push((
+                "REDUCTION_WIDTH",
+                workgroup_state_reduction_width::<T>() as f64,
+            ));
         }
         // The kernels whose steps end at a workgroup barrier, so that their
         // lanes can read their block's kept bit from workgroup memory

@@ -16,7 +16,8 @@ pub const TILE_HALO: u32 = 4;
 /// dispatch's loop iterations against 65535, and the redundant halo work
 /// grows with it.
 pub const MAX_TILE_HALO: u32 = 32;
-/// The tiled kernel's own workgroup words (its plan), rounded up.
+/// The tiled kernel's own workgroup words (its plan, its chain, its next
+/// sample, the sample reduction's flag), rounded up.
 const TILE_OWN_BYTES: u64 = 64;
 /// Tile widths `auto` times beside the default, at the default halo
 /// (`kernel_choice::search_tile_shapes`): narrower tiles spread a small
@@ -120,12 +121,14 @@ impl TileGeometry {
     }
 
     /// Bytes of workgroup memory a tile holds in precision `T`: its
-    /// blocks' u, v and force, its columns' kept bits and the kernel's own
-    /// words.
+    /// blocks' u, v and force, its columns' kept bits, the slots of the
+    /// samples it records and the kernel's own words.
     pub fn workgroup_bytes<T: GpuReal>(&self) -> u64 {
         let per_block = std::mem::size_of::<[Coord<T>; 2]>() + 2 * std::mem::size_of::<[T; 2]>();
         let kept = 4 * super::layout::kept_words(self.span as usize) as u64;
-        self.blocks as u64 * per_block as u64 + kept + TILE_OWN_BYTES
+        let slots = super::options::workgroup_state_reduction_width::<T>() as u64
+            * std::mem::size_of::<super::layout::GpuSampleSums<T>>() as u64;
+        self.blocks as u64 * per_block as u64 + kept + slots + TILE_OWN_BYTES
     }
 
     /// Elements of each scratch buffer per scene of `blocks` blocks, `nx`
@@ -188,7 +191,8 @@ const SOFTWARE_LOOP_BUDGET: usize = 32_768;
 /// The most loop iterations one invocation of `threads` runs in a tiled
 /// dispatch of `geometry.halo` steps on `model` (counted as the persistent
 /// kernel's are: 10 a block for its bonds, a junction lane's junctions,
-/// eight lane sums a round), with loading and publishing the tile.
+/// eight lane sums a round, and a sample's tally and reduction), with
+/// loading and publishing the tile.
 pub fn loop_iterations(model: &Model, geometry: &TileGeometry, threads: u32) -> usize {
     let t = threads.max(1) as usize;
     let span = geometry.span as usize;
@@ -204,8 +208,13 @@ pub fn loop_iterations(model: &Model, geometry: &TileGeometry, threads: u32) -> 
     let blocks = (span * model.nz).div_ceil(t);
     let items = (span * lanes).div_ceil(t);
     let merges = span.div_ceil(t) * lanes.div_ceil(8).max(1);
-    let per_step = 3 + blocks * 10 + items * (1 + ns.div_ceil(lanes.max(1))) + merges;
-    let tile = 2 * blocks + 2 * (span * ns).div_ceil(t);
+    // A sample in the step: an interface block's junction tally (16 a
+    // round), the threads folded into the slots, the tree.
+    let slots = super::options::WORKGROUP_STATE_REDUCTION_WIDTH as usize;
+    let sample = ns.div_ceil(16) + 1 + t.div_ceil(slots) + slots.ilog2() as usize;
+    let per_step = 3 + blocks * 10 + items * (1 + ns.div_ceil(lanes.max(1))) + merges + sample;
+    // Loading and publishing the tile, and the search for its first sample.
+    let tile = 2 * blocks + 2 * (span * ns).div_ceil(t) + 12;
     geometry.halo as usize * per_step + tile
 }
 
@@ -230,7 +239,7 @@ pub fn software_fit(model: &Model, geometry: &TileGeometry, threads: u32) -> Res
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct TileChain {
     /// Rounds (dispatches of the unchained kernel) one dispatch runs at
-    /// most; a sample's step and the batch's end end one anyway.
+    /// most; the batch's end ends one anyway.
     pub rounds: usize,
     /// Polls a tile makes in one dispatch before it gives up
     /// (`CHAIN_POLLS`; `GpuStatus::stalled_tile`).
@@ -299,26 +308,22 @@ impl TileChain {
 }
 
 /// The step after the last of the dispatch that starts at step `first` of
-/// a batch of `steps` steps with samples at `sample_offsets` (ascending):
-/// after `halo` steps, at the batch's end, after the batch's first step
-/// (whose forces may be a snapshot's) and after a sample's step. The
+/// a batch of `steps` steps: after `halo` steps, at the batch's end, and
+/// after the batch's first step (whose forces may be a snapshot's). A
+/// sample ends none: the kernel records it in its step (tiled.wgsl). The
 /// engine writes a batch's ends to the kernel's `tile_ends`.
-pub fn dispatch_end(first: u64, steps: u64, halo: u64, sample_offsets: &[u64]) -> u64 {
-    let mut end = if first == 0 { 1 } else { first + halo }.min(steps);
-    if let Some(&sample) = sample_offsets.iter().find(|&&o| o >= first) {
-        end = end.min(sample + 1);
-    }
-    end
+pub fn dispatch_end(first: u64, steps: u64, halo: u64) -> u64 {
+    if first == 0 { 1 } else { first + halo }.min(steps)
 }
 
 /// The step after the last of each dispatch of a batch on `kernel`: one
 /// step each for the one-step kernels, `dispatch_end` for the tiled one.
-pub fn dispatch_ends(kernel: Kernel, steps: u64, halo: u64, sample_offsets: &[u64]) -> Vec<u64> {
+pub fn dispatch_ends(kernel: Kernel, steps: u64, halo: u64) -> Vec<u64> {
     let mut ends = Vec::new();
     let mut first = 0;
     while first < steps {
         let end = match kernel {
-            Kernel::Tiled => dispatch_end(first, steps, halo, sample_offsets),
+            Kernel::Tiled => dispatch_end(first, steps, halo),
             _ => first + 1,
         };
         ends.push(end);
@@ -333,25 +338,18 @@ pub const ROUND_ENDS_DISPATCH: u32 = 0x8000_0000;
 
 /// Whether each round of a batch (its end steps `ends`, from
 /// `dispatch_ends`) ends its dispatch: every round unchained; chained
-/// (`chain`), the round of a sample's step (the output kernels record
-/// after it), the batch's last, and any that would make a dispatch longer
+/// (`chain`), the batch's last, and any that would make a dispatch longer
 /// than `chain.rounds`.
-pub fn rounds_ending_dispatches(
-    ends: &[u64],
-    sample_offsets: &[u64],
-    chain: Option<TileChain>,
-) -> Vec<bool> {
+pub fn rounds_ending_dispatches(ends: &[u64], chain: Option<TileChain>) -> Vec<bool> {
     let Some(chain) = chain else {
         return vec![true; ends.len()];
     };
     let mut run = 0;
     ends.iter()
         .enumerate()
-        .map(|(d, &end)| {
+        .map(|(d, _)| {
             run += 1;
-            let last = d + 1 == ends.len()
-                || run == chain.rounds
-                || sample_offsets.binary_search(&(end - 1)).is_ok();
+            let last = d + 1 == ends.len() || run == chain.rounds;
             if last {
                 run = 0;
             }
@@ -457,39 +455,38 @@ mod tests {
         }
     }
 
+    /// A sample ends no dispatch: the tiled kernel records it in its step.
     #[test]
-    fn a_dispatch_ends_after_its_halo_the_first_step_a_sample_or_the_batch() {
-        let ends = dispatch_ends(Kernel::Tiled, 20, 4, &[6, 7, 15]);
-        assert_eq!(ends, vec![1, 5, 7, 8, 12, 16, 20]);
-        assert_eq!(dispatch_ends(Kernel::Tiled, 1, 4, &[]), vec![1]);
-        assert_eq!(dispatch_ends(Kernel::Tiled, 9, 4, &[]), vec![1, 5, 9]);
-        assert_eq!(dispatch_ends(Kernel::OneStep, 3, 4, &[1]), vec![1, 2, 3]);
-        // A sample at the first step ends the first dispatch anyway.
-        assert_eq!(dispatch_ends(Kernel::Tiled, 6, 8, &[0, 5]), vec![1, 6]);
+    fn a_dispatch_ends_after_its_halo_the_first_step_or_the_batch() {
+        assert_eq!(
+            dispatch_ends(Kernel::Tiled, 20, 4),
+            vec![1, 5, 9, 13, 17, 20]
+        );
+        assert_eq!(dispatch_ends(Kernel::Tiled, 1, 4), vec![1]);
+        assert_eq!(dispatch_ends(Kernel::Tiled, 9, 4), vec![1, 5, 9]);
+        assert_eq!(dispatch_ends(Kernel::OneStep, 3, 4), vec![1, 2, 3]);
+        assert_eq!(dispatch_ends(Kernel::Tiled, 6, 8), vec![1, 6]);
     }
 
-    /// Chained, a dispatch runs rounds up to a sample's step, the batch's
-    /// end or its most rounds; unchained, a round is a dispatch.
+    /// Chained, a dispatch runs rounds up to the batch's end or its most
+    /// rounds; unchained, a round is a dispatch.
     #[test]
-    fn a_chained_dispatch_ends_at_a_sample_the_batch_or_its_most_rounds() {
-        let samples = [6, 7, 15];
-        let ends = dispatch_ends(Kernel::Tiled, 30, 4, &samples);
-        assert_eq!(ends, vec![1, 5, 7, 8, 12, 16, 20, 24, 28, 30]);
+    fn a_chained_dispatch_ends_at_the_batch_or_its_most_rounds() {
+        let ends = dispatch_ends(Kernel::Tiled, 30, 4);
+        assert_eq!(ends, vec![1, 5, 9, 13, 17, 21, 25, 29, 30]);
         let chain = TileChain {
             rounds: 3,
             polls: 1,
             pause: false,
         };
-        let ending = rounds_ending_dispatches(&ends, &samples, Some(chain));
+        let ending = rounds_ending_dispatches(&ends, Some(chain));
         let t = true;
         let f = false;
-        assert_eq!(ending, vec![f, f, t, t, f, t, f, f, t, t]);
-        assert!(rounds_ending_dispatches(&ends, &samples, None)
-            .iter()
-            .all(|&e| e));
+        assert_eq!(ending, vec![f, f, t, f, f, t, f, f, t]);
+        assert!(rounds_ending_dispatches(&ends, None).iter().all(|&e| e));
         let words = tile_end_words(&ends, &ending);
         assert_eq!(words[0], 1);
-        assert_eq!(words[2], 7 | ROUND_ENDS_DISPATCH);
+        assert_eq!(words[2], 9 | ROUND_ENDS_DISPATCH);
     }
 
     /// Table S1 on a software adapter leaves its chained tiles polls to
