@@ -92,9 +92,13 @@ fn chained_tiles_are_the_tiled_kernel_bit_for_bit() {
     );
 }
 
-/// A sample's step ends a chained dispatch, so the output kernels record
-/// the same instants from the same state: chained tiles' device samples
-/// are the unchained kernel's, and one sample later is flagged.
+/// The tiled kernel records a sample in the sample's step, so no sample
+/// ends a dispatch: with a sample planned every few steps (the fast
+/// cadence's), chained or not, it makes the step dispatches it makes
+/// without output (and a forces-only pass where the run ends at a
+/// sample), and one `tile_record_finish` a batch. Chained tiles'
+/// device samples are the unchained kernel's, and one sample later is
+/// flagged.
 #[test]
 fn chained_tiles_record_the_samples_of_the_tiled_kernel() {
     let s = scenario(&[]);
@@ -102,14 +106,40 @@ fn chained_tiles_record_the_samples_of_the_tiled_kernel() {
     let plan = plan(&m, &s);
     let end = m.prep_steps + 1500;
     let shape = TileShape { width: 16, halo: 4 };
-    let samples = |chained| {
+    let run = |chained, record| {
         let mut e = tiled(&m, shape, chained, GpuOutput::Device);
-        assert!(e.record_samples(&plan).unwrap());
+        if record {
+            assert!(e.record_samples(&plan).unwrap());
+        }
         advance_to(&mut e, end).unwrap();
-        e.take_samples()
+        let counts = (e.dispatches().unwrap(), e.output_dispatches().unwrap());
+        (e.take_samples(), counts)
     };
-    let plain = samples(false);
-    let chained = samples(true);
+    let mut recorded = Vec::new();
+    for chained in [false, true] {
+        let (_, (quiet, none)) = run(chained, false);
+        let (samples, (steps, finishes)) = run(chained, true);
+        println!(
+            "chained {chained}: {} samples; {steps} step dispatches recording, {quiet} \
+             without; {finishes} record dispatches",
+            samples.len()
+        );
+        assert_eq!(none, 0);
+        // The run's last step, where it is a sample, takes a forces-only
+        // pass of its own (a dispatch).
+        let last = plan.due(end).any() as u64;
+        assert_eq!(
+            steps,
+            quiet + last,
+            "chained {chained}: samples ended dispatches"
+        );
+        assert!(
+            (1..=8).contains(&finishes),
+            "chained {chained}: {finishes} record dispatches in 1500 steps"
+        );
+        recorded.push(samples);
+    }
+    let (plain, chained) = (&recorded[0], &recorded[1]);
     assert!(plain.len() >= 8, "{} samples", plain.len());
     assert!(
         chained == plain,

@@ -259,11 +259,11 @@ fn the_tiled_kernel_refuses_what_it_cannot_step() {
     assert!(err.contains("tile halo 0"), "{err}");
 }
 
-/// A lattice above `RECORD_SMALL_BLOCKS` (257 × 65) records its samples
-/// in two output dispatches after a tiled dispatch (the tiled kernel has no
-/// recording variant to sum the kinetic energy in its step): the samples
-/// equal the CPU twin on host snapshots of the same kernel, and the twin
-/// a step later is flagged.
+/// A lattice above `RECORD_SMALL_BLOCKS` (257 × 65, 65 tiles of 4
+/// columns, bulk fields among the samples) records its samples in the
+/// tiled kernel's steps as a small one does: the samples equal the CPU
+/// twin on host snapshots of the same kernel, and the twin a step later is
+/// flagged.
 #[test]
 fn a_large_lattice_on_the_tiled_kernel_records_its_samples_on_the_device() {
     let s = large_lattice();
