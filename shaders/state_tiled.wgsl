@@ -3,8 +3,10 @@
 // holds them with a halo of up to TILE_HALO columns on each side in
 // workgroup memory, at local slot row · TILE_SPAN + (column − tile_lo).
 // In storage the state is the one-step kernels' pair of copies: a
-// dispatch reads copy (parity + first step) and leaves steps end − 1 and
-// end in their copies as a run of one-step dispatches would. A neighbour
+// dispatch reads copy (parity + first step) and leaves step end in its
+// copy, as a run of one-step dispatches would (the other copy, which
+// only the output kernels after a one-step dispatch read, is left as it
+// was: the tiled kernel records its samples itself). A neighbour
 // overwrites its columns meanwhile, so the halo comes from a published
 // copy instead (pub_disp, pub_vel: two copies of the lattice, of which
 // only the columns near a tile's edges are used): dispatch d of a batch

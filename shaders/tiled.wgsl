@@ -335,10 +335,9 @@ fn store_tile_end(t: u32, end: u32) {
 
 // Round d of the batch: steps tile_ends[d − 1] .. tile_ends[d] (0 for the
 // first), reading published copy d mod 2 and publishing in the other.
-// `first`: its own columns come from storage; `last`: the state its last
-// step starts from goes to storage (output samples read it), as does its
-// end state after it (`store_tile_end`). Returns its end step plus one, or
-// 0 where the scene has stopped (a blow-up, a stalled tile): no step.
+// `first`: its own columns come from storage; `last`: its end state goes
+// to storage after it (`store_tile_end`). Returns its end step plus one,
+// or 0 where the scene has stopped (a blow-up, a stalled tile): no step.
 fn tile_round(t: u32, d: u32, lanes: u32, stride: u32, first: bool, last: bool) -> u32 {
     if t == 0u {
         let start = select(tile_ends[max(d, 1u) - 1u] & ~ROUND_ENDS_DISPATCH, 0u, d == 0u);
@@ -466,11 +465,6 @@ fn tile_round(t: u32, d: u32, lanes: u32, stride: u32, first: bool, last: bool) 
                 acc = combine(acc, block_sample(i, e, flags[i], u, v, f, friction, normal, interface_planned(e)));
             }
             if update {
-                // The last step's starting state stays in its copy, where a
-                // run of one-step dispatches leaves it (output samples read it).
-                if last && s + 1u == plan.y && tile_owns(ix) {
-                    store_copy(i, copy_of(s), load_disp_at(i, ix, iz), load_vel_at(i, ix, iz));
-                }
                 verlet(i, ix, iz, f, friction, ld, s);
             }
             // Its kept bit for step s + 1 (whose columns this step's

@@ -115,7 +115,9 @@ impl<T: GpuReal> GpuEngine<T> {
                 Kernel::OneStep | Kernel::OneStepLanes | Kernel::Tiled => {
                     // A dispatch per step, or the tiled kernel's of up to
                     // its halo's steps after one gather; a sample's step
-                    // always ends a dispatch.
+                    // ends a one-step kernel's dispatch (its output
+                    // kernels record after it), and none of the tiled
+                    // kernel's (it records in its steps).
                     if let Some(tiled) = tiled {
                         pass.set_bind_group(1, &self.batch_group, &[0]);
                         pass.set_pipeline(&tiled.gather);

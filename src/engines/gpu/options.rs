@@ -174,10 +174,11 @@ pub struct GpuOptions {
     /// times each launch recording at them, the records dropped. Every
     /// multiple of the fast cadence is a planned sample, whether the
     /// interface turns out fast or not (the device decides at each
-    /// sample): at Table S1's defaults every 4 or 5 steps. There a tiled
-    /// launch, chained or not, ends a dispatch; a one-step launch adds
-    /// the record dispatches; a persistent one reduces the sample across
-    /// its workgroup. So output weighs on the launches unequally. None:
+    /// sample): at Table S1's defaults every 4 or 5 steps. There a
+    /// one-step launch adds the record dispatches; a persistent one
+    /// reduces the sample across its workgroup, and a tiled one (chained
+    /// or not) across each tile's, with a dispatch a batch that adds the
+    /// tiles' partials. So output weighs on the launches unequally. None:
     /// timed without output.
     pub samples: Option<SamplePlan>,
 }

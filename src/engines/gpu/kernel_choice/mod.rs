@@ -5,7 +5,8 @@
 //! what each timed advance pays once (`timing::marginal_step_seconds`).
 //! A run with an output file is timed recording its samples on the
 //! device at its cadences (`GpuOptions::samples`): output weighs on the
-//! launches unequally (a tiled launch ends its dispatch at every sample).
+//! launches unequally (a one-step launch adds record dispatches, a
+//! persistent or tiled one reduces each sample in its workgroups).
 //! The choice and its figures are cached per
 //! adapter, driver, precision, lattice, compiled terms, output cadences
 //! and kernel sources,
