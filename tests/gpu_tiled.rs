@@ -325,3 +325,59 @@ fn halo_copies_keep_their_junction_sums_apart() {
     assert_eq!(other.kept_halo_junction_records().unwrap(), 0);
     assert_eq!(other.kept_junction_blocks(0).unwrap(), m.nx);
 }
+
+/// A sample every step (the global cadence at dt): more samples than a
+/// tiled batch keeps partials for (`TILED_SAMPLES_A_BATCH`, 256), so the
+/// batches are cut short, through 600 steps of ruptures. Every step's
+/// sample equals the CPU twin on host snapshots of the same kernel, and
+/// the twin a step later is flagged.
+#[test]
+fn a_sample_every_step_cuts_the_tiled_batches_and_records_every_one() {
+    let small: &[&str] = &slipfront::app::verify::SMALL_SCENE;
+    let set: Vec<String> = [small, &["loading.drive.velocity=0.4"]]
+        .concat()
+        .iter()
+        .map(|s| s.to_string())
+        .collect();
+    let mut s = Scenario::parse(DEFAULT_SCENARIO, "test", &set).unwrap();
+    let m0 = Model::from_scenario(&s, false).unwrap();
+    s.output.global_interval = m0.dt;
+    let m = Model::from_scenario(&s, false).unwrap();
+    let plan = plan(&m, &s);
+    assert_eq!(plan.every_global, 1);
+    let engine = |output| {
+        let opts = GpuOptions {
+            path: GpuPath::Tiled,
+            output,
+            tile: Some(TileShape { width: 8, halo: 4 }),
+            ..GpuOptions::default()
+        };
+        GpuEngine::with_options(&m, opts).expect("a GPU adapter (lavapipe in CI)")
+    };
+    let mut dev = engine(GpuOutput::Device);
+    assert!(dev.record_samples(&plan).unwrap());
+    let start = m.prep_steps + 2000;
+    advance_to(&mut dev, start).unwrap();
+    dev.take_samples();
+    advance_to(&mut dev, start + 600).unwrap();
+    let samples = dev.take_samples();
+    let steps: Vec<u64> = samples.iter().map(|x| x.step).collect();
+    let expected: Vec<u64> = (start + 1..=start + 600).collect();
+    assert_eq!(steps, expected, "a sample every step");
+    assert!(
+        samples.last().unwrap().sums.ruptures > samples[0].sums.ruptures,
+        "junctions broke while sampled"
+    );
+    // Three batches of 256 samples at most, each with its finish.
+    assert!(dev.output_dispatches().unwrap() >= 3);
+    let mut host = engine(GpuOutput::Host);
+    let (twin, later) = twins(&m, &mut host, &samples);
+    let (err, field) = worst_error(&twin, &samples);
+    println!(
+        "{} samples: device against twin {err:.2e} ({field})",
+        samples.len()
+    );
+    assert!(err < 1e-5, "{field} off by {err:.2e} of its scale");
+    let (shifted, field) = worst_error(&later, &samples);
+    assert!(shifted > 1e-4, "a one-step shift must be flagged ({field})");
+}

@@ -24,6 +24,13 @@ use wgpu::util::DeviceExt;
 /// a batch ends early rather than go past it (one bulk field always fits).
 const ROWS_BUDGET: u64 = 64 << 20;
 
+/// The most samples of a batch of the tiled kernel, which keeps a partial
+/// per tile for each: a batch ends early rather than plan more. At
+/// Table S1's cadences (a planned sample every 4 or 5 steps) a batch of
+/// `ONE_STEP_BATCH` steps plans about 230; a quarter of the other kernels'
+/// room keeps an ensemble's partials a quarter as large.
+const TILED_SAMPLES_A_BATCH: u32 = 256;
+
 /// The state buffers the output kernels read.
 pub struct StateBuffers<'a> {
     pub consts: &'a wgpu::Buffer,
@@ -218,7 +225,10 @@ impl<T: GpuReal> Recorder<T> {
         let real = size_of::<T>() as u64;
         let interface_bytes = nx * RECORD_INTERFACE_WORDS as u64 * real;
         let bulk_bytes = n * RECORD_BULK_WORDS as u64 * real;
-        let max_entries = ONE_STEP_BATCH as u32 + 1;
+        let max_entries = match site {
+            RecordSite::Tiles { .. } => TILED_SAMPLES_A_BATCH,
+            _ => ONE_STEP_BATCH as u32 + 1,
+        };
         let budget = ROWS_BUDGET / 2 / scenes;
         let max_interface = (budget / interface_bytes).clamp(1, max_entries as u64) as u32;
         let max_bulk = if plan.every_bulk > 0 {
