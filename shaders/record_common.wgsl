@@ -113,8 +113,7 @@ fn block_sample(
     row: bool,
 ) -> SampleSums {
     let v = sampled_velocity(fl, v_half, f, friction);
-    var s = no_sums();
-    s.kinetic = v.x * v.x + v.y * v.y;
+    var s = block_sample_besides_interface(i, e, u, v_half, v, f, friction);
     if i < c.nx {
         var pinned = 0u;
         let slide_i = slide[interface_base() + i];
@@ -159,6 +158,26 @@ fn block_sample(
             rows[at + 5u] = v.x;
         }
     }
+    return s;
+}
+
+// What block i adds to sample e besides its interface part (block_sample):
+// its kinetic energy (from v, its velocity at the sample's instant), the
+// driven block's displacement, the top row's reaction, its bulk field if
+// due. All a block off the interface adds: the tiled kernel sums those
+// blocks with this alone, which holds fewer registers than block_sample's
+// junction tally.
+fn block_sample_besides_interface(
+    i: u32,
+    e: RecordEntry,
+    u: Disp,
+    v_half: vec2<real>,
+    v: vec2<real>,
+    f: vec2<real>,
+    friction: real,
+) -> SampleSums {
+    var s = no_sums();
+    s.kinetic = v.x * v.x + v.y * v.y;
     if i == plans[scene].driven_block {
         s.driven_ux_hi = coord_hi(u.x);
         s.driven_ux_lo = coord_lo(u.x);

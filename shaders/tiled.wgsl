@@ -83,6 +83,18 @@ var<workgroup> tile_neighbours_done: u32;
 // The next sample of the round: its index among the batch's and its step
 // (NO_SAMPLE: none).
 var<workgroup> tile_next_sample: vec2<u32>;
+// What a sample reads of each own interface block, kept from the update
+// phase (which computes its friction, then overwrites its u and v), and
+// the block's part of the sample, column by column.
+struct InterfaceInputs {
+    u: Disp,
+    v_half: vec2<real>,
+    f: vec2<real>,
+    friction: real,
+    normal: real,
+}
+var<workgroup> tile_interface_inputs: array<InterfaceInputs, TILE_WIDTH>;
+var<workgroup> tile_interface_sums: array<SampleSums, TILE_WIDTH>;
 
 // Publishes this tile's edge columns (every row: those in a neighbour's
 // halo) in published copy `copy`: u and v from the tile's state, the
@@ -378,11 +390,6 @@ fn tile_round(t: u32, d: u32, lanes: u32, stride: u32, first: bool, last: bool) 
         // Step s is a sample: its own columns' part of it, from the state
         // before their update.
         let sampling = next.y == s;
-        var e: RecordEntry;
-        if sampling {
-            e = record_entries[next.x];
-        }
-        var acc = no_sums();
         if !ready {
             if BOND_PATCHES {
                 // Patches from column a; the last is half one where cols
@@ -428,6 +435,9 @@ fn tile_round(t: u32, d: u32, lanes: u32, stride: u32, first: bool, last: bool) 
         }
         storageBarrier();
         workgroupBarrier();
+        if sampling {
+            sample_rows_above(t, record_entries[next.x], ready);
+        }
         for (var b = grid_walk(t, TILE_THREADS, cols); b.row < c.nz; grid_walk_next(&b)) {
             let ix = a + b.column;
             let iz = b.row;
@@ -455,14 +465,11 @@ fn tile_round(t: u32, d: u32, lanes: u32, stride: u32, first: bool, last: bool) 
                     }
                 }
             }
-            if sampling && tile_owns(ix) {
-                var normal: real = 0.0;
-                if iz == 0u {
-                    normal = contact[interface_base() + ix].y;
-                }
-                let u = load_disp_at(i, ix, iz);
-                let v = load_vel_at(i, ix, iz);
-                acc = combine(acc, block_sample(i, e, flags[i], u, v, f, friction, normal, interface_planned(e)));
+            // What the sample reads of an own interface block, before its
+            // update: the update computes its friction.
+            if sampling && iz == 0u && tile_owns(ix) {
+                let normal = contact[interface_base() + ix].y;
+                tile_interface_inputs[ix - tile_x0] = InterfaceInputs(load_disp_at(i, ix, 0u), load_vel_at(i, ix, 0u), f, friction, normal);
             }
             if update {
                 verlet(i, ix, iz, f, friction, ld, s);
@@ -474,11 +481,7 @@ fn tile_round(t: u32, d: u32, lanes: u32, stride: u32, first: bool, last: bool) 
             }
         }
         if sampling {
-            reduce_threads(t, TILE_THREADS, acc);
-            if t == 0u {
-                sums[plans[scene].partials_offset + e.sums_slot * tile_count() + tile] = wg_sums[0];
-                tile_next_sample = sample_at_or_after(next.x + 1u, s + 1u);
-            }
+            sample_interface(t, next, s);
             next = workgroupUniformLoad(&tile_next_sample);
         }
         storageBarrier();
@@ -486,6 +489,54 @@ fn tile_round(t: u32, d: u32, lanes: u32, stride: u32, first: bool, last: bool) 
     }
     publish_edges(t, (d + 1u) & 1u);
     return plan.y + 1u;
+}
+
+// The part of sample e of this tile's own blocks above the interface row,
+// from the state before their update (no friction acts there), reduced
+// across the tile into wg_sums[0]. A pass of its own, so that no sample's
+// sums are held through the update (the interface row's part needs the
+// friction the update computes: sample_interface).
+fn sample_rows_above(t: u32, e: RecordEntry, ready: bool) {
+    var acc = no_sums();
+    for (var b = grid_walk(t, TILE_THREADS, tile_x1 - tile_x0); b.row + 1u < c.nz; grid_walk_next(&b)) {
+        let ix = tile_x0 + b.column;
+        let iz = b.row + 1u;
+        let i = iz * c.nx + ix;
+        var f: vec2<real>;
+        if ready {
+            f = force[block_base() + i];
+        } else {
+            f = tile_force[tile_slot_at(ix, iz)];
+        }
+        let v_half = load_vel_at(i, ix, iz);
+        let v = sampled_velocity(flags[i], v_half, f, 0.0);
+        acc = combine(acc, block_sample_besides_interface(i, e, load_disp_at(i, ix, iz), v_half, v, f, 0.0));
+    }
+    reduce_threads(t, TILE_THREADS, acc);
+}
+
+// The part of sample `next` (index, step s) of this tile's own interface
+// blocks, from what the update phase kept of them, added to the rows
+// above (wg_sums[0]) in column order: the tile's partial. Thread 0 then
+// finds the next sample.
+fn sample_interface(t: u32, next: vec2<u32>, s: u32) {
+    workgroupBarrier();
+    let e = record_entries[next.x];
+    let own = tile_x1 - tile_x0;
+    for (var k = t; k < own; k += TILE_THREADS) {
+        let x = tile_interface_inputs[k];
+        let ix = tile_x0 + k;
+        tile_interface_sums[k] = block_sample(ix, e, flags[ix], x.u, x.v_half, x.f, x.friction, x.normal, interface_planned(e));
+    }
+    workgroupBarrier();
+    if t == 0u {
+        var total = wg_sums[0];
+        for (var k = 0u; k < own; k++) {
+            total = combine(total, tile_interface_sums[k]);
+        }
+        sums[plans[scene].partials_offset + e.sums_slot * tile_count() + tile] = total;
+        tile_next_sample = sample_at_or_after(next.x + 1u, s + 1u);
+    }
 }
 
 // The first of the batch's samples from index `first` on whose step is

@@ -126,8 +126,12 @@ impl TileGeometry {
     pub fn workgroup_bytes<T: GpuReal>(&self) -> u64 {
         let per_block = std::mem::size_of::<[Coord<T>; 2]>() + 2 * std::mem::size_of::<[T; 2]>();
         let kept = 4 * super::layout::kept_words(self.span as usize) as u64;
-        let slots = super::options::workgroup_state_reduction_width::<T>() as u64
-            * std::mem::size_of::<super::layout::GpuSampleSums<T>>() as u64;
+        // The sample reduction's slots, and of each own interface block
+        // what a sample reads (u, v, force, friction, normal) and its part.
+        let sums = std::mem::size_of::<super::layout::GpuSampleSums<T>>() as u64;
+        let inputs = (std::mem::size_of::<Coord<T>>() + 6 * std::mem::size_of::<T>()) as u64;
+        let slots = super::options::workgroup_state_reduction_width::<T>() as u64 * sums
+            + self.width as u64 * (sums + inputs.next_multiple_of(16));
         self.blocks as u64 * per_block as u64 + kept + slots + TILE_OWN_BYTES
     }
 
