@@ -71,6 +71,12 @@ const ROUND_ENDS_DISPATCH: u32 = 0x80000000u;
 @group(0) @binding(25) var<storage, read> record_entries: array<RecordEntry>;
 // A step offset no sample has.
 const NO_SAMPLE: u32 = 0xffffffffu;
+// The recording variant (the engine builds it for a run that records its
+// samples on the device): without it the sample code is compiled out, and
+// a run without output steps as fast as a kernel without it (llvmpipe
+// steps a kernel with the sample's barriers in its loop at about half the
+// speed, samples or not).
+override TILE_RECORDS: bool = false;
 
 // The forces of the held blocks at the step under way.
 var<workgroup> tile_force: array<vec2<real>, TILE_BLOCKS>;
@@ -361,10 +367,13 @@ fn tile_round(t: u32, d: u32, lanes: u32, stride: u32, first: bool, last: bool) 
         return 0u;
     }
     let update = batch.forces_only == 0u;
-    if t == 0u {
-        tile_next_sample = sample_at_or_after(0u, plan.x);
+    var next = vec2<u32>(0u, NO_SAMPLE);
+    if TILE_RECORDS {
+        if t == 0u {
+            tile_next_sample = sample_at_or_after(0u, plan.x);
+        }
+        next = workgroupUniformLoad(&tile_next_sample);
     }
-    var next = workgroupUniformLoad(&tile_next_sample);
     load_tile(t, plan.x, d & 1u, first);
     storageBarrier();
     workgroupBarrier();
@@ -389,7 +398,7 @@ fn tile_round(t: u32, d: u32, lanes: u32, stride: u32, first: bool, last: bool) 
         let ready = batch.forces_ready != 0u && s == 0u;
         // Step s is a sample: its own columns' part of it, from the state
         // before their update.
-        let sampling = next.y == s;
+        let sampling = TILE_RECORDS && next.y == s;
         if !ready {
             if BOND_PATCHES {
                 // Patches from column a; the last is half one where cols

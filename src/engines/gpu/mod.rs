@@ -160,8 +160,9 @@ pub struct GpuEngine<T: GpuReal = f32> {
     /// Steps the persistent kernel has been asked to run (mod 2³²).
     persistent_steps: u32,
     variant: Variant,
-    /// The step pipeline's override constants (its recording variant adds
-    /// `RECORD_KINETIC`).
+    /// The step pipeline's override constants (the one-step kernels'
+    /// recording variant adds `RECORD_KINETIC`; the tiled kernel's,
+    /// `TILE_RECORDS`, replaces its pipeline once it records).
     constants: Vec<(&'static str, f64)>,
     /// Where the kernel's junction lanes merge first (`GpuOptions::lane_shuffle`)
     /// and which run-time checks its modules carry (`GpuOptions::shader_checks`).
@@ -591,6 +592,14 @@ impl<T: GpuReal> GpuEngine<T> {
                     constants.push(("RECORD_KINETIC", 1.0));
                     let pipeline = self.ctx.pipeline::<T>(self.kernel, self.build, &constants);
                     self.record_step = Some(pipeline);
+                }
+                // The tiled kernel's recording variant steps every batch
+                // from now on (shaders/tiled.wgsl TILE_RECORDS).
+                if self.kernel == Kernel::Tiled {
+                    self.constants.push(("TILE_RECORDS", 1.0));
+                    self.pipeline =
+                        self.ctx
+                            .pipeline::<T>(self.kernel, self.build, &self.constants);
                 }
                 self.recorder = Some(rec);
                 Ok(true)
