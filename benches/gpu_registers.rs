@@ -29,7 +29,9 @@
 //! only those launches.
 //! SLIPFRONT_GPU_REGISTERS_SET=TWO_LANES_A_ROUND=0,KEEP_JUNCTION_SUMS=0
 //! compiles every kernel with those override constants changed, where it
-//! has them: what a kernel's options cost in registers.
+//! has them: what a kernel's options cost in registers (TILE_RECORDS=1:
+//! the tiled kernel's recording variant, which a run with an output file
+//! steps with).
 
 use slipfront::engines::gpu::compile::KernelSource;
 use slipfront::engines::gpu::driver_stats::{
@@ -166,6 +168,10 @@ impl Table<'_> {
             for (name, value) in &self.set {
                 if let Some(slot) = k.constants.iter_mut().find(|(n, _)| n == name) {
                     slot.1 = *value;
+                } else if k.source.contains(&format!("override {name}:")) {
+                    // One the module declares and the pipeline leaves at
+                    // its default (a recording variant's: TILE_RECORDS).
+                    k.constants.push((name.clone(), *value));
                 }
             }
             let k = &k;
