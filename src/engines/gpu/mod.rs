@@ -572,7 +572,6 @@ impl<T: GpuReal> GpuEngine<T> {
             (k, _) if k.is_persistent() => recorder::RecordSite::Persistent,
             _ => recorder::RecordSite::Dispatches {
                 stride: record_entry_stride(self.offset_stride),
-                steps_sum_kinetic: true,
                 // The one-step kernels' partials follow their patched threads.
                 partials: recorder::Partials::of(model, self.bond_patches),
             },

@@ -81,13 +81,13 @@ pub struct Recorder<T: GpuReal> {
     /// Bytes between entries: the dynamic-offset alignment for the output
     /// kernels, the entry's size for the persistent kernel (an array).
     stride: u64,
-    /// Workgroups of `record_sample` (x, y); None: one `record_small`.
+    /// Workgroups of `record_sample` (x, y); None: one `record_small`, or
+    /// no output kernel (the persistent and tiled kernels record in their
+    /// steps). With them, the step dispatch of a sample sums each
+    /// partial's kinetic energy (the one-step kernels' recording variant):
+    /// then a sample without a bulk field takes `record_special` over
+    /// these partials, not `record_sample`.
     groups: Option<(u32, u32)>,
-    /// Whether the step dispatch of a sample sums each partial's kinetic
-    /// energy (the one-step kernels, on lattices recorded in two
-    /// dispatches): then a sample without a bulk field takes
-    /// `record_special` over these partials, not `record_sample`.
-    kinetic_in_steps: bool,
     special_count: u32,
     max_entries: u32,
     max_interface: u32,
@@ -177,16 +177,11 @@ impl Partials {
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum RecordSite {
     /// By the output kernels, after a sample's step dispatch (the one-step
-    /// kernels). `stride`: the dynamic-offset alignment of the entries;
-    /// `steps_sum_kinetic`: the step kernel has the recording variant
-    /// (`RECORD_KINETIC`), which a large lattice's samples then use;
-    /// `partials`: how the partials split the lattice (as the step
-    /// kernel's workgroups do).
-    Dispatches {
-        stride: u64,
-        steps_sum_kinetic: bool,
-        partials: Partials,
-    },
+    /// kernels, whose recording variant `RECORD_KINETIC` a large lattice's
+    /// samples then use). `stride`: the dynamic-offset alignment of the
+    /// entries; `partials`: how the partials split the lattice (as the
+    /// step kernel's workgroups do).
+    Dispatches { stride: u64, partials: Partials },
     /// Inside the persistent kernel's loop, which reads the entries as an
     /// array.
     Persistent,
@@ -208,16 +203,14 @@ impl<T: GpuReal> Recorder<T> {
         site: RecordSite,
         checks: ShaderChecks,
     ) -> Result<Recorder<T>, String> {
-        let (stride, steps_sum_kinetic, layout) = match site {
-            RecordSite::Dispatches {
-                stride,
-                steps_sum_kinetic,
-                partials,
-            } => (Some(stride), steps_sum_kinetic, partials),
-            _ => (None, false, Partials::of(&models[0], false)),
+        // The others read the entries as an array.
+        let (stride, layout) = match site {
+            RecordSite::Dispatches { stride, partials } => (stride, partials),
+            _ => (
+                size_of::<GpuRecordEntry>() as u64,
+                Partials::of(&models[0], false),
+            ),
         };
-        let stride_given = stride.is_some();
-        let stride = stride.unwrap_or(size_of::<GpuRecordEntry>() as u64);
         let device = &ctx.device;
         let model = &models[0];
         let scenes = models.len() as u64;
@@ -261,7 +254,6 @@ impl<T: GpuReal> Recorder<T> {
             RecordSite::Persistent => (0, None),
             RecordSite::Tiles { tiles } => (max_entries * tiles, None),
         };
-        let kinetic_in_steps = groups.is_some() && stride_given && steps_sum_kinetic;
         let special = layout.special(models);
         let special_groups = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("record special groups"),
@@ -377,7 +369,6 @@ impl<T: GpuReal> Recorder<T> {
             entry_group,
             stride,
             groups,
-            kinetic_in_steps,
             special_count: special.len() as u32,
             max_entries,
             max_interface,
@@ -502,13 +493,13 @@ impl<T: GpuReal> Recorder<T> {
     /// `RECORD_KINETIC`): lattices recorded in two dispatches, when no
     /// bulk field is due (`record_sample` writes every partial then).
     pub fn kinetic_in_step(&self, entry: &GpuRecordEntry) -> bool {
-        self.kinetic_in_steps && entry.channels & RECORD_BULK == 0
+        self.kinetic_in_steps() && entry.channels & RECORD_BULK == 0
     }
 
     /// Whether any sample's step dispatch may sum kinetic energy (the
     /// engine then builds the recording variant of its step kernel).
     pub fn kinetic_in_steps(&self) -> bool {
-        self.kinetic_in_steps
+        self.groups.is_some()
     }
 
     /// Records sample `k` of the batch, `entry`, (one or two dispatches)
