@@ -30,7 +30,8 @@
 //   decides, sample by sample in order, which were due.
 // - Chained tiles (TILE_CHAINED; GpuOptions::chained_tiles): one dispatch
 //   runs several of those dispatches' rounds in turn, up to the round
-//   whose end carries ROUND_ENDS_DISPATCH (the batch's end). Before its round k > 0, a tile waits until every tile whose
+//   whose end carries ROUND_ENDS_DISPATCH (the batch's end). Before its
+//   round k > 0, a tile waits until every tile whose
 //   columns reach into its halo has finished round k − 1 (their counters
 //   in tile_progress), so it reads what the next dispatch would have read;
 //   its neighbours wait on it in turn before they overwrite the copy it
