@@ -6,6 +6,7 @@
 
 use slipfront::engines::gpu::tiles::TileShape;
 use slipfront::engines::gpu::{GpuEngine, GpuOptions, GpuOutput, GpuPath};
+use slipfront::engines::Sample;
 use slipfront::model::scenario::{Scenario, DEFAULT_SCENARIO};
 use slipfront::{advance_to, Engine, Model, Snapshot};
 
@@ -271,31 +272,14 @@ fn a_large_lattice_on_the_tiled_kernel_records_its_samples_on_the_device() {
     assert!(m.n_blocks() > slipfront::engines::gpu::RECORD_SMALL_BLOCKS);
     let plan = plan(&m, &s);
     // 8 columns of 65 rows fit lavapipe's 32 KB of workgroup memory.
-    let engine = |output| {
-        let opts = GpuOptions {
-            path: GpuPath::Tiled,
-            output,
-            tile: Some(TileShape { width: 4, halo: 2 }),
-            ..GpuOptions::default()
-        };
-        GpuEngine::with_options(&m, opts).expect("a GPU adapter (lavapipe in CI)")
-    };
+    let engine = |output| tiled_recording(&m, TileShape { width: 4, halo: 2 }, output);
     let mut dev = engine(GpuOutput::Device);
     assert!(dev.record_samples(&plan).unwrap());
     advance_to(&mut dev, m.total_steps()).unwrap();
     let samples = dev.take_samples();
     assert!(samples.len() >= 8, "{} samples", samples.len());
     assert!(samples.iter().any(|x| x.bulk.is_some()));
-    let mut host = engine(GpuOutput::Host);
-    let (twin, later) = twins(&m, &mut host, &samples);
-    let (err, field) = worst_error(&twin, &samples);
-    println!(
-        "{} samples: device against twin {err:.2e} ({field})",
-        samples.len()
-    );
-    assert!(err < 1e-5, "{field} off by {err:.2e} of its scale");
-    let (shifted, field) = worst_error(&later, &samples);
-    assert!(shifted > 1e-4, "a one-step shift must be flagged ({field})");
+    assert_samples_match_the_twin(&m, &mut engine(GpuOutput::Host), &samples);
 }
 
 /// The halo copies keep their junction sums apart from their owner's
@@ -345,15 +329,7 @@ fn a_sample_every_step_cuts_the_tiled_batches_and_records_every_one() {
     let m = Model::from_scenario(&s, false).unwrap();
     let plan = plan(&m, &s);
     assert_eq!(plan.every_global, 1);
-    let engine = |output| {
-        let opts = GpuOptions {
-            path: GpuPath::Tiled,
-            output,
-            tile: Some(TileShape { width: 8, halo: 4 }),
-            ..GpuOptions::default()
-        };
-        GpuEngine::with_options(&m, opts).expect("a GPU adapter (lavapipe in CI)")
-    };
+    let engine = |output| tiled_recording(&m, TileShape { width: 8, halo: 4 }, output);
     let mut dev = engine(GpuOutput::Device);
     assert!(dev.record_samples(&plan).unwrap());
     let start = m.prep_steps + 2000;
@@ -370,14 +346,30 @@ fn a_sample_every_step_cuts_the_tiled_batches_and_records_every_one() {
     );
     // Three batches of 256 samples at most, each with its finish.
     assert!(dev.output_dispatches().unwrap() >= 3);
-    let mut host = engine(GpuOutput::Host);
-    let (twin, later) = twins(&m, &mut host, &samples);
-    let (err, field) = worst_error(&twin, &samples);
+    assert_samples_match_the_twin(&m, &mut engine(GpuOutput::Host), &samples);
+}
+
+/// The tiled kernel of `shape` on `m`, its samples taken as `output` says.
+fn tiled_recording(m: &Model, shape: TileShape, output: GpuOutput) -> GpuEngine {
+    let opts = GpuOptions {
+        path: GpuPath::Tiled,
+        output,
+        tile: Some(shape),
+        ..GpuOptions::default()
+    };
+    GpuEngine::with_options(m, opts).expect("a GPU adapter (lavapipe in CI)")
+}
+
+/// Device samples equal the CPU twin on host snapshots of `host` (the
+/// same kernel) to f32 round-off, and the twin a step later is flagged.
+fn assert_samples_match_the_twin(m: &Model, host: &mut GpuEngine, samples: &[Sample]) {
+    let (twin, later) = twins(m, host, samples);
+    let (err, field) = worst_error(&twin, samples);
     println!(
         "{} samples: device against twin {err:.2e} ({field})",
         samples.len()
     );
     assert!(err < 1e-5, "{field} off by {err:.2e} of its scale");
-    let (shifted, field) = worst_error(&later, &samples);
+    let (shifted, field) = worst_error(&later, samples);
     assert!(shifted > 1e-4, "a one-step shift must be flagged ({field})");
 }
