@@ -9,15 +9,17 @@
 // other workgroups update WORKGROUP blocks each, one per thread. The
 // workgroup barrier makes llvmpipe run the whole shader as coroutines, so
 // software adapters take one_step (serial lanes) instead. With junctions,
-// the other workgroups start at block WORKGROUP·⌊nx/WORKGROUP⌋, so that
-// each covers the blocks of one output partial (record_kinetic.wgsl),
-// whose kinetic energy the recording variant (RECORD_KINETIC) sums as in
-// one_step. With BOND_PATCHES the other workgroups step the items of
-// step_patches.wgsl from the same run of WORKGROUP (without junctions,
-// from the first: the interface row a block a thread), so that each
-// covers one output partial's items.
+// the other workgroups start at block WORKGROUP·⌊nx/WORKGROUP⌋ (the
+// interface blocks among them are the junction workgroups'). With
+// BOND_PATCHES the other workgroups step the items of step_patches.wgsl
+// from the same run of WORKGROUP (without junctions, from the first: the
+// interface row a block a thread).
+// The recording variant (STEP_RECORDS, the step dispatch of an output
+// sample; record_step.wgsl) writes a partial of the sample per workgroup:
+// a junction workgroup's holds its block (thread 0 sums it once the lanes'
+// junction states are in storage), the others' their blocks or items.
 // CPU twin: src/engines/cpu/mod.rs CpuEngine::one_step (force pass and update).
-// import: bulk_forces, common, coordinates, junctions, record_kinetic, scene, state, step_forces, step_patches, verlet
+// import: bulk_forces, common, coordinates, junctions, record_batch, record_common, record_step, scene, state, step_forces, step_patches, verlet
 
 var<workgroup> lane_sum: array<LaneSum, JUNCTION_LANES>;
 // The interface block's bulk force, from the last lane to thread 0.
@@ -59,7 +61,12 @@ fn one_step_lanes(
         }
     }
     // Outside the branch: every workgroup reaches it (an ensemble scene's
-    // constants are not uniform to the uniformity analysis).
+    // constants are not uniform to the uniformity analysis). A sample's
+    // junction tally (thread 0, below) reads the lanes' junction states
+    // from storage.
+    if STEP_RECORDS {
+        storageBarrier();
+    }
     workgroupBarrier();
     if !kept && local % 8u == 0u {
         let l = local;
@@ -75,6 +82,7 @@ fn one_step_lanes(
         );
     }
     workgroupBarrier();
+    var part = no_sums();
     if junction_group {
         if local == 0u {
             var f: vec2<real>;
@@ -94,6 +102,9 @@ fn one_step_lanes(
                 force[block_base() + w] = f;
                 contact[interface_base() + w] = vec2<real>(friction, foundation_normal(coord_value(load_disp(w).z)));
             }
+            if STEP_RECORDS {
+                part = step_block_sample(w, step_sample(), f, friction);
+            }
             if update {
                 verlet(w, w, 0u, f, friction, ld, i_step);
             }
@@ -106,27 +117,22 @@ fn one_step_lanes(
         g = c.nx / WORKGROUP + (w - c.nx);
     }
     let i = g * WORKGROUP + local;
-    var kinetic = real(0.0);
     let not_interface = FRICTION_LAW != LAW_JUNCTIONS || i >= c.nx;
     if BOND_PATCHES {
         if !junction_group && not_interface {
-            kinetic = step_by_patches(i);
+            part = step_by_patches(i);
         }
     } else if !junction_group && i < c.n_blocks && not_interface {
         let ff = block_forces(i, ld, ready);
-        if RECORD_KINETIC {
-            kinetic = bulk_kinetic(i, load_vel(i), ff.xy);
+        if STEP_RECORDS {
+            part = step_block_sample(i, step_sample(), ff.xy, ff.z);
         }
         if update {
             verlet(i, i % c.nx, i / c.nx, ff.xy, ff.z, ld, i_step);
         }
     }
-    // Partials that hold interface blocks are the output kernels' to
-    // write (record.wgsl, after this dispatch).
-    if RECORD_KINETIC {
-        let total = sum_kinetic(local, kinetic);
-        if local == 0u && !junction_group && g < plans[scene].partials {
-            write_kinetic_partial(g, total);
-        }
+    // Workgroup w's partial (the host counts every workgroup's).
+    if STEP_RECORDS {
+        write_step_partial(local, w, step_sample(), part);
     }
 }

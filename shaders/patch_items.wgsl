@@ -1,9 +1,9 @@
 // The one-step kernels' patched layout of threads (step_patches.wgsl),
-// which the output kernels' partials follow with it (record.wgsl): item t
+// whose workgroups' sample partials follow it (record_step.wgsl): item t
 // below nx is interface block t; item nx + p is the 2×2 patch p of the
 // rows above the interface, ⌈nx/2⌉ patches a row from row 1 up (an even
 // row count leaves the top row in half patches).
-// CPU twin: src/engines/gpu/recorder.rs patch_item_origin.
+// CPU twin: src/engines/gpu/step_kernel.rs patch_item_origin.
 // import: (none)
 
 // The first block (column, row) of patch item t ≥ nx of a lattice nx wide;

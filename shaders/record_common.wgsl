@@ -1,10 +1,34 @@
 // Output samples written on the device: what a block contributes to a
 // sample, the sums and their reduction, and the fast cadence's rule. Shared
-// by the output kernels of the one-step kernels (record.wgsl) and by the
-// persistent kernel, which records in its loop. The including module
-// declares c, flags, junction_state, slide and the record buffers
-// (record_buffers.wgsl). CPU twin: src/engines/sample.rs record_sample.
-// import: bindings, coordinates, record_buffers, record_kinetic, scene
+// by every step kernel, each of which records in its steps: the persistent
+// kernel in its loop, the tiled kernel and the one-step kernels' recording
+// variant (record_step.wgsl) a partial per workgroup (record_batch.wgsl).
+// CPU twin: src/engines/sample.rs record_sample.
+// import: common, coordinates, record_buffers, scene
+
+fn no_sums() -> SampleSums {
+    var s: SampleSums;
+    s.min_pinned = 3.0e38;
+    return s;
+}
+
+// A block's velocity at the instant of u (CPU twin:
+// engine::synchronised_velocity), from its flags `fl`; samples are taken
+// while driving.
+fn sampled_velocity(fl: u32, v_half: vec2<real>, f: vec2<real>, friction: real) -> vec2<real> {
+    let half_dt_over_m = 0.5 * c.dt * c.inv_mass;
+    var v = vec2<real>(v_half.x + half_dt_over_m * (f.x + friction), v_half.y + half_dt_over_m * f.y);
+    if (fl & FLAG_FIX_X) != 0u {
+        v.x = 0.0;
+    }
+    if (fl & FLAG_FIX_Z) != 0u {
+        v.y = 0.0;
+    }
+    if (fl & FLAG_PRESCRIBED_X) != 0u {
+        v.x = c.drive_velocity;
+    }
+    return v;
+}
 
 // The fixed cadences make the sample due, or the fast one does and is on.
 fn sample_due(e: RecordEntry) -> bool {
@@ -18,9 +42,9 @@ fn interface_due(e: RecordEntry) -> bool {
 }
 
 // The fixed cadence makes the interface row due, or the fast one plans it
-// whether it turns out on or not: the tiled kernel writes such a row
-// before the samples before it have decided the fast flag
-// (tile_record_finish decides it afterwards, in order).
+// whether it turns out on or not: the tiled and one-step kernels write
+// such a row before the samples before it have decided the fast flag
+// (record_batch_finish decides it afterwards, in order).
 fn interface_planned(e: RecordEntry) -> bool {
     return (e.channels & (RECORD_INTERFACE | RECORD_FAST)) != 0u;
 }
@@ -197,11 +221,11 @@ fn block_sample_besides_interface(
 }
 
 // REDUCTION_SLOTS (prelude): 256 in mixed precision, fewer in f64, whose
-// sums are larger (layout::reduction_slots). The resident kernel, whose
-// workgroup memory holds the lattice, takes fewer (REDUCTION_WIDTH).
+// sums are larger (layout::reduction_slots). The resident and tiled
+// kernels, whose workgroup memory holds the lattice, take fewer
+// (REDUCTION_WIDTH).
 override REDUCTION_WIDTH: u32 = REDUCTION_SLOTS;
 var<workgroup> wg_sums: array<SampleSums, REDUCTION_WIDTH>;
-var<workgroup> wg_go: u32;
 
 // Reduces wg_sums[0..width] to wg_sums[0] (a fixed tree: the same bits
 // every run).

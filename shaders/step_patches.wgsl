@@ -5,12 +5,11 @@
 // interface row keeps a thread per block, whose junction walk a patch would
 // double. A quarter of the threads for the bulk: the large lattices'
 // variant, where threads are plenty. A sample's partials follow the
-// threads (patch_items.wgsl): the recording variant (RECORD_KINETIC) sums
-// the kinetic energy of a workgroup's items, and the output kernels the
-// same items' sums.
+// threads (patch_items.wgsl): the recording variant (STEP_RECORDS) sums
+// each workgroup's items.
 // CPU twin: src/engines/kernels/bulk_forces.rs bulk_force_patch (the
 // forces), src/engines/kernels/verlet.rs verlet (the update).
-// import: bulk_patch, common, patch_items, record_kinetic, scene, state, step_forces, verlet
+// import: bulk_patch, common, patch_items, record_common, record_step, scene, state, step_forces, verlet
 
 override BOND_PATCHES: bool = false;
 
@@ -18,31 +17,31 @@ override BOND_PATCHES: bool = false;
 // patch_items.wgsl: interface block t as in one_step (its junction walk
 // stays one block long; one_step_lanes' junction workgroups step the
 // interface row, and its other threads start past it), or a patch.
-// Returns the item's kinetic energy at the step's instant, its blocks in
-// patch order (RECORD_KINETIC; zero otherwise).
-fn step_by_patches(t: u32) -> real {
-    var kinetic = real(0.0);
+// Returns the item's part of the step's sample, its blocks in patch order
+// (STEP_RECORDS; no_sums otherwise).
+fn step_by_patches(t: u32) -> SampleSums {
+    var part = no_sums();
     if scene_stopped() {
-        return kinetic;
+        return part;
     }
     let ld = loads_at(step_offset);
     let ready = batch.forces_ready != 0u && step_offset == 0u;
     let update = batch.forces_only == 0u;
     if t < c.nx {
         let ff = block_forces(t, ld, ready);
-        if RECORD_KINETIC {
-            kinetic = bulk_kinetic(t, load_vel(t), ff.xy);
+        if STEP_RECORDS {
+            part = step_block_sample(t, step_sample(), ff.xy, ff.z);
         }
         if update {
             verlet(t, t, 0u, ff.xy, ff.z, ld, step_offset);
         }
-        return kinetic;
+        return part;
     }
     let origin = patch_item_origin(t, c.nx);
     let x0 = origin.x;
     let z0 = origin.y;
     if z0 >= c.nz {
-        return kinetic;
+        return part;
     }
     let has_b = x0 + 1u < c.nx;
     let has_c = z0 + 1u < c.nz;
@@ -73,20 +72,21 @@ fn step_by_patches(t: u32) -> real {
             }
         }
     }
-    if RECORD_KINETIC {
-        kinetic = bulk_kinetic(i, load_vel(i), f.a);
+    if STEP_RECORDS {
+        let e = step_sample();
+        part = step_block_sample(i, e, f.a, 0.0);
         if has_b {
-            kinetic += bulk_kinetic(i + 1u, load_vel(i + 1u), f.b);
+            part = combine(part, step_block_sample(i + 1u, e, f.b, 0.0));
         }
         if has_c {
-            kinetic += bulk_kinetic(i + c.nx, load_vel(i + c.nx), f.c);
+            part = combine(part, step_block_sample(i + c.nx, e, f.c, 0.0));
             if has_b {
-                kinetic += bulk_kinetic(i + c.nx + 1u, load_vel(i + c.nx + 1u), f.d);
+                part = combine(part, step_block_sample(i + c.nx + 1u, e, f.d, 0.0));
             }
         }
     }
     if !update {
-        return kinetic;
+        return part;
     }
     // Blocks above the interface have no friction.
     verlet(i, x0, z0, f.a, 0.0, ld, step_offset);
@@ -99,5 +99,5 @@ fn step_by_patches(t: u32) -> real {
             verlet(i + c.nx + 1u, x0 + 1u, z0 + 1u, f.d, 0.0, ld, step_offset);
         }
     }
-    return kinetic;
+    return part;
 }

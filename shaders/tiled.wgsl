@@ -26,8 +26,9 @@
 //   and writes their rows. A planned fast-cadence row is written whether
 //   the fast cadence turns out on or not: that is decided by the samples
 //   before it, which other tiles may not have finished. After the batch,
-//   tile_record_finish adds each sample's partials in tile order and
-//   decides, sample by sample in order, which were due.
+//   record_batch_finish (record_batch.wgsl; the host counts a partial per
+//   tile) adds each sample's partials in tile order and decides, sample
+//   by sample in order, which were due.
 // - Chained tiles (TILE_CHAINED; GpuOptions::chained_tiles): one dispatch
 //   runs several of those dispatches' rounds in turn, up to the round
 //   whose end carries ROUND_ENDS_DISPATCH (the batch's end). Before its
@@ -44,7 +45,7 @@
 // the lanes merged as a tree (lane_tree8), and the update. Junction friction laws
 // only (the per-block laws keep state that a halo would race on).
 // CPU twin: src/engines/cpu/mod.rs CpuEngine::one_step (each step of the loop).
-// import: bulk_forces, bulk_patch, common, coordinates, junction_store, junctions, kept_bits, lane_merge, lane_partials, record_buffers, record_common, scene, state, verlet
+// import: bulk_forces, bulk_patch, common, coordinates, junction_store, junctions, kept_bits, lane_merge, lane_partials, record_batch, record_buffers, record_common, scene, state, verlet
 
 override TILE_THREADS: u32 = 64u;
 // Bulk forces by 2×2 patches of blocks (bulk_patch.wgsl;
@@ -66,10 +67,6 @@ const ROUND_ENDS_DISPATCH: u32 = 0x80000000u;
 // Rounds each tile of each scene has finished, all dispatches (mod 2³²):
 // equal for a scene's tiles between dispatches.
 @group(0) @binding(24) var<storage, read_write> tile_progress: array<atomic<u32>>;
-// The batch's output samples (batch.records of them, in step order;
-// src/engines/gpu/recorder.rs). Sample k's partial of tile g is
-// sums[plans[scene].partials_offset + k · tile_count() + g].
-@group(0) @binding(25) var<storage, read> record_entries: array<RecordEntry>;
 // A step offset no sample has.
 const NO_SAMPLE: u32 = 0xffffffffu;
 // The recording variant (the engine builds it for a run that records its
@@ -544,7 +541,7 @@ fn sample_interface(t: u32, next: vec2<u32>, s: u32) {
         for (var k = 0u; k < own; k++) {
             total = combine(total, tile_interface_sums[k]);
         }
-        sums[plans[scene].partials_offset + e.sums_slot * tile_count() + tile] = total;
+        sums[batch_partial_slot(e, tile)] = total;
         tile_next_sample = sample_at_or_after(next.x + 1u, s + 1u);
     }
 }
@@ -568,38 +565,4 @@ fn sample_at_or_after(first: u32, step: u32) -> vec2<u32> {
         return vec2<u32>(lo, record_entries[lo].offset);
     }
     return vec2<u32>(lo, NO_SAMPLE);
-}
-
-// After a batch's tiled dispatches, one workgroup per scene: each sample's
-// partials added in tile order (a fixed order: the same bits every run),
-// then, sample by sample in step order, the fast cadence's rule decides
-// which were due (a planned fast-cadence sample is due only if the
-// sample before it left the cadence on), as the output kernels and the
-// persistent kernel decide it at each sample.
-@compute @workgroup_size(TILE_THREADS)
-fn tile_record_finish(
-    @builtin(local_invocation_index) t: u32,
-    @builtin(workgroup_id) wid: vec3<u32>,
-) {
-    enter_scene(wid.z);
-    let tiles = tile_count();
-    let partials = plans[scene].partials_offset;
-    for (var k = t; k < batch.records; k += TILE_THREADS) {
-        var total = no_sums();
-        for (var g = 0u; g < tiles; g++) {
-            total = combine(total, sums[partials + k * tiles + g]);
-        }
-        sums[sums_slot(record_entries[k])] = total;
-    }
-    storageBarrier();
-    if t == 0u {
-        for (var k = 0u; k < batch.records; k++) {
-            let e = record_entries[k];
-            if sample_due(e) {
-                settle_sample(e, sums[sums_slot(e)]);
-            } else {
-                sums[sums_slot(e)].recorded = 0u;
-            }
-        }
-    }
 }

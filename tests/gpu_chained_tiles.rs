@@ -96,7 +96,7 @@ fn chained_tiles_are_the_tiled_kernel_bit_for_bit() {
 /// ends a dispatch: with a sample planned every few steps (the fast
 /// cadence's), chained or not, it makes the step dispatches it makes
 /// without output (and a forces-only pass where the run ends at a
-/// sample), and one `tile_record_finish` a batch. Chained tiles'
+/// sample), and one `record_batch_finish` a batch. Chained tiles'
 /// device samples are the unchained kernel's, and one sample later is
 /// flagged.
 #[test]

@@ -342,7 +342,6 @@ fn a_large_lattice_ensemble_records_every_scene_as_its_solo_run() {
         large(&["time.seed=7", "loading.normal.force=1800"]),
     ];
     let m = &models[0];
-    assert!(m.n_blocks() > slipfront::engines::gpu::RECORD_SMALL_BLOCKS);
     let every = |t: f64| ((t / m.dt).round() as u64).max(1);
     let plan = SamplePlan {
         every_global: every(5e-6),

@@ -222,9 +222,9 @@ fn gpu_f64_rate_state_matches_cpu_f64_on_every_kernel() {
 /// (f64 is the default precision where the adapter has it): each sample
 /// equals the CPU twin (`engine::record_sample`) on a host snapshot of a
 /// second f64 run at its step, to f64 round-off in the sums. On the small
-/// triggered scene (one dispatch a sample on one-step; in the loop of the
-/// persistent kernel) and on 257×65 (the step's kinetic partials,
-/// `record_special`, `record_finish`, bulk fields by `record_sample`).
+/// triggered scene (in the step of the sample on one-step; in the loop of
+/// the persistent kernel) and on 257×65 (66 partials a sample, bulk
+/// fields).
 /// Negative control: the twin a step later is flagged.
 #[test]
 fn f64_output_samples_are_recorded_on_the_device() {

@@ -1,4 +1,5 @@
-//! Output samples recorded on the device (`shaders/record.wgsl`) against
+//! Output samples recorded on the device, in the step kernels' steps
+//! (`shaders/record_common.wgsl`), against
 //! their CPU twin (`engine::record_sample`) on host snapshots of the same
 //! GPU run, and whole run files written both ways. These tests fail, never
 //! skip, when no adapter exists (lavapipe in CI).
@@ -123,16 +124,15 @@ fn device_samples_match_the_cpu_twin_on_host_snapshots() {
     }
 }
 
-/// Lattices above `RECORD_SMALL_BLOCKS` record in two dispatches
-/// (`record_sample`'s per-workgroup partials, then `record_finish`): the
-/// device's samples equal the CPU twin on host snapshots there too, and the
-/// twin a step later is flagged.
+/// A large lattice's samples are summed in many partials (a workgroup's
+/// each, in the sample's step dispatch; record_step.wgsl) and added after
+/// the batch (`record_batch_finish`): the device's samples equal the CPU
+/// twin on host snapshots there too, and the twin a step later is flagged.
 #[test]
-fn a_large_lattice_records_in_two_dispatches() {
-    // The side spring's driven block and the top row's reaction are each
-    // summed by the output kernels, apart from the kinetic energy that
-    // the step dispatch sums (record_kinetic.wgsl); one-step-lanes lays
-    // its workgroups out differently (junction workgroups first).
+fn a_large_lattice_records_in_the_partials_of_its_steps() {
+    // The side spring's driven block and the top row's reaction each lie
+    // in one workgroup's partial; one-step-lanes lays its workgroups out
+    // differently (junction workgroups first).
     let side = large_lattice();
     let top = large_lattice_driven_at_the_top();
     // The one-step kernels with bond patches sum their partials by their
@@ -153,7 +153,6 @@ fn a_large_lattice_records_in_two_dispatches() {
     ];
     for (driver, s, path, bond_patches) in runs {
         let m = Model::from_scenario(s, false).unwrap();
-        assert!(m.n_blocks() > slipfront::engines::gpu::RECORD_SMALL_BLOCKS);
         let plan = plan(&m, s);
         let engine = |output| {
             let opts = GpuOptions {
@@ -203,10 +202,10 @@ fn large_lattice_driven_at_the_top() -> Scenario {
 }
 
 /// Timestamps inside the pass split its device time between the steps,
-/// the samples' steps and the record dispatches (lavapipe has them):
-/// every dispatch is counted once, the parts add up to the passes' time,
-/// and a step of 16,705 blocks costs more than adding 262 partials (the
-/// finish), which a timestamp put on the wrong side of a dispatch would
+/// the samples' steps (the recording variant) and the batches' record
+/// finishes (lavapipe has them): every dispatch is counted once, the parts
+/// add up to the passes' time, and a step of 16,705 blocks costs more than
+/// a finish, which a timestamp put on the wrong side of a dispatch would
 /// turn round.
 #[test]
 fn the_device_time_splits_between_step_and_record_dispatches() {
@@ -230,15 +229,14 @@ fn the_device_time_splits_between_step_and_record_dispatches() {
     println!("{t}; passes {busy:.4} s");
     assert_eq!(t.steps + t.sample_steps, dev.dispatches().unwrap() - d0);
     let records = dev.output_dispatches().unwrap() - o0;
-    assert!(t.samples >= 8 && t.samples == t.finishes, "{t:?}");
-    assert_eq!(t.sample_steps, t.samples);
-    assert_eq!(t.samples + t.finishes, records);
+    assert!(t.sample_steps >= 8 && t.finishes >= 1, "{t:?}");
+    assert_eq!(t.finishes, records);
     assert!(
         (t.total_seconds() - busy).abs() <= 1e-9 * busy + 1e-9,
         "parts {} s, passes {busy} s",
         t.total_seconds()
     );
-    assert!(t.step_seconds > 0.0 && t.sample_seconds > 0.0 && t.finish_seconds > 0.0);
+    assert!(t.step_seconds > 0.0 && t.finish_seconds > 0.0);
     assert!(t.sample_step_seconds > 0.0);
     let each = |s: f64, n: u64| s / n as f64;
     assert!(

@@ -260,7 +260,7 @@ fn the_tiled_kernel_refuses_what_it_cannot_step() {
     assert!(err.contains("tile halo 0"), "{err}");
 }
 
-/// A lattice above `RECORD_SMALL_BLOCKS` (257 × 65, 65 tiles of 4
+/// A large lattice (257 × 65, 65 tiles of 4
 /// columns, bulk fields among the samples) records its samples in the
 /// tiled kernel's steps as a small one does: the samples equal the CPU
 /// twin on host snapshots of the same kernel, and the twin a step later is
@@ -269,7 +269,6 @@ fn the_tiled_kernel_refuses_what_it_cannot_step() {
 fn a_large_lattice_on_the_tiled_kernel_records_its_samples_on_the_device() {
     let s = large_lattice();
     let m = Model::from_scenario(&s, false).unwrap();
-    assert!(m.n_blocks() > slipfront::engines::gpu::RECORD_SMALL_BLOCKS);
     let plan = plan(&m, &s);
     // 8 columns of 65 rows fit lavapipe's 32 KB of workgroup memory.
     let engine = |output| tiled_recording(&m, TileShape { width: 4, halo: 2 }, output);

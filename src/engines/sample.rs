@@ -1,7 +1,7 @@
 //! Output samples: what one output instant holds, channel by channel, the
 //! cadences that make a step an output instant, and `record_sample`, the
-//! CPU twin of the GPU kernel pair that writes the same records on the
-//! device (`shaders/record.wgsl`).
+//! CPU twin of the GPU code that writes the same records on the device
+//! (`shaders/record_common.wgsl`, in the step kernels' steps).
 
 use super::Snapshot;
 use crate::engines::step_params::{step_params, Consts};
@@ -116,8 +116,10 @@ pub struct Sample {
 }
 
 /// The sample of `snap` with the interface row and the bulk field if
-/// asked. CPU twin of `record_sample` + `record_finish` in
-/// `shaders/record.wgsl` (which sum in f32 on the device; these sums are f64).
+/// asked. CPU twin of `block_sample` summed over the blocks and
+/// `record_batch_finish` (`shaders/record_common.wgsl`,
+/// `shaders/record_batch.wgsl`), which sum in the kernels' precision on
+/// the device; these sums are f64.
 pub fn record_sample(model: &Model, snap: &Snapshot, interface: bool, bulk: bool) -> Sample {
     let nx = model.nx;
     let pinned = snap.pinned_fraction(nx);

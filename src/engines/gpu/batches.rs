@@ -55,9 +55,7 @@ impl<T: GpuReal> GpuEngine<T> {
                 batch.forces_only = forces_only as u32;
                 batch.steps_per_dispatch = self.steps_per_dispatch as u32;
                 batch.parity = self.current as u32;
-                if self.kernel.is_persistent() || self.kernel == Kernel::Tiled {
-                    batch.records = planned.len() as u32;
-                }
+                batch.records = planned.len() as u32;
                 batch
             })
             .collect();
@@ -73,15 +71,7 @@ impl<T: GpuReal> GpuEngine<T> {
         // Which of them end a dispatch: all but where the tiled kernel
         // chains its rounds.
         let ending = super::tiles::rounds_ending_dispatches(&ends, self.chain);
-        // The samples the output kernels record after their step
-        // dispatches: the one-step kernels'. The tiled kernel records its
-        // own in its steps, and tile_record_finish ends them after the
-        // batch's dispatches.
         let tiled = self.tiles.as_ref();
-        let after_steps = match tiled {
-            Some(_) => &planned[..0],
-            None => &planned[..],
-        };
         let dispatch_count = ending.iter().filter(|&&e| e).count() as u64;
         if self.tiles.is_some() {
             let words = super::tiles::tile_end_words(&ends, &ending);
@@ -114,17 +104,17 @@ impl<T: GpuReal> GpuEngine<T> {
             match self.kernel {
                 Kernel::OneStep | Kernel::OneStepLanes | Kernel::Tiled => {
                     // A dispatch per step, or the tiled kernel's of up to
-                    // its halo's steps after one gather; a sample's step
-                    // ends a one-step kernel's dispatch (its output
-                    // kernels record after it), and none of the tiled
-                    // kernel's (it records in its steps).
+                    // its halo's steps after one gather. Both record their
+                    // samples in their steps: a sample's step is the
+                    // one-step kernels' recording variant, and the tiled
+                    // kernel's (recording) steps find theirs.
                     if let Some(tiled) = tiled {
                         pass.set_bind_group(1, &self.batch_group, &[0]);
                         pass.set_pipeline(&tiled.gather);
                         pass.dispatch_workgroups(self.groups.0, self.groups.1, scene_count);
                         pass.set_pipeline(&self.pipeline);
                     }
-                    let mut samples = after_steps.iter().enumerate().peekable();
+                    let mut samples = planned.iter().peekable();
                     let mut first = 0;
                     // The first round of the dispatch under way.
                     let mut first_round = 0;
@@ -149,18 +139,18 @@ impl<T: GpuReal> GpuEngine<T> {
                         first_round = d + 1;
                         let offset = (index * self.offset_stride) as u32;
                         pass.set_bind_group(1, &self.batch_group, &[offset]);
-                        // The step that ends this dispatch.
+                        // A one-step kernel's sample: the step that ends
+                        // this dispatch.
                         let i = end - 1;
-                        // A sample's step dispatch sums its kinetic energy
-                        // where the recorder asks (the recording variant).
-                        let sample = samples.next_if(|(_, p)| p.offset == i);
-                        debug_assert!(samples.peek().is_none_or(|(_, p)| p.offset > i));
-                        let record_step = sample.and_then(|(_, p)| {
-                            let rec = self.recorder.as_ref()?;
-                            rec.kinetic_in_step(&p.entry)
-                                .then_some(self.record_step.as_ref())
-                                .flatten()
-                        });
+                        let sample = match tiled {
+                            Some(_) => None,
+                            None => samples.next_if(|p| p.offset == i),
+                        };
+                        debug_assert!(
+                            tiled.is_some() || samples.peek().is_none_or(|p| p.offset > i)
+                        );
+                        let record_step = sample.and(self.record_step.as_ref());
+                        debug_assert_eq!(sample.is_some(), record_step.is_some());
                         // With the dispatch timing: a sample's step dispatch
                         // between two timestamps.
                         let mut step_marked = false;
@@ -176,38 +166,34 @@ impl<T: GpuReal> GpuEngine<T> {
                             pass.set_pipeline(pipeline);
                         }
                         pass.dispatch_workgroups(self.groups.0, self.groups.1, scene_count);
+                        if record_step.is_some() {
+                            pass.set_pipeline(&self.pipeline);
+                        }
                         if let Some(m) = marks.as_mut() {
                             m.step_dispatched();
+                        }
+                        if let (Some(t), Some(m), Some(p)) =
+                            (self.timer.as_ref(), marks.as_mut(), sample)
+                        {
+                            t.mark(&mut pass, m);
+                            m.push_sample(p.offset, step_marked);
                         }
                         if !forces_only {
                             self.current = (self.current + (end - first) as usize) % 2;
                         }
-                        // The sample of step first + i, from the state this
-                        // dispatch read and the forces it computed.
-                        if let Some((k, p)) = sample {
-                            let rec = self.recorder.as_ref().expect("samples need a recorder");
-                            // With the dispatch timing: a timestamp after
-                            // the step dispatch and one after each record
-                            // dispatch.
-                            let mut mark = |pass: &mut wgpu::ComputePass| {
-                                if let (Some(t), Some(m)) = (self.timer.as_ref(), marks.as_mut()) {
-                                    t.mark(pass, m);
-                                }
-                            };
-                            mark(&mut pass);
-                            let dispatches = rec.encode(&mut pass, k, &p.entry, &mut mark);
-                            if let Some(m) = marks.as_mut() {
-                                m.push_sample(i, step_marked, dispatches);
-                            }
-                            self.output_dispatches += dispatches;
-                            pass.set_pipeline(&self.pipeline);
-                            pass.set_bind_group(0, &self.state_group, &[]);
-                        }
                         first = end;
                     }
-                    if let Some(tiled) = tiled.filter(|_| !planned.is_empty()) {
+                    // The batch's samples: their partials added, and
+                    // which were due decided (record_batch.wgsl).
+                    if let Some(finish) =
+                        self.record_finish.as_ref().filter(|_| !planned.is_empty())
+                    {
+                        if let (Some(t), Some(m)) = (self.timer.as_ref(), marks.as_mut()) {
+                            t.mark(&mut pass, m);
+                            m.finish_marked();
+                        }
                         pass.set_bind_group(1, &self.batch_group, &[0]);
-                        pass.set_pipeline(&tiled.record_finish);
+                        pass.set_pipeline(finish);
                         pass.dispatch_workgroups(1, 1, scene_count);
                         self.output_dispatches += 1;
                     }
@@ -472,7 +458,7 @@ impl<T: GpuReal> GpuEngine<T> {
             }
             let planned = match self.recorder.as_mut() {
                 Some(rec) => {
-                    let (planned, fits) = rec.plan_batch(self.step, k, self.current);
+                    let (planned, fits) = rec.plan_batch(self.step, k);
                     k = fits;
                     rec.write_entries(&self.ctx.queue, &planned);
                     planned
@@ -488,7 +474,7 @@ impl<T: GpuReal> GpuEngine<T> {
         // The sample of the step reached, if it is one: after the forces
         // of that step (which the next step then reads).
         if let Some(rec) = self.recorder.as_mut() {
-            let planned = rec.plan_now(self.step, self.current);
+            let planned = rec.plan_now(self.step);
             if !planned.is_empty() {
                 rec.write_entries(&self.ctx.queue, &planned);
                 self.submit_batch(1, true, planned)?;

@@ -69,9 +69,9 @@ pub(super) struct Buffers {
     pub(super) law_state: wgpu::Buffer,
     pub(super) status: wgpu::Buffer,
     pub(super) lane_partial: wgpu::Buffer,
-    /// What the persistent kernel binds for the record buffers until it
-    /// records output samples (never read then).
-    pub(super) record_placeholders: [wgpu::Buffer; 4],
+    /// What the step kernels bind for the record buffers until they
+    /// record output samples (never read then).
+    pub(super) record_placeholders: [wgpu::Buffer; 5],
     /// The tiled kernel's: two published copies of the blocks (u, v), of
     /// the junctions (state, spring; then each tile's private halo
     /// junctions), the ends of a batch's dispatches and each tile's rounds
@@ -228,16 +228,17 @@ impl Buffers {
     }
 }
 
-/// Group 0 of `kernel`: the state buffers, and for the persistent kernel the
-/// record buffers `[plan, sums, rows, entries]`, bound by the names the
-/// kernel's module declares (`bindings::Bindings`).
+/// Group 0 of `kernel`: the state buffers and the record buffers `[plan,
+/// sums, rows, entries, step samples]` (`Recorder::state_bindings`, or
+/// placeholders), bound by the names the kernel's module declares
+/// (`bindings::Bindings`).
 pub(super) fn state_group(
     ctx: &GpuContext,
     kernel: Kernel,
     b: &Buffers,
-    records: [&wgpu::Buffer; 4],
+    records: [&wgpu::Buffer; 5],
 ) -> wgpu::BindGroup {
-    let [plan, sums, rows, entries] = records;
+    let [plan, sums, rows, entries, step_samples] = records;
     let resources = [
         ("scene_consts", &b.consts),
         // The one-step kernels' ping-pong copies; the persistent kernel's
@@ -268,6 +269,7 @@ pub(super) fn state_group(
         ("sums", sums),
         ("rows", rows),
         ("record_entries", entries),
+        ("step_samples", step_samples),
     ]
     .map(|(name, buffer)| (name, buffer.as_entire_binding()));
     ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {

@@ -1,9 +1,8 @@
 //! Adapter selection: a hardware GPU, else a software one (lavapipe).
 
 use super::bindings::Bindings;
-use super::compile::{KernelBuild, ShaderChecks};
+use super::compile::KernelBuild;
 use super::precision::GpuReal;
-use super::record_pipelines::RecordPipelines;
 use super::shaders::Kernel;
 use crate::engines::EngineError;
 use std::collections::HashMap;
@@ -31,13 +30,7 @@ pub struct GpuContext {
     /// Group 1: the step offset (dynamic) and the batch (or the batches).
     pub batch_layout: wgpu::BindGroupLayout,
     pipelines: Arc<Mutex<HashMap<String, wgpu::ComputePipeline>>>,
-    /// The output kernels by precision (`GpuReal::NAME`) and checks,
-    /// compiled on first use.
-    record: Arc<Mutex<HashMap<RecordKey, Arc<RecordPipelines>>>>,
 }
-
-/// The output kernels' precision (`GpuReal::NAME`) and checks.
-type RecordKey = (&'static str, ShaderChecks);
 
 static SHARED: OnceLock<Result<GpuContext, String>> = OnceLock::new();
 
@@ -163,9 +156,8 @@ impl GpuContext {
         let batch_layout = layout("batch", &reflect(Kernel::OneStep).layout(1, &[STEP_OFFSET]));
         let kernel_layout = |kernel: Kernel| {
             // Group 0 as the kernel's module declares it: the constants (one
-            // record per scene), the state, and the persistent kernel's
-            // record buffers. The one-step kernels share a layout: what
-            // either uses.
+            // record per scene), the state, and the record buffers. The
+            // one-step kernels share a layout: what either uses.
             let bindings = match kernel {
                 Kernel::OneStep | Kernel::OneStepLanes => {
                     reflect(Kernel::OneStep).union(reflect(Kernel::OneStepLanes))
@@ -204,7 +196,6 @@ impl GpuContext {
             layouts,
             batch_layout,
             pipelines: Arc::new(Mutex::new(HashMap::new())),
-            record: Arc::new(Mutex::new(HashMap::new())),
         })
     }
 
@@ -282,22 +273,6 @@ impl GpuContext {
                         },
                         cache: None,
                     })
-            })
-            .clone()
-    }
-
-    /// The output kernels' pipelines (`shaders/record.wgsl`).
-    pub fn record_pipelines<T: GpuReal>(&self, checks: ShaderChecks) -> Arc<RecordPipelines> {
-        let mut cache = self.record.lock().expect("record pipelines");
-        cache
-            .entry((T::NAME, checks))
-            .or_insert_with(|| {
-                // lavapipe runs a workgroup on one core and a barrier as a
-                // switch of every invocation: 8 threads (one SIMD row)
-                // record a Table S1 sample faster there than 256
-                // (benches/gpu_output.rs, BENCHMARKS.md).
-                let threads = if self.is_software() { 8 } else { 256 };
-                Arc::new(RecordPipelines::new::<T>(&self.device, threads, checks))
             })
             .clone()
     }

@@ -4,10 +4,11 @@
 //! stepping and recording, against the wall time a run took: what output
 //! costs on the device, apart from what it costs the host.
 //!
-//! On request (`GpuEngine::time_each_dispatch`) the one-step kernels'
-//! passes also take timestamps inside the pass around each sample's record
-//! dispatches, which split the pass's time between the step dispatches and
-//! the output kernels (`DispatchTimes`).
+//! On request (`GpuEngine::time_each_dispatch`) the passes also take
+//! timestamps inside the pass: around each sample's step dispatch of the
+//! one-step kernels (their recording variant) and before the batch's
+//! record finish, which split the pass's time between plain steps, the
+//! samples' steps and the finish (`DispatchTimes`).
 
 use super::context::GpuContext;
 
@@ -24,8 +25,8 @@ pub const TIMESTAMP_BYTES: u64 = 16;
 /// resolved theirs.
 const INSIDE_SETS: usize = 4;
 
-/// Timestamps one batch may take inside its pass: the pass's two and three
-/// a sample at most (`ONE_STEP_BATCH` + 1 samples).
+/// Timestamps one batch may take inside its pass: the pass's two, two a
+/// sample at most (`ONE_STEP_BATCH` + 1 samples) and one before the finish.
 const INSIDE_QUERIES: u32 = wgpu::QUERY_SET_MAX_QUERIES;
 
 /// Where the device time of the timed batches went, by dispatch kind.
@@ -37,15 +38,12 @@ pub struct DispatchTimes {
     /// their seconds.
     pub steps: u64,
     pub step_seconds: f64,
-    /// Step dispatches of samples (on large lattices the one-step
-    /// kernels' recording variant, `RECORD_KINETIC`) and their seconds.
+    /// Step dispatches of samples (the one-step kernels' recording
+    /// variant, `STEP_RECORDS`) and their seconds.
     pub sample_steps: u64,
     pub sample_step_seconds: f64,
-    /// Samples' first output dispatches (`record_small`, or
-    /// `record_sample` on lattices that take two) and their seconds.
-    pub samples: u64,
-    pub sample_seconds: f64,
-    /// Samples' second dispatches (`record_finish`) and their seconds.
+    /// The batches' record finishes (`record_batch_finish`, one a batch
+    /// with samples) and their seconds.
     pub finishes: u64,
     pub finish_seconds: f64,
 }
@@ -53,7 +51,7 @@ pub struct DispatchTimes {
 impl DispatchTimes {
     /// Seconds in all.
     pub fn total_seconds(&self) -> f64 {
-        self.step_seconds + self.sample_step_seconds + self.sample_seconds + self.finish_seconds
+        self.step_seconds + self.sample_step_seconds + self.finish_seconds
     }
 
     fn add(&mut self, t: &DispatchTimes) {
@@ -61,8 +59,6 @@ impl DispatchTimes {
         self.step_seconds += t.step_seconds;
         self.sample_steps += t.sample_steps;
         self.sample_step_seconds += t.sample_step_seconds;
-        self.samples += t.samples;
-        self.sample_seconds += t.sample_seconds;
         self.finishes += t.finishes;
         self.finish_seconds += t.finish_seconds;
     }
@@ -74,17 +70,13 @@ impl std::fmt::Display for DispatchTimes {
         write!(
             f,
             "steps {:.3} s ({} dispatches, {:.2} µs each); steps of samples {:.3} s ({}, \
-             {:.2} µs each); record first dispatch {:.3} s ({}, {:.2} µs each); record finish \
-             {:.3} s ({}, {:.2} µs each)",
+             {:.2} µs each); record finish {:.3} s ({}, {:.2} µs each)",
             self.step_seconds,
             self.steps,
             each(self.step_seconds, self.steps),
             self.sample_step_seconds,
             self.sample_steps,
             each(self.sample_step_seconds, self.sample_steps),
-            self.sample_seconds,
-            self.samples,
-            each(self.sample_seconds, self.samples),
             self.finish_seconds,
             self.finishes,
             each(self.finish_seconds, self.finishes),
@@ -92,12 +84,15 @@ impl std::fmt::Display for DispatchTimes {
     }
 }
 
-/// What a timed batch's pass held: its step dispatches and, in order,
-/// its samples.
+/// What a timed batch's pass held: its step dispatches, in order its
+/// samples, and whether a finish ended it.
 #[derive(Debug, Clone, Default)]
 pub struct BatchMarks {
     steps: u64,
     samples: Vec<SampleMarks>,
+    /// A timestamp before the batch's record finish (the pass's end
+    /// closes it).
+    finish: bool,
     set: usize,
     /// Timestamps written so far (the pass's two first).
     written: u32,
@@ -107,13 +102,11 @@ pub struct BatchMarks {
 
 /// A sample's timestamps: one before its step dispatch where steps of no
 /// sample came since the last timestamp (else the last one stands for it),
-/// one after it, and one after each record dispatch (1 or 2). At most
-/// 2 + 3 × 1024 in a batch of 1024 steps.
+/// and one after it. At most 3 + 2 × 1025 in a batch of 1024 steps.
 #[derive(Debug, Clone, Copy)]
 struct SampleMarks {
     offset: u64,
     step_marked: bool,
-    dispatches: u64,
 }
 
 /// The query sets of the dispatch timing.
@@ -252,8 +245,8 @@ impl DeviceTimer {
     }
 
     /// In a batch timed dispatch by dispatch: a timestamp after the
-    /// dispatches so far (before a sample's record dispatches, and after
-    /// each of them).
+    /// dispatches so far (around a sample's step dispatch, and before the
+    /// batch's finish).
     pub fn mark(&self, pass: &mut wgpu::ComputePass, marks: &mut BatchMarks) {
         pass.write_timestamp(&self.inside_set(marks.set).0, marks.written);
         marks.written += 1;
@@ -339,14 +332,17 @@ impl BatchMarks {
     }
 
     /// A sample at step `offset` whose timestamps were written: before its
-    /// step dispatch if `step_marked`, after it, and after each of its
-    /// `dispatches` record dispatches.
-    pub fn push_sample(&mut self, offset: u64, step_marked: bool, dispatches: u64) {
+    /// step dispatch if `step_marked`, and after it.
+    pub fn push_sample(&mut self, offset: u64, step_marked: bool) {
         self.samples.push(SampleMarks {
             offset,
             step_marked,
-            dispatches,
         });
+    }
+
+    /// A timestamp was written before the batch's record finish.
+    pub fn finish_marked(&mut self) {
+        self.finish = true;
     }
 
     /// Queries the batch wrote.
@@ -356,8 +352,9 @@ impl BatchMarks {
             2 + self
                 .samples
                 .iter()
-                .map(|m| m.step_marked as u64 + 1 + m.dispatches)
+                .map(|m| m.step_marked as u64 + 1)
                 .sum::<u64>()
+                + self.finish as u64
         );
         self.written
     }
@@ -383,18 +380,16 @@ impl BatchMarks {
             times.sample_steps += 1;
             at = stamps[k];
             next_step = m.offset + 1;
-            times.sample_seconds += seconds(at, stamps[k + 1])?;
-            times.samples += 1;
-            at = stamps[k + 1];
-            if m.dispatches == 2 {
-                times.finish_seconds += seconds(at, stamps[k + 2])?;
-                times.finishes += 1;
-                at = stamps[k + 2];
-            }
-            k += 1 + m.dispatches as usize;
+            k += 1;
         }
-        times.step_seconds += seconds(at, end)?;
+        // The steps after the last sample, then the finish.
+        let steps_end = if self.finish { stamps[k] } else { end };
+        times.step_seconds += seconds(at, steps_end)?;
         times.steps += self.steps - next_step;
+        if self.finish {
+            times.finish_seconds += seconds(steps_end, end)?;
+            times.finishes += 1;
+        }
         Some(times)
     }
 }

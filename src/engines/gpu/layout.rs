@@ -283,7 +283,7 @@ gpu_struct! {
 }
 
 gpu_struct! {
-    /// What the output kernels (`shaders/record.wgsl`) need besides the
+    /// What the step kernels' sample code (`shaders/record_common.wgsl`) needs besides the
     /// run constants: the fast cadence (its state is updated by the
     /// device), the driver's blocks, and where each region of the record
     /// buffers starts.
@@ -297,13 +297,12 @@ gpu_struct! {
         /// 1: the top row's velocity is prescribed (its reaction is summed).
         pub top_reaction: u32,
         pub junctions_per_block: u32,
-        /// Workgroups of `record_sample`, and where their partial sums go
-        /// in the sums buffer.
+        /// A sample's partial sums (a workgroup's of the one-step kernels,
+        /// a tile's of the tiled kernel; `shaders/record_batch.wgsl`), and
+        /// where the batch's go in the sums buffer.
         pub partials: u32,
-        /// 1: a partial holds the items of the one-step kernels' patched
-        /// threads (`shaders/patch_items.wgsl`), not `WORKGROUP`
-        /// consecutive blocks.
-        pub partials_by_patches: u32,
+        /// Unused: keeps both precisions free of padding.
+        pub reserved_a: u32,
         pub partials_offset: u32,
         /// Word offsets of the interface rows and the bulk fields.
         pub interface_offset: u32,
@@ -316,12 +315,11 @@ gpu_struct! {
 }
 
 gpu_struct! {
-    /// One sample the host asks for in a batch: the state copy holding
-    /// u(s) and v(s−½), the channels (`RECORD_*` bits) and its slots.
+    /// One sample the host asks for in a batch: its step, the channels
+    /// (`RECORD_*` bits) and its slots.
     pub struct GpuRecordEntry as "RecordEntry" {
         /// The sample's step offset in its batch.
         pub offset: u32,
-        pub copy: u32,
         pub channels: u32,
         pub sums_slot: u32,
         pub interface_slot: u32,

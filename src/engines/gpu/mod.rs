@@ -47,7 +47,6 @@ pub mod lockstep;
 pub mod options;
 pub mod precision;
 mod readback;
-mod record_pipelines;
 mod recorder;
 mod scene_state;
 pub mod shaders;
@@ -68,7 +67,6 @@ use options::*;
 pub use options::{GpuOptions, GpuOutput, GpuPath, PERSISTENT_THREADS, RESIDENT_THREADS};
 pub use precision::GpuReal;
 use precision::{Coord, Packed};
-pub use record_pipelines::RECORD_SMALL_BLOCKS;
 pub use step_kernel::AdapterTraits;
 use step_kernel::{kernel_sources, KernelPlan};
 
@@ -114,18 +112,15 @@ struct Scene<T: GpuReal> {
     failure: Option<EngineError>,
 }
 
-/// The tiled kernel's entry point that finishes a batch's samples
-/// (shaders/tiled.wgsl).
-const TILE_RECORD_FINISH: &str = "tile_record_finish";
+/// The entry point of the tiled and one-step kernels' modules that
+/// finishes a batch's samples (shaders/record_batch.wgsl).
+const RECORD_BATCH_FINISH: &str = "record_batch_finish";
 
-/// The tiled kernel's tiles and its entry points besides its steps.
+/// The tiled kernel's tiles and its entry point besides its steps.
 struct TiledKernel {
     geometry: tiles::TileGeometry,
     /// The halo gather, dispatched before a batch's first dispatch.
     gather: wgpu::ComputePipeline,
-    /// After a batch's dispatches: each sample's tile partials added, and
-    /// which samples were due decided in order (the fast cadence).
-    record_finish: wgpu::ComputePipeline,
 }
 
 /// The GPU engine over one scene (`GpuEngine::new`), or over an ensemble of
@@ -154,6 +149,9 @@ pub struct GpuEngine<T: GpuReal = f32> {
     offset_stride: u64,
     /// Workgroups (x, y) of a one-step dispatch of one scene.
     groups: (u32, u32),
+    /// The workgroups of a one-step dispatch of one scene that hold
+    /// blocks (the rest of `groups`' x · y pads it): a sample's partials.
+    step_workgroups: u32,
     persistent_threads: u32,
     /// Steps per persistent dispatch (bounded on software adapters).
     steps_per_dispatch: u64,
@@ -161,7 +159,7 @@ pub struct GpuEngine<T: GpuReal = f32> {
     persistent_steps: u32,
     variant: Variant,
     /// The step pipeline's override constants (the one-step kernels'
-    /// recording variant adds `RECORD_KINETIC`; the tiled kernel's,
+    /// recording variant adds `STEP_RECORDS`; the tiled kernel's,
     /// `TILE_RECORDS`, replaces its pipeline once it records).
     constants: Vec<(&'static str, f64)>,
     /// Where the kernel's junction lanes merge first (`GpuOptions::lane_shuffle`)
@@ -184,26 +182,23 @@ pub struct GpuEngine<T: GpuReal = f32> {
     timer: Option<device_timer::DeviceTimer>,
     /// Dispatches that stepped the lattice (forces-only passes included).
     dispatches: u64,
-    /// Dispatches of the output kernels (one-step kernels' samples).
+    /// Dispatches that only record output (the batches' record finishes).
     output_dispatches: u64,
     /// Where output samples are made (the option).
     output: GpuOutput,
     /// Output samples recorded on the device, scene by scene.
     recorder: Option<recorder::Recorder<T>>,
-    /// The one-step kernel's recording variant (`RECORD_KINETIC`), for the
-    /// step dispatches of samples, where the recorder asks for it.
+    /// The one-step kernel's recording variant (`STEP_RECORDS`), for the
+    /// step dispatches of samples.
     record_step: Option<wgpu::ComputePipeline>,
+    /// After a batch's steps, where the kernel records in partials (the
+    /// tiled and one-step kernels): each sample's partials added, and
+    /// which samples were due decided in order (the fast cadence).
+    record_finish: Option<wgpu::ComputePipeline>,
     /// Samples read back and not yet taken.
     samples: Vec<Vec<Sample>>,
     /// Why `auto` took this kernel, when it measured.
     choice: Option<kernel_choice::KernelChoice>,
-}
-
-/// Bytes between the record entries of the one-step and tiled kernels'
-/// batches: each output dispatch reads its own at a dynamic offset, so a
-/// multiple of the adapter's offset alignment, and at least one entry.
-fn record_entry_stride(offset_stride: u64) -> u64 {
-    (std::mem::size_of::<layout::GpuRecordEntry>() as u64).next_multiple_of(offset_stride)
 }
 
 /// The mixed-precision engine (every adapter).
@@ -406,10 +401,10 @@ impl<T: GpuReal> GpuEngine<T> {
                         .gather_entry_point()
                         .expect("the tiled kernel gathers"),
                 ),
-                record_finish: entry(TILE_RECORD_FINISH),
             }
         });
         let groups = step_kernel.groups(model);
+        let step_workgroups = step_kernel.workgroups(model);
         let steps_per_dispatch = match geometry {
             Some(g) => g.halo as u64,
             None => opts
@@ -452,6 +447,7 @@ impl<T: GpuReal> GpuEngine<T> {
             batch_buffer,
             offset_stride,
             groups,
+            step_workgroups,
             persistent_threads,
             steps_per_dispatch,
             persistent_steps: 0,
@@ -471,6 +467,7 @@ impl<T: GpuReal> GpuEngine<T> {
             output: opts.output,
             recorder: None,
             record_step: None,
+            record_finish: None,
             samples: vec![Vec::new(); scene_count],
             choice: None,
         };
@@ -552,17 +549,6 @@ impl<T: GpuReal> GpuEngine<T> {
             rec.set_plan(&self.ctx.queue, scene, plan);
             return Ok(true);
         }
-        let b = &self.buffers;
-        let state = recorder::StateBuffers {
-            consts: &b.consts,
-            disp: &b.disp,
-            vel: &b.vel,
-            force: &b.force,
-            flags: &b.flags,
-            contact: &b.contact,
-            junction_state: &b.junction_state,
-            slide: &b.slide,
-        };
         let models: Vec<Model> = self.scenes.iter().map(|s| s.model.clone()).collect();
         let model = &models[0];
         let site = match (self.kernel, self.tiles.as_ref()) {
@@ -570,41 +556,47 @@ impl<T: GpuReal> GpuEngine<T> {
                 tiles: tiles.geometry.tiles,
             },
             (k, _) if k.is_persistent() => recorder::RecordSite::Persistent,
-            _ => recorder::RecordSite::Dispatches {
-                stride: record_entry_stride(self.offset_stride),
-                // The one-step kernels' partials follow their patched threads.
-                partials: recorder::Partials::of(model, self.bond_patches),
+            _ => recorder::RecordSite::Steps {
+                partials: self.step_workgroups,
             },
         };
-        let checks = self.build.checks;
-        match recorder::Recorder::new(&self.ctx, &models, state, plan, site, checks) {
+        match recorder::Recorder::new(&self.ctx, &models, plan, site) {
             Ok(mut rec) => {
                 // The host has taken the samples up to here (none before
                 // driving, and none at its first step).
                 rec.recorded_through = Some(self.step.max(model.prep_steps));
-                if in_steps || rec.kinetic_in_steps() {
-                    let records = rec.state_bindings();
-                    self.state_group = state_group(&self.ctx, self.kernel, &self.buffers, records);
+                let records = rec.state_bindings();
+                self.state_group = state_group(&self.ctx, self.kernel, &self.buffers, records);
+                let (kernel, build) = (self.kernel, self.build);
+                match site {
+                    // The one-step kernels' recording variant steps the
+                    // samples' steps (shaders/record_step.wgsl).
+                    recorder::RecordSite::Steps { .. } => {
+                        let mut constants = self.constants.clone();
+                        constants.push(("STEP_RECORDS", 1.0));
+                        self.record_step = Some(self.ctx.pipeline::<T>(kernel, build, &constants));
+                    }
+                    // The tiled kernel's recording variant steps every
+                    // batch from now on (shaders/tiled.wgsl TILE_RECORDS).
+                    recorder::RecordSite::Tiles { .. } => {
+                        self.constants.push(("TILE_RECORDS", 1.0));
+                        self.pipeline = self.ctx.pipeline::<T>(kernel, build, &self.constants);
+                    }
+                    recorder::RecordSite::Persistent => {}
                 }
-                if rec.kinetic_in_steps() {
-                    let mut constants = self.constants.clone();
-                    constants.push(("RECORD_KINETIC", 1.0));
-                    let pipeline = self.ctx.pipeline::<T>(self.kernel, self.build, &constants);
-                    self.record_step = Some(pipeline);
-                }
-                // The tiled kernel's recording variant steps every batch
-                // from now on (shaders/tiled.wgsl TILE_RECORDS).
-                if self.kernel == Kernel::Tiled {
-                    self.constants.push(("TILE_RECORDS", 1.0));
-                    self.pipeline =
-                        self.ctx
-                            .pipeline::<T>(self.kernel, self.build, &self.constants);
+                if site != recorder::RecordSite::Persistent {
+                    self.record_finish = Some(self.ctx.pipeline_of::<T>(
+                        kernel,
+                        build,
+                        RECORD_BATCH_FINISH,
+                        &self.constants,
+                    ));
                 }
                 self.recorder = Some(rec);
                 Ok(true)
             }
-            // Output kernels this adapter cannot build: host snapshots,
-            // the reference path, record the same samples.
+            // Records this adapter cannot hold: host snapshots, the
+            // reference path, record the same samples.
             Err(_) => Ok(false),
         }
     }

@@ -90,10 +90,10 @@ pub enum GpuPath {
 /// Where the output samples of a run with an output file are made.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, clap::ValueEnum)]
 pub enum GpuOutput {
-    /// On the device (`shaders/record.wgsl`, and in the persistent
-    /// kernel's loop): only the channels due are read back, asynchronously
-    /// with the batches; an ensemble records all its scenes in one dispatch
-    /// (in the run's precision, mixed f32 or f64).
+    /// On the device, by the step kernels in their steps
+    /// (`shaders/record_common.wgsl`): only the channels due are read
+    /// back, asynchronously with the batches; an ensemble records all its
+    /// scenes together (in the run's precision, mixed f32 or f64).
     #[default]
     Device,
     /// A whole-state snapshot read back at every output step (the

@@ -1,21 +1,18 @@
-//! Output samples recorded on the device (`shaders/record.wgsl`): which
-//! steps of a batch are samples and where their records go, the two
-//! dispatches that write them, the copy of a batch's records into a staging
-//! buffer read back with the batch's status, and their decoding into
-//! `Sample`s. Only the channels due are written and copied. An ensemble's
-//! scenes are recorded together: the same steps, one dispatch for all
-//! (workgroup row z is scene z), each scene in its own region of every
-//! record buffer (its plan says where).
+//! Output samples recorded on the device, by the step kernels in their
+//! steps (`shaders/record_common.wgsl`): which steps of a batch are
+//! samples and where their records go, the copy of a batch's records into
+//! a staging buffer read back with the batch's status, and their decoding
+//! into `Sample`s. Only the channels due are copied. An ensemble's scenes
+//! are recorded together: the same steps, each scene in its own region of
+//! every record buffer (its plan says where).
 
-use super::compile::ShaderChecks;
 use super::context::GpuContext;
 use super::layout::{
     GpuRecordEntry, GpuRecordPlan, GpuSampleSums, RECORD_BULK, RECORD_BULK_WORDS, RECORD_FAST,
-    RECORD_GLOBAL, RECORD_INTERFACE, RECORD_INTERFACE_WORDS, WORKGROUP,
+    RECORD_GLOBAL, RECORD_INTERFACE, RECORD_INTERFACE_WORDS,
 };
 use super::options::ONE_STEP_BATCH;
 use super::precision::GpuReal;
-use super::record_pipelines::{RecordPipelines, RECORD_SMALL_BLOCKS};
 use crate::engines::{BulkField, InterfaceRow, Sample, SamplePlan, SampleSums};
 use crate::model::{Driver, Model};
 use wgpu::util::DeviceExt;
@@ -24,27 +21,18 @@ use wgpu::util::DeviceExt;
 /// a batch ends early rather than go past it (one bulk field always fits).
 const ROWS_BUDGET: u64 = 64 << 20;
 
-/// The most samples of a batch of the tiled kernel, which keeps a partial
-/// per tile for each: a batch ends early rather than plan more. At
-/// Table S1's cadences (a planned sample every 4 or 5 steps) a batch of
-/// `ONE_STEP_BATCH` steps plans about 230; a quarter of the other kernels'
-/// room keeps an ensemble's partials a quarter as large.
+/// The partials of one batch's samples at most (all scenes'): a batch of
+/// the kernels that keep a partial per workgroup and sample ends early
+/// rather than plan more samples than fit (one always does).
+const PARTIALS_BUDGET: u64 = 64 << 20;
+
+/// The most samples of a batch of the tiled kernel. At Table S1's cadences
+/// (a planned sample every 4 or 5 steps) a batch of `ONE_STEP_BATCH` steps
+/// plans about 230.
 const TILED_SAMPLES_A_BATCH: u32 = 256;
 
-/// The state buffers the output kernels read.
-pub struct StateBuffers<'a> {
-    pub consts: &'a wgpu::Buffer,
-    pub disp: &'a [wgpu::Buffer; 2],
-    pub vel: &'a [wgpu::Buffer; 2],
-    pub force: &'a wgpu::Buffer,
-    pub flags: &'a wgpu::Buffer,
-    pub contact: &'a wgpu::Buffer,
-    pub junction_state: &'a wgpu::Buffer,
-    pub slide: &'a wgpu::Buffer,
-}
-
-/// A sample asked for in a batch: after the step dispatch at `offset` (or
-/// after the batch's forces-only pass), at global step `step`.
+/// A sample asked for in a batch: in the step dispatch at `offset` (or in
+/// the batch's forces-only pass), at global step `step`.
 #[derive(Debug, Clone, Copy)]
 pub struct Planned {
     pub offset: u64,
@@ -71,24 +59,16 @@ pub struct Recorder<T: GpuReal> {
     plan: SamplePlan,
     /// Scene by scene.
     models: Vec<Model>,
-    pipelines: std::sync::Arc<RecordPipelines>,
     plan_buffer: wgpu::Buffer,
     sums: wgpu::Buffer,
     rows: wgpu::Buffer,
+    /// The batch's samples in step order (`GpuRecordEntry`).
     entries: wgpu::Buffer,
-    group: wgpu::BindGroup,
-    entry_group: wgpu::BindGroup,
-    /// Bytes between entries: the dynamic-offset alignment for the output
-    /// kernels, the entry's size for the persistent kernel (an array).
-    stride: u64,
-    /// Workgroups of `record_sample` (x, y); None: one `record_small`, or
-    /// no output kernel (the persistent and tiled kernels record in their
-    /// steps). With them, the step dispatch of a sample sums each
-    /// partial's kinetic energy (the one-step kernels' recording variant):
-    /// then a sample without a bulk field takes `record_special` over
-    /// these partials, not `record_sample`.
-    groups: Option<(u32, u32)>,
-    special_count: u32,
+    /// The one-step kernels' (`RecordSite::Steps`; a placeholder for the
+    /// others): the index of each step offset's sample among the entries
+    /// (`shaders/record_step.wgsl` step_samples).
+    step_samples: Option<wgpu::Buffer>,
+    placeholder: wgpu::Buffer,
     max_entries: u32,
     max_interface: u32,
     max_bulk: u32,
@@ -108,120 +88,61 @@ fn words<T>(bytes: u64) -> u64 {
     bytes / size_of::<T>() as u64
 }
 
-/// How a sample's partials split a lattice: each holds `WORKGROUP`
-/// consecutive blocks, or `WORKGROUP` items of the one-step kernels'
-/// patched threads (`shaders/patch_items.wgsl`: interface block t below
-/// nx, then the 2×2 patches of the rows above, ⌈nx/2⌉ a row).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct Partials {
-    nx: u32,
-    nz: u32,
-    by_patches: bool,
-}
-
-impl Partials {
-    pub fn of(m: &Model, by_patches: bool) -> Partials {
-        Partials {
-            nx: m.nx as u32,
-            nz: m.nz as u32,
-            by_patches,
-        }
-    }
-
-    /// Blocks, or items.
-    fn items(self) -> u32 {
-        if self.by_patches {
-            self.nx + self.nx.div_ceil(2) * (self.nz - 1).div_ceil(2)
-        } else {
-            self.nx * self.nz
-        }
-    }
-
-    pub fn count(self) -> u32 {
-        self.items().div_ceil(WORKGROUP)
-    }
-
-    /// The partial that holds the block at `column` and `row`.
-    fn holding(self, column: u32, row: u32) -> u32 {
-        let item = if !self.by_patches || row == 0 {
-            row * self.nx + column
-        } else {
-            self.nx + (row - 1) / 2 * self.nx.div_ceil(2) + column / 2
-        };
-        item / WORKGROUP
-    }
-
-    /// The partials of any of the scenes that hold a block adding more
-    /// than kinetic energy to a sample: the interface row, the top row
-    /// where the top reaction is summed, the driven block. In increasing
-    /// order, each once (`record_special`).
-    fn special(self, models: &[Model]) -> Vec<u32> {
-        let (nx, nz) = (self.nx, self.nz);
-        let mut groups: Vec<u32> = (0..=self.holding(nx - 1, 0)).collect();
-        for m in models {
-            match m.driver {
-                Driver::TopVelocity { .. } => {
-                    groups.extend(self.holding(0, nz - 1)..=self.holding(nx - 1, nz - 1))
-                }
-                Driver::SideSpring { row, .. } => groups.push(self.holding(0, row as u32)),
-                _ => {}
-            }
-        }
-        groups.sort_unstable();
-        groups.dedup();
-        groups
-    }
-}
-
 /// Where a step kernel's output samples are recorded.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum RecordSite {
-    /// By the output kernels, after a sample's step dispatch (the one-step
-    /// kernels, whose recording variant `RECORD_KINETIC` a large lattice's
-    /// samples then use). `stride`: the dynamic-offset alignment of the
-    /// entries; `partials`: how the partials split the lattice (as the
-    /// step kernel's workgroups do).
-    Dispatches { stride: u64, partials: Partials },
-    /// Inside the persistent kernel's loop, which reads the entries as an
-    /// array.
+    /// In the one-step kernels' step dispatch of each sample (their
+    /// recording variant, `STEP_RECORDS`): a partial per workgroup of the
+    /// dispatch (`partials` of them a scene) and sample, added after the
+    /// batch (`record_batch_finish`).
+    Steps { partials: u32 },
+    /// Inside the persistent kernel's loop, which reduces each sample
+    /// across its workgroup itself.
     Persistent,
     /// Inside the tiled kernel's steps: a partial per tile (`tiles` a
-    /// scene) and sample, added after the batch (`tile_record_finish`).
+    /// scene) and sample, added after the batch (`record_batch_finish`).
     Tiles { tiles: u32 },
+}
+
+impl RecordSite {
+    /// A sample's partials a scene.
+    fn partials(self) -> u32 {
+        match self {
+            RecordSite::Steps { partials } => partials,
+            RecordSite::Persistent => 0,
+            RecordSite::Tiles { tiles } => tiles,
+        }
+    }
 }
 
 impl<T: GpuReal> Recorder<T> {
     /// The recorder of an engine's scenes (`models`, one lattice) whose
     /// step kernel records at `site`, or why the device cannot hold the
-    /// records of one batch. `checks`: the run-time checks of the output
-    /// kernels' module, as the step kernel's.
+    /// records of one batch.
     pub fn new(
         ctx: &GpuContext,
         models: &[Model],
-        state: StateBuffers,
         plan: &SamplePlan,
         site: RecordSite,
-        checks: ShaderChecks,
     ) -> Result<Recorder<T>, String> {
-        // The others read the entries as an array.
-        let (stride, layout) = match site {
-            RecordSite::Dispatches { stride, partials } => (stride, partials),
-            _ => (
-                size_of::<GpuRecordEntry>() as u64,
-                Partials::of(&models[0], false),
-            ),
-        };
         let device = &ctx.device;
         let model = &models[0];
         let scenes = models.len() as u64;
         let (n, nx) = (model.n_blocks() as u64, model.nx as u64);
         let real = size_of::<T>() as u64;
+        let sums_size = size_of::<GpuSampleSums<T>>() as u64;
         let interface_bytes = nx * RECORD_INTERFACE_WORDS as u64 * real;
         let bulk_bytes = n * RECORD_BULK_WORDS as u64 * real;
-        let max_entries = match site {
-            RecordSite::Tiles { .. } => TILED_SAMPLES_A_BATCH,
-            _ => ONE_STEP_BATCH as u32 + 1,
+        // Each sample of a batch keeps its partials until the batch's end.
+        let partials = site.partials() as u64;
+        let most = match site {
+            RecordSite::Tiles { .. } => TILED_SAMPLES_A_BATCH as u64,
+            _ => ONE_STEP_BATCH + 1,
         };
+        let max_entries = match partials {
+            0 => most,
+            p => (PARTIALS_BUDGET / (scenes * p * sums_size)).clamp(1, most),
+        } as u32;
         let budget = ROWS_BUDGET / 2 / scenes;
         let max_interface = (budget / interface_bytes).clamp(1, max_entries as u64) as u32;
         let max_bulk = if plan.every_bulk > 0 {
@@ -242,26 +163,8 @@ impl<T: GpuReal> Recorder<T> {
                 ctx.info.name
             ));
         }
-        // The output kernels' partials, or the tiled kernel's: a tile's
-        // each of a batch's samples.
-        let (partials, groups) = match site {
-            RecordSite::Dispatches { .. } => {
-                let partials = layout.count();
-                let groups = (model.n_blocks() > RECORD_SMALL_BLOCKS)
-                    .then(|| super::step_kernel::groups_for(partials));
-                (partials, groups)
-            }
-            RecordSite::Persistent => (0, None),
-            RecordSite::Tiles { tiles } => (max_entries * tiles, None),
-        };
-        let special = layout.special(models);
-        let special_groups = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("record special groups"),
-            contents: bytemuck::cast_slice(&special),
-            usage: wgpu::BufferUsages::STORAGE,
-        });
-        let sums_per_scene = (max_entries + partials) as u64;
-        let sums_bytes = scenes * sums_per_scene * size_of::<GpuSampleSums<T>>() as u64;
+        let sums_per_scene = max_entries as u64 * (1 + partials);
+        let sums_bytes = scenes * sums_per_scene * sums_size;
         if sums_bytes > limit {
             return Err(format!(
                 "the sums of one batch's samples need {sums_bytes} bytes, {} binds at most {limit}",
@@ -286,8 +189,8 @@ impl<T: GpuReal> Recorder<T> {
                     },
                     top_reaction: matches!(m.driver, Driver::TopVelocity { .. }) as u32,
                     junctions_per_block: (m.n_junctions() / m.nx.max(1)) as u32,
-                    partials,
-                    partials_by_patches: layout.by_patches as u32,
+                    partials: partials as u32,
+                    reserved_a: 0,
                     reserved: 0,
                     sums_offset: (k * sums_per_scene) as u32,
                     partials_offset: (k * sums_per_scene) as u32 + max_entries,
@@ -311,65 +214,29 @@ impl<T: GpuReal> Recorder<T> {
         };
         let sums = storage("record sums", sums_bytes, wgpu::BufferUsages::COPY_SRC);
         let rows = storage("record rows", rows_bytes, wgpu::BufferUsages::COPY_SRC);
-        let entries = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("record entries"),
-            size: max_entries as u64 * stride.max(size_of::<GpuRecordEntry>() as u64),
-            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
+        let entries = storage(
+            "record entries",
+            max_entries as u64 * size_of::<GpuRecordEntry>() as u64,
+            wgpu::BufferUsages::COPY_DST,
+        );
+        // A one-step batch's steps (`GpuEngine::batch_steps`).
+        let step_samples = matches!(site, RecordSite::Steps { .. }).then(|| {
+            storage(
+                "record step samples",
+                ONE_STEP_BATCH * 4,
+                wgpu::BufferUsages::COPY_DST,
+            )
         });
-        let pipelines = ctx.record_pipelines::<T>(checks);
-        let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("record"),
-            layout: &pipelines.group,
-            entries: &pipelines.bindings.entries(
-                0,
-                &[
-                    ("scene_consts", state.consts),
-                    ("disp_a", &state.disp[0]),
-                    ("vel_a", &state.vel[0]),
-                    ("disp_b", &state.disp[1]),
-                    ("vel_b", &state.vel[1]),
-                    ("force", state.force),
-                    ("flags", state.flags),
-                    ("contact", state.contact),
-                    ("junction_state", state.junction_state),
-                    ("slide", state.slide),
-                    ("plans", &plan_buffer),
-                    ("sums", &sums),
-                    ("rows", &rows),
-                    ("special_groups", &special_groups),
-                ]
-                .map(|(name, buffer)| (name, buffer.as_entire_binding())),
-            ),
-        });
-        let entry_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("record entry"),
-            layout: &pipelines.entry,
-            entries: &pipelines.bindings.entries(
-                1,
-                &[(
-                    super::record_pipelines::RECORD_ENTRY,
-                    wgpu::BindingResource::Buffer(wgpu::BufferBinding {
-                        buffer: &entries,
-                        offset: 0,
-                        size: wgpu::BufferSize::new(size_of::<GpuRecordEntry>() as u64),
-                    }),
-                )],
-            ),
-        });
+        let placeholder = storage("no step samples", 16, wgpu::BufferUsages::empty());
         Ok(Recorder {
             plan: *plan,
             models: models.to_vec(),
-            pipelines,
             plan_buffer,
             sums,
             rows,
             entries,
-            group,
-            entry_group,
-            stride,
-            groups,
-            special_count: special.len() as u32,
+            step_samples,
+            placeholder,
             max_entries,
             max_interface,
             max_bulk,
@@ -382,11 +249,16 @@ impl<T: GpuReal> Recorder<T> {
         })
     }
 
-    /// The buffers the step kernels bind: the persistent kernel at 13
-    /// (plan), 14 (sums), 15 (rows) and 16 (entries); the one-step kernels'
-    /// recording variant plans and sums.
-    pub fn state_bindings(&self) -> [&wgpu::Buffer; 4] {
-        [&self.plan_buffer, &self.sums, &self.rows, &self.entries]
+    /// The buffers the step kernels bind, by their names in the shaders:
+    /// `plans`, `sums`, `rows`, `record_entries` and `step_samples`.
+    pub fn state_bindings(&self) -> [&wgpu::Buffer; 5] {
+        [
+            &self.plan_buffer,
+            &self.sums,
+            &self.rows,
+            &self.entries,
+            self.step_samples.as_ref().unwrap_or(&self.placeholder),
+        ]
     }
 
     /// Whether `plan` has the cadences this recorder samples at (its fast
@@ -417,10 +289,10 @@ impl<T: GpuReal> Recorder<T> {
         self.recorded_through.is_none_or(|r| step > r) && self.plan.due(step).any()
     }
 
-    /// The samples of a batch of `steps` steps from `first` whose first
-    /// step reads state copy `parity`, and how many steps the batch may
-    /// take before its records would overflow (≤ `steps`).
-    pub fn plan_batch(&self, first: u64, steps: u64, parity: usize) -> (Vec<Planned>, u64) {
+    /// The samples of a batch of `steps` steps from `first`, and how many
+    /// steps the batch may take before its records would overflow
+    /// (≤ `steps`).
+    pub fn plan_batch(&self, first: u64, steps: u64) -> (Vec<Planned>, u64) {
         let mut planned = Vec::new();
         let (mut interface, mut bulk) = (0u32, 0u32);
         for offset in 0..steps {
@@ -445,7 +317,6 @@ impl<T: GpuReal> Recorder<T> {
                 step,
                 entry: GpuRecordEntry {
                     offset: offset as u32,
-                    copy: ((parity as u64 + offset) & 1) as u32,
                     channels,
                     sums_slot: planned.len() as u32,
                     interface_slot: interface,
@@ -460,85 +331,31 @@ impl<T: GpuReal> Recorder<T> {
 
     /// The sample of the current step (after a forces-only pass), if it is
     /// one not yet taken.
-    pub fn plan_now(&self, step: u64, copy: usize) -> Vec<Planned> {
+    pub fn plan_now(&self, step: u64) -> Vec<Planned> {
         if !self.wanted(step) {
             return Vec::new();
         }
-        let mut v = self.plan_batch(step, 1, copy).0;
-        // No step dispatch runs: the copy is the current one.
-        if let Some(p) = v.first_mut() {
-            p.entry.copy = copy as u32;
-        }
-        v
+        self.plan_batch(step, 1).0
     }
 
-    /// Writes a batch's entries (before its submit) and marks its samples
-    /// as taken.
+    /// Writes a batch's entries (before its submit): the samples in step
+    /// order, and the sample of each step offset; marks its samples as
+    /// taken.
     pub fn write_entries(&mut self, queue: &wgpu::Queue, planned: &[Planned]) {
-        if planned.is_empty() {
+        let Some(last) = planned.last() else {
             return;
-        }
-        let mut table = vec![0u8; planned.len() * self.stride as usize];
-        for (k, p) in planned.iter().enumerate() {
-            let at = k * self.stride as usize;
-            table[at..at + size_of::<GpuRecordEntry>()]
-                .copy_from_slice(bytemuck::bytes_of(&p.entry));
-        }
-        queue.write_buffer(&self.entries, 0, &table);
-        self.recorded_through = planned.last().map(|p| p.step);
-    }
-
-    /// Whether the step dispatch of sample `entry` is to sum each
-    /// partial's kinetic energy (the one-step kernels' recording variant,
-    /// `RECORD_KINETIC`): lattices recorded in two dispatches, when no
-    /// bulk field is due (`record_sample` writes every partial then).
-    pub fn kinetic_in_step(&self, entry: &GpuRecordEntry) -> bool {
-        self.kinetic_in_steps() && entry.channels & RECORD_BULK == 0
-    }
-
-    /// Whether any sample's step dispatch may sum kinetic energy (the
-    /// engine then builds the recording variant of its step kernel).
-    pub fn kinetic_in_steps(&self) -> bool {
-        self.groups.is_some()
-    }
-
-    /// Records sample `k` of the batch, `entry`, (one or two dispatches)
-    /// in `pass`, calling `after_each` after each dispatch (the dispatch
-    /// timing's marks); the caller sets its own pipeline and groups again
-    /// afterwards. Returns the dispatches.
-    pub fn encode(
-        &self,
-        pass: &mut wgpu::ComputePass,
-        k: usize,
-        entry: &GpuRecordEntry,
-        after_each: &mut dyn FnMut(&mut wgpu::ComputePass),
-    ) -> u64 {
-        let offset = (k as u64 * self.stride) as u32;
-        pass.set_bind_group(0, &self.group, &[]);
-        pass.set_bind_group(1, &self.entry_group, &[offset]);
-        let scenes = self.models.len() as u32;
-        match self.groups {
-            None => {
-                pass.set_pipeline(&self.pipelines.small);
-                pass.dispatch_workgroups(1, 1, scenes);
-                after_each(pass);
-                1
+        };
+        let entries: Vec<GpuRecordEntry> = planned.iter().map(|p| p.entry).collect();
+        queue.write_buffer(&self.entries, 0, bytemuck::cast_slice(&entries));
+        if let Some(buffer) = &self.step_samples {
+            // Offsets of no sample: no step reads them.
+            let mut step_samples = vec![u32::MAX; last.offset as usize + 1];
+            for (k, p) in planned.iter().enumerate() {
+                step_samples[p.offset as usize] = k as u32;
             }
-            Some((x, y)) => {
-                if self.kinetic_in_step(entry) {
-                    pass.set_pipeline(&self.pipelines.special);
-                    pass.dispatch_workgroups(self.special_count, 1, scenes);
-                } else {
-                    pass.set_pipeline(&self.pipelines.sample);
-                    pass.dispatch_workgroups(x, y, scenes);
-                }
-                after_each(pass);
-                pass.set_pipeline(&self.pipelines.finish);
-                pass.dispatch_workgroups(1, 1, scenes);
-                after_each(pass);
-                2
-            }
+            queue.write_buffer(buffer, 0, bytemuck::cast_slice(&step_samples));
         }
+        self.recorded_through = Some(last.step);
     }
 
     /// Copies the batch's records (only the slots it used) into a staging
@@ -722,67 +539,5 @@ impl<T: GpuReal> Recorder<T> {
             });
         }
         samples
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// The first block (column, row) of the one-step kernels' patch item
-    /// `t` ≥ nx on a lattice `nx` wide (`shaders/patch_items.wgsl`, the
-    /// same name; the host needs only its inverse, `Partials::holding`);
-    /// its row is nz or more past the last patch.
-    fn patch_item_origin(t: u32, nx: u32) -> (u32, u32) {
-        let columns = nx.div_ceil(2);
-        let p = t - nx;
-        (2 * (p % columns), 1 + 2 * (p / columns))
-    }
-
-    /// Every block of odd and even lattices lies in one item of the
-    /// patched layout (patch_item_origin), and `Partials::holding` names
-    /// that item's partial; the plain layout holds WORKGROUP consecutive
-    /// blocks.
-    #[test]
-    fn partials_by_patches_hold_each_block_once() {
-        for (nx, nz) in [(57, 31), (256, 128), (15, 8), (130, 1), (3, 2)] {
-            let by_patches = Partials {
-                nx,
-                nz,
-                by_patches: true,
-            };
-            let mut seen = vec![0u32; (nx * nz) as usize];
-            let mut partial_of = vec![u32::MAX; (nx * nz) as usize];
-            for t in 0..by_patches.items() {
-                let blocks: Vec<(u32, u32)> = if t < nx {
-                    vec![(t, 0)]
-                } else {
-                    let (x0, z0) = patch_item_origin(t, nx);
-                    [(0, 0), (1, 0), (0, 1), (1, 1)]
-                        .iter()
-                        .map(|&(dx, dz)| (x0 + dx, z0 + dz))
-                        .filter(|&(x, z)| x < nx && z < nz)
-                        .collect()
-                };
-                assert!(!blocks.is_empty(), "{nx}×{nz}: item {t} is empty");
-                for (x, z) in blocks {
-                    seen[(z * nx + x) as usize] += 1;
-                    partial_of[(z * nx + x) as usize] = t / WORKGROUP;
-                }
-            }
-            assert!(seen.iter().all(|&n| n == 1), "{nx}×{nz}: {seen:?}");
-            for z in 0..nz {
-                for x in 0..nx {
-                    assert_eq!(by_patches.holding(x, z), partial_of[(z * nx + x) as usize]);
-                }
-            }
-            assert!(by_patches.count() * WORKGROUP >= by_patches.items());
-            let plain = Partials {
-                by_patches: false,
-                ..by_patches
-            };
-            assert_eq!(plain.holding(nx - 1, nz - 1), (nx * nz - 1) / WORKGROUP);
-            assert_eq!(plain.count(), (nx * nz).div_ceil(WORKGROUP));
-        }
     }
 }

@@ -8,10 +8,8 @@
 //! tiled kernel's tile and halo), `junction_store` (where the junctions
 //! are stepped: storage, or for the tiled kernel its halo's private
 //! copies too), `lane_merge` (the junction lanes' sums merged in subgroups
-//! before storage, or not: `LaneMerge`), `coordinates` (double-single or
-//! f64: the precision) and
-//! `bindings` (where the output code finds the state buffers: the
-//! kernels' common.wgsl, or the output module's read-only views). A module
+//! before storage, or not: `LaneMerge`) and `coordinates` (double-single
+//! or f64: the precision). A module
 //! is the generated prelude of `layout.rs` and the closure of its entry
 //! file's imports, each file once (WGSL declarations are order-free).
 //! Every file validates with naga with only what it imports, so the
@@ -51,10 +49,10 @@ wgsl_files!(
     "one_step_lanes",
     "patch_items",
     "persistent",
-    "record",
+    "record_batch",
     "record_buffers",
     "record_common",
-    "record_kinetic",
+    "record_step",
     "rng",
     "scene",
     "state_one_step",
@@ -120,19 +118,17 @@ pub struct Slots {
     pub junction_store: &'static str,
     pub lane_merge: &'static str,
     pub coordinates: &'static str,
-    pub bindings: &'static str,
 }
 
 impl Slots {
     /// A kernel's slots: its state, the junctions in storage, `T`'s
-    /// coordinates, the kernels' bindings.
+    /// coordinates.
     pub fn kernel<T: GpuReal>(state: &'static str) -> Slots {
         Slots {
             state,
             junction_store: "junction_store",
             lane_merge: LaneMerge::Storage.file(),
             coordinates: T::COORDINATES,
-            bindings: "common",
         }
     }
 
@@ -142,7 +138,6 @@ impl Slots {
             "junction_store" => self.junction_store,
             "lane_merge" => self.lane_merge,
             "coordinates" => self.coordinates,
-            "bindings" => self.bindings,
             other => other,
         }
     }
@@ -167,38 +162,6 @@ pub fn compose(prelude: &str, entry: &str, slots: &Slots) -> Result<String, Stri
     for name in order {
         module += &format!("\n// ---- shaders/{name}.wgsl\n");
         module += file(name).unwrap_or_default();
-    }
-    Ok(module)
-}
-
-/// The output kernels' module (`record_small`, `record_sample`,
-/// `record_special`, `record_finish`): scene 0 of the state buffers, no override constants.
-pub fn record_source<T: GpuReal>() -> String {
-    let slots = Slots {
-        bindings: "record",
-        ..Slots::kernel::<T>("state_one_step")
-    };
-    compose(&super::layout::wgsl_prelude::<T>(), "record", &slots)
-        .expect("the shader files' imports resolve (tested)")
-}
-
-/// Parses and validates the output kernels' module with naga.
-pub fn validate_record<T: GpuReal>() -> Result<naga::Module, String> {
-    let src = record_source::<T>();
-    let module = naga::front::wgsl::parse_str(&src)
-        .map_err(|e| format!("record: {}", e.emit_to_string(&src)))?;
-    naga::valid::Validator::new(naga::valid::ValidationFlags::all(), T::CAPABILITIES)
-        .validate(&module)
-        .map_err(|e| format!("record: {}", e.emit_to_string(&src)))?;
-    for name in [
-        "record_small",
-        "record_sample",
-        "record_special",
-        "record_finish",
-    ] {
-        if !module.entry_points.iter().any(|e| e.name == name) {
-            return Err(format!("record: entry point {name} missing"));
-        }
     }
     Ok(module)
 }
@@ -462,7 +425,6 @@ mod tests {
                 slots.junction_store = name;
             }
             "double_single" | "coord_f64" => slots.coordinates = name,
-            "common" | "record" => slots.bindings = name,
             _ => {}
         }
         slots
@@ -561,14 +523,7 @@ mod tests {
             let wanted = imports(text).unwrap_or_else(|e| panic!("{name}: {e}"));
             for w in wanted {
                 let known = file(w).is_some()
-                    || [
-                        "state",
-                        "junction_store",
-                        "lane_merge",
-                        "coordinates",
-                        "bindings",
-                    ]
-                    .contains(&w);
+                    || ["state", "junction_store", "lane_merge", "coordinates"].contains(&w);
                 assert!(known, "{name}.wgsl imports unknown {w}");
             }
         }
@@ -621,7 +576,6 @@ mod tests {
                     .unwrap_or_else(|e| panic!("{} {lanes:?}: {e}", T::NAME));
             }
         }
-        validate_record::<T>().unwrap_or_else(|e| panic!("{}: {e}", T::NAME));
     }
 
     #[test]

@@ -99,6 +99,13 @@ impl StepKernel {
         if let Some(g) = self.geometry {
             return (g.tiles, 1);
         }
+        groups_for(self.workgroups(model))
+    }
+
+    /// The workgroups of a one-step dispatch of one scene that hold blocks
+    /// (`groups` may pad them to fit its two dimensions); each keeps a
+    /// partial of a sample (`shaders/record_step.wgsl`).
+    pub fn workgroups(&self, model: &Model) -> u32 {
         let junction_groups = match (self.kernel, model.law) {
             (Kernel::OneStepLanes, FrictionLaw::Junctions | FrictionLaw::SingleJunction) => {
                 model.nx as u32
@@ -109,14 +116,13 @@ impl StepKernel {
             // The items of step_patches.wgsl: the interface row a thread a
             // block, then the patches; with junction workgroups, from the
             // run of WORKGROUP items that holds item nx (one_step_lanes.wgsl).
-            let (nx, nz) = (model.nx as u32, model.nz as u32);
-            let items = nx + nx.div_ceil(2) * (nz - 1).div_ceil(2);
+            let items = patch_items(model.nx as u32, model.nz as u32);
             let first = if junction_groups > 0 {
-                nx / WORKGROUP * WORKGROUP
+                model.nx as u32 / WORKGROUP * WORKGROUP
             } else {
                 0
             };
-            return groups_for(junction_groups + (items - first).div_ceil(WORKGROUP));
+            return junction_groups + (items - first).div_ceil(WORKGROUP);
         }
         // With junction workgroups, the others start at the first block of
         // the workgroup-sized run that holds block nx (one_step_lanes.wgsl).
@@ -125,8 +131,7 @@ impl StepKernel {
         } else {
             0
         };
-        let plain_groups = (model.n_blocks() as u32 - first_plain).div_ceil(WORKGROUP);
-        groups_for(junction_groups + plain_groups)
+        junction_groups + (model.n_blocks() as u32 - first_plain).div_ceil(WORKGROUP)
     }
 }
 
@@ -301,4 +306,52 @@ pub fn groups_for(workgroups: u32) -> (u32, u32) {
     let groups = workgroups.max(1);
     let x = groups.min(65_535);
     (x, groups.div_ceil(x))
+}
+
+/// Threads of the one-step kernels by patches on a lattice `nx` × `nz`
+/// (`shaders/patch_items.wgsl`): the interface row a block each, then the
+/// 2×2 patches of the rows above, ⌈nx/2⌉ a row.
+fn patch_items(nx: u32, nz: u32) -> u32 {
+    nx + nx.div_ceil(2) * (nz - 1).div_ceil(2)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The first block (column, row) of the one-step kernels' patch item
+    /// `t` ≥ nx on a lattice `nx` wide (`shaders/patch_items.wgsl`, the
+    /// same name); its row is nz or more past the last patch.
+    fn patch_item_origin(t: u32, nx: u32) -> (u32, u32) {
+        let columns = nx.div_ceil(2);
+        let p = t - nx;
+        (2 * (p % columns), 1 + 2 * (p / columns))
+    }
+
+    /// Every block of odd and even lattices lies in exactly one of the
+    /// `patch_items` items (patch_item_origin), and none is empty: each
+    /// block's part of a sample is summed once.
+    #[test]
+    fn patch_items_hold_each_block_once() {
+        for (nx, nz) in [(57, 31), (256, 128), (15, 8), (130, 1), (3, 2)] {
+            let mut seen = vec![0u32; (nx * nz) as usize];
+            for t in 0..patch_items(nx, nz) {
+                let blocks: Vec<(u32, u32)> = if t < nx {
+                    vec![(t, 0)]
+                } else {
+                    let (x0, z0) = patch_item_origin(t, nx);
+                    [(0, 0), (1, 0), (0, 1), (1, 1)]
+                        .iter()
+                        .map(|&(dx, dz)| (x0 + dx, z0 + dz))
+                        .filter(|&(x, z)| x < nx && z < nz)
+                        .collect()
+                };
+                assert!(!blocks.is_empty(), "{nx}×{nz}: item {t} is empty");
+                for (x, z) in blocks {
+                    seen[(z * nx + x) as usize] += 1;
+                }
+            }
+            assert!(seen.iter().all(|&n| n == 1), "{nx}×{nz}: {seen:?}");
+        }
+    }
 }

@@ -1,0 +1,69 @@
+// A batch's output samples when the step kernels record them in their
+// steps (the one-step kernels' recording variant, record_step.wgsl, and
+// the tiled kernel): each workgroup of a sample's step writes a partial of
+// its own, and no sample ends a dispatch. After the batch's steps,
+// record_batch_finish adds each sample's partials and decides which were
+// due. The entries are the batch's samples in step order
+// (src/engines/gpu/recorder.rs); sample k's partial g is
+// sums[plans[scene].partials_offset + k · plans[scene].partials + g].
+// CPU twin: src/engines/sample.rs record_sample (the sums), and
+// runner::outputs::Outputs::emit_sample (the fast cadence's rule).
+// import: common, record_buffers, record_common, scene
+
+@group(0) @binding(25) var<storage, read> record_entries: array<RecordEntry>;
+
+const RECORD_BATCH_THREADS: u32 = 64u;
+
+// Where sample `e`'s partial g goes.
+fn batch_partial_slot(e: RecordEntry, g: u32) -> u32 {
+    return plans[scene].partials_offset + e.sums_slot * plans[scene].partials + g;
+}
+
+// After a batch's step dispatches, one workgroup per scene: each sample's
+// partials added in their order (a fixed order: the same bits every run,
+// solo or in an ensemble), eight loaded before their combines (a thread's
+// chain of storage round trips is this dispatch's length); then, sample by
+// sample in step order, the fast cadence's rule decides which were due (a
+// planned fast-cadence sample is due only if the sample before it left
+// the cadence on), as the persistent kernel decides it at each sample.
+@compute @workgroup_size(RECORD_BATCH_THREADS)
+fn record_batch_finish(
+    @builtin(local_invocation_index) t: u32,
+    @builtin(workgroup_id) wid: vec3<u32>,
+) {
+    enter_scene(wid.z);
+    let partials = plans[scene].partials;
+    for (var k = t; k < batch.records; k += RECORD_BATCH_THREADS) {
+        let e = record_entries[k];
+        let at = batch_partial_slot(e, 0u);
+        var total = no_sums();
+        var g = 0u;
+        for (; g + 8u <= partials; g += 8u) {
+            let p0 = sums[at + g];
+            let p1 = sums[at + g + 1u];
+            let p2 = sums[at + g + 2u];
+            let p3 = sums[at + g + 3u];
+            let p4 = sums[at + g + 4u];
+            let p5 = sums[at + g + 5u];
+            let p6 = sums[at + g + 6u];
+            let p7 = sums[at + g + 7u];
+            total = combine(combine(combine(combine(total, p0), p1), p2), p3);
+            total = combine(combine(combine(combine(total, p4), p5), p6), p7);
+        }
+        for (; g < partials; g++) {
+            total = combine(total, sums[at + g]);
+        }
+        sums[sums_slot(e)] = total;
+    }
+    storageBarrier();
+    if t == 0u {
+        for (var k = 0u; k < batch.records; k++) {
+            let e = record_entries[k];
+            if sample_due(e) {
+                settle_sample(e, sums[sums_slot(e)]);
+            } else {
+                sums[sums_slot(e)].recorded = 0u;
+            }
+        }
+    }
+}

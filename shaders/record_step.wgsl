@@ -1,0 +1,44 @@
+// The one-step kernels' recording variant (STEP_RECORDS, set on its
+// pipeline only; the engine dispatches it for the steps of a batch's output
+// samples): the step dispatch of a sample also sums its workgroup's part
+// of the sample, from the state it reads (u(s), v(s−½)) and the forces,
+// friction and junction states of s it computes, into the sample's partial
+// of that workgroup (record_batch.wgsl), and writes its blocks' interface
+// row and bulk field where planned. So no output dispatch follows a
+// sample's step: record_batch_finish adds the partials once a batch.
+// A planned fast-cadence row is written whether the cadence turns out on
+// or not (interface_planned): the samples before it decide that, in the
+// finish.
+// CPU twin: src/engines/sample.rs record_sample.
+// import: common, record_batch, record_buffers, record_common, scene, state
+
+override STEP_RECORDS: bool = false;
+
+// The batch's sample at each step offset (an index into record_entries;
+// only the recording variant's steps read it).
+@group(0) @binding(26) var<storage, read> step_samples: array<u32>;
+
+// The sample of this dispatch's step.
+fn step_sample() -> RecordEntry {
+    return record_entries[step_samples[step_offset]];
+}
+
+// Block i's part of this step's sample, from the state the step read and
+// its force `f` and friction at the step (its normal force, on the
+// interface, from `contact`, which the step wrote or a snapshot did).
+fn step_block_sample(i: u32, e: RecordEntry, f: vec2<real>, friction: real) -> SampleSums {
+    var normal = real(0.0);
+    if i < c.nx {
+        normal = contact[interface_base() + i].y;
+    }
+    return block_sample(i, e, flags[i], load_disp(i), load_vel(i), f, friction, normal, interface_planned(e));
+}
+
+// Workgroup g's partial of this step's sample: its threads' parts reduced
+// in a fixed tree (the same bits every run). Uniform control flow only.
+fn write_step_partial(local: u32, g: u32, e: RecordEntry, part: SampleSums) {
+    reduce_threads(local, WORKGROUP, part);
+    if local == 0u && g < plans[scene].partials {
+        sums[batch_partial_slot(e, g)] = wg_sums[0];
+    }
+}
