@@ -70,6 +70,10 @@ step registers 60 gpu_registers
 #     its samples in the tiled kernel's steps), its registers against step 0's.
 step registers-recording 30 env SLIPFRONT_GPU_REGISTERS_SET=TILE_RECORDS=1 \
   SLIPFRONT_GPU_REGISTERS_LAUNCHES=tiled/256/8x4,tiled/1024/16x4,tiled/256/8x4/chained gpu_registers
+# 0c. The one-step kernels' recording variant (STEP_RECORDS: the step dispatch of a sample
+#     records it), its registers against step 0's.
+step registers-step-recording 30 env SLIPFRONT_GPU_REGISTERS_SET=STEP_RECORDS=1 \
+  SLIPFRONT_GPU_REGISTERS_LAUNCHES=one-step,one-step/bond-patches,one-step-lanes gpu_registers
 # 1. The targets, met or not: auto's pick against every launch timed again, Table S1
 #    µs/step, 256 scenes' aggregate, 64 scenes against one at a time, output cost; in f64
 #    (what a default run computes in on a GPU with f64 shaders) and then in mixed f32.

@@ -245,6 +245,50 @@ fn the_device_time_splits_between_step_and_record_dispatches() {
     );
 }
 
+/// The one-step kernels record a sample in the sample's own step dispatch
+/// (their recording variant): a run that records its samples makes the
+/// step dispatches of the run without (and one forces-only pass where it
+/// ends at a sample), and its only output dispatches are the batches'
+/// record finishes, far fewer than its samples (the build before made one
+/// or two output dispatches a sample).
+#[test]
+fn one_step_kernels_record_in_their_steps_with_one_finish_a_batch() {
+    let s = triggered(&["time.end=6e-4"]);
+    let m = Model::from_scenario(&s, false).unwrap();
+    let plan = plan(&m, &s);
+    for path in [GpuPath::OneStep, GpuPath::OneStepLanes] {
+        let run = |record: bool| {
+            let mut e = engine(&m, path, GpuOutput::Device);
+            if record {
+                assert!(e.record_samples(&plan).unwrap());
+            }
+            advance_to(&mut e, m.total_steps()).unwrap();
+            let samples = e.take_samples().len() as u64;
+            (
+                samples,
+                e.dispatches().unwrap(),
+                e.output_dispatches().unwrap(),
+            )
+        };
+        let (_, quiet, none) = run(false);
+        let (samples, steps, finishes) = run(true);
+        println!(
+            "{path:?}: {samples} samples; {steps} step dispatches recording, {quiet} without; \
+             {finishes} record finishes"
+        );
+        assert_eq!(none, 0);
+        assert!(samples >= 100, "{samples} samples");
+        assert!(
+            steps == quiet || steps == quiet + 1,
+            "{steps} step dispatches recording, {quiet} without"
+        );
+        assert!(
+            finishes >= 1 && 20 * finishes < samples,
+            "{finishes} output dispatches for {samples} samples"
+        );
+    }
+}
+
 fn temp(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("slipfront-record-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
