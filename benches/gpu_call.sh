@@ -71,8 +71,9 @@ step registers 60 gpu_registers
 step registers-recording 30 env SLIPFRONT_GPU_REGISTERS_SET=TILE_RECORDS=1 \
   SLIPFRONT_GPU_REGISTERS_LAUNCHES=tiled/256/8x4,tiled/1024/16x4,tiled/256/8x4/chained gpu_registers
 # 0c. The one-step kernels' recording variant (STEP_RECORDS: the step dispatch of a sample
-#     records it), its registers against step 0's.
-step registers-step-recording 30 env SLIPFRONT_GPU_REGISTERS_SET=STEP_RECORDS=1 \
+#     records it; its reduction's 64 slots: step_kernel::step_recording_constants), its
+#     registers against step 0's.
+step registers-step-recording 30 env SLIPFRONT_GPU_REGISTERS_SET=STEP_RECORDS=1,REDUCTION_WIDTH=64 \
   SLIPFRONT_GPU_REGISTERS_LAUNCHES=one-step,one-step/bond-patches,one-step-lanes gpu_registers
 # 1. The targets, met or not: auto's pick against every launch timed again, Table S1
 #    µs/step, 256 scenes' aggregate, 64 scenes against one at a time, output cost; in f64

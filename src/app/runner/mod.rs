@@ -144,7 +144,8 @@ pub struct RunSummary {
     pub normal_load: bool,
     pub ruptures: u64,
     /// GPU dispatches over the run (GPU engines only): those that stepped
-    /// the lattice, and those that recorded output samples.
+    /// the lattice (recording their samples), and those that only finish
+    /// output samples (a batch's record finish).
     pub dispatches: Option<u64>,
     pub output_dispatches: Option<u64>,
     /// Quasi-static fast-forward totals (when it was on), over the whole
@@ -206,7 +207,10 @@ impl std::fmt::Display for RunSummary {
                 d as f64 / self.steps.max(1) as f64
             )?;
             match self.output_dispatches.filter(|&o| o > 0) {
-                Some(o) => writeln!(f, ", and {o} recording output samples on the device")?,
+                Some(o) => writeln!(
+                    f,
+                    ", and {o} finishing output samples on the device (one a batch)"
+                )?,
                 None => writeln!(f)?,
             }
         }

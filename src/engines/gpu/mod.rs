@@ -572,8 +572,7 @@ impl<T: GpuReal> GpuEngine<T> {
                     // The one-step kernels' recording variant steps the
                     // samples' steps (shaders/record_step.wgsl).
                     recorder::RecordSite::Steps { .. } => {
-                        let mut constants = self.constants.clone();
-                        constants.push(("STEP_RECORDS", 1.0));
+                        let constants = step_kernel::step_recording_constants::<T>(&self.constants);
                         self.record_step = Some(self.ctx.pipeline::<T>(kernel, build, &constants));
                     }
                     // The tiled kernel's recording variant steps every

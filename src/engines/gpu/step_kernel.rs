@@ -63,6 +63,13 @@ impl StepKernel {
                 workgroup_state_reduction_width::<T>() as f64,
             ));
         }
+        // The one-step kernels reduce samples in their recording variant
+        // only (`step_recording_constants`): no slots in the others, whose
+        // workgroup memory would hold them unused (drivers allocate every
+        // workgroup variable a module's entry point names, used or not).
+        if !self.kernel.is_persistent() && self.geometry.is_none() {
+            constants.push(("REDUCTION_WIDTH", 1.0));
+        }
         // The kernels whose steps end at a workgroup barrier, so that their
         // lanes can read their block's kept bit from workgroup memory
         // (shaders/kept_bits.wgsl): a bit per interface block of the
@@ -298,6 +305,24 @@ pub fn plan<T: GpuReal>(
         constants,
         build,
     })
+}
+
+/// The override constants of the one-step kernels' recording variant
+/// (`shaders/record_step.wgsl`) from their step kernel's `constants`:
+/// `STEP_RECORDS`, and a slot a thread to reduce a sample across the
+/// workgroup in (as many as workgroup memory's 16 KB hold).
+pub fn step_recording_constants<T: GpuReal>(
+    constants: &[(&'static str, f64)],
+) -> Vec<(&'static str, f64)> {
+    let mut recording: Vec<(&'static str, f64)> = constants
+        .iter()
+        .filter(|(name, _)| *name != "REDUCTION_WIDTH")
+        .copied()
+        .collect();
+    recording.push(("STEP_RECORDS", 1.0));
+    let width = WORKGROUP.min(layout::reduction_slots::<T>());
+    recording.push(("REDUCTION_WIDTH", width as f64));
+    recording
 }
 
 /// Workgroups (x, y) of a dispatch of `workgroups` of them (at least one),
