@@ -2,12 +2,13 @@
 // steps (the one-step kernels' recording variant, record_step.wgsl, and
 // the tiled kernel): each workgroup of a sample's step writes a partial of
 // its own, and no sample ends a dispatch. After the batch's steps,
-// record_batch_finish adds each sample's partials and decides which were
-// due. The entries are the batch's samples in step order
-// (src/engines/gpu/recorder.rs); sample k's partial g is
+// record_batch_finish adds each sample's partials. Every planned sample is
+// recorded; which were due (the fast cadence's rule, a chain from sample
+// to sample) the host decides as it reads them back
+// (src/engines/gpu/recorder.rs fast_rule). The entries are the batch's
+// samples in step order; sample k's partial g is
 // sums[plans[scene].partials_offset + k · plans[scene].partials + g].
-// CPU twin: src/engines/sample.rs record_sample (the sums), and
-// runner::outputs::Outputs::emit_sample (the fast cadence's rule).
+// CPU twin: src/engines/sample.rs record_sample.
 // import: common, record_buffers, record_common, scene
 
 @group(0) @binding(25) var<storage, read> record_entries: array<RecordEntry>;
@@ -21,11 +22,9 @@ fn batch_partial_slot(e: RecordEntry, g: u32) -> u32 {
 
 // After a batch's step dispatches, one workgroup per scene: each sample's
 // partials added in their order (a fixed order: the same bits every run,
-// solo or in an ensemble), eight loaded before their combines (a thread's
-// chain of storage round trips is this dispatch's length); then, sample by
-// sample in step order, the fast cadence's rule decides which were due (a
-// planned fast-cadence sample is due only if the sample before it left
-// the cadence on), as the persistent kernel decides it at each sample.
+// solo or in an ensemble), a thread a sample, eight loaded before their
+// combines (a thread's chain of storage round trips is this dispatch's
+// length). No sample waits for the one before it.
 @compute @workgroup_size(RECORD_BATCH_THREADS)
 fn record_batch_finish(
     @builtin(local_invocation_index) t: u32,
@@ -54,16 +53,5 @@ fn record_batch_finish(
             total = combine(total, sums[at + g]);
         }
         sums[sums_slot(e)] = total;
-    }
-    storageBarrier();
-    if t == 0u {
-        for (var k = 0u; k < batch.records; k++) {
-            let e = record_entries[k];
-            if sample_due(e) {
-                settle_sample(e, sums[sums_slot(e)]);
-            } else {
-                sums[sums_slot(e)].recorded = 0u;
-            }
-        }
     }
 }

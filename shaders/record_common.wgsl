@@ -43,8 +43,8 @@ fn interface_due(e: RecordEntry) -> bool {
 
 // The fixed cadence makes the interface row due, or the fast one plans it
 // whether it turns out on or not: the tiled and one-step kernels write
-// such a row before the samples before it have decided the fast flag
-// (record_batch_finish decides it afterwards, in order).
+// such a row before the samples before it have decided the fast flag (the
+// host decides it afterwards, in order: recorder.rs fast_rule).
 fn interface_planned(e: RecordEntry) -> bool {
     return (e.channels & (RECORD_INTERFACE | RECORD_FAST)) != 0u;
 }

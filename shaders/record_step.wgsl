@@ -7,8 +7,8 @@
 // row and bulk field where planned. So no output dispatch follows a
 // sample's step: record_batch_finish adds the partials once a batch.
 // A planned fast-cadence row is written whether the cadence turns out on
-// or not (interface_planned): the samples before it decide that, in the
-// finish.
+// or not (interface_planned): the samples before it decide that, and the
+// host applies the rule as it reads the batch back.
 // CPU twin: src/engines/sample.rs record_sample.
 // import: common, record_batch, record_buffers, record_common, scene, state
 

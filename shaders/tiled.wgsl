@@ -27,8 +27,8 @@
 //   the fast cadence turns out on or not: that is decided by the samples
 //   before it, which other tiles may not have finished. After the batch,
 //   record_batch_finish (record_batch.wgsl; the host counts a partial per
-//   tile) adds each sample's partials in tile order and decides, sample
-//   by sample in order, which were due.
+//   tile) adds each sample's partials in tile order, and the host decides
+//   as it reads them back which were due.
 // - Chained tiles (TILE_CHAINED; GpuOptions::chained_tiles): one dispatch
 //   runs several of those dispatches' rounds in turn, up to the round
 //   whose end carries ROUND_ENDS_DISPATCH (the batch's end). Before its

@@ -2,9 +2,16 @@
 //! steps (`shaders/record_common.wgsl`): which steps of a batch are
 //! samples and where their records go, the copy of a batch's records into
 //! a staging buffer read back with the batch's status, and their decoding
-//! into `Sample`s. Only the channels due are copied. An ensemble's scenes
-//! are recorded together: the same steps, each scene in its own region of
-//! every record buffer (its plan says where).
+//! into `Sample`s. An ensemble's scenes are recorded together: the same
+//! steps, each scene in its own region of every record buffer (its plan
+//! says where).
+//!
+//! Which planned samples are due (the fast interface cadence's rule: a
+//! sample of the fast cadence only while the sample before it slipped
+//! fast) is decided in step order: inside the persistent kernel's loop, and
+//! here on the host for the kernels that keep a partial a workgroup
+//! (`RecordSite::Steps`, `RecordSite::Tiles`), which record every planned
+//! sample, as the batches are read back.
 
 use super::context::GpuContext;
 use super::layout::{
@@ -54,9 +61,15 @@ pub struct Pending {
 /// The output side of one GPU engine: every scene's samples, in the
 /// kernels' precision `T` (sums and rows of `T`).
 pub struct Recorder<T: GpuReal> {
-    /// The cadences every scene shares (each scene's fast flag is on the
-    /// device, in its plan).
+    /// The cadences every scene shares (each scene's fast flag is in
+    /// `fast`, and on the device in its plan).
     plan: SamplePlan,
+    /// Each scene's fast cadence flag after the samples read back so far,
+    /// where the host decides which samples are due (`host_rule`).
+    fast: Vec<bool>,
+    /// The host applies the fast cadence's rule (the sites that record
+    /// every planned sample); else the persistent kernel did.
+    host_rule: bool,
     /// Scene by scene.
     models: Vec<Model>,
     plan_buffer: wgpu::Buffer,
@@ -230,6 +243,8 @@ impl<T: GpuReal> Recorder<T> {
         let placeholder = storage("no step samples", 16, wgpu::BufferUsages::empty());
         Ok(Recorder {
             plan: *plan,
+            fast: vec![plan.fast; models.len()],
+            host_rule: site != RecordSite::Persistent,
             models: models.to_vec(),
             plan_buffer,
             sums,
@@ -275,6 +290,7 @@ impl<T: GpuReal> Recorder<T> {
     /// (the engine has drained).
     pub fn set_plan(&mut self, queue: &wgpu::Queue, scene: usize, plan: &SamplePlan) {
         debug_assert!(self.samples_like(plan));
+        self.fast[scene] = plan.fast;
         let at =
             scene * size_of::<GpuRecordPlan<T>>() + std::mem::offset_of!(GpuRecordPlan<T>, fast);
         queue.write_buffer(
@@ -447,15 +463,37 @@ impl<T: GpuReal> Recorder<T> {
             .slice(..)
             .get_mapped_range()
             .map_err(|e| format!("record readback: {e}"))?;
+        let sums_bytes = pending.planned.len() * size_of::<GpuSampleSums<T>>();
+        let scene_records = |k: usize| {
+            let at = (k as u64 * pending.scene_bytes) as usize;
+            &view[at..at + pending.scene_bytes as usize]
+        };
+        // Which samples were due, scene by scene, and (where the host
+        // decides) each scene's fast flag after them.
+        let due: Vec<Vec<Due>> = (0..self.models.len())
+            .map(|k| {
+                let sums: &[GpuSampleSums<T>] =
+                    bytemuck::cast_slice(&scene_records(k)[..sums_bytes]);
+                match self.host_rule {
+                    true => fast_rule(&self.plan, &mut self.fast[k], &pending.planned, sums),
+                    false => sums
+                        .iter()
+                        .map(|s| Due {
+                            recorded: s.recorded != 0,
+                            interface_row: s.interface_row != 0,
+                        })
+                        .collect(),
+                }
+            })
+            .collect();
         let samples = self
             .models
             .iter()
             .zip(before)
+            .zip(&due)
             .enumerate()
-            .map(|(k, (m, &before))| {
-                let at = (k as u64 * pending.scene_bytes) as usize;
-                let records = &view[at..at + pending.scene_bytes as usize];
-                self.decode_scene(&pending, m, records, before)
+            .map(|(k, ((m, &before), due))| {
+                self.decode_scene(&pending, m, scene_records(k), before, due)
             })
             .collect();
         drop(view);
@@ -464,13 +502,15 @@ impl<T: GpuReal> Recorder<T> {
         Ok(samples)
     }
 
-    /// One scene's samples from its records in the staging buffer.
+    /// One scene's samples from its records in the staging buffer, `due`
+    /// saying which were.
     fn decode_scene(
         &self,
         pending: &Pending,
         m: &Model,
         records: &[u8],
         before: u64,
+        due: &[Due],
     ) -> Vec<Sample> {
         let sums_bytes = pending.planned.len() * size_of::<GpuSampleSums<T>>();
         let sums: &[GpuSampleSums<T>] = bytemuck::cast_slice(&records[..sums_bytes]);
@@ -480,11 +520,11 @@ impl<T: GpuReal> Recorder<T> {
         let bulk_words = self.bulk_bytes() as usize / size_of::<T>();
         debug_assert!(reals.len() >= bulk_at + pending.bulk_slots as usize * bulk_words);
         let mut samples = Vec::new();
-        for (p, s) in pending.planned.iter().zip(sums) {
-            if s.recorded == 0 || p.step >= before {
+        for ((p, s), due) in pending.planned.iter().zip(sums).zip(due) {
+            if !due.recorded || p.step >= before {
                 continue;
             }
-            let interface = (s.interface_row != 0).then(|| {
+            let interface = due.interface_row.then(|| {
                 let at = p.entry.interface_slot as usize * interface_words;
                 let row = &reals[at..at + interface_words];
                 let col = |k: usize| -> Vec<f64> {
@@ -539,5 +579,131 @@ impl<T: GpuReal> Recorder<T> {
             });
         }
         samples
+    }
+}
+
+/// Whether a planned sample was due, and with its interface row.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+struct Due {
+    recorded: bool,
+    interface_row: bool,
+}
+
+/// The fast interface cadence's rule over a batch's `planned` samples of
+/// one scene, in step order, from `fast` (the flag the samples before them
+/// left, updated): a sample is due by a fixed cadence, or by the fast one
+/// while the flag is on; a due sample sets the flag where its interface
+/// slipped faster than the plan's threshold (the host's rule,
+/// `runner::outputs::Outputs::emit_sample`).
+fn fast_rule<T: GpuReal>(
+    plan: &SamplePlan,
+    fast: &mut bool,
+    planned: &[Planned],
+    sums: &[GpuSampleSums<T>],
+) -> Vec<Due> {
+    planned
+        .iter()
+        .zip(sums)
+        .map(|(p, s)| {
+            let channels = p.entry.channels;
+            let by_fast = channels & RECORD_FAST != 0 && *fast;
+            let recorded =
+                channels & (RECORD_GLOBAL | RECORD_INTERFACE | RECORD_BULK) != 0 || by_fast;
+            let interface_row = channels & RECORD_INTERFACE != 0 || by_fast;
+            if recorded {
+                *fast = plan.every_fast > 0 && s.max_slip_speed.as_f64() > plan.fast_slip_speed;
+            }
+            Due {
+                recorded,
+                interface_row,
+            }
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn planned(offset: u64, channels: u32) -> Planned {
+        Planned {
+            offset,
+            step: offset,
+            entry: GpuRecordEntry {
+                offset: offset as u32,
+                channels,
+                sums_slot: offset as u32,
+                interface_slot: 0,
+                bulk_slot: 0,
+            },
+        }
+    }
+
+    fn slipping(speed: f32) -> GpuSampleSums<f32> {
+        GpuSampleSums {
+            max_slip_speed: speed,
+            ..bytemuck::Zeroable::zeroed()
+        }
+    }
+
+    /// The fast cadence's rule as the host applies it to a batch read
+    /// back: a fast-only sample is due only while the due sample before it
+    /// slipped faster than the threshold, and a sample that was not due
+    /// leaves the flag as it was (however fast its planned sums say the
+    /// interface slipped). The flag carries over to the next batch.
+    #[test]
+    fn the_fast_rule_follows_the_due_samples_in_order() {
+        let plan = SamplePlan {
+            prep_steps: 0,
+            every_global: 10,
+            every_interface: 10,
+            every_bulk: 0,
+            every_fast: 2,
+            fast_slip_speed: 0.5,
+            fast: false,
+        };
+        let fixed = RECORD_GLOBAL | RECORD_INTERFACE | RECORD_FAST;
+        let batch = [
+            (planned(0, RECORD_FAST), slipping(2.0)),
+            (planned(2, fixed), slipping(1.0)),
+            (planned(4, RECORD_FAST), slipping(0.1)),
+            (planned(6, RECORD_FAST), slipping(9.0)),
+            (planned(8, RECORD_GLOBAL), slipping(0.7)),
+        ];
+        let (p, s): (Vec<Planned>, Vec<GpuSampleSums<f32>>) = batch.into_iter().unzip();
+        let mut fast = false;
+        let due = fast_rule(&plan, &mut fast, &p, &s);
+        let (yes, row, no) = (
+            Due {
+                recorded: true,
+                interface_row: true,
+            },
+            Due {
+                recorded: true,
+                interface_row: false,
+            },
+            Due {
+                recorded: false,
+                interface_row: false,
+            },
+        );
+        // Off at first: the fast-only sample at 0 is not due and does not
+        // turn it on; the fixed one at 2 does; 4 is due and turns it off;
+        // 6 is not due; 8 (fixed, no row) turns it on again.
+        assert_eq!(due, [no, yes, yes, no, row]);
+        assert!(fast);
+        // The next batch starts from that flag.
+        let due = fast_rule(&plan, &mut fast, &p[..1], &s[4..]);
+        assert_eq!(due, [yes]);
+        assert!(fast);
+        // No fast cadence: never on.
+        let mut fast = false;
+        let never = SamplePlan {
+            every_fast: 0,
+            ..plan
+        };
+        let due = fast_rule(&never, &mut fast, &p, &s);
+        assert_eq!(due[3], no);
+        assert!(!fast);
     }
 }
