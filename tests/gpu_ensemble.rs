@@ -321,13 +321,13 @@ fn an_ensemble_records_every_scene_on_the_device_as_its_solo_run() {
     }
 }
 
-/// On a lattice recorded in two dispatches (more than 16,384 blocks), the
-/// step dispatch of a sample sums each partial's kinetic energy for every
-/// scene and the output kernels write the partials with other sums
-/// (record_kinetic.wgsl): each scene's samples are still bit for bit its
-/// solo run's, on both one-step kernels (one-step-lanes lays out its
-/// workgroups otherwise), samples with and without a bulk field among
-/// them. Control: scene 1's samples are not scene 0's.
+/// On a large lattice (more than 16,384 blocks, 66 partials a sample and
+/// scene), the step dispatch of a sample writes every scene's partials
+/// (record_step.wgsl) and the batch's finish adds them: each scene's
+/// samples are still bit for bit its solo run's, on both one-step kernels
+/// (one-step-lanes lays out its workgroups otherwise), samples with and
+/// without a bulk field among them. Control: scene 1's samples are not
+/// scene 0's.
 #[test]
 fn a_large_lattice_ensemble_records_every_scene_as_its_solo_run() {
     let large = |extra: &[&str]| {
