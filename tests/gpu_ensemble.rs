@@ -321,8 +321,8 @@ fn an_ensemble_records_every_scene_on_the_device_as_its_solo_run() {
     }
 }
 
-/// On a large lattice (more than 16,384 blocks, 66 partials a sample and
-/// scene), the step dispatch of a sample writes every scene's partials
+/// On a large lattice (more than 16,384 blocks, 262 partials a sample and
+/// scene on one-step), the step dispatch of a sample writes every scene's partials
 /// (record_step.wgsl) and the batch's finish adds them: each scene's
 /// samples are still bit for bit its solo run's, on both one-step kernels
 /// (one-step-lanes lays out its workgroups otherwise), samples with and

@@ -223,7 +223,7 @@ fn gpu_f64_rate_state_matches_cpu_f64_on_every_kernel() {
 /// equals the CPU twin (`engine::record_sample`) on a host snapshot of a
 /// second f64 run at its step, to f64 round-off in the sums. On the small
 /// triggered scene (in the step of the sample on one-step; in the loop of
-/// the persistent kernel) and on 257×65 (66 partials a sample, bulk
+/// the persistent kernel) and on 257×65 (262 partials a sample, bulk
 /// fields).
 /// Negative control: the twin a step later is flagged.
 #[test]
