@@ -257,18 +257,12 @@ fn reduce_threads(local: u32, width: u32, acc: SampleSums) {
     reduce_workgroup(local, slots);
 }
 
-// Thread 0 of a workgroup whose wg_sums[0] holds the sample's sums: writes
-// them and decides the fast interface cadence for the samples after this
-// one (settle_sample).
-fn finish_sample(e: RecordEntry) {
-    settle_sample(e, wg_sums[0]);
-}
-
-// Writes the sums `total` of due sample e, and decides the fast interface
+// Thread 0 of a workgroup whose wg_sums[0] holds due sample e's sums (the
+// persistent kernel's): writes them, and decides the fast interface
 // cadence for the samples after it (the host's rule,
 // runner::outputs::Outputs::emit_sample).
-fn settle_sample(e: RecordEntry, total: SampleSums) {
-    var out = total;
+fn finish_sample(e: RecordEntry) {
+    var out = wg_sums[0];
     out.recorded = 1u;
     out.interface_row = select(0u, 1u, interface_due(e));
     let fast = plans[scene].every_fast != 0u && out.max_slip_speed > plans[scene].fast_slip_speed;

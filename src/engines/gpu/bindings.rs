@@ -171,27 +171,32 @@ mod tests {
         // The resident kernel shares the persistent kernel's layout.
         let resident = Bindings::reflect(&Kernel::Resident.source::<f32>()).unwrap();
         assert_eq!(resident.layout(0, &[]), persistent.layout(0, &[]));
-        let ty = |b: &Bindings, n: u32| match b.layout(0, &[])[n as usize].ty {
-            wgpu::BindingType::Buffer { ty, .. } => ty,
-            _ => unreachable!(),
+        // A group-0 binding's access, by binding number.
+        let access = |b: &Bindings, binding: u32| {
+            let entry = b.layout(0, &[]).into_iter().find(|e| e.binding == binding);
+            match entry.map(|e| e.ty) {
+                Some(wgpu::BindingType::Buffer { ty, .. }) => ty,
+                other => panic!("binding {binding}: {other:?}"),
+            }
         };
-        // The constants: one record per scene (a solo run is an ensemble of one).
-        assert_eq!(
-            ty(&one_step, 0),
-            wgpu::BufferBindingType::Storage { read_only: true }
-        );
-        assert_eq!(
-            ty(&persistent, 0),
-            wgpu::BufferBindingType::Storage { read_only: true }
-        );
-        assert_eq!(
-            ty(&one_step, 6),
-            wgpu::BufferBindingType::Storage { read_only: true }
-        );
-        assert_eq!(
-            ty(&one_step, 5),
-            wgpu::BufferBindingType::Storage { read_only: false }
-        );
+        let read = wgpu::BufferBindingType::Storage { read_only: true };
+        let write = wgpu::BufferBindingType::Storage { read_only: false };
+        // The constants: one record per scene (a solo run is an ensemble of
+        // one), read only; the flags read only, the forces written. The
+        // recording variant's entries and step samples (record_step.wgsl)
+        // are only read; the plans and sums it writes.
+        for (module, binding, want) in [
+            (&one_step, 0, read),
+            (&persistent, 0, read),
+            (&one_step, 6, read),
+            (&one_step, 5, write),
+            (&one_step, 25, read),
+            (&one_step, 26, read),
+            (&one_step, 13, write),
+            (&one_step, 14, write),
+        ] {
+            assert_eq!(access(module, binding), want, "binding {binding}");
+        }
         let batch = one_step.layout(1, &["step_offset"]);
         assert!(matches!(
             batch[0].ty,
@@ -200,20 +205,6 @@ mod tests {
                 ..
             }
         ));
-        // The recording variant's entries and step samples (record_step.wgsl)
-        // are only read; the sums it writes.
         assert_eq!(one_step.binding("step_samples"), Some((0, 26)));
-        assert_eq!(
-            ty(&one_step, 17),
-            wgpu::BufferBindingType::Storage { read_only: true }
-        );
-        assert_eq!(
-            ty(&one_step, 18),
-            wgpu::BufferBindingType::Storage { read_only: true }
-        );
-        assert_eq!(
-            ty(&one_step, 13),
-            wgpu::BufferBindingType::Storage { read_only: false }
-        );
     }
 }
