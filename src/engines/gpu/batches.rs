@@ -4,9 +4,9 @@
 //! `GpuOptions::run_ahead`) of them on the device and retires the oldest
 //! first, reading each scene's blow-up and samples.
 
+use super::batch_sizes::{IN_FLIGHT, ONE_STEP_BATCH, PERSISTENT_BATCH};
 use super::buffers::{gpu_junction_springs, STATUS_BYTES};
 use super::layout::{self, GpuBatch, GpuStatus};
-use super::options::{IN_FLIGHT, ONE_STEP_BATCH, PERSISTENT_BATCH};
 use super::precision::{Coord, GpuReal};
 use super::shaders::Kernel;
 use super::{device_timer, recorder, GpuEngine};

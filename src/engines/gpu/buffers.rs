@@ -2,8 +2,8 @@
 //! s's element i at s times the per-scene count plus i), the kernels'
 //! scratch, and group 0's bind group over them.
 
+use super::batch_sizes::ONE_STEP_BATCH;
 use super::layout::{GpuConsts, GpuJunctionCache, GpuJunctionSpring, GpuLaneSum, GpuStatus};
-use super::options::ONE_STEP_BATCH;
 use super::precision::{Coord, GpuReal, Packed};
 use super::shaders::Kernel;
 use super::tiles::TileGeometry;

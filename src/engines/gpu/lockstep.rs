@@ -19,7 +19,7 @@ use std::sync::{Arc, Condvar, Mutex, MutexGuard};
 /// Steps a lockstep scene's runner asks for per advance: a few batches of
 /// the one-step kernels, long enough to amortise a round of requests, short
 /// enough for progress and interrupts.
-pub const LOCKSTEP_CHUNK: u64 = 8 * super::options::ONE_STEP_BATCH;
+pub const LOCKSTEP_CHUNK: u64 = 8 * super::batch_sizes::ONE_STEP_BATCH;
 
 struct Shared<T: GpuReal> {
     ensemble: GpuEnsemble<T>,

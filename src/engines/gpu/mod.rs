@@ -33,6 +33,7 @@
 //! separate runners. A solo run is an ensemble of one: the same compiled
 //! kernels, so a scene's bits do not depend on the scenes beside it.
 
+mod batch_sizes;
 mod batches;
 mod bindings;
 mod buffers;
@@ -58,6 +59,7 @@ use crate::engines::{Engine, EngineError, EngineState, Sample, SamplePlan, Snaps
 use crate::model::real::precision_name;
 use crate::model::scenario::FrictionLaw;
 use crate::model::Model;
+use batch_sizes::*;
 use buffers::{state_group, Buffers, Shape};
 use compile::{KernelBuild, KernelSource};
 use context::GpuContext;

@@ -1,6 +1,7 @@
 //! The choices of the GPU engine: which kernel steps a scene, with how many
 //! threads and steps per dispatch, and how many steps go in a batch.
 
+use super::batch_sizes::*;
 use super::layout;
 use super::precision::{Coord, GpuReal};
 use super::shaders::Kernel;
@@ -9,13 +10,6 @@ use crate::engines::SamplePlan;
 use crate::model::scenario::FrictionLaw;
 use crate::model::Model;
 
-/// Steps of one batch of the persistent kernel (one dispatch). The drive
-/// target arithmetic in the kernels needs it ≤ 4096.
-pub const PERSISTENT_BATCH: u64 = 4096;
-/// Dispatches of the one-step kernel per batch (one submit).
-pub const ONE_STEP_BATCH: u64 = 1024;
-/// Batches queued on the device at most.
-pub const IN_FLIGHT: usize = 2;
 /// Batches an `advance` may leave running by default when its caller
 /// writes output meanwhile (`Engine::run_ahead`, `GpuOptions::run_ahead`):
 /// the device keeps stepping while the runner handles the samples read
@@ -53,10 +47,6 @@ pub const RESIDENT_THREADS: u32 = 1024;
 /// (`persistent_steps_per_dispatch`: with 64 threads the f64 RNG's loops
 /// at a burst of ruptures overrun it).
 pub const RESIDENT_THREADS_SOFTWARE: u32 = PERSISTENT_THREADS;
-/// Reduction slots of the resident and tiled kernels' output samples
-/// (their threads fold into them first): their workgroup memory holds the
-/// lattice, or a tile of it.
-pub const WORKGROUP_STATE_REDUCTION_WIDTH: u32 = 64;
 /// The resident kernel's own workgroup words (its step span, stop and
 /// sample flags, and the lane shuffles' levels: 28 bytes), rounded up.
 const RESIDENT_OWN_BYTES: u64 = 64;
@@ -284,11 +274,6 @@ pub fn resident_fit<T: GpuReal>(model: &Model, limits: &wgpu::Limits) -> Result<
         ));
     }
     Ok(bytes)
-}
-
-/// The resident and tiled kernels' reduction slots in precision `T`.
-pub fn workgroup_state_reduction_width<T: GpuReal>() -> u32 {
-    WORKGROUP_STATE_REDUCTION_WIDTH.min(layout::reduction_slots::<T>())
 }
 
 impl GpuPath {

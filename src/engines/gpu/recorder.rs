@@ -13,12 +13,12 @@
 //! (`RecordSite::Steps`, `RecordSite::Tiles`), which record every planned
 //! sample, as the batches are read back.
 
+use super::batch_sizes::ONE_STEP_BATCH;
 use super::context::GpuContext;
 use super::layout::{
     GpuRecordEntry, GpuRecordPlan, GpuSampleSums, RECORD_BULK, RECORD_BULK_WORDS, RECORD_FAST,
     RECORD_GLOBAL, RECORD_INTERFACE, RECORD_INTERFACE_WORDS,
 };
-use super::options::ONE_STEP_BATCH;
 use super::precision::GpuReal;
 use crate::engines::{BulkField, InterfaceRow, Sample, SamplePlan, SampleSums};
 use crate::model::{Driver, Model};

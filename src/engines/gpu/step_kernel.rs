@@ -4,6 +4,7 @@
 //! module's build. The engine builds what `plan` decides; the driver
 //! statistics (`driver_stats`) compile the same kernels on another device.
 
+use super::batch_sizes::*;
 use super::compile::{KernelBuild, KernelSource, ShaderChecks};
 use super::context::GpuContext;
 use super::layout::{self, WORKGROUP};

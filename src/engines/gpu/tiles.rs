@@ -3,7 +3,7 @@
 //! workgroup memory and in its scratch buffers, whether a scene fits, and
 //! where each dispatch of a batch ends.
 
-use super::options::ONE_STEP_BATCH;
+use super::batch_sizes::ONE_STEP_BATCH;
 use super::precision::{Coord, GpuReal};
 use super::shaders::Kernel;
 use crate::model::Model;
@@ -130,7 +130,7 @@ impl TileGeometry {
         // what a sample reads (u, v, force, friction, normal) and its part.
         let sums = std::mem::size_of::<super::layout::GpuSampleSums<T>>() as u64;
         let inputs = (std::mem::size_of::<Coord<T>>() + 6 * std::mem::size_of::<T>()) as u64;
-        let slots = super::options::workgroup_state_reduction_width::<T>() as u64 * sums
+        let slots = super::batch_sizes::workgroup_state_reduction_width::<T>() as u64 * sums
             + self.width as u64 * (sums + inputs.next_multiple_of(16));
         self.blocks as u64 * per_block as u64 + kept + slots + TILE_OWN_BYTES
     }
@@ -214,7 +214,7 @@ pub fn loop_iterations(model: &Model, geometry: &TileGeometry, threads: u32) -> 
     let merges = span.div_ceil(t) * lanes.div_ceil(8).max(1);
     // A sample in the step: an interface block's junction tally (16 a
     // round), the threads folded into the slots, the tree.
-    let slots = super::options::WORKGROUP_STATE_REDUCTION_WIDTH as usize;
+    let slots = super::batch_sizes::WORKGROUP_STATE_REDUCTION_WIDTH as usize;
     let sample = ns.div_ceil(16) + 1 + t.div_ceil(slots) + slots.ilog2() as usize;
     let per_step = 3 + blocks * 10 + items * (1 + ns.div_ceil(lanes.max(1))) + merges + sample;
     // Loading and publishing the tile, and the search for its first sample.
