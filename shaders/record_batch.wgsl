@@ -20,38 +20,45 @@ fn batch_partial_slot(e: RecordEntry, g: u32) -> u32 {
     return plans[scene].partials_offset + e.sums_slot * plans[scene].partials + g;
 }
 
-// After a batch's step dispatches, one workgroup per scene: each sample's
-// partials added in their order (a fixed order: the same bits every run,
-// solo or in an ensemble), a thread a sample, eight loaded before their
-// combines (a thread's chain of storage round trips is this dispatch's
-// length). No sample waits for the one before it.
+// After a batch's step dispatches, a workgroup per sample and scene
+// (workgroup (k, 0, z): sample k of scene z): each thread adds a fixed run
+// of the sample's partials in order, eight loaded before their combines,
+// and the workgroup reduces the threads' sums in a fixed tree (the same
+// order every run: the same bits solo or in an ensemble). The samples run
+// side by side, and a sample's partials are read by all its threads at
+// once: a thread's chain of storage round trips is this dispatch's length.
 @compute @workgroup_size(RECORD_BATCH_THREADS)
 fn record_batch_finish(
     @builtin(local_invocation_index) t: u32,
     @builtin(workgroup_id) wid: vec3<u32>,
 ) {
     enter_scene(wid.z);
+    // The host dispatches a workgroup per sample of the batch.
+    let k = min(wid.x, max(batch.records, 1u) - 1u);
+    let e = record_entries[k];
     let partials = plans[scene].partials;
-    for (var k = t; k < batch.records; k += RECORD_BATCH_THREADS) {
-        let e = record_entries[k];
-        let at = batch_partial_slot(e, 0u);
-        var total = no_sums();
-        var g = 0u;
-        for (; g + 8u <= partials; g += 8u) {
-            let p0 = sums[at + g];
-            let p1 = sums[at + g + 1u];
-            let p2 = sums[at + g + 2u];
-            let p3 = sums[at + g + 3u];
-            let p4 = sums[at + g + 4u];
-            let p5 = sums[at + g + 5u];
-            let p6 = sums[at + g + 6u];
-            let p7 = sums[at + g + 7u];
-            total = combine(combine(combine(combine(total, p0), p1), p2), p3);
-            total = combine(combine(combine(combine(total, p4), p5), p6), p7);
-        }
-        for (; g < partials; g++) {
-            total = combine(total, sums[at + g]);
-        }
-        sums[sums_slot(e)] = total;
+    let at = batch_partial_slot(e, 0u);
+    let first = t * partials / RECORD_BATCH_THREADS;
+    let end = (t + 1u) * partials / RECORD_BATCH_THREADS;
+    var total = no_sums();
+    var g = first;
+    for (; g + 8u <= end; g += 8u) {
+        let p0 = sums[at + g];
+        let p1 = sums[at + g + 1u];
+        let p2 = sums[at + g + 2u];
+        let p3 = sums[at + g + 3u];
+        let p4 = sums[at + g + 4u];
+        let p5 = sums[at + g + 5u];
+        let p6 = sums[at + g + 6u];
+        let p7 = sums[at + g + 7u];
+        total = combine(combine(combine(combine(total, p0), p1), p2), p3);
+        total = combine(combine(combine(combine(total, p4), p5), p6), p7);
+    }
+    for (; g < end; g++) {
+        total = combine(total, sums[at + g]);
+    }
+    reduce_threads(t, RECORD_BATCH_THREADS, total);
+    if t == 0u && wid.x < batch.records {
+        sums[sums_slot(e)] = wg_sums[0];
     }
 }

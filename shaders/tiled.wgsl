@@ -27,7 +27,7 @@
 //   the fast cadence turns out on or not: that is decided by the samples
 //   before it, which other tiles may not have finished. After the batch,
 //   record_batch_finish (record_batch.wgsl; the host counts a partial per
-//   tile) adds each sample's partials in tile order, and the host decides
+//   tile) adds each sample's partials in a fixed order, and the host decides
 //   as it reads them back which were due.
 // - Chained tiles (TILE_CHAINED; GpuOptions::chained_tiles): one dispatch
 //   runs several of those dispatches' rounds in turn, up to the round

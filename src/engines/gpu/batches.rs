@@ -194,7 +194,8 @@ impl<T: GpuReal> GpuEngine<T> {
                         }
                         pass.set_bind_group(1, &self.batch_group, &[0]);
                         pass.set_pipeline(finish);
-                        pass.dispatch_workgroups(1, 1, scene_count);
+                        // A workgroup per sample and scene.
+                        pass.dispatch_workgroups(planned.len() as u32, 1, scene_count);
                         self.output_dispatches += 1;
                     }
                     self.dispatches += dispatch_count;

@@ -585,14 +585,19 @@ impl<T: GpuReal> GpuEngine<T> {
                     }
                     recorder::RecordSite::Persistent => {}
                 }
-                if site != recorder::RecordSite::Persistent {
-                    self.record_finish = Some(self.ctx.pipeline_of::<T>(
-                        kernel,
-                        build,
-                        RECORD_BATCH_FINISH,
-                        &self.constants,
-                    ));
-                }
+                // The finish reduces a sample across its workgroup: the
+                // one-step kernels' slots are their recording variant's.
+                let finish_constants = match site {
+                    recorder::RecordSite::Steps { .. } => {
+                        Some(step_kernel::step_recording_constants::<T>(&self.constants))
+                    }
+                    recorder::RecordSite::Tiles { .. } => Some(self.constants.clone()),
+                    recorder::RecordSite::Persistent => None,
+                };
+                self.record_finish = finish_constants.map(|constants| {
+                    self.ctx
+                        .pipeline_of::<T>(kernel, build, RECORD_BATCH_FINISH, &constants)
+                });
                 self.recorder = Some(rec);
                 Ok(true)
             }
