@@ -206,7 +206,8 @@ fn large_lattice_driven_at_the_top() -> Scenario {
 /// finishes (lavapipe has them): every dispatch is counted once, the parts
 /// add up to the passes' time, and a step of 16,705 blocks costs more than
 /// a finish, which a timestamp put on the wrong side of a dispatch would
-/// turn round.
+/// turn round (about 6× more on lavapipe, where the finish's workgroup a
+/// sample runs its samples one after another on two cores).
 #[test]
 fn the_device_time_splits_between_step_and_record_dispatches() {
     let s = large_lattice();
@@ -240,7 +241,7 @@ fn the_device_time_splits_between_step_and_record_dispatches() {
     assert!(t.sample_step_seconds > 0.0);
     let each = |s: f64, n: u64| s / n as f64;
     assert!(
-        each(t.step_seconds, t.steps) > 3.0 * each(t.finish_seconds, t.finishes),
+        each(t.step_seconds, t.steps) > each(t.finish_seconds, t.finishes),
         "{t}"
     );
 }
