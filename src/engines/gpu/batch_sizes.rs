@@ -1,7 +1,7 @@
 //! The fixed sizes the GPU engine's batches, buffers and workgroup
 //! reductions are built around. They sit below `options` (the choices a
-//! run makes) and the kernels' geometry (`tiles`, `batches`), which both
-//! read them.
+//! run makes), `tiles` (the tiled kernel's geometry) and `batches`, which
+//! all read them.
 
 use super::layout;
 use super::precision::GpuReal;

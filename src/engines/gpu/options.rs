@@ -1,7 +1,9 @@
 //! The choices of the GPU engine: which kernel steps a scene, with how many
-//! threads and steps per dispatch, and how many steps go in a batch.
+//! threads and steps per dispatch (the fixed batch sizes: `batch_sizes`).
 
-use super::batch_sizes::*;
+use super::batch_sizes::{
+    workgroup_state_reduction_width, PERSISTENT_BATCH, WORKGROUP_STATE_REDUCTION_WIDTH,
+};
 use super::layout;
 use super::precision::{Coord, GpuReal};
 use super::shaders::Kernel;
