@@ -36,6 +36,6 @@ fn one_step(
         }
     }
     if STEP_RECORDS {
-        write_step_partial(local, g, step_sample(), part);
+        write_step_partial(local, g, step_sample(), part, items_add_more_than_kinetic(g * WORKGROUP, BOND_PATCHES));
     }
 }

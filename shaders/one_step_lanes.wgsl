@@ -133,6 +133,7 @@ fn one_step_lanes(
     }
     // Workgroup w's partial (the host counts every workgroup's).
     if STEP_RECORDS {
-        write_step_partial(local, w, step_sample(), part);
+        let whole = junction_group || items_add_more_than_kinetic(g * WORKGROUP, BOND_PATCHES);
+        write_step_partial(local, w, step_sample(), part, whole);
     }
 }

@@ -224,7 +224,7 @@ fn persistent_steps(
             }
         }
         if sampling {
-            reduce_threads(t, PERSISTENT_THREADS, acc);
+            reduce_threads(t, PERSISTENT_THREADS, acc, true);
             if t == 0u {
                 finish_sample(e);
             }

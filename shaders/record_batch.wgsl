@@ -57,7 +57,7 @@ fn record_batch_finish(
     for (; g < end; g++) {
         total = combine(total, sums[at + g]);
     }
-    reduce_threads(t, RECORD_BATCH_THREADS, total);
+    reduce_threads(t, RECORD_BATCH_THREADS, total, true);
     if t == 0u && wid.x < batch.records {
         sums[sums_slot(e)] = wg_sums[0];
     }

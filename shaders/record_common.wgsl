@@ -228,13 +228,30 @@ override REDUCTION_WIDTH: u32 = REDUCTION_SLOTS;
 var<workgroup> wg_sums: array<SampleSums, REDUCTION_WIDTH>;
 
 // Reduces wg_sums[0..width] to wg_sums[0] (a fixed tree: the same bits
-// every run).
-fn reduce_workgroup(local: u32, width: u32) {
+// every run). With `whole` false only the kinetic energy is reduced, by
+// the same tree, and wg_sums[0] is no_sums with that kinetic energy: the
+// sums of threads whose blocks add nothing else (off the interface and the
+// top row, not the driven block), bit for bit what the whole tree gives
+// them, for a fourteenth of the workgroup memory traffic. `whole` must be
+// the same on every thread, but need not be uniform to the analysis: the
+// barriers are outside its branches.
+fn reduce_workgroup(local: u32, width: u32, whole: bool) {
     for (var half = width / 2u; half > 0u; half = half / 2u) {
         workgroupBarrier();
         if local < half {
-            wg_sums[local] = combine(wg_sums[local], wg_sums[local + half]);
+            if whole {
+                wg_sums[local] = combine(wg_sums[local], wg_sums[local + half]);
+            } else {
+                wg_sums[local].kinetic = wg_sums[local].kinetic + wg_sums[local + half].kinetic;
+            }
         }
+    }
+    // Thread 0 wrote slot 0 last (or alone, with one slot): no barrier
+    // before it fills in the rest.
+    if !whole && local == 0u {
+        var s = no_sums();
+        s.kinetic = wg_sums[0].kinetic;
+        wg_sums[0] = s;
     }
     workgroupBarrier();
 }
@@ -242,19 +259,28 @@ fn reduce_workgroup(local: u32, width: u32) {
 // Reduces the sums `acc` of `width` threads (a power of two) to
 // wg_sums[0]. Threads beyond REDUCTION_WIDTH first fold into the slots, one
 // block of them per round, in a fixed order (the same bits every run); with
-// width ≤ REDUCTION_WIDTH this is the tree alone.
-fn reduce_threads(local: u32, width: u32, acc: SampleSums) {
+// width ≤ REDUCTION_WIDTH this is the tree alone. With `whole` false, the
+// kinetic energy alone (reduce_workgroup).
+fn reduce_threads(local: u32, width: u32, acc: SampleSums, whole: bool) {
     let slots = min(width, REDUCTION_WIDTH);
     if local < slots {
-        wg_sums[local] = acc;
+        if whole {
+            wg_sums[local] = acc;
+        } else {
+            wg_sums[local].kinetic = acc.kinetic;
+        }
     }
     for (var base = slots; base < width; base += slots) {
         workgroupBarrier();
         if local >= base && local < base + slots {
-            wg_sums[local - base] = combine(wg_sums[local - base], acc);
+            if whole {
+                wg_sums[local - base] = combine(wg_sums[local - base], acc);
+            } else {
+                wg_sums[local - base].kinetic = wg_sums[local - base].kinetic + acc.kinetic;
+            }
         }
     }
-    reduce_workgroup(local, slots);
+    reduce_workgroup(local, slots, whole);
 }
 
 // Thread 0 of a workgroup whose wg_sums[0] holds due sample e's sums (the

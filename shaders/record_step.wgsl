@@ -10,7 +10,7 @@
 // or not (interface_planned): the samples before it decide that, and the
 // host applies the rule as it reads the batch back.
 // CPU twin: src/engines/sample.rs record_sample.
-// import: common, record_batch, record_buffers, record_common, scene, state
+// import: common, patch_items, record_batch, record_buffers, record_common, scene, state
 
 override STEP_RECORDS: bool = false;
 
@@ -34,10 +34,30 @@ fn step_block_sample(i: u32, e: RecordEntry, f: vec2<real>, friction: real) -> S
     return block_sample(i, e, flags[i], load_disp(i), load_vel(i), f, friction, normal, interface_planned(e));
 }
 
+// Whether a workgroup whose threads hold items first .. first + WORKGROUP − 1
+// (blocks, or with `patches` the items of patch_items.wgsl) may hold a block that adds more than its kinetic energy to a sample: an
+// interface block, the driven block, or with a top drive a block of the
+// top row (block_sample). Every thread computes the same answer; a
+// workgroup past the lattice's last item may answer true, which costs only
+// time.
+fn items_add_more_than_kinetic(first: u32, patches: bool) -> bool {
+    let last = first + (WORKGROUP - 1u);
+    let driven = plans[scene].driven_block;
+    var holds_driven = false;
+    if driven < c.n_blocks {
+        let item = item_of_block(driven, c.nx, patches);
+        holds_driven = item >= first && item <= last;
+    }
+    let top = plans[scene].top_reaction != 0u && last >= item_of_block(c.n_blocks - c.nx, c.nx, patches);
+    return first < c.nx || holds_driven || top;
+}
+
 // Workgroup g's partial of this step's sample: its threads' parts reduced
-// in a fixed tree (the same bits every run). Uniform control flow only.
-fn write_step_partial(local: u32, g: u32, e: RecordEntry, part: SampleSums) {
-    reduce_threads(local, WORKGROUP, part);
+// in a fixed tree (the same bits every run); `whole` false (a workgroup of
+// blocks that add only their kinetic energy): that alone, by the same
+// tree. Uniform control flow only.
+fn write_step_partial(local: u32, g: u32, e: RecordEntry, part: SampleSums, whole: bool) {
+    reduce_threads(local, WORKGROUP, part, whole);
     if local == 0u && g < plans[scene].partials {
         sums[batch_partial_slot(e, g)] = wg_sums[0];
     }

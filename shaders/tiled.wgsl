@@ -519,7 +519,12 @@ fn sample_rows_above(t: u32, e: RecordEntry, ready: bool) {
         let v = sampled_velocity(flags[i], v_half, f, 0.0);
         acc = combine(acc, block_sample_besides_interface(i, e, load_disp_at(i, ix, iz), v_half, v, f, 0.0));
     }
-    reduce_threads(t, TILE_THREADS, acc);
+    // Only the tile that holds the driven block's column, or with a top
+    // drive every tile (the top row's reaction), adds more above the
+    // interface than its kinetic energy.
+    let driven = plans[scene].driven_block;
+    let holds_driven = driven < c.n_blocks && tile_owns(driven % c.nx);
+    reduce_threads(t, TILE_THREADS, acc, holds_driven || plans[scene].top_reaction != 0u);
 }
 
 // The part of sample `next` (index, step s) of this tile's own interface

@@ -354,12 +354,27 @@ mod tests {
         (2 * (p % columns), 1 + 2 * (p / columns))
     }
 
+    /// The item that holds block `i` (`shaders/patch_items.wgsl`, the same
+    /// name): the block itself, or with `patches` its interface item or
+    /// its patch's. The recording steps find the driven block's and the
+    /// top row's workgroups by it (`shaders/record_step.wgsl`).
+    fn item_of_block(i: u32, nx: u32, patches: bool) -> u32 {
+        if !patches || i < nx {
+            return i;
+        }
+        let columns = nx.div_ceil(2);
+        nx + ((i / nx - 1) / 2) * columns + (i % nx) / 2
+    }
+
     /// Every block of odd and even lattices lies in exactly one of the
     /// `patch_items` items (patch_item_origin), and none is empty: each
-    /// block's part of a sample is summed once.
+    /// block's part of a sample is summed once. item_of_block names that
+    /// item, and the top row's blocks lie in the items from its first
+    /// block's item on (a recording step's test of a workgroup's range).
     #[test]
     fn patch_items_hold_each_block_once() {
         for (nx, nz) in [(57, 31), (256, 128), (15, 8), (130, 1), (3, 2)] {
+            let top_first = item_of_block(nx * (nz - 1), nx, true);
             let mut seen = vec![0u32; (nx * nz) as usize];
             for t in 0..patch_items(nx, nz) {
                 let blocks: Vec<(u32, u32)> = if t < nx {
@@ -374,7 +389,13 @@ mod tests {
                 };
                 assert!(!blocks.is_empty(), "{nx}×{nz}: item {t} is empty");
                 for (x, z) in blocks {
-                    seen[(z * nx + x) as usize] += 1;
+                    let i = z * nx + x;
+                    seen[i as usize] += 1;
+                    assert_eq!(item_of_block(i, nx, true), t, "{nx}×{nz}: block {i}");
+                    assert_eq!(item_of_block(i, nx, false), i);
+                    if z == nz - 1 {
+                        assert!(t >= top_first, "{nx}×{nz}: top block {i} in item {t}");
+                    }
                 }
             }
             assert!(seen.iter().all(|&n| n == 1), "{nx}×{nz}: {seen:?}");
