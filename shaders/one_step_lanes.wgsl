@@ -24,6 +24,24 @@
 var<workgroup> lane_sum: array<LaneSum, JUNCTION_LANES>;
 // The interface block's bulk force, from the last lane to thread 0.
 var<workgroup> interface_bulk: vec2<real>;
+// A sample's junction tally (pinned junctions, their ruptures), added by
+// the lanes side by side (integer sums: any order, the same counts) for
+// thread 0, whose own walk through the block's Ns states was a chain of
+// rounds of loads on the step's critical path.
+var<workgroup> sample_tally: array<atomic<u32>, 2>;
+
+// (pinned, ruptures) of the junctions of interface block i that lane
+// `lane` holds (junctions lane, lane + JUNCTION_LANES, …), from their
+// states in storage after the step's updates.
+fn lane_tally(i: u32, lane: u32) -> vec2<u32> {
+    let first = junction_first(i);
+    var tally = vec2<u32>(0u);
+    for (var j = lane; j < c.junction_count; j += JUNCTION_LANES) {
+        let state = junction_state_at(first + j);
+        tally += vec2<u32>(select(0u, 1u, state.x == PINNED), state.y);
+    }
+    return tally;
+}
 
 @compute @workgroup_size(WORKGROUP)
 fn one_step_lanes(
@@ -46,6 +64,10 @@ fn one_step_lanes(
     // barrier: the lanes' updates cannot change it (junction 0's re-pin
     // anchors at u_x, the reference it had while slipping).
     var jb: JunctionBlock;
+    if STEP_RECORDS && junction_group && local == 0u {
+        atomicStore(&sample_tally[0], 0u);
+        atomicStore(&sample_tally[1], 0u);
+    }
     if junction_group && !ready && local < JUNCTION_LANES {
         jb = junction_block(w, ld);
         kept = jb.kept;
@@ -62,12 +84,17 @@ fn one_step_lanes(
     }
     // Outside the branch: every workgroup reaches it (an ensemble scene's
     // constants are not uniform to the uniformity analysis). A sample's
-    // junction tally (thread 0, below) reads the lanes' junction states
+    // junction tally (the lanes, below) reads the lanes' junction states
     // from storage.
     if STEP_RECORDS {
         storageBarrier();
     }
     workgroupBarrier();
+    if STEP_RECORDS && junction_group && local < JUNCTION_LANES {
+        let tally = lane_tally(w, local);
+        atomicAdd(&sample_tally[0], tally.x);
+        atomicAdd(&sample_tally[1], tally.y);
+    }
     if !kept && local % 8u == 0u {
         let l = local;
         lane_sum[l] = lane_tree8(
@@ -103,7 +130,8 @@ fn one_step_lanes(
                 contact[interface_base() + w] = vec2<real>(friction, foundation_normal(coord_value(load_disp(w).z)));
             }
             if STEP_RECORDS {
-                part = step_block_sample(w, step_sample(), f, friction);
+                let tally = vec2<u32>(atomicLoad(&sample_tally[0]), atomicLoad(&sample_tally[1]));
+                part = step_block_sample_tallied(w, step_sample(), f, friction, tally);
             }
             if update {
                 verlet(w, w, 0u, f, friction, ld, i_step);

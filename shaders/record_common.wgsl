@@ -122,6 +122,33 @@ fn tally_eight_of(first: u32, count: u32) -> vec2<u32> {
     );
 }
 
+// (pinned junctions, ruptures of its junctions) of interface block i, its
+// Ns junction states tallied by one thread. Sixteen states are loaded
+// before any is used: a load at a time made that a chain of Ns memory
+// round trips on hardware (integer sums: any order, the same result).
+fn interface_tally(i: u32) -> vec2<u32> {
+    var pinned = 0u;
+    var ruptures = 0u;
+    let ns = plans[scene].junctions_per_block;
+    let first = junction_base() + i * ns;
+    var j = 0u;
+    for (; j + 16u <= ns; j += 16u) {
+        let a = tally_eight(first + j);
+        let b = tally_eight(first + j + 8u);
+        pinned += a.x + b.x;
+        ruptures += a.y + b.y;
+    }
+    // The last ns mod 16 in one more round, the states past the block's
+    // masked out.
+    if j < ns {
+        let a = tally_eight_of(first + j, ns - j);
+        let b = tally_eight_of(first + j + 8u, ns - min(ns, j + 8u));
+        pinned += a.x + b.x;
+        ruptures += a.y + b.y;
+    }
+    return vec2<u32>(pinned, ruptures);
+}
+
 // Block i's sums at the instant of sample e (u(s), v(s−½), the forces,
 // friction and normal force of s), its interface row where `row` says
 // (interface_due, or interface_planned), and its bulk field if due.
@@ -139,48 +166,73 @@ fn block_sample(
     let v = sampled_velocity(fl, v_half, f, friction);
     var s = block_sample_besides_interface(i, e, u, v_half, v, f, friction);
     if i < c.nx {
-        var pinned = 0u;
-        let slide_i = slide[interface_base() + i];
-        var ruptures = u32(slide_i.y);
-        let ns = plans[scene].junctions_per_block;
-        let first = junction_base() + i * ns;
-        // Sixteen states loaded before any is used: one thread tallies a
-        // block's Ns junctions, and a load at a time made that a chain of
-        // Ns memory round trips on hardware (integer sums: any order, the
-        // same result).
-        var j = 0u;
-        for (; j + 16u <= ns; j += 16u) {
-            let a = tally_eight(first + j);
-            let b = tally_eight(first + j + 8u);
-            pinned += a.x + b.x;
-            ruptures += a.y + b.y;
-        }
-        // The last ns mod 16 in one more round, the states past the
-        // block's masked out.
-        if j < ns {
-            let a = tally_eight_of(first + j, ns - j);
-            let b = tally_eight_of(first + j + 8u, ns - min(ns, j + 8u));
-            pinned += a.x + b.x;
-            ruptures += a.y + b.y;
-        }
-        var fraction = real(pinned) / real(max(ns, 1u));
-        if ns == 0u {
-            fraction = select(real(0.0), real(1.0), slide_i.x == 0);
-        }
-        s.friction = friction;
-        s.pinned = fraction;
-        s.min_pinned = fraction;
-        s.max_slip_speed = abs(v.x);
-        s.ruptures_lo = ruptures;
-        if row {
-            let at = plans[scene].interface_offset + (e.interface_slot * c.nx + i) * RECORD_INTERFACE_WORDS;
-            rows[at] = coord_hi(u.x);
-            rows[at + 1u] = coord_lo(u.x);
-            rows[at + 2u] = friction;
-            rows[at + 3u] = normal;
-            rows[at + 4u] = fraction;
-            rows[at + 5u] = v.x;
-        }
+        s = with_interface_part(s, i, e, u, v, friction, normal, row, false, vec2<u32>(0u));
+    }
+    return s;
+}
+
+// block_sample of interface block i with its junction tally given
+// (`tally`, interface_tally's: one_step_lanes has its lanes tally the
+// block's junctions side by side).
+fn block_sample_tallied(
+    i: u32,
+    e: RecordEntry,
+    fl: u32,
+    u: Disp,
+    v_half: vec2<real>,
+    f: vec2<real>,
+    friction: real,
+    normal: real,
+    row: bool,
+    tally: vec2<u32>,
+) -> SampleSums {
+    let v = sampled_velocity(fl, v_half, f, friction);
+    let s = block_sample_besides_interface(i, e, u, v_half, v, f, friction);
+    return with_interface_part(s, i, e, u, v, friction, normal, row, true, tally);
+}
+
+// Interface block i's part of sample e added to `sums`, the rest of its
+// sums (v: its velocity at the sample's instant), and its interface row
+// written where `row` says. Its junctions' (pinned, ruptures): `given`
+// where `tallied`, else interface_tally's, taken after the block's slide
+// state as block_sample always took them (the drivers' register
+// allocation follows the order).
+fn with_interface_part(
+    sums: SampleSums,
+    i: u32,
+    e: RecordEntry,
+    u: Disp,
+    v: vec2<real>,
+    friction: real,
+    normal: real,
+    row: bool,
+    tallied: bool,
+    given: vec2<u32>,
+) -> SampleSums {
+    var s = sums;
+    let slide_i = slide[interface_base() + i];
+    let ns = plans[scene].junctions_per_block;
+    var tally = given;
+    if !tallied {
+        tally = interface_tally(i);
+    }
+    var fraction = real(tally.x) / real(max(ns, 1u));
+    if ns == 0u {
+        fraction = select(real(0.0), real(1.0), slide_i.x == 0);
+    }
+    s.friction = friction;
+    s.pinned = fraction;
+    s.min_pinned = fraction;
+    s.max_slip_speed = abs(v.x);
+    s.ruptures_lo = u32(slide_i.y) + tally.y;
+    if row {
+        let at = plans[scene].interface_offset + (e.interface_slot * c.nx + i) * RECORD_INTERFACE_WORDS;
+        rows[at] = coord_hi(u.x);
+        rows[at + 1u] = coord_lo(u.x);
+        rows[at + 2u] = friction;
+        rows[at + 3u] = normal;
+        rows[at + 4u] = fraction;
+        rows[at + 5u] = v.x;
     }
     return s;
 }

@@ -52,6 +52,13 @@ fn items_add_more_than_kinetic(first: u32, patches: bool) -> bool {
     return first < c.nx || holds_driven || top;
 }
 
+// step_block_sample of interface block i whose junction tally is given
+// (interface_tally's; one_step_lanes' lanes add it side by side).
+fn step_block_sample_tallied(i: u32, e: RecordEntry, f: vec2<real>, friction: real, tally: vec2<u32>) -> SampleSums {
+    let normal = contact[interface_base() + i].y;
+    return block_sample_tallied(i, e, flags[i], load_disp(i), load_vel(i), f, friction, normal, interface_planned(e), tally);
+}
+
 // Workgroup g's partial of this step's sample: its threads' parts reduced
 // in a fixed tree (the same bits every run); `whole` false (a workgroup of
 // blocks that add only their kinetic energy): that alone, by the same
