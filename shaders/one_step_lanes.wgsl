@@ -16,8 +16,9 @@
 // interface row a block a thread).
 // The recording variant (STEP_RECORDS, the step dispatch of an output
 // sample; record_step.wgsl) writes a partial of the sample per workgroup:
-// a junction workgroup's holds its block (thread 0 sums it once the lanes'
-// junction states are in storage), the others' their blocks or items.
+// a junction workgroup's holds its block (thread 0 sums it, with the
+// junction tally its lanes add: lane_tally), the others' their blocks or
+// items.
 // CPU twin: src/engines/cpu/mod.rs CpuEngine::one_step (force pass and update).
 // import: bulk_forces, common, coordinates, junctions, record_batch, record_common, record_step, scene, state, step_forces, step_patches, verlet
 
