@@ -85,8 +85,9 @@ fn one_step_lanes(
     }
     // Outside the branch: every workgroup reaches it (an ensemble scene's
     // constants are not uniform to the uniformity analysis). A sample's
-    // junction tally (the lanes, below) reads the lanes' junction states
-    // from storage.
+    // junction tally (the lanes, below) reads from storage the states each
+    // lane has just written itself; the storage barrier was for thread 0's
+    // tally of them all, before session 43, and is kept untested without.
     if STEP_RECORDS {
         storageBarrier();
     }

@@ -35,9 +35,10 @@ fn step_block_sample(i: u32, e: RecordEntry, f: vec2<real>, friction: real) -> S
 }
 
 // Whether a workgroup whose threads hold items first .. first + WORKGROUP − 1
-// (blocks, or with `patches` the items of patch_items.wgsl) may hold a block that adds more than its kinetic energy to a sample: an
-// interface block, the driven block, or with a top drive a block of the
-// top row (block_sample). Every thread computes the same answer; a
+// (blocks, or with `patches` the items of patch_items.wgsl) may hold a
+// block that adds more than its kinetic energy to a sample: an interface
+// block, the driven block, or with a top drive a block of the top row
+// (block_sample). Every thread computes the same answer; a
 // workgroup past the lattice's last item may answer true, which costs only
 // time.
 fn items_add_more_than_kinetic(first: u32, patches: bool) -> bool {
