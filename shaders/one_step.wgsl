@@ -5,7 +5,8 @@
 // coroutines. CPU twin: src/engines/cpu/mod.rs CpuEngine::one_step.
 // The recording variant (STEP_RECORDS, the step dispatch of an output
 // sample) also sums its workgroup's part of the sample into the sample's
-// partial g (record_step.wgsl); the workgroup barriers of that sum are in
+// partial g (record_step.wgsl), where the sample may be due (its fast
+// chain); the workgroup barriers of that sum and of that decision are in
 // that variant only.
 // With BOND_PATCHES (GpuOptions::bond_patches) the threads step the
 // interface row a block each and the rows above by 2×2 patches
@@ -21,14 +22,18 @@ fn one_step(
     enter_scene(wid.z);
     let g = wid.x + wid.y * groups.x;
     let i = g * WORKGROUP + local;
+    var computed = false;
+    if STEP_RECORDS {
+        computed = step_sample_computed(local, g);
+    }
     var part = no_sums();
     if BOND_PATCHES {
-        part = step_by_patches(i);
+        part = step_by_patches(i, computed);
     } else if i < c.n_blocks && !scene_stopped() {
         let ld = loads_at(step_offset);
         let ready = batch.forces_ready != 0u && step_offset == 0u;
         let ff = block_forces(i, ld, ready);
-        if STEP_RECORDS {
+        if computed {
             part = step_block_sample(i, step_sample(), ff.xy, ff.z);
         }
         if batch.forces_only == 0u {
@@ -36,6 +41,10 @@ fn one_step(
         }
     }
     if STEP_RECORDS {
-        write_step_partial(local, g, step_sample(), part, items_add_more_than_kinetic(g * WORKGROUP, BOND_PATCHES));
+        if computed {
+            write_step_partial(local, g, step_sample(), part, items_add_more_than_kinetic(g * WORKGROUP, BOND_PATCHES));
+        } else {
+            mark_step_skipped(local, g, step_sample());
+        }
     }
 }

@@ -15,10 +15,12 @@
 // from the same run of WORKGROUP (without junctions, from the first: the
 // interface row a block a thread).
 // The recording variant (STEP_RECORDS, the step dispatch of an output
-// sample; record_step.wgsl) writes a partial of the sample per workgroup:
-// a junction workgroup's holds its block (thread 0 sums it, with the
-// junction tally its lanes add: lane_tally), the others' their blocks or
-// items.
+// sample; record_step.wgsl) writes a partial of the sample per workgroup,
+// where the sample may be due (its fast chain, which one thread reads
+// while the lanes step, CHAIN_THREAD; the step's first barrier hands the
+// decision to the workgroup): a junction workgroup's holds its block (thread 0 sums it,
+// with the junction tally its lanes add: lane_tally), the others' their
+// blocks or items.
 // CPU twin: src/engines/cpu/mod.rs CpuEngine::one_step (force pass and update).
 // import: bulk_forces, common, coordinates, junctions, record_batch, record_common, record_step, scene, state, step_forces, step_patches, verlet
 
@@ -30,6 +32,10 @@ var<workgroup> interface_bulk: vec2<real>;
 // thread 0, whose own walk through the block's Ns states was a chain of
 // rounds of loads on the step's critical path.
 var<workgroup> sample_tally: array<atomic<u32>, 2>;
+// The thread that reads the fast chain in a sample's step: not thread 0,
+// whose merge ends the step, nor the last lane, which computes the bulk
+// force; a lane with the fewest junctions, or none.
+const CHAIN_THREAD: u32 = JUNCTION_LANES - 2u;
 
 // (pinned, ruptures) of the junctions of interface block i that lane
 // `lane` holds (junctions lane, lane + JUNCTION_LANES, …), from their
@@ -69,6 +75,9 @@ fn one_step_lanes(
         atomicStore(&sample_tally[0], 0u);
         atomicStore(&sample_tally[1], 0u);
     }
+    if STEP_RECORDS && local == CHAIN_THREAD {
+        wg_sample_computed = select(0u, 1u, fast_chain_due(step_sample(), w == 0u));
+    }
     if junction_group && !ready && local < JUNCTION_LANES {
         jb = junction_block(w, ld);
         kept = jb.kept;
@@ -84,15 +93,18 @@ fn one_step_lanes(
         }
     }
     // Outside the branch: every workgroup reaches it (an ensemble scene's
-    // constants are not uniform to the uniformity analysis). A sample's
-    // junction tally (the lanes, below) reads from storage the states each
-    // lane has just written itself; the storage barrier was for thread 0's
-    // tally of them all, before session 43, and is kept untested without.
+    // constants are not uniform to the uniformity analysis). In the
+    // recording variant the barrier is the load of thread 0's decision,
+    // uniform from here on. A sample's junction tally (the lanes, below)
+    // reads from storage only the states each lane has just written itself:
+    // no storage barrier.
+    var computed = false;
     if STEP_RECORDS {
-        storageBarrier();
+        computed = workgroupUniformLoad(&wg_sample_computed) != 0u;
+    } else {
+        workgroupBarrier();
     }
-    workgroupBarrier();
-    if STEP_RECORDS && junction_group && local < JUNCTION_LANES {
+    if computed && junction_group && local < JUNCTION_LANES {
         let tally = lane_tally(w, local);
         atomicAdd(&sample_tally[0], tally.x);
         atomicAdd(&sample_tally[1], tally.y);
@@ -131,7 +143,7 @@ fn one_step_lanes(
                 force[block_base() + w] = f;
                 contact[interface_base() + w] = vec2<real>(friction, foundation_normal(coord_value(load_disp(w).z)));
             }
-            if STEP_RECORDS {
+            if computed {
                 let tally = vec2<u32>(atomicLoad(&sample_tally[0]), atomicLoad(&sample_tally[1]));
                 part = step_block_sample_tallied(w, step_sample(), f, friction, tally);
             }
@@ -150,11 +162,11 @@ fn one_step_lanes(
     let not_interface = FRICTION_LAW != LAW_JUNCTIONS || i >= c.nx;
     if BOND_PATCHES {
         if !junction_group && not_interface {
-            part = step_by_patches(i);
+            part = step_by_patches(i, computed);
         }
     } else if !junction_group && i < c.n_blocks && not_interface {
         let ff = block_forces(i, ld, ready);
-        if STEP_RECORDS {
+        if computed {
             part = step_block_sample(i, step_sample(), ff.xy, ff.z);
         }
         if update {
@@ -163,7 +175,11 @@ fn one_step_lanes(
     }
     // Workgroup w's partial (the host counts every workgroup's).
     if STEP_RECORDS {
-        let whole = junction_group || items_add_more_than_kinetic(g * WORKGROUP, BOND_PATCHES);
-        write_step_partial(local, w, step_sample(), part, whole);
+        if computed {
+            let whole = junction_group || items_add_more_than_kinetic(g * WORKGROUP, BOND_PATCHES);
+            write_step_partial(local, w, step_sample(), part, whole);
+        } else {
+            mark_step_skipped(local, w, step_sample());
+        }
     }
 }

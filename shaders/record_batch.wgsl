@@ -2,10 +2,12 @@
 // steps (the one-step kernels' recording variant, record_step.wgsl, and
 // the tiled kernel): each workgroup of a sample's step writes a partial of
 // its own, and no sample ends a dispatch. After the batch's steps,
-// record_batch_finish adds each sample's partials. Every planned sample is
-// recorded; which were due (the fast cadence's rule, a chain from sample
-// to sample) the host decides as it reads them back
-// (src/engines/gpu/recorder.rs fast_rule). The entries are the batch's
+// record_batch_finish adds each sample's partials. Which samples were due
+// (the fast cadence's rule, a chain from sample to sample) the host
+// decides as it reads them back (src/engines/gpu/recorder.rs fast_rule);
+// the tiled kernel computes every planned sample, the one-step kernels
+// those their fast chain says may be due (record_step.wgsl), and a sample's
+// `recorded` says whether it was computed. The entries are the batch's
 // samples in step order; sample k's partial g is
 // sums[plans[scene].partials_offset + k · plans[scene].partials + g].
 // CPU twin: src/engines/sample.rs record_sample.
@@ -38,8 +40,14 @@ fn record_batch_finish(
     let e = record_entries[k];
     let partials = plans[scene].partials;
     let at = batch_partial_slot(e, 0u);
+    // Partial 0 of a sample the one-step kernels skipped says so: the
+    // others were not written.
+    let computed = plans[scene].step_chain == 0u || sums[at].recorded != 0u;
     let first = t * partials / RECORD_BATCH_THREADS;
-    let end = (t + 1u) * partials / RECORD_BATCH_THREADS;
+    var end = (t + 1u) * partials / RECORD_BATCH_THREADS;
+    if !computed {
+        end = first;
+    }
     var total = no_sums();
     var g = first;
     for (; g + 8u <= end; g += 8u) {
@@ -59,6 +67,8 @@ fn record_batch_finish(
     }
     reduce_threads(t, RECORD_BATCH_THREADS, total, true);
     if t == 0u && wid.x < batch.records {
-        sums[sums_slot(e)] = wg_sums[0];
+        var out = wg_sums[0];
+        out.recorded = select(0u, 1u, computed);
+        sums[sums_slot(e)] = out;
     }
 }

@@ -18,8 +18,9 @@ override BOND_PATCHES: bool = false;
 // stays one block long; one_step_lanes' junction workgroups step the
 // interface row, and its other threads start past it), or a patch.
 // Returns the item's part of the step's sample, its blocks in patch order
-// (STEP_RECORDS; no_sums otherwise).
-fn step_by_patches(t: u32) -> SampleSums {
+// (where `computed`: the recording variant's sample that may be due;
+// no_sums otherwise).
+fn step_by_patches(t: u32, computed: bool) -> SampleSums {
     var part = no_sums();
     if scene_stopped() {
         return part;
@@ -29,7 +30,7 @@ fn step_by_patches(t: u32) -> SampleSums {
     let update = batch.forces_only == 0u;
     if t < c.nx {
         let ff = block_forces(t, ld, ready);
-        if STEP_RECORDS {
+        if computed {
             part = step_block_sample(t, step_sample(), ff.xy, ff.z);
         }
         if update {
@@ -72,7 +73,7 @@ fn step_by_patches(t: u32) -> SampleSums {
             }
         }
     }
-    if STEP_RECORDS {
+    if computed {
         let e = step_sample();
         part = step_block_sample(i, e, f.a, 0.0);
         if has_b {

@@ -269,16 +269,25 @@ fn one_step_kernels_record_in_their_steps_with_one_finish_a_batch() {
                 samples,
                 e.dispatches().unwrap(),
                 e.output_dispatches().unwrap(),
+                e.samples_computed(),
             )
         };
-        let (_, quiet, none) = run(false);
-        let (samples, steps, finishes) = run(true);
+        let (_, quiet, none, _) = run(false);
+        let (samples, steps, finishes, computed) = run(true);
+        let computed = computed.unwrap();
         println!(
             "{path:?}: {samples} samples; {steps} step dispatches recording, {quiet} without; \
-             {finishes} record finishes"
+             {finishes} record finishes; {} planned, {} computed",
+            computed.planned, computed.computed
         );
         assert_eq!(none, 0);
         assert!(samples >= 100, "{samples} samples");
+        // The fast cadence switches off after the front: its planned
+        // samples are then skipped, and every sample taken was computed.
+        assert!(
+            computed.computed >= samples && computed.computed < computed.planned,
+            "{computed:?} for {samples} samples"
+        );
         assert!(
             steps == quiet || steps == quiet + 1,
             "{steps} step dispatches recording, {quiet} without"

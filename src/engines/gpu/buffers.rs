@@ -46,8 +46,13 @@ impl Shape {
 pub(super) const WORD_PAIR_BYTES: usize = std::mem::size_of::<[u32; 2]>();
 pub(super) const STATUS_BYTES: usize = std::mem::size_of::<GpuStatus>();
 /// What the persistent kernel's unused record bindings hold at least (the
-/// plan, an entry, a word of rows); the sums need `GpuEngine::SUMS_BYTES`.
-pub(super) const PLACEHOLDER_BYTES: usize = 64;
+/// plan of either precision, an entry, a word of rows); the sums need
+/// `GpuEngine::SUMS_BYTES`.
+pub(super) const PLACEHOLDER_BYTES: usize = 128;
+const _: () = assert!(
+    std::mem::size_of::<super::layout::GpuRecordPlan<f64>>() <= PLACEHOLDER_BYTES
+        && std::mem::size_of::<super::layout::GpuRecordPlan<f32>>() <= PLACEHOLDER_BYTES
+);
 
 pub(super) struct Buffers {
     /// The run constants: one record per scene.

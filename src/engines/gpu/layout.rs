@@ -288,6 +288,9 @@ gpu_struct! {
     /// device), the driver's blocks, and where each region of the record
     /// buffers starts.
     pub struct GpuRecordPlan<T> as "RecordPlan" {
+        /// The threshold in `T`, rounded down where it is not a value of
+        /// `T` (`GpuReal::fast_threshold`): `|v| > fast_slip_speed` in `T`
+        /// is then the host's f64 rule exactly.
         pub fast_slip_speed: T,
         /// 1: the fast interface cadence is on (set by each sample).
         pub fast: u32,
@@ -301,16 +304,56 @@ gpu_struct! {
         /// a tile's of the tiled kernel; `shaders/record_batch.wgsl`), and
         /// where the batch's go in the sums buffer.
         pub partials: u32,
-        /// Unused: keeps both precisions free of padding.
-        pub reserved_a: u32,
+        /// The one-step kernels' fast chain (`FAST_CHAIN_*`): a sample's
+        /// max slip speed may be over the threshold where the order bits
+        /// of its f32 rounding are at least these
+        /// (`GpuReal::fast_order_bits`).
+        pub fast_bits: u32,
         pub partials_offset: u32,
         /// Word offsets of the interface rows and the bulk fields.
         pub interface_offset: u32,
         pub bulk_offset: u32,
         /// Where this scene's samples' sums start in the sums buffer.
         pub sums_offset: u32,
-        /// Unused: keeps both precisions free of padding.
-        pub reserved: u32,
+        /// 1: the one-step kernels' chain decides which planned samples
+        /// they compute, and partial 0 of a sample says whether they did
+        /// (`shaders/record_step.wgsl`; `record_batch_finish` reads it).
+        pub step_chain: u32,
+        /// The one-step kernels' fast chain, written by the device
+        /// (`FAST_CHAIN_*` say where each ring is).
+        pub fast_chain: AtomicWords8,
+    }
+}
+
+/// Eight words the device updates with atomics (WGSL
+/// `array<atomic<u32>, 8>`).
+#[repr(transparent)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Pod, Zeroable)]
+pub struct AtomicWords8(pub [u32; 8]);
+
+impl WgslType for AtomicWords8 {
+    const WGSL: &'static str = "array<atomic<u32>, 8>";
+}
+
+/// Where `GpuRecordPlan::fast_chain`'s rings start, each indexed by a
+/// sample's ordinal (`GpuRecordEntry::ring`, its ordinal mod 6): sample
+/// n's max slip speed (order bits, atomicMax) in a ring of three, whether
+/// it may be due in a ring of two, and the fast flag after it in a ring of
+/// two. Sample n's step reads what sample n − 1's step left and writes
+/// none of the words it reads.
+pub const FAST_CHAIN_MAX: u32 = 0;
+pub const FAST_CHAIN_DUE: u32 = 3;
+pub const FAST_CHAIN_FLAG: u32 = 5;
+
+impl AtomicWords8 {
+    /// The chain of a scene whose fast flag is `fast` before the next
+    /// sample, whatever its ordinal: the sample before it not due (so the
+    /// flag stands), both flag slots `fast`, the max slots cleared.
+    pub fn fast_chain(fast: bool) -> AtomicWords8 {
+        let mut w = [0u32; 8];
+        w[FAST_CHAIN_FLAG as usize] = fast as u32;
+        w[FAST_CHAIN_FLAG as usize + 1] = fast as u32;
+        AtomicWords8(w)
     }
 }
 
@@ -324,6 +367,9 @@ gpu_struct! {
         pub sums_slot: u32,
         pub interface_slot: u32,
         pub bulk_slot: u32,
+        /// The sample's ordinal among all the engine's samples, mod 6:
+        /// its slots in the fast chain's rings (`FAST_CHAIN_*`).
+        pub ring: u32,
     }
 }
 
@@ -413,6 +459,9 @@ pub fn wgsl_prelude<T: GpuReal>() -> String {
         ),
         ("RECORD_INTERFACE_WORDS", RECORD_INTERFACE_WORDS),
         ("RECORD_BULK_WORDS", RECORD_BULK_WORDS),
+        ("FAST_CHAIN_MAX", FAST_CHAIN_MAX),
+        ("FAST_CHAIN_DUE", FAST_CHAIN_DUE),
+        ("FAST_CHAIN_FLAG", FAST_CHAIN_FLAG),
         (
             "JUNCTION_LANES",
             crate::model::junction::JUNCTION_LANES as u32,

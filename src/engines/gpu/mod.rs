@@ -69,6 +69,7 @@ use options::*;
 pub use options::{GpuOptions, GpuOutput, GpuPath, PERSISTENT_THREADS, RESIDENT_THREADS};
 pub use precision::GpuReal;
 use precision::{Coord, Packed};
+pub use recorder::PlannedAndComputed;
 pub use step_kernel::AdapterTraits;
 use step_kernel::{kernel_sources, KernelPlan};
 
@@ -652,6 +653,13 @@ impl<T: GpuReal> GpuEngine<T> {
     /// Whether output samples are recorded on the device.
     pub fn records_on_device(&self) -> bool {
         self.recorder.is_some()
+    }
+
+    /// The device's planned samples read back so far, all scenes, and how
+    /// many of them it computed: the one-step kernels skip those their fast
+    /// chain finds not due (None: no device records).
+    pub fn samples_computed(&self) -> Option<PlannedAndComputed> {
+        self.recorder.as_ref().map(|r| r.read_back)
     }
 
     fn kernel_description(&self) -> String {

@@ -10,14 +10,17 @@
 //! sample of the fast cadence only while the sample before it slipped
 //! fast) is decided in step order: inside the persistent kernel's loop, and
 //! here on the host for the kernels that keep a partial a workgroup
-//! (`RecordSite::Steps`, `RecordSite::Tiles`), which record every planned
-//! sample, as the batches are read back.
+//! (`RecordSite::Steps`, `RecordSite::Tiles`), as the batches are read
+//! back. The tiled kernel computes every planned sample; the one-step
+//! kernels skip those their fast chain finds cannot be due (the same rule
+//! on the device, `shaders/record_step.wgsl`), and the host checks that
+//! every due sample was computed.
 
 use super::batch_sizes::ONE_STEP_BATCH;
 use super::context::GpuContext;
 use super::layout::{
-    GpuRecordEntry, GpuRecordPlan, GpuSampleSums, RECORD_BULK, RECORD_BULK_WORDS, RECORD_FAST,
-    RECORD_GLOBAL, RECORD_INTERFACE, RECORD_INTERFACE_WORDS,
+    AtomicWords8, GpuRecordEntry, GpuRecordPlan, GpuSampleSums, RECORD_BULK, RECORD_BULK_WORDS,
+    RECORD_FAST, RECORD_GLOBAL, RECORD_INTERFACE, RECORD_INTERFACE_WORDS,
 };
 use super::precision::GpuReal;
 use crate::engines::{BulkField, InterfaceRow, Sample, SamplePlan, SampleSums};
@@ -92,8 +95,22 @@ pub struct Recorder<T: GpuReal> {
     bulk_offset: u64,
     /// The last step sampled (by the device or by the host).
     pub recorded_through: Option<u64>,
+    /// Samples planned so far, all batches: the next one's ordinal (its
+    /// fast chain slots, `GpuRecordEntry::ring`).
+    ordinal: u64,
+    /// Planned samples read back, and those of them the device computed
+    /// (all scenes).
+    pub read_back: PlannedAndComputed,
     spare: Vec<wgpu::Buffer>,
     precision: std::marker::PhantomData<T>,
+}
+
+/// Planned samples, and those of them the device computed (the rest its
+/// fast chain skipped, `shaders/record_step.wgsl`).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct PlannedAndComputed {
+    pub planned: u64,
+    pub computed: u64,
 }
 
 /// Reals of `T` in `bytes`.
@@ -195,7 +212,8 @@ impl<T: GpuReal> Recorder<T> {
                 GpuRecordPlan::<T> {
                     fast: plan.fast as u32,
                     every_fast: plan.every_fast.min(u32::MAX as u64) as u32,
-                    fast_slip_speed: T::from_f64(plan.fast_slip_speed),
+                    fast_slip_speed: T::fast_threshold(plan.fast_slip_speed),
+                    fast_bits: T::fast_order_bits(plan.fast_slip_speed),
                     driven_block: match m.driver {
                         Driver::SideSpring { row, .. } => (row * m.nx) as u32,
                         _ => u32::MAX,
@@ -203,8 +221,8 @@ impl<T: GpuReal> Recorder<T> {
                     top_reaction: matches!(m.driver, Driver::TopVelocity { .. }) as u32,
                     junctions_per_block: (m.n_junctions() / m.nx.max(1)) as u32,
                     partials: partials as u32,
-                    reserved_a: 0,
-                    reserved: 0,
+                    step_chain: matches!(site, RecordSite::Steps { .. }) as u32,
+                    fast_chain: AtomicWords8::fast_chain(plan.fast),
                     sums_offset: (k * sums_per_scene) as u32,
                     partials_offset: (k * sums_per_scene) as u32 + max_entries,
                     interface_offset: words::<T>(k * rows_per_scene) as u32,
@@ -259,6 +277,8 @@ impl<T: GpuReal> Recorder<T> {
             rows_per_scene,
             bulk_offset,
             recorded_through: None,
+            ordinal: 0,
+            read_back: PlannedAndComputed::default(),
             spare: Vec::new(),
             precision: std::marker::PhantomData,
         })
@@ -286,18 +306,21 @@ impl<T: GpuReal> Recorder<T> {
     }
 
     /// Takes scene `scene`'s fast cadence state from `plan` (whose
-    /// cadences are this recorder's, `samples_like`); only between batches
-    /// (the engine has drained).
+    /// cadences are this recorder's, `samples_like`), into its flag and its
+    /// fast chain; only between batches (the engine has drained).
     pub fn set_plan(&mut self, queue: &wgpu::Queue, scene: usize, plan: &SamplePlan) {
         debug_assert!(self.samples_like(plan));
         self.fast[scene] = plan.fast;
-        let at =
-            scene * size_of::<GpuRecordPlan<T>>() + std::mem::offset_of!(GpuRecordPlan<T>, fast);
+        let plan_at = (scene * size_of::<GpuRecordPlan<T>>()) as u64;
+        let at = plan_at + std::mem::offset_of!(GpuRecordPlan<T>, fast) as u64;
         queue.write_buffer(
             &self.plan_buffer,
-            at as u64,
+            at,
             bytemuck::bytes_of(&(plan.fast as u32)),
         );
+        let at = plan_at + std::mem::offset_of!(GpuRecordPlan<T>, fast_chain) as u64;
+        let chain = AtomicWords8::fast_chain(plan.fast);
+        queue.write_buffer(&self.plan_buffer, at, bytemuck::bytes_of(&chain));
     }
 
     /// Whether `step` is a sample not yet taken.
@@ -337,6 +360,7 @@ impl<T: GpuReal> Recorder<T> {
                     sums_slot: planned.len() as u32,
                     interface_slot: interface,
                     bulk_slot: bulk,
+                    ring: 0,
                 },
             });
             interface += needs_interface as u32;
@@ -355,13 +379,21 @@ impl<T: GpuReal> Recorder<T> {
     }
 
     /// Writes a batch's entries (before its submit): the samples in step
-    /// order, and the sample of each step offset; marks its samples as
-    /// taken.
+    /// order, each with its slots in the fast chain, and the sample of each
+    /// step offset; marks its samples as taken.
     pub fn write_entries(&mut self, queue: &wgpu::Queue, planned: &[Planned]) {
         let Some(last) = planned.last() else {
             return;
         };
-        let entries: Vec<GpuRecordEntry> = planned.iter().map(|p| p.entry).collect();
+        let entries: Vec<GpuRecordEntry> = planned
+            .iter()
+            .zip(self.ordinal..)
+            .map(|(p, n)| GpuRecordEntry {
+                ring: (n % 6) as u32,
+                ..p.entry
+            })
+            .collect();
+        self.ordinal += planned.len() as u64;
         queue.write_buffer(&self.entries, 0, bytemuck::cast_slice(&entries));
         if let Some(buffer) = &self.step_samples {
             // Offsets of no sample: no step reads them.
@@ -486,6 +518,26 @@ impl<T: GpuReal> Recorder<T> {
                 }
             })
             .collect();
+        // The one-step kernels compute only the planned samples their
+        // chain says may be due (a superset of the host's rule's).
+        for (k, due) in due.iter().enumerate() {
+            let sums: &[GpuSampleSums<T>] = bytemuck::cast_slice(&scene_records(k)[..sums_bytes]);
+            self.read_back.planned += sums.len() as u64;
+            self.read_back.computed += sums.iter().filter(|s| s.recorded != 0).count() as u64;
+            let skipped = pending
+                .planned
+                .iter()
+                .zip(sums)
+                .zip(due)
+                .find(|((p, s), d)| d.recorded && s.recorded == 0 && p.step < before[k]);
+            if let Some(((p, _), _)) = skipped {
+                return Err(format!(
+                    "scene {k}: the device skipped the sample of step {}, which the fast \
+                     cadence's rule makes due (the kernels' fast chain parts from the host's rule)",
+                    p.step
+                ));
+            }
+        }
         let samples = self
             .models
             .iter()
@@ -623,6 +675,7 @@ fn fast_rule<T: GpuReal>(
 
 #[cfg(test)]
 mod tests {
+    use super::super::layout::{FAST_CHAIN_DUE, FAST_CHAIN_FLAG, FAST_CHAIN_MAX};
     use super::*;
 
     fn planned(offset: u64, channels: u32) -> Planned {
@@ -635,6 +688,7 @@ mod tests {
                 sums_slot: offset as u32,
                 interface_slot: 0,
                 bulk_slot: 0,
+                ring: 0,
             },
         }
     }
@@ -705,5 +759,169 @@ mod tests {
         let due = fast_rule(&never, &mut fast, &p, &s);
         assert_eq!(due[3], no);
         assert!(!fast);
+    }
+
+    /// CPU twin of shaders/record_step.wgsl fast_chain_due, on one scene's
+    /// chain words.
+    fn fast_chain_due(
+        chain: &mut [u32; 8],
+        e: &GpuRecordEntry,
+        every_fast: u32,
+        fast_bits: u32,
+        writer: bool,
+    ) -> bool {
+        let (max, due, flag) = (
+            FAST_CHAIN_MAX as usize,
+            FAST_CHAIN_DUE as usize,
+            FAST_CHAIN_FLAG as usize,
+        );
+        let n = e.ring as usize;
+        let mut fast = chain[flag + n % 2] != 0;
+        if chain[due + (n + 1) % 2] != 0 {
+            fast = every_fast != 0 && chain[max + (n + 2) % 3] >= fast_bits;
+        }
+        let fixed = RECORD_GLOBAL | RECORD_INTERFACE | RECORD_BULK;
+        let is_due = e.channels & fixed != 0 || (e.channels & RECORD_FAST != 0 && fast);
+        if writer {
+            chain[flag + (n + 1) % 2] = fast as u32;
+            chain[due + n % 2] = is_due as u32;
+            chain[max + (n + 1) % 3] = 0;
+        }
+        is_due
+    }
+
+    /// Runs `speeds.len()` samples (the channels of each from `channels`)
+    /// through the device's chain, whose computed samples add their speed
+    /// (as f32 order bits) to their max, and through the host's rule in
+    /// batches of seven; returns (device's, host's) decisions.
+    fn chain_and_host<T: GpuReal>(
+        plan: &SamplePlan,
+        fast_bits: u32,
+        channels: &[u32],
+        speeds: &[T],
+    ) -> (Vec<bool>, Vec<bool>) {
+        let mut chain = AtomicWords8::fast_chain(plan.fast).0;
+        let every_fast = plan.every_fast as u32;
+        let device: Vec<bool> = channels
+            .iter()
+            .zip(speeds)
+            .enumerate()
+            .map(|(n, (&c, &v))| {
+                let mut e = planned(n as u64, c).entry;
+                e.ring = (n % 6) as u32;
+                let due = fast_chain_due(&mut chain, &e, every_fast, fast_bits, true);
+                if due {
+                    let at = FAST_CHAIN_MAX as usize + n % 3;
+                    chain[at] = chain[at].max((v.as_f64() as f32).to_bits());
+                }
+                due
+            })
+            .collect();
+        let mut fast = plan.fast;
+        let mut host = Vec::new();
+        for (c, v) in channels.chunks(7).zip(speeds.chunks(7)) {
+            let p: Vec<Planned> = c.iter().map(|&c| planned(0, c)).collect();
+            let s: Vec<GpuSampleSums<T>> = v
+                .iter()
+                .map(|&v| GpuSampleSums {
+                    max_slip_speed: v,
+                    ..bytemuck::Zeroable::zeroed()
+                })
+                .collect();
+            host.extend(
+                fast_rule(plan, &mut fast, &p, &s)
+                    .iter()
+                    .map(|d| d.recorded),
+            );
+        }
+        (device, host)
+    }
+
+    /// A stick-slip-like run of planned samples: mostly the fast cadence's
+    /// alone, speeds in runs, many of them the f32 values next to the
+    /// threshold.
+    fn chain_run(threshold: f64, count: usize) -> (Vec<u32>, Vec<f64>) {
+        let mut state = 0x2545_f491_4f6c_dd1d_u64;
+        let mut next = move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            state
+        };
+        let mut near = vec![0.0, 2.0 * threshold + 1.0, threshold, threshold.next_up()];
+        let mut x = (threshold as f32).next_down().next_down();
+        for _ in 0..5 {
+            near.push(x as f64);
+            x = x.next_up();
+        }
+        let mut channels = Vec::new();
+        let mut speeds = Vec::new();
+        let mut speed = 0.0;
+        for _ in 0..count {
+            let r = next();
+            channels.push(match r % 10 {
+                0 => RECORD_GLOBAL | RECORD_FAST,
+                1 => RECORD_INTERFACE | RECORD_FAST,
+                2 => RECORD_GLOBAL,
+                _ => RECORD_FAST,
+            });
+            if (r >> 8) % 3 == 0 {
+                speed = near[((r >> 16) % near.len() as u64) as usize];
+            }
+            speeds.push(speed);
+        }
+        (channels, speeds)
+    }
+
+    /// The one-step kernels compute the planned samples their fast chain
+    /// says may be due: in mixed precision exactly the host rule's due
+    /// samples (the threshold's order bits are exact), in f64 every one
+    /// of them. The control: order bits one f32 step too high skip due
+    /// samples, which the comparison must see.
+    #[test]
+    fn the_fast_chain_computes_the_samples_the_host_rule_makes_due() {
+        for threshold in [0.1, 0.5, 1e-3] {
+            for fast in [false, true] {
+                let plan = SamplePlan {
+                    prep_steps: 0,
+                    every_global: 10,
+                    every_interface: 10,
+                    every_bulk: 0,
+                    every_fast: 1,
+                    fast_slip_speed: threshold,
+                    fast,
+                };
+                let (channels, speeds) = chain_run(threshold, 3000);
+                let mixed: Vec<f32> = speeds.iter().map(|&v| v as f32).collect();
+                let bits = f32::fast_order_bits(threshold);
+                let (device, host) = chain_and_host(&plan, bits, &channels, &mixed);
+                assert_eq!(device, host, "mixed, threshold {threshold}");
+                let skipped = host.iter().filter(|&&d| !d).count();
+                assert!(
+                    skipped > 300,
+                    "{skipped} of 3000 skipped: the run tests too little"
+                );
+
+                let (device, host) = chain_and_host(&plan, bits + 1, &channels, &mixed);
+                let missed = device
+                    .iter()
+                    .zip(&host)
+                    .filter(|(d, h)| **h && !**d)
+                    .count();
+                assert!(
+                    missed > 0,
+                    "the control: one step too high must skip a due sample"
+                );
+
+                let bits = f64::fast_order_bits(threshold);
+                let (device, host) = chain_and_host(&plan, bits, &channels, &speeds);
+                for (n, (d, h)) in device.iter().zip(&host).enumerate() {
+                    assert!(
+                        d | !h,
+                        "f64, threshold {threshold}: sample {n} due, not computed"
+                    );
+                }
+            }
+        }
     }
 }
