@@ -269,7 +269,7 @@ fn one_step_kernels_record_in_their_steps_with_one_finish_a_batch() {
                 samples,
                 e.dispatches().unwrap(),
                 e.output_dispatches().unwrap(),
-                e.samples_computed(),
+                e.device_samples(),
             )
         };
         let (_, quiet, none, _) = run(false);

@@ -23,7 +23,9 @@ mod sample;
 mod state;
 
 pub use friction_state::FrictionState;
-pub use sample::{record_sample, BulkField, Due, InterfaceRow, Sample, SamplePlan, SampleSums};
+pub use sample::{
+    record_sample, BulkField, Due, InterfaceRow, PlannedAndComputed, Sample, SamplePlan, SampleSums,
+};
 pub use state::{EngineState, StateArrays};
 
 use crate::model::real::{Coordinate, Real};
@@ -264,6 +266,11 @@ pub trait Engine: Send {
     }
     /// GPU dispatches of output kernels so far (apart from `dispatches`).
     fn output_dispatches(&self) -> Option<u64> {
+        None
+    }
+    /// Output samples planned on the device so far and those it computed
+    /// (None: it records none).
+    fn device_samples(&self) -> Option<PlannedAndComputed> {
         None
     }
     /// Asks the engine to record the output samples `plan` makes due on

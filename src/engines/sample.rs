@@ -7,6 +7,15 @@ use super::Snapshot;
 use crate::engines::step_params::{step_params, Consts};
 use crate::model::{Driver, Model};
 
+/// Output samples an engine planned to record on the device, and those of
+/// them it computed: the GPU one-step kernels skip the fast cadence's
+/// samples that cannot be due (`shaders/record_step.wgsl`, its fast chain).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct PlannedAndComputed {
+    pub planned: u64,
+    pub computed: u64,
+}
+
 /// The output cadences, in steps from the start of driving (0: off), and
 /// the slip speed above which the interface switches to the fast cadence.
 #[derive(Debug, Clone, Copy, PartialEq)]

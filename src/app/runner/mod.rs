@@ -12,7 +12,7 @@ pub use outputs::{drive_force, drive_origin, global_of, global_sample, sample_pl
 pub use progress::ProgressMode;
 
 use crate::engines::quasistatic::{FastForward, FastForwardSettings, FastForwardStats};
-use crate::engines::{advance_to, Engine, EngineError};
+use crate::engines::{advance_to, Engine, EngineError, PlannedAndComputed};
 use crate::io::checkpoint::RunnerState;
 use crate::io::live::LiveView;
 use crate::io::output::McapSink;
@@ -148,6 +148,9 @@ pub struct RunSummary {
     /// output samples (a batch's record finish).
     pub dispatches: Option<u64>,
     pub output_dispatches: Option<u64>,
+    /// Output samples planned on the device and those it computed (the
+    /// others its fast chain found could not be due).
+    pub device_samples: Option<PlannedAndComputed>,
     /// Quasi-static fast-forward totals (when it was on), over the whole
     /// run (a resumed run's include the part before the resume).
     pub fast_forward: Option<FastForwardStats>,
@@ -213,6 +216,14 @@ impl std::fmt::Display for RunSummary {
                 )?,
                 None => writeln!(f)?,
             }
+        }
+        if let Some(s) = self.device_samples.filter(|s| s.planned > 0) {
+            writeln!(
+                f,
+                "  device samples     {} planned, {} computed (the rest could not be due: \
+                 the fast cadence was off)",
+                s.planned, s.computed
+            )?;
         }
         if let Some(ff) = &self.fast_forward {
             writeln!(
@@ -489,6 +500,7 @@ pub fn run_scene(
             .output_dispatches()
             .zip(start_output_dispatches)
             .map(|(end, start)| end - start),
+        device_samples: engine.device_samples(),
         fast_forward: ff.map(|f| f.stats),
         skipped_steps: skipped,
         interrupted,

@@ -55,7 +55,9 @@ mod step_kernel;
 pub mod tiles;
 
 use crate::engines::step_params::Consts;
-use crate::engines::{Engine, EngineError, EngineState, Sample, SamplePlan, Snapshot};
+use crate::engines::{
+    Engine, EngineError, EngineState, PlannedAndComputed, Sample, SamplePlan, Snapshot,
+};
 use crate::model::real::precision_name;
 use crate::model::scenario::FrictionLaw;
 use crate::model::Model;
@@ -69,7 +71,6 @@ use options::*;
 pub use options::{GpuOptions, GpuOutput, GpuPath, PERSISTENT_THREADS, RESIDENT_THREADS};
 pub use precision::GpuReal;
 use precision::{Coord, Packed};
-pub use recorder::PlannedAndComputed;
 pub use step_kernel::AdapterTraits;
 use step_kernel::{kernel_sources, KernelPlan};
 
@@ -655,13 +656,6 @@ impl<T: GpuReal> GpuEngine<T> {
         self.recorder.is_some()
     }
 
-    /// The device's planned samples read back so far, all scenes, and how
-    /// many of them it computed: the one-step kernels skip those their fast
-    /// chain finds not due (None: no device records).
-    pub fn samples_computed(&self) -> Option<PlannedAndComputed> {
-        self.recorder.as_ref().map(|r| r.read_back)
-    }
-
     fn kernel_description(&self) -> String {
         let kernel = self.kernel_alone();
         match &self.choice {
@@ -804,6 +798,13 @@ impl<T: GpuReal> Engine for GpuEngine<T> {
 
     fn output_dispatches(&self) -> Option<u64> {
         Some(self.output_dispatches)
+    }
+
+    /// The planned samples read back so far, all scenes, and how many of
+    /// them the device computed: the one-step kernels skip those their
+    /// fast chain finds cannot be due.
+    fn device_samples(&self) -> Option<PlannedAndComputed> {
+        self.recorder.as_ref().map(|r| r.read_back)
     }
 
     fn record_samples(&mut self, plan: &SamplePlan) -> Result<bool, EngineError> {

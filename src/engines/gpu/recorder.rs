@@ -23,7 +23,7 @@ use super::layout::{
     RECORD_FAST, RECORD_GLOBAL, RECORD_INTERFACE, RECORD_INTERFACE_WORDS,
 };
 use super::precision::GpuReal;
-use crate::engines::{BulkField, InterfaceRow, Sample, SamplePlan, SampleSums};
+use crate::engines::{BulkField, InterfaceRow, PlannedAndComputed, Sample, SamplePlan, SampleSums};
 use crate::model::{Driver, Model};
 use wgpu::util::DeviceExt;
 
@@ -103,14 +103,6 @@ pub struct Recorder<T: GpuReal> {
     pub read_back: PlannedAndComputed,
     spare: Vec<wgpu::Buffer>,
     precision: std::marker::PhantomData<T>,
-}
-
-/// Planned samples, and those of them the device computed (the rest its
-/// fast chain skipped, `shaders/record_step.wgsl`).
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
-pub struct PlannedAndComputed {
-    pub planned: u64,
-    pub computed: u64,
 }
 
 /// Reals of `T` in `bytes`.
