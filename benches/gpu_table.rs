@@ -802,6 +802,7 @@ fn main() {
                         let (without, device_without) = (quiet_run.wall, quiet_run.device);
                         let (with, host, device_with) =
                             (output_run.wall, output_run.cpu, output_run.device);
+                        let samples = output_run.samples_text();
                         let (how, quiet, busy) =
                             (quiet_run.how, quiet_run.threads, output_run.threads);
                         let waiting = waiting_run.wall;
@@ -818,7 +819,7 @@ fn main() {
                         );
                         threads_seen.push(format!(
                             "- {nx}×{nz}, {steps} steps, CPU seconds per wall second by thread: \
-                             without output {quiet}; with -o {busy}"
+                             without output {quiet}; with -o {busy}; device samples {samples}"
                         ));
                         walls.push((without, with, waiting, device_without, device_with));
                     }

@@ -161,7 +161,7 @@ fn output_cost<T: GpuReal>(
     nz: u32,
     steps: u64,
     dir: &std::path::Path,
-) -> Result<(f64, f64), String> {
+) -> Result<(f64, f64, String), String> {
     let file = dir.join("run.mcap");
     let ahead = GpuOptions::default().run_ahead;
     let scenario_of = |n: u64| {
@@ -171,13 +171,15 @@ fn output_cost<T: GpuReal>(
     // Untimed first: the first run with output builds the record pipelines.
     output_run::<T>(&scenario_of(steps), Some(&file), ahead, false)?;
     let mut walls = Vec::new();
+    let mut samples = String::new();
     for n in [steps, 2 * steps] {
         let scenario = scenario_of(n);
         let without = output_run::<T>(&scenario, None, ahead, false)?.wall;
-        let with = output_run::<T>(&scenario, Some(&file), ahead, false)?.wall;
-        walls.push((without, with));
+        let with = output_run::<T>(&scenario, Some(&file), ahead, false)?;
+        samples = with.samples_text();
+        walls.push((without, with.wall));
     }
-    Ok((walls[1].0 - walls[0].0, walls[1].1 - walls[0].1))
+    Ok((walls[1].0 - walls[0].0, walls[1].1 - walls[0].1, samples))
 }
 
 const NOT_AGAIN: &str = "the chosen launch did not run again";
@@ -322,10 +324,11 @@ fn targets_in<T: GpuReal>(ctx: &GpuContext, quick: bool, min_seconds: f64) -> Ve
     let dir = std::env::temp_dir().join(format!("slipfront-gpu-targets-{}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("temp dir");
     targets.push(match output_cost::<T>(nx, nz, steps, &dir) {
-        Ok((without, with)) => Target::new(
+        Ok((without, with, samples)) => Target::new(
             what,
             format!(
-                "{:.2}× (the second {steps} steps: {with:.3} s with -o, {without:.3} s without)",
+                "{:.2}× (the second {steps} steps: {with:.3} s with -o, {without:.3} s without; \
+                 the whole run's device samples {samples})",
                 with / without
             ),
             with <= OUTPUT_RATIO * without,

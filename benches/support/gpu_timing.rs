@@ -64,6 +64,17 @@ pub struct Timed {
     pub threads: String,
     pub device: Option<f64>,
     pub dispatches: Option<slipfront::engines::gpu::DispatchTimes>,
+    /// The output samples planned on the device and those it computed.
+    pub samples: Option<slipfront::engines::PlannedAndComputed>,
+}
+
+impl Timed {
+    /// "N planned, M computed" (the device's samples), or "none".
+    pub fn samples_text(&self) -> String {
+        self.samples.map_or("none".into(), |s| {
+            format!("{} planned, {} computed", s.planned, s.computed)
+        })
+    }
 }
 
 /// One run of a scenario (`gpu_table`'s section 4) in precision `T` with device records,
@@ -118,6 +129,7 @@ pub fn output_run<T: GpuReal>(
         threads: format!("{threads}{megabytes}"),
         device,
         dispatches: e.dispatch_times(),
+        samples: e.device_samples(),
     })
 }
 

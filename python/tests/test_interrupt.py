@@ -37,9 +37,16 @@ def test_ctrl_c_stops_a_run_after_its_checkpoint(tmp_path):
     out = tmp_path / "r.mcap"
     r = interrupted("""
         import json, signal, sys, slipfront
-        print("ready", flush=True)
+        # "ready" once the slider is driven (past its normal-load steps, which
+        # record no samples): a slow machine may spend seconds loading.
+        loaded = slipfront.Scenario.load().model()["normal_load_steps"]
+        said = []
+        def progress(done, total):
+            if done > loaded and not said:
+                said.append(done)
+                print("ready", flush=True)
         try:
-            slipfront.run(None, backend="cpu", output=sys.argv[1], progress=False)
+            slipfront.run(None, backend="cpu", output=sys.argv[1], progress=progress)
             print(json.dumps({"finished": True}))
         except slipfront.Interrupted as e:
             print(json.dumps({
