@@ -19,8 +19,12 @@ import slipfront
 def interrupted(script: str, *args: str, after: float = 2.0) -> dict:
     """Runs `script` in a new Python, sends SIGINT `after` seconds after it
     prints "ready", and returns the JSON it prints last."""
+    # A child of a background job starts with SIGINT ignored, and Python then
+    # keeps it ignored: give the child the default disposition, so Python
+    # installs its own handler as in a terminal.
     child = subprocess.Popen([sys.executable, "-c", textwrap.dedent(script), *args],
-                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                             preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     assert child.stdout.readline().strip() == "ready"
     time.sleep(after)
     sent = time.monotonic()
