@@ -559,6 +559,13 @@ fn a_measured_sweep_runs_every_point_on_the_kernel_timed_on_its_ensemble() {
 fn gpu_points_with_device_records_alone_or_as_an_ensemble_give_the_host_snapshot_table() {
     let d = dir("gpu_device_records");
     let file = gpu_sweep_file(&d, "");
+    // Ended 0.45 ms after the last first event (at 1.03 ms), the slip and
+    // the ringing after it included: three sweeps of these points on
+    // lavapipe's one-step-lanes kernel are CI's costliest test at 2.5 ms.
+    let text = std::fs::read_to_string(&file).unwrap();
+    let shorter = text.replace("\"time.end\" = 0.0025", "\"time.end\" = 0.0015");
+    assert_ne!(text, shorter, "the sweep file's time.end moved");
+    std::fs::write(&file, shorter).unwrap();
     let run = |name: &str, extra: &[&str]| {
         let out = d.join(name);
         let mut args = gpu_f32_sweep(&file, &out);

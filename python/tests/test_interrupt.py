@@ -29,7 +29,12 @@ def interrupted(script: str, *args: str, after: float = 2.0) -> dict:
     time.sleep(after)
     sent = time.monotonic()
     child.send_signal(signal.SIGINT)
-    out, err = child.communicate(timeout=60)
+    try:
+        out, err = child.communicate(timeout=60)
+    except subprocess.TimeoutExpired:
+        child.kill()  # not left stepping beside the tests that follow
+        child.communicate()
+        raise
     stopped_in = time.monotonic() - sent
     assert child.returncode == 0, err
     result = json.loads(out.strip().splitlines()[-1])
