@@ -71,9 +71,7 @@ pub struct Timed {
 impl Timed {
     /// "N planned, M computed" (the device's samples), or "none".
     pub fn samples_text(&self) -> String {
-        self.samples.map_or("none".into(), |s| {
-            format!("{} planned, {} computed", s.planned, s.computed)
-        })
+        self.samples.map_or("none".into(), |s| s.to_string())
     }
 }
 

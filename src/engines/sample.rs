@@ -16,6 +16,12 @@ pub struct PlannedAndComputed {
     pub computed: u64,
 }
 
+impl std::fmt::Display for PlannedAndComputed {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{} planned, {} computed", self.planned, self.computed)
+    }
+}
+
 /// The output cadences, in steps from the start of driving (0: off), and
 /// the slip speed above which the interface switches to the fast cadence.
 #[derive(Debug, Clone, Copy, PartialEq)]

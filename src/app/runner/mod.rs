@@ -220,9 +220,7 @@ impl std::fmt::Display for RunSummary {
         if let Some(s) = self.device_samples.filter(|s| s.planned > 0) {
             writeln!(
                 f,
-                "  device samples     {} planned, {} computed (the rest could not be due: \
-                 the fast cadence was off)",
-                s.planned, s.computed
+                "  device samples     {s} (the rest could not be due: the fast cadence was off)"
             )?;
         }
         if let Some(ff) = &self.fast_forward {
