@@ -4,6 +4,7 @@
 use slipfront::app::runner::{run_scene, RunOptions};
 use slipfront::engines::backend::{cpu_engine, Precision};
 use slipfront::io::output::reader::RunFile;
+use slipfront::io::output::ChunkCompression;
 use slipfront::model::scenario::{Scenario, DEFAULT_SCENARIO};
 use slipfront::{advance_to, Model};
 
@@ -111,4 +112,47 @@ fn a_file_cut_short_is_still_readable() {
     assert!(!part.interface.is_empty());
     assert!(part.interface.len() <= whole.interface.len());
     assert_eq!(part.interface[0], whole.interface[0]);
+}
+
+#[test]
+fn a_scratch_file_without_compression_reads_back_as_the_compressed_one() {
+    // A sweep point that keeps no file writes it uncompressed: the same
+    // messages, read back the same, in a larger file (the control: the
+    // option is seen to change the file).
+    let set: Vec<String> = [
+        "time.end=1e-4",
+        "output.interface_interval=1e-6",
+        "output.bulk_interval=2e-5",
+    ]
+    .iter()
+    .map(|s| s.to_string())
+    .collect();
+    let scenario = Scenario::parse(DEFAULT_SCENARIO, "scratch", &set).unwrap();
+    let model = Model::from_scenario(&scenario, false).unwrap();
+    let dir = std::env::temp_dir().join(format!("slipfront-scratch-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let write = |name: &str, compression| {
+        let path = dir.join(name);
+        let mut engine = cpu_engine(&model, Precision::F64, 1).unwrap();
+        let opts = RunOptions {
+            output: Some(path.clone()),
+            output_compression: compression,
+            ..RunOptions::default()
+        };
+        run_scene(engine.as_mut(), &scenario, &opts).unwrap();
+        let size = std::fs::metadata(&path).unwrap().len();
+        (RunFile::read(&path).unwrap(), size)
+    };
+    let (kept, kept_size) = write("kept.mcap", ChunkCompression::Zstd);
+    let (scratch, scratch_size) = write("scratch.mcap", ChunkCompression::None);
+    assert!(!scratch.truncated && scratch.damage.is_none());
+    assert!(!scratch.interface.is_empty() && !scratch.bulk.is_empty());
+    assert_eq!(scratch.global, kept.global);
+    assert_eq!(scratch.interface, kept.interface);
+    assert_eq!(scratch.bulk, kept.bulk);
+    assert!(
+        scratch_size > kept_size,
+        "uncompressed {scratch_size} B, zstd {kept_size} B"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
 }

@@ -15,7 +15,7 @@ use crate::engines::quasistatic::{FastForward, FastForwardSettings, FastForwardS
 use crate::engines::{advance_to, Engine, EngineError, PlannedAndComputed};
 use crate::io::checkpoint::RunnerState;
 use crate::io::live::LiveView;
-use crate::io::output::McapSink;
+use crate::io::output::{ChunkCompression, McapSink};
 use crate::model::scenario::Scenario;
 use checkpoints::Checkpointer;
 use jump::perform_jump;
@@ -105,6 +105,8 @@ pub type ChunkHook = std::sync::Arc<dyn Fn(u64, u64) + Send + Sync>;
 #[derive(Default)]
 pub struct RunOptions {
     pub output: Option<PathBuf>,
+    /// How `output`'s chunks are stored (zstd unless it is scratch).
+    pub output_compression: ChunkCompression,
     pub progress: ProgressMode,
     /// Fast-forward settings that replace the scenario's (and switch it on
     /// whatever `time.fast_forward` says).
@@ -316,6 +318,7 @@ pub fn run_scene(
             scenario,
             &describe,
             &opts.history,
+            opts.output_compression,
         )?),
         (None, _) => None,
     };

@@ -23,6 +23,7 @@ use crate::engines::backend::{make_engine_with, Backend, Precision};
 use crate::engines::{Engine, EngineError, EngineState};
 use crate::io::checkpoint::RunnerState;
 use crate::io::output::reader::RunFile;
+use crate::io::output::ChunkCompression;
 use crate::model::Model;
 use kernels::SweepKernels;
 use std::collections::BTreeMap;
@@ -274,6 +275,12 @@ fn run_point(
             &p.scenario,
             &RunOptions {
                 output: Some(mcap.clone()),
+                // A file read back once below and deleted needs no compression.
+                output_compression: if keep {
+                    ChunkCompression::Zstd
+                } else {
+                    ChunkCompression::None
+                },
                 start,
                 ..RunOptions::default()
             },

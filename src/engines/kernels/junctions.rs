@@ -183,8 +183,14 @@ pub fn merge_lanes<T: Real, S: ForceSum<T>>(lanes: &[LaneSum<T, S>]) -> LaneSum<
         first: usize,
         width: usize,
     ) -> LaneSum<T, S> {
+        // A subtree wholly past the junctions merges zero sums into the
+        // zero sum: its value without the merges (most of the tree where
+        // Ns is well under the lane count).
+        if first >= lanes.len() {
+            return LaneSum::default();
+        }
         if width == 1 {
-            return lanes.get(first).copied().unwrap_or_default();
+            return lanes[first];
         }
         let half = width / 2;
         subtree(lanes, first, half).merge(subtree(lanes, first + half, half))

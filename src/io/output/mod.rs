@@ -2,8 +2,9 @@
 //! attachment, and one channel per output kind. Messages are protobuf with
 //! their FileDescriptorSet as the schema (MCAP well-known encoding), so that
 //! Foxglove and the `mcap` Python reader decode numeric arrays; chunks are
-//! zstd-compressed on the file's own writing thread (`writer`) and flushed
-//! every second so that a killed run leaves a readable file.
+//! zstd-compressed (unless the file is scratch, `ChunkCompression`) on the
+//! file's own writing thread (`writer`) and flushed every second so that a
+//! killed run leaves a readable file.
 
 pub mod lock;
 pub mod messages;
@@ -44,6 +45,29 @@ fn mcap_cause(e: &mcap::McapError) -> String {
     match e {
         mcap::McapError::Io(io) => format!("{e}: {io}"),
         other => other.to_string(),
+    }
+}
+
+/// How a run file's chunks are stored.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub enum ChunkCompression {
+    /// zstd: what a file that is kept gets.
+    #[default]
+    Zstd,
+    /// Uncompressed, for a scratch file read back once and deleted (a
+    /// sweep point that keeps no file): the stick-slip scenes' fast
+    /// interface samples compress only 1.45×, and compressing them cost
+    /// 17 % of such a run's CPU (measured, BENCHMARKS.md "CPU engine:
+    /// sweep").
+    None,
+}
+
+impl ChunkCompression {
+    fn mcap(self) -> Option<mcap::Compression> {
+        match self {
+            ChunkCompression::Zstd => Some(mcap::Compression::Zstd),
+            ChunkCompression::None => None,
+        }
     }
 }
 
@@ -114,8 +138,10 @@ impl McapSink {
         scenario: &Scenario,
         backend: &str,
         history: &[String],
+        compression: ChunkCompression,
     ) -> Result<Self, OutputError> {
-        Ok(Opened::create(path, model, scenario, backend, history)?.spawn(0))
+        let opened = Opened::create(path, model, scenario, backend, history, compression)?;
+        Ok(opened.spawn(0))
     }
 
     /// A run file that continues `parent` (or, with `parent` = `path`,
@@ -136,7 +162,14 @@ impl McapSink {
         let mut partial = path.as_os_str().to_owned();
         partial.push(".partial");
         let partial = std::path::PathBuf::from(partial);
-        let mut opened = Opened::create(&partial, model, scenario, backend, history)?;
+        let mut opened = Opened::create(
+            &partial,
+            model,
+            scenario,
+            backend,
+            history,
+            ChunkCompression::Zstd,
+        )?;
         let copied = opened.copy_messages(parent, messages)?;
         if copied != messages {
             let _ = std::fs::remove_file(&partial);
@@ -216,6 +249,7 @@ impl Opened {
         scenario: &Scenario,
         backend: &str,
         history: &[String],
+        compression: ChunkCompression,
     ) -> Result<Self, OutputError> {
         let create_error = |source| OutputError::Create {
             path: path.display().to_string(),
@@ -224,7 +258,7 @@ impl Opened {
         let file = open_locked(path)?;
         let sync_handle = file.try_clone().map_err(create_error)?;
         let mut writer = mcap::WriteOptions::new()
-            .compression(Some(mcap::Compression::Zstd))
+            .compression(compression.mcap())
             .chunk_size(Some(1 << 20))
             .create(BufWriter::new(file))?;
         let toml = scenario.to_toml();
