@@ -1,6 +1,6 @@
 //! Is mixed f32 a sample from f64's outcome distribution? The statistical
-//! precision test, sized for a 2-core CI machine (about six minutes alone,
-//! twelve beside another test; the f32 ensemble is the slowest): five
+//! precision test, sized for a 2-core CI machine (158 s alone, 2026-12-03;
+//! the f32 ensemble is the slowest): five
 //! perturbation ensembles of 24 runs of `scenarios/small_stick_slip.toml`
 //! (0.3 s of stick-slip, about 20 events each), drive speed × (1 + k·1e-6),
 //! the slider starting 1 cm along the track (`start.position`): where a
