@@ -461,7 +461,7 @@ mod tests {
             fn value(&mut self) -> f32 {
                 let special = [-0.0f32, 0.0, f32::NAN, f32::INFINITY, 1.0e-30, -3.0e7];
                 let r = self.next();
-                if r % 4 == 0 {
+                if r.is_multiple_of(4) {
                     special[(r / 4) as usize % special.len()]
                 } else {
                     (r as f32 / 2.0f32.powi(31) - 0.5) * 1.0e3
