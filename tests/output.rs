@@ -8,26 +8,33 @@ use slipfront::io::output::ChunkCompression;
 use slipfront::model::scenario::{Scenario, DEFAULT_SCENARIO};
 use slipfront::{advance_to, Model};
 
+/// The default scene with `set` applied, its model, and a fresh folder
+/// named `name` for its files.
+fn scene(name: &str, set: &[&str]) -> (Scenario, Model, std::path::PathBuf) {
+    let set: Vec<String> = set.iter().map(|s| s.to_string()).collect();
+    let scenario = Scenario::parse(DEFAULT_SCENARIO, name, &set).unwrap();
+    let model = Model::from_scenario(&scenario, false).unwrap();
+    let dir = std::env::temp_dir().join(format!("slipfront-{name}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    (scenario, model, dir)
+}
+
 #[test]
 fn every_channel_reads_back_as_the_engine_state() {
     // 2.2e-4 s of fast driving (junctions break); every cadence divides the end, so the last
     // message of each channel is the final state.
-    let set: Vec<String> = [
-        "time.end=2.237101e-4",
-        "time.dt=2.237101e-7",
-        "loading.drive.velocity=2.0",
-        "output.global_interval=2.237101e-6",
-        "output.interface_interval=4.474202e-6",
-        "output.bulk_interval=1.1185505e-4",
-        "output.fast_interval=0",
-    ]
-    .iter()
-    .map(|s| s.to_string())
-    .collect();
-    let scenario = Scenario::parse(DEFAULT_SCENARIO, "output test", &set).unwrap();
-    let model = Model::from_scenario(&scenario, false).unwrap();
-    let dir = std::env::temp_dir().join(format!("slipfront-out-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let (scenario, model, dir) = scene(
+        "out",
+        &[
+            "time.end=2.237101e-4",
+            "time.dt=2.237101e-7",
+            "loading.drive.velocity=2.0",
+            "output.global_interval=2.237101e-6",
+            "output.interface_interval=4.474202e-6",
+            "output.bulk_interval=1.1185505e-4",
+            "output.fast_interval=0",
+        ],
+    );
     let path = dir.join("run.mcap");
     let mut engine = cpu_engine(&model, Precision::F64, 1).unwrap();
     run_scene(
@@ -86,14 +93,7 @@ fn every_channel_reads_back_as_the_engine_state() {
 
 #[test]
 fn a_file_cut_short_is_still_readable() {
-    let set: Vec<String> = ["time.end=1e-4", "output.interface_interval=1e-6"]
-        .iter()
-        .map(|s| s.to_string())
-        .collect();
-    let scenario = Scenario::parse(DEFAULT_SCENARIO, "cut", &set).unwrap();
-    let model = Model::from_scenario(&scenario, false).unwrap();
-    let dir = std::env::temp_dir().join(format!("slipfront-cut-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let (scenario, model, dir) = scene("cut", &["time.end=1e-4", "output.interface_interval=1e-6"]);
     let path = dir.join("run.mcap");
     let mut engine = cpu_engine(&model, Precision::F64, 1).unwrap();
     let opts = RunOptions {
@@ -119,18 +119,14 @@ fn a_scratch_file_without_compression_reads_back_as_the_compressed_one() {
     // A sweep point that keeps no file writes it uncompressed: the same
     // messages, read back the same, in a larger file (the control: the
     // option is seen to change the file).
-    let set: Vec<String> = [
-        "time.end=1e-4",
-        "output.interface_interval=1e-6",
-        "output.bulk_interval=2e-5",
-    ]
-    .iter()
-    .map(|s| s.to_string())
-    .collect();
-    let scenario = Scenario::parse(DEFAULT_SCENARIO, "scratch", &set).unwrap();
-    let model = Model::from_scenario(&scenario, false).unwrap();
-    let dir = std::env::temp_dir().join(format!("slipfront-scratch-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let (scenario, model, dir) = scene(
+        "scratch",
+        &[
+            "time.end=1e-4",
+            "output.interface_interval=1e-6",
+            "output.bulk_interval=2e-5",
+        ],
+    );
     let write = |name: &str, compression| {
         let path = dir.join(name);
         let mut engine = cpu_engine(&model, Precision::F64, 1).unwrap();

@@ -56,9 +56,9 @@ pub enum ChunkCompression {
     Zstd,
     /// Uncompressed, for a scratch file read back once and deleted (a
     /// sweep point that keeps no file): the stick-slip scenes' fast
-    /// interface samples compress only 1.45×, and compressing them cost
-    /// 17 % of such a run's CPU (measured, BENCHMARKS.md "CPU engine:
-    /// sweep").
+    /// interface samples compress only 1.45×, and compressing them took
+    /// 7–17 % of such a run's CPU (measured, BENCHMARKS.md "CPU sweeps:
+    /// lane trees without their empty subtrees").
     None,
 }
 
