@@ -62,30 +62,27 @@ step() {
 # A step's own environment goes through `env VAR=VALUE... COMMAND`: `timeout` runs an
 # executable, so a shell function there fails with exit 127.
 
-# 0. The registers each kernel's thread holds, as NVIDIA's driver reports them, and the
-#    workgroups an SM holds by them: whether Table S1 scenes can share an SM at all. It
-#    compiles, runs nothing, and takes seconds (benches/gpu_registers.rs).
-step registers 60 gpu_registers
-# 0b. The tiled kernel's recording variant (TILE_RECORDS: a run with an output file records
-#     its samples in the tiled kernel's steps), its registers against step 0's.
-step registers-recording 30 env SLIPFRONT_GPU_REGISTERS_SET=TILE_RECORDS=1 \
-  SLIPFRONT_GPU_REGISTERS_LAUNCHES=tiled/256/8x4,tiled/1024/16x4,tiled/256/8x4/chained gpu_registers
-# 0c. The one-step kernels' recording variant (STEP_RECORDS: the step dispatch of a sample
-#     records it; its reduction's 64 slots: step_kernel::step_recording_constants), its
-#     registers against step 0's.
-step registers-step-recording 30 env SLIPFRONT_GPU_REGISTERS_SET=STEP_RECORDS=1,REDUCTION_WIDTH=64 \
-  SLIPFRONT_GPU_REGISTERS_LAUNCHES=one-step,one-step/bond-patches,one-step-lanes gpu_registers
 # 1. The targets, met or not: auto's pick against every launch timed again, Table S1
 #    µs/step, 256 scenes' aggregate, 64 scenes against one at a time, output cost; in f64
 #    (what a default run computes in on a GPU with f64 shaders) and then in mixed f32.
 step targets 270 gpu_targets
-# 2. Ensemble against solo, bit for bit (the issue's "the ensemble and solo tests pass").
+# 2. The ensemble target's other launches, at 1 and 256 scenes: resident/512 (two waves of
+#    one scene an SM, about 2.04e10 by section 8 on the H200 in session 50, where `auto`
+#    mis-timed it), bond patches, and the one-step kernel.
+step ensembles 150 env SLIPFRONT_GPU_TABLE_SECTIONS=3 SLIPFRONT_GPU_TABLE_SCENES=1,256 \
+  SLIPFRONT_GPU_TABLE_LAUNCHES=resident/512,resident/1024/bond-patches,persistent/1024/bond-patches,one-step,one-step/bond-patches \
+  gpu_table
+# 2a. Where the output's cost at 1024×512 lies: section 4, each run with the device's busy
+#     time and the host's CPU by thread (session 50: 0.445 s for 20,000 steps in f32 and
+#     f64 alike, which points at the host or memory traffic, not arithmetic).
+step output 120 env SLIPFRONT_GPU_TABLE_SECTIONS=4 gpu_table
+# 2b. Ensemble against solo, bit for bit (the issue's "the ensemble and solo tests pass").
 step bits 90 gpu_ensemble --test-threads 1
-# 2b. Chained tiles on hardware: the same bits as a dispatch a round, a scene of 64 tiles
+# 2c. Chained tiles on hardware: the same bits as a dispatch a round, a scene of 64 tiles
 #     at once, and an ensemble of chained scenes against their solo runs (lavapipe can
 #     check only one scene at a time).
 step chained 60 gpu_chained_tiles --test-threads 1
-# 2c. auto's pick for a run with an output file (the default job's `-o`), in f64: timed
+# 2d. auto's pick for a run with an output file (the default job's `-o`), in f64: timed
 #     recording Table S1's samples at its cadences, against each launch timed again
 #     recording them (output weighs on the launches unequally: BENCHMARKS.md, session 39).
 step output-pick 90 env SLIPFRONT_GPU_TARGETS_WITH_OUTPUT=only SLIPFRONT_GPU_TARGETS_PRECISIONS=f64 \
@@ -96,18 +93,28 @@ step output-pick 90 env SLIPFRONT_GPU_TARGETS_WITH_OUTPUT=only SLIPFRONT_GPU_TAR
 #    ensemble"): whether scenes that share an SM contend in the bulk phase or in the
 #    junction phase, which decides what to build.
 step limits 180 env SLIPFRONT_GPU_TABLE_SECTIONS=8 gpu_table
-# 4. The ensemble target's other launches, at 1 and 256 scenes: bond patches, and the
-#    one-step kernel (step 3 has resident and persistent without patches).
-step ensembles 150 env SLIPFRONT_GPU_TABLE_SECTIONS=3 SLIPFRONT_GPU_TABLE_SCENES=1,256 \
-  SLIPFRONT_GPU_TABLE_LAUNCHES=resident/512,resident/1024/bond-patches,persistent/1024/bond-patches,one-step,one-step/bond-patches \
-  gpu_table
-# 5. Table S1 per kernel: kept sums, lane shuffles, run-time checks, bond patches.
+# 4. Table S1 per kernel: kept sums, lane shuffles, run-time checks, bond patches.
 step junctions 150 env SLIPFRONT_GPU_TABLE_SECTIONS=7 gpu_table
-# 6. Kernels against lattice size (the one-step kernels with and without bond patches),
+# 5. Kernels against lattice size (the one-step kernels with and without bond patches),
 #    and Table S1's thread counts and tile shapes.
 step kernels 200 env SLIPFRONT_GPU_TABLE_SECTIONS=1,2 gpu_table
-# 7. Accuracy: the GPU kernels' perturbation ensembles against CPU f64.
+# 6. Accuracy: the GPU kernels' perturbation ensembles against CPU f64.
 step precision 300 gpu_precision
+
+# 7. The registers each kernel's thread holds, as NVIDIA's driver reports them, and the
+#    workgroups an SM holds by them: whether Table S1 scenes can share an SM at all. It
+#    compiles only, but every launch in two precisions took over 60 s on the H200
+#    (session 50, which measured them: BENCHMARKS.md), hence last (benches/gpu_registers.rs).
+step registers 60 gpu_registers
+# 7b. The tiled kernel's recording variant (TILE_RECORDS: a run with an output file records
+#     its samples in the tiled kernel's steps), its registers against step 0's.
+step registers-recording 30 env SLIPFRONT_GPU_REGISTERS_SET=TILE_RECORDS=1 \
+  SLIPFRONT_GPU_REGISTERS_LAUNCHES=tiled/256/8x4,tiled/1024/16x4,tiled/256/8x4/chained gpu_registers
+# 7c. The one-step kernels' recording variant (STEP_RECORDS: the step dispatch of a sample
+#     records it; its reduction's 64 slots: step_kernel::step_recording_constants), its
+#     registers against step 0's.
+step registers-step-recording 30 env SLIPFRONT_GPU_REGISTERS_SET=STEP_RECORDS=1,REDUCTION_WIDTH=64 \
+  SLIPFRONT_GPU_REGISTERS_LAUNCHES=one-step,one-step/bond-patches,one-step-lanes gpu_registers
 
 echo
 echo "=== gpu_call summary (budget ${budget} s, used $(($(date +%s) - start)) s)"
