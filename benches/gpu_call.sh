@@ -6,7 +6,7 @@
 #
 # On the GPU machine, after a release build and packing here:
 #   cargo build --release --bins --benches --tests
-#   ../shared/device/pack.sh gpu_registers gpu_targets gpu_ensemble gpu_chained_tiles gpu_table gpu_precision
+#   ../shared/device/pack.sh gpu_registers gpu_targets gpu_ensemble gpu_chained_tiles gpu_table gpu_precision output_writer
 #   device call, carry [".devbin"]: bash .devbin/on-gpu.sh 'bash ../benches/gpu_call.sh 420'
 # (on-gpu.sh runs its command from .devbin/, with the packed binaries on PATH).
 #
@@ -76,6 +76,11 @@ step ensembles 150 env SLIPFRONT_GPU_TABLE_SECTIONS=3 SLIPFRONT_GPU_TABLE_SCENES
 #     time and the host's CPU by thread (session 50: 0.445 s for 20,000 steps in f32 and
 #     f64 alike, which points at the host or memory traffic, not arithmetic).
 step output 120 env SLIPFRONT_GPU_TABLE_SECTIONS=4 gpu_table
+# 2a'. The host's side of that output on this machine's CPU, without the GPU: the
+#      runner's encoding and the writing thread's zstd, per 1024-column `/interface`
+#      message (benches/output_writer.rs; on the 2-core container the writer's zstd took
+#      131 µs a slipping row, against the 36 µs a sample the 1.3× target leaves). Seconds.
+step output-host 30 output_writer 3000
 # 2b. Ensemble against solo, bit for bit (the issue's "the ensemble and solo tests pass").
 step bits 90 gpu_ensemble --test-threads 1
 # 2c. Chained tiles on hardware: the same bits as a dispatch a round, a scene of 64 tiles

@@ -71,6 +71,27 @@ impl ChunkCompression {
     }
 }
 
+/// The zstd level of a run file's chunks: the fastest. On a large lattice
+/// the writing thread's compression is what an output file costs (at 1024
+/// columns, 41 KB a fast `/interface` sample every 4–5 steps): level 1
+/// wrote 1.5× faster than zstd's default level 3 on slipping rows and
+/// 1.2× on stuck ones (medians of paired runs), for files 2 % and 0.3 %
+/// larger (`cargo bench --bench output_writer`, BENCHMARKS.md session
+/// 50). Readers see no difference.
+const ZSTD_LEVEL: u32 = 1;
+
+/// Target uncompressed size of a chunk.
+const CHUNK_BYTES: u64 = 1 << 20;
+
+/// How every run file slipfront writes is laid out: chunks of
+/// `CHUNK_BYTES`, compressed as `compression` says at `ZSTD_LEVEL`.
+fn write_options(compression: ChunkCompression) -> mcap::WriteOptions {
+    mcap::WriteOptions::new()
+        .compression(compression.mcap())
+        .compression_level(ZSTD_LEVEL)
+        .chunk_size(Some(CHUNK_BYTES))
+}
+
 /// One sample of the global series.
 #[derive(Debug, Clone, Serialize, PartialEq)]
 pub struct GlobalSample {
@@ -257,10 +278,7 @@ impl Opened {
         };
         let file = open_locked(path)?;
         let sync_handle = file.try_clone().map_err(create_error)?;
-        let mut writer = mcap::WriteOptions::new()
-            .compression(compression.mcap())
-            .chunk_size(Some(1 << 20))
-            .create(BufWriter::new(file))?;
+        let mut writer = write_options(compression).create(BufWriter::new(file))?;
         let toml = scenario.to_toml();
         let mut meta = BTreeMap::new();
         meta.insert("slipfront_version".into(), env!("CARGO_PKG_VERSION").into());

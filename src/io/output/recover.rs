@@ -3,7 +3,7 @@
 //! reads from the start, opens it.
 
 use super::scan::{scan, Ending, Flow};
-use super::OutputError;
+use super::{ChunkCompression, OutputError};
 use mcap::records::Record;
 use std::collections::{BTreeMap, HashMap};
 use std::io::BufWriter;
@@ -31,10 +31,7 @@ pub fn rewrite(cut: &Path, out: &Path) -> Result<Recovered, OutputError> {
         path: out.display().to_string(),
         source,
     })?;
-    let mut writer = mcap::WriteOptions::new()
-        .compression(Some(mcap::Compression::Zstd))
-        .chunk_size(Some(1 << 20))
-        .create(BufWriter::new(file))?;
+    let mut writer = super::write_options(ChunkCompression::Zstd).create(BufWriter::new(file))?;
     let mut schemas: HashMap<u16, u16> = HashMap::new();
     let mut channels: HashMap<u16, u16> = HashMap::new();
     let mut messages = 0u64;
