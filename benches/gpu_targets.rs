@@ -118,11 +118,26 @@ fn solo_figures<T: GpuReal>(
         ""
     };
     println!("`auto` on Table S1{with}: {}\n", choice.describe());
-    println!("| launch | auto's figure (µs/step) | timed again (µs/step) | host CPU / wall |");
+    let again = timed_again(&choice.timings, "µs/step", |launch| {
+        solo_step_seconds_in::<T>(s1, launch.options(opts), min_seconds)
+    });
+    Ok((choice, again))
+}
+
+/// Each of `timings` (a launch and `auto`'s seconds a step for it) timed
+/// again by `time` (seconds a step and the host's CPU share), printed as a
+/// table beside `auto`'s figure in `unit`: the launches that ran, with
+/// their seconds.
+fn timed_again(
+    timings: &[(Launch, f64)],
+    unit: &str,
+    mut time: impl FnMut(Launch) -> Result<(f64, f64), String>,
+) -> Vec<(Launch, f64)> {
+    println!("| launch | auto's figure ({unit}) | timed again ({unit}) | host CPU / wall |");
     println!("| --- | ---: | ---: | ---: |");
     let mut again = Vec::new();
-    for &(launch, seconds) in &choice.timings {
-        match solo_step_seconds_in::<T>(s1, launch.options(opts), min_seconds) {
+    for &(launch, seconds) in timings {
+        match time(launch) {
             Ok((s, host)) => {
                 println!(
                     "| {} | {:.2} | {:.2} | {host:.2} |",
@@ -140,7 +155,7 @@ fn solo_figures<T: GpuReal>(
         }
     }
     println!();
-    Ok((choice, again))
+    again
 }
 
 /// The launch a sweep of `models` takes (timed on that ensemble), and
@@ -159,38 +174,21 @@ fn ensemble_figures<T: GpuReal>(
     let opts = slipfront::app::sweeps::default_gpu();
     let choice = measure::<T>(models, ctx, opts).map_err(|e| e.to_string())?;
     println!("{} scenes: {}\n", models.len(), choice.describe());
-    println!(
-        "| launch | auto's figure (µs an ensemble step) | timed again (µs an ensemble step) | \
-         host CPU / wall |"
-    );
-    println!("| --- | ---: | ---: | ---: |");
-    let contender = |l: &Launch| {
-        *l == choice.launch
-            || (l.kernel.is_persistent()
-                && !l.lanes_in_storage
-                && !l.bond_patches
-                && !l.one_lane_a_round)
-    };
-    let mut again = Vec::new();
-    for &(launch, seconds) in choice.timings.iter().filter(|(l, _)| contender(l)) {
-        match ensemble_step_seconds_in::<T>(models, launch.options(opts), min_seconds) {
-            Ok((s, host)) => {
-                println!(
-                    "| {} | {:.2} | {:.2} | {host:.2} |",
-                    launch.name(),
-                    seconds * 1e6,
-                    s * 1e6
-                );
-                again.push((launch, s));
-            }
-            Err(e) => println!(
-                "| {} | {:.2} | not run: {e} | |",
-                launch.name(),
-                seconds * 1e6
-            ),
-        }
-    }
-    println!();
+    let contenders: Vec<(Launch, f64)> = choice
+        .timings
+        .iter()
+        .copied()
+        .filter(|(l, _)| {
+            *l == choice.launch
+                || (l.kernel.is_persistent()
+                    && !l.lanes_in_storage
+                    && !l.bond_patches
+                    && !l.one_lane_a_round)
+        })
+        .collect();
+    let again = timed_again(&contenders, "µs an ensemble step", |launch| {
+        ensemble_step_seconds_in::<T>(models, launch.options(opts), min_seconds)
+    });
     Ok((choice, again))
 }
 

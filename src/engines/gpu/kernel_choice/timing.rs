@@ -97,43 +97,27 @@ fn time_launch<T: GpuReal>(
     if let Some(plan) = opts.samples.as_ref() {
         record_while_timed(&mut engine, plan)?;
     }
-    let mut samples = 0;
-    let mut drop_samples = |engine: &mut GpuEngine<T>| {
-        for k in 0..models.len() {
-            samples += engine.take_samples_of(k).len() as u64;
-        }
-    };
-    let started = Instant::now();
-    engine.advance_steps(WARM_UP_STEPS)?;
-    let rough = started.elapsed().as_secs_f64() / WARM_UP_STEPS as f64;
-    drop_samples(&mut engine);
     let batch = engine.batch_steps();
     let sustain = if ctx.is_software() {
         0.0
     } else {
         SUSTAINED_WARM_UP_SECONDS
     };
-    let short = sustained_warm_up(
-        |steps| {
-            let t = Instant::now();
-            engine.advance_steps(steps)?;
-            drop_samples(&mut engine);
-            Ok(t.elapsed().as_secs_f64())
-        },
-        rough,
-        batch,
-        sustain,
-    )?;
-    let seconds = marginal_step_seconds(
-        |steps| {
-            let t = Instant::now();
-            engine.advance_steps(steps)?;
-            let seconds = t.elapsed().as_secs_f64();
-            drop_samples(&mut engine);
-            Ok(seconds)
-        },
-        short,
-    )?;
+    let mut samples = 0;
+    // A span: `steps` steps, waited for, and their wall seconds; the
+    // samples they recorded are counted and dropped outside the time.
+    let mut span = |steps: u64| -> Result<f64, EngineError> {
+        let t = Instant::now();
+        engine.advance_steps(steps)?;
+        let seconds = t.elapsed().as_secs_f64();
+        for k in 0..models.len() {
+            samples += engine.take_samples_of(k).len() as u64;
+        }
+        Ok(seconds)
+    };
+    let rough = span(WARM_UP_STEPS)? / WARM_UP_STEPS as f64;
+    let short = sustained_warm_up(&mut span, rough, batch, sustain)?;
+    let seconds = marginal_step_seconds(&mut span, short)?;
     Ok(Timed {
         seconds,
         lane_levels: engine.lane_shuffle_levels(),
