@@ -30,7 +30,9 @@
 //! 5. An output file at the default cadences at 1024×512 costs at most 1.3×
 //!    no output: the second N steps of a run with `-o` against the same
 //!    without (what a run pays once, the file's creation and its final
-//!    checkpoint, left out).
+//!    checkpoint, left out). Beside it, the device's busy time of the same
+//!    steps with and without the file, and each thread's CPU: whether what
+//!    the file adds is the device's time or the host's.
 //!
 //! SLIPFRONT_GPU_TARGETS_PRECISIONS=f32 (or f64, or f64,f32, the default)
 //! runs those precisions only, in that order; f64 on an adapter without
@@ -63,7 +65,7 @@ mod gpu_timing;
 mod thread_cpu;
 
 use gpu_timing::{
-    ensemble_step_seconds_in, output_run, solo_step_seconds_in, table_s1, table_s1_scenario,
+    ensemble_step_seconds_in, output_run, solo_step_seconds_in, table_s1, table_s1_scenario, Timed,
 };
 use slipfront::app::runner::sample_plan;
 
@@ -202,14 +204,54 @@ fn chosen_again(choice: &KernelChoice, again: &[(Launch, f64)]) -> Result<(Launc
         .ok_or_else(|| NOT_AGAIN.to_string())
 }
 
-/// The output's cost at `nx`×`nz`: the wall seconds of the second `steps`
-/// steps of a run without an output file and with one (`-o`).
+/// The output's cost at `nx`×`nz`, the second `steps` steps of a run
+/// with an output file (`-o`) against the same without.
+struct OutputCost {
+    /// Wall seconds of those steps without and with the file.
+    without: f64,
+    with: f64,
+    /// The device's busy seconds of the same steps, without and with
+    /// (None where the adapter has no timestamp queries): whether what the
+    /// file adds is device time or the host's.
+    device: Option<(f64, f64)>,
+    /// The longer run with the file: its device samples and each
+    /// thread's CPU seconds per wall second.
+    samples: String,
+    threads: String,
+}
+
+impl OutputCost {
+    /// The figure of the target row.
+    fn describe(&self, steps: u64) -> String {
+        let device = self.device.map_or(String::new(), |(without, with)| {
+            format!(
+                "; device busy {without:.3} s without, {with:.3} s with: the file adds \
+                 {:.3} s of device time of its {:.3} s",
+                with - without,
+                self.with - self.without
+            )
+        });
+        format!(
+            "{:.2}× (the second {steps} steps: {:.3} s with -o, {:.3} s without{device}; \
+             the longer run with -o: device samples {}, CPU a wall second {})",
+            self.with / self.without,
+            self.with,
+            self.without,
+            self.samples,
+            self.threads
+        )
+    }
+}
+
+/// The output's cost at `nx`×`nz` over the second `steps` steps of a run
+/// (what a run pays once, the file's creation and its final checkpoint,
+/// drops out of the difference).
 fn output_cost<T: GpuReal>(
     nx: u32,
     nz: u32,
     steps: u64,
     dir: &std::path::Path,
-) -> Result<(f64, f64, String), String> {
+) -> Result<OutputCost, String> {
     let file = dir.join("run.mcap");
     let ahead = GpuOptions::default().run_ahead;
     let scenario_of = |n: u64| {
@@ -218,16 +260,22 @@ fn output_cost<T: GpuReal>(
     };
     // Untimed first: the first run with output builds the record pipelines.
     output_run::<T>(&scenario_of(steps), Some(&file), ahead, false)?;
-    let mut walls = Vec::new();
-    let mut samples = String::new();
+    let mut runs = Vec::new();
     for n in [steps, 2 * steps] {
         let scenario = scenario_of(n);
-        let without = output_run::<T>(&scenario, None, ahead, false)?.wall;
+        let without = output_run::<T>(&scenario, None, ahead, false)?;
         let with = output_run::<T>(&scenario, Some(&file), ahead, false)?;
-        samples = with.samples_text();
-        walls.push((without, with.wall));
+        runs.push((without, with));
     }
-    Ok((walls[1].0 - walls[0].0, walls[1].1 - walls[0].1, samples))
+    let (short, long) = (&runs[0], &runs[1]);
+    let busy = |a: &Timed, b: &Timed| a.device.zip(b.device).map(|(a, b)| b - a);
+    Ok(OutputCost {
+        without: long.0.wall - short.0.wall,
+        with: long.1.wall - short.1.wall,
+        device: busy(&short.0, &long.0).zip(busy(&short.1, &long.1)),
+        samples: long.1.samples_text(),
+        threads: long.1.threads.clone(),
+    })
 }
 
 const NOT_AGAIN: &str = "the chosen launch did not run again";
@@ -387,14 +435,10 @@ fn targets_in<T: GpuReal>(ctx: &GpuContext, quick: bool, min_seconds: f64) -> Ve
     let dir = std::env::temp_dir().join(format!("slipfront-gpu-targets-{}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("temp dir");
     targets.push(match output_cost::<T>(nx, nz, steps, &dir) {
-        Ok((without, with, samples)) => Target::new(
+        Ok(cost) => Target::new(
             what,
-            format!(
-                "{:.2}× (the second {steps} steps: {with:.3} s with -o, {without:.3} s without; \
-                 the whole run's device samples {samples})",
-                with / without
-            ),
-            with <= OUTPUT_RATIO * without,
+            cost.describe(steps),
+            cost.with <= OUTPUT_RATIO * cost.without,
         ),
         Err(e) => Target::not_measured(what, e),
     });

@@ -5,6 +5,9 @@
 //! and writes it (`io::output::writer`). On the H200 (BENCHMARKS.md,
 //! session 50) the output added about 86 µs a sample in f32 and f64
 //! alike, which points at these host costs rather than the kernels.
+//! The writing thread is timed with the run file's chunks
+//! (`io::output::CHUNK_BYTES`, several zstd jobs each), with chunks of
+//! 1 MB (one job each: the layout until session 51), and uncompressed.
 //! Needs no GPU.
 //!
 //! `cargo bench --bench output_writer [-- MESSAGES [ROWS.mcap]]`: MESSAGES
@@ -17,7 +20,7 @@
 use slipfront::engines::InterfaceRow;
 use slipfront::io::output::reader::RunFile;
 use slipfront::io::output::records::{RecordBuilder, Topic};
-use slipfront::io::output::{ChunkCompression, McapSink};
+use slipfront::io::output::{ChunkCompression, ChunkLayout, McapSink, CHUNK_BYTES};
 use slipfront::Model;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -145,19 +148,28 @@ fn main() {
     );
     let dir = std::env::temp_dir().join(format!("slipfront-output-writer-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
-    for (name, compression) in [
-        ("zstd (a kept file)", ChunkCompression::Zstd),
+    // Chunks of 1 MB were the layout until session 51: one zstd job each.
+    let one_job = 1 << 20;
+    let layouts = [
+        ("zstd (a kept file)", ChunkCompression::Zstd, CHUNK_BYTES),
+        ("zstd, chunks of 1 MB", ChunkCompression::Zstd, one_job),
         (
             "uncompressed (a sweep's scratch file)",
             ChunkCompression::None,
+            CHUNK_BYTES,
         ),
-    ] {
+    ];
+    for (name, compression, chunk_bytes) in layouts {
+        let layout = ChunkLayout {
+            compression,
+            bytes: chunk_bytes,
+        };
         let path = dir.join("run.mcap");
         let _ = std::fs::remove_file(&path);
         // The runner hands the sink messages it owns: copied before the clock.
         let messages_owned = encoded.clone();
         let t0 = Instant::now();
-        let mut sink = McapSink::create(&path, &model, &scenario, "bench", &[], compression)
+        let mut sink = McapSink::create_laid_out(&path, &model, &scenario, "bench", &[], layout)
             .expect("run file");
         for (k, data) in messages_owned.into_iter().enumerate() {
             let step = 4 * k as u64;

@@ -599,10 +599,10 @@ fn records(bytes: &[u8], opcode: u8) -> Vec<(usize, usize)> {
 fn damaged_chunks_are_found_by_their_crc_and_dropped() {
     let d = dir("crc");
     let run = d.join("run.mcap");
-    // Dense samples: several 1 MiB chunks.
+    // Dense samples: several chunks (`CHUNK_BYTES` each, 8 MiB).
     small_run_with(
         &run,
-        "2e-3",
+        "1.2e-2",
         &[
             "output.interface_interval=1e-6",
             "output.global_interval=1e-6",
@@ -639,7 +639,7 @@ fn damaged_chunks_are_found_by_their_crc_and_dropped() {
         slipfront::io::checkpoint::path_for(&bad),
     )
     .unwrap();
-    let out = slipfront(&["run", "--resume", s(&bad), "--t-end", "2e-3"], &[]);
+    let out = slipfront(&["run", "--resume", s(&bad), "--t-end", "1.2e-2"], &[]);
     let err = String::from_utf8_lossy(&out.stderr);
     assert_ne!(out.status.code(), Some(0), "{err}");
     assert!(err.contains("recover"), "{err}");

@@ -80,16 +80,52 @@ impl ChunkCompression {
 /// 50). Readers see no difference.
 const ZSTD_LEVEL: u32 = 1;
 
-/// Target uncompressed size of a chunk.
-const CHUNK_BYTES: u64 = 1 << 20;
+/// Uncompressed bytes of one zstd job at `ZSTD_LEVEL`: zstd's
+/// multithreaded compressor (the `mcap` crate gives it a worker per
+/// physical core) cuts its input into jobs of 2^(windowLog + 2) bytes,
+/// windowLog 19 at level 1, and compresses the jobs on its workers side by
+/// side. A chunk of one job or less is compressed by one worker while the
+/// writing thread waits for it.
+const ZSTD_JOB_BYTES: u64 = 2 << 20;
 
-/// How every run file slipfront writes is laid out: chunks of
-/// `CHUNK_BYTES`, compressed as `compression` says at `ZSTD_LEVEL`.
-fn write_options(compression: ChunkCompression) -> mcap::WriteOptions {
+/// zstd jobs a chunk holds: the writing thread fills the next job while
+/// the workers compress the ones before, and waits only for the last one
+/// at the chunk's end. On a 41 KB-a-sample `/interface` stream (1024
+/// columns, slipping) the writing thread took 46–62 µs a message with
+/// chunks of 4 jobs against 69–93 µs with chunks of 1 MB, on 2 cores
+/// (`cargo bench --bench output_writer`, BENCHMARKS.md session 51); 8 jobs
+/// were no faster there. A chunk is also cut at every flush (at least
+/// once a second, `writer`), so a slow run's chunks stay small.
+const CHUNK_JOBS: u64 = 4;
+
+/// Target uncompressed size of a chunk.
+pub const CHUNK_BYTES: u64 = CHUNK_JOBS * ZSTD_JOB_BYTES;
+
+/// How a run file's chunks are laid out: their compression and their
+/// target uncompressed size.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct ChunkLayout {
+    pub compression: ChunkCompression,
+    pub bytes: u64,
+}
+
+impl ChunkLayout {
+    /// Chunks of `CHUNK_BYTES`, compressed as `compression` says: what
+    /// every run file slipfront writes gets.
+    pub fn of(compression: ChunkCompression) -> ChunkLayout {
+        ChunkLayout {
+            compression,
+            bytes: CHUNK_BYTES,
+        }
+    }
+}
+
+/// The `mcap` writer's options for `layout`, at `ZSTD_LEVEL`.
+fn write_options(layout: ChunkLayout) -> mcap::WriteOptions {
     mcap::WriteOptions::new()
-        .compression(compression.mcap())
+        .compression(layout.compression.mcap())
         .compression_level(ZSTD_LEVEL)
-        .chunk_size(Some(CHUNK_BYTES))
+        .chunk_size(Some(layout.bytes))
 }
 
 /// One sample of the global series.
@@ -161,7 +197,21 @@ impl McapSink {
         history: &[String],
         compression: ChunkCompression,
     ) -> Result<Self, OutputError> {
-        let opened = Opened::create(path, model, scenario, backend, history, compression)?;
+        let layout = ChunkLayout::of(compression);
+        Self::create_laid_out(path, model, scenario, backend, history, layout)
+    }
+
+    /// `create`, with chunks laid out as `layout` says (the benches
+    /// compare layouts; runs take `ChunkLayout::of`).
+    pub fn create_laid_out(
+        path: &Path,
+        model: &Model,
+        scenario: &Scenario,
+        backend: &str,
+        history: &[String],
+        layout: ChunkLayout,
+    ) -> Result<Self, OutputError> {
+        let opened = Opened::create(path, model, scenario, backend, history, layout)?;
         Ok(opened.spawn(0))
     }
 
@@ -189,7 +239,7 @@ impl McapSink {
             scenario,
             backend,
             history,
-            ChunkCompression::Zstd,
+            ChunkLayout::of(ChunkCompression::Zstd),
         )?;
         let copied = opened.copy_messages(parent, messages)?;
         if copied != messages {
@@ -270,7 +320,7 @@ impl Opened {
         scenario: &Scenario,
         backend: &str,
         history: &[String],
-        compression: ChunkCompression,
+        layout: ChunkLayout,
     ) -> Result<Self, OutputError> {
         let create_error = |source| OutputError::Create {
             path: path.display().to_string(),
@@ -278,7 +328,7 @@ impl Opened {
         };
         let file = open_locked(path)?;
         let sync_handle = file.try_clone().map_err(create_error)?;
-        let mut writer = write_options(compression).create(BufWriter::new(file))?;
+        let mut writer = write_options(layout).create(BufWriter::new(file))?;
         let toml = scenario.to_toml();
         let mut meta = BTreeMap::new();
         meta.insert("slipfront_version".into(), env!("CARGO_PKG_VERSION").into());

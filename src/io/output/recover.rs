@@ -31,7 +31,8 @@ pub fn rewrite(cut: &Path, out: &Path) -> Result<Recovered, OutputError> {
         path: out.display().to_string(),
         source,
     })?;
-    let mut writer = super::write_options(ChunkCompression::Zstd).create(BufWriter::new(file))?;
+    let mut writer = super::write_options(super::ChunkLayout::of(ChunkCompression::Zstd))
+        .create(BufWriter::new(file))?;
     let mut schemas: HashMap<u16, u16> = HashMap::new();
     let mut channels: HashMap<u16, u16> = HashMap::new();
     let mut messages = 0u64;

@@ -1,5 +1,5 @@
 //! Reading an MCAP file record by record from disk: the file is never held
-//! in memory (one chunk at a time, 1 MiB as written), no length field
+//! in memory (one chunk at a time, `CHUNK_BYTES` as written), no length field
 //! becomes an allocation larger than [`RECORD_LIMIT`], a file cut short (a
 //! killed run) yields every record before the cut, and a chunk whose
 //! records fail their CRC (or do not decompress or parse) is skipped and
@@ -13,7 +13,8 @@ use std::io::{BufReader, Read};
 use std::path::Path;
 
 /// The longest record a run file may hold (bytes): the writer's chunks are
-/// 1 MiB, an attachment is a scenario. A longer length field is damage.
+/// `CHUNK_BYTES` (8 MiB), an attachment is a scenario. A longer length
+/// field is damage.
 pub const RECORD_LIMIT: u64 = 256 << 20;
 
 const OP_FOOTER: u8 = 0x02;
@@ -165,7 +166,7 @@ fn chunk<E>(
     each: &mut impl FnMut(Record<'_>) -> Result<Flow, E>,
 ) -> Result<ChunkEnd, E> {
     // The record whole first (len ≤ RECORD_LIMIT; the writer's chunks are
-    // 1 MiB): a chunk the file ends inside is a cut, one that is all there
+    // `CHUNK_BYTES`): a chunk the file ends inside is a cut, one that is all there
     // but does not read is damage.
     let mut raw = Vec::new();
     if r.take(len).read_to_end(&mut raw).is_err() || (raw.len() as u64) < len {
