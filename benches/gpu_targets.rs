@@ -13,7 +13,9 @@
 //! short still brings back the first.
 //!
 //! 1. `auto` picks the fastest kernel: its measurement as a run makes it,
-//!    then every launch it timed, timed again alone over at least `SECONDS`.
+//!    then every launch it timed, timed again alone over at least `SECONDS`
+//!    (with the host's CPU share and the device's busy time of that span:
+//!    which of the two sets the pace).
 //!    Met when the chosen launch is within `PICK_TOLERANCE` of the fastest.
 //! 2. Table S1 in at most 3 µs a step: the fastest of those figures.
 //! 3. 256 scenes (a seed each) in one dispatch at 2e10 block-steps/s or
@@ -65,7 +67,8 @@ mod gpu_timing;
 mod thread_cpu;
 
 use gpu_timing::{
-    ensemble_step_seconds_in, output_run, solo_step_seconds_in, table_s1, table_s1_scenario, Timed,
+    ensemble_step_seconds_in, output_run, solo_step_figures_in, table_s1, table_s1_scenario,
+    StepFigures, Timed,
 };
 use slipfront::app::runner::sample_plan;
 
@@ -121,36 +124,41 @@ fn solo_figures<T: GpuReal>(
     };
     println!("`auto` on Table S1{with}: {}\n", choice.describe());
     let again = timed_again(&choice.timings, "µs/step", |launch| {
-        solo_step_seconds_in::<T>(s1, launch.options(opts), min_seconds)
+        solo_step_figures_in::<T>(s1, launch.options(opts), min_seconds)
     });
     Ok((choice, again))
 }
 
 /// Each of `timings` (a launch and `auto`'s seconds a step for it) timed
-/// again by `time` (seconds a step and the host's CPU share), printed as a
-/// table beside `auto`'s figure in `unit`: the launches that ran, with
-/// their seconds.
+/// again by `time`, printed as a table beside `auto`'s figure in `unit`,
+/// with the host's CPU share and the device's busy time of the same span
+/// where `time` has it: the launches that ran, with their seconds.
 fn timed_again(
     timings: &[(Launch, f64)],
     unit: &str,
-    mut time: impl FnMut(Launch) -> Result<(f64, f64), String>,
+    mut time: impl FnMut(Launch) -> Result<StepFigures, String>,
 ) -> Vec<(Launch, f64)> {
-    println!("| launch | auto's figure ({unit}) | timed again ({unit}) | host CPU / wall |");
-    println!("| --- | ---: | ---: | ---: |");
+    println!(
+        "| launch | auto's figure ({unit}) | timed again ({unit}) | host CPU / wall | \
+         device busy ({unit}) |"
+    );
+    println!("| --- | ---: | ---: | ---: | ---: |");
     let mut again = Vec::new();
     for &(launch, seconds) in timings {
         match time(launch) {
-            Ok((s, host)) => {
+            Ok(f) => {
+                let busy = f.device.map_or("–".into(), |d| format!("{:.2}", d * 1e6));
                 println!(
-                    "| {} | {:.2} | {:.2} | {host:.2} |",
+                    "| {} | {:.2} | {:.2} | {:.2} | {busy} |",
                     launch.name(),
                     seconds * 1e6,
-                    s * 1e6
+                    f.seconds * 1e6,
+                    f.host
                 );
-                again.push((launch, s));
+                again.push((launch, f.seconds));
             }
             Err(e) => println!(
-                "| {} | {:.2} | not run: {e} | |",
+                "| {} | {:.2} | not run: {e} | | |",
                 launch.name(),
                 seconds * 1e6
             ),
@@ -189,7 +197,13 @@ fn ensemble_figures<T: GpuReal>(
         })
         .collect();
     let again = timed_again(&contenders, "µs an ensemble step", |launch| {
-        ensemble_step_seconds_in::<T>(models, launch.options(opts), min_seconds)
+        ensemble_step_seconds_in::<T>(models, launch.options(opts), min_seconds).map(
+            |(seconds, host)| StepFigures {
+                seconds,
+                host,
+                device: None,
+            },
+        )
     });
     Ok((choice, again))
 }

@@ -150,6 +150,27 @@ pub fn solo_step_seconds_in<T: GpuReal>(
     opts: GpuOptions,
     min_seconds: f64,
 ) -> Result<(f64, f64), String> {
+    solo_step_figures_in::<T>(model, opts, min_seconds).map(|f| (f.seconds, f.host))
+}
+
+/// A launch's step timed: its wall seconds, the host's CPU seconds a wall
+/// second, and the device's busy seconds a step (its passes' timestamps;
+/// None where the adapter has none). Busy near the wall time says the
+/// device sets the pace; well under it, the host does (a host CPU share
+/// near 1 can also be a driver spinning in its wait).
+#[derive(Debug, Clone, Copy)]
+pub struct StepFigures {
+    pub seconds: f64,
+    pub host: f64,
+    pub device: Option<f64>,
+}
+
+/// `solo_step_seconds_in`, with the device's busy time of the same span.
+pub fn solo_step_figures_in<T: GpuReal>(
+    model: &Model,
+    opts: GpuOptions,
+    min_seconds: f64,
+) -> Result<StepFigures, String> {
     let mut e = GpuEngine::<T>::with_precision(model, opts).map_err(|e| e.to_string())?;
     if let Some(plan) = opts.samples.as_ref() {
         if !e.record_samples(plan).map_err(|e| e.to_string())? {
@@ -157,16 +178,28 @@ pub fn solo_step_seconds_in<T: GpuReal>(
         }
     }
     advance_to(&mut e, model.prep_steps + 16).map_err(|e| e.to_string())?;
+    // The device's busy seconds of the last advance, the one timed (an
+    // advance without running ahead returns with its batches retired).
+    let mut busy = None;
     let (dt, steps, cpu) = timed_with_cpu(
         |n| {
+            let before = e.device_seconds();
             let stepped = e.advance(n);
             e.take_samples();
+            busy = e
+                .device_seconds()
+                .zip(before)
+                .map(|(after, before)| after - before);
             stepped
         },
         min_seconds,
     )
     .map_err(|e| e.to_string())?;
-    Ok((dt / steps as f64, cpu / dt))
+    Ok(StepFigures {
+        seconds: dt / steps as f64,
+        host: cpu / dt,
+        device: busy.map(|b| b / steps as f64),
+    })
 }
 
 /// The precursors scene (Table S1, Ns = 100) with seed `seed`.
