@@ -122,6 +122,13 @@ step registers-recording 30 env SLIPFRONT_GPU_REGISTERS_SET=TILE_RECORDS=1 \
 #     registers against step 0's.
 step registers-step-recording 30 env SLIPFRONT_GPU_REGISTERS_SET=STEP_RECORDS=1,REDUCTION_WIDTH=64 \
   SLIPFRONT_GPU_REGISTERS_LAUNCHES=one-step,one-step/bond-patches,one-step-lanes gpu_registers
+# 7d. The ensemble launches with one junction lane a round (TWO_LANES_A_ROUND=0, a launch
+#     `auto` times on hardware): two Table S1 scenes share an SM only at 128 registers or
+#     fewer at 256 threads (resident/256 held 139 in session 50). On AMD's compiler (RADV
+#     navi21, session 51) the option took f64 resident/256 from 88 VGPRs to 80 and
+#     persistent/256 from 88 to 72, and left f32 at 64.
+step registers-one-lane 30 env SLIPFRONT_GPU_REGISTERS_SET=TWO_LANES_A_ROUND=0 \
+  SLIPFRONT_GPU_REGISTERS_LAUNCHES=resident/256,resident/512,persistent/256 gpu_registers
 
 echo
 echo "=== gpu_call summary (budget ${budget} s, used $(($(date +%s) - start)) s)"
