@@ -5,6 +5,9 @@
 //! and writes it (`io::output::writer`). On the H200 (BENCHMARKS.md,
 //! session 50) the output added about 86 µs a sample in f32 and f64
 //! alike, which points at these host costs rather than the kernels.
+//! The runner's part is timed with its encoder (each array copied whole,
+//! `io::output::packed`) and with prost's, which it replaced; each message
+//! is dropped once built, as the writing thread frees it once written.
 //! The writing thread is timed with the run file's chunks
 //! (`io::output::CHUNK_BYTES`, several zstd jobs each), with chunks of
 //! 1 MB (one job each: the layout until session 51), and uncompressed.
@@ -17,9 +20,10 @@
 //! speeds; they compress about as little as a driven run's). Prints a
 //! Markdown table (BENCHMARKS.md).
 
+use prost::Message;
 use slipfront::engines::InterfaceRow;
 use slipfront::io::output::reader::RunFile;
-use slipfront::io::output::records::{RecordBuilder, Topic};
+use slipfront::io::output::records::{Record, RecordBuilder, Topic};
 use slipfront::io::output::{ChunkCompression, ChunkLayout, McapSink, CHUNK_BYTES};
 use slipfront::Model;
 use std::path::{Path, PathBuf};
@@ -30,6 +34,9 @@ use std::time::Instant;
 mod bench_scene;
 
 const COLUMNS: u32 = 1024;
+
+/// A record's protobuf bytes.
+type Encoder = fn(&Record) -> Vec<u8>;
 
 /// A small deterministic generator (xorshift), so that runs compare.
 struct Noise(u64);
@@ -119,20 +126,41 @@ fn main() {
         model.nx
     );
 
-    // The runner's part: a record built and encoded per sample.
-    let mut builder = RecordBuilder::default();
+    // The runner's part: a record built and encoded per sample, then
+    // handed off; dropped here, as the writing thread frees each message
+    // once written, so the runner's allocations reuse memory. (Keeping all
+    // of them, as this bench did until session 51, timed the kernel's
+    // first touch of each new page: 22 µs a message against 4–5.)
     let dt = model.dt;
-    let t0 = Instant::now();
+    let build = |builder: &mut RecordBuilder, k: usize| {
+        let step = 4 * k as u64;
+        builder.interface(&model, step, step as f64 * dt, &rows[k % rows.len()])
+    };
+    // The runner's encoder (arrays copied whole), and prost's (a value at
+    // a time, until session 51): the same bytes.
+    let encoders: [(&str, Encoder); 2] = [
+        ("build and encode", Record::encode),
+        ("build and encode with prost's encoder", |r| match r {
+            Record::Interface(m) => m.encode_to_vec(),
+            _ => unreachable!("interface records only"),
+        }),
+    ];
+    let mut runner = Vec::new();
+    let mut bytes = 0;
+    for (name, encoder) in encoders {
+        let mut builder = RecordBuilder::default();
+        let t0 = Instant::now();
+        bytes = 0;
+        for k in 0..messages {
+            bytes += std::hint::black_box(encoder(&build(&mut builder, k))).len();
+        }
+        runner.push((name, t0.elapsed().as_secs_f64()));
+    }
+    // The messages the writing thread is timed on, built again untimed.
+    let mut builder = RecordBuilder::default();
     let encoded: Vec<Vec<u8>> = (0..messages)
-        .map(|k| {
-            let step = 4 * k as u64;
-            builder
-                .interface(&model, step, step as f64 * dt, &rows[k % rows.len()])
-                .encode()
-        })
+        .map(|k| build(&mut builder, k).encode())
         .collect();
-    let encode_s = t0.elapsed().as_secs_f64();
-    let bytes: usize = encoded.iter().map(Vec::len).sum();
 
     println!(
         "{messages} `/interface` messages of {} columns, {:.1} KB each, from {source}\n",
@@ -141,11 +169,13 @@ fn main() {
     );
     println!("| part | µs a message | MB/s of messages | file |");
     println!("| --- | ---: | ---: | ---: |");
-    println!(
-        "| runner: build and encode | {:.1} | {:.0} | |",
-        encode_s / messages as f64 * 1e6,
-        bytes as f64 / encode_s / 1e6
-    );
+    for (name, seconds) in runner {
+        println!(
+            "| runner: {name} | {:.1} | {:.0} | |",
+            seconds / messages as f64 * 1e6,
+            bytes as f64 / seconds / 1e6
+        );
+    }
     let dir = std::env::temp_dir().join(format!("slipfront-output-writer-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     // Chunks of 1 MB were the layout until session 51: one zstd job each.

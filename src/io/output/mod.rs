@@ -8,6 +8,7 @@
 
 pub mod lock;
 pub mod messages;
+mod packed;
 pub mod reader;
 pub mod records;
 pub mod recover;

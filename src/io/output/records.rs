@@ -88,8 +88,9 @@ impl Record {
     pub fn encode(&self) -> Vec<u8> {
         match self {
             Record::Global(m) => m.encode_to_vec(),
-            Record::Interface(m) => m.encode_to_vec(),
-            Record::Bulk(m) => m.encode_to_vec(),
+            // The arrays copied whole (`packed`): the same bytes.
+            Record::Interface(m) => super::packed::encode_interface(m),
+            Record::Bulk(m) => super::packed::encode_bulk(m),
             Record::FastForward(m) => m.encode_to_vec(),
         }
     }
