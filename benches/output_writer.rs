@@ -130,7 +130,7 @@ fn main() {
     // handed off; dropped here, as the writing thread frees each message
     // once written, so the runner's allocations reuse memory. (Keeping all
     // of them, as this bench did until session 51, timed the kernel's
-    // first touch of each new page: 22 µs a message against 4–5.)
+    // first touch of each new page: 22 µs a message against 3.5–7.)
     let dt = model.dt;
     let build = |builder: &mut RecordBuilder, k: usize| {
         let step = 4 * k as u64;
@@ -199,8 +199,8 @@ fn main() {
         // The runner hands the sink messages it owns: copied before the clock.
         let messages_owned = encoded.clone();
         let t0 = Instant::now();
-        let mut sink = McapSink::create_laid_out(&path, &model, &scenario, "bench", &[], layout)
-            .expect("run file");
+        let mut sink =
+            McapSink::create(&path, &model, &scenario, "bench", &[], layout).expect("run file");
         for (k, data) in messages_owned.into_iter().enumerate() {
             let step = 4 * k as u64;
             sink.write(Topic::Interface, step as f64 * dt, data)

@@ -15,7 +15,7 @@ use crate::engines::quasistatic::{FastForward, FastForwardSettings, FastForwardS
 use crate::engines::{advance_to, Engine, EngineError, PlannedAndComputed};
 use crate::io::checkpoint::RunnerState;
 use crate::io::live::LiveView;
-use crate::io::output::{ChunkCompression, McapSink};
+use crate::io::output::{ChunkCompression, ChunkLayout, McapSink};
 use crate::model::scenario::Scenario;
 use checkpoints::Checkpointer;
 use jump::perform_jump;
@@ -318,7 +318,7 @@ pub fn run_scene(
             scenario,
             &describe,
             &opts.history,
-            opts.output_compression,
+            ChunkLayout::of(opts.output_compression),
         )?),
         (None, _) => None,
     };

@@ -188,23 +188,11 @@ fn open_locked(path: &Path) -> Result<File, OutputError> {
 }
 
 impl McapSink {
-    /// A new run file. `history` (one line per start, resume and branch
-    /// of the run) goes to the `slipfront_history` metadata record.
+    /// A new run file, its chunks laid out as `layout` says (runs take
+    /// `ChunkLayout::of`; the benches compare layouts). `history` (one
+    /// line per start, resume and branch of the run) goes to the
+    /// `slipfront_history` metadata record.
     pub fn create(
-        path: &Path,
-        model: &Model,
-        scenario: &Scenario,
-        backend: &str,
-        history: &[String],
-        compression: ChunkCompression,
-    ) -> Result<Self, OutputError> {
-        let layout = ChunkLayout::of(compression);
-        Self::create_laid_out(path, model, scenario, backend, history, layout)
-    }
-
-    /// `create`, with chunks laid out as `layout` says (the benches
-    /// compare layouts; runs take `ChunkLayout::of`).
-    pub fn create_laid_out(
         path: &Path,
         model: &Model,
         scenario: &Scenario,

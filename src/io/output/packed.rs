@@ -27,7 +27,7 @@ pub fn encode_interface(m: &Interface) -> Vec<u8> {
     put_double(&mut out, 1, m.time);
     put_uint(&mut out, 2, m.step);
     for (tag, values) in arrays {
-        put_packed(&mut out, tag, values, f64::to_le_bytes);
+        put_packed(&mut out, tag, values);
     }
     out
 }
@@ -42,7 +42,7 @@ pub fn encode_bulk(m: &Bulk) -> Vec<u8> {
     put_uint(&mut out, 3, m.nx as u64);
     put_uint(&mut out, 4, m.nz as u64);
     for (tag, values) in arrays {
-        put_packed(&mut out, tag, values, f32::to_le_bytes);
+        put_packed(&mut out, tag, values);
     }
     out
 }
@@ -76,25 +76,21 @@ fn put_uint(out: &mut Vec<u8>, tag: u64, v: u64) {
     }
 }
 
-/// A packed array of fixed-width values, left out when empty: on a
-/// little-endian machine the values' memory is their wire bytes, copied
-/// at once.
-fn put_packed<T: bytemuck::Pod, const N: usize>(
-    out: &mut Vec<u8>,
-    tag: u64,
-    values: &[T],
-    to_le_bytes: fn(T) -> [u8; N],
-) {
+/// A packed array of fixed-width values, left out when empty: the wire
+/// bytes are the values' little-endian bytes, on a little-endian machine
+/// their memory, copied at once.
+fn put_packed<T: bytemuck::Pod>(out: &mut Vec<u8>, tag: u64, values: &[T]) {
     if values.is_empty() {
         return;
     }
+    let bytes: &[u8] = bytemuck::cast_slice(values);
     put_key(out, tag, WIRE_LENGTH_DELIMITED);
-    put_varint(out, (N * values.len()) as u64);
+    put_varint(out, bytes.len() as u64);
     if cfg!(target_endian = "little") {
-        out.extend_from_slice(bytemuck::cast_slice(values));
+        out.extend_from_slice(bytes);
     } else {
-        for &v in values {
-            out.extend_from_slice(&to_le_bytes(v));
+        for value in bytes.chunks_exact(size_of::<T>()) {
+            out.extend(value.iter().rev());
         }
     }
 }
