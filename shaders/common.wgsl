@@ -136,3 +136,48 @@ fn grid_walk_next(w: ptr<function, GridWalk>) {
         (*w).row += 1u;
     }
 }
+
+// The blocks of columns a ..< b (all rows) split for the force phase: the
+// inner ones (column in 1 ..= nx − 2, row in 1 ..= nz − 2: every neighbour
+// present), then the rim, so that a subgroup's threads take the path
+// without bounds together (inner_bulk_force). A lattice under three
+// blocks wide or high is all rim.
+struct BlockSpan {
+    // Inner columns first ..< end, rows 1 ..= nz − 2.
+    inner_first: u32,
+    inner_columns: u32,
+    inner_count: u32,
+    a: u32,
+    b: u32,
+}
+
+fn block_span(a: u32, b: u32) -> BlockSpan {
+    let first = max(a, 1u);
+    let end = min(b, c.nx - 1u);
+    if c.nx < 3u || c.nz < 3u || end <= first {
+        return BlockSpan(first, 0u, 0u, a, b);
+    }
+    return BlockSpan(first, end - first, (end - first) * (c.nz - 2u), a, b);
+}
+
+// (column, row) of the span's rim block r (r < its blocks − inner_count):
+// the bottom row, the top row, then column 0 and column nx − 1 between
+// them where the span holds them.
+fn span_rim_block(s: BlockSpan, r: u32) -> vec2<u32> {
+    let cols = s.b - s.a;
+    if c.nx < 3u || c.nz < 3u {
+        return vec2<u32>(s.a + r % cols, r / cols);
+    }
+    if r < cols {
+        return vec2<u32>(s.a + r, 0u);
+    }
+    if r < 2u * cols {
+        return vec2<u32>(s.a + r - cols, c.nz - 1u);
+    }
+    let side = r - 2u * cols;
+    let inner_rows = c.nz - 2u;
+    if s.a == 0u && side < inner_rows {
+        return vec2<u32>(0u, side + 1u);
+    }
+    return vec2<u32>(c.nx - 1u, side - select(0u, inner_rows, s.a == 0u) + 1u);
+}

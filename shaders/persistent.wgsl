@@ -107,6 +107,22 @@ fn persistent_steps(
                         }
                     }
                 }
+            } else if INNER_BLOCKS_FIRST {
+                // Inner blocks first, without bounds, then the rim: item
+                // k = t, t + threads, … of inner then rim blocks.
+                let span = block_span(0u, c.nx);
+                var k = t;
+                for (var b = grid_walk(t, PERSISTENT_THREADS, max(span.inner_columns, 1u)); k < span.inner_count; grid_walk_next(&b)) {
+                    let column = span.inner_first + b.column;
+                    let i = (b.row + 1u) * c.nx + column;
+                    store_bulk_force(i, inner_bulk_force(i, column, b.row + 1u, ld), ld);
+                    k += PERSISTENT_THREADS;
+                }
+                for (; k < c.n_blocks; k += PERSISTENT_THREADS) {
+                    let b = span_rim_block(span, k - span.inner_count);
+                    let i = b.y * c.nx + b.x;
+                    store_bulk_force(i, bulk_force(i, b.x, b.y, ld), ld);
+                }
             } else {
                 for (var b = grid_walk(t, PERSISTENT_THREADS, c.nx); b.row < c.nz; grid_walk_next(&b)) {
                     let i = b.row * c.nx + b.column;

@@ -9,6 +9,14 @@
 @group(0) @binding(2) var<storage, read_write> vel: array<vec2<real>>;
 @group(0) @binding(12) var<storage, read_write> lane_partial: array<LaneSum>;
 
+// The force phase walks the lattice in order, every block through the
+// bounds-checked bulk_force: walking the inner blocks apart, the compiler
+// hoists a block's eight neighbour loads from storage, and on RADV the
+// kernel holds 72 registers a thread where it held 64 (112 for 88 in
+// f64), which on NVIDIA may cost persistent/256 its second workgroup an
+// SM. In workgroup memory (resident, tiled) the registers stay as they were.
+const INNER_BLOCKS_FIRST: bool = false;
+
 fn load_disp(i: u32) -> Disp {
     return disp[block_base() + i];
 }

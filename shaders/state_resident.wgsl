@@ -18,6 +18,10 @@ override RESIDENT_BLOCKS: u32 = 1u;
 var<workgroup> resident_disp: array<Disp, RESIDENT_BLOCKS>;
 var<workgroup> resident_vel: array<vec2<real>, RESIDENT_BLOCKS>;
 
+// The force phase walks the inner blocks first, without bounds
+// (persistent.wgsl; state_persistent.wgsl says why not there).
+const INNER_BLOCKS_FIRST: bool = true;
+
 fn load_disp(i: u32) -> Disp {
     return resident_disp[i];
 }

@@ -417,10 +417,19 @@ fn tile_round(t: u32, d: u32, lanes: u32, stride: u32, first: bool, last: bool) 
                     }
                 }
             } else {
-                for (var w = grid_walk(t, TILE_THREADS, cols); w.row < c.nz; grid_walk_next(&w)) {
-                    let ix = a + w.column;
-                    let iz = w.row;
-                    store_tile_force(ix, iz, bulk_force(iz * c.nx + ix, ix, iz, ld));
+                // Inner blocks first, without bounds, then the rim: item
+                // k = t, t + threads, … of inner then rim blocks.
+                let span = block_span(a, b);
+                var k = t;
+                for (var w = grid_walk(t, TILE_THREADS, max(span.inner_columns, 1u)); k < span.inner_count; grid_walk_next(&w)) {
+                    let ix = span.inner_first + w.column;
+                    let iz = w.row + 1u;
+                    store_tile_force(ix, iz, inner_bulk_force(iz * c.nx + ix, ix, iz, ld));
+                    k += TILE_THREADS;
+                }
+                for (; k < cols * c.nz; k += TILE_THREADS) {
+                    let r = span_rim_block(span, k - span.inner_count);
+                    store_tile_force(r.x, r.y, bulk_force(r.y * c.nx + r.x, r.x, r.y, ld));
                 }
             }
             if FRICTION_LAW == LAW_JUNCTIONS {
