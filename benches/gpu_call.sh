@@ -83,6 +83,19 @@ step output 120 env SLIPFRONT_GPU_TABLE_SECTIONS=4 gpu_table
 #      message (benches/output_writer.rs; on the 2-core container the writer's zstd took
 #      131 µs a slipping row, against the 36 µs a sample the 1.3× target leaves). Seconds.
 step output-host 30 output_writer 3000
+# 2a''. What NVIDIA's compiler makes of the kernels that step a scene on one SM (resident)
+#      and on a few (chained tiles), and of the one-step kernel: its internal
+#      representations where the driver gives them (VK_KHR_pipeline_executable_properties),
+#      written to $OUT/isa. A Table S1 step on one SM is bound by the instructions the bulk
+#      force issues (BENCHMARKS.md, session 52); RADV's disassembly counts them for AMD, this
+#      would for the H200: the division's form, the bounds, each loop's length. Seconds.
+step isa 40 env SLIPFRONT_GPU_REGISTERS_DUMP="${OUT:-.}/isa" \
+  SLIPFRONT_GPU_REGISTERS_LAUNCHES=resident/1024,tiled/512/8x4/chained,one-step-lanes gpu_registers
+# 2a'''. Table S1 ≤ 3 µs: chained tiles by width (2-16), halo (1, 2, 4) and threads, with the
+#       device's busy time a step (gpu_table section 9). `auto` times chained tiles only at
+#       the width its unchained search found; the nearest launch so far is 8 columns,
+#       halo 4, at 6.84 µs (session 50).
+step chained-shapes 110 env SLIPFRONT_GPU_TABLE_SECTIONS=9 gpu_table
 # 2b. Ensemble against solo, bit for bit (the issue's "the ensemble and solo tests pass").
 step bits 90 gpu_ensemble --test-threads 1
 # 2c. Chained tiles on hardware: the same bits as a dispatch a round, a scene of 64 tiles

@@ -27,6 +27,11 @@
 //! an SM.
 //! SLIPFRONT_GPU_REGISTERS_LAUNCHES=resident/1024,persistent/256 compiles
 //! only those launches.
+//! SLIPFRONT_GPU_REGISTERS_DUMP=DIR also writes what the driver gives of
+//! each kernel's internal forms (RADV: NIR, ACO IR, disassembly; NVIDIA:
+//! whatever its driver gives) into DIR, a file per kernel and form, and
+//! lists them: the instructions a kernel's loops issue, read off the
+//! hardware's own compiler.
 //! SLIPFRONT_GPU_REGISTERS_SET=TWO_LANES_A_ROUND=0,KEEP_JUNCTION_SUMS=0
 //! compiles every kernel with those override constants changed, where it
 //! has them: what a kernel's options cost in registers (TILE_RECORDS=1:
@@ -152,6 +157,10 @@ struct Table<'a> {
     set: Vec<(String, f64)>,
     /// Why a row did not compile, each reason once.
     not_built: Vec<String>,
+    /// Where the driver's internal representations go (SLIPFRONT_GPU_REGISTERS_DUMP).
+    dump_dir: Option<std::path::PathBuf>,
+    /// The files written there.
+    dumped: Vec<String>,
 }
 
 impl Table<'_> {
@@ -178,6 +187,7 @@ impl Table<'_> {
             match self.device.compile(k) {
                 Ok(executables) => {
                     for e in &executables {
+                        self.dump(scene_name, T::NAME, launch, k, e);
                         let regs = e.registers();
                         let per_sm = match regs {
                             Some(r) if self.device.vendor_id() == NVIDIA => {
@@ -200,6 +210,49 @@ impl Table<'_> {
                     }
                 }
                 Err(e) => self.skip(scene_name, T::NAME, launch, &e),
+            }
+        }
+    }
+
+    /// Writes `e`'s internal representations into the dump folder, if
+    /// one was asked for, a file each, and notes their names.
+    fn dump(
+        &mut self,
+        scene_name: &str,
+        precision: &str,
+        launch: Launch,
+        k: &KernelSource,
+        e: &Executable,
+    ) {
+        let Some(dir) = &self.dump_dir else {
+            return;
+        };
+        for r in &e.representations {
+            let name = format!(
+                "{scene_name}-{precision}-{}-{}-{}-{}.{}",
+                launch.name(),
+                k.entry,
+                e.name,
+                r.name,
+                if r.is_text { "txt" } else { "bin" }
+            );
+            // Runs of other characters as one underscore.
+            let mut file = String::new();
+            for ch in name.chars() {
+                if ch.is_ascii_alphanumeric() || ch == '.' || ch == '-' {
+                    file.push(ch);
+                } else if !file.ends_with('_') {
+                    file.push('_');
+                }
+            }
+            let path = dir.join(file);
+            match std::fs::write(&path, &r.data) {
+                Ok(()) => self
+                    .dumped
+                    .push(format!("{} ({} bytes)", path.display(), r.data.len())),
+                Err(err) => self
+                    .dumped
+                    .push(format!("{}: not written: {err}", path.display())),
             }
         }
     }
@@ -239,6 +292,17 @@ fn main() {
         println!("No driver statistics: {why}");
         std::process::exit(1);
     });
+    let mut device = device;
+    let dump_dir = std::env::var_os("SLIPFRONT_GPU_REGISTERS_DUMP").map(std::path::PathBuf::from);
+    if let Some(dir) = &dump_dir {
+        std::fs::create_dir_all(dir).unwrap_or_else(|e| {
+            panic!(
+                "SLIPFRONT_GPU_REGISTERS_DUMP: cannot make {}: {e}",
+                dir.display()
+            )
+        });
+        device.capture_representations(true);
+    }
     println!(
         "## The driver's figures for each kernel: {} ({})\n",
         device.name(),
@@ -261,6 +325,8 @@ fn main() {
         traits,
         set: constants_set(),
         not_built: Vec::new(),
+        dump_dir,
+        dumped: Vec::new(),
     };
     let scenes = [
         ("Ns = 100 (as shipped)", scene(&[])),
@@ -282,6 +348,16 @@ fn main() {
         println!("\nNot built:");
         for why in &table.not_built {
             println!("- {why}");
+        }
+    }
+    if let Some(dir) = &table.dump_dir {
+        println!(
+            "\nThe driver's internal representations, in {}: {} files",
+            dir.display(),
+            table.dumped.len()
+        );
+        for file in &table.dumped {
+            println!("- {file}");
         }
     }
 }

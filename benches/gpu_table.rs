@@ -45,7 +45,11 @@
 //!    junctions' share of the work and the precision, says whether they
 //!    overlap or contend, and for what (docs/gpu-kernels.md, "What limits
 //!    an ensemble"). SLIPFRONT_GPU_TABLE_LIMIT_SCENES=1,132,264 sets its
-//!    scene counts.
+//!    scene counts;
+//! 9. the tiled kernel with its rounds chained in one dispatch on Table S1
+//!    by tile width (2 to 16 columns), halo (1, 2, 4) and threads (256,
+//!    512, 1024), with the device's busy time a step: `auto` times
+//!    chained tiles only at the width its unchained search found.
 //!
 //! Sections 1–3 also print the host's CPU time per wall second of each
 //! timed span: it says whether the host (encoding dispatches, waiting) or
@@ -76,8 +80,8 @@
 //! (`GpuOptions::bond_patches`).
 
 use gpu_timing::{
-    ensemble_step_seconds, ensemble_step_seconds_in, output_run, solo_step_seconds, table_s1,
-    timed_advance, Timed,
+    ensemble_step_seconds, ensemble_step_seconds_in, output_run, solo_step_figures_in,
+    solo_step_seconds, table_s1, timed_advance, Timed,
 };
 use slipfront::app::sweeps::{run_sweep, KeepMcap, Sweep, SweepOptions};
 use slipfront::engines::backend::{make_engine, Backend, Precision};
@@ -452,6 +456,14 @@ fn s1_model(text: &str) -> Model {
     Model::from_scenario(&scenario, false).expect("the shipped scene")
 }
 
+/// The precursors scene with `set`'s keys changed.
+fn s1_model_set(set: &[&str]) -> Model {
+    let text = built_in("tromborg2014_precursors").expect("shipped scene");
+    let set: Vec<String> = set.iter().map(|s| s.to_string()).collect();
+    let scenario = Scenario::parse(text, "table S1", &set).expect("the changed scene");
+    Model::from_scenario(&scenario, false).expect("the changed scene")
+}
+
 /// `points` seeds of the precursors scene, 0.01 s of driving each, as a
 /// sweep file in `dir`.
 fn table_s1_sweep(dir: &std::path::Path, points: usize) -> Sweep {
@@ -546,14 +558,14 @@ impl Drop for SectionTimer {
 
 impl Sections {
     fn from_env() -> Self {
-        let all = (1..=8).collect();
+        let all = (1..=9).collect();
         match std::env::var("SLIPFRONT_GPU_TABLE_SECTIONS") {
             Ok(list) => Sections(
                 list.split(',')
                     .map(|s| match s.trim().parse() {
-                        Ok(n @ 1..=8) => n,
+                        Ok(n @ 1..=9) => n,
                         _ => {
-                            panic!("SLIPFRONT_GPU_TABLE_SECTIONS: `{s}` is not a section (1 to 8)")
+                            panic!("SLIPFRONT_GPU_TABLE_SECTIONS: `{s}` is not a section (1 to 9)")
                         }
                     })
                     .collect(),
@@ -1036,5 +1048,65 @@ fn main() {
         println!("\n## 8. What limits an ensemble of Table S1 scenes\n");
         ensemble_limits(quick, min_seconds);
     }
+    if let Some(_timer) = sections.start(9) {
+        // 9. The chained tiles by shape on Table S1.
+        println!("\n## 9. Chained tiles on Table S1 by width, halo and threads\n");
+        // Quick (software adapters): 29 columns, two tiles of 16 and 13.
+        let model = if quick {
+            s1_model_set(&["geometry.nx=29", "geometry.length=0.07"])
+        } else {
+            table_s1(1)
+        };
+        chained_grid(&model, quick, min_seconds);
+    }
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// The tiled kernel with its rounds chained in one dispatch on `model`,
+/// by tile width, halo and threads, with the device's busy time a step.
+/// `auto` times chained tiles only at the width the unchained search
+/// found (halos 1, 2 and its own), so narrower tiles, which spread a
+/// Table S1 step over more SMs, are timed here: the launch nearest the
+/// 3 µs target (6.84 µs on the H200 at 8 columns, halo 4, in session
+/// 50), and bound by the device, not the host. A software adapter runs
+/// only scenes of two tiles (quick: 16 columns of a 29-column scene).
+fn chained_grid(model: &Model, quick: bool, min_seconds: f64) {
+    println!(
+        "µs a step; device: the passes' busy time a step (timestamps, where the adapter has \
+         them); tiles: the scene's tiles, each a workgroup on its own SM where they fit.\n"
+    );
+    println!(
+        "| tile width | halo | threads | tiles | µs/step | device µs/step | host CPU / wall |"
+    );
+    println!("| ---: | ---: | ---: | ---: | ---: | ---: | ---: |");
+    let (widths, halos, threads): (&[u32], &[u32], &[u32]) = if quick {
+        (&[16], &[2], &[256])
+    } else {
+        (&[2, 4, 8, 16], &[1, 2, 4], &[256, 512, 1024])
+    };
+    for &width in widths {
+        for &halo in halos {
+            for &t in threads {
+                let opts = GpuOptions {
+                    tile: Some(TileShape { width, halo }),
+                    chained_tiles: true,
+                    ..with_threads(Kernel::Tiled, Some(t))
+                };
+                let figure = match solo_step_figures_in::<f32>(model, opts, min_seconds) {
+                    Ok(f) => format!(
+                        "{:.2} | {} | {:.2}",
+                        f.seconds * 1e6,
+                        f.device.map_or("–".into(), |d| format!("{:.2}", d * 1e6)),
+                        f.host
+                    ),
+                    Err(e) => format!("not run: {e} | | "),
+                };
+                println!(
+                    "| {width} | {halo} | {t} | {} | {figure} |",
+                    model.nx.div_ceil(width as usize)
+                );
+            }
+        }
+    }
+    println!();
 }

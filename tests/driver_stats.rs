@@ -235,3 +235,33 @@ fn a_missing_device_is_named_with_those_seen() {
         .expect("no device has that name");
     assert!(e.contains("no such GPU") && e.contains("RADV"), "{e}");
 }
+
+/// Asked to, the device captures the driver's internal representations of
+/// a kernel: on RADV its disassembly, a whole program (it ends the shader
+/// with `s_endpgm`). Not asked, it captures none: the statistics alone.
+#[test]
+fn the_driver_gives_a_kernels_disassembly_when_asked() {
+    let Some(mut dev) = radv() else { return };
+    let k = step_source::<f32>(&dev, &table_s1(&[]), "resident/1024");
+    let plain = dev.compile(&k).unwrap();
+    assert!(plain[0].representations.is_empty(), "none unless asked");
+    dev.capture_representations(true);
+    let captured = dev.compile(&k).unwrap();
+    let names: Vec<&str> = captured[0]
+        .representations
+        .iter()
+        .map(|r| r.name.as_str())
+        .collect();
+    let assembly = captured[0]
+        .representations
+        .iter()
+        .find(|r| r.is_text && r.name.contains("Assembly"))
+        .unwrap_or_else(|| panic!("no disassembly among {names:?}"));
+    let text = String::from_utf8_lossy(&assembly.data);
+    assert!(text.contains("s_endpgm"), "{} bytes", assembly.data.len());
+    assert_eq!(
+        captured[0].registers(),
+        plain[0].registers(),
+        "the same compile"
+    );
+}

@@ -57,6 +57,18 @@ pub struct Statistic {
     pub value: StatValue,
 }
 
+/// One of the driver's internal forms of an executable (its IR, its
+/// machine code), where it gives them (`StatsDevice::capture_representations`):
+/// the instructions a loop of a kernel issues, on the hardware itself.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Representation {
+    pub name: String,
+    pub description: String,
+    /// Text (disassembly, IR) or the driver's binary.
+    pub is_text: bool,
+    pub data: Vec<u8>,
+}
+
 /// One executable the driver made of a pipeline, and its statistics.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Executable {
@@ -65,6 +77,8 @@ pub struct Executable {
     /// The subgroup size it runs at (0 where the driver does not say).
     pub subgroup_size: u32,
     pub statistics: Vec<Statistic>,
+    /// Empty unless asked for (and given by the driver).
+    pub representations: Vec<Representation>,
 }
 
 /// The statistics' names for the registers a thread holds: NVIDIA's, then
@@ -145,6 +159,7 @@ mod tests {
                 stat("Binary Size", StatValue::Uint(9000)),
                 stat("Register Count", StatValue::Uint(96)),
             ],
+            representations: Vec::new(),
         };
         assert_eq!(nv.registers(), Some(96));
         let amd = Executable {

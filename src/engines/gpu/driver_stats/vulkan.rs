@@ -5,7 +5,7 @@
 //! runs anything.
 
 use super::spirv::{kernel_spirv, language_version, ZeroWorkgroupMemory};
-use super::{Executable, StatValue, Statistic};
+use super::{Executable, Representation, StatValue, Statistic};
 use crate::engines::gpu::compile::KernelSource;
 use crate::engines::gpu::AdapterTraits;
 use ash::vk;
@@ -28,6 +28,8 @@ pub struct StatsDevice {
     _entry: ash::Entry,
     instance: ash::Instance,
     open: OpenDevice,
+    /// Whether compiles capture the driver's internal representations.
+    representations: bool,
 }
 
 fn c_text(s: Result<&CStr, std::ffi::FromBytesUntilNulError>) -> String {
@@ -57,6 +59,7 @@ impl StatsDevice {
         .map_err(|e| format!("cannot create a Vulkan instance: {e}"))?;
         match Self::open_on(&instance, choice) {
             Ok(open) => Ok(StatsDevice {
+                representations: false,
                 _entry: entry,
                 instance,
                 open,
@@ -258,6 +261,14 @@ impl StatsDevice {
         })
     }
 
+    /// Whether later compiles also capture the driver's internal
+    /// representations (`Executable::representations`): RADV gives its
+    /// NIR, ACO IR and disassembly; what NVIDIA's driver gives is read
+    /// on a lent GPU (`gpu_registers`, SLIPFRONT_GPU_REGISTERS_DUMP).
+    pub fn capture_representations(&mut self, on: bool) {
+        self.representations = on;
+    }
+
     /// Compiles `kernel` as wgpu would and returns what the driver reports
     /// of each executable it made (a compute pipeline has one).
     pub fn compile(&self, kernel: &KernelSource) -> Result<Vec<Executable>, String> {
@@ -315,8 +326,12 @@ impl StatsDevice {
                 .stage(vk::ShaderStageFlags::COMPUTE)
                 .module(made.module)
                 .name(&entry);
+            let mut flags = vk::PipelineCreateFlags::CAPTURE_STATISTICS_KHR;
+            if self.representations {
+                flags |= vk::PipelineCreateFlags::CAPTURE_INTERNAL_REPRESENTATIONS_KHR;
+            }
             let info = vk::ComputePipelineCreateInfo::default()
-                .flags(vk::PipelineCreateFlags::CAPTURE_STATISTICS_KHR)
+                .flags(flags)
                 .stage(stage)
                 .layout(made.layout);
             let pipelines = d
@@ -341,16 +356,89 @@ impl StatsDevice {
                             .executable_index(index as u32),
                     )
                     .map_err(|e| format!("executable statistics: {e}"))?;
+                let info = vk::PipelineExecutableInfoKHR::default()
+                    .pipeline(made.pipeline)
+                    .executable_index(index as u32);
+                let representations = if self.representations {
+                    representations(&open.executables, &info)?
+                } else {
+                    Vec::new()
+                };
                 out.push(Executable {
                     name: c_text(p.name_as_c_str()),
                     description: c_text(p.description_as_c_str()),
                     subgroup_size: p.subgroup_size,
                     statistics: stats.iter().map(statistic).collect(),
+                    representations,
                 });
             }
             Ok(out)
         }
     }
+}
+
+/// The internal representations of one executable, by the spec's
+/// three calls: their count, their names and sizes, then their bytes
+/// into buffers of those sizes.
+///
+/// # Safety
+/// `info` names an executable of a live pipeline made with
+/// CAPTURE_INTERNAL_REPRESENTATIONS_KHR on the device of `executables`.
+unsafe fn representations(
+    executables: &ash::khr::pipeline_executable_properties::Device,
+    info: &vk::PipelineExecutableInfoKHR,
+) -> Result<Vec<Representation>, String> {
+    let get = executables
+        .fp()
+        .get_pipeline_executable_internal_representations_khr;
+    let device = executables.device();
+    let failed = |e: vk::Result| format!("internal representations: {e}");
+    let mut count = 0u32;
+    let mut forms: Vec<vk::PipelineExecutableInternalRepresentationKHR>;
+    let mut buffers: Vec<Vec<u8>>;
+    // SAFETY: the caller's executable; each call's array holds `count`
+    // entries, and each entry's data pointer (null, then a buffer of the
+    // size the driver gave) outlives the call.
+    unsafe {
+        get(device, info, &mut count, std::ptr::null_mut())
+            .result()
+            .map_err(failed)?;
+        forms = vec![vk::PipelineExecutableInternalRepresentationKHR::default(); count as usize];
+        // With no data buffers the driver fills in names and sizes
+        // (VK_INCOMPLETE where a size is not zero).
+        let sized = get(device, info, &mut count, forms.as_mut_ptr());
+        if sized != vk::Result::SUCCESS && sized != vk::Result::INCOMPLETE {
+            return Err(failed(sized));
+        }
+        buffers = forms.iter().map(|f| vec![0u8; f.data_size]).collect();
+        for (form, buffer) in forms.iter_mut().zip(buffers.iter_mut()) {
+            form.p_data = buffer.as_mut_ptr().cast();
+        }
+        let filled = get(device, info, &mut count, forms.as_mut_ptr());
+        if filled != vk::Result::SUCCESS && filled != vk::Result::INCOMPLETE {
+            return Err(failed(filled));
+        }
+    }
+    Ok(forms
+        .iter()
+        .zip(buffers)
+        .map(|(form, mut data)| {
+            // The driver's written size; text ends at its terminating zero.
+            data.truncate(form.data_size);
+            let is_text = form.is_text == vk::TRUE;
+            if is_text {
+                if let Some(end) = data.iter().position(|&b| b == 0) {
+                    data.truncate(end);
+                }
+            }
+            Representation {
+                name: c_text(form.name_as_c_str()),
+                description: c_text(form.description_as_c_str()),
+                is_text,
+                data,
+            }
+        })
+        .collect())
 }
 
 fn statistic(s: &vk::PipelineExecutableStatisticKHR) -> Statistic {
