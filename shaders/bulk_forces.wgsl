@@ -135,35 +135,24 @@ fn add_bond(
     if jx < 0 || jz < 0 || jx >= i32(c.nx) || jz >= i32(c.nz) {
         return;
     }
-    let j = u32(jz) * c.nx + u32(jx);
-    let uj = load_disp_at(j, u32(jx), u32(jz));
-    let vj = load_vel_at(j, u32(jx), u32(jz));
-    add_bond_terms(bond_terms(ui, vi, uj, vj, d, length, stiffness), d, fx, fz);
+    add_neighbour_bond(u32(jz) * c.nx + u32(jx), u32(jx), u32(jz), ui, vi, d, length, stiffness, fx, fz);
 }
 
-// Bond of a block inside the lattice's rim (inner_block_walk: every
-// neighbour exists, so no bound is checked) to its neighbour at offset d,
-// added to the block's sums: add_bond's terms, in its order. The checks
-// were a fifth of a bond's instructions (RADV, Table S1), and nine blocks
-// in ten of Table S1 are inner.
-fn add_inner_bond(
-    i: u32,
-    ix: u32,
-    iz: u32,
-    ui: Disp,
-    vi: vec2<real>,
-    d: vec2<i32>,
-    length: real,
-    stiffness: real,
-    fx: ptr<function, force_sum>,
-    fz: ptr<function, force_sum>,
-) {
-    let jx = u32(i32(ix) + d.x);
-    let jz = u32(i32(iz) + d.y);
-    let j = u32(i32(i) + d.y * i32(c.nx) + d.x);
+// The bond to neighbour j (column jx, row jz, at offset d), which exists,
+// added to the block's sums.
+fn add_neighbour_bond(j: u32, jx: u32, jz: u32, ui: Disp, vi: vec2<real>, d: vec2<i32>, length: real, stiffness: real, fx: ptr<function, force_sum>, fz: ptr<function, force_sum>) {
     let uj = load_disp_at(j, jx, jz);
     let vj = load_vel_at(j, jx, jz);
     add_bond_terms(bond_terms(ui, vi, uj, vj, d, length, stiffness), d, fx, fz);
+}
+
+// add_bond of a block inside the lattice's rim (block i at column ix, row
+// iz; block_span): every neighbour exists, so no bound is checked. The
+// checks were a fifth of a bond's instructions (RADV, Table S1), and nine
+// blocks in ten of Table S1 are inside.
+fn add_inner_bond(i: u32, ix: u32, iz: u32, ui: Disp, vi: vec2<real>, d: vec2<i32>, length: real, stiffness: real, fx: ptr<function, force_sum>, fz: ptr<function, force_sum>) {
+    let j = u32(i32(i) + d.y * i32(c.nx) + d.x);
+    add_neighbour_bond(j, u32(i32(ix) + d.x), u32(i32(iz) + d.y), ui, vi, d, length, stiffness, fx, fz);
 }
 
 // bulk_force of a block inside the lattice's rim (column and row in
