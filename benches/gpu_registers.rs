@@ -273,7 +273,7 @@ fn main() {
     let named = std::env::var("SLIPFRONT_GPU_REGISTERS_DEVICE").ok();
     // The engine's own adapter unless another device is named: then wgpu
     // is not opened at all (Mesa's null devices cannot run it).
-    let (device, traits) = match &named {
+    let (mut device, traits) = match &named {
         Some(text) => StatsDevice::open(DeviceChoice::NameContains(text)).map(|d| {
             let t = d.traits().clone();
             (d, t)
@@ -292,7 +292,6 @@ fn main() {
         println!("No driver statistics: {why}");
         std::process::exit(1);
     });
-    let mut device = device;
     let dump_dir = std::env::var_os("SLIPFRONT_GPU_REGISTERS_DUMP").map(std::path::PathBuf::from);
     if let Some(dir) = &dump_dir {
         std::fs::create_dir_all(dir).unwrap_or_else(|e| {

@@ -194,7 +194,7 @@ fn junction_cost(min_seconds: f64) {
     // quiet block's sums (`GpuOptions::keep_junction_sums`) saves.
     // And with every lane's sum through storage: what merging runs of
     // lanes in subgroups first saves where every block is summed.
-    for kernel in candidates(&s1_model(text)) {
+    for kernel in candidates(&s1_model(text, &[])) {
         let shuffles: &[bool] = if kernel.merges_lanes_through_storage() {
             &[true, false]
         } else {
@@ -206,7 +206,7 @@ fn junction_cost(min_seconds: f64) {
                 lane_shuffle: shuffle,
                 ..options(kernel)
             };
-            let figure = match solo_step_seconds(&s1_model(text), opts, min_seconds) {
+            let figure = match solo_step_seconds(&s1_model(text, &[]), opts, min_seconds) {
                 Ok((s, host)) => format!("{:.2} | {host:.2}", s * 1e6),
                 Err(e) => format!("not run: {e} |"),
             };
@@ -450,18 +450,11 @@ impl LimitRows<'_> {
     }
 }
 
-/// The precursors scene as shipped.
-fn s1_model(text: &str) -> Model {
-    let scenario = Scenario::parse(text, "table S1", &[]).expect("the shipped scene");
-    Model::from_scenario(&scenario, false).expect("the shipped scene")
-}
-
-/// The precursors scene with `set`'s keys changed.
-fn s1_model_set(set: &[&str]) -> Model {
-    let text = built_in("tromborg2014_precursors").expect("shipped scene");
+/// The precursors scene from `text`, with `set`'s keys changed.
+fn s1_model(text: &str, set: &[&str]) -> Model {
     let set: Vec<String> = set.iter().map(|s| s.to_string()).collect();
-    let scenario = Scenario::parse(text, "table S1", &set).expect("the changed scene");
-    Model::from_scenario(&scenario, false).expect("the changed scene")
+    let scenario = Scenario::parse(text, "table S1", &set).expect("the scene");
+    Model::from_scenario(&scenario, false).expect("the scene")
 }
 
 /// `points` seeds of the precursors scene, 0.01 s of driving each, as a
@@ -1053,7 +1046,8 @@ fn main() {
         println!("\n## 9. Chained tiles on Table S1 by width, halo and threads\n");
         // Quick (software adapters): 29 columns, two tiles of 16 and 13.
         let model = if quick {
-            s1_model_set(&["geometry.nx=29", "geometry.length=0.07"])
+            let text = built_in("tromborg2014_precursors").expect("shipped scene");
+            s1_model(text, &["geometry.nx=29", "geometry.length=0.07"])
         } else {
             table_s1(1)
         };
