@@ -54,17 +54,22 @@ fn bond_terms(ui: Disp, vi: vec2<real>, uj: Disp, vj: vec2<real>, d: vec2<i32>, 
     let du = vec2<real>(coord_diff(uj.x, ui.x), coord_diff(uj.z, ui.z));
     let r = r0 + du;
     let len = sqrt(r.x * r.x + r.y * r.y);
-    // Elongation without cancellation: (|r|² − l²)/(|r| + l).
-    let stretch = (2.0 * (r0.x * du.x + r0.y * du.y) + (du.x * du.x + du.y * du.y)) / (len + rest);
+    // Elongation without cancellation: stretch = (|r|² − l²)/(|r| + l) =
+    // num/over. Each force below divides once by a denominator that folds
+    // this division in (one division a bond, not two).
+    let num = 2.0 * (r0.x * du.x + r0.y * du.y) + (du.x * du.x + du.y * du.y);
+    let over = len + rest;
     var damper = vec2<real>(0.0, 0.0);
     let dv = vj - vi;
     if SPLITS_BONDS {
         // Mixed f32: r0 + du would round du to ulp(r0), about two steps
         // of creep, and turn the bond's direction in stairs; the force
         // q·r is summed as q·r0 + q·du instead (CPU twin: bulk_force).
-        let q = kb * stretch / (rest + stretch);
+        // q = k·stretch/|r| with |r| = rest + stretch = (rest·over + num)/over.
+        let length = rest * over + num;
+        let q = kb * num / length;
         if DAMPING_FORM == 2u {
-            let inv = 1.0 / (rest + stretch);
+            let inv = over / length;
             let n0 = vec2<real>(r0.x * inv, r0.y * inv);
             let n1 = vec2<real>(du.x * inv, du.y * inv);
             let along = c.eta * ((dv.x * n0.x + dv.y * n0.y) + (dv.x * n1.x + dv.y * n1.y));
@@ -78,16 +83,17 @@ fn bond_terms(ui: Disp, vi: vec2<real>, uj: Disp, vj: vec2<real>, d: vec2<i32>, 
             vec2<real>(q * du.y, damper.y),
         );
     }
-    let inv_len = 1.0 / len;
-    let n = vec2<real>(r.x * inv_len, r.y * inv_len);
-    let spring = kb * stretch;
+    // The spring force k·stretch·r/|r| = (k·num/(over·|r|))·r.
+    let spring_per_length = kb * num / (over * len);
     if DAMPING_FORM == 2u {
+        let inv_len = 1.0 / len;
+        let n = vec2<real>(r.x * inv_len, r.y * inv_len);
         let along = c.eta * (dv.x * n.x + dv.y * n.y);
         damper = vec2<real>(along * n.x, along * n.y);
     } else if DAMPING_FORM != 0u {
         damper = vec2<real>(c.eta * dv.x, c.eta * dv.y);
     }
-    return BondTerms(vec2<real>(0.0, 0.0), vec2<real>(spring * n.x, damper.x), vec2<real>(spring * n.y, damper.y));
+    return BondTerms(vec2<real>(0.0, 0.0), vec2<real>(spring_per_length * r.x, damper.x), vec2<real>(spring_per_length * r.y, damper.y));
 }
 
 // The same bond seen from the neighbour's end (offset −d): every term

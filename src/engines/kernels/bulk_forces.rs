@@ -99,11 +99,12 @@ fn bond_terms<T: Real, C: Coordinate<T>>(
     let du = [uj[0].diff(ui[0]), uj[1].diff(ui[1])];
     let r = [bond.r0[0] + du[0], bond.r0[1] + du[1]];
     let len = (r[0] * r[0] + r[1] * r[1]).sqrt();
-    // Elongation without cancellation: (|r|² − l²)/(|r| + l).
+    // Elongation without cancellation: stretch = (|r|² − l²)/(|r| + l) =
+    // num/(|r| + l). Each force below divides once by a denominator that
+    // folds this division in (one division a bond, not two).
     let two = T::one() + T::one();
-    let stretch = (two * (bond.r0[0] * du[0] + bond.r0[1] * du[1])
-        + (du[0] * du[0] + du[1] * du[1]))
-        / (len + bond.rest);
+    let num = two * (bond.r0[0] * du[0] + bond.r0[1] * du[1]) + (du[0] * du[0] + du[1] * du[1]);
+    let over = len + bond.rest;
     let held = |x: T| hold(c.f32_probe, FORCES, x);
     let dv = [vj[0] - vi[0], vj[1] - vi[1]];
     if C::Sum::SPLITS_BONDS {
@@ -112,10 +113,13 @@ fn bond_terms<T: Real, C: Coordinate<T>>(
         // stairs, step after step alike, and bias the lattice. Instead
         // the force q·r (q = k·stretch/|r|, |r| = rest + stretch) is
         // summed as q·r0 + q·du, each exact to f32's relative precision.
-        let q = bond.k * stretch / (bond.rest + stretch);
+        // With stretch = num/over, |r| = (rest·over + num)/over, so
+        // q = k·num/(rest·over + num).
+        let length = bond.rest * over + num;
+        let q = bond.k * num / length;
         let (dx, dz) = if c.bond_damping {
             // n = r0/|r| + du/|r|, kept as its two parts alike.
-            let inv = T::one() / (bond.rest + stretch);
+            let inv = over / length;
             let n0 = [bond.r0[0] * inv, bond.r0[1] * inv];
             let n1 = [du[0] * inv, du[1] * inv];
             let along = c.eta * ((dv[0] * n0[0] + dv[1] * n0[1]) + (dv[0] * n1[0] + dv[1] * n1[1]));
@@ -129,12 +133,16 @@ fn bond_terms<T: Real, C: Coordinate<T>>(
             along_z: [q * du[1], dz],
         };
     }
-    let inv_len = T::one() / len;
-    let n = [r[0] * inv_len, r[1] * inv_len];
-    let spring = bond.k * stretch;
+    // The spring force k·stretch·r/|r| = (k·num/(over·|r|))·r.
+    let spring_per_length = bond.k * num / (over * len);
     // (The probe rounds each bond's terms as the sweep engine's rows do.)
-    let (sx, sz) = (held(spring * n[0]), held(spring * n[1]));
+    let (sx, sz) = (
+        held(spring_per_length * r[0]),
+        held(spring_per_length * r[1]),
+    );
     let (dx, dz) = if c.bond_damping {
+        let inv_len = T::one() / len;
+        let n = [r[0] * inv_len, r[1] * inv_len];
         let along = c.eta * (dv[0] * n[0] + dv[1] * n[1]);
         (held(along * n[0]), held(along * n[1]))
     } else {

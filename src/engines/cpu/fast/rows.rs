@@ -216,17 +216,19 @@ fn bond_kernel<T: Real, C: Coordinate<T>, const BOND_DAMPING: bool>(
         let r0 = r00 + du0;
         let r1 = r01 + du1;
         let len = (r0 * r0 + r1 * r1).sqrt();
-        let stretch = (two * (r00 * du0 + r01 * du1) + (du0 * du0 + du1 * du1)) / (len + rest);
+        let num = two * (r00 * du0 + r01 * du1) + (du0 * du0 + du1 * du1);
+        let over = len + rest;
         let dv0 = vxj[i] - vxi[i];
         let dv1 = vzj[i] - vzi[i];
         if <C::Sum as ForceSum<T>>::SPLITS_BONDS {
-            let q = k * stretch / (rest + stretch);
+            let length = rest * over + num;
+            let q = k * num / length;
             sx[i] = q * r00;
             sz[i] = q * r01;
             rx[i] = q * du0;
             rz[i] = q * du1;
             if BOND_DAMPING {
-                let inv = T::one() / (rest + stretch);
+                let inv = over / length;
                 let (n00, n01) = (r00 * inv, r01 * inv);
                 let (n10, n11) = (du0 * inv, du1 * inv);
                 let along = eta * ((dv0 * n00 + dv1 * n01) + (dv0 * n10 + dv1 * n11));
@@ -238,13 +240,13 @@ fn bond_kernel<T: Real, C: Coordinate<T>, const BOND_DAMPING: bool>(
             }
             continue;
         }
-        let inv_len = T::one() / len;
-        let n0 = r0 * inv_len;
-        let n1 = r1 * inv_len;
-        let spring = k * stretch;
-        sx[i] = spring * n0;
-        sz[i] = spring * n1;
+        let spring_per_length = k * num / (over * len);
+        sx[i] = spring_per_length * r0;
+        sz[i] = spring_per_length * r1;
         if BOND_DAMPING {
+            let inv_len = T::one() / len;
+            let n0 = r0 * inv_len;
+            let n1 = r1 * inv_len;
             let along = eta * (dv0 * n0 + dv1 * n1);
             dx[i] = along * n0;
             dz[i] = along * n1;
