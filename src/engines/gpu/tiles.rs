@@ -31,6 +31,13 @@ pub const HALOS_SEARCHED: [u32; 2] = [2, 8];
 /// round costs a neighbour's wait, not a dispatch, so less redundant halo
 /// work may win there.
 pub const CHAINED_HALOS_SEARCHED: [u32; 2] = [1, 2];
+/// Widths `auto` then times chained at the fastest chained halo (narrower
+/// ones than its own only), on hardware: a narrower tile spreads a scene
+/// over more multiprocessors, each stepping fewer blocks, and chained its
+/// rounds cost waits on neighbours rather than dispatches. Software
+/// adapters run only as many workgroups at once as they have threads, so
+/// a scene of many tiles would stall its chain there.
+pub const CHAINED_WIDTHS_SEARCHED: [u32; 2] = [2, 4];
 
 /// A tile's shape: the columns it owns and its halo columns each side,
 /// the most steps one dispatch runs. Written `16x4` (width x halo) in

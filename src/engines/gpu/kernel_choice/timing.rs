@@ -11,7 +11,7 @@ use crate::engines::gpu::options::GpuOptions;
 use crate::engines::gpu::precision::GpuReal;
 use crate::engines::gpu::shaders::Kernel;
 use crate::engines::gpu::tiles::{
-    TileShape, CHAINED_HALOS_SEARCHED, HALOS_SEARCHED, WIDTHS_SEARCHED,
+    TileShape, CHAINED_HALOS_SEARCHED, CHAINED_WIDTHS_SEARCHED, HALOS_SEARCHED, WIDTHS_SEARCHED,
 };
 use crate::engines::gpu::GpuEngine;
 use crate::engines::{EngineError, EngineState};
@@ -307,7 +307,9 @@ pub fn search_tile_shapes(
 /// ensemble of one lattice shape) from the start of driving
 /// (`driving_start`, within `PREPARE_BUDGET_SECONDS`), then the tiled
 /// kernel's other tile shapes (`search_tile_shapes`, unless the options
-/// fix the shape), then the fastest launch whose lanes merged in subgroups
+/// fix the shape), then the fastest tiled launch chained and, where that
+/// wins, its smaller halos and (on hardware) narrower widths chained
+/// (`chained_halo_search`, `chained_width_search`), then the fastest launch whose lanes merged in subgroups
 /// with every lane's sum through storage instead (unless the options fix
 /// that), then the fastest launch so far with its bulk forces by patches
 /// (unless the options fix them on), and takes the fastest. A launch that cannot be built
@@ -383,12 +385,18 @@ pub fn measure_within<T: GpuReal>(
     // Where chaining wins, smaller halos are timed chained too.
     if let Some((launch, unchained)) = tiled_best.filter(|_| !opts.chained_tiles) {
         let chained = time_noting_merges(launch.with_chained_tiles());
-        if chained.is_some_and(|s| s < unchained) {
-            for smaller in chained_halo_search(launch)
-                .into_iter()
-                .filter(|_| opts.tile.is_none())
-            {
-                time_noting_merges(smaller);
+        if let Some(seconds) = chained.filter(|&s| s < unchained && opts.tile.is_none()) {
+            let mut chained_best = (launch.with_chained_tiles(), seconds);
+            for smaller in chained_halo_search(launch) {
+                if let Some(s) = time_noting_merges(smaller) {
+                    keep_faster_pair(&mut chained_best, smaller, s);
+                }
+            }
+            // Then narrower tiles at the fastest chained halo (hardware).
+            if !ctx.is_software() {
+                for narrower in chained_width_search(chained_best.0) {
+                    time_noting_merges(narrower);
+                }
             }
         }
     }
@@ -450,6 +458,30 @@ pub fn chained_halo_search(launch: Launch) -> Vec<Launch> {
                 .with_chained_tiles()
         })
         .collect()
+}
+
+/// The chained launches `measure` times last, on hardware, after the
+/// chained halos (`chained_halo_search`): `launch` (the fastest chained
+/// launch) at each of `CHAINED_WIDTHS_SEARCHED` narrower than its width,
+/// with its halo and threads.
+pub fn chained_width_search(launch: Launch) -> Vec<Launch> {
+    let shape = launch.tile.unwrap_or(TileShape::DEFAULT);
+    CHAINED_WIDTHS_SEARCHED
+        .into_iter()
+        .filter(|&w| w < shape.width)
+        .map(|width| {
+            launch
+                .with_tile(TileShape { width, ..shape })
+                .with_chained_tiles()
+        })
+        .collect()
+}
+
+/// `best` becomes (`launch`, `seconds`) if that is faster.
+fn keep_faster_pair(best: &mut (Launch, f64), launch: Launch, seconds: f64) {
+    if seconds < best.1 {
+        *best = (launch, seconds);
+    }
 }
 
 /// `best` becomes (`launch`, `seconds`) if that is faster or it was empty.
@@ -588,6 +620,29 @@ mod tests {
             chained_halo_search(default)[0].name(),
             "tiled/512/8x1/chained"
         );
+    }
+
+    /// The narrower chained widths are searched at the fastest chained
+    /// launch's halo and threads: 2 and 4 below the default 8, 2 below 4,
+    /// none below 2.
+    #[test]
+    fn a_winning_chain_searches_narrower_tiles_at_its_halo() {
+        let base = Launch::with_threads(Kernel::Tiled, 512)
+            .with_tile(TileShape { width: 8, halo: 2 })
+            .with_chained_tiles();
+        let names: Vec<String> = chained_width_search(base)
+            .iter()
+            .map(|l| l.name())
+            .collect();
+        assert_eq!(names, ["tiled/512/2x2/chained", "tiled/512/4x2/chained"]);
+        let four = base.with_tile(TileShape { width: 4, halo: 1 });
+        let names: Vec<String> = chained_width_search(four)
+            .iter()
+            .map(|l| l.name())
+            .collect();
+        assert_eq!(names, ["tiled/512/2x1/chained"]);
+        let two = base.with_tile(TileShape { width: 2, halo: 1 });
+        assert!(chained_width_search(two).is_empty());
     }
 
     /// A made-up landscape of step times by shape: the search times the
