@@ -92,9 +92,10 @@ step output-host 30 output_writer 3000
 step isa 40 env SLIPFRONT_GPU_REGISTERS_DUMP="${OUT:-.}/isa" \
   SLIPFRONT_GPU_REGISTERS_LAUNCHES=resident/1024,tiled/512/8x4/chained,one-step-lanes gpu_registers
 # 2a'''. Table S1 ≤ 3 µs: chained tiles by width (2-16), halo (1, 2, 4) and threads, with the
-#       device's busy time a step (gpu_table section 9). `auto` times chained tiles only at
-#       the width its unchained search found; the nearest launch so far is 8 columns,
-#       halo 4, at 6.84 µs (session 50).
+#       device's busy time a step (gpu_table section 9). Since session 53 `auto` also times
+#       chained widths 2 and 4 at its fastest chained halo on hardware; this step times
+#       every shape apart. The nearest launch so far is 8 columns, halo 4, at 6.84 µs
+#       (session 50).
 step chained-shapes 110 env SLIPFRONT_GPU_TABLE_SECTIONS=9 gpu_table
 # 2b. Ensemble against solo, bit for bit (the issue's "the ensemble and solo tests pass").
 step bits 90 gpu_ensemble --test-threads 1
