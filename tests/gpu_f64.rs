@@ -334,3 +334,47 @@ fn an_f64_ensemble_records_every_scene_as_its_solo_run() {
         assert!(differs, "{path:?}: scene 1 is not scene 0");
     }
 }
+
+/// Where a lattice's u fits workgroup memory and its u and v together do
+/// not (f64 Table S1 on NVIDIA's 48 KB), the resident kernel keeps v in
+/// storage, as the persistent kernel does: the same arithmetic on the same
+/// values, so the same bits as the persistent kernel (and the one-step
+/// kernel), through junction ruptures and across dispatches. Here 36 × 30 blocks in f64: u and v
+/// would take about 40 KB, u alone about 23 KB, and lavapipe offers 32 KB.
+/// Negative control: V × (1 + 1e-9) differs.
+#[test]
+fn the_resident_kernel_keeps_v_in_storage_where_only_u_fits_bit_for_bit() {
+    let spacing = 0.0025;
+    let lattice = [
+        "geometry.nx=36".to_string(),
+        "geometry.nz=30".to_string(),
+        format!("geometry.length={}", spacing * 35.0),
+        format!("geometry.height={}", spacing * 29.0),
+    ];
+    let lattice: Vec<&str> = lattice.iter().map(String::as_str).collect();
+    let m = model(&lattice);
+    let end = m.prep_steps + 1500;
+    let on = |m: &Model, path| {
+        let opts = GpuOptions {
+            path,
+            ..GpuOptions::default()
+        };
+        let mut g = GpuEngine::<f64>::with_precision(m, opts)
+            .unwrap_or_else(|e| panic!("a GPU adapter with f64 is required (lavapipe in CI): {e}"));
+        advance_to(&mut g, end).unwrap();
+        (g.describe(), g.snapshot().unwrap())
+    };
+    let (resident_how, resident) = on(&m, GpuPath::Resident);
+    assert!(resident_how.contains("v in storage"), "{resident_how}");
+    let (_, persistent) = on(&m, GpuPath::Persistent);
+    assert!(persistent.total_ruptures() > 0, "junctions broke");
+    assert!(persistent == resident, "resident and persistent differ");
+    let (_, one_step) = on(&m, GpuPath::OneStep);
+    assert!(one_step == resident, "resident and one-step differ");
+    let mut faster = m.clone();
+    if let slipfront::model::Driver::SideSpring { velocity, .. } = &mut faster.driver {
+        *velocity *= 1.0 + 1e-9;
+    }
+    let (_, other) = on(&faster, GpuPath::Resident);
+    assert_ne!(other.disp, resident.disp, "control");
+}

@@ -704,13 +704,20 @@ impl<T: GpuReal> GpuEngine<T> {
                 "persistent kernel, 1 dispatch per {} steps, {} threads",
                 self.steps_per_dispatch, self.persistent_threads
             ),
-            Kernel::Resident => format!(
-                "resident kernel (u and v in {} bytes of workgroup memory), 1 dispatch per {} \
-                 steps, {} threads",
-                resident_fit::<T>(&self.scenes[0].model, &self.ctx.limits).unwrap_or(0),
-                self.steps_per_dispatch,
-                self.persistent_threads
-            ),
+            Kernel::Resident => {
+                let fit = resident_fit::<T>(&self.scenes[0].model, &self.ctx.limits);
+                let held = match fit {
+                    Ok(f) if f.velocities => {
+                        format!("u and v in {} bytes of workgroup memory", f.bytes)
+                    }
+                    Ok(f) => format!("u in {} bytes of workgroup memory, v in storage", f.bytes),
+                    Err(_) => "u and v in workgroup memory".to_string(),
+                };
+                format!(
+                    "resident kernel ({held}), 1 dispatch per {} steps, {} threads",
+                    self.steps_per_dispatch, self.persistent_threads
+                )
+            }
             Kernel::Tiled => {
                 let g = self
                     .tiles

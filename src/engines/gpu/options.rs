@@ -71,7 +71,8 @@ pub enum GpuPath {
     Persistent,
     /// The persistent kernel with the lattice held in workgroup memory for
     /// the whole dispatch (lattices that fit the adapter's workgroup memory:
-    /// Table S1 needs 46 KB in mixed f32).
+    /// Table S1 needs 46 KB in mixed f32; in f64 u and v take 62 KB, so
+    /// where the adapter offers less, u alone, 34 KB, with v in storage).
     Resident,
     /// Temporal blocking: a workgroup per column tile steps its tile and a
     /// halo of 4 columns for up to 4 steps per dispatch (small lattices
@@ -254,28 +255,54 @@ pub fn persistent_threads(
         .max(1)
 }
 
-/// Bytes of workgroup memory the resident kernel needs for `model` in
-/// precision `T`: the lattice's u and v, the sample reduction's slots and
-/// its own words; an error naming both sizes where the adapter allows
-/// less.
-pub fn resident_fit<T: GpuReal>(model: &Model, limits: &wgpu::Limits) -> Result<u64, String> {
-    let per_block = std::mem::size_of::<[Coord<T>; 2]>() + std::mem::size_of::<[T; 2]>();
+/// How the resident kernel holds a lattice in workgroup memory
+/// (`resident_fit`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct ResidentFit {
+    /// Bytes of workgroup memory it takes.
+    pub bytes: u64,
+    /// v in workgroup memory beside u; else v stays in storage, where the
+    /// persistent kernel keeps it (`RESIDENT_VELOCITIES`).
+    pub velocities: bool,
+}
+
+/// How the resident kernel holds `model` in precision `T`: u and v where
+/// both fit the adapter's workgroup memory, else u alone. Beside them: the
+/// sample reduction's slots and its own words. f64 Table S1 needs 62 KB
+/// for both, and NVIDIA's Vulkan driver offers 48 KB; u alone takes 34 KB.
+/// An error naming the sizes where not even u fits.
+pub fn resident_fit<T: GpuReal>(
+    model: &Model,
+    limits: &wgpu::Limits,
+) -> Result<ResidentFit, String> {
+    let disp = std::mem::size_of::<[Coord<T>; 2]>();
+    let vel = std::mem::size_of::<[T; 2]>();
     let slots = workgroup_state_reduction_width::<T>() as usize;
-    let bytes = (model.n_blocks() * per_block
-        + slots * std::mem::size_of::<layout::GpuSampleSums<T>>()
+    let others = (slots * std::mem::size_of::<layout::GpuSampleSums<T>>()
         + layout::kept_words(model.nx) as usize * 4) as u64
         + RESIDENT_OWN_BYTES;
+    let both = (model.n_blocks() * (disp + vel)) as u64 + others;
+    let disp_only = (model.n_blocks() * disp) as u64 + others;
     let allowed = limits.max_compute_workgroup_storage_size as u64;
-    if bytes > allowed {
-        return Err(format!(
-            "the resident kernel holds the lattice in workgroup memory: {} blocks in {} need \
-             {bytes} bytes, the adapter allows {allowed}: use --gpu-path one-step-lanes or \
-             persistent",
-            model.n_blocks(),
-            T::NAME
-        ));
+    if both <= allowed {
+        return Ok(ResidentFit {
+            bytes: both,
+            velocities: true,
+        });
     }
-    Ok(bytes)
+    if disp_only <= allowed {
+        return Ok(ResidentFit {
+            bytes: disp_only,
+            velocities: false,
+        });
+    }
+    Err(format!(
+        "the resident kernel holds the lattice in workgroup memory: {} blocks in {} need \
+         {disp_only} bytes for their displacements alone ({both} with their velocities), the \
+         adapter allows {allowed}: use --gpu-path one-step-lanes or persistent",
+        model.n_blocks(),
+        T::NAME
+    ))
 }
 
 impl GpuPath {

@@ -30,6 +30,9 @@ pub struct StepKernel {
     /// The tiled kernel's rounds chained in one dispatch
     /// (`GpuOptions::chained_tiles`).
     pub chain: Option<tiles::TileChain>,
+    /// The resident kernel's v in workgroup memory beside u (where both
+    /// fit: `options::resident_fit`), else in storage.
+    pub resident_velocities: bool,
 }
 
 impl StepKernel {
@@ -55,6 +58,10 @@ impl StepKernel {
         constants.push(("BOND_PATCHES", self.bond_patches as u8 as f64));
         if self.kernel == Kernel::Resident {
             constants.push(("RESIDENT_BLOCKS", shape.blocks as f64));
+            let velocities = self.resident_velocities;
+            constants.push(("RESIDENT_VELOCITIES", velocities as u8 as f64));
+            let vel_blocks = if velocities { shape.blocks } else { 1 };
+            constants.push(("RESIDENT_VEL_BLOCKS", vel_blocks as f64));
         }
         // Their workgroup memory holds the state: fewer slots for the
         // samples they record.
@@ -206,20 +213,34 @@ pub fn kernel_sources<T: GpuReal>(
         .collect()
 }
 
+/// How a kernel holds a scene in workgroup memory (`kernel_fit`).
+struct KernelFit {
+    geometry: Option<tiles::TileGeometry>,
+    resident_velocities: bool,
+}
+
 /// Fails where `kernel` cannot hold `model` on this adapter (the
 /// resident kernel's lattice, the tiled kernel's tile in workgroup
-/// memory); the tiled kernel's geometry.
+/// memory); the tiled kernel's geometry, and whether the resident
+/// kernel's v fits beside u.
 fn kernel_fit<T: GpuReal>(
     model: &Model,
     adapter: &AdapterTraits,
     opts: GpuOptions,
     kernel: Kernel,
     threads: u32,
-) -> Result<Option<tiles::TileGeometry>, EngineError> {
+) -> Result<KernelFit, EngineError> {
+    let geometry = |geometry| KernelFit {
+        geometry,
+        resident_velocities: true,
+    };
     match kernel {
         Kernel::Resident => {
-            resident_fit::<T>(model, &adapter.limits).map_err(EngineError::Gpu)?;
-            Ok(None)
+            let fit = resident_fit::<T>(model, &adapter.limits).map_err(EngineError::Gpu)?;
+            Ok(KernelFit {
+                geometry: None,
+                resident_velocities: fit.velocities,
+            })
         }
         Kernel::Tiled => {
             let shape = opts.tile.unwrap_or(tiles::TileShape::DEFAULT);
@@ -228,9 +249,9 @@ fn kernel_fit<T: GpuReal>(
             if adapter.software {
                 tiles::software_fit(model, &g, threads).map_err(EngineError::Gpu)?;
             }
-            Ok(Some(g))
+            Ok(geometry(Some(g)))
         }
-        _ => Ok(None),
+        _ => Ok(geometry(None)),
     }
 }
 
@@ -268,7 +289,10 @@ pub fn plan<T: GpuReal>(
         &adapter.limits,
         adapter.software,
     );
-    let geometry = kernel_fit::<T>(model, adapter, opts, kernel, threads)?;
+    let KernelFit {
+        geometry,
+        resident_velocities,
+    } = kernel_fit::<T>(model, adapter, opts, kernel, threads)?;
     // Asked for with a kernel named that has no rounds to chain: refused
     // (auto and measure leave the other kernels unchained).
     if opts.chained_tiles
@@ -292,6 +316,7 @@ pub fn plan<T: GpuReal>(
         geometry,
         bond_patches: opts.bond_patches,
         chain,
+        resident_velocities,
     };
     let constants = step_kernel.constants::<T>(&variant, opts, Shape::of(model), adapter.software);
     // One module (and one compiled pipeline) for the one-step kernels.
