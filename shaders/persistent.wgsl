@@ -32,6 +32,9 @@ var<workgroup> stop: u32;
 // sample at or after the first step.
 var<workgroup> span: vec4<u32>;
 var<workgroup> wg_sample: u32;
+// The fewest steps any thread ran (llvmpipe cuts each invocation's loops
+// on its own, so thread 0's count alone may miss a cut).
+var<workgroup> fewest_run: atomic<u32>;
 
 // Block i's bulk force, and a per-block friction law's friction from it.
 fn store_bulk_force(i: u32, f: vec2<real>, ld: Loads) {
@@ -64,6 +67,7 @@ fn persistent_steps(
             first_sample,
         );
         stop = atomicLoad(&status[status_base()]);
+        atomicStore(&fewest_run, 0xffffffffu);
     }
     let steps = workgroupUniformLoad(&span);
     lane_shuffle_ready();
@@ -260,8 +264,11 @@ fn persistent_steps(
     state_leave(t, PERSISTENT_THREADS);
     // Steps run, summed over dispatches: the host checks that no driver
     // cut a dispatch short (llvmpipe ends a shader's loops after 65535
-    // iterations in all, silently).
+    // iterations in all, silently, each invocation's apart: a thread with
+    // more junction draws than thread 0 may be cut while thread 0 is not).
+    atomicMin(&fewest_run, ran);
+    workgroupBarrier();
     if t == 0u {
-        atomicAdd(&status[status_base() + 7u], ran);
+        atomicAdd(&status[status_base() + 7u], atomicLoad(&fewest_run));
     }
 }
