@@ -449,15 +449,10 @@ fn times_one_lane_a_round(launch: Launch, opts: GpuOptions, software: bool) -> b
 /// each of `CHAINED_HALOS_SEARCHED` smaller than its halo.
 pub fn chained_halo_search(launch: Launch) -> Vec<Launch> {
     let shape = launch.tile.unwrap_or(TileShape::DEFAULT);
-    CHAINED_HALOS_SEARCHED
+    let halos = CHAINED_HALOS_SEARCHED
         .into_iter()
-        .filter(|&h| h < shape.halo)
-        .map(|halo| {
-            launch
-                .with_tile(TileShape { halo, ..shape })
-                .with_chained_tiles()
-        })
-        .collect()
+        .filter(|&h| h < shape.halo);
+    chained_shapes(launch, halos.map(|halo| TileShape { halo, ..shape }))
 }
 
 /// The chained launches `measure` times last, on hardware, after the
@@ -466,14 +461,16 @@ pub fn chained_halo_search(launch: Launch) -> Vec<Launch> {
 /// with its halo and threads.
 pub fn chained_width_search(launch: Launch) -> Vec<Launch> {
     let shape = launch.tile.unwrap_or(TileShape::DEFAULT);
-    CHAINED_WIDTHS_SEARCHED
+    let widths = CHAINED_WIDTHS_SEARCHED
         .into_iter()
-        .filter(|&w| w < shape.width)
-        .map(|width| {
-            launch
-                .with_tile(TileShape { width, ..shape })
-                .with_chained_tiles()
-        })
+        .filter(|&w| w < shape.width);
+    chained_shapes(launch, widths.map(|width| TileShape { width, ..shape }))
+}
+
+/// `launch` chained at each of `shapes`.
+fn chained_shapes(launch: Launch, shapes: impl Iterator<Item = TileShape>) -> Vec<Launch> {
+    shapes
+        .map(|shape| launch.with_tile(shape).with_chained_tiles())
         .collect()
 }
 
