@@ -66,10 +66,10 @@ fn bond_terms(ui: Disp, vi: vec2<real>, uj: Disp, vj: vec2<real>, d: vec2<i32>, 
         // of creep, and turn the bond's direction in stairs; the force
         // q·r is summed as q·r0 + q·du instead (CPU twin: bulk_force).
         // q = k·stretch/|r| with |r| = rest + stretch = (rest·over + num)/over.
-        let length = rest * over + num;
-        let q = kb * num / length;
+        let len_times_over = rest * over + num;
+        let q = kb * num / len_times_over;
         if DAMPING_FORM == 2u {
-            let inv = over / length;
+            let inv = over / len_times_over;
             let n0 = vec2<real>(r0.x * inv, r0.y * inv);
             let n1 = vec2<real>(du.x * inv, du.y * inv);
             let along = c.eta * ((dv.x * n0.x + dv.y * n0.y) + (dv.x * n1.x + dv.y * n1.y));

@@ -230,7 +230,8 @@ fn kernel_fit<T: GpuReal>(
     kernel: Kernel,
     threads: u32,
 ) -> Result<KernelFit, EngineError> {
-    let geometry = |geometry| KernelFit {
+    // Every kernel but the resident one: v is where it always is.
+    let tiles_only = |geometry| KernelFit {
         geometry,
         resident_velocities: true,
     };
@@ -249,9 +250,9 @@ fn kernel_fit<T: GpuReal>(
             if adapter.software {
                 tiles::software_fit(model, &g, threads).map_err(EngineError::Gpu)?;
             }
-            Ok(geometry(Some(g)))
+            Ok(tiles_only(Some(g)))
         }
-        _ => Ok(geometry(None)),
+        _ => Ok(tiles_only(None)),
     }
 }
 

@@ -115,11 +115,11 @@ fn bond_terms<T: Real, C: Coordinate<T>>(
         // summed as q·r0 + q·du, each exact to f32's relative precision.
         // With stretch = num/over, |r| = (rest·over + num)/over, so
         // q = k·num/(rest·over + num).
-        let length = bond.rest * over + num;
-        let q = bond.k * num / length;
+        let len_times_over = bond.rest * over + num;
+        let q = bond.k * num / len_times_over;
         let (dx, dz) = if c.bond_damping {
             // n = r0/|r| + du/|r|, kept as its two parts alike.
-            let inv = over / length;
+            let inv = over / len_times_over;
             let n0 = [bond.r0[0] * inv, bond.r0[1] * inv];
             let n1 = [du[0] * inv, du[1] * inv];
             let along = c.eta * ((dv[0] * n0[0] + dv[1] * n0[1]) + (dv[0] * n1[0] + dv[1] * n1[1]));

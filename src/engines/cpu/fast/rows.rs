@@ -221,14 +221,14 @@ fn bond_kernel<T: Real, C: Coordinate<T>, const BOND_DAMPING: bool>(
         let dv0 = vxj[i] - vxi[i];
         let dv1 = vzj[i] - vzi[i];
         if <C::Sum as ForceSum<T>>::SPLITS_BONDS {
-            let length = rest * over + num;
-            let q = k * num / length;
+            let len_times_over = rest * over + num;
+            let q = k * num / len_times_over;
             sx[i] = q * r00;
             sz[i] = q * r01;
             rx[i] = q * du0;
             rz[i] = q * du1;
             if BOND_DAMPING {
-                let inv = over / length;
+                let inv = over / len_times_over;
                 let (n00, n01) = (r00 * inv, r01 * inv);
                 let (n10, n11) = (du0 * inv, du1 * inv);
                 let along = eta * ((dv0 * n00 + dv1 * n01) + (dv0 * n10 + dv1 * n11));

@@ -386,15 +386,15 @@ pub fn measure_within<T: GpuReal>(
     if let Some((launch, unchained)) = tiled_best.filter(|_| !opts.chained_tiles) {
         let chained = time_noting_merges(launch.with_chained_tiles());
         if let Some(seconds) = chained.filter(|&s| s < unchained && opts.tile.is_none()) {
-            let mut chained_best = (launch.with_chained_tiles(), seconds);
+            let mut chained_best = Some((launch.with_chained_tiles(), seconds));
             for smaller in chained_halo_search(launch) {
                 if let Some(s) = time_noting_merges(smaller) {
-                    keep_faster_pair(&mut chained_best, smaller, s);
+                    keep_faster(&mut chained_best, smaller, s);
                 }
             }
             // Then narrower tiles at the fastest chained halo (hardware).
-            if !ctx.is_software() {
-                for narrower in chained_width_search(chained_best.0) {
+            if let Some((fastest_chained, _)) = chained_best.filter(|_| !ctx.is_software()) {
+                for narrower in chained_width_search(fastest_chained) {
                     time_noting_merges(narrower);
                 }
             }
@@ -472,13 +472,6 @@ fn chained_shapes(launch: Launch, shapes: impl Iterator<Item = TileShape>) -> Ve
     shapes
         .map(|shape| launch.with_tile(shape).with_chained_tiles())
         .collect()
-}
-
-/// `best` becomes (`launch`, `seconds`) if that is faster.
-fn keep_faster_pair(best: &mut (Launch, f64), launch: Launch, seconds: f64) {
-    if seconds < best.1 {
-        *best = (launch, seconds);
-    }
 }
 
 /// `best` becomes (`launch`, `seconds`) if that is faster or it was empty.
