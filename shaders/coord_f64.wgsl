@@ -74,27 +74,42 @@ fn coord_unpack(p: packed_coord) -> coord {
 
 // ln x for x > 0 (the RNG's 24-bit uniforms, rate-and-state's ratios):
 // x = m·2^e with m in [√½, √2), ln m = 2 atanh(s), s = (m − 1)/(m + 1),
-// |s| < 0.172. Powers of two scale exactly, so the coarse steps change
-// nothing but the time taken.
+// |s| < 0.172. m and e are found without a loop: llvmpipe counts every
+// pass of every loop against one budget a dispatch (a loop no junction
+// enters still costs a pass there), and the persistent kernel's steps per
+// dispatch are sized by that budget. (naga's f64 frexp gives an i64
+// exponent, which needs SHADER_INT64; f32's gives an i32.)
+fn ln_scale_up(me: vec2<real>, k: real, below: real, by: real) -> vec2<real> {
+    return select(me, vec2<real>(me.x * by, me.y - k), me.x < below);
+}
+
+fn ln_scale_down(me: vec2<real>, k: real, at_least: real, by: real) -> vec2<real> {
+    return select(me, vec2<real>(me.x * by, me.y + k), me.x >= at_least);
+}
+
 fn real_ln(x: real) -> real {
-    var m = x;
-    var e: real = 0.0;
-    for (var k = 0; k < 40 && m < 2.3283064365386963e-10; k++) {
-        m = m * 4294967296.0;
-        e = e - 32.0;
+    var me = vec2<real>(x, 0.0);
+    // Outside [2^-64, 2^64) (extreme rate-and-state ratios only): into it
+    // by exact powers of two (2^-512 twice: subnormals reach 2^-1074).
+    if x < 5.421010862427522e-20 || x >= 1.8446744073709552e19 {
+        me = ln_scale_up(me, 512.0, 7.458340731200207e-155, 1.3407807929942597e154);
+        me = ln_scale_up(me, 512.0, 7.458340731200207e-155, 1.3407807929942597e154);
+        me = ln_scale_up(me, 256.0, 8.636168555094445e-78, 1.157920892373162e77);
+        me = ln_scale_up(me, 128.0, 2.938735877055719e-39, 3.402823669209385e38);
+        me = ln_scale_up(me, 64.0, 5.421010862427522e-20, 1.8446744073709552e19);
+        me = ln_scale_down(me, 512.0, 1.3407807929942597e154, 7.458340731200207e-155);
+        me = ln_scale_down(me, 256.0, 1.157920892373162e77, 8.636168555094445e-78);
+        me = ln_scale_down(me, 128.0, 3.402823669209385e38, 2.938735877055719e-39);
+        me = ln_scale_down(me, 64.0, 1.8446744073709552e19, 5.421010862427522e-20);
     }
-    for (var k = 0; k < 40 && m >= 4294967296.0; k++) {
-        m = m * 2.3283064365386963e-10;
-        e = e + 32.0;
-    }
-    for (var k = 0; k < 1100 && m < 0.7071067811865476; k++) {
-        m = m * 2.0;
-        e = e - 1.0;
-    }
-    for (var k = 0; k < 1100 && m >= 1.4142135623730951; k++) {
-        m = m * 0.5;
-        e = e + 1.0;
-    }
+    // The exponent of the value's f32 rounding (a normal f32 here), then m
+    // exactly: f32 rounding moves it by 2^-24 at most, so m is in
+    // [½ − 2^-25, 1), and one doubling puts it in [√½, √2).
+    let e32 = frexp(f32(me.x)).exp;
+    let half_to_one = ldexp(me.x, -e32);
+    let low = half_to_one < 0.7071067811865476;
+    let m = select(half_to_one, half_to_one * 2.0, low);
+    let e = me.y + real(e32) - real(select(0, 1, low));
     let s = (m - 1.0) / (m + 1.0);
     let s2 = s * s;
     // 2 Σ s^(2k+1)/(2k+1), k ≤ 11: the next term is below 1e-19 of ln m.
@@ -119,8 +134,9 @@ fn real_ln(x: real) -> real {
 
 // e^x (rate-and-state friction): x = n·ln 2 + r with ln 2 in two parts
 // (n·LN2_HI exact for |n| < 2^21), |r| ≤ ln2/2, e^r by its Taylor series
-// to r^13 (the next term is below 5e-18), times 2^n in exact steps; 0
-// below −745 and held at e^709 above (the f64 range).
+// to r^13 (the next term is below 5e-18), times 2^n by ldexp (exact where
+// the result is normal; no loop, as in real_ln); 0 below −745 and held at
+// e^709 above (the f64 range).
 fn real_exp(x: real) -> real {
     if x < -745.0 {
         return 0.0;
@@ -143,21 +159,8 @@ fn real_exp(x: real) -> real {
     p = p * r + 1.0 / 6.0;
     p = p * r + 0.5;
     p = p * r + 1.0;
-    var y = p * r + 1.0;
-    var k = i32(n);
-    for (var i = 0; i < 40 && k >= 30; i++) {
-        y = y * 1073741824.0;
-        k = k - 30;
-    }
-    for (var i = 0; i < 40 && k <= -30; i++) {
-        y = y * 9.313225746154785e-10;
-        k = k + 30;
-    }
-    let scale = real(1u << u32(abs(k)));
-    if k >= 0 {
-        return y * scale;
-    }
-    return y / scale;
+    let y = p * r + 1.0;
+    return ldexp(y, i32(n));
 }
 
 // sin r and cos r for |r| ≤ π/4 (Taylor series to r^19 and r^18).

@@ -36,6 +36,24 @@ var<workgroup> wg_sample: u32;
 // on its own, so thread 0's count alone may miss a cut).
 var<workgroup> fewest_run: atomic<u32>;
 
+// Whether this invocation's loops all ran whole. Once llvmpipe has spent
+// an invocation's loop budget it ends every loop after one pass, and the
+// budget never comes back, so a loop of batch.probe_passes (2) passes then
+// runs one. The loop's bound varies by thread, as the kernel's loops do:
+// llvmpipe neither counts nor cuts a loop whose bound is the same for the
+// whole workgroup (measured: such a probe ran 70,000 passes after a cut).
+fn loop_budget_left(t: u32) -> bool {
+    var k = t;
+    let end = t + batch.probe_passes * PERSISTENT_THREADS;
+    loop {
+        k += PERSISTENT_THREADS;
+        if k >= end {
+            break;
+        }
+    }
+    return k - t >= 2u * PERSISTENT_THREADS;
+}
+
 // Block i's bulk force, and a per-block friction law's friction from it.
 fn store_bulk_force(i: u32, f: vec2<real>, ld: Loads) {
     force[block_base() + i] = f;
@@ -266,6 +284,11 @@ fn persistent_steps(
     // cut a dispatch short (llvmpipe ends a shader's loops after 65535
     // iterations in all, silently, each invocation's apart: a thread with
     // more junction draws than thread 0 may be cut while thread 0 is not).
+    // A loop cut inside a step leaves the step counted, so a thread whose
+    // budget ran out anywhere in the dispatch reports no steps at all.
+    if !loop_budget_left(t) {
+        ran = 0u;
+    }
     atomicMin(&fewest_run, ran);
     workgroupBarrier();
     if t == 0u {

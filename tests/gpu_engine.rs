@@ -461,6 +461,79 @@ fn a_persistent_dispatch_cut_short_is_an_error() {
     }
 }
 
+/// A loop cut inside a dispatch's last step leaves every step counted, so
+/// the count of steps run alone would pass it; the kernel's loop probe
+/// (`persistent.wgsl` `loop_budget_left`) must catch it. On a software
+/// adapter, bisect the length of a persistent dispatch (8 threads, so
+/// llvmpipe's budget runs out within tens of steps): the longest that runs
+/// must give the one-step kernel's bits, and must be shorter than one that
+/// is caught. Elsewhere (no budget) a long dispatch runs and gives them.
+/// Control: a perturbed one-step run differs.
+#[test]
+fn the_longest_persistent_dispatch_a_loop_budget_allows_is_exact() {
+    let m = model(SMALL);
+    let persistent = |steps: u64| -> Result<Snapshot, String> {
+        let opts = GpuOptions {
+            path: GpuPath::Persistent,
+            persistent_threads: Some(8),
+            steps_per_dispatch: Some(steps),
+            ..GpuOptions::default()
+        };
+        let mut g = GpuEngine::with_options(&m, opts).expect("an adapter");
+        advance_to(&mut g, steps).map_err(|e| e.to_string())?;
+        Ok(g.snapshot().unwrap())
+    };
+    let one_step = |m: &Model, steps: u64| {
+        let opts = GpuOptions {
+            path: GpuPath::OneStep,
+            ..GpuOptions::default()
+        };
+        let mut g = GpuEngine::with_options(m, opts).expect("an adapter");
+        advance_to(&mut g, steps).unwrap();
+        g.snapshot().unwrap()
+    };
+    let software = GpuEngine::with_options(&m, GpuOptions::default())
+        .expect("an adapter")
+        .adapter()
+        .contains("llvmpipe");
+    let (longest, edge) = if software {
+        // runs(ok) < cut: the budget runs out past `ok` steps and by `cut`.
+        let (mut ok, mut cut) = (1u64, 2u64);
+        while persistent(cut).is_ok() {
+            ok = cut;
+            cut *= 2;
+            assert!(
+                cut <= 4096,
+                "llvmpipe ran a dispatch of {ok} steps of 8 threads"
+            );
+        }
+        while cut - ok > 1 {
+            let mid = (ok + cut) / 2;
+            match persistent(mid) {
+                Ok(_) => ok = mid,
+                Err(e) => {
+                    assert!(e.contains("cut a persistent dispatch short"), "{e}");
+                    cut = mid;
+                }
+            }
+        }
+        eprintln!("llvmpipe: {ok} steps a dispatch run, {cut} are caught");
+        (ok, Some(cut))
+    } else {
+        (1000, None)
+    };
+    let reference = one_step(&m, longest);
+    let snapshot = persistent(longest).unwrap();
+    assert!(
+        snapshot == reference,
+        "a dispatch of {longest} steps ran (the next, {edge:?}, was caught) but differs \
+         from the one-step kernel"
+    );
+    let mut heavier = m.clone();
+    heavier.mass *= 1.0 + 1e-6;
+    assert!(one_step(&heavier, longest) != reference, "control");
+}
+
 /// A run that blows up stops with the step and block where it happened, on
 /// every kernel, as the CPU does: junctions 10⁴× too stiff for the time
 /// step (forced past the stability check) blow up within a few hundred

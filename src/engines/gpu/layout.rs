@@ -180,10 +180,16 @@ gpu_struct! {
         pub anchor_offset: u32,
         /// Output samples the persistent kernel records in this batch.
         pub records: u32,
-        /// Unused: keeps both precisions free of padding.
-        pub reserved: u32,
+        /// `LOOP_PROBE_PASSES`: the passes of the persistent kernel's loop
+        /// probe, read at run time so that no compiler unrolls the probe.
+        pub probe_passes: u32,
     }
 }
+
+/// Passes of the persistent kernel's loop probe (`persistent.wgsl`
+/// `loop_budget_left`): two, one more than llvmpipe lets any loop run once
+/// an invocation has spent its loop budget.
+pub const LOOP_PROBE_PASSES: u32 = 2;
 
 /// While driving, batches are anchored at every this many steps of
 /// driving and never cross an anchor: a step's drive time and target are
@@ -602,7 +608,7 @@ impl<T: GpuReal> GpuBatch<T> {
             parity: 0,
             anchor_offset: (first - anchor) as u32,
             records: 0,
-            reserved: 0,
+            probe_passes: LOOP_PROBE_PASSES,
         }
     }
 }
