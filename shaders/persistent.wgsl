@@ -22,6 +22,11 @@
 override PERSISTENT_THREADS: u32 = 256u;
 // Junction lanes two at a time in phase 1 (hardware; see there).
 override TWO_LANES_A_ROUND: bool = true;
+// Software adapters: check llvmpipe's loop budget at the dispatch's end
+// (loop_budget_left). Off on hardware, which has no such budget, where the
+// probe cost the f64 one-lane persistent/256 launch 16 VGPRs on RADV.
+override LOOP_PROBE: bool = false;
+
 // Bulk forces by 2×2 patches of blocks, each inner bond computed once
 // (bulk_patch.wgsl; GpuOptions::bond_patches): the same bits, fewer
 // bonds and loads a block, a quarter of the threads busy.
@@ -286,7 +291,7 @@ fn persistent_steps(
     // more junction draws than thread 0 may be cut while thread 0 is not).
     // A loop cut inside a step leaves the step counted, so a thread whose
     // budget ran out anywhere in the dispatch reports no steps at all.
-    if !loop_budget_left(t) {
+    if LOOP_PROBE && !loop_budget_left(t) {
         ran = 0u;
     }
     atomicMin(&fewest_run, ran);

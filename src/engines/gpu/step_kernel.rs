@@ -54,6 +54,9 @@ impl StepKernel {
             // its limit: one junction lane a round there.
             let two_lanes = !software && opts.two_lanes_a_round;
             constants.push(("TWO_LANES_A_ROUND", two_lanes as u8 as f64));
+            // llvmpipe's loop budget, checked at each dispatch's end; on
+            // hardware (no budget) the probe would only cost registers.
+            constants.push(("LOOP_PROBE", software as u8 as f64));
         }
         constants.push(("BOND_PATCHES", self.bond_patches as u8 as f64));
         if self.kernel == Kernel::Resident {
