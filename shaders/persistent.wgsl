@@ -44,7 +44,7 @@ var<workgroup> fewest_run: atomic<u32>;
 // Whether this invocation's loops all ran whole. Once llvmpipe has spent
 // an invocation's loop budget it ends every loop after one pass, and the
 // budget never comes back, so a loop of batch.probe_passes (2) passes then
-// runs one. The loop's bound varies by thread, as the kernel's loops do:
+// stops short of its end. The loop's bound varies by thread, as the kernel's loops do:
 // llvmpipe neither counts nor cuts a loop whose bound is the same for the
 // whole workgroup (measured: such a probe ran 70,000 passes after a cut).
 fn loop_budget_left(t: u32) -> bool {
@@ -56,7 +56,7 @@ fn loop_budget_left(t: u32) -> bool {
             break;
         }
     }
-    return k - t >= 2u * PERSISTENT_THREADS;
+    return k >= end;
 }
 
 // Block i's bulk force, and a per-block friction law's friction from it.

@@ -492,10 +492,9 @@ fn the_longest_persistent_dispatch_a_loop_budget_allows_is_exact() {
         advance_to(&mut g, steps).unwrap();
         g.snapshot().unwrap()
     };
-    let software = GpuEngine::with_options(&m, GpuOptions::default())
+    let software = slipfront::engines::gpu::context::shared()
         .expect("an adapter")
-        .adapter()
-        .contains("llvmpipe");
+        .is_software();
     let (longest, edge) = if software {
         // runs(ok) < cut: the budget runs out past `ok` steps and by `cut`.
         let (mut ok, mut cut) = (1u64, 2u64);
