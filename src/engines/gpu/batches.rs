@@ -59,9 +59,9 @@ impl<T: GpuReal> GpuEngine<T> {
                 batch
             })
             .collect();
-        self.ctx
-            .queue
-            .write_buffer(&self.batch_buffer, 0, bytemuck::cast_slice(&batches));
+        self.buffers
+            .batches
+            .write(&self.ctx.queue, 0, bytemuck::cast_slice(&batches));
         // The step after each dispatch (one-step and tiled kernels), which
         // the tiled kernel reads.
         let ends = match self.kernel.is_persistent() {
@@ -75,11 +75,7 @@ impl<T: GpuReal> GpuEngine<T> {
         let dispatch_count = ending.iter().filter(|&&e| e).count() as u64;
         if self.tiles.is_some() {
             let words = super::tiles::tile_end_words(&ends, &ending);
-            self.ctx.queue.write_buffer(
-                &self.buffers.tile_scratch[4],
-                0,
-                bytemuck::cast_slice(&words),
-            );
+            self.buffers.tile_scratch[4].write(&self.ctx.queue, 0, bytemuck::cast_slice(&words));
         }
         let mut encoder = self
             .ctx
@@ -137,7 +133,7 @@ impl<T: GpuReal> GpuEngine<T> {
                             first
                         };
                         first_round = d + 1;
-                        let offset = (index * self.offset_stride) as u32;
+                        let offset = (index * self.buffers.offset_stride) as u32;
                         pass.set_bind_group(1, &self.batch_group, &[offset]);
                         // A one-step kernel's sample: the step that ends
                         // this dispatch.
@@ -205,7 +201,7 @@ impl<T: GpuReal> GpuEngine<T> {
                 }
                 Kernel::Persistent | Kernel::Resident => {
                     for d in 0..steps.div_ceil(self.steps_per_dispatch) {
-                        let offset = (d * self.offset_stride) as u32;
+                        let offset = (d * self.buffers.offset_stride) as u32;
                         pass.set_bind_group(1, &self.batch_group, &[offset]);
                         pass.dispatch_workgroups(1, 1, scene_count);
                         self.dispatches += 1;
@@ -231,7 +227,8 @@ impl<T: GpuReal> GpuEngine<T> {
                 mapped_at_creation: false,
             })
         });
-        encoder.copy_buffer_to_buffer(&self.buffers.status, 0, &staging, 0, status_size);
+        let status = self.buffers.status.range(0, status_size);
+        encoder.copy_buffer_to_buffer(status.buffer, status.offset, &staging, 0, status_size);
         // The pass's timestamps after the statuses (a multiple of 8 bytes).
         if let (Some(timer), Some(slot)) = (self.timer.as_ref(), timer_slot) {
             timer.copy_out(&mut encoder, slot, marks.as_ref(), &staging, status_size);
@@ -409,8 +406,8 @@ impl<T: GpuReal> GpuEngine<T> {
                 let anchors = crate::engines::trigger::trigger_anchors(&scene.model, &snap);
                 let spring = gpu_junction_springs::<T>(&anchors, &snap.junction_stiffness);
                 let at = (k * self.shape.junctions * Self::SPRING_BYTES) as u64;
-                self.ctx.queue.write_buffer(
-                    &self.buffers.junction_spring,
+                self.buffers.junction_spring.write(
+                    &self.ctx.queue,
                     at,
                     bytemuck::cast_slice(&spring),
                 );

@@ -2,8 +2,11 @@
 //! s's element i at s times the per-scene count plus i), the kernels'
 //! scratch, and group 0's bind group over them.
 
+use super::arena::{Access, Arenas, Region};
 use super::batch_sizes::ONE_STEP_BATCH;
-use super::layout::{GpuConsts, GpuJunctionCache, GpuJunctionSpring, GpuLaneSum, GpuStatus};
+use super::layout::{
+    GpuBatch, GpuConsts, GpuJunctionCache, GpuJunctionSpring, GpuLaneSum, GpuStatus,
+};
 use super::precision::{Coord, GpuReal, Packed};
 use super::shaders::Kernel;
 use super::tiles::TileGeometry;
@@ -12,8 +15,6 @@ use crate::engines::step_params::Consts;
 use crate::model::lattice::{block_flags, initial_displacement};
 use crate::model::real::Coordinate;
 use crate::model::Model;
-use bytemuck::Zeroable;
-use wgpu::util::DeviceExt;
 
 /// Elements of one scene in each buffer; scene s's slice starts at s times
 /// these (scene-major, `shaders/scene.wgsl`).
@@ -54,71 +55,72 @@ const _: () = assert!(
         && std::mem::size_of::<super::layout::GpuRecordPlan<f32>>() <= PLACEHOLDER_BYTES
 );
 
+/// The engine's storage arrays, each a region of the arenas
+/// (`arena`): the read-write ones share arenas, the read-only ones
+/// (`scene_consts`, `flags`, `tile_ends`, the record entries' and step
+/// samples' placeholders) have their own.
 pub(super) struct Buffers {
     /// The run constants: one record per scene.
-    pub(super) consts: wgpu::Buffer,
+    pub(super) consts: Region,
     /// Two copies of u and v: the one-step kernel reads one, writes the other.
-    pub(super) disp: [wgpu::Buffer; 2],
-    pub(super) vel: [wgpu::Buffer; 2],
-    pub(super) force: wgpu::Buffer,
+    pub(super) disp: [Region; 2],
+    pub(super) vel: [Region; 2],
+    pub(super) force: Region,
     /// One lattice: shared by the scenes of an ensemble.
-    pub(super) flags: wgpu::Buffer,
-    pub(super) contact: wgpu::Buffer,
-    pub(super) junction_spring: wgpu::Buffer,
-    pub(super) junction_state: wgpu::Buffer,
+    pub(super) flags: Region,
+    pub(super) contact: Region,
+    pub(super) junction_spring: Region,
+    pub(super) junction_state: Region,
     /// Per interface block, the sums of its junctions while none changes
     /// (`GpuJunctionCache`); zeroed wherever the host writes junctions.
-    pub(super) junction_cache: wgpu::Buffer,
-    pub(super) slide: wgpu::Buffer,
+    pub(super) junction_cache: Region,
+    pub(super) slide: Region,
     /// The friction law's state (`Shape::law_words` per scene).
-    pub(super) law_state: wgpu::Buffer,
-    pub(super) status: wgpu::Buffer,
-    pub(super) lane_partial: wgpu::Buffer,
-    /// What the step kernels bind for the record buffers until they
-    /// record output samples (never read then).
-    pub(super) record_placeholders: [wgpu::Buffer; 5],
+    pub(super) law_state: Region,
+    pub(super) status: Region,
+    pub(super) lane_partial: Region,
+    /// What the step kernels bind for the record buffers `[plan, sums,
+    /// rows, entries, step samples]` until they record output samples
+    /// (never read then).
+    pub(super) record_placeholders: [Region; 5],
     /// The tiled kernel's: two published copies of the blocks (u, v), of
     /// the junctions (state, spring; then each tile's private halo
     /// junctions), the ends of a batch's dispatches and each tile's rounds
     /// done; placeholders for the other kernels.
-    pub(super) tile_scratch: [wgpu::Buffer; 6],
+    pub(super) tile_scratch: [Region; 6],
+    /// Group 1: each scene's batch (`GpuBatch`), written before each batch.
+    pub(super) batches: Region,
+    /// Group 1: the step offsets 0..ONE_STEP_BATCH, one per dynamic-offset
+    /// stride (a dispatch's offset into it says which step of the batch it
+    /// runs), and that stride.
+    pub(super) step_offsets: Region,
+    pub(super) offset_stride: u64,
+    /// Whether the arrays are in arenas (`GpuOptions::pack_arrays`): a
+    /// recorder made later packs its own alike.
+    pub(super) packed: bool,
 }
 
 impl Buffers {
     /// The buffers of `models` (one lattice `shape`, scene-major), in their
-    /// initial state; the tiled kernel's scratch where `geometry` is given.
+    /// initial state; the tiled kernel's scratch where `geometry` is given;
+    /// in a few arenas where `packed` (`GpuOptions::pack_arrays`), else a
+    /// buffer each.
     pub(super) fn new<T: GpuReal>(
         device: &wgpu::Device,
+        limits: &wgpu::Limits,
         models: &[Model],
         shape: Shape,
         geometry: Option<TileGeometry>,
+        packed: bool,
     ) -> Buffers {
         let model = &models[0];
         let s = models.len();
         let (n, nj) = (shape.blocks, shape.junctions);
-        let storage = |label: &str, bytes: &[u8]| {
-            // Zero-sized bindings are invalid: pad empty arrays to one element.
-            let padded;
-            let contents = if bytes.is_empty() {
-                padded = vec![0u8; 48]; // a whole number of every element size
-                &padded[..]
-            } else {
-                bytes
-            };
-            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some(label),
-                contents,
-                usage: wgpu::BufferUsages::STORAGE
-                    | wgpu::BufferUsages::COPY_SRC
-                    | wgpu::BufferUsages::COPY_DST,
-            })
-        };
         let disp: Vec<[Coord<T>; 2]> = models
             .iter()
             .flat_map(initial_displacement)
             .map(|u| u.map(Coord::<T>::from_f64))
             .collect();
-        let zeros2 = |len: usize| vec![[T::zero(); 2]; len];
         let gpu_consts: Vec<GpuConsts<T>> = models
             .iter()
             .map(|m| {
@@ -126,125 +128,111 @@ impl Buffers {
                 GpuConsts::new(&Consts::<T>::new(m), speed_limit)
             })
             .collect();
+        let flags = block_flags(model);
+        let springs: Vec<GpuJunctionSpring<T>> = models
+            .iter()
+            .flat_map(|m| {
+                gpu_junction_springs::<T>(
+                    &crate::model::lattice::initial_anchors(m),
+                    &vec![0.0; nj],
+                )
+            })
+            .collect();
+        let junction_state = vec![[crate::model::junction::PINNED, 0u32]; s * nj];
+        let law_state: Vec<Packed<T>> = models
+            .iter()
+            .flat_map(crate::engines::friction_state::initial_law_state::<T, Coord<T>>)
+            .map(T::pack)
+            .collect();
         // The tiled kernel's scratch per scene (`TileGeometry::scratch_per_scene`);
         // the lane sums of the others.
         let scratch = geometry.map_or([0, 0, shape.nx * shape.lanes], |g| {
             g.scratch_per_scene(n, shape.nx, nj / shape.nx.max(1), shape.lanes)
         });
+        let mut arenas = Arenas::default();
+        let (rw, ro) = (Access::ReadWrite, Access::ReadOnly);
+        let pairs = |len: usize| s * len * GpuEngine::<T>::REAL_PAIR_BYTES;
+        let consts = arenas.bytes(ro, bytemuck::cast_slice(&gpu_consts));
+        let disp = [
+            arenas.bytes(rw, bytemuck::cast_slice(&disp)),
+            arenas.bytes(rw, bytemuck::cast_slice(&disp)),
+        ];
+        let vel = [arenas.zeros(rw, pairs(n)), arenas.zeros(rw, pairs(n))];
+        let force = arenas.zeros(rw, pairs(n));
+        let flags = arenas.bytes(ro, bytemuck::cast_slice(&flags));
+        let contact = arenas.zeros(rw, pairs(shape.nx));
+        let junction_spring = arenas.bytes(rw, bytemuck::cast_slice(&springs));
+        let junction_state = arenas.bytes(rw, bytemuck::cast_slice(&junction_state));
+        // Each scene's interface blocks, then (tiled kernel) each tile's
+        // private records of its halo columns.
+        let halo_records = geometry.map_or(0, |g| (g.tiles * g.span) as usize);
+        let junction_cache = arenas.zeros(
+            rw,
+            s * (shape.nx + halo_records) * std::mem::size_of::<GpuJunctionCache<T>>(),
+        );
+        let slide = arenas.zeros(rw, s * shape.nx * WORD_PAIR_BYTES);
+        let law_state = arenas.bytes(rw, bytemuck::cast_slice(&law_state));
+        let status = arenas.zeros(rw, s * STATUS_BYTES);
+        // One WGSL `LaneSum` per lane (of each tile's held blocks for the
+        // tiled kernel).
+        let lane_partial = arenas.zeros(rw, s * scratch[2] * std::mem::size_of::<GpuLaneSum<T>>());
+        let ends = geometry.map_or(0, |_| ONE_STEP_BATCH as usize);
+        let tile_scratch = [
+            // Published u and v.
+            arenas.zeros(rw, s * scratch[0] * GpuEngine::<T>::DISP_BYTES),
+            arenas.zeros(rw, pairs(scratch[0])),
+            // The tiles' junction state and springs.
+            arenas.zeros(rw, s * scratch[1] * WORD_PAIR_BYTES),
+            arenas.zeros(rw, s * scratch[1] * GpuEngine::<T>::SPRING_BYTES),
+            // The dispatches' ends (read-only in the kernels).
+            arenas.zeros(ro, ends * 4),
+            // Each tile's rounds done (chained tiles).
+            arenas.zeros(rw, s * geometry.map_or(0, |g| g.tiles as usize) * 4),
+        ];
+        // One element of the largest record struct in this precision; the
+        // entries and step samples are read-only bindings.
+        let placeholder = PLACEHOLDER_BYTES.max(GpuEngine::<T>::SUMS_BYTES);
+        let record_placeholders = [rw, rw, rw, ro, ro].map(|a| arenas.zeros(a, placeholder));
+        let batches = arenas.zeros(ro, s * std::mem::size_of::<GpuBatch<T>>());
+        let (table, offset_stride) = step_offsets(limits);
+        let step_offsets = arenas.bytes(ro, &table);
+        let built = arenas.build(device, limits, packed);
         Buffers {
-            consts: storage("scene consts", bytemuck::cast_slice(&gpu_consts)),
-            disp: [
-                storage("disp 0", bytemuck::cast_slice(&disp)),
-                storage("disp 1", bytemuck::cast_slice(&disp)),
-            ],
-            vel: [
-                storage("vel 0", bytemuck::cast_slice(&zeros2(s * n))),
-                storage("vel 1", bytemuck::cast_slice(&zeros2(s * n))),
-            ],
-            force: storage("force", bytemuck::cast_slice(&zeros2(s * n))),
-            flags: storage("flags", bytemuck::cast_slice(&block_flags(model))),
-            contact: storage("contact", bytemuck::cast_slice(&zeros2(s * shape.nx))),
-            junction_spring: storage(
-                "junction_spring",
-                bytemuck::cast_slice(
-                    &models
-                        .iter()
-                        .flat_map(|m| {
-                            gpu_junction_springs::<T>(
-                                &crate::model::lattice::initial_anchors(m),
-                                &vec![0.0; nj],
-                            )
-                        })
-                        .collect::<Vec<_>>(),
-                ),
-            ),
-            junction_state: storage(
-                "junction_state",
-                bytemuck::cast_slice(&vec![[crate::model::junction::PINNED, 0u32]; s * nj]),
-            ),
-            junction_cache: storage(
-                "junction sums kept",
-                // Each scene's interface blocks, then (tiled kernel) each
-                // tile's private records of its halo columns.
-                bytemuck::cast_slice(&vec![
-                    GpuJunctionCache::<T>::zeroed();
-                    s * (shape.nx
-                        + geometry
-                            .map_or(0, |g| (g.tiles * g.span) as usize))
-                ]),
-            ),
-            slide: storage(
-                "slide",
-                bytemuck::cast_slice(&vec![[0i32; 2]; s * shape.nx]),
-            ),
-            law_state: storage(
-                "law_state",
-                bytemuck::cast_slice(
-                    &models
-                        .iter()
-                        .flat_map(crate::engines::friction_state::initial_law_state::<T, Coord<T>>)
-                        .map(T::pack)
-                        .collect::<Vec<Packed<T>>>(),
-                ),
-            ),
-            status: storage(
-                "status",
-                bytemuck::cast_slice(&vec![GpuStatus::zeroed(); s]),
-            ),
-            lane_partial: storage(
-                "lane partial sums",
-                // One WGSL `LaneSum` per lane (of each tile's held blocks
-                // for the tiled kernel).
-                bytemuck::cast_slice(&vec![GpuLaneSum::<T>::zeroed(); s * scratch[2]]),
-            ),
-            tile_scratch: {
-                let zeros = |len: usize, bytes: usize| vec![0u8; s * len * bytes];
-                let ends = geometry.map_or(0, |_| ONE_STEP_BATCH as usize);
-                [
-                    storage(
-                        "published disp",
-                        &zeros(scratch[0], GpuEngine::<T>::DISP_BYTES),
-                    ),
-                    storage(
-                        "published vel",
-                        &zeros(scratch[0], GpuEngine::<T>::REAL_PAIR_BYTES),
-                    ),
-                    storage("tile junction state", &zeros(scratch[1], WORD_PAIR_BYTES)),
-                    storage(
-                        "tile junction spring",
-                        &zeros(scratch[1], GpuEngine::<T>::SPRING_BYTES),
-                    ),
-                    storage("tile dispatch ends", &vec![0u8; ends * 4]),
-                    // Each tile's rounds done (chained tiles).
-                    storage(
-                        "tile progress",
-                        &vec![0u8; s * geometry.map_or(0, |g| g.tiles as usize) * 4],
-                    ),
-                ]
-            },
-            // One element of the largest record struct in this precision.
-            record_placeholders: std::array::from_fn(|_| {
-                storage(
-                    "no records",
-                    &vec![0u8; PLACEHOLDER_BYTES.max(GpuEngine::<T>::SUMS_BYTES)],
-                )
-            }),
+            consts: built.region(consts),
+            disp: disp.map(|d| built.region(d)),
+            vel: vel.map(|v| built.region(v)),
+            force: built.region(force),
+            flags: built.region(flags),
+            contact: built.region(contact),
+            junction_spring: built.region(junction_spring),
+            junction_state: built.region(junction_state),
+            junction_cache: built.region(junction_cache),
+            slide: built.region(slide),
+            law_state: built.region(law_state),
+            status: built.region(status),
+            lane_partial: built.region(lane_partial),
+            record_placeholders: record_placeholders.map(|p| built.region(p)),
+            tile_scratch: tile_scratch.map(|t| built.region(t)),
+            batches: built.region(batches),
+            step_offsets: built.region(step_offsets),
+            offset_stride,
+            packed,
         }
     }
 }
 
 /// Group 0 of `kernel`: the state buffers and the record buffers `[plan,
 /// sums, rows, entries, step samples]` (`Recorder::state_bindings`, or
-/// placeholders), bound by the names the kernel's module declares
+/// placeholders' regions), bound by the names the kernel's module declares
 /// (`bindings::Bindings`).
 pub(super) fn state_group(
     ctx: &GpuContext,
     kernel: Kernel,
     b: &Buffers,
-    records: [&wgpu::Buffer; 5],
+    records: [wgpu::BindingResource<'_>; 5],
 ) -> wgpu::BindGroup {
     let [plan, sums, rows, entries, step_samples] = records;
-    let resources = [
+    let state = [
         ("scene_consts", &b.consts),
         // The one-step kernels' ping-pong copies; the persistent kernel's
         // state in place.
@@ -270,13 +258,16 @@ pub(super) fn state_group(
         ("tile_junction_spring", &b.tile_scratch[3]),
         ("tile_ends", &b.tile_scratch[4]),
         ("tile_progress", &b.tile_scratch[5]),
+    ]
+    .map(|(name, region)| (name, region.binding()));
+    let records = [
         ("plans", plan),
         ("sums", sums),
         ("rows", rows),
         ("record_entries", entries),
         ("step_samples", step_samples),
-    ]
-    .map(|(name, buffer)| (name, buffer.as_entire_binding()));
+    ];
+    let resources: Vec<_> = state.into_iter().chain(records).collect();
     ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
         label: Some(kernel.entry_point()),
         layout: ctx.state_layout(kernel),
@@ -284,22 +275,16 @@ pub(super) fn state_group(
     })
 }
 
-/// The step offsets 0..ONE_STEP_BATCH, one per dynamic-offset stride (a
-/// dispatch's offset into it says which step of the batch it runs), and
-/// that stride.
-pub(super) fn step_offsets(device: &wgpu::Device, limits: &wgpu::Limits) -> (wgpu::Buffer, u64) {
+/// The step offsets 0..ONE_STEP_BATCH, one per dynamic-offset stride,
+/// and that stride.
+fn step_offsets(limits: &wgpu::Limits) -> (Vec<u8>, u64) {
     let offset_stride = (limits.min_storage_buffer_offset_alignment as u64).max(4);
     let mut table = vec![0u8; (offset_stride * ONE_STEP_BATCH) as usize];
     for i in 0..ONE_STEP_BATCH {
         let at = (i * offset_stride) as usize;
         table[at..at + 4].copy_from_slice(&(i as u32).to_le_bytes());
     }
-    let offsets = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-        label: Some("step offsets"),
-        contents: &table,
-        usage: wgpu::BufferUsages::STORAGE,
-    });
-    (offsets, offset_stride)
+    (table, offset_stride)
 }
 
 /// The `junction_spring` buffer's records: anchors as coordinates,

@@ -33,6 +33,7 @@
 //! separate runners. A solo run is an ensemble of one: the same compiled
 //! kernels, so a scene's bits do not depend on the scenes beside it.
 
+mod arena;
 mod batch_sizes;
 mod batches;
 mod bindings;
@@ -61,12 +62,13 @@ use crate::engines::{
 use crate::model::real::precision_name;
 use crate::model::scenario::FrictionLaw;
 use crate::model::Model;
+use arena::Region;
 use batch_sizes::*;
 use buffers::{state_group, Buffers, Shape};
 use compile::{KernelBuild, KernelSource};
 use context::GpuContext;
 pub use device_timer::DispatchTimes;
-use layout::{GpuBatch, GpuJunctionSpring};
+use layout::GpuJunctionSpring;
 use options::*;
 pub use options::{GpuOptions, GpuOutput, GpuPath, PERSISTENT_THREADS, RESIDENT_THREADS};
 pub use precision::GpuReal;
@@ -78,12 +80,8 @@ use shaders::{Kernel, LaneMerge, Variant};
 use std::collections::VecDeque;
 
 /// Group 1 of `kernel`: the step offset (dynamic) and the scenes' batches.
-fn batch_group(
-    ctx: &GpuContext,
-    kernel: Kernel,
-    offsets: &wgpu::Buffer,
-    batches: &wgpu::Buffer,
-) -> wgpu::BindGroup {
+fn batch_group(ctx: &GpuContext, kernel: Kernel, b: &Buffers) -> wgpu::BindGroup {
+    let offsets = b.step_offsets.range(0, 4);
     ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
         label: Some("batch"),
         layout: &ctx.batch_layout,
@@ -93,13 +91,13 @@ fn batch_group(
                 (
                     context::STEP_OFFSET,
                     wgpu::BindingResource::Buffer(wgpu::BufferBinding {
-                        buffer: offsets,
-                        offset: 0,
-                        size: wgpu::BufferSize::new(4),
+                        buffer: offsets.buffer,
+                        offset: offsets.offset,
+                        size: wgpu::BufferSize::new(offsets.size),
                     }),
                 ),
-                ("batch", batches.as_entire_binding()),
-                ("scene_batches", batches.as_entire_binding()),
+                ("batch", b.batches.binding()),
+                ("scene_batches", b.batches.binding()),
             ],
         ),
     })
@@ -149,8 +147,6 @@ pub struct GpuEngine<T: GpuReal = f32> {
     /// Both state copies (one step) or copy 0 (persistent).
     state_group: wgpu::BindGroup,
     batch_group: wgpu::BindGroup,
-    batch_buffer: wgpu::Buffer,
-    offset_stride: u64,
     /// Workgroups (x, y) of a one-step dispatch of one scene.
     groups: (u32, u32),
     /// The workgroups of a one-step dispatch of one scene that hold
@@ -384,17 +380,17 @@ impl<T: GpuReal> GpuEngine<T> {
         let persistent_threads = step_kernel.threads;
         let geometry = step_kernel.geometry;
         let device = &ctx.device;
-        let buffers = Buffers::new::<T>(device, models, shape, geometry);
-        let (offsets, offset_stride) = buffers::step_offsets(device, &ctx.limits);
-        let batch_buffer = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("batch"),
-            size: (scene_count * std::mem::size_of::<GpuBatch<T>>()) as u64,
-            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
-        let placeholders = buffers.record_placeholders.each_ref();
+        let buffers = Buffers::new::<T>(
+            device,
+            &ctx.limits,
+            models,
+            shape,
+            geometry,
+            opts.pack_arrays,
+        );
+        let placeholders = buffers.record_placeholders.each_ref().map(Region::binding);
         let state_group = state_group(&ctx, kernel, &buffers, placeholders);
-        let batch_group = batch_group(&ctx, kernel, &offsets, &batch_buffer);
+        let batch_group = batch_group(&ctx, kernel, &buffers);
         let pipeline = ctx.pipeline::<T>(kernel, build, &constants);
         let tiles = geometry.map(|geometry| {
             let entry = |name| ctx.pipeline_of::<T>(kernel, build, name, &constants);
@@ -448,8 +444,6 @@ impl<T: GpuReal> GpuEngine<T> {
             chain: step_kernel.chain,
             state_group,
             batch_group,
-            batch_buffer,
-            offset_stride,
             groups,
             step_workgroups,
             persistent_threads,
@@ -564,7 +558,7 @@ impl<T: GpuReal> GpuEngine<T> {
                 partials: self.step_workgroups,
             },
         };
-        match recorder::Recorder::new(&self.ctx, &models, plan, site) {
+        match recorder::Recorder::new(&self.ctx, &models, plan, site, self.buffers.packed) {
             Ok(mut rec) => {
                 // The host has taken the samples up to here (none before
                 // driving, and none at its first step).

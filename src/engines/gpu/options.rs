@@ -173,6 +173,12 @@ pub struct GpuOptions {
     /// tiles' partials. So output weighs on the launches unequally. None:
     /// timed without output.
     pub samples: Option<SamplePlan>,
+    /// The storage arrays as ranges of a few buffers (`arena`): wgpu's
+    /// host cost of encoding a dispatch grows with the distinct buffers it
+    /// binds, and the one-step kernels encode a dispatch a step. The same
+    /// arrays and kernels, so the same bits. false: a buffer per array, as
+    /// before session 55 (the comparison in benchmarks).
+    pub pack_arrays: bool,
 }
 
 impl Default for GpuOptions {
@@ -192,6 +198,7 @@ impl Default for GpuOptions {
             two_lanes_a_round: true,
             chained_tiles: false,
             samples: None,
+            pack_arrays: true,
         }
     }
 }

@@ -16,6 +16,7 @@
 //! on the device, `shaders/record_step.wgsl`), and the host checks that
 //! every due sample was computed.
 
+use super::arena::{Access, Arenas, Region};
 use super::batch_sizes::ONE_STEP_BATCH;
 use super::context::GpuContext;
 use super::layout::{
@@ -25,7 +26,6 @@ use super::layout::{
 use super::precision::GpuReal;
 use crate::engines::{BulkField, InterfaceRow, PlannedAndComputed, Sample, SamplePlan, SampleSums};
 use crate::model::{Driver, Model};
-use wgpu::util::DeviceExt;
 
 /// Record buffers of one batch at most (interface rows and bulk fields);
 /// a batch ends early rather than go past it (one bulk field always fits).
@@ -75,16 +75,18 @@ pub struct Recorder<T: GpuReal> {
     host_rule: bool,
     /// Scene by scene.
     models: Vec<Model>,
-    plan_buffer: wgpu::Buffer,
-    sums: wgpu::Buffer,
-    rows: wgpu::Buffer,
+    /// Its arrays, in arenas of their own (`arena`) where the engine packs
+    /// its arrays (`GpuOptions::pack_arrays`).
+    plans: Region,
+    sums: Region,
+    rows: Region,
     /// The batch's samples in step order (`GpuRecordEntry`).
-    entries: wgpu::Buffer,
+    entries: Region,
     /// The one-step kernels' (`RecordSite::Steps`; a placeholder for the
-    /// others): the index of each step offset's sample among the entries
-    /// (`shaders/record_step.wgsl` step_samples).
-    step_samples: Option<wgpu::Buffer>,
-    placeholder: wgpu::Buffer,
+    /// others, never written): the index of each step offset's sample
+    /// among the entries (`shaders/record_step.wgsl` step_samples).
+    step_samples: Region,
+    writes_step_samples: bool,
     max_entries: u32,
     max_interface: u32,
     max_bulk: u32,
@@ -146,6 +148,7 @@ impl<T: GpuReal> Recorder<T> {
         models: &[Model],
         plan: &SamplePlan,
         site: RecordSite,
+        packed: bool,
     ) -> Result<Recorder<T>, String> {
         let device = &ctx.device;
         let model = &models[0];
@@ -222,46 +225,33 @@ impl<T: GpuReal> Recorder<T> {
                 }
             })
             .collect();
-        let plan_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("record plans"),
-            contents: bytemuck::cast_slice(&gpu_plans),
-            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
-        });
-        let storage = |label: &str, size: u64, usage: wgpu::BufferUsages| {
-            device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some(label),
-                size,
-                usage: wgpu::BufferUsages::STORAGE | usage,
-                mapped_at_creation: false,
-            })
-        };
-        let sums = storage("record sums", sums_bytes, wgpu::BufferUsages::COPY_SRC);
-        let rows = storage("record rows", rows_bytes, wgpu::BufferUsages::COPY_SRC);
-        let entries = storage(
-            "record entries",
-            max_entries as u64 * size_of::<GpuRecordEntry>() as u64,
-            wgpu::BufferUsages::COPY_DST,
-        );
+        let mut arenas = Arenas::default();
+        let (rw, ro) = (Access::ReadWrite, Access::ReadOnly);
+        let plans = arenas.bytes(rw, bytemuck::cast_slice(&gpu_plans));
+        let sums = arenas.zeros(rw, sums_bytes as usize);
+        let rows = arenas.zeros(rw, rows_bytes as usize);
+        let entries = arenas.zeros(ro, max_entries as usize * size_of::<GpuRecordEntry>());
         // A one-step batch's steps (`GpuEngine::batch_steps`).
-        let step_samples = matches!(site, RecordSite::Steps { .. }).then(|| {
-            storage(
-                "record step samples",
-                ONE_STEP_BATCH * 4,
-                wgpu::BufferUsages::COPY_DST,
-            )
-        });
-        let placeholder = storage("no step samples", 16, wgpu::BufferUsages::empty());
+        let writes_step_samples = matches!(site, RecordSite::Steps { .. });
+        let step_samples = arenas.zeros(
+            ro,
+            match writes_step_samples {
+                true => ONE_STEP_BATCH as usize * 4,
+                false => 16,
+            },
+        );
+        let built = arenas.build(device, &ctx.limits, packed);
         Ok(Recorder {
             plan: *plan,
             fast: vec![plan.fast; models.len()],
             host_rule: site != RecordSite::Persistent,
             models: models.to_vec(),
-            plan_buffer,
-            sums,
-            rows,
-            entries,
-            step_samples,
-            placeholder,
+            plans: built.region(plans),
+            sums: built.region(sums),
+            rows: built.region(rows),
+            entries: built.region(entries),
+            step_samples: built.region(step_samples),
+            writes_step_samples,
             max_entries,
             max_interface,
             max_bulk,
@@ -276,16 +266,17 @@ impl<T: GpuReal> Recorder<T> {
         })
     }
 
-    /// The buffers the step kernels bind, by their names in the shaders:
+    /// The arrays the step kernels bind, by their names in the shaders:
     /// `plans`, `sums`, `rows`, `record_entries` and `step_samples`.
-    pub fn state_bindings(&self) -> [&wgpu::Buffer; 5] {
+    pub fn state_bindings(&self) -> [wgpu::BindingResource<'_>; 5] {
         [
-            &self.plan_buffer,
+            &self.plans,
             &self.sums,
             &self.rows,
             &self.entries,
-            self.step_samples.as_ref().unwrap_or(&self.placeholder),
+            &self.step_samples,
         ]
+        .map(Region::binding)
     }
 
     /// Whether `plan` has the cadences this recorder samples at (its fast
@@ -305,14 +296,11 @@ impl<T: GpuReal> Recorder<T> {
         self.fast[scene] = plan.fast;
         let plan_at = (scene * size_of::<GpuRecordPlan<T>>()) as u64;
         let at = plan_at + std::mem::offset_of!(GpuRecordPlan<T>, fast) as u64;
-        queue.write_buffer(
-            &self.plan_buffer,
-            at,
-            bytemuck::bytes_of(&(plan.fast as u32)),
-        );
+        self.plans
+            .write(queue, at, bytemuck::bytes_of(&(plan.fast as u32)));
         let at = plan_at + std::mem::offset_of!(GpuRecordPlan<T>, fast_chain) as u64;
         let chain = AtomicWords8::fast_chain(plan.fast);
-        queue.write_buffer(&self.plan_buffer, at, bytemuck::bytes_of(&chain));
+        self.plans.write(queue, at, bytemuck::bytes_of(&chain));
     }
 
     /// Whether `step` is a sample not yet taken.
@@ -386,14 +374,15 @@ impl<T: GpuReal> Recorder<T> {
             })
             .collect();
         self.ordinal += planned.len() as u64;
-        queue.write_buffer(&self.entries, 0, bytemuck::cast_slice(&entries));
-        if let Some(buffer) = &self.step_samples {
+        self.entries.write(queue, 0, bytemuck::cast_slice(&entries));
+        if self.writes_step_samples {
             // Offsets of no sample: no step reads them.
             let mut step_samples = vec![u32::MAX; last.offset as usize + 1];
             for (k, p) in planned.iter().enumerate() {
                 step_samples[p.offset as usize] = k as u32;
             }
-            queue.write_buffer(buffer, 0, bytemuck::cast_slice(&step_samples));
+            self.step_samples
+                .write(queue, 0, bytemuck::cast_slice(&step_samples));
         }
         self.recorded_through = Some(last.step);
     }
@@ -435,21 +424,24 @@ impl<T: GpuReal> Recorder<T> {
         for k in 0..self.models.len() as u64 {
             let to = k * scene_bytes;
             let sums_at = k * self.sums_per_scene * sums_size;
-            encoder.copy_buffer_to_buffer(&self.sums, sums_at, &staging, to, sums_bytes);
+            let from = self.sums.range(sums_at, sums_bytes);
+            encoder.copy_buffer_to_buffer(from.buffer, from.offset, &staging, to, sums_bytes);
             let rows_at = k * self.rows_per_scene;
             if interface_bytes > 0 {
+                let from = self.rows.range(rows_at, interface_bytes);
                 encoder.copy_buffer_to_buffer(
-                    &self.rows,
-                    rows_at,
+                    from.buffer,
+                    from.offset,
                     &staging,
                     to + sums_bytes,
                     interface_bytes,
                 );
             }
             if bulk_bytes > 0 {
+                let from = self.rows.range(rows_at + self.bulk_offset, bulk_bytes);
                 encoder.copy_buffer_to_buffer(
-                    &self.rows,
-                    rows_at + self.bulk_offset,
+                    from.buffer,
+                    from.offset,
                     &staging,
                     to + sums_bytes + interface_bytes,
                     bulk_bytes,

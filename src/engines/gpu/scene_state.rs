@@ -3,6 +3,7 @@
 //! kinematics and junctions). Scene k's elements start at k times the
 //! per-scene count of each buffer.
 
+use super::arena::Region;
 use super::buffers::{gpu_junction_springs, Shape, WORD_PAIR_BYTES};
 use super::layout::{GpuJunctionCache, GpuJunctionSpring};
 use super::precision::{Coord, GpuReal, Packed};
@@ -17,17 +18,13 @@ impl<T: GpuReal> GpuEngine<T> {
     /// of `bytes` each.
     pub(super) fn slice<'a>(
         &self,
-        buffer: &'a wgpu::Buffer,
+        array: &'a Region,
         k: usize,
         per_scene: usize,
         bytes: usize,
     ) -> Range<'a> {
         let size = (per_scene * bytes) as u64;
-        Range {
-            buffer,
-            offset: k as u64 * size,
-            size,
-        }
+        array.range(k as u64 * size, size)
     }
 
     /// Scene `k`'s buffers as they are (forces possibly of the previous step).
@@ -89,7 +86,7 @@ impl<T: GpuReal> GpuEngine<T> {
     /// of `element` bytes (nothing for an empty array).
     pub(super) fn write_scene(
         &self,
-        buffer: &wgpu::Buffer,
+        array: &Region,
         k: usize,
         per_scene: usize,
         element: usize,
@@ -97,7 +94,7 @@ impl<T: GpuReal> GpuEngine<T> {
     ) {
         if !bytes.is_empty() {
             let at = (k * per_scene * element) as u64;
-            self.ctx.queue.write_buffer(buffer, at, bytes);
+            array.write(&self.ctx.queue, at, bytes);
         }
     }
 
@@ -140,11 +137,7 @@ impl<T: GpuReal> GpuEngine<T> {
         if size == 0 {
             return Ok(0);
         }
-        let range = Range {
-            buffer: &self.buffers.junction_cache,
-            offset: owned,
-            size,
-        };
+        let range = self.buffers.junction_cache.range(owned, size);
         let raw = read_ranges(&self.ctx, &[range])?;
         Ok(kept_records::<T>(&raw[0]))
     }

@@ -204,7 +204,7 @@ pub fn scenes_cache_key<T: GpuReal>(
         String::new()
     };
     format!(
-        "{} | {:?} | {} {} | {} | {}{ensemble} | threads {} | tiles {} | lanes {} | checks {} | patches {} | lane rounds {} | chained tiles {} | timed by {} | samples {} | kernels {:016x}",
+        "{} | {:?} | {} {} | {} | {}{ensemble} | threads {} | tiles {} | lanes {} | checks {} | patches {} | lane rounds {} | chained tiles {} | arrays {} | timed by {} | samples {} | kernels {:016x}",
         info.name,
         info.backend,
         info.driver,
@@ -249,6 +249,14 @@ pub fn scenes_cache_key<T: GpuReal>(
             "on"
         } else {
             "searched"
+        },
+        // The host's cost of a dispatch grows with the buffers it binds
+        // (`GpuOptions::pack_arrays`): choices timed with a buffer per
+        // array (all before session 55) favoured launches of few dispatches.
+        if opts.pack_arrays {
+            "in arenas"
+        } else {
+            "a buffer each"
         },
         // Choices timed by a span's mean step (before session 38) carry
         // each advance's fixed costs: measured again.
