@@ -15,9 +15,15 @@
 //! scene's first (its normal-load phase): a dispatch costs the host the
 //! same in every phase.
 //!
+//! A second table isolates the mechanism: a trivial kernel that binds N
+//! storage arrays, dispatched 4000 times in one pass (a dynamic offset set
+//! before each, as the engine does), the host's CPU to encode a dispatch
+//! with the N arrays in N buffers and as N ranges of one buffer.
+//!
 //! `cargo bench --bench gpu_host [-- ROUNDS]` (default 3; medians over the
-//! rounds). Prints a Markdown table (BENCHMARKS.md).
+//! rounds). Prints Markdown tables (BENCHMARKS.md).
 
+use slipfront::engines::gpu::context::GpuContext;
 use slipfront::engines::gpu::{GpuEngine, GpuOptions, GpuPath};
 use slipfront::{Engine, EngineError};
 use std::time::Instant;
@@ -56,6 +62,128 @@ fn host_per_step(
     Ok((cpu / steps as f64, wall / steps as f64))
 }
 
+/// Host CPU µs to encode and finish one dispatch of a kernel binding
+/// `arrays` storage arrays, in `arrays` buffers or as ranges of one
+/// (`one_buffer`): the median of `rounds` passes of 4000 dispatches.
+fn bare_dispatch_us(ctx: &GpuContext, arrays: u32, one_buffer: bool, rounds: usize) -> f64 {
+    let device = &ctx.device;
+    let mut src = String::new();
+    for b in 0..arrays {
+        src += &format!("@group(0) @binding({b}) var<storage, read_write> a{b}: array<u32>;\n");
+    }
+    src += "@group(1) @binding(0) var<storage, read> offset: u32;\n";
+    src += "@compute @workgroup_size(64) fn main(@builtin(global_invocation_id) g: vec3<u32>) {\n";
+    for b in 0..arrays {
+        src += &format!("    a{b}[g.x] += offset;\n");
+    }
+    src += "}\n";
+    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some("bare dispatch"),
+        source: wgpu::ShaderSource::Wgsl(src.into()),
+    });
+    let entry = |binding, read_only, dynamic| wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Storage { read_only },
+            has_dynamic_offset: dynamic,
+            min_binding_size: None,
+        },
+        count: None,
+    };
+    let arrays_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: None,
+        entries: &(0..arrays)
+            .map(|b| entry(b, false, false))
+            .collect::<Vec<_>>(),
+    });
+    let offset_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: None,
+        entries: &[entry(0, true, true)],
+    });
+    let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+        label: None,
+        bind_group_layouts: &[Some(&arrays_layout), Some(&offset_layout)],
+        immediate_size: 0,
+    });
+    let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+        label: None,
+        layout: Some(&layout),
+        module: &module,
+        entry_point: Some("main"),
+        compilation_options: Default::default(),
+        cache: None,
+    });
+    // 64 words an array (the kernel's workgroup), at aligned offsets.
+    let align = u64::from(ctx.limits.min_storage_buffer_offset_alignment).max(256);
+    let storage = |size| {
+        device.create_buffer(&wgpu::BufferDescriptor {
+            label: None,
+            size,
+            usage: wgpu::BufferUsages::STORAGE,
+            mapped_at_creation: false,
+        })
+    };
+    let (each, one) = (
+        (0..arrays).map(|_| storage(256)).collect::<Vec<_>>(),
+        storage(align * u64::from(arrays)),
+    );
+    let entries: Vec<wgpu::BindGroupEntry> = (0..arrays)
+        .map(|b| wgpu::BindGroupEntry {
+            binding: b,
+            resource: match one_buffer {
+                true => wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                    buffer: &one,
+                    offset: u64::from(b) * align,
+                    size: wgpu::BufferSize::new(256),
+                }),
+                false => each[b as usize].as_entire_binding(),
+            },
+        })
+        .collect();
+    let arrays_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: None,
+        layout: &arrays_layout,
+        entries: &entries,
+    });
+    let offsets = storage(align * 64);
+    let offset_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: None,
+        layout: &offset_layout,
+        entries: &[wgpu::BindGroupEntry {
+            binding: 0,
+            resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                buffer: &offsets,
+                offset: 0,
+                size: wgpu::BufferSize::new(4),
+            }),
+        }],
+    });
+    const DISPATCHES: u32 = 4000;
+    let mut each_round = Vec::new();
+    for _ in 0..rounds {
+        let cpu0 = thread_cpu_seconds();
+        let mut encoder = device.create_command_encoder(&Default::default());
+        {
+            let mut pass = encoder.begin_compute_pass(&Default::default());
+            pass.set_pipeline(&pipeline);
+            pass.set_bind_group(0, &arrays_group, &[]);
+            for d in 0..DISPATCHES {
+                let offset = (u64::from(d % 64) * align) as u32;
+                pass.set_bind_group(1, &offset_group, &[offset]);
+                pass.dispatch_workgroups(1, 1, 1);
+            }
+        }
+        let commands = encoder.finish();
+        each_round.push((thread_cpu_seconds() - cpu0) / f64::from(DISPATCHES) * 1e6);
+        ctx.queue.submit([commands]);
+        device
+            .poll(wgpu::PollType::wait_indefinitely())
+            .expect("the device runs the dispatches");
+    }
+    median(each_round)
+}
+
 fn median(mut v: Vec<f64>) -> f64 {
     v.sort_by(f64::total_cmp);
     v[v.len() / 2]
@@ -70,7 +198,17 @@ fn main() {
     let model = gpu_timing::table_s1(1);
     let ctx = slipfront::engines::gpu::context::shared().expect("an adapter");
     let software = ctx.is_software();
-    println!("adapter: {} ({:?})", ctx.info.name, ctx.info.backend);
+    println!("adapter: {} ({:?})\n", ctx.info.name, ctx.info.backend);
+    println!("| storage arrays a dispatch binds | host CPU µs a dispatch, a buffer each | ranges of one buffer |");
+    println!("| ---: | ---: | ---: |");
+    for arrays in [1, 4, 12, 28] {
+        println!(
+            "| {arrays} | {:.2} | {:.2} |",
+            bare_dispatch_us(&ctx, arrays, false, rounds.max(3)),
+            bare_dispatch_us(&ctx, arrays, true, rounds.max(3))
+        );
+    }
+    println!();
     // A software adapter steps Table S1 at about a millisecond a step.
     let (warm, steps) = if software {
         (200, 1000)

@@ -1,6 +1,7 @@
-//! The engine's device buffers: every scene's state, scene-major (scene
-//! s's element i at s times the per-scene count plus i), the kernels'
-//! scratch, and group 0's bind group over them.
+//! The engine's storage arrays, each a range of a few arenas (`arena`):
+//! every scene's state, scene-major (scene s's element i at s times the
+//! per-scene count plus i), the kernels' scratch, the batches and step
+//! offsets, and group 0's bind group over them.
 
 use super::arena::{Access, Arenas, Region};
 use super::batch_sizes::ONE_STEP_BATCH;
