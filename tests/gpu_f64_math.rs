@@ -6,8 +6,8 @@
 //! Fails, never skips, without an adapter with f64.
 
 use slipfront::engines::gpu::context::shared;
+use slipfront::engines::gpu::readback::{read_ranges, Range};
 use slipfront::engines::gpu::shaders::file;
-use std::sync::mpsc;
 use wgpu::util::DeviceExt;
 
 /// `real_ln` and `real_exp` of each input, computed on the adapter.
@@ -64,12 +64,6 @@ fn ln_and_exp(@builtin(global_invocation_id) id: vec3<u32>) {
         usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
         mapped_at_creation: false,
     });
-    let staging = ctx.device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("staging"),
-        size: bytes,
-        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-        mapped_at_creation: false,
-    });
     let group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
         label: None,
         layout: &pipeline.get_bind_group_layout(0),
@@ -93,18 +87,13 @@ fn ln_and_exp(@builtin(global_invocation_id) id: vec3<u32>) {
         pass.set_bind_group(0, &group, &[]);
         pass.dispatch_workgroups((inputs.len() as u32).div_ceil(64), 1, 1);
     }
-    encoder.copy_buffer_to_buffer(&output, 0, &staging, 0, bytes);
     ctx.queue.submit([encoder.finish()]);
-    let (tx, rx) = mpsc::channel();
-    staging.slice(..).map_async(wgpu::MapMode::Read, move |r| {
-        let _ = tx.send(r);
-    });
-    ctx.device
-        .poll(wgpu::PollType::wait_indefinitely())
-        .unwrap();
-    rx.recv().unwrap().unwrap();
-    let out: Vec<f64> =
-        bytemuck::pod_collect_to_vec(&staging.slice(..).get_mapped_range().unwrap());
+    let range = Range {
+        buffer: &output,
+        offset: 0,
+        size: bytes,
+    };
+    let out: Vec<f64> = bytemuck::pod_collect_to_vec(&read_ranges(&ctx, &[range]).unwrap()[0]);
     let ln = out.iter().step_by(2).copied().collect();
     let exp = out.iter().skip(1).step_by(2).copied().collect();
     (ln, exp)

@@ -48,7 +48,7 @@ pub mod layout;
 pub mod lockstep;
 pub mod options;
 pub mod precision;
-mod readback;
+pub mod readback;
 mod recorder;
 mod scene_state;
 pub mod shaders;
