@@ -23,8 +23,10 @@
 //! `cargo bench --bench gpu_host [-- ROUNDS]` (default 3; medians over the
 //! rounds). Prints Markdown tables (BENCHMARKS.md).
 
+use slipfront::app::runner::sample_plan;
 use slipfront::engines::gpu::context::GpuContext;
 use slipfront::engines::gpu::{GpuEngine, GpuOptions, GpuPath};
+use slipfront::engines::SamplePlan;
 use slipfront::{Engine, EngineError};
 use std::time::Instant;
 
@@ -46,17 +48,28 @@ fn thread_cpu_seconds() -> f64 {
 }
 
 /// (host CPU seconds, wall seconds) a step of `steps` steps after `warm`
-/// steps of a fresh engine.
+/// steps of a fresh engine, recording `samples` on the device where given
+/// (as a run with `-o` does; the samples are taken and dropped).
 fn host_per_step(
     model: &slipfront::Model,
     opts: GpuOptions,
+    samples: Option<&SamplePlan>,
     warm: u64,
     steps: u64,
 ) -> Result<(f64, f64), EngineError> {
     let mut e = GpuEngine::with_options(model, opts)?;
+    if let Some(plan) = samples {
+        if !e.record_samples(plan)? {
+            return Err(EngineError::Gpu(
+                "cannot record samples on the device".into(),
+            ));
+        }
+    }
     e.advance(warm)?;
+    e.take_samples();
     let (t0, cpu0) = (Instant::now(), thread_cpu_seconds());
     e.advance(steps)?;
+    e.take_samples();
     let cpu = thread_cpu_seconds() - cpu0;
     let wall = t0.elapsed().as_secs_f64();
     Ok((cpu / steps as f64, wall / steps as f64))
@@ -219,19 +232,30 @@ fn main() {
         "Table S1 ({}×{}), {warm} steps' warm-up, then {steps} timed; medians of {rounds} rounds\n",
         model.nx, model.nz
     );
+    // Table S1's output plan. Its first sample comes when driving starts,
+    // after these steps, so the recording rows time what recording adds to
+    // every dispatch: the recorder's arrays bound beside the state.
+    let plan = sample_plan(&model, &gpu_timing::table_s1_scenario(1));
     let launches = [
-        ("one-step", GpuPath::OneStep, false),
-        ("one-step-lanes", GpuPath::OneStepLanes, false),
-        ("tiled", GpuPath::Tiled, false),
-        ("tiled/chained", GpuPath::Tiled, true),
-        ("persistent", GpuPath::Persistent, false),
-        ("resident", GpuPath::Resident, false),
+        ("one-step", GpuPath::OneStep, false, false),
+        ("one-step-lanes", GpuPath::OneStepLanes, false, false),
+        (
+            "one-step-lanes, recorder bound",
+            GpuPath::OneStepLanes,
+            false,
+            true,
+        ),
+        ("tiled", GpuPath::Tiled, false, false),
+        ("tiled, recorder bound", GpuPath::Tiled, false, true),
+        ("tiled/chained", GpuPath::Tiled, true, false),
+        ("persistent", GpuPath::Persistent, false, false),
+        ("resident", GpuPath::Resident, false, false),
     ];
     println!(
         "| launch | host CPU µs a step, arrays in arenas | a buffer each | ratio | wall µs a step, arenas | a buffer each |"
     );
     println!("| --- | ---: | ---: | ---: | ---: | ---: |");
-    for (name, path, chained_tiles) in launches {
+    for (name, path, chained_tiles, records) in launches {
         let mut figures: [Vec<(f64, f64)>; 2] = [Vec::new(), Vec::new()];
         let mut failed = None;
         for _ in 0..rounds {
@@ -242,7 +266,8 @@ fn main() {
                     pack_arrays,
                     ..GpuOptions::default()
                 };
-                match host_per_step(&model, opts, warm, steps) {
+                let samples = records.then_some(&plan);
+                match host_per_step(&model, opts, samples, warm, steps) {
                     Ok(f) => figures[k].push(f),
                     Err(e) => failed = Some(e.to_string()),
                 }
