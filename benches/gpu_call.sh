@@ -73,7 +73,7 @@ step targets 310 gpu_targets
 #     (benches/gpu_host.rs): on the 2-core container, lavapipe, arenas halved the one-step
 #     launches' host CPU a step (2.8 -> 1.5 us); session 50's H200 one-step launches were
 #     host-bound (the host busy 0.77 of a 5.92 us step).
-step host 60 gpu_host 2
+step host 90 gpu_host 2
 # 2. The ensemble target's other launches, at 1 and 256 scenes: resident/512 (two waves of
 #    one scene an SM, about 2.04e10 by section 8 on the H200 in session 50, where `auto`
 #    mis-timed it), bond patches, and the one-step kernel.

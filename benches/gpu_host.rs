@@ -226,7 +226,7 @@ fn main() {
     let (warm, steps) = if software {
         (200, 1000)
     } else {
-        (2000, 50_000)
+        (2000, 20_000)
     };
     println!(
         "Table S1 ({}×{}), {warm} steps' warm-up, then {steps} timed; medians of {rounds} rounds\n",
