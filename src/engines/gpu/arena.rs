@@ -4,11 +4,13 @@
 //! Why: wgpu tracks every buffer a dispatch binds, at every dispatch (it
 //! merges each bound buffer's usage into the dispatch's scope and works
 //! out its barriers), so the host's cost of encoding a dispatch grows with
-//! the distinct buffers bound, not with the bindings: 0.38 µs a dispatch
-//! with one buffer, 2.0 µs with 24, and 0.42 µs with 24 bindings that are
-//! ranges of one buffer (lavapipe, the 2-core container; BENCHMARKS.md,
-//! session 55). The one-step kernels encode a dispatch a step, and on the
-//! H200 they were host-bound at Table S1 (session 50).
+//! the distinct buffers bound, not with the bindings: 0.63 µs a dispatch
+//! with one buffer, 2.51 µs with 28, and 0.68 µs with 28 bindings that are
+//! ranges of one buffer (`cargo bench --bench gpu_host`; lavapipe, the
+//! 2-core container; BENCHMARKS.md, session 55). The one-step kernels
+//! encode a dispatch a step, and on the H200 they were host-bound at
+//! Table S1 (session 50). In arenas their host CPU a step halved there
+//! (2.8 to 1.5 µs).
 //!
 //! Each arena holds arrays of one access: a buffer bound read-only in a
 //! dispatch may not also be bound read-write in it (wgpu's usage rules),
