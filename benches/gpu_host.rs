@@ -32,20 +32,10 @@ use std::time::Instant;
 
 #[path = "support/gpu_timing.rs"]
 mod gpu_timing;
+use gpu_timing::thread_cpu_seconds;
 #[path = "support/thread_cpu.rs"]
 #[allow(dead_code)] // gpu_timing's
 mod thread_cpu;
-
-/// CPU seconds of the calling thread so far.
-fn thread_cpu_seconds() -> f64 {
-    let mut t = libc::timespec {
-        tv_sec: 0,
-        tv_nsec: 0,
-    };
-    // SAFETY: clock_gettime writes the timespec it is given.
-    unsafe { libc::clock_gettime(libc::CLOCK_THREAD_CPUTIME_ID, &mut t) };
-    t.tv_sec as f64 + t.tv_nsec as f64 * 1e-9
-}
 
 /// (host CPU seconds, wall seconds) a step of `steps` steps after `warm`
 /// steps of a fresh engine, recording `samples` on the device where given

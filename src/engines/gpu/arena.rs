@@ -39,10 +39,21 @@ impl Region {
 
     /// The array as a binding (`arrayLength` sees its own elements only).
     pub(super) fn binding(&self) -> wgpu::BindingResource<'_> {
+        self.head_binding(self.size)
+    }
+
+    /// The array's first `size` bytes as a binding: one with a dynamic
+    /// offset, which moves it within the rest of the array.
+    pub(super) fn head_binding(&self, size: u64) -> wgpu::BindingResource<'_> {
+        assert!(
+            size <= self.size,
+            "{size} bytes of an array of {}",
+            self.size
+        );
         wgpu::BindingResource::Buffer(wgpu::BufferBinding {
             buffer: &self.buffer,
             offset: self.offset,
-            size: NonZeroU64::new(self.size),
+            size: NonZeroU64::new(size),
         })
     }
 

@@ -58,8 +58,8 @@ const _: () = assert!(
 
 /// The engine's storage arrays, each a region of the arenas
 /// (`arena`): the read-write ones share arenas, the read-only ones
-/// (`scene_consts`, `flags`, `tile_ends`, the record entries' and step
-/// samples' placeholders) have their own.
+/// (`scene_consts`, `flags`, `tile_ends`, the batches, the step offsets,
+/// and the record entries' and step samples' placeholders) have their own.
 pub(super) struct Buffers {
     /// The run constants: one record per scene.
     pub(super) consts: Region,

@@ -81,21 +81,13 @@ use std::collections::VecDeque;
 
 /// Group 1 of `kernel`: the step offset (dynamic) and the scenes' batches.
 fn batch_group(ctx: &GpuContext, kernel: Kernel, b: &Buffers) -> wgpu::BindGroup {
-    let offsets = b.step_offsets.range(0, 4);
     ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
         label: Some("batch"),
         layout: &ctx.batch_layout,
         entries: &ctx.bindings(kernel).entries(
             1,
             &[
-                (
-                    context::STEP_OFFSET,
-                    wgpu::BindingResource::Buffer(wgpu::BufferBinding {
-                        buffer: offsets.buffer,
-                        offset: offsets.offset,
-                        size: wgpu::BufferSize::new(offsets.size),
-                    }),
-                ),
+                (context::STEP_OFFSET, b.step_offsets.head_binding(4)),
                 ("batch", b.batches.binding()),
                 ("scene_batches", b.batches.binding()),
             ],
