@@ -1,6 +1,11 @@
-//! The host's CPU a step of each GPU launch on the Table S1 scene, with
-//! the storage arrays in arenas (`GpuOptions::pack_arrays`, the default)
-//! and with a buffer each (as before session 55), alternating in one run.
+//! The host's CPU a step of each GPU launch on the Table S1 scene, for
+//! each way the host encodes a dispatch, alternating in one run:
+//! - the default: the storage arrays in arenas (`GpuOptions::pack_arrays`)
+//!   and each dispatch's step offset as an immediate
+//!   (`GpuOptions::step_immediates`, session 56);
+//! - the step offset by a dynamic offset into a table, group 1 bound again
+//!   at each dispatch (session 55);
+//! - that, with a buffer per array as well (before session 55).
 //!
 //! Why: wgpu tracks every buffer a dispatch binds, at every dispatch, and
 //! the one-step launches encode a dispatch a step. On the H200 they were
@@ -241,19 +246,31 @@ fn main() {
         ("persistent", GpuPath::Persistent, false, false),
         ("resident", GpuPath::Resident, false, false),
     ];
+    // The ways to encode a dispatch, newest first: the default (arrays in
+    // arenas, the step as an immediate), the step by a dynamic offset
+    // (session 55's), and a buffer per array as well (before session 55).
+    let ways = [(true, true), (true, false), (false, false)];
     println!(
-        "| launch | host CPU µs a step, arrays in arenas | a buffer each | ratio | wall µs a step, arenas | a buffer each |"
+        "Immediates for the step offset: {}\n",
+        match ctx.has_immediates() {
+            true => "yes",
+            false => "no (the first two columns are the same way)",
+        }
     );
-    println!("| --- | ---: | ---: | ---: | ---: | ---: |");
+    println!(
+        "| launch | host CPU µs a step: arenas, step immediate (default) | arenas, step by dynamic offset | a buffer each, dynamic offset | default / dynamic offset | default / a buffer each | wall µs a step, default |"
+    );
+    println!("| --- | ---: | ---: | ---: | ---: | ---: | ---: |");
     for (name, path, chained_tiles, records) in launches {
-        let mut figures: [Vec<(f64, f64)>; 2] = [Vec::new(), Vec::new()];
+        let mut figures: [Vec<(f64, f64)>; 3] = [Vec::new(), Vec::new(), Vec::new()];
         let mut failed = None;
         for _ in 0..rounds {
-            for (k, pack_arrays) in [true, false].into_iter().enumerate() {
+            for (k, (pack_arrays, step_immediates)) in ways.into_iter().enumerate() {
                 let opts = GpuOptions {
                     path,
                     chained_tiles,
                     pack_arrays,
+                    step_immediates,
                     ..GpuOptions::default()
                 };
                 let samples = records.then_some(&plan);
@@ -263,26 +280,30 @@ fn main() {
                 }
             }
         }
-        if let Some(why) = failed.filter(|_| figures[0].is_empty() || figures[1].is_empty()) {
-            println!("| {name} | – | – | – | – | – ({why}) |");
+        if let Some(why) = failed.filter(|_| figures.iter().any(Vec::is_empty)) {
+            println!("| {name} | – | – | – | – | – | – ({why}) |");
             continue;
         }
         let cpu = |k: usize| median(figures[k].iter().map(|f| f.0 * 1e6).collect());
         let wall = |k: usize| median(figures[k].iter().map(|f| f.1 * 1e6).collect());
         // The ratio of each round's pair, then their median.
-        let ratio = median(
-            figures[0]
-                .iter()
-                .zip(&figures[1])
-                .map(|(a, b)| a.0 / b.0)
-                .collect(),
-        );
+        let ratio = |k: usize| {
+            median(
+                figures[0]
+                    .iter()
+                    .zip(&figures[k])
+                    .map(|(a, b)| a.0 / b.0)
+                    .collect(),
+            )
+        };
         println!(
-            "| {name} | {:.2} | {:.2} | {ratio:.2} | {:.1} | {:.1} |",
+            "| {name} | {:.2} | {:.2} | {:.2} | {:.2} | {:.2} | {:.1} |",
             cpu(0),
             cpu(1),
-            wall(0),
-            wall(1)
+            cpu(2),
+            ratio(1),
+            ratio(2),
+            wall(0)
         );
     }
 }

@@ -114,6 +114,7 @@ fn the_driver_reports_each_kernels_registers() {
             lanes: LaneMerge::Storage,
             checks: ShaderChecks::Trusted,
             chained_tiles: false,
+            step_immediate: false,
         },
         entry: "store_one".into(),
         source: "@group(0) @binding(0) var<storage, read_write> out: array<u32>;\n\

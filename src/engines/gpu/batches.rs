@@ -32,6 +32,39 @@ pub(super) struct InFlight {
     marks: Option<device_timer::BatchMarks>,
 }
 
+/// How a dispatch learns its step offset: as an immediate
+/// (`KernelBuild::step_immediate`), with group 1 bound once a pass, or as a
+/// dynamic offset into the step offsets' table, group 1 bound again at
+/// each dispatch.
+struct StepOffsets<'a> {
+    immediate: bool,
+    /// Group 1: the step offsets' table and the batches.
+    group: &'a wgpu::BindGroup,
+    /// The table's stride (bytes from one step offset to the next).
+    stride: u64,
+}
+
+impl StepOffsets<'_> {
+    /// Binds group 1 for the whole pass where the offsets are immediates.
+    fn bind(&self, pass: &mut wgpu::ComputePass) {
+        if self.immediate {
+            pass.set_bind_group(1, self.group, &[0]);
+        }
+    }
+
+    /// The next dispatch's step offset: `index`.
+    fn set(&self, pass: &mut wgpu::ComputePass, index: u64) {
+        debug_assert!(
+            self.immediate || index < ONE_STEP_BATCH,
+            "past the offsets' table"
+        );
+        match self.immediate {
+            true => pass.set_immediates(0, bytemuck::bytes_of(&(index as u32))),
+            false => pass.set_bind_group(1, self.group, &[(index * self.stride) as u32]),
+        }
+    }
+}
+
 impl<T: GpuReal> GpuEngine<T> {
     /// Submits `steps` steps from the current one (or, with `forces_only`,
     /// the forces of the current state where they are not ready), and the
@@ -97,6 +130,12 @@ impl<T: GpuReal> GpuEngine<T> {
             });
             pass.set_pipeline(&self.pipeline);
             pass.set_bind_group(0, &self.state_group, &[]);
+            let step_offsets = StepOffsets {
+                immediate: self.build.step_immediate,
+                group: &self.batch_group,
+                stride: self.buffers.offset_stride,
+            };
+            step_offsets.bind(&mut pass);
             match self.kernel {
                 Kernel::OneStep | Kernel::OneStepLanes | Kernel::Tiled => {
                     // A dispatch per step, or the tiled kernel's of up to
@@ -105,7 +144,7 @@ impl<T: GpuReal> GpuEngine<T> {
                     // one-step kernels' recording variant, and the tiled
                     // kernel's (recording) steps find theirs.
                     if let Some(tiled) = tiled {
-                        pass.set_bind_group(1, &self.batch_group, &[0]);
+                        step_offsets.set(&mut pass, 0);
                         pass.set_pipeline(&tiled.gather);
                         pass.dispatch_workgroups(self.groups.0, self.groups.1, scene_count);
                         pass.set_pipeline(&self.pipeline);
@@ -133,8 +172,7 @@ impl<T: GpuReal> GpuEngine<T> {
                             first
                         };
                         first_round = d + 1;
-                        let offset = (index * self.buffers.offset_stride) as u32;
-                        pass.set_bind_group(1, &self.batch_group, &[offset]);
+                        step_offsets.set(&mut pass, index);
                         // A one-step kernel's sample: the step that ends
                         // this dispatch.
                         let i = end - 1;
@@ -188,7 +226,7 @@ impl<T: GpuReal> GpuEngine<T> {
                             t.mark(&mut pass, m);
                             m.finish_marked();
                         }
-                        pass.set_bind_group(1, &self.batch_group, &[0]);
+                        step_offsets.set(&mut pass, 0);
                         pass.set_pipeline(finish);
                         // A workgroup per sample and scene.
                         pass.dispatch_workgroups(planned.len() as u32, 1, scene_count);
@@ -201,8 +239,7 @@ impl<T: GpuReal> GpuEngine<T> {
                 }
                 Kernel::Persistent | Kernel::Resident => {
                     for d in 0..steps.div_ceil(self.steps_per_dispatch) {
-                        let offset = (d * self.buffers.offset_stride) as u32;
-                        pass.set_bind_group(1, &self.batch_group, &[offset]);
+                        step_offsets.set(&mut pass, d);
                         pass.dispatch_workgroups(1, 1, scene_count);
                         self.dispatches += 1;
                     }

@@ -15,14 +15,23 @@ pub struct KernelBuild {
     /// `@coherent`, past the multiprocessor's own cache, since a
     /// neighbour writes them within the dispatch.
     pub chained_tiles: bool,
+    /// The dispatch's step offset passed as an immediate
+    /// (`GpuOptions::step_immediates`, where the adapter has immediates),
+    /// not as a dynamic offset into a table: a dispatch then sets 4 bytes
+    /// rather than rebinding group 1, which costs the host less.
+    pub step_immediate: bool,
 }
 
 impl KernelBuild {
     /// The WGSL module of `kernel` built this way.
     pub fn source<T: GpuReal>(self, kernel: Kernel) -> String {
         let source = kernel.source_with::<T>(self.lanes);
-        match self.chained_tiles && kernel == Kernel::Tiled {
+        let source = match self.chained_tiles && kernel == Kernel::Tiled {
             true => coherent_halos(&source),
+            false => source,
+        };
+        match self.step_immediate {
+            true => step_as_immediate(&source),
             false => source,
         }
     }
@@ -33,8 +42,26 @@ impl KernelBuild {
         if self.chained_tiles {
             caps |= naga::valid::Capabilities::MEMORY_DECORATION_COHERENT;
         }
+        if self.step_immediate {
+            caps |= naga::valid::Capabilities::IMMEDIATES;
+        }
         caps
     }
+}
+
+/// The step offset's declaration in `common.wgsl`: a storage word that a
+/// dynamic offset picks from a table, one slot a dispatch.
+pub const STEP_OFFSET_BINDING: &str = "@group(1) @binding(0) var<storage, read> step_offset: u32;";
+
+/// The same variable as an immediate (Vulkan's push constant), which the
+/// host sets before each dispatch (`set_immediates`).
+pub const STEP_OFFSET_IMMEDIATE: &str = "var<immediate> step_offset: u32;";
+
+/// `source` with the step offset declared an immediate. Every kernel reads
+/// `step_offset` by name, so nothing else changes.
+fn step_as_immediate(source: &str) -> String {
+    debug_assert_eq!(source.matches(STEP_OFFSET_BINDING).count(), 1);
+    source.replacen(STEP_OFFSET_BINDING, STEP_OFFSET_IMMEDIATE, 1)
 }
 
 /// The buffers a tiled kernel's tiles publish for their neighbours' halos.

@@ -63,6 +63,10 @@ struct KernelLayout {
 /// The batch group's binding that takes a dynamic offset per dispatch.
 pub const STEP_OFFSET: &str = "step_offset";
 
+/// The immediates a pipeline layout holds where the adapter has them: the
+/// step offset, one u32.
+pub const STEP_IMMEDIATE_BYTES: u32 = 4;
+
 /// Index in `GpuContext::layouts`.
 fn layout_index(kernel: Kernel) -> usize {
     match kernel {
@@ -120,12 +124,18 @@ impl GpuContext {
         // lanes' sums merged in registers (lane_shuffle.wgsl).
         // Coherent storage where the adapter has it (every Vulkan one): the
         // tiled kernel's halos read within a chained dispatch.
-        let features = adapter.features()
+        // Immediates (push constants) where the adapter has room for the
+        // step offset: a dispatch sets it without rebinding group 1.
+        let mut features = adapter.features()
             & (wgpu::Features::SHADER_F64
                 | wgpu::Features::TIMESTAMP_QUERY
                 | wgpu::Features::TIMESTAMP_QUERY_INSIDE_PASSES
                 | wgpu::Features::SUBGROUP
-                | wgpu::Features::MEMORY_DECORATION_COHERENT);
+                | wgpu::Features::MEMORY_DECORATION_COHERENT
+                | wgpu::Features::IMMEDIATES);
+        if limits.max_immediate_size < STEP_IMMEDIATE_BYTES {
+            features.remove(wgpu::Features::IMMEDIATES);
+        }
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("slipfront"),
             required_features: features,
@@ -148,7 +158,15 @@ impl GpuContext {
             })
         };
         // Group 1 (the step offset, with a dynamic offset per dispatch, and
-        // the batch) is the same in every kernel.
+        // the batch) is the same in every kernel. Where the adapter has
+        // immediates, every pipeline layout also has room for the step
+        // offset as one; a module that declares it a binding leaves that
+        // room unused, and one that declares it an immediate leaves
+        // group 1's binding 0 unused.
+        let immediate_size = match features.contains(wgpu::Features::IMMEDIATES) {
+            true => STEP_IMMEDIATE_BYTES,
+            false => 0,
+        };
         let reflect = |kernel: Kernel| {
             Bindings::reflect(&kernel.source::<f32>())
                 .expect("the kernels parse (tested with naga)")
@@ -170,7 +188,7 @@ impl GpuContext {
             let pipeline = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
                 label: Some("slipfront"),
                 bind_group_layouts: &[Some(&group), Some(&batch_layout)],
-                immediate_size: 0,
+                immediate_size,
             });
             KernelLayout {
                 group,
@@ -228,6 +246,12 @@ impl GpuContext {
             .contains(wgpu::Features::MEMORY_DECORATION_COHERENT)
     }
 
+    /// Whether the adapter was opened with immediates for the step offset
+    /// (`KernelBuild::step_immediate`).
+    pub fn has_immediates(&self) -> bool {
+        self.device.features().contains(wgpu::Features::IMMEDIATES)
+    }
+
     /// Whether the adapter was opened with subgroup operations.
     pub fn has_subgroups(&self) -> bool {
         self.device.features().contains(wgpu::Features::SUBGROUP)
@@ -247,9 +271,10 @@ impl GpuContext {
             lanes,
             checks,
             chained_tiles,
+            step_immediate,
         } = build;
         let key = format!(
-            "{}{kernel:?}{lanes:?}{checks:?}{chained_tiles}{entry}{constants:?}",
+            "{}{kernel:?}{lanes:?}{checks:?}{chained_tiles}{step_immediate}{entry}{constants:?}",
             T::NAME
         );
         let mut cache = self.pipelines.lock().expect("pipeline cache");

@@ -179,6 +179,13 @@ pub struct GpuOptions {
     /// arrays and kernels, so the same bits. false: a buffer per array, as
     /// before session 55 (the comparison in benchmarks).
     pub pack_arrays: bool,
+    /// Each dispatch's step offset passed as an immediate where the
+    /// adapter has them (`KernelBuild::step_immediate`): setting 4 bytes
+    /// costs the host less than rebinding group 1 with a dynamic offset,
+    /// at every dispatch of a one-step launch. The same kernels read the
+    /// same value, so the same bits. false: the dynamic offset (the
+    /// comparison in benchmarks, and adapters without immediates).
+    pub step_immediates: bool,
 }
 
 impl Default for GpuOptions {
@@ -199,6 +206,7 @@ impl Default for GpuOptions {
             chained_tiles: false,
             samples: None,
             pack_arrays: true,
+            step_immediates: true,
         }
     }
 }

@@ -642,6 +642,7 @@ mod chained_tiles_tests {
             lanes,
             checks: ShaderChecks::Trusted,
             chained_tiles: true,
+            step_immediate: false,
         }
     }
 

@@ -163,6 +163,8 @@ pub struct AdapterTraits {
     pub subgroups: bool,
     /// `@coherent` storage buffers (the chained tiled kernel's halos).
     pub coherent_storage: bool,
+    /// Immediates with room for the step offset (`KernelBuild::step_immediate`).
+    pub immediates: bool,
 }
 
 impl AdapterTraits {
@@ -172,6 +174,7 @@ impl AdapterTraits {
             software: ctx.is_software(),
             subgroups: ctx.has_subgroups(),
             coherent_storage: ctx.has_coherent_storage(),
+            immediates: ctx.has_immediates(),
         }
     }
 
@@ -328,6 +331,7 @@ pub fn plan<T: GpuReal>(
         lanes: adapter.lane_merge(opts.lane_shuffle && kernel.merges_lanes_through_storage()),
         checks: ShaderChecks::of(opts.shader_checks),
         chained_tiles: chain.is_some(),
+        step_immediate: adapter.immediates && opts.step_immediates,
     };
     Ok(KernelPlan {
         step_kernel,

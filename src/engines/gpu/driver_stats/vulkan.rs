@@ -7,6 +7,7 @@
 use super::spirv::{kernel_spirv, language_version, ZeroWorkgroupMemory};
 use super::{Executable, Representation, StatValue, Statistic};
 use crate::engines::gpu::compile::KernelSource;
+use crate::engines::gpu::context::STEP_IMMEDIATE_BYTES;
 use crate::engines::gpu::AdapterTraits;
 use ash::vk;
 use std::ffi::CStr;
@@ -238,6 +239,9 @@ impl StatsDevice {
                 && subgroup.supported_operations.contains(needed),
             // wgpu offers @coherent on every Vulkan device.
             coherent_storage: true,
+            // And immediates (push constants) where there is room for
+            // the step offset, as GpuContext::open asks for them.
+            immediates: l.max_push_constants_size >= STEP_IMMEDIATE_BYTES,
         };
         let driver = format!(
             "{} {}",
@@ -307,9 +311,21 @@ impl StatsDevice {
                     .map_err(|e| format!("descriptor set layout: {e}"))?;
                 made.set_layouts.push(layout);
             }
+            // As wgpu's layouts: room for the step offset as an immediate
+            // (a push constant) where the module declares it one.
+            let immediates = [vk::PushConstantRange::default()
+                .stage_flags(vk::ShaderStageFlags::COMPUTE)
+                .offset(0)
+                .size(STEP_IMMEDIATE_BYTES)];
+            let ranges: &[vk::PushConstantRange] = match kernel.build.step_immediate {
+                true => &immediates,
+                false => &[],
+            };
             made.layout = d
                 .create_pipeline_layout(
-                    &vk::PipelineLayoutCreateInfo::default().set_layouts(&made.set_layouts),
+                    &vk::PipelineLayoutCreateInfo::default()
+                        .set_layouts(&made.set_layouts)
+                        .push_constant_ranges(ranges),
                     None,
                 )
                 .map_err(|e| format!("pipeline layout: {e}"))?;

@@ -204,7 +204,7 @@ pub fn scenes_cache_key<T: GpuReal>(
         String::new()
     };
     format!(
-        "{} | {:?} | {} {} | {} | {}{ensemble} | threads {} | tiles {} | lanes {} | checks {} | patches {} | lane rounds {} | chained tiles {} | arrays {} | timed by {} | samples {} | kernels {:016x}",
+        "{} | {:?} | {} {} | {} | {}{ensemble} | threads {} | tiles {} | lanes {} | checks {} | patches {} | lane rounds {} | chained tiles {} | arrays {} | step {} | timed by {} | samples {} | kernels {:016x}",
         info.name,
         info.backend,
         info.driver,
@@ -257,6 +257,13 @@ pub fn scenes_cache_key<T: GpuReal>(
             "in arenas"
         } else {
             "a buffer each"
+        },
+        // Nor by the step offset's way to a dispatch
+        // (`GpuOptions::step_immediates`).
+        if opts.step_immediates {
+            "immediate"
+        } else {
+            "dynamic offset"
         },
         // Choices timed by a span's mean step (before session 38) carry
         // each advance's fixed costs: measured again.
