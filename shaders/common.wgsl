@@ -35,10 +35,12 @@
 fn scene_stopped() -> bool {
     return atomicLoad(&status[status_base()]) != 0u;
 }
-// The step offset of this dispatch in its batch (one-step kernel: a
-// dynamic offset into a fixed table). The batch (binding 1) is storage, not
-// uniform: lavapipe specialises shaders on uniform contents and would
-// recompile.
+// The step offset of this dispatch in its batch: a dynamic offset into a
+// fixed table, or, where the adapter has immediates, an immediate (the
+// declaration below rewritten to the immediate address space) that the
+// host sets before each dispatch (compile.rs, KernelBuild::step_immediate).
+// The batch (binding 1) is storage, not uniform: lavapipe specialises
+// shaders on uniform contents and would recompile.
 @group(1) @binding(0) var<storage, read> step_offset: u32;
 
 // The friction law compiled in: one of the LAW_* constants, which the

@@ -15,7 +15,7 @@
 //   (junction_tiled.wgsl): their updates depend only on the block's u_x
 //   and their state, and the slip draws are keyed by (seed, block,
 //   junction, count), so the copy evolves as its owner's original does.
-// - Dispatch d of a batch (its dynamic offset) runs the steps from
+// - Dispatch d of a batch (its step offset) runs the steps from
 //   tile_ends[d − 1] (0 for the first) to tile_ends[d], which the host
 //   cuts after TILE_HALO steps and after the batch's first step (whose
 //   forces may be a snapshot's, read from `force` by every tile while no

@@ -1,5 +1,6 @@
 //! How the engine's WGSL modules are compiled: where a kernel's junction
-//! lanes merge (the module's source) and which run-time checks wgpu adds.
+//! lanes merge (the module's source), which run-time checks wgpu adds, and
+//! how a dispatch gets its step offset.
 
 use super::precision::GpuReal;
 use super::shaders::{Kernel, LaneMerge};
@@ -163,5 +164,67 @@ impl KernelSource {
             .iter()
             .find(|(n, _)| n == name)
             .map(|&(_, v)| v)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn build(lanes: LaneMerge, step_immediate: bool, chained_tiles: bool) -> KernelBuild {
+        KernelBuild {
+            lanes,
+            checks: ShaderChecks::Trusted,
+            chained_tiles,
+            step_immediate,
+        }
+    }
+
+    fn validates<T: GpuReal>(src: &str, caps: naga::valid::Capabilities) -> bool {
+        let module = naga::front::wgsl::parse_str(src).expect("parses");
+        naga::valid::Validator::new(naga::valid::ValidationFlags::all(), T::CAPABILITIES | caps)
+            .validate(&module)
+            .is_ok()
+    }
+
+    /// Every kernel's module declares the step offset once, as a binding;
+    /// built with the step as an immediate, it declares it as one instead,
+    /// changes nothing else, and validates with the immediates capability
+    /// in both precisions (and not without it).
+    #[test]
+    fn the_step_as_an_immediate_changes_its_declaration_alone() {
+        for kernel in Kernel::ALL {
+            for lanes in [LaneMerge::Storage, LaneMerge::Shuffle] {
+                let chained = kernel == Kernel::Tiled;
+                let plain = build(lanes, false, chained).source::<f32>(kernel);
+                let immediate = build(lanes, true, chained);
+                let src = immediate.source::<f32>(kernel);
+                for (i, l) in plain.lines().enumerate() {
+                    if l.contains("step_offset: u32") {
+                        eprintln!("{i}: {l}");
+                    }
+                }
+                assert_eq!(plain.matches(STEP_OFFSET_BINDING).count(), 1, "{kernel:?}");
+                assert!(!src.contains(STEP_OFFSET_BINDING), "{kernel:?}");
+                assert_eq!(src.matches(STEP_OFFSET_IMMEDIATE).count(), 1, "{kernel:?}");
+                assert_eq!(
+                    src.replacen(STEP_OFFSET_IMMEDIATE, STEP_OFFSET_BINDING, 1),
+                    plain
+                );
+                assert!(
+                    validates::<f32>(&src, immediate.capabilities()),
+                    "{kernel:?}"
+                );
+                assert!(
+                    !validates::<f32>(&src, build(lanes, false, chained).capabilities()),
+                    "{kernel:?}: validated without the immediates capability"
+                );
+                let f64_src = immediate.source::<f64>(kernel);
+                assert!(
+                    validates::<f64>(&f64_src, immediate.capabilities()),
+                    "{kernel:?} f64"
+                );
+            }
+        }
     }
 }
