@@ -22,8 +22,9 @@
 //!
 //! A second table isolates the mechanism: a trivial kernel that binds N
 //! storage arrays, dispatched 4000 times in one pass (a dynamic offset set
-//! before each, as the engine does), the host's CPU to encode a dispatch
-//! with the N arrays in N buffers and as N ranges of one buffer.
+//! before each, as the engine did until session 56), the host's CPU to
+//! encode a dispatch with the N arrays in N buffers and as N ranges of one
+//! buffer, and as ranges of one buffer with the offset as an immediate.
 //!
 //! `cargo bench --bench gpu_host [-- ROUNDS]` (default 3; medians over the
 //! rounds). Prints Markdown tables (BENCHMARKS.md).
@@ -70,16 +71,31 @@ fn host_per_step(
     Ok((cpu / steps as f64, wall / steps as f64))
 }
 
+/// How the bare kernel's arrays are bound and how it gets its offset.
+#[derive(Clone, Copy, PartialEq)]
+enum Bare {
+    /// A buffer per array, the offset by a dynamic offset.
+    BufferEach,
+    /// Ranges of one buffer, the offset by a dynamic offset.
+    OneBuffer,
+    /// Ranges of one buffer, the offset as an immediate.
+    OneBufferImmediate,
+}
+
 /// Host CPU µs to encode and finish one dispatch of a kernel binding
-/// `arrays` storage arrays, in `arrays` buffers or as ranges of one
-/// (`one_buffer`): the median of `rounds` passes of 4000 dispatches.
-fn bare_dispatch_us(ctx: &GpuContext, arrays: u32, one_buffer: bool, rounds: usize) -> f64 {
+/// `arrays` storage arrays, bound as `how` says: the median of `rounds`
+/// passes of 4000 dispatches.
+fn bare_dispatch_us(ctx: &GpuContext, arrays: u32, how: Bare, rounds: usize) -> f64 {
+    let immediate = how == Bare::OneBufferImmediate;
     let device = &ctx.device;
     let mut src = String::new();
     for b in 0..arrays {
         src += &format!("@group(0) @binding({b}) var<storage, read_write> a{b}: array<u32>;\n");
     }
-    src += "@group(1) @binding(0) var<storage, read> offset: u32;\n";
+    src += match immediate {
+        true => "var<immediate> offset: u32;\n",
+        false => "@group(1) @binding(0) var<storage, read> offset: u32;\n",
+    };
     src += "@compute @workgroup_size(64) fn main(@builtin(global_invocation_id) g: vec3<u32>) {\n";
     for b in 0..arrays {
         src += &format!("    a{b}[g.x] += offset;\n");
@@ -109,10 +125,12 @@ fn bare_dispatch_us(ctx: &GpuContext, arrays: u32, one_buffer: bool, rounds: usi
         label: None,
         entries: &[entry(0, true, true)],
     });
+    let groups = [Some(&arrays_layout), Some(&offset_layout)];
     let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
         label: None,
-        bind_group_layouts: &[Some(&arrays_layout), Some(&offset_layout)],
-        immediate_size: 0,
+        // With the offset as an immediate, group 1 is not bound.
+        bind_group_layouts: &groups[..if immediate { 1 } else { 2 }],
+        immediate_size: if immediate { 4 } else { 0 },
     });
     let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
         label: None,
@@ -139,7 +157,7 @@ fn bare_dispatch_us(ctx: &GpuContext, arrays: u32, one_buffer: bool, rounds: usi
     let entries: Vec<wgpu::BindGroupEntry> = (0..arrays)
         .map(|b| wgpu::BindGroupEntry {
             binding: b,
-            resource: match one_buffer {
+            resource: match how != Bare::BufferEach {
                 true => wgpu::BindingResource::Buffer(wgpu::BufferBinding {
                     buffer: &one,
                     offset: u64::from(b) * align,
@@ -177,8 +195,13 @@ fn bare_dispatch_us(ctx: &GpuContext, arrays: u32, one_buffer: bool, rounds: usi
             pass.set_pipeline(&pipeline);
             pass.set_bind_group(0, &arrays_group, &[]);
             for d in 0..DISPATCHES {
-                let offset = (u64::from(d % 64) * align) as u32;
-                pass.set_bind_group(1, &offset_group, &[offset]);
+                match immediate {
+                    true => pass.set_immediates(0, bytemuck::bytes_of(&(d % 64))),
+                    false => {
+                        let offset = (u64::from(d % 64) * align) as u32;
+                        pass.set_bind_group(1, &offset_group, &[offset]);
+                    }
+                }
                 pass.dispatch_workgroups(1, 1, 1);
             }
         }
@@ -207,13 +230,20 @@ fn main() {
     let ctx = slipfront::engines::gpu::context::shared().expect("an adapter");
     let software = ctx.is_software();
     println!("adapter: {} ({:?})\n", ctx.info.name, ctx.info.backend);
-    println!("| storage arrays a dispatch binds | host CPU µs a dispatch, a buffer each | ranges of one buffer |");
-    println!("| ---: | ---: | ---: |");
+    println!(
+        "| storage arrays a dispatch binds | host CPU µs a dispatch, a buffer each | ranges of one buffer | ranges of one buffer, offset as an immediate |"
+    );
+    println!("| ---: | ---: | ---: | ---: |");
     for arrays in [1, 4, 12, 28] {
+        let us = |how| bare_dispatch_us(&ctx, arrays, how, rounds.max(3));
+        let immediate = match ctx.has_immediates() {
+            true => format!("{:.2}", us(Bare::OneBufferImmediate)),
+            false => "– (no immediates)".to_string(),
+        };
         println!(
-            "| {arrays} | {:.2} | {:.2} |",
-            bare_dispatch_us(&ctx, arrays, false, rounds.max(3)),
-            bare_dispatch_us(&ctx, arrays, true, rounds.max(3))
+            "| {arrays} | {:.2} | {:.2} | {immediate} |",
+            us(Bare::BufferEach),
+            us(Bare::OneBuffer)
         );
     }
     println!();
