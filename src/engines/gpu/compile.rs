@@ -227,4 +227,34 @@ mod tests {
             }
         }
     }
+
+    /// The chained tiled kernel's module declares exactly its published
+    /// halos `@coherent`, validates with that capability in both
+    /// precisions and both lane merges, and not without it; the other
+    /// kernels' modules are the same chained or not.
+    #[test]
+    fn chained_tiles_read_their_published_halos_coherent() {
+        for lanes in [LaneMerge::Storage, LaneMerge::Shuffle] {
+            let build = build(lanes, false, true);
+            let src = build.source::<f32>(Kernel::Tiled);
+            let coherent: Vec<&str> = src.lines().filter(|l| l.contains("@coherent")).collect();
+            assert_eq!(coherent.len(), PUBLISHED_HALOS.len(), "{coherent:?}");
+            for name in PUBLISHED_HALOS {
+                assert!(
+                    coherent.iter().any(|l| l.contains(&format!("> {name}:"))),
+                    "{name}"
+                );
+            }
+            assert!(validates::<f32>(&src, build.capabilities()));
+            assert!(!validates::<f32>(&src, lanes.capabilities()));
+            let f64_src = build.source::<f64>(Kernel::Tiled);
+            assert!(validates::<f64>(&f64_src, build.capabilities()));
+            for kernel in Kernel::ALL.into_iter().filter(|&k| k != Kernel::Tiled) {
+                assert_eq!(
+                    build.source::<f32>(kernel),
+                    kernel.source_with::<f32>(lanes)
+                );
+            }
+        }
+    }
 }
