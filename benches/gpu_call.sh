@@ -68,12 +68,13 @@ step() {
 #    against one at a time, output cost; in f64 (what a default run computes in on a GPU
 #    with f64 shaders) and then in mixed f32.
 step targets 310 gpu_targets
-# 1a. The host's CPU a step of each launch, the storage arrays in arenas (since session 55)
-#     against a buffer each, and a bare dispatch against the buffers it binds
-#     (benches/gpu_host.rs): on the 2-core container, lavapipe, arenas halved the one-step
-#     launches' host CPU a step (2.8 -> 1.5 us); session 50's H200 one-step launches were
+# 1a. The host's CPU a step of each launch, three ways: the default (arrays in arenas, the
+#     step as an immediate, session 56), the step by a dynamic offset (session 55), and a
+#     buffer per array as well (before 55); and a bare dispatch against the buffers it binds
+#     (benches/gpu_host.rs). On the 2-core container, lavapipe, the one-step launches' host
+#     CPU a step went 2.9 -> 1.5 -> 1.35 us; session 50's H200 one-step launches were
 #     host-bound (the host busy 0.77 of a 5.92 us step).
-step host 90 gpu_host 2
+step host 100 gpu_host 2
 # 2. The ensemble target's other launches, at 1 and 256 scenes: resident/512 (two waves of
 #    one scene an SM, about 2.04e10 by section 8 on the H200 in session 50, where `auto`
 #    mis-timed it), bond patches, and the one-step kernel.
