@@ -199,11 +199,6 @@ mod tests {
                 let plain = build(lanes, false, chained).source::<f32>(kernel);
                 let immediate = build(lanes, true, chained);
                 let src = immediate.source::<f32>(kernel);
-                for (i, l) in plain.lines().enumerate() {
-                    if l.contains("step_offset: u32") {
-                        eprintln!("{i}: {l}");
-                    }
-                }
                 assert_eq!(plain.matches(STEP_OFFSET_BINDING).count(), 1, "{kernel:?}");
                 assert!(!src.contains(STEP_OFFSET_BINDING), "{kernel:?}");
                 assert_eq!(src.matches(STEP_OFFSET_IMMEDIATE).count(), 1, "{kernel:?}");
