@@ -66,11 +66,15 @@ const LAUNCHES: &[&str] = &[
     "resident/1024",
     "resident/256/bond-patches",
     "resident/1024/bond-patches",
+    "persistent/256/lane-run-4",
+    "resident/256/lane-run-4",
+    "resident/1024/lane-run-4",
     "tiled/256/8x4",
     "tiled/256/16x4",
     "tiled/1024/16x4",
     "tiled/256/8x4/chained",
     "tiled/256/16x1/chained",
+    "tiled/256/8x4/chained/lane-run-4",
 ];
 
 fn launches() -> Vec<Launch> {

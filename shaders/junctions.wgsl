@@ -298,6 +298,43 @@ fn junction_lane(ix: u32, lane: u32, jb: JunctionBlock, ld: Loads) -> LaneSum {
     return lane_from(ix, lane, jb, ld, lane_pair(ix, lane));
 }
 
+// Consecutive junction lanes a thread steps in the persistent, resident
+// and tiled kernels (1, 2, 4 or 8; GpuOptions::lane_run): where a thread
+// steps a lane run, it works out its block's JunctionBlock once for the
+// run, not once a lane, and merges the run's lane sums itself as the lane
+// tree's lowest levels, so fewer levels are left to subgroup shuffles or
+// storage. The same lanes by the same tree: the same bits.
+override LANE_RUN: u32 = 1u;
+
+// Lane runs of a block with `lanes` lanes.
+fn lane_runs(lanes: u32) -> u32 {
+    return (lanes + LANE_RUN - 1u) / LANE_RUN;
+}
+
+// Lanes first .. first + LANE_RUN of block ix (first a multiple of
+// LANE_RUN), each stepped as junction_lane steps it, merged as the subtree
+// of the lane tree they make (lanes past the block's last make the zero
+// sum). The next lane's first pair is loaded before this lane is stepped,
+// as two lanes a round does: one round trip to storage on the thread's
+// path a lane, not two.
+fn lane_run(ix: u32, first: u32, jb: JunctionBlock, ld: Loads) -> LaneSum {
+    if LANE_RUN == 1u || jb.kept {
+        return junction_lane(ix, first, jb, ld);
+    }
+    var tree: LaneTree8;
+    var last = lane_sum_zero();
+    var maxima = vec2<real>(0.0, 0.0);
+    var pair = lane_pair(ix, first);
+    for (var q = 0u; q < LANE_RUN; q++) {
+        let next = lane_pair(ix, first + min(q + 1u, LANE_RUN - 1u));
+        let sum = lane_from(ix, first + q, jb, ld, pair);
+        maxima = max(maxima, lane_maxima(sum));
+        last = lane_tree8_add(&tree, q, lane_sum_unbounded(sum));
+        pair = next;
+    }
+    return lane_sum_bounded(last, maxima);
+}
+
 // Two junctions of a lane (j and j + JUNCTION_LANES) as loaded, so that
 // both loads go out before either is used, and the kernels can send two
 // lanes' first pairs out together. A junction past the block's last is

@@ -1,6 +1,7 @@
 // lane_shuffle.wgsl's interface without subgroup operations (adapters
-// without them, and GpuOptions::lane_shuffle false): every lane writes its
-// own sum, and lane_partials.wgsl merges all of a block's lanes.
+// without them, and GpuOptions::lane_shuffle false): every lane run
+// (junctions.wgsl lane_run; a lane where LANE_RUN is 1) writes its own
+// sum, and lane_partials.wgsl merges all of a block's runs.
 // CPU twin: src/engines/kernels/junctions.rs merge_lanes.
 // import: junctions
 
@@ -13,7 +14,7 @@ fn lane_levels_used() -> u32 {
 }
 
 fn lane_subtree_stride() -> u32 {
-    return 1u;
+    return LANE_RUN;
 }
 
 fn lane_subtree(sum: LaneSum, lane: u32) -> LaneSum {

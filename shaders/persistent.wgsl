@@ -164,10 +164,13 @@ fn persistent_steps(
                 // lane doubles the loop iterations llvmpipe counts.
                 // Item w is lane w mod lanes of block w / lanes (row and
                 // column of the walk).
-                let items = c.nx * lanes;
+                // With lane runs (LANE_RUN > 1), item w is run w mod runs
+                // of block w / runs, whose lanes load ahead themselves.
+                let runs = lane_runs(lanes);
+                let items = c.nx * runs;
                 var w = t;
-                var lane = grid_walk(t, PERSISTENT_THREADS, lanes);
-                for (; TWO_LANES_A_ROUND && w + PERSISTENT_THREADS < items; w += 2u * PERSISTENT_THREADS) {
+                var lane = grid_walk(t, PERSISTENT_THREADS, runs);
+                for (; TWO_LANES_A_ROUND && LANE_RUN == 1u && w + PERSISTENT_THREADS < items; w += 2u * PERSISTENT_THREADS) {
                     let w2 = w + PERSISTENT_THREADS;
                     var lane2 = lane;
                     grid_walk_next(&lane2);
@@ -198,9 +201,10 @@ fn persistent_steps(
                 for (; w < items; w += PERSISTENT_THREADS) {
                     let jb = lanes_junction_block(lane.row, lane.row, ld);
                     if !jb.kept {
-                        let sum = lane_subtree(junction_lane(lane.row, lane.column, jb, ld), lane.column);
-                        if (lane.column & (stride - 1u)) == 0u {
-                            lane_partial[lane_base() + w] = sum;
+                        let l = lane.column * LANE_RUN;
+                        let sum = lane_subtree(lane_run(lane.row, l, jb, ld), l);
+                        if (l & (stride - 1u)) == 0u {
+                            lane_partial[lane_base() + lane.row * lanes + l] = sum;
                         }
                     }
                     grid_walk_next(&lane);

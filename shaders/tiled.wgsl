@@ -433,15 +433,16 @@ fn tile_round(t: u32, d: u32, lanes: u32, stride: u32, first: bool, last: bool) 
                 }
             }
             if FRICTION_LAW == LAW_JUNCTIONS {
-                for (var w = grid_walk(t, TILE_THREADS, lanes); w.row < cols; grid_walk_next(&w)) {
+                // Item (column, run): a block's lane run (LANE_RUN lanes).
+                for (var w = grid_walk(t, TILE_THREADS, lane_runs(lanes)); w.row < cols; grid_walk_next(&w)) {
                     let ix = a + w.row;
-                    let l = w.column;
+                    let l = w.column * LANE_RUN;
                     let jb = lanes_junction_block(ix - tile_lo, ix, ld);
                     // A kept block's partials are not merged: not written.
                     // Where lanes merge in subgroups, a run's first lane
                     // writes its subtree.
                     if !jb.kept {
-                        let sum = lane_subtree(junction_lane(ix, l, jb, ld), l);
+                        let sum = lane_subtree(lane_run(ix, l, jb, ld), l);
                         if (l & (stride - 1u)) == 0u {
                             lane_partial[lane_first + (ix - tile_lo) * lanes + l] = sum;
                         }

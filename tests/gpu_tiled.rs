@@ -200,6 +200,83 @@ fn lane_subtrees_of_any_count_merge_as_the_one_step_kernels_tree() {
     }
 }
 
+/// Lane runs (`GpuOptions::lane_run`: a thread steps 2, 4 or 8
+/// consecutive junction lanes and merges their sums as the lane tree's
+/// lowest levels) end in the one-step kernel's bits through ruptures, on
+/// the persistent, resident and tiled kernels. Ns = 56 leaves runs of 2 and
+/// 4 lanes with subgroup levels above them (28 and 14 runs a block) and
+/// runs of 8 with none (7 runs: each run's subtree goes through storage);
+/// Ns = 100 fills all 64 lanes; runs of 4 with every run's sum through
+/// storage too. Each engine says it compiled the run asked for, so a run
+/// is not compared with a lane a thread. Negative control: a drive 1e-9
+/// faster on runs of 4 is flagged.
+#[test]
+fn lane_runs_merge_as_the_one_step_kernels_tree() {
+    let small: &[&str] = &slipfront::app::verify::SMALL_SCENE;
+    for (count, runs) in [(56, &[2u32, 4, 8][..]), (100, &[4][..])] {
+        let ns = format!("friction.junctions.count={count}");
+        let m = model(&[small, &["loading.drive.velocity=0.4", ns.as_str()]].concat());
+        let end = m.prep_steps + 2500;
+        let reference = run_to(&mut one_step(&m), end);
+        assert!(
+            reference.total_ruptures() > 100,
+            "Ns = {count}: junctions broke"
+        );
+        for path in [GpuPath::Persistent, GpuPath::Resident, GpuPath::Tiled] {
+            for &lane_run in runs {
+                for lane_shuffle in [true, false] {
+                    if !lane_shuffle && (lane_run != 4 || path != GpuPath::Resident) {
+                        continue;
+                    }
+                    let opts = GpuOptions {
+                        path,
+                        lane_shuffle,
+                        lane_run,
+                        ..GpuOptions::default()
+                    };
+                    let mut e = GpuEngine::with_options(&m, opts).unwrap();
+                    let how = e.describe();
+                    assert!(
+                        how.contains(&format!("{lane_run} junction lanes a thread")),
+                        "{how}"
+                    );
+                    let got = run_to(&mut e, end);
+                    let levels = e.lane_shuffle_levels();
+                    let what =
+                        format!("Ns = {count}, {path:?}, run {lane_run}, shuffle {lane_shuffle}");
+                    // Subgroups merge 3 or more of the tree's levels (the
+                    // run's own included), or none.
+                    assert!(levels == 0 || levels >= 3, "{what}: {levels} levels");
+                    assert_eq!(
+                        levels > 0,
+                        lane_shuffle && lane_run < 8,
+                        "{what}: {levels} levels"
+                    );
+                    assert!(
+                        got == reference,
+                        "{what}: {} ruptures against {}",
+                        got.total_ruptures(),
+                        reference.total_ruptures()
+                    );
+                }
+            }
+        }
+    }
+    let m = model(&[small, &["loading.drive.velocity=0.4"]].concat());
+    let end = m.prep_steps + 2500;
+    let reference = run_to(&mut one_step(&m), end);
+    let opts = GpuOptions {
+        path: GpuPath::Resident,
+        lane_run: 4,
+        ..GpuOptions::default()
+    };
+    let faster = run_to(
+        &mut GpuEngine::with_options(&drive_faster(&m), opts).unwrap(),
+        end,
+    );
+    assert_ne!(faster.disp, reference.disp, "control");
+}
+
 /// Batches cut every 37 steps, each followed by a snapshot (whose forces
 /// the next batch's first step reads from storage), give the bits of one
 /// long run.

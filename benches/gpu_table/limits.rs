@@ -3,6 +3,7 @@
 use crate::common::counts_from_env;
 use crate::gpu_timing::ensemble_step_seconds_in;
 use slipfront::engines::gpu::kernel_choice::Launch;
+use slipfront::engines::gpu::options::LANE_RUN_TIMED;
 use slipfront::engines::gpu::shaders::Kernel;
 use slipfront::engines::gpu::{GpuOptions, GpuReal};
 use slipfront::model::scenario::built_in;
@@ -60,6 +61,10 @@ pub fn ensemble_limits(quick: bool, min_seconds: f64) {
             // In f64 one lane a round needs fewer registers (AMD: 72–80
             // VGPRs against 88), so it may fit more scenes an SM.
             one_lane_too: f64_run,
+            // Lane runs: fewer instructions a block's lanes, more
+            // registers a thread (BENCHMARKS.md, session 57); on the
+            // shipped scene in mixed f32.
+            lane_run_too: name.contains("shipped") && !f64_run,
         };
         if f64_run {
             rows.print::<f64>("f64", &mut not_run);
@@ -114,12 +119,15 @@ struct LimitRows<'a> {
     min_seconds: f64,
     /// Each launch again with one junction lane a round.
     one_lane_too: bool,
+    /// Each launch again with `LANE_RUN_TIMED` junction lanes a thread.
+    lane_run_too: bool,
 }
 
 impl LimitRows<'_> {
     /// The rows in precision `T`: the resident and persistent kernels at
-    /// each of the threads (and each with one junction lane a round, where
-    /// asked), each on the first `n` scenes for each count. A
+    /// each of the threads (and each with one junction lane a round, and
+    /// with lane runs, where asked), each on the first `n` scenes for each
+    /// count. A
     /// launch that does not run (resident in f64 at Table S1 does not fit)
     /// adds its reason to `not_run`.
     fn print<T: GpuReal>(&self, precision: &str, not_run: &mut Vec<String>) {
@@ -132,7 +140,10 @@ impl LimitRows<'_> {
             })
             .flat_map(|launch| {
                 let one = self.one_lane_too.then(|| launch.with_one_lane_a_round());
-                std::iter::once(launch).chain(one)
+                let run = self
+                    .lane_run_too
+                    .then(|| launch.with_lane_run(LANE_RUN_TIMED));
+                std::iter::once(launch).chain(one).chain(run)
             });
         for launch in launches {
             self.print_launch::<T>(launch, precision, not_run);

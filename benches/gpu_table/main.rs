@@ -39,7 +39,8 @@
 //!    shipped scene), with Ns = 100 (as shipped), Ns = 16 and Coulomb
 //!    friction in mixed f32, and as shipped in f64 (each launch also with
 //!    one junction lane a round, which needs fewer registers in f64, so
-//!    may fit more scenes an SM). Where the step doubles
+//!    may fit more scenes an SM; as shipped in mixed f32 also with 4
+//!    junction lanes a thread, `GpuOptions::lane_run`). Where the step doubles
 //!    between the counts says how many scenes an SM holds at once; how much
 //!    longer than one scene's it is where they share, against the
 //!    junctions' share of the work and the precision, says whether they

@@ -47,6 +47,14 @@ pub struct GpuLaunchArgs {
     /// `…/one-lane-a-round`; software adapters always step one).
     #[arg(long)]
     pub gpu_one_lane_a_round: bool,
+    /// Junction lanes a thread steps in the persistent, resident and tiled
+    /// kernels, 1, 2, 4 or 8: a thread works out its block's junction
+    /// state once a run and merges the run's lane sums itself. The same
+    /// results, fewer instructions, more registers a thread (`auto` on a
+    /// hardware GPU times 4 beside 1 unless another run is given; its figures
+    /// name such a launch `…/lane-run-4`).
+    #[arg(long, value_name = "LANES", value_parser = slipfront::engines::gpu::options::lane_run)]
+    pub gpu_lane_run: Option<u32>,
     /// The tiled kernel runs a batch's rounds (up to a halo's steps each)
     /// in one dispatch, each tile waiting for its neighbours' edges
     /// between them: the same results, fewer dispatches. It needs a
@@ -68,6 +76,7 @@ impl Default for GpuLaunchArgs {
             gpu_bond_patches: false,
             gpu_lanes_in_storage: false,
             gpu_one_lane_a_round: false,
+            gpu_lane_run: None,
             gpu_chained_tiles: false,
         }
     }
@@ -87,6 +96,7 @@ impl GpuLaunchArgs {
             bond_patches: self.gpu_bond_patches,
             lane_shuffle: !self.gpu_lanes_in_storage,
             two_lanes_a_round: !self.gpu_one_lane_a_round,
+            lane_run: self.gpu_lane_run.unwrap_or(1),
             chained_tiles: self.gpu_chained_tiles,
             ..GpuOptions::default()
         }

@@ -141,6 +141,7 @@ mod tests {
             Launch::with_threads(Kernel::Tiled, 256).with_tile(shape),
             Launch::with_threads(Kernel::Persistent, 512).with_lanes_in_storage(),
             Launch::with_threads(Kernel::Resident, 256).with_one_lane_a_round(),
+            Launch::with_threads(Kernel::Resident, 1024).with_lane_run(4),
             Launch::with_threads(Kernel::Tiled, 256)
                 .with_tile(shape)
                 .with_chained_tiles(),
@@ -174,6 +175,12 @@ mod tests {
             assert_eq!(
                 runs.chained_tiles,
                 launch.chained_tiles,
+                "{}",
+                launch.name()
+            );
+            assert_eq!(
+                runs.lane_run,
+                launch.lane_run.unwrap_or(1),
                 "{}",
                 launch.name()
             );

@@ -406,6 +406,7 @@ impl<T: GpuReal> GpuEngine<T> {
                         model,
                         kernel,
                         persistent_threads,
+                        opts.lane_run,
                         ctx.is_software(),
                     )
                 })
@@ -651,8 +652,9 @@ impl<T: GpuReal> GpuEngine<T> {
     }
 
     /// The kernel and what else of its launch changes its bits or its
-    /// speed: the bulk forces by patches, where the lanes merge, and (on
-    /// hardware, where it is a choice) the junction lanes a round.
+    /// speed: the bulk forces by patches, where the lanes merge, (on
+    /// hardware, where it is a choice) the junction lanes a round, and the
+    /// junction lanes a thread.
     fn kernel_alone(&self) -> String {
         let mut text = self.kernel_shape();
         if self.bond_patches {
@@ -670,12 +672,20 @@ impl<T: GpuReal> GpuEngine<T> {
             self.scenes[0].model.law,
             FrictionLaw::Junctions | FrictionLaw::SingleJunction
         );
-        if !self.ctx.is_software() && junctions {
+        let lane_run = self
+            .constants
+            .iter()
+            .find(|(name, _)| *name == "LANE_RUN")
+            .map(|&(_, v)| v as u32);
+        if !self.ctx.is_software() && junctions && lane_run == Some(1) {
             match lanes_a_round {
                 Some(1.0) => text.push_str(", two junction lanes a round"),
                 Some(_) => text.push_str(", one junction lane a round"),
                 None => {}
             }
+        }
+        if let Some(run) = lane_run.filter(|&r| junctions && r > 1) {
+            text.push_str(&format!(", {run} junction lanes a thread"));
         }
         text
     }

@@ -151,6 +151,18 @@ pub struct GpuOptions {
     /// two, on hardware). `auto` on hardware times its fastest persistent
     /// launch both ways.
     pub two_lanes_a_round: bool,
+    /// Consecutive junction lanes a thread steps in the persistent,
+    /// resident and tiled kernels (`LANE_RUNS`; `LANE_RUN` in
+    /// `shaders/junctions.wgsl`): the thread works out its block's
+    /// junction state once for the run, not once a lane, and merges the
+    /// run's lane sums itself as the lane tree's lowest levels, so fewer
+    /// levels are left to subgroup shuffles or storage. On AMD's compiler
+    /// (Table S1) a block's lane work is about a quarter to a third fewer
+    /// instructions at 4 (BENCHMARKS.md, session 57), for more registers a
+    /// thread. The same lanes merged by the same tree: the same bits. 1:
+    /// a lane a thread, as before. `auto` on hardware times its fastest
+    /// launch of these kernels at 4 too.
+    pub lane_run: u32,
     /// The tiled kernel runs the rounds of a batch (its dispatches of up
     /// to a halo's steps) in one dispatch, each tile waiting for the
     /// tiles in its halo to finish a round before it reads their edges
@@ -203,6 +215,7 @@ impl Default for GpuOptions {
             bond_patches: false,
             lanes_read_kept: true,
             two_lanes_a_round: true,
+            lane_run: 1,
             chained_tiles: false,
             samples: None,
             pack_arrays: true,
@@ -228,6 +241,7 @@ pub fn persistent_steps_per_dispatch(
     model: &Model,
     kernel: Kernel,
     threads: u32,
+    lane_run: u32,
     software: bool,
 ) -> u64 {
     if !software {
@@ -241,9 +255,9 @@ pub fn persistent_steps_per_dispatch(
         _ => (0, 0),
     };
     let blocks = model.n_blocks().div_ceil(t);
-    let items = (model.nx * lanes).div_ceil(t);
     let friction = model.nx.div_ceil(t) * model.law.declaration().block_loop_iterations;
-    let mut per_step = 3 + blocks * 10 + items * (1 + ns.div_ceil(lanes.max(1))) + lanes + friction;
+    let lane_loops = lane_loop_iterations(model.nx, lanes, ns, t, lane_run);
+    let mut per_step = 3 + blocks * 10 + lane_loops + lanes + friction;
     let mut budget = 32_768;
     if kernel == Kernel::Resident {
         let slots = WORKGROUP_STATE_REDUCTION_WIDTH as usize;
@@ -251,6 +265,44 @@ pub fn persistent_steps_per_dispatch(
         budget -= 2 * blocks;
     }
     (budget as u64 / per_step as u64).clamp(1, PERSISTENT_BATCH)
+}
+
+/// The lane runs a thread may step (`GpuOptions::lane_run`): powers of two
+/// up to the lane tree's eight-leaf subtrees.
+pub const LANE_RUNS: [u32; 4] = [1, 2, 4, 8];
+
+/// The lane run `auto` times beside a lane a thread on hardware.
+pub const LANE_RUN_TIMED: u32 = 4;
+
+/// `--gpu-lane-run`: one of `LANE_RUNS`, else an error naming the value and
+/// the allowed ones.
+pub fn lane_run(text: &str) -> Result<u32, String> {
+    text.parse()
+        .ok()
+        .filter(|n| LANE_RUNS.contains(n))
+        .ok_or_else(|| format!("lane run `{text}`: must be one of {LANE_RUNS:?}"))
+}
+
+/// The loop iterations (llvmpipe counts them: `persistent_steps_per_dispatch`)
+/// that the busiest of `threads` invocations runs a step in a walk over the
+/// junction lanes of `blocks` interface blocks with `lanes` lanes and `ns`
+/// junctions each, `lane_run` lanes an item: an item's pass, and in a lane
+/// run a pass a lane, plus each lane's junctions.
+pub fn lane_loop_iterations(
+    blocks: usize,
+    lanes: usize,
+    ns: usize,
+    threads: usize,
+    lane_run: u32,
+) -> usize {
+    let run = lane_run.max(1) as usize;
+    let items = (blocks * lanes.div_ceil(run)).div_ceil(threads.max(1));
+    let per_lane = ns.div_ceil(lanes.max(1));
+    if run == 1 {
+        items * (1 + per_lane)
+    } else {
+        items * (1 + run * (1 + per_lane))
+    }
 }
 
 /// Threads of `kernel`'s workgroup: the option, else the kernel's default,
@@ -408,14 +460,30 @@ mod tests {
     fn software_dispatches_stay_within_half_the_loop_limit() {
         let s = Scenario::parse(DEFAULT_SCENARIO, "test", &[]).unwrap();
         let m = Model::from_scenario(&s, false).unwrap();
-        let k = persistent_steps_per_dispatch(&m, Kernel::Persistent, 256, true);
+        let k = persistent_steps_per_dispatch(&m, Kernel::Persistent, 256, 1, true);
         assert_eq!(k, 180);
         assert_eq!(
-            persistent_steps_per_dispatch(&m, Kernel::Persistent, 256, false),
+            persistent_steps_per_dispatch(&m, Kernel::Persistent, 256, 1, false),
             PERSISTENT_BATCH
         );
         // The resident kernel's sample folding and state copies count too.
-        let resident = persistent_steps_per_dispatch(&m, Kernel::Resident, 256, true);
+        let resident = persistent_steps_per_dispatch(&m, Kernel::Resident, 256, 1, true);
         assert!(resident < k && resident > k / 2, "{resident}");
+        // A lane run's passes a lane count too: fewer steps a dispatch.
+        let runs = persistent_steps_per_dispatch(&m, Kernel::Persistent, 256, 4, true);
+        assert!(runs < k && runs > k / 2, "{runs}");
+    }
+
+    /// `--gpu-lane-run` takes the powers of two up to 8 and names the
+    /// allowed values otherwise.
+    #[test]
+    fn lane_runs_are_powers_of_two_up_to_eight() {
+        for n in LANE_RUNS {
+            assert_eq!(lane_run(&n.to_string()), Ok(n));
+        }
+        for bad in ["0", "3", "16", "-1", "four"] {
+            let e = lane_run(bad).unwrap_err();
+            assert!(e.contains(bad) && e.contains("[1, 2, 4, 8]"), "{e}");
+        }
     }
 }

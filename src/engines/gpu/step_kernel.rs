@@ -58,6 +58,9 @@ impl StepKernel {
             // hardware (no budget) the probe would only cost registers.
             constants.push(("LOOP_PROBE", software as u8 as f64));
         }
+        if self.kernel.is_persistent() || self.geometry.is_some() {
+            constants.push(("LANE_RUN", opts.lane_run as f64));
+        }
         constants.push(("BOND_PATCHES", self.bond_patches as u8 as f64));
         if self.kernel == Kernel::Resident {
             constants.push(("RESIDENT_BLOCKS", shape.blocks as f64));
@@ -254,7 +257,7 @@ fn kernel_fit<T: GpuReal>(
             let g = tiles::TileGeometry::new(model, shape).map_err(EngineError::Gpu)?;
             tiles::tiled_fit::<T>(model, &g, &adapter.limits).map_err(EngineError::Gpu)?;
             if adapter.software {
-                tiles::software_fit(model, &g, threads).map_err(EngineError::Gpu)?;
+                tiles::software_fit(model, &g, threads, opts.lane_run).map_err(EngineError::Gpu)?;
             }
             Ok(tiles_only(Some(g)))
         }
@@ -269,6 +272,7 @@ fn chain_fit(
     adapter: &AdapterTraits,
     geometry: &tiles::TileGeometry,
     threads: u32,
+    lane_run: u32,
 ) -> Result<tiles::TileChain, EngineError> {
     if !adapter.coherent_storage {
         return Err(EngineError::Gpu(
@@ -277,7 +281,8 @@ fn chain_fit(
                 .into(),
         ));
     }
-    tiles::TileChain::new(model, geometry, threads, adapter.software).map_err(EngineError::Gpu)
+    tiles::TileChain::new(model, geometry, threads, lane_run, adapter.software)
+        .map_err(EngineError::Gpu)
 }
 
 /// The step kernel `model` compiles with `opts` on an adapter like
@@ -289,6 +294,12 @@ pub fn plan<T: GpuReal>(
     opts: GpuOptions,
     adapter: &AdapterTraits,
 ) -> Result<KernelPlan, EngineError> {
+    if !LANE_RUNS.contains(&opts.lane_run) {
+        return Err(EngineError::Gpu(format!(
+            "GPU option lane_run = {}: must be one of {LANE_RUNS:?}",
+            opts.lane_run
+        )));
+    }
     let kernel = choose_kernel(opts.path, adapter.software);
     let threads = persistent_threads(
         kernel,
@@ -313,7 +324,7 @@ pub fn plan<T: GpuReal>(
         )));
     }
     let chain = match geometry.filter(|_| opts.chained_tiles) {
-        Some(g) => Some(chain_fit(model, adapter, &g, threads)?),
+        Some(g) => Some(chain_fit(model, adapter, &g, threads, opts.lane_run)?),
         None => None,
     };
     let variant = Variant::for_model(model);

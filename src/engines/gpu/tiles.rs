@@ -204,7 +204,12 @@ const SOFTWARE_LOOP_BUDGET: usize = 32_768;
 /// kernel's are: 10 a block for its bonds, a junction lane's junctions,
 /// eight lane sums a round, and a sample's tally and reduction), with
 /// loading and publishing the tile.
-pub fn loop_iterations(model: &Model, geometry: &TileGeometry, threads: u32) -> usize {
+pub fn loop_iterations(
+    model: &Model,
+    geometry: &TileGeometry,
+    threads: u32,
+    lane_run: u32,
+) -> usize {
     let t = threads.max(1) as usize;
     let span = geometry.span as usize;
     let (ns, lanes) = match model.junctions {
@@ -217,13 +222,13 @@ pub fn loop_iterations(model: &Model, geometry: &TileGeometry, threads: u32) -> 
         _ => (0, 0),
     };
     let blocks = (span * model.nz).div_ceil(t);
-    let items = (span * lanes).div_ceil(t);
+    let lane_loops = super::options::lane_loop_iterations(span, lanes, ns, t, lane_run);
     let merges = span.div_ceil(t) * lanes.div_ceil(8).max(1);
     // A sample in the step: an interface block's junction tally (16 a
     // round), the threads folded into the slots, the tree.
     let slots = super::batch_sizes::WORKGROUP_STATE_REDUCTION_WIDTH as usize;
     let sample = ns.div_ceil(16) + 1 + t.div_ceil(slots) + slots.ilog2() as usize;
-    let per_step = 3 + blocks * 10 + items * (1 + ns.div_ceil(lanes.max(1))) + merges + sample;
+    let per_step = 3 + blocks * 10 + lane_loops + merges + sample;
     // Loading and publishing the tile, and the search for its first sample.
     let tile = 2 * blocks + 2 * (span * ns).div_ceil(t) + 12;
     geometry.halo as usize * per_step + tile
@@ -231,8 +236,13 @@ pub fn loop_iterations(model: &Model, geometry: &TileGeometry, threads: u32) -> 
 
 /// On a software adapter, whether a tiled dispatch stays within the loop
 /// budget; an error naming the count and what to change where not.
-pub fn software_fit(model: &Model, geometry: &TileGeometry, threads: u32) -> Result<(), String> {
-    let n = loop_iterations(model, geometry, threads);
+pub fn software_fit(
+    model: &Model,
+    geometry: &TileGeometry,
+    threads: u32,
+    lane_run: u32,
+) -> Result<(), String> {
+    let n = loop_iterations(model, geometry, threads, lane_run);
     if n > SOFTWARE_LOOP_BUDGET {
         return Err(format!(
             "a tiled dispatch of {} steps with {threads} threads would run about {n} loop \
@@ -284,6 +294,7 @@ impl TileChain {
         model: &Model,
         geometry: &TileGeometry,
         threads: u32,
+        lane_run: u32,
         software: bool,
     ) -> Result<TileChain, String> {
         if !software {
@@ -293,7 +304,7 @@ impl TileChain {
                 pause: false,
             });
         }
-        let per_round = loop_iterations(model, geometry, threads);
+        let per_round = loop_iterations(model, geometry, threads, lane_run);
         let rounds = SOFTWARE_CHAINED_ROUNDS;
         // The loop round, and where a halo reaches past the tiles either
         // side, a round per tile it reaches (`neighbours_finished`).
@@ -400,9 +411,9 @@ mod tests {
     fn a_dispatch_past_the_software_loop_budget_is_refused() {
         let m = table_s1();
         let defaults = TileGeometry::new(&m, TileShape::DEFAULT).unwrap();
-        let n = loop_iterations(&m, &defaults, 256);
+        let n = loop_iterations(&m, &defaults, 256, 1);
         assert!(n < SOFTWARE_LOOP_BUDGET / 10, "{n}");
-        assert!(software_fit(&m, &defaults, 256).is_ok());
+        assert!(software_fit(&m, &defaults, 256, 1).is_ok());
         let wide = TileGeometry::new(
             &m,
             TileShape {
@@ -411,9 +422,9 @@ mod tests {
             },
         )
         .unwrap();
-        let err = software_fit(&m, &wide, 1).unwrap_err();
+        let err = software_fit(&m, &wide, 1, 1).unwrap_err();
         assert!(err.contains("loop iterations per thread"), "{err}");
-        assert!(loop_iterations(&m, &wide, 1) > SOFTWARE_LOOP_BUDGET);
+        assert!(loop_iterations(&m, &wide, 1, 1) > SOFTWARE_LOOP_BUDGET);
     }
 
     /// A tile of no columns, or a halo past the most steps a dispatch may
@@ -506,14 +517,14 @@ mod tests {
     fn chained_tiles_keep_polls_within_a_software_loop_budget() {
         let m = table_s1();
         let g = TileGeometry::new(&m, TileShape::DEFAULT).unwrap();
-        let soft = TileChain::new(&m, &g, 256, true).unwrap();
+        let soft = TileChain::new(&m, &g, 256, 1, true).unwrap();
         assert_eq!(soft.rounds, SOFTWARE_CHAINED_ROUNDS);
         assert!(soft.pause);
         // Halo 4 within tiles of 8: a loop round a poll.
-        let used = soft.rounds * loop_iterations(&m, &g, 256) + soft.polls as usize;
+        let used = soft.rounds * loop_iterations(&m, &g, 256, 1) + soft.polls as usize;
         assert!(used <= SOFTWARE_LOOP_BUDGET, "{used}");
         assert!(soft.polls > 10_000, "{soft:?}");
-        let hard = TileChain::new(&m, &g, 256, false).unwrap();
+        let hard = TileChain::new(&m, &g, 256, 1, false).unwrap();
         assert_eq!(hard.polls, HARDWARE_CHAIN_POLLS);
         assert!(!hard.pause);
         let wide = TileGeometry::new(
@@ -524,7 +535,7 @@ mod tests {
             },
         )
         .unwrap();
-        let err = TileChain::new(&m, &wide, 1, true).unwrap_err();
+        let err = TileChain::new(&m, &wide, 1, 1, true).unwrap_err();
         assert!(err.contains("polls"), "{err}");
     }
 }

@@ -163,7 +163,7 @@ fn samples_key(samples: Option<&SamplePlan>) -> String {
 /// precision, the lattice (`lattice_key`), the persistent kernels' threads,
 /// the tile shape where one is fixed, whether the lanes' merge was
 /// searched, wgpu's run-time checks, whether the bond patches, the
-/// junction lanes a round and chained tiles were searched, how a step was
+/// junction lanes a round, lane runs and chained tiles were searched, how a step was
 /// timed (`timing::TIMING`), the output cadences it was timed recording
 /// at (`GpuOptions::samples`), and the kernels' sources (a new version
 /// of slipfront measures again).
@@ -204,7 +204,7 @@ pub fn scenes_cache_key<T: GpuReal>(
         String::new()
     };
     format!(
-        "{} | {:?} | {} {} | {} | {}{ensemble} | threads {} | tiles {} | lanes {} | checks {} | patches {} | lane rounds {} | chained tiles {} | arrays {} | step {} | timed by {} | samples {} | kernels {:016x}",
+        "{} | {:?} | {} {} | {} | {}{ensemble} | threads {} | tiles {} | lanes {} | checks {} | patches {} | lane rounds {} | lane runs {} | chained tiles {} | arrays {} | step {} | timed by {} | samples {} | kernels {:016x}",
         info.name,
         info.backend,
         info.driver,
@@ -243,6 +243,12 @@ pub fn scenes_cache_key<T: GpuReal>(
             "searched"
         } else {
             "one"
+        },
+        // Nor one that searched lane runs one with a run fixed.
+        if opts.lane_run == 1 {
+            "searched".to_string()
+        } else {
+            opts.lane_run.to_string()
         },
         // Nor one that searched chained tiles one with them fixed on.
         if opts.chained_tiles {

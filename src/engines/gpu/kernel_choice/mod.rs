@@ -97,6 +97,10 @@ pub struct Launch {
     /// The tiled kernel's rounds chained in one dispatch
     /// (`GpuOptions::chained_tiles`): the same bits, fewer dispatches.
     pub chained_tiles: bool,
+    /// Junction lanes a thread (`GpuOptions::lane_run`) where not the
+    /// options': the same bits, fewer instructions a block's lanes. Only
+    /// for the persistent, resident and tiled kernels.
+    pub lane_run: Option<u32>,
 }
 
 /// The name's last part for `Launch::lanes_in_storage`.
@@ -107,6 +111,8 @@ const BOND_PATCHES: &str = "bond-patches";
 const ONE_LANE_A_ROUND: &str = "one-lane-a-round";
 /// The name's part (after the tile shape) for `Launch::chained_tiles`.
 const CHAINED: &str = "chained";
+/// The name's last part for `Launch::lane_run`, before its count.
+const LANE_RUN: &str = "lane-run-";
 
 impl Launch {
     pub fn of(kernel: Kernel) -> Launch {
@@ -118,6 +124,7 @@ impl Launch {
             bond_patches: false,
             one_lane_a_round: false,
             chained_tiles: false,
+            lane_run: None,
         }
     }
 
@@ -161,6 +168,20 @@ impl Launch {
         }
     }
 
+    /// This launch with `run` junction lanes a thread.
+    pub fn with_lane_run(self, run: u32) -> Launch {
+        Launch {
+            lane_run: Some(run),
+            ..self
+        }
+    }
+
+    /// Whether the launch's kernel steps lane runs (the persistent,
+    /// resident and tiled kernels).
+    pub fn has_lane_runs(self) -> bool {
+        self.kernel.is_persistent() || self.kernel == Kernel::Tiled
+    }
+
     /// This launch with the tiled kernel's rounds chained.
     pub fn with_chained_tiles(self) -> Launch {
         Launch {
@@ -171,7 +192,7 @@ impl Launch {
 
     /// `one-step-lanes`, `resident/512`, `tiled/1024/16x4`, `tiled/256/8x4/chained`,
     /// `resident/1024/lanes-in-storage`, `persistent/1024/bond-patches`,
-    /// `resident/256/bond-patches/one-lane-a-round`.
+    /// `resident/256/bond-patches/one-lane-a-round`, `resident/1024/lane-run-4`.
     pub fn name(self) -> String {
         let mut name = path_name(self.kernel);
         if let Some(t) = self.threads {
@@ -192,6 +213,9 @@ impl Launch {
         if self.one_lane_a_round {
             name += &format!("/{ONE_LANE_A_ROUND}");
         }
+        if let Some(run) = self.lane_run {
+            name += &format!("/{LANE_RUN}{run}");
+        }
         name
     }
 
@@ -205,9 +229,10 @@ impl Launch {
         {
             launch.threads = Some(t.parse().ok().filter(|&t: &u32| t > 0)?);
         }
-        if let Some(shape) = rest
-            .next_if(|p| ![CHAINED, LANES_IN_STORAGE, BOND_PATCHES, ONE_LANE_A_ROUND].contains(p))
-        {
+        if let Some(shape) = rest.next_if(|p| {
+            ![CHAINED, LANES_IN_STORAGE, BOND_PATCHES, ONE_LANE_A_ROUND].contains(p)
+                && !p.starts_with(LANE_RUN)
+        }) {
             if launch.kernel != Kernel::Tiled {
                 return None;
             }
@@ -234,6 +259,14 @@ impl Launch {
             }
             launch.one_lane_a_round = true;
         }
+        if let Some(run) = rest.next_if(|p| p.starts_with(LANE_RUN)) {
+            if !launch.has_lane_runs() {
+                return None;
+            }
+            let run = run[LANE_RUN.len()..].parse().ok()?;
+            launch.lane_run = Some(run).filter(|r| super::options::LANE_RUNS.contains(r));
+            launch.lane_run?;
+        }
         rest.next().is_none().then_some(launch)
     }
 
@@ -246,6 +279,7 @@ impl Launch {
             lane_shuffle: opts.lane_shuffle && !self.lanes_in_storage,
             bond_patches: opts.bond_patches || self.bond_patches,
             two_lanes_a_round: opts.two_lanes_a_round && !self.one_lane_a_round,
+            lane_run: self.lane_run.unwrap_or(opts.lane_run),
             // Only the tiled kernel has rounds to chain.
             chained_tiles: (opts.chained_tiles || self.chained_tiles)
                 && self.kernel == Kernel::Tiled,

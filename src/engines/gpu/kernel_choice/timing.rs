@@ -7,7 +7,7 @@
 
 use super::{launches, ChoiceSource, KernelChoice, Launch, TimedPhase};
 use crate::engines::gpu::context::GpuContext;
-use crate::engines::gpu::options::GpuOptions;
+use crate::engines::gpu::options::{GpuOptions, LANE_RUN_TIMED};
 use crate::engines::gpu::precision::GpuReal;
 use crate::engines::gpu::shaders::Kernel;
 use crate::engines::gpu::tiles::{
@@ -422,6 +422,16 @@ pub fn measure_within<T: GpuReal>(
             time(launch.with_one_lane_a_round());
         }
     }
+    // Lane runs, on the fastest launch so far: the same bits, fewer
+    // instructions a block's lanes for more registers a thread, which no
+    // hardware figure has weighed yet.
+    let junctions = models[0].law == crate::model::scenario::FrictionLaw::Junctions
+        && models[0].junctions.is_some_and(|j| j.count > 1);
+    if let Some((launch, _)) = fastest.get() {
+        if times_lane_run(launch, opts, ctx.is_software(), junctions) {
+            time(launch.with_lane_run(LANE_RUN_TIMED));
+        }
+    }
     let Some(&(launch, _)) = timings.iter().min_by(|a, b| a.1.total_cmp(&b.1)) else {
         return Err(first_error.expect("at least one candidate (one-step always is)"));
     };
@@ -442,6 +452,20 @@ pub fn measure_within<T: GpuReal>(
 /// one (`TWO_LANES_A_ROUND`), so there both would be the same pipeline.
 fn times_one_lane_a_round(launch: Launch, opts: GpuOptions, software: bool) -> bool {
     launch.kernel.is_persistent() && !launch.one_lane_a_round && opts.two_lanes_a_round && !software
+}
+
+/// Whether `measure` times `launch` (the fastest so far) again with
+/// `LANE_RUN_TIMED` lanes a thread: a kernel with lane runs on hardware,
+/// on a scene whose blocks have junction lanes to run, unless the options
+/// or the launch fix the run. On software adapters each lane of a run is
+/// a loop pass llvmpipe counts (fewer steps a dispatch), so `auto` keeps a
+/// lane a thread there.
+fn times_lane_run(launch: Launch, opts: GpuOptions, software: bool, junctions: bool) -> bool {
+    launch.has_lane_runs()
+        && launch.lane_run.is_none()
+        && opts.lane_run == 1
+        && junctions
+        && !software
 }
 
 /// The chained launches `measure` times after chaining `launch` (the
@@ -708,6 +732,57 @@ mod tests {
             fixed,
             false
         ));
+    }
+
+    /// Lane runs are timed on hardware, on the persistent, resident and
+    /// tiled kernels of a scene with junction lanes, unless fixed; the
+    /// launch sets the run in its options.
+    #[test]
+    fn lane_runs_are_timed_on_hardware_junction_launches_only() {
+        let plain = GpuOptions::default();
+        for kernel in [Kernel::Persistent, Kernel::Resident, Kernel::Tiled] {
+            let launch = Launch::with_threads(kernel, 256);
+            assert!(times_lane_run(launch, plain, false, true), "{kernel:?}");
+            assert!(
+                !times_lane_run(launch, plain, true, true),
+                "software: {kernel:?}"
+            );
+            assert!(
+                !times_lane_run(launch, plain, false, false),
+                "Coulomb: {kernel:?}"
+            );
+            let run = launch.with_lane_run(LANE_RUN_TIMED);
+            assert!(
+                !times_lane_run(run, plain, false, true),
+                "twice: {kernel:?}"
+            );
+            assert_eq!(run.options(plain).lane_run, LANE_RUN_TIMED);
+            assert_eq!(launch.options(plain).lane_run, 1);
+            assert_eq!(Launch::named(&run.name()), Some(run), "{}", run.name());
+        }
+        for kernel in [Kernel::OneStep, Kernel::OneStepLanes] {
+            assert!(
+                !times_lane_run(Launch::of(kernel), plain, false, true),
+                "{kernel:?}"
+            );
+            let name = format!("{}/lane-run-4", super::super::path_name(kernel));
+            assert_eq!(Launch::named(&name), None);
+        }
+        let fixed = GpuOptions {
+            lane_run: 2,
+            ..plain
+        };
+        assert!(!times_lane_run(
+            Launch::of(Kernel::Resident),
+            fixed,
+            false,
+            true
+        ));
+        assert_eq!(Launch::named("resident/1024/lane-run-3"), None);
+        assert_eq!(
+            Launch::named("tiled/512/8x4/chained/lane-run-8").map(|l| l.lane_run),
+            Some(Some(8))
+        );
     }
 
     /// A launch with patches turns them on in the options it builds; one
