@@ -311,12 +311,18 @@ fn lane_runs(lanes: u32) -> u32 {
     return (lanes + LANE_RUN - 1u) / LANE_RUN;
 }
 
+// A lane run loads its next lane's first pair before it steps this one
+// (the persistent and resident kernels unless one lane a round is asked,
+// GpuOptions::two_lanes_a_round): the round trip to storage off the
+// thread's path, for the pair's registers (on AMD's compiler 8 a thread
+// more at Table S1, BENCHMARKS.md session 57). false (the tiled kernel):
+// each lane loads its own as it starts.
+override LANE_RUN_AHEAD: bool = false;
+
 // Lanes first .. first + LANE_RUN of block ix (first a multiple of
 // LANE_RUN), each stepped as junction_lane steps it, merged as the subtree
 // of the lane tree they make (lanes past the block's last make the zero
-// sum). The next lane's first pair is loaded before this lane is stepped,
-// as two lanes a round does: one round trip to storage on the thread's
-// path a lane, not two.
+// sum).
 fn lane_run(ix: u32, first: u32, jb: JunctionBlock, ld: Loads) -> LaneSum {
     if LANE_RUN == 1u || jb.kept {
         return junction_lane(ix, first, jb, ld);
@@ -326,11 +332,16 @@ fn lane_run(ix: u32, first: u32, jb: JunctionBlock, ld: Loads) -> LaneSum {
     var maxima = vec2<real>(0.0, 0.0);
     var pair = lane_pair(ix, first);
     for (var q = 0u; q < LANE_RUN; q++) {
-        let next = lane_pair(ix, first + min(q + 1u, LANE_RUN - 1u));
-        let sum = lane_from(ix, first + q, jb, ld, pair);
+        var sum: LaneSum;
+        if LANE_RUN_AHEAD {
+            let next = lane_pair(ix, first + min(q + 1u, LANE_RUN - 1u));
+            sum = lane_from(ix, first + q, jb, ld, pair);
+            pair = next;
+        } else {
+            sum = lane_from(ix, first + q, jb, ld, lane_pair(ix, first + q));
+        }
         maxima = max(maxima, lane_maxima(sum));
         last = lane_tree8_add(&tree, q, lane_sum_unbounded(sum));
-        pair = next;
     }
     return lane_sum_bounded(last, maxima);
 }

@@ -207,9 +207,10 @@ fn lane_subtrees_of_any_count_merge_as_the_one_step_kernels_tree() {
 /// 4 lanes with subgroup levels above them (28 and 14 runs a block) and
 /// runs of 8 with none (7 runs: each run's subtree goes through storage);
 /// Ns = 100 fills all 64 lanes; runs of 4 with every run's sum through
-/// storage too. Each engine says it compiled the run asked for, so a run
-/// is not compared with a lane a thread. Negative control: a drive 1e-9
-/// faster on runs of 4 is flagged.
+/// storage too; runs of 4 with and without the next lane's pair loaded
+/// ahead (`LANE_RUN_AHEAD`). Each engine says it compiled the run asked
+/// for, so a run is not compared with a lane a thread. Negative control:
+/// a drive 1e-9 faster on runs of 4 is flagged.
 #[test]
 fn lane_runs_merge_as_the_one_step_kernels_tree() {
     let small: &[&str] = &slipfront::app::verify::SMALL_SCENE;
@@ -224,14 +225,18 @@ fn lane_runs_merge_as_the_one_step_kernels_tree() {
         );
         for path in [GpuPath::Persistent, GpuPath::Resident, GpuPath::Tiled] {
             for &lane_run in runs {
-                for lane_shuffle in [true, false] {
-                    if !lane_shuffle && (lane_run != 4 || path != GpuPath::Resident) {
+                // (shuffle, loads ahead): the persistent kernels load a
+                // run's next lane ahead unless one lane a round is asked.
+                for (lane_shuffle, ahead) in [(true, true), (false, true), (true, false)] {
+                    let persistent = path != GpuPath::Tiled;
+                    if (!lane_shuffle || !ahead) && (lane_run != 4 || !persistent) {
                         continue;
                     }
                     let opts = GpuOptions {
                         path,
                         lane_shuffle,
                         lane_run,
+                        two_lanes_a_round: ahead,
                         ..GpuOptions::default()
                     };
                     let mut e = GpuEngine::with_options(&m, opts).unwrap();

@@ -54,6 +54,11 @@ impl StepKernel {
             // its limit: one junction lane a round there.
             let two_lanes = !software && opts.two_lanes_a_round;
             constants.push(("TWO_LANES_A_ROUND", two_lanes as u8 as f64));
+            // A lane run's next lane loaded ahead where two lanes a round
+            // would be (`shaders/junctions.wgsl` lane_run), software
+            // adapters included: it adds no loop pass for llvmpipe to count.
+            let ahead = opts.two_lanes_a_round;
+            constants.push(("LANE_RUN_AHEAD", ahead as u8 as f64));
             // llvmpipe's loop budget, checked at each dispatch's end; on
             // hardware (no budget) the probe would only cost registers.
             constants.push(("LOOP_PROBE", software as u8 as f64));
