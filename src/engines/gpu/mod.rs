@@ -46,6 +46,7 @@ pub mod ensemble;
 pub mod kernel_choice;
 pub mod layout;
 pub mod lockstep;
+mod loop_budget;
 pub mod options;
 pub mod precision;
 pub mod readback;

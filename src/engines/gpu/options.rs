@@ -5,6 +5,7 @@ use super::batch_sizes::{
     workgroup_state_reduction_width, PERSISTENT_BATCH, WORKGROUP_STATE_REDUCTION_WIDTH,
 };
 use super::layout;
+use super::loop_budget;
 use super::precision::{Coord, GpuReal};
 use super::shaders::Kernel;
 use super::tiles::TileShape;
@@ -256,9 +257,9 @@ pub fn persistent_steps_per_dispatch(
     };
     let blocks = model.n_blocks().div_ceil(t);
     let friction = model.nx.div_ceil(t) * model.law.declaration().block_loop_iterations;
-    let lane_loops = lane_loop_iterations(model.nx, lanes, ns, t, lane_run);
+    let lane_loops = loop_budget::lane_loop_iterations(model.nx, lanes, ns, t, lane_run);
     let mut per_step = 3 + blocks * 10 + lane_loops + lanes + friction;
-    let mut budget = 32_768;
+    let mut budget = loop_budget::SOFTWARE_LOOP_BUDGET;
     if kernel == Kernel::Resident {
         let slots = WORKGROUP_STATE_REDUCTION_WIDTH as usize;
         per_step += t.div_ceil(slots) + slots.ilog2() as usize;
@@ -281,28 +282,6 @@ pub fn lane_run(text: &str) -> Result<u32, String> {
         .ok()
         .filter(|n| LANE_RUNS.contains(n))
         .ok_or_else(|| format!("lane run `{text}`: must be one of {LANE_RUNS:?}"))
-}
-
-/// The loop iterations (llvmpipe counts them: `persistent_steps_per_dispatch`)
-/// that the busiest of `threads` invocations runs a step in a walk over the
-/// junction lanes of `blocks` interface blocks with `lanes` lanes and `ns`
-/// junctions each, `lane_run` lanes an item: an item's pass, and in a lane
-/// run a pass a lane, plus each lane's junctions.
-pub fn lane_loop_iterations(
-    blocks: usize,
-    lanes: usize,
-    ns: usize,
-    threads: usize,
-    lane_run: u32,
-) -> usize {
-    let run = lane_run.max(1) as usize;
-    let items = (blocks * lanes.div_ceil(run)).div_ceil(threads.max(1));
-    let per_lane = ns.div_ceil(lanes.max(1));
-    if run == 1 {
-        items * (1 + per_lane)
-    } else {
-        items * (1 + run * (1 + per_lane))
-    }
 }
 
 /// Threads of `kernel`'s workgroup: the option, else the kernel's default,

@@ -4,6 +4,7 @@
 //! where each dispatch of a batch ends.
 
 use super::batch_sizes::ONE_STEP_BATCH;
+use super::loop_budget::{lane_loop_iterations, SOFTWARE_LOOP_BUDGET};
 use super::precision::{Coord, GpuReal};
 use super::shaders::Kernel;
 use crate::model::Model;
@@ -194,11 +195,6 @@ pub fn tiled_fit<T: GpuReal>(
     Ok(bytes)
 }
 
-/// Loop iterations a software adapter may run in one tiled dispatch per
-/// invocation: llvmpipe ends a shader's loops after 65535 in all,
-/// silently, so half of that (as `options::persistent_steps_per_dispatch`).
-const SOFTWARE_LOOP_BUDGET: usize = 32_768;
-
 /// The most loop iterations one invocation of `threads` runs in a tiled
 /// dispatch of `geometry.halo` steps on `model` (counted as the persistent
 /// kernel's are: 10 a block for its bonds, a junction lane's junctions,
@@ -222,7 +218,7 @@ pub fn loop_iterations(
         _ => (0, 0),
     };
     let blocks = (span * model.nz).div_ceil(t);
-    let lane_loops = super::options::lane_loop_iterations(span, lanes, ns, t, lane_run);
+    let lane_loops = lane_loop_iterations(span, lanes, ns, t, lane_run);
     let merges = span.div_ceil(t) * lanes.div_ceil(8).max(1);
     // A sample in the step: an interface block's junction tally (16 a
     // round), the threads folded into the slots, the tree.
