@@ -172,6 +172,17 @@ fn bad_input_exits_with_a_clear_message() {
             assert!(err.contains(&format!("'{bad}' for '--gpu-tile")), "{err}");
             assert!(err.contains("1 to 32"), "{err}");
         }
+        // Junction lanes a thread: a power of two up to 8.
+        for bad in ["0", "3", "16", "four"] {
+            let out = slipfront(&[command, &format!("--gpu-lane-run={bad}")]);
+            assert_eq!(out.status.code(), Some(2));
+            let err = String::from_utf8_lossy(&out.stderr);
+            assert!(
+                err.contains(&format!("'{bad}' for '--gpu-lane-run")),
+                "{err}"
+            );
+            assert!(err.contains("[1, 2, 4, 8]"), "{err}");
+        }
     }
 }
 

@@ -716,8 +716,8 @@ fn a_run_with_gpu_path_measure_prints_the_figures() {
 /// be named again: `persistent/64/lanes-in-storage/bond-patches` is
 /// `--gpu-path persistent --gpu-threads 64 --gpu-lanes-in-storage
 /// --gpu-bond-patches` (and `…/one-lane-a-round` adds
-/// `--gpu-one-lane-a-round`), and the run's header (the description its
-/// file keeps) says what ran.
+/// `--gpu-one-lane-a-round`, `…/lane-run-4` `--gpu-lane-run 4`), and the
+/// run's header (the description its file keeps) says what ran.
 #[test]
 fn a_launch_named_by_its_flags_is_the_one_described() {
     let header = |flags: &[&str]| {
@@ -771,6 +771,10 @@ fn a_launch_named_by_its_flags_is_the_one_described() {
         "{plain}"
     );
     assert!(!one.contains("two junction lanes"), "{one}");
+    // `…/lane-run-4` is `--gpu-lane-run 4`, on any adapter.
+    let runs = header(&["--gpu-lane-run", "4"]);
+    assert!(runs.contains("4 junction lanes a thread"), "{runs}");
+    assert!(!plain.contains("junction lanes a thread"), "{plain}");
 }
 
 /// The kernels the driver statistics compile (`GpuEngine::kernel_sources_on`,
