@@ -162,10 +162,9 @@ fn persistent_steps(
                 // of storage round trips on a thread's path. One on software
                 // adapters (TWO_LANES_A_ROUND false), where a second inlined
                 // lane doubles the loop iterations llvmpipe counts.
-                // Item w is lane w mod lanes of block w / lanes (row and
-                // column of the walk).
-                // With lane runs (LANE_RUN > 1), item w is run w mod runs
-                // of block w / runs, whose lanes load ahead themselves.
+                // Item w is lane run w mod runs of block w / runs (row and
+                // column of the walk): a lane where LANE_RUN is 1; longer
+                // runs load their lanes ahead themselves (lane_run).
                 let runs = lane_runs(lanes);
                 let items = c.nx * runs;
                 var w = t;

@@ -153,36 +153,23 @@ fn bad_input_exits_with_a_clear_message() {
         let err = String::from_utf8_lossy(&out.stderr);
         assert!(err.contains("'0' for '--gpu-threads"), "{err}");
         assert!(err.contains("not in 1.."), "{err}");
+        // Each bad value of a flag: refused (status 2), the value and the
+        // flag named, with the allowed range.
+        let refused = |flag: &str, bad: &[&str], allowed: &str| {
+            for bad in bad {
+                let out = slipfront(&[command, &format!("--{flag}={bad}")]);
+                assert_eq!(out.status.code(), Some(2));
+                let err = String::from_utf8_lossy(&out.stderr);
+                assert!(err.contains(&format!("'{bad}' for '--{flag}")), "{err}");
+                assert!(err.contains(allowed), "{err}");
+            }
+        };
         // Batches to run ahead: a count, and a bounded one.
-        for bad in ["-1", "65", "four"] {
-            let out = slipfront(&[command, &format!("--gpu-run-ahead={bad}")]);
-            assert_eq!(out.status.code(), Some(2));
-            let err = String::from_utf8_lossy(&out.stderr);
-            assert!(
-                err.contains(&format!("'{bad}' for '--gpu-run-ahead")),
-                "{err}"
-            );
-            assert!(err.contains("from 0 to 64"), "{err}");
-        }
+        refused("gpu-run-ahead", &["-1", "65", "four"], "from 0 to 64");
         // A tile shape: WIDTHxHALO, the width at least 1, the halo 1 to 32.
-        for bad in ["8x0", "0x4", "8x33", "8"] {
-            let out = slipfront(&[command, &format!("--gpu-tile={bad}")]);
-            assert_eq!(out.status.code(), Some(2));
-            let err = String::from_utf8_lossy(&out.stderr);
-            assert!(err.contains(&format!("'{bad}' for '--gpu-tile")), "{err}");
-            assert!(err.contains("1 to 32"), "{err}");
-        }
+        refused("gpu-tile", &["8x0", "0x4", "8x33", "8"], "1 to 32");
         // Junction lanes a thread: a power of two up to 8.
-        for bad in ["0", "3", "16", "four"] {
-            let out = slipfront(&[command, &format!("--gpu-lane-run={bad}")]);
-            assert_eq!(out.status.code(), Some(2));
-            let err = String::from_utf8_lossy(&out.stderr);
-            assert!(
-                err.contains(&format!("'{bad}' for '--gpu-lane-run")),
-                "{err}"
-            );
-            assert!(err.contains("[1, 2, 4, 8]"), "{err}");
-        }
+        refused("gpu-lane-run", &["0", "3", "16", "four"], "[1, 2, 4, 8]");
     }
 }
 

@@ -280,6 +280,19 @@ fn lane_runs_merge_as_the_one_step_kernels_tree() {
         end,
     );
     assert_ne!(faster.disp, reference.disp, "control");
+    // A run that is no power of two up to 8 is refused, named.
+    let odd = GpuOptions {
+        lane_run: 3,
+        ..opts
+    };
+    let err = GpuEngine::with_options(&m, odd)
+        .err()
+        .expect("refused")
+        .to_string();
+    assert!(
+        err.contains("lane_run = 3") && err.contains("[1, 2, 4, 8]"),
+        "{err}"
+    );
 }
 
 /// Batches cut every 37 steps, each followed by a snapshot (whose forces

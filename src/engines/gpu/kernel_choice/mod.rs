@@ -263,9 +263,8 @@ impl Launch {
             if !launch.has_lane_runs() {
                 return None;
             }
-            let run = run[LANE_RUN.len()..].parse().ok()?;
-            launch.lane_run = Some(run).filter(|r| super::options::LANE_RUNS.contains(r));
-            launch.lane_run?;
+            let run = run[LANE_RUN.len()..].parse().ok();
+            launch.lane_run = Some(run.filter(|r| super::options::LANE_RUNS.contains(r))?);
         }
         rest.next().is_none().then_some(launch)
     }
