@@ -30,6 +30,24 @@
 // uz, vx, vz, persistent steps run): 8 words per scene.
 @group(0) @binding(11) var<storage, read_write> status: array<atomic<u32>>;
 
+// Junction k of the junction arrays: the only way the junction phase
+// reads and writes them (junction_first says where a block's are).
+fn junction_state_at(k: u32) -> vec2<u32> {
+    return junction_state[k];
+}
+
+fn junction_spring_at(k: u32) -> JunctionSpring {
+    return junction_spring[k];
+}
+
+fn set_junction_state(k: u32, state: vec2<u32>) {
+    junction_state[k] = state;
+}
+
+fn set_junction_spring(k: u32, spring: JunctionSpring) {
+    junction_spring[k] = spring;
+}
+
 // A scene that blew up is left as it is (its status keeps the first
 // blow-up) while the others go on.
 fn scene_stopped() -> bool {

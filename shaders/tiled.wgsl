@@ -168,8 +168,8 @@ fn load_tile(t: u32, first: u32, copy: u32, own: bool) {
                 let j = b.column;
                 let published = pub_junction_first(copy, ix) + j;
                 let to = halo_junction_first(ix) + j;
-                tile_junction_state[to] = tile_junction_state[published];
-                tile_junction_spring[to] = tile_junction_spring[published];
+                junction_state[to] = tile_junction_state[published];
+                junction_spring[to] = tile_junction_spring[published];
             }
         }
     }
@@ -339,6 +339,23 @@ fn tiled_steps(
     }
 }
 
+// Thread t's first lane run item of a step whose force phase has `bulk`
+// items (blocks, or patches), which threads 0, 1, … take first. The runs
+// start at the first thread after them and wrap past the last, so that
+// where the threads are enough for both no thread steps a bulk item and a
+// run: the phase lasts the longer of the two chains, not their sum. The
+// start is a multiple of 64 (where the threads are), so that item k keeps
+// its place k mod 64 in its subgroup and a block's runs their butterfly
+// (lane_shuffle.wgsl); an item's pass, and so its partners', is still
+// k / TILE_THREADS. The same items and sums, on other threads.
+fn first_run_item(t: u32, bulk: u32) -> u32 {
+    var start = 0u;
+    if TILE_THREADS % 64u == 0u {
+        start = ((bulk + 63u) / 64u * 64u) % TILE_THREADS;
+    }
+    return (t + TILE_THREADS - start) % TILE_THREADS;
+}
+
 // This tile's own columns' state at step `end` into that step's copy.
 fn store_tile_end(t: u32, end: u32) {
     let copy = copy_of(end);
@@ -433,8 +450,10 @@ fn tile_round(t: u32, d: u32, lanes: u32, stride: u32, first: bool, last: bool) 
                 }
             }
             if FRICTION_LAW == LAW_JUNCTIONS {
-                // Item (column, run): a block's lane run (LANE_RUN lanes).
-                for (var w = grid_walk(t, TILE_THREADS, lane_runs(lanes)); w.row < cols; grid_walk_next(&w)) {
+                // Item (column, run): a block's lane run (LANE_RUN lanes),
+                // on the threads after the bulk items' (first_run_item).
+                let bulk = select(cols * c.nz, ((cols + 1u) / 2u) * ((c.nz + 1u) / 2u), BOND_PATCHES);
+                for (var w = grid_walk(first_run_item(t, bulk), TILE_THREADS, lane_runs(lanes)); w.row < cols; grid_walk_next(&w)) {
                     let ix = a + w.row;
                     let l = w.column * LANE_RUN;
                     let jb = lanes_junction_block(ix - tile_lo, ix, ld);

@@ -295,6 +295,45 @@ fn lane_runs_merge_as_the_one_step_kernels_tree() {
     );
 }
 
+/// The tiled kernel's lane runs start on the first thread after the bulk
+/// forces' items (`first_run_item`), at a multiple of 64 so that a block's
+/// runs keep their places in their subgroup. On 15 rows a step's bulk items
+/// are no multiple of 8 (lavapipe's subgroup), so a start that is not
+/// rounded up misplaces the butterfly's partners. At 256 threads, lane
+/// runs of 1 and 2 merged in subgroups end in the one-step kernel's bits
+/// through ruptures.
+#[test]
+fn lane_runs_take_the_threads_the_bulk_forces_leave() {
+    let small: &[&str] = &slipfront::app::verify::SMALL_SCENE;
+    let fifteen_rows = ["geometry.nz=15", "geometry.height=0.035"];
+    let m = model(&[small, &fifteen_rows, &["loading.drive.velocity=0.4"]].concat());
+    assert_eq!(m.nz, 15);
+    let end = m.prep_steps + 2500;
+    let reference = run_to(&mut one_step(&m), end);
+    assert!(reference.total_ruptures() > 100, "junctions broke");
+    for lane_run in [1, 2] {
+        let opts = GpuOptions {
+            path: GpuPath::Tiled,
+            tile: Some(TileShape { width: 8, halo: 4 }),
+            persistent_threads: Some(256),
+            lane_run,
+            ..GpuOptions::default()
+        };
+        let mut e = GpuEngine::with_options(&m, opts).unwrap();
+        let got = run_to(&mut e, end);
+        assert!(
+            e.lane_shuffle_levels() >= 3,
+            "run {lane_run}: merged in subgroups"
+        );
+        assert!(
+            got == reference,
+            "run {lane_run}: {} ruptures against {}",
+            got.total_ruptures(),
+            reference.total_ruptures()
+        );
+    }
+}
+
 /// Batches cut every 37 steps, each followed by a snapshot (whose forces
 /// the next batch's first step reads from storage), give the bits of one
 /// long run.

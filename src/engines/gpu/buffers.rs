@@ -10,7 +10,7 @@ use super::layout::{
 };
 use super::precision::{Coord, GpuReal, Packed};
 use super::shaders::Kernel;
-use super::tiles::TileGeometry;
+use super::tiles::{TileGeometry, TileScratch};
 use super::{GpuContext, GpuEngine};
 use crate::engines::step_params::Consts;
 use crate::model::lattice::{block_flags, initial_displacement};
@@ -70,6 +70,8 @@ pub(super) struct Buffers {
     /// One lattice: shared by the scenes of an ensemble.
     pub(super) flags: Region,
     pub(super) contact: Region,
+    /// Every scene's junctions, then (tiled kernel) each tile's private
+    /// copy of its halo's (`TileScratch::halo_junctions`).
     pub(super) junction_spring: Region,
     pub(super) junction_state: Region,
     /// Per interface block, the sums of its junctions while none changes
@@ -85,8 +87,7 @@ pub(super) struct Buffers {
     /// (never read then).
     pub(super) record_placeholders: [Region; 5],
     /// The tiled kernel's: two published copies of the blocks (u, v), of
-    /// the junctions (state, spring; then each tile's private halo
-    /// junctions), the ends of a batch's dispatches and each tile's rounds
+    /// the junctions (state, spring), the ends of a batch's dispatches and each tile's rounds
     /// done; placeholders for the other kernels.
     pub(super) tile_scratch: [Region; 6],
     /// Group 1: each scene's batch (`GpuBatch`), written before each batch.
@@ -130,6 +131,20 @@ impl Buffers {
             })
             .collect();
         let flags = block_flags(model);
+        // The tiled kernel's scratch per scene (`TileGeometry::scratch_per_scene`);
+        // the lane sums of the others.
+        let scratch = geometry.map_or(
+            TileScratch {
+                published_blocks: 0,
+                published_junctions: 0,
+                halo_junctions: 0,
+                lane_sums: shape.nx * shape.lanes,
+            },
+            |g| g.scratch_per_scene(n, shape.nx, nj / shape.nx.max(1), shape.lanes),
+        );
+        // Every scene's junctions, then (tiled kernel) each tile's private
+        // copy of its halo's, which a dispatch fills before it reads them.
+        let halo_junctions = s * scratch.halo_junctions;
         let springs: Vec<GpuJunctionSpring<T>> = models
             .iter()
             .flat_map(|m| {
@@ -138,18 +153,17 @@ impl Buffers {
                     &vec![0.0; nj],
                 )
             })
+            .chain(std::iter::repeat_n(
+                bytemuck::Zeroable::zeroed(),
+                halo_junctions,
+            ))
             .collect();
-        let junction_state = vec![[crate::model::junction::PINNED, 0u32]; s * nj];
+        let junction_state = vec![[crate::model::junction::PINNED, 0u32]; s * nj + halo_junctions];
         let law_state: Vec<Packed<T>> = models
             .iter()
             .flat_map(crate::engines::friction_state::initial_law_state::<T, Coord<T>>)
             .map(T::pack)
             .collect();
-        // The tiled kernel's scratch per scene (`TileGeometry::scratch_per_scene`);
-        // the lane sums of the others.
-        let scratch = geometry.map_or([0, 0, shape.nx * shape.lanes], |g| {
-            g.scratch_per_scene(n, shape.nx, nj / shape.nx.max(1), shape.lanes)
-        });
         let mut arenas = Arenas::default();
         let (rw, ro) = (Access::ReadWrite, Access::ReadOnly);
         let pairs = |len: usize| s * len * GpuEngine::<T>::REAL_PAIR_BYTES;
@@ -176,15 +190,24 @@ impl Buffers {
         let status = arenas.zeros(rw, s * STATUS_BYTES);
         // One WGSL `LaneSum` per lane (of each tile's held blocks for the
         // tiled kernel).
-        let lane_partial = arenas.zeros(rw, s * scratch[2] * std::mem::size_of::<GpuLaneSum<T>>());
+        let lane_partial = arenas.zeros(
+            rw,
+            s * scratch.lane_sums * std::mem::size_of::<GpuLaneSum<T>>(),
+        );
         let ends = geometry.map_or(0, |_| ONE_STEP_BATCH as usize);
         let tile_scratch = [
             // Published u and v.
-            arenas.zeros(rw, s * scratch[0] * GpuEngine::<T>::DISP_BYTES),
-            arenas.zeros(rw, pairs(scratch[0])),
-            // The tiles' junction state and springs.
-            arenas.zeros(rw, s * scratch[1] * WORD_PAIR_BYTES),
-            arenas.zeros(rw, s * scratch[1] * GpuEngine::<T>::SPRING_BYTES),
+            arenas.zeros(
+                rw,
+                s * scratch.published_blocks * GpuEngine::<T>::DISP_BYTES,
+            ),
+            arenas.zeros(rw, pairs(scratch.published_blocks)),
+            // Published junction state and springs.
+            arenas.zeros(rw, s * scratch.published_junctions * WORD_PAIR_BYTES),
+            arenas.zeros(
+                rw,
+                s * scratch.published_junctions * GpuEngine::<T>::SPRING_BYTES,
+            ),
             // The dispatches' ends (read-only in the kernels).
             arenas.zeros(ro, ends * 4),
             // Each tile's rounds done (chained tiles).

@@ -272,8 +272,26 @@ pub fn persistent_steps_per_dispatch(
 /// up to the lane tree's eight-leaf subtrees.
 pub const LANE_RUNS: [u32; 4] = [1, 2, 4, 8];
 
-/// The lane run `auto` times beside a lane a thread on hardware.
+/// The lane run `gpu_table` section 8 times beside a lane a thread (the
+/// run `fitting_lane_run` gives Table S1 on the resident kernel's 1024
+/// threads).
 pub const LANE_RUN_TIMED: u32 = 4;
+
+/// The lane run `auto` times beside a lane a thread on hardware: the
+/// shortest that gives every thread of a junction phase at most one run,
+/// where `blocks` interface blocks of `lanes` lanes each step at once on
+/// `threads` threads. A thread's lanes are a chain (each lane's loads, its
+/// junctions, its merge), so the longest chain is then as short as the
+/// threads allow, and a longer run would only lengthen it; a shorter one
+/// leaves some threads two runs, as long a chain with more runs' overhead.
+/// 1 where a lane a thread already fits, at most the longest run.
+pub fn fitting_lane_run(blocks: u32, lanes: u32, threads: u32) -> u32 {
+    let longest = LANE_RUNS[LANE_RUNS.len() - 1];
+    LANE_RUNS
+        .into_iter()
+        .find(|&run| blocks.saturating_mul(lanes.div_ceil(run)) <= threads)
+        .unwrap_or(longest)
+}
 
 /// `--gpu-lane-run`: one of `LANE_RUNS`, else an error naming the value and
 /// the allowed ones.

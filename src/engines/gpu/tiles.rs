@@ -143,25 +143,40 @@ impl TileGeometry {
         self.blocks as u64 * per_block as u64 + kept + slots + TILE_OWN_BYTES
     }
 
-    /// Elements of each scratch buffer per scene of `blocks` blocks, `nx`
-    /// columns, `ns` junctions per interface block and `lanes` lanes: the
-    /// published blocks (two copies); the published junctions (two copies)
-    /// and then each tile's private halo junctions; the lane sums.
+    /// Elements of each scratch array per scene of `blocks` blocks, `nx`
+    /// columns, `ns` junctions per interface block and `lanes` lanes.
     pub fn scratch_per_scene(
         &self,
         blocks: usize,
         nx: usize,
         ns: usize,
         lanes: usize,
-    ) -> [usize; 3] {
+    ) -> TileScratch {
         let tiles = self.tiles as usize;
         let span = self.span as usize;
-        [
-            2 * blocks,
-            2 * nx * ns + tiles * span * ns,
-            tiles * span * lanes,
-        ]
+        TileScratch {
+            published_blocks: 2 * blocks,
+            published_junctions: 2 * nx * ns,
+            halo_junctions: tiles * span * ns,
+            lane_sums: tiles * span * lanes,
+        }
     }
+}
+
+/// Elements per scene of what the tiled kernel keeps beside the state
+/// (`shaders/state_tiled.wgsl`, `shaders/junction_tiled.wgsl`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct TileScratch {
+    /// Two published copies of the blocks (`pub_disp`, `pub_vel`).
+    pub published_blocks: usize,
+    /// Two published copies of the junctions (`tile_junction_state`,
+    /// `tile_junction_spring`).
+    pub published_junctions: usize,
+    /// Each tile's private copy of its halo's junctions: the junction
+    /// arrays' tail, after every scene's own junctions.
+    pub halo_junctions: usize,
+    /// The lane sums of each tile's held interface blocks (`lane_partial`).
+    pub lane_sums: usize,
 }
 
 /// Whether the tiled kernel can step `model` in precision `T` on an

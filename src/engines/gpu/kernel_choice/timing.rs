@@ -7,11 +7,12 @@
 
 use super::{launches, ChoiceSource, KernelChoice, Launch, TimedPhase};
 use crate::engines::gpu::context::GpuContext;
-use crate::engines::gpu::options::{GpuOptions, LANE_RUN_TIMED};
+use crate::engines::gpu::options::{fitting_lane_run, persistent_threads, GpuOptions};
 use crate::engines::gpu::precision::GpuReal;
 use crate::engines::gpu::shaders::Kernel;
 use crate::engines::gpu::tiles::{
-    TileShape, CHAINED_HALOS_SEARCHED, CHAINED_WIDTHS_SEARCHED, HALOS_SEARCHED, WIDTHS_SEARCHED,
+    TileGeometry, TileShape, CHAINED_HALOS_SEARCHED, CHAINED_WIDTHS_SEARCHED, HALOS_SEARCHED,
+    WIDTHS_SEARCHED,
 };
 use crate::engines::gpu::GpuEngine;
 use crate::engines::{EngineError, EngineState};
@@ -424,12 +425,13 @@ pub fn measure_within<T: GpuReal>(
     }
     // Lane runs, on the fastest launch so far: the same bits, fewer
     // instructions a block's lanes for more registers a thread, which no
-    // hardware figure has weighed yet.
+    // hardware figure has weighed yet. The run that fills its threads once.
     let junctions = models[0].law == crate::model::scenario::FrictionLaw::Junctions
         && models[0].junctions.is_some_and(|j| j.count > 1);
     if let Some((launch, _)) = fastest.get() {
-        if times_lane_run(launch, opts, ctx.is_software(), junctions) {
-            time(launch.with_lane_run(LANE_RUN_TIMED));
+        let run = launch_lane_run(launch, opts, &models[0], &ctx.limits, ctx.is_software());
+        if times_lane_run(launch, opts, ctx.is_software(), junctions) && run > 1 {
+            time(launch.with_lane_run(run));
         }
     }
     let Some(&(launch, _)) = timings.iter().min_by(|a, b| a.1.total_cmp(&b.1)) else {
@@ -454,8 +456,31 @@ fn times_one_lane_a_round(launch: Launch, opts: GpuOptions, software: bool) -> b
     launch.kernel.is_persistent() && !launch.one_lane_a_round && opts.two_lanes_a_round && !software
 }
 
+/// The lane run `measure` times `launch` with (`fitting_lane_run`): its
+/// junction phase steps every interface block's lanes at once (the tiled
+/// kernel: the columns a tile holds) on its workgroup's threads.
+pub fn launch_lane_run(
+    launch: Launch,
+    opts: GpuOptions,
+    model: &Model,
+    limits: &wgpu::Limits,
+    software: bool,
+) -> u32 {
+    let opts = launch.options(opts);
+    let threads = persistent_threads(launch.kernel, opts.persistent_threads, limits, software);
+    let lanes = crate::model::junction::JUNCTION_LANES.min(model.junctions.map_or(0, |j| j.count));
+    let mut blocks = model.nx as u32;
+    if launch.kernel == Kernel::Tiled {
+        let shape = opts.tile.unwrap_or(TileShape::DEFAULT);
+        if let Ok(tiles) = TileGeometry::new(model, shape) {
+            blocks = blocks.min(tiles.span);
+        }
+    }
+    fitting_lane_run(blocks, lanes as u32, threads)
+}
+
 /// Whether `measure` times `launch` (the fastest so far) again with
-/// `LANE_RUN_TIMED` lanes a thread: a kernel with lane runs on hardware,
+/// more than one lane a thread (`launch_lane_run`): a kernel with lane runs on hardware,
 /// on a scene whose blocks have junction lanes to run, unless the options
 /// or the launch fix the run. On software adapters each lane of a run is
 /// a loop pass llvmpipe counts (fewer steps a dispatch), so `auto` keeps a
@@ -751,12 +776,12 @@ mod tests {
                 !times_lane_run(launch, plain, false, false),
                 "Coulomb: {kernel:?}"
             );
-            let run = launch.with_lane_run(LANE_RUN_TIMED);
+            let run = launch.with_lane_run(4);
             assert!(
                 !times_lane_run(run, plain, false, true),
                 "twice: {kernel:?}"
             );
-            assert_eq!(run.options(plain).lane_run, LANE_RUN_TIMED);
+            assert_eq!(run.options(plain).lane_run, 4);
             assert_eq!(launch.options(plain).lane_run, 1);
             assert_eq!(Launch::named(&run.name()), Some(run), "{}", run.name());
         }
@@ -783,6 +808,42 @@ mod tests {
             Launch::named("tiled/512/8x4/chained/lane-run-8").map(|l| l.lane_run),
             Some(Some(8))
         );
+    }
+
+    /// The run timed on Table S1 gives each thread of the junction phase at
+    /// most one run: 57 blocks of 64 lanes on the resident kernel's 1024
+    /// threads in runs of 4, on 256 threads in runs of 8 (the longest,
+    /// though 57 × 8 do not fit); a tiled launch counts the columns a tile
+    /// holds (8x4: 16 columns on 512 threads, runs of 2).
+    #[test]
+    fn the_lane_run_timed_fills_the_launchs_threads_once() {
+        let s = crate::model::scenario::Scenario::parse(
+            crate::model::scenario::built_in("tromborg2014_precursors").unwrap(),
+            "s1",
+            &[] as &[String],
+        )
+        .unwrap();
+        let model = Model::from_scenario(&s, false).unwrap();
+        let limits = wgpu::Limits {
+            max_compute_invocations_per_workgroup: 1024,
+            max_compute_workgroup_size_x: 1024,
+            ..wgpu::Limits::default()
+        };
+        let plain = GpuOptions::default();
+        let run = |name: &str| {
+            let launch = Launch::named(name).unwrap();
+            launch_lane_run(launch, plain, &model, &limits, false)
+        };
+        assert_eq!(run("resident/1024"), 4);
+        assert_eq!(run("persistent/256"), 8);
+        assert_eq!(run("tiled/512"), 2);
+        assert_eq!(run("tiled/512/8x4/chained"), 2);
+        assert_eq!(run("tiled/256/16x2/chained"), 8);
+        assert_eq!(run("tiled/256/4x2/chained"), 2);
+        // A lane a thread that fits already: no run is timed.
+        assert_eq!(run("tiled/1024/4x2"), 1);
+        assert_eq!(fitting_lane_run(57, 16, 1024), 1);
+        assert_eq!(fitting_lane_run(57, 64, 0), 8);
     }
 
     /// A launch with patches turns them on in the options it builds; one
