@@ -122,6 +122,16 @@ fn add_bond_terms(t: BondTerms, d: vec2<i32>, fx: ptr<function, force_sum>, fz: 
     *fz = force_sum_add_bond(sz, t.along_z.x, t.along_z.y);
 }
 
+// Whether add_bond loads every neighbour and selects the missing ones'
+// terms away (the one-step kernels: the host sets it), rather than
+// branching around a missing neighbour's loads. With neither that branch
+// nor one between two state copies (state_one_step.wgsl), a block's eight
+// neighbours' loads can be in flight together, where each had waited for
+// the bond before it; a kernel holding its state in workgroup memory, or
+// one for which more registers cost a workgroup an SM (the persistent
+// kernel), keeps the branch.
+override NEIGHBOURS_WITHOUT_BRANCHES: bool = false;
+
 // Bond of the block at column ix and row iz (displacement ui, velocity vi)
 // to its neighbour at offset d, if that is in the lattice, added to the
 // block's sums.
@@ -138,7 +148,25 @@ fn add_bond(
 ) {
     let jx = ix + d.x;
     let jz = iz + d.y;
-    if jx < 0 || jz < 0 || jx >= i32(c.nx) || jz >= i32(c.nz) {
+    let exists = jx >= 0 && jz >= 0 && jx < i32(c.nx) && jz < i32(c.nz);
+    if NEIGHBOURS_WITHOUT_BRANCHES {
+        // A missing neighbour's slot is the nearest one in the lattice.
+        let cx = u32(clamp(jx, 0, i32(c.nx) - 1));
+        let cz = u32(clamp(jz, 0, i32(c.nz) - 1));
+        let j = cz * c.nx + cx;
+        let t = bond_terms(ui, vi, load_disp_at(j, cx, cz), load_vel_at(j, cx, cz), d, length, stiffness);
+        // The sums with the bond added, kept where the neighbour exists:
+        // the same arithmetic as the branch's (selecting the terms instead
+        // would change where a compiler may fuse their products into the
+        // sums, and so their rounding).
+        var sx = *fx;
+        var sz = *fz;
+        add_bond_terms(t, d, &sx, &sz);
+        *fx = select(*fx, sx, exists);
+        *fz = select(*fz, sz, exists);
+        return;
+    }
+    if !exists {
         return;
     }
     add_neighbour_bond(u32(jz) * c.nx + u32(jx), u32(jx), u32(jz), ui, vi, d, length, stiffness, fx, fz);

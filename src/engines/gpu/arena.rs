@@ -72,6 +72,23 @@ impl Region {
         }
     }
 
+    /// Bytes `at..at + size` of the array as an array of its own (a
+    /// binding of it starts at `at`, which must be a multiple of the
+    /// adapter's storage offset alignment).
+    pub(super) fn part(&self, at: u64, size: u64) -> Region {
+        assert!(
+            at + size <= self.size,
+            "bytes {at}..{} of an array of {}",
+            at + size,
+            self.size
+        );
+        Region {
+            buffer: self.buffer.clone(),
+            offset: self.offset + at,
+            size,
+        }
+    }
+
     /// Writes `bytes` at byte `at` of the array (in queue order).
     pub(super) fn write(&self, queue: &wgpu::Queue, at: u64, bytes: &[u8]) {
         let range = self.range(at, bytes.len() as u64);

@@ -63,9 +63,13 @@ const _: () = assert!(
 pub(super) struct Buffers {
     /// The run constants: one record per scene.
     pub(super) consts: Region,
-    /// Two copies of u and v: the one-step kernel reads one, writes the other.
+    /// Two copies of u and v: the one-step kernel reads one, writes the
+    /// other. Each pair is the two halves of one array (`disp_copies`,
+    /// `vel_copies`), which the one-step kernels bind whole.
     pub(super) disp: [Region; 2],
     pub(super) vel: [Region; 2],
+    pub(super) disp_copies: Region,
+    pub(super) vel_copies: Region,
     pub(super) force: Region,
     /// One lattice: shared by the scenes of an ensemble.
     pub(super) flags: Region,
@@ -164,15 +168,18 @@ impl Buffers {
             .flat_map(crate::engines::friction_state::initial_law_state::<T, Coord<T>>)
             .map(T::pack)
             .collect();
+        let pairs = |len: usize| s * len * GpuEngine::<T>::REAL_PAIR_BYTES;
+        // Both copies of u in one array, and of v in another: each copy
+        // padded to the storage offset alignment, so that each is also an
+        // array of its own (`disp`, `vel`) and the one-step kernels index
+        // the pair (`state_one_step.wgsl`).
+        let copy = CopyPair::new(limits, bytemuck::cast_slice(&disp));
+        let vel_copy = CopyPair::zeros(limits, pairs(n));
         let mut arenas = Arenas::default();
         let (rw, ro) = (Access::ReadWrite, Access::ReadOnly);
-        let pairs = |len: usize| s * len * GpuEngine::<T>::REAL_PAIR_BYTES;
         let consts = arenas.bytes(ro, bytemuck::cast_slice(&gpu_consts));
-        let disp = [
-            arenas.bytes(rw, bytemuck::cast_slice(&disp)),
-            arenas.bytes(rw, bytemuck::cast_slice(&disp)),
-        ];
-        let vel = [arenas.zeros(rw, pairs(n)), arenas.zeros(rw, pairs(n))];
+        let disp_copies = arenas.bytes(rw, &copy.bytes);
+        let vel_copies = arenas.zeros(rw, 2 * vel_copy.stride);
         let force = arenas.zeros(rw, pairs(n));
         let flags = arenas.bytes(ro, bytemuck::cast_slice(&flags));
         let contact = arenas.zeros(rw, pairs(shape.nx));
@@ -223,8 +230,10 @@ impl Buffers {
         let built = arenas.build(device, limits, packed);
         Buffers {
             consts: built.region(consts),
-            disp: disp.map(|d| built.region(d)),
-            vel: vel.map(|v| built.region(v)),
+            disp: copy.halves(&built.region(disp_copies)),
+            vel: vel_copy.halves(&built.region(vel_copies)),
+            disp_copies: built.region(disp_copies),
+            vel_copies: built.region(vel_copies),
             force: built.region(force),
             flags: built.region(flags),
             contact: built.region(contact),
@@ -245,6 +254,44 @@ impl Buffers {
     }
 }
 
+/// Two copies of one state array in one array: each `size` bytes long, the
+/// second at `stride` (a multiple of the storage offset alignment), and
+/// the pair `2 stride` bytes, so that `arrayLength / 2` is the stride.
+struct CopyPair {
+    size: usize,
+    stride: usize,
+    /// The pair's first contents (empty for zeros).
+    bytes: Vec<u8>,
+}
+
+impl CopyPair {
+    fn zeros(limits: &wgpu::Limits, size: usize) -> CopyPair {
+        let align = (limits.min_storage_buffer_offset_alignment as usize).max(4);
+        CopyPair {
+            size,
+            stride: size.max(1).next_multiple_of(align),
+            bytes: Vec::new(),
+        }
+    }
+
+    /// Both copies holding `copy`.
+    fn new(limits: &wgpu::Limits, copy: &[u8]) -> CopyPair {
+        let mut pair = CopyPair::zeros(limits, copy.len());
+        pair.bytes = vec![0; 2 * pair.stride];
+        pair.bytes[..copy.len()].copy_from_slice(copy);
+        pair.bytes[pair.stride..pair.stride + copy.len()].copy_from_slice(copy);
+        pair
+    }
+
+    /// The two copies as arrays of their own.
+    fn halves(&self, pair: &Region) -> [Region; 2] {
+        [
+            pair.part(0, self.size as u64),
+            pair.part(self.stride as u64, self.size as u64),
+        ]
+    }
+}
+
 /// Group 0 of `kernel`: the state buffers and the record buffers `[plan,
 /// sums, rows, entries, step samples]` (`Recorder::state_bindings`, or
 /// placeholders' regions), bound by the names the kernel's module declares
@@ -260,6 +307,8 @@ pub(super) fn state_group(
         ("scene_consts", &b.consts),
         // The one-step kernels' ping-pong copies; the persistent kernel's
         // state in place.
+        ("disp_copies", &b.disp_copies),
+        ("vel_copies", &b.vel_copies),
         ("disp_a", &b.disp[0]),
         ("vel_a", &b.vel[0]),
         ("disp_b", &b.disp[1]),

@@ -88,6 +88,10 @@ impl StepKernel {
         // workgroup variable a module's entry point names, used or not).
         if !self.kernel.is_persistent() && self.geometry.is_none() {
             constants.push(("REDUCTION_WIDTH", 1.0));
+            // Their neighbours are in storage and their state copies one
+            // array: every neighbour's loads in flight together
+            // (`bulk_forces.wgsl`).
+            constants.push(("NEIGHBOURS_WITHOUT_BRANCHES", 1.0));
         }
         // The kernels whose steps end at a workgroup barrier, so that their
         // lanes can read their block's kept bit from workgroup memory
