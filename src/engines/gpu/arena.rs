@@ -113,6 +113,10 @@ enum Contents<'a> {
     Bytes(&'a [u8]),
     /// This many zero bytes (every buffer starts zeroed: wgpu's rule).
     Zeros(usize),
+    /// Two copies of these bytes, the second `stride` bytes after the
+    /// first, in `2 stride` bytes (written in place: no pair is built on
+    /// the host).
+    Twice(&'a [u8], usize),
 }
 
 impl Contents<'_> {
@@ -120,6 +124,7 @@ impl Contents<'_> {
         match self {
             Contents::Bytes(b) => b.len(),
             Contents::Zeros(n) => *n,
+            Contents::Twice(_, stride) => 2 * stride,
         }
     }
 }
@@ -134,6 +139,17 @@ impl<'a> Arenas<'a> {
     /// Adds an array with these initial bytes.
     pub(super) fn bytes(&mut self, access: Access, bytes: &'a [u8]) -> Slot {
         self.add(access, Contents::Bytes(bytes))
+    }
+
+    /// Adds an array of two copies of `bytes`, the second at `stride`
+    /// (at least `bytes.len()`), `2 stride` bytes long.
+    pub(super) fn twice(&mut self, access: Access, bytes: &'a [u8], stride: usize) -> Slot {
+        assert!(
+            stride >= bytes.len(),
+            "{stride} bytes apart, {} long",
+            bytes.len()
+        );
+        self.add(access, Contents::Twice(bytes, stride))
     }
 
     /// Adds an array of `len` zero bytes.
@@ -191,9 +207,17 @@ impl<'a> Arenas<'a> {
                         .expect("a buffer mapped at creation maps");
                     let members = placed.iter().enumerate().filter(|(_, p)| p.0 == k);
                     for (i, &(_, at)) in members {
-                        if let Contents::Bytes(array) = self.arrays[i].1 {
-                            let at = at as usize;
-                            view.slice(at..at + array.len()).copy_from_slice(array);
+                        let at = at as usize;
+                        match self.arrays[i].1 {
+                            Contents::Bytes(array) => {
+                                view.slice(at..at + array.len()).copy_from_slice(array);
+                            }
+                            Contents::Twice(array, stride) => {
+                                for at in [at, at + stride] {
+                                    view.slice(at..at + array.len()).copy_from_slice(array);
+                                }
+                            }
+                            Contents::Zeros(_) => {}
                         }
                     }
                 }

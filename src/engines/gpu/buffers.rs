@@ -173,12 +173,13 @@ impl Buffers {
         // padded to the storage offset alignment, so that each is also an
         // array of its own (`disp`, `vel`) and the one-step kernels index
         // the pair (`state_one_step.wgsl`).
-        let copy = CopyPair::new(limits, bytemuck::cast_slice(&disp));
-        let vel_copy = CopyPair::zeros(limits, pairs(n));
+        let disp_bytes: &[u8] = bytemuck::cast_slice(&disp);
+        let copy = CopyPair::new(limits, disp_bytes.len());
+        let vel_copy = CopyPair::new(limits, pairs(n));
         let mut arenas = Arenas::default();
         let (rw, ro) = (Access::ReadWrite, Access::ReadOnly);
         let consts = arenas.bytes(ro, bytemuck::cast_slice(&gpu_consts));
-        let disp_copies = arenas.bytes(rw, &copy.bytes);
+        let disp_copies = arenas.twice(rw, disp_bytes, copy.stride);
         let vel_copies = arenas.zeros(rw, 2 * vel_copy.stride);
         let force = arenas.zeros(rw, pairs(n));
         let flags = arenas.bytes(ro, bytemuck::cast_slice(&flags));
@@ -260,27 +261,15 @@ impl Buffers {
 struct CopyPair {
     size: usize,
     stride: usize,
-    /// The pair's first contents (empty for zeros).
-    bytes: Vec<u8>,
 }
 
 impl CopyPair {
-    fn zeros(limits: &wgpu::Limits, size: usize) -> CopyPair {
+    fn new(limits: &wgpu::Limits, size: usize) -> CopyPair {
         let align = (limits.min_storage_buffer_offset_alignment as usize).max(4);
         CopyPair {
             size,
             stride: size.max(1).next_multiple_of(align),
-            bytes: Vec::new(),
         }
-    }
-
-    /// Both copies holding `copy`.
-    fn new(limits: &wgpu::Limits, copy: &[u8]) -> CopyPair {
-        let mut pair = CopyPair::zeros(limits, copy.len());
-        pair.bytes = vec![0; 2 * pair.stride];
-        pair.bytes[..copy.len()].copy_from_slice(copy);
-        pair.bytes[pair.stride..pair.stride + copy.len()].copy_from_slice(copy);
-        pair
     }
 
     /// The two copies as arrays of their own.
