@@ -79,12 +79,20 @@ fn one_step_lanes(
         wg_sample_computed = select(0u, 1u, fast_chain_due(step_sample(), w == 0u));
     }
     if junction_group && !ready && local < JUNCTION_LANES {
+        // The lane's first pair is loaded beside the junction block, not
+        // once the block is known to be summed: one round trip to storage
+        // on the lanes' path where there were two, for loads a kept
+        // block's lanes make for nothing (its junctions' states and
+        // springs, 2 KB a block and step at Ns = 100 in mixed f32).
+        // The same values: lane_pair clamps a lane past the last junction
+        // to the last.
+        let first_pair = lane_pair(w, local);
         jb = junction_block(w, ld);
         kept = jb.kept;
         if !kept {
             var sum = lane_sum_zero();
             if local < lanes {
-                sum = junction_lane(w, local, jb, ld);
+                sum = lane_from(w, local, jb, ld, first_pair);
             }
             lane_sum[local] = sum;
         }

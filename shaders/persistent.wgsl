@@ -10,7 +10,7 @@
 // start and written back at its end (state_resident.wgsl: the resident
 // kernel, for lattices that fit). Both run this same loop.
 // CPU twin: src/engines/cpu/mod.rs CpuEngine::one_step (one step of its loop).
-// import: bulk_forces, bulk_patch, common, coordinates, friction_law, junctions, kept_bits, lane_merge, lane_partials, record_buffers, record_common, scene, state, verlet
+// import: bulk_forces, bulk_patch, common, coordinates, friction_law, junctions, lane_merge, noted_blocks, lane_partials, record_buffers, record_common, scene, state, verlet
 
 // With an output file, the samples of the batch (batch.records of them,
 // in step order; src/engines/gpu/recorder.rs): a sample of step s is recorded in
@@ -104,11 +104,11 @@ fn persistent_steps(
         return;
     }
     state_enter(t, PERSISTENT_THREADS);
-    // The first step's kept bits (kept_bits.wgsl; resident only).
-    if LANES_READ_KEPT && FRICTION_LAW == LAW_JUNCTIONS {
+    // The first step's junction blocks (noted_blocks.wgsl; resident only).
+    if NOTED_JUNCTION_BLOCKS && FRICTION_LAW == LAW_JUNCTIONS {
         let first = loads_at(steps.x);
         for (var ix = t; ix < c.nx; ix += PERSISTENT_THREADS) {
-            note_kept(ix, ix, first);
+            note_junction_block(ix, ix, first);
         }
         workgroupBarrier();
     }
@@ -238,7 +238,7 @@ fn persistent_steps(
             var friction: real = 0.0;
             if FRICTION_LAW != LAW_NONE && i < c.nx {
                 if FRICTION_LAW == LAW_JUNCTIONS && !ready {
-                    let jb = junction_block(i, ld);
+                    let jb = update_junction_block(i, i, ld);
                     var lane_sums: LaneSum;
                     if jb.kept {
                         lane_sums = kept_lane_sum(jb);
@@ -262,11 +262,9 @@ fn persistent_steps(
             if batch.forces_only == 0u {
                 verlet(i, b.column, b.row, force[block_base() + i], friction, ld, s);
             }
-            // Its kept bit for step s + 1, from the state that step starts
-            // from: this block's update, its sums stored above, its
-            // junctions as the lanes left them.
-            if LANES_READ_KEPT && FRICTION_LAW == LAW_JUNCTIONS && i < c.nx {
-                note_kept(i, i, ld);
+            // Its junction block for step s + 1.
+            if NOTED_JUNCTION_BLOCKS && FRICTION_LAW == LAW_JUNCTIONS && i < c.nx {
+                note_junction_block(i, i, ld);
             }
         }
         if sampling {

@@ -45,7 +45,7 @@
 // the lanes merged as a tree (lane_tree8), and the update. Junction friction laws
 // only (the per-block laws keep state that a halo would race on).
 // CPU twin: src/engines/cpu/mod.rs CpuEngine::one_step (each step of the loop).
-// import: bulk_forces, bulk_patch, common, coordinates, junction_store, junctions, kept_bits, lane_merge, lane_partials, record_batch, record_buffers, record_common, scene, state, verlet
+// import: bulk_forces, bulk_patch, common, coordinates, junction_store, junctions, lane_merge, lane_partials, noted_blocks, record_batch, record_buffers, record_common, scene, state, verlet
 
 override TILE_THREADS: u32 = 64u;
 // Bulk forces by 2×2 patches of blocks (bulk_patch.wgsl;
@@ -392,12 +392,12 @@ fn tile_round(t: u32, d: u32, lanes: u32, stride: u32, first: bool, last: bool) 
     load_tile(t, plan.x, d & 1u, first);
     storageBarrier();
     workgroupBarrier();
-    // The first step's kept bits, for every column of the tile
-    // (kept_bits.wgsl; a bit a column from tile_lo).
-    if LANES_READ_KEPT && FRICTION_LAW == LAW_JUNCTIONS {
+    // The first step's junction blocks, for every column of the tile
+    // (noted_blocks.wgsl; a note a column from tile_lo).
+    if NOTED_JUNCTION_BLOCKS && FRICTION_LAW == LAW_JUNCTIONS {
         let first = loads_at(plan.x);
         for (var ix = tile_lo + t; ix < tile_hi; ix += TILE_THREADS) {
-            note_kept(ix - tile_lo, ix, first);
+            note_junction_block(ix - tile_lo, ix, first);
         }
         workgroupBarrier();
     }
@@ -488,7 +488,7 @@ fn tile_round(t: u32, d: u32, lanes: u32, stride: u32, first: bool, last: bool) 
             } else {
                 f = tile_force[tile_slot_at(ix, iz)];
                 if FRICTION_LAW == LAW_JUNCTIONS && iz == 0u {
-                    let jb = junction_block(ix, ld);
+                    let jb = update_junction_block(ix - tile_lo, ix, ld);
                     var sums: LaneSum;
                     if jb.kept {
                         sums = kept_lane_sum(jb);
@@ -510,10 +510,10 @@ fn tile_round(t: u32, d: u32, lanes: u32, stride: u32, first: bool, last: bool) 
             if update {
                 verlet(i, ix, iz, f, friction, ld, s);
             }
-            // Its kept bit for step s + 1 (whose columns this step's
-            // contain), from the state that step starts from.
-            if LANES_READ_KEPT && FRICTION_LAW == LAW_JUNCTIONS && iz == 0u {
-                note_kept(ix - tile_lo, ix, ld);
+            // Its junction block for step s + 1 (whose columns this
+            // step's contain).
+            if NOTED_JUNCTION_BLOCKS && FRICTION_LAW == LAW_JUNCTIONS && iz == 0u {
+                note_junction_block(ix - tile_lo, ix, ld);
             }
         }
         if sampling {

@@ -90,14 +90,14 @@ fn every_junction_summed(text: &str, min_seconds: f64) {
 /// gets the variants of `variants`.
 fn kept_rows(name: &str, model: &Model, as_shipped: bool, min_seconds: f64) {
     for kernel in candidates(model) {
-        for (shader_checks, bond_patches, lanes_read_kept, chained_tiles) in
+        for (shader_checks, bond_patches, noted_junction_blocks, chained_tiles) in
             variants(kernel, as_shipped)
         {
             let kept = GpuOptions {
                 keep_junction_sums: true,
                 shader_checks,
                 bond_patches,
-                lanes_read_kept,
+                noted_junction_blocks,
                 chained_tiles,
                 ..options(kernel)
             };
@@ -105,12 +105,12 @@ fn kept_rows(name: &str, model: &Model, as_shipped: bool, min_seconds: f64) {
                 Ok((s, host)) => format!("{:.2} | {host:.2}", s * 1e6),
                 Err(e) => format!("not run: {e} |"),
             };
-            let how = match (shader_checks, bond_patches, lanes_read_kept) {
+            let how = match (shader_checks, bond_patches, noted_junction_blocks) {
                 _ if chained_tiles => ", rounds chained in one dispatch",
                 (true, _, _) => ", wgpu's run-time checks in the kernels",
                 (_, true, _) => ", bulk forces by 2×2 patches of blocks",
                 (_, _, false) => {
-                    ", each lane calling junction_block for its block's kept flag \
+                    ", each lane and update calling junction_block for its block \
                      (before session 33)"
                 }
                 _ => "",

@@ -29,9 +29,9 @@
 //!    default, and with every lane's sum through storage) and with quiet
 //!    blocks' sums kept (the default), Ns = 16, Coulomb friction, and no
 //!    friction (the bulk alone, the tiled kernel included); the resident
-//!    and tiled kernels also with each junction lane calling
-//!    `junction_block` for its block's kept flag, as before session 33
-//!    (`GpuOptions::lanes_read_kept`), and the tiled kernel with its
+//!    and tiled kernels also with each junction lane and each update
+//!    calling `junction_block` for its block, as before session 33
+//!    (`GpuOptions::noted_junction_blocks`), and the tiled kernel with its
 //!    rounds chained in one dispatch (`GpuOptions::chained_tiles`);
 //! 8. what limits an ensemble: the single-workgroup kernels on one Table S1
 //!    scene and on 132, 264 and 528 (one, two and four an SM of an H200 or

@@ -158,6 +158,41 @@ pub struct KernelSource {
 }
 
 impl KernelSource {
+    /// The kernel's module as naga parses and validates it.
+    pub fn module(&self) -> Result<(naga::Module, naga::valid::ModuleInfo), String> {
+        let src = &self.source;
+        let module = naga::front::wgsl::parse_str(src)
+            .map_err(|e| format!("{}: {}", self.entry, e.emit_to_string(src)))?;
+        let info = naga::valid::Validator::new(
+            naga::valid::ValidationFlags::all(),
+            naga::valid::Capabilities::all(),
+        )
+        .validate(&module)
+        .map_err(|e| format!("{}: {}", self.entry, e.emit_to_string(src)))?;
+        Ok((module, info))
+    }
+
+    /// `module` (this kernel's, from `module`) with the pipeline's override
+    /// constants applied for its entry point, and compacted to what that
+    /// entry point reaches: what a driver is given to compile
+    /// (`driver_stats`), and what the workgroup memory it declares is read
+    /// from (`step_kernel`'s fit test).
+    pub fn with_constants(
+        &self,
+        module: &naga::Module,
+        info: &naga::valid::ModuleInfo,
+    ) -> Result<(naga::Module, naga::valid::ModuleInfo), String> {
+        let constants: naga::back::PipelineConstants = self.constants.iter().cloned().collect();
+        let (module, info) = naga::back::pipeline_constants::process_overrides(
+            module,
+            info,
+            Some((naga::ShaderStage::Compute, &self.entry)),
+            &constants,
+        )
+        .map_err(|e| format!("{}: override constants: {e}", self.entry))?;
+        Ok((module.into_owned(), info.into_owned()))
+    }
+
     /// The value of override constant `name`, where the pipeline sets it.
     pub fn constant(&self, name: &str) -> Option<f64> {
         self.constants

@@ -262,6 +262,24 @@ gpu_struct! {
 }
 
 gpu_struct! {
+    /// An interface block's junction block for its next step, noted in
+    /// workgroup memory by the thread that updates the block
+    /// (`shaders/noted_blocks.wgsl`: the resident and tiled kernels), so
+    /// that its lanes and its next update read it, not work it out again.
+    pub struct GpuNotedBlock<T> as "NotedBlock" {
+        /// u_x.
+        pub ux: Coord<T>,
+        /// r, the coordinate the pinned sums are taken about.
+        pub reference: Coord<T>,
+        /// The normal force a junction.
+        pub f_n: T,
+        /// 1 where the block keeps its sums (no junction can change), else 0:
+        /// a real, so that neither precision's layout has padding.
+        pub kept: T,
+    }
+}
+
+gpu_struct! {
     /// The first blow-up of a batch, written by the kernel that saw it
     /// (non-finite or faster than c_p): read back after every batch.
     /// Its values are f32 in either precision (diagnostics).
@@ -500,6 +518,7 @@ pub fn wgsl_prelude<T: GpuReal>() -> String {
         GpuJunctionSpring::<T>::wgsl(),
         GpuLaneSum::<T>::wgsl(),
         GpuJunctionCache::<T>::wgsl(),
+        GpuNotedBlock::<T>::wgsl(),
         GpuStatus::wgsl(),
         GpuRecordPlan::<T>::wgsl(),
         GpuRecordEntry::wgsl(),
@@ -635,11 +654,21 @@ impl<T: GpuReal> From<crate::model::junction::JunctionSpring<Coord<T>, T>>
     }
 }
 
-/// Words of a workgroup's kept bits for `blocks` interface blocks, a bit
-/// each (`shaders/kept_bits.wgsl`: the resident kernel's lattice, the tiled
-/// kernel's tile).
-pub fn kept_words(blocks: usize) -> u32 {
-    blocks.div_ceil(32).max(1) as u32
+/// The notes a workgroup holds (`shaders/noted_blocks.wgsl`) for
+/// `interface_blocks` interface blocks (the resident kernel's lattice, the
+/// tiled kernel's tile) of a scene with `junctions` junctions: one a block,
+/// or where the scene has no junctions one, the array's least length,
+/// which no kernel reads.
+pub fn noted_blocks(interface_blocks: usize, junctions: usize) -> usize {
+    if junctions == 0 {
+        return 1;
+    }
+    interface_blocks.max(1)
+}
+
+/// Bytes of `notes` notes in precision `T`.
+pub fn noted_blocks_bytes<T: GpuReal>(notes: usize) -> u64 {
+    (notes * std::mem::size_of::<GpuNotedBlock<T>>()) as u64
 }
 
 #[cfg(test)]
@@ -751,6 +780,11 @@ mod tests {
             "JunctionCache",
             size_of::<GpuJunctionCache<T>>(),
             GpuJunctionCache::<T>::fields(),
+        );
+        check(
+            "NotedBlock",
+            size_of::<GpuNotedBlock<T>>(),
+            GpuNotedBlock::<T>::fields(),
         );
         check("Status", size_of::<GpuStatus>(), GpuStatus::fields());
         check(

@@ -134,12 +134,14 @@ pub struct GpuOptions {
     /// per block; `auto` on hardware times both (`--gpu-bond-patches`
     /// fixes it on).
     pub bond_patches: bool,
-    /// The resident and tiled kernels' junction lanes read whether their
-    /// block keeps its sums from a bit noted once per block and step
-    /// (`shaders/kept_bits.wgsl`), not from a `junction_block` call per
-    /// lane: the same bits. false: a call per lane, as before session 33
-    /// (the comparison in benchmarks).
-    pub lanes_read_kept: bool,
+    /// The resident and tiled kernels' junction lanes, and a block's
+    /// update, read the block's junction block (its u_x, reference, normal
+    /// force and whether it keeps its sums) from a note made once per block
+    /// and step by the thread that updates it (`shaders/noted_blocks.wgsl`),
+    /// not from a `junction_block` call per lane and two per update: the
+    /// same values, so the same bits. false: a call each, as before
+    /// session 33 (the comparison in benchmarks).
+    pub noted_junction_blocks: bool,
     /// The persistent and resident kernels step two junction lanes a round
     /// on hardware, both lanes' first junctions loaded before either is
     /// stepped: half the chains of storage round trips on a thread's path,
@@ -214,7 +216,7 @@ impl Default for GpuOptions {
             lane_shuffle: true,
             shader_checks: false,
             bond_patches: false,
-            lanes_read_kept: true,
+            noted_junction_blocks: true,
             two_lanes_a_round: true,
             lane_run: 1,
             chained_tiles: false,
@@ -345,8 +347,8 @@ pub fn resident_fit<T: GpuReal>(
     let disp = std::mem::size_of::<[Coord<T>; 2]>();
     let vel = std::mem::size_of::<[T; 2]>();
     let slots = workgroup_state_reduction_width::<T>() as usize;
-    let others = (slots * std::mem::size_of::<layout::GpuSampleSums<T>>()
-        + layout::kept_words(model.nx) as usize * 4) as u64
+    let others = (slots * std::mem::size_of::<layout::GpuSampleSums<T>>()) as u64
+        + layout::noted_blocks_bytes::<T>(layout::noted_blocks(model.nx, model.n_junctions()))
         + RESIDENT_OWN_BYTES;
     let both = (model.n_blocks() * (disp + vel)) as u64 + others;
     let disp_only = (model.n_blocks() * disp) as u64 + others;

@@ -94,17 +94,22 @@ impl StepKernel {
             constants.push(("NEIGHBOURS_WITHOUT_BRANCHES", 1.0));
         }
         // The kernels whose steps end at a workgroup barrier, so that their
-        // lanes can read their block's kept bit from workgroup memory
-        // (shaders/kept_bits.wgsl): a bit per interface block of the
-        // resident kernel's lattice, or of the tiled kernel's tile.
-        let kept_blocks = match (self.kernel, self.geometry) {
+        // lanes and updates can read their block's junction block from
+        // workgroup memory (shaders/noted_blocks.wgsl): a note per
+        // interface block of the resident kernel's lattice, or of the tiled
+        // kernel's tile.
+        let noted_blocks = match (self.kernel, self.geometry) {
             (Kernel::Resident, _) => Some(shape.nx),
             (_, Some(g)) => Some(g.span as usize),
             _ => None,
         };
-        if let Some(blocks) = kept_blocks {
-            constants.push(("LANES_READ_KEPT", opts.lanes_read_kept as u8 as f64));
-            constants.push(("KEPT_WORDS", layout::kept_words(blocks) as f64));
+        if let Some(blocks) = noted_blocks {
+            constants.push((
+                "NOTED_JUNCTION_BLOCKS",
+                opts.noted_junction_blocks as u8 as f64,
+            ));
+            let notes = layout::noted_blocks(blocks, shape.junctions);
+            constants.push(("NOTED_BLOCKS", notes as f64));
         }
         if let Some(g) = self.geometry {
             constants.push(("TILE_WIDTH", g.width as f64));
@@ -452,6 +457,104 @@ mod tests {
                 }
             }
             assert!(seen.iter().all(|&n| n == 1), "{nx}×{nz}: {seen:?}");
+        }
+    }
+
+    /// Bytes of workgroup memory the entry point of `source` names, after
+    /// its override constants: what a driver allocates a workgroup (naga's
+    /// layout of each workgroup variable the entry point uses).
+    fn declared_workgroup_bytes(source: &KernelSource) -> u64 {
+        let (module, info) = source.module().expect("the kernel validates");
+        let (module, info) = source
+            .with_constants(&module, &info)
+            .expect("its constants apply");
+        let mut layouter = naga::proc::Layouter::default();
+        layouter.update(module.to_ctx()).expect("the types lay out");
+        let entry = module
+            .entry_points
+            .iter()
+            .position(|e| e.name == source.entry)
+            .expect("the entry point is there");
+        let used = info.get_entry_point(entry);
+        module
+            .global_variables
+            .iter()
+            .filter(|(h, v)| v.space == naga::AddressSpace::WorkGroup && !used[*h].is_empty())
+            .map(|(_, v)| layouter[v.ty].size as u64)
+            .sum()
+    }
+
+    /// The workgroup memory the resident and tiled kernels are fitted by
+    /// (`resident_fit`, `TileGeometry::workgroup_bytes`) is what their
+    /// modules declare, after the override constants the plan sets: never
+    /// less (a driver would refuse a launch the engine thought fits), and
+    /// at most 64 bytes more (a fit that counts an array the
+    /// module no longer holds would refuse launches that fit). Table S1
+    /// and a small lattice, both precisions, junctions and (resident)
+    /// Coulomb friction, tiles of several shapes, chained or not.
+    #[test]
+    fn the_workgroup_memory_fitted_is_what_the_kernels_declare() {
+        use crate::model::scenario::{built_in, Scenario};
+        let adapter = AdapterTraits {
+            limits: wgpu::Limits {
+                max_compute_workgroup_storage_size: 65536,
+                ..wgpu::Limits::default()
+            },
+            software: false,
+            subgroups: true,
+            coherent_storage: true,
+            immediates: true,
+        };
+        let model = |name: &str, set: &[&str]| {
+            let set: Vec<String> = set.iter().map(|s| s.to_string()).collect();
+            let s = Scenario::parse(built_in(name).unwrap(), name, &set).unwrap();
+            Model::from_scenario(&s, false).unwrap()
+        };
+        let scenes = [
+            ("Table S1", model("tromborg2014_precursors", &[]), true),
+            (
+                "Table S1, Coulomb",
+                model("tromborg2014_precursors", &["friction.law=\"coulomb\""]),
+                false,
+            ),
+            ("small", model("small_stick_slip", &[]), true),
+        ];
+        fn check<T: GpuReal>(name: &str, m: &Model, tiled: bool, adapter: &AdapterTraits) {
+            let mut launches = vec![(GpuPath::Resident, None, false)];
+            if tiled {
+                for (width, halo) in [(8, 4), (4, 2), (16, 1)] {
+                    let shape = Some(tiles::TileShape { width, halo });
+                    launches.push((GpuPath::Tiled, shape, false));
+                    launches.push((GpuPath::Tiled, shape, true));
+                }
+            }
+            for (path, tile, chained_tiles) in launches {
+                let opts = GpuOptions {
+                    path,
+                    tile,
+                    chained_tiles,
+                    ..GpuOptions::default()
+                };
+                let plan = plan::<T>(m, opts, adapter).unwrap();
+                let fitted = match plan.step_kernel.geometry {
+                    Some(g) => g.workgroup_bytes::<T>(),
+                    None => resident_fit::<T>(m, &adapter.limits).unwrap().bytes,
+                };
+                let k = plan.step_kernel.kernel;
+                let source = &kernel_sources::<T>(k, plan.build, false, &plan.constants)[0];
+                let declared = declared_workgroup_bytes(source);
+                let what = format!(
+                    "{name}, {}, {path:?} {tile:?} chained {chained_tiles}: fitted {fitted} bytes, \
+                     declared {declared}",
+                    T::NAME
+                );
+                assert!(declared <= fitted, "{what}");
+                assert!(fitted - declared <= 64, "{what}");
+            }
+        }
+        for (name, m, tiled) in &scenes {
+            check::<f32>(name, m, *tiled, &adapter);
+            check::<f64>(name, m, *tiled, &adapter);
         }
     }
 }

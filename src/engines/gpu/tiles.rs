@@ -129,18 +129,23 @@ impl TileGeometry {
     }
 
     /// Bytes of workgroup memory a tile holds in precision `T`: its
-    /// blocks' u, v and force, its columns' kept bits, the slots of the
+    /// blocks' u, v and force, its columns' junction-block notes, the slots of the
     /// samples it records and the kernel's own words.
     pub fn workgroup_bytes<T: GpuReal>(&self) -> u64 {
         let per_block = std::mem::size_of::<[Coord<T>; 2]>() + 2 * std::mem::size_of::<[T; 2]>();
-        let kept = 4 * super::layout::kept_words(self.span as usize) as u64;
+        // A note a column: the tiled kernel steps junctions or no friction,
+        // and counts the notes of the second too (a few hundred bytes).
+        let noted = super::layout::noted_blocks_bytes::<T>(self.span as usize);
         // The sample reduction's slots, and of each own interface block
         // what a sample reads (u, v, force, friction, normal) and its part.
         let sums = std::mem::size_of::<super::layout::GpuSampleSums<T>>() as u64;
-        let inputs = (std::mem::size_of::<Coord<T>>() + 6 * std::mem::size_of::<T>()) as u64;
+        // (`InterfaceInputs`: u's two coordinates, then four reals and
+        // two vec2s, laid out at a vec2<real>'s alignment.)
+        let vec2 = std::mem::size_of::<[T; 2]>() as u64;
+        let inputs = (std::mem::size_of::<[Coord<T>; 2]>() + 6 * std::mem::size_of::<T>()) as u64;
         let slots = super::batch_sizes::workgroup_state_reduction_width::<T>() as u64 * sums
-            + self.width as u64 * (sums + inputs.next_multiple_of(16));
-        self.blocks as u64 * per_block as u64 + kept + slots + TILE_OWN_BYTES
+            + self.width as u64 * (sums + inputs.next_multiple_of(vec2));
+        self.blocks as u64 * per_block as u64 + noted + slots + TILE_OWN_BYTES
     }
 
     /// Elements of each scratch array per scene of `blocks` blocks, `nx`

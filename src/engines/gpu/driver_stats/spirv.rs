@@ -36,24 +36,9 @@ pub fn kernel_spirv(
     language: (u8, u8),
     zero: ZeroWorkgroupMemory,
 ) -> Result<(Vec<u32>, Vec<BufferBinding>), String> {
-    let src = &kernel.source;
-    let module = naga::front::wgsl::parse_str(src)
-        .map_err(|e| format!("{}: {}", kernel.entry, e.emit_to_string(src)))?;
+    let (module, info) = kernel.module()?;
     let bindings = buffer_bindings(&module);
-    let info = naga::valid::Validator::new(
-        naga::valid::ValidationFlags::all(),
-        naga::valid::Capabilities::all(),
-    )
-    .validate(&module)
-    .map_err(|e| format!("{}: {}", kernel.entry, e.emit_to_string(src)))?;
-    let constants: naga::back::PipelineConstants = kernel.constants.iter().cloned().collect();
-    let (module, info) = naga::back::pipeline_constants::process_overrides(
-        &module,
-        &info,
-        Some((naga::ShaderStage::Compute, &kernel.entry)),
-        &constants,
-    )
-    .map_err(|e| format!("{}: override constants: {e}", kernel.entry))?;
+    let (module, info) = kernel.with_constants(&module, &info)?;
     let checked = kernel.build.checks == ShaderChecks::Checked;
     let policy = if checked {
         naga::proc::BoundsCheckPolicy::Restrict
