@@ -80,8 +80,9 @@ fn one_step_lanes(
     }
     if junction_group && !ready && local < JUNCTION_LANES {
         // The lane's first pair is loaded beside the junction block, not
-        // once the block is known to be summed: one round trip to storage
-        // on the lanes' path where there were two, for loads a kept
+        // once the block is known to be summed: two round trips to storage
+        // on the lanes' path before the first update where there were three
+        // (u and junction 0, then the kept sums, then the pair), for loads a kept
         // block's lanes make for nothing (its junctions' states and
         // springs, 2 KB a block and step at Ns = 100 in mixed f32).
         // The same values: lane_pair clamps a lane past the last junction
