@@ -26,8 +26,8 @@
 // (crate::model::friction::Law): θ of rate-and-state. Coordinates, as
 // displacements are: tiny increments (aging at rest) are kept.
 @group(0) @binding(17) var<storage, read_write> law_state: array<packed_coord>;
-// The first blow-up of each scene, as GpuStatus (flag, step, block, ux,
-// uz, vx, vz, persistent steps run): 8 words per scene.
+// Each scene's GpuStatus: its first blow-up (flag, step, block, ux, uz,
+// vx, vz), then the kernels' counters (STATUS_WORDS words per scene).
 @group(0) @binding(11) var<storage, read_write> status: array<atomic<u32>>;
 
 // Junction k of the junction arrays: the only way the junction phase

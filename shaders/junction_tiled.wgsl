@@ -14,6 +14,19 @@
 
 @group(0) @binding(21) var<storage, read_write> tile_junction_state: array<vec2<u32>>;
 @group(0) @binding(22) var<storage, read_write> tile_junction_spring: array<JunctionSpring>;
+// Two published copies of every scene's kept junction sums, beside the
+// junctions (only the edge columns' are used).
+@group(0) @binding(27) var<storage, read_write> tile_junction_cache: array<JunctionCache>;
+
+// A halo block's kept sums come with its junctions: its owner's record, as
+// the owner left it at the round's end, which describes exactly the
+// junctions published with it (GpuOptions::published_halo_sums). So a
+// quiet halo block keeps its sums from a round's first step, as its owner
+// does. false: the private records are emptied at each round's start and
+// a halo block sums its junctions at the round's first step (a full lane
+// phase a round in every tile), as before session 60. Kept or made anew,
+// sums of the same junctions have the same bits.
+override PUBLISHED_HALO_SUMS: bool = true;
 
 // Junctions of all scenes in one published copy, and in the junction
 // arrays before the tiles' private copies.
@@ -36,11 +49,16 @@ fn junction_first(ix: u32) -> u32 {
     return select(halo_junction_first(ix), junction_base() + ix * c.junction_count, tile_owns(ix));
 }
 
+// Block ix's kept sums in published copy `copy`.
+fn pub_sums_slot(copy: u32, ix: u32) -> u32 {
+    return copy * scene_count() * c.nx + interface_base() + ix;
+}
+
 // Where block ix's kept junction sums are: its own columns' in the
 // scenes' records, as every kernel; a halo block's in this tile's private
 // records after every scene's (its owner rewrites the scene's record in
-// the same dispatch). load_tile empties the private ones, so a halo block
-// sums its junctions at a dispatch's first step and keeps them from then.
+// the same dispatch). load_tile fills the private ones from the published
+// copy it reads (PUBLISHED_HALO_SUMS), or empties them.
 fn junction_sums_slot(ix: u32) -> u32 {
     if tile_owns(ix) {
         return interface_base() + ix;

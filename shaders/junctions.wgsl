@@ -42,6 +42,11 @@ const KEPT_MARGIN: real = 1.0 + 1.0 / 65536.0;
 // GpuOptions::keep_junction_sums: false sums every junction every step.
 override KEEP_JUNCTION_SUMS: bool = true;
 
+// GpuOptions::count_summed_junction_blocks: junction_friction counts the
+// blocks whose lanes summed their junctions (GpuStatus::summed_junction_blocks),
+// one atomic each; off, the count is compiled out.
+override COUNT_SUMMED_BLOCKS: bool = false;
+
 fn junction_block(ix: u32, ld: Loads) -> JunctionBlock {
     let u = load_disp_at(ix, ix, 0u);
     let f_n = foundation_normal(coord_value(u.z)) / real(c.junction_count);
@@ -260,6 +265,9 @@ fn kept_lane_sum(jb: JunctionBlock) -> LaneSum {
 // under `sign` pushes against v (the thesis's rule).
 fn junction_friction(ix: u32, jb: JunctionBlock, lanes: LaneSum, other: real) -> real {
     let total = lanes;
+    if COUNT_SUMMED_BLOCKS && !jb.kept {
+        atomicAdd(&status[status_base() + 10u], 1u);
+    }
     if !jb.kept && jb.keeps {
         // Kept only while every junction is pinned (stiffness_max 0: empty).
         let k_max = select(0.0, total.stiffness_max, total.slipping == 0u);

@@ -46,7 +46,10 @@ fn lane_base() -> u32 {
     return scene * c.nx * min(JUNCTION_LANES, c.junction_count);
 }
 
-// GpuStatus's words.
+// GpuStatus's words (std::mem::size_of::<GpuStatus>() / 4: a unit test
+// holds them equal).
+const STATUS_WORDS: u32 = 12u;
+
 fn status_base() -> u32 {
-    return scene * 10u;
+    return scene * STATUS_WORDS;
 }

@@ -68,6 +68,14 @@ fn tile_owns(ix: u32) -> bool {
     return ix >= tile_x0 && ix < tile_x1;
 }
 
+// Whether a round steps held column ix: every one but the outermost halo
+// column each side, whose update would need a column the tile does not
+// hold (a round's first step updates tile_lo + 1 .. tile_hi − 1, or from
+// the lattice's edge, and each later step fewer).
+fn tile_steps(ix: u32) -> bool {
+    return (ix > tile_lo || tile_lo == 0u) && (ix + 1u < tile_hi || tile_hi == c.nx);
+}
+
 fn tile_slot_at(ix: u32, iz: u32) -> u32 {
     return iz * tile_span() + (ix - tile_lo);
 }

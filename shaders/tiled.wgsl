@@ -15,6 +15,8 @@
 //   (junction_tiled.wgsl): their updates depend only on the block's u_x
 //   and their state, and the slip draws are keyed by (seed, block,
 //   junction, count), so the copy evolves as its owner's original does.
+//   Its kept sums are published with them (PUBLISHED_HALO_SUMS), so a
+//   quiet halo block skips its junctions from a round's first step.
 // - Dispatch d of a batch (its step offset) runs the steps from
 //   tile_ends[d − 1] (0 for the first) to tile_ends[d], which the host
 //   cuts after TILE_HALO steps and after the batch's first step (whose
@@ -115,11 +117,18 @@ fn publish_edges(t: u32, copy: u32) {
     publish_edge_junctions(t, copy);
 }
 
-// The interface junctions of this tile's edge columns, from storage into
-// published copy `copy`.
+// The interface junctions of this tile's edge columns, and their blocks'
+// kept sums, from storage into published copy `copy`.
 fn publish_edge_junctions(t: u32, copy: u32) {
     if FRICTION_LAW != LAW_JUNCTIONS {
         return;
+    }
+    if PUBLISHED_HALO_SUMS {
+        for (var ix = tile_x0 + t; ix < tile_x1; ix += TILE_THREADS) {
+            if tile_edge(ix) {
+                tile_junction_cache[pub_sums_slot(copy, ix)] = junction_cache[junction_sums_slot(ix)];
+            }
+        }
     }
     let ns = c.junction_count;
     for (var b = grid_walk(t, TILE_THREADS, ns); b.row < tile_x1 - tile_x0; grid_walk_next(&b)) {
@@ -155,16 +164,23 @@ fn load_tile(t: u32, first: u32, copy: u32, own: bool) {
         }
     }
     if FRICTION_LAW == LAW_JUNCTIONS {
-        // The halo's kept sums are of an earlier dispatch's junctions.
+        // The halo's kept sums: those published with its junctions, or
+        // none (the private records hold an earlier round's). Only for the
+        // columns the round steps: the outermost halo columns' junctions
+        // are never stepped, nor their sums or notes read.
         for (var ix = tile_lo + t; ix < tile_hi; ix += TILE_THREADS) {
-            if !tile_owns(ix) {
-                junction_cache[junction_sums_slot(ix)] = JunctionCache();
+            if !tile_owns(ix) && tile_steps(ix) {
+                var sums = JunctionCache();
+                if PUBLISHED_HALO_SUMS {
+                    sums = tile_junction_cache[pub_sums_slot(copy, ix)];
+                }
+                junction_cache[junction_sums_slot(ix)] = sums;
             }
         }
         let ns = c.junction_count;
         for (var b = grid_walk(t, TILE_THREADS, ns); b.row < held; grid_walk_next(&b)) {
             let ix = tile_lo + b.row;
-            if !tile_owns(ix) {
+            if !tile_owns(ix) && tile_steps(ix) {
                 let j = b.column;
                 let published = pub_junction_first(copy, ix) + j;
                 let to = halo_junction_first(ix) + j;
@@ -392,12 +408,14 @@ fn tile_round(t: u32, d: u32, lanes: u32, stride: u32, first: bool, last: bool) 
     load_tile(t, plan.x, d & 1u, first);
     storageBarrier();
     workgroupBarrier();
-    // The first step's junction blocks, for every column of the tile
+    // The first step's junction blocks, for every column the round steps
     // (noted_blocks.wgsl; a note a column from tile_lo).
     if NOTED_JUNCTION_BLOCKS && FRICTION_LAW == LAW_JUNCTIONS {
         let first = loads_at(plan.x);
         for (var ix = tile_lo + t; ix < tile_hi; ix += TILE_THREADS) {
-            note_junction_block(ix - tile_lo, ix, first);
+            if tile_steps(ix) {
+                note_junction_block(ix - tile_lo, ix, first);
+            }
         }
         workgroupBarrier();
     }

@@ -11,15 +11,16 @@ use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
+#[path = "support/scratch.rs"]
+mod scratch;
+use scratch::Scratch;
+
 /// The small side-driven scene (`verify::SMALL_SCENE`), driven fast
 /// enough that junctions break from 0.6 ms on.
 const DRIVE: &str = "loading.drive.velocity=0.2";
 
-fn dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("slipfront-ckpt-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+fn dir(name: &str) -> Scratch {
+    Scratch::new("ckpt", name)
 }
 
 /// The engine most tests run on.

@@ -2,6 +2,10 @@
 
 use std::process::Command;
 
+#[path = "support/scratch.rs"]
+mod scratch;
+use scratch::Scratch;
+
 #[path = "support/f64_adapter.rs"]
 mod f64_adapter;
 
@@ -45,8 +49,7 @@ fn check_reports_derived_quantities_as_json() {
 
 #[test]
 fn run_default_scene_briefly_writes_an_mcap_file() {
-    let dir = std::env::temp_dir().join(format!("slipfront-cli-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = Scratch::new("cli", "run");
     let file = dir.join("run.mcap");
     let out = slipfront(&[
         "run",
@@ -283,8 +286,7 @@ fn check_is_bounded_in_memory_and_time() {
 /// not a fixed step count), exiting 130 with its file closed.
 #[test]
 fn sigint_stops_a_big_lattice_promptly() {
-    let dir = std::env::temp_dir().join(format!("slipfront-cli-big-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = Scratch::new("cli", "big");
     let file = dir.join("big.mcap");
     let mut child = Command::new(env!("CARGO_BIN_EXE_slipfront"))
         .args(["run", "--backend", "cpu", "--threads", "1", "--quiet"])
@@ -332,9 +334,7 @@ fn sigint_stops_a_big_lattice_promptly() {
 /// and terminal escapes in a run's metadata are not sent to the terminal.
 #[test]
 fn outputs_inputs_and_foreign_files_are_guarded() {
-    let dir = std::env::temp_dir().join(format!("slipfront-cli-guard-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = Scratch::new("cli", "guard");
     let file = dir.join("run.mcap");
     let f = file.to_str().unwrap();
     let short = [
@@ -441,9 +441,8 @@ fn outputs_inputs_and_foreign_files_are_guarded() {
 
 #[test]
 fn study_commands_write_their_tables_and_figures() {
-    let dir = std::env::temp_dir().join(format!("slipfront-cli-study-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let out = dir.as_path();
+    let dir = Scratch::new("cli", "study");
+    let out: &std::path::Path = &dir;
     for study in ["front-1d", "single-block", "coulomb-precursors"] {
         let o = slipfront_cmd()
             .args(["study", study, "--quick", "-o"])
@@ -493,8 +492,7 @@ fn study_commands_write_their_tables_and_figures() {
 
 #[test]
 fn single_block_runs_the_built_in_scene_and_refuses_a_bad_one() {
-    let dir = std::env::temp_dir().join(format!("slipfront-cli-block-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = Scratch::new("cli", "block");
     let csv = dir.join("sb.csv");
     let o = slipfront_cmd()
         .args(["single-block", "-o"])

@@ -4,14 +4,15 @@
 
 use slipfront::app::sweeps::compare::compare_tables;
 use slipfront::app::sweeps::table;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::Command;
 
-fn dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("slipfront-compare-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+#[path = "support/scratch.rs"]
+mod scratch;
+use scratch::Scratch;
+
+fn dir(name: &str) -> Scratch {
+    Scratch::new("compare", name)
 }
 
 /// One run's outcomes as the sweep writes them.
@@ -224,7 +225,7 @@ fn bad_input_exits_2_naming_the_path() {
     )
     .unwrap();
     for (bad, says) in [
-        (&missing, "cannot read the sweep table"),
+        (missing.as_path(), "cannot read the sweep table"),
         (&failed, "no row with status ok (1 failed)"),
         (&other, "has no column `first_full_time_s`"),
         (

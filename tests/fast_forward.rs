@@ -13,6 +13,10 @@ use slipfront::model::scenario::{Scenario, DEFAULT_SCENARIO};
 use slipfront::Model;
 use std::path::PathBuf;
 
+#[path = "support/scratch.rs"]
+mod scratch;
+use scratch::Scratch;
+
 fn scene() -> Scenario {
     scene_with(&[])
 }
@@ -40,8 +44,7 @@ fn run(name: &str, ff: Option<FastForwardSettings>) -> (RunSummary, RunFile) {
 fn run_with(name: &str, ff: Option<FastForwardSettings>, extra: &[&str]) -> (RunSummary, RunFile) {
     let scenario = scene_with(extra);
     let model = Model::from_scenario(&scenario, false).unwrap();
-    let dir = std::env::temp_dir().join(format!("slipfront-ff-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = Scratch::new("ff", name);
     let path: PathBuf = dir.join(format!("{name}.mcap"));
     let mut engine = cpu_engine(&model, Precision::F64, 1).unwrap();
     let summary = run_scene(
@@ -262,8 +265,7 @@ fn top_force_and_top_velocity_drives_fast_forward_to_the_first_rupture() {
             .collect();
         let scenario = Scenario::parse(&text, "drive test", &set).unwrap();
         let model = Model::from_scenario(&scenario, false).unwrap();
-        let dir = std::env::temp_dir().join(format!("slipfront-ff-drive-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
+        let dir = Scratch::new("ff", "drive");
         let first = |ff: Option<FastForwardSettings>, name: &str| {
             let path = dir.join(name);
             let mut engine = cpu_engine(&model, Precision::F64, 1).unwrap();

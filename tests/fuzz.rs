@@ -12,6 +12,10 @@ use slipfront::io::output::reader::RunFile;
 use slipfront::{Model, Scenario};
 use std::path::{Path, PathBuf};
 
+#[path = "support/scratch.rs"]
+mod scratch;
+use scratch::Scratch;
+
 fn cases() -> u32 {
     std::env::var("SLIPFRONT_FUZZ_CASES")
         .ok()
@@ -216,8 +220,7 @@ fn analyse(run: &RunFile) {
 fn the_run_file_reader_survives_mutated_files() {
     let corpus = files(&root().join("tests/fuzz/corpus/mcap"), "mcap");
     assert!(!corpus.is_empty());
-    let dir = std::env::temp_dir().join(format!("slipfront-fuzz-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = Scratch::new("fuzz", "run");
     let path = dir.join("case.mcap");
     // Most edits land in the compressed chunks; a few in the headers
     // (the first 2 KiB hold the header, metadata and the first chunk's).
@@ -259,8 +262,7 @@ fn the_run_file_reader_survives_mutated_files() {
 fn recover_keeps_only_good_records_of_cut_or_flipped_files() {
     use slipfront::io::output::recover::rewrite;
     let corpus = files(&root().join("tests/fuzz/corpus/mcap"), "mcap");
-    let dir = std::env::temp_dir().join(format!("slipfront-fuzz-recover-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = Scratch::new("fuzz", "recover");
     let (case, out) = (dir.join("case.mcap"), dir.join("out.mcap"));
     let originals: Vec<RunFile> = corpus
         .iter()

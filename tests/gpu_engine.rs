@@ -9,6 +9,10 @@ use slipfront::io::compare::{compare_snapshots, fields_over};
 use slipfront::model::scenario::{Scenario, DEFAULT_SCENARIO};
 use slipfront::{advance_to, Engine, EngineError, Model, Snapshot};
 
+#[path = "support/scratch.rs"]
+mod scratch;
+use scratch::Scratch;
+
 fn model(set: &[&str]) -> Model {
     let set: Vec<String> = set.iter().map(|s| s.to_string()).collect();
     let s = Scenario::parse(DEFAULT_SCENARIO, "test", &set).unwrap();
@@ -580,8 +584,7 @@ fn gpu_fast_forward_finds_the_first_rupture_of_full_dynamics() {
     ])
     .unwrap();
     let m = Model::from_scenario(&scenario, false).unwrap();
-    let dir = std::env::temp_dir().join(format!("slipfront-gpu-ff-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = Scratch::new("gpu", "ff");
     let first_rupture = |engine: &mut dyn Engine, ff: Option<FastForwardSettings>, name: &str| {
         let path = dir.join(name);
         let opts = RunOptions {

@@ -16,7 +16,10 @@ use slipfront::engines::gpu::{GpuEngine, GpuOptions, GpuPath};
 use slipfront::engines::{Engine, SamplePlan};
 use slipfront::model::scenario::Scenario;
 use slipfront::Model;
-use std::path::PathBuf;
+
+#[path = "support/scratch.rs"]
+mod scratch;
+use scratch::Scratch;
 
 fn ctx() -> GpuContext {
     context::shared().unwrap_or_else(|e| panic!("a GPU adapter is required (lavapipe in CI): {e}"))
@@ -30,10 +33,8 @@ fn small(extra: &[&str]) -> Model {
     Model::from_scenario(&small_scenario(extra), false).unwrap()
 }
 
-fn scratch(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("slipfront-choice-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    d
+fn scratch(name: &str) -> Scratch {
+    Scratch::new("choice", name)
 }
 
 fn options(path: GpuPath) -> GpuOptions {

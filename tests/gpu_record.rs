@@ -10,11 +10,14 @@ use slipfront::engines::Sample;
 use slipfront::io::compare::compare_run_files;
 use slipfront::io::output::reader::RunFile;
 use slipfront::{advance_to, Engine, EngineError, Model, Scenario};
-use std::path::PathBuf;
 
 #[path = "support/record_twins.rs"]
 mod record_twins;
 use record_twins::{large_lattice, large_lattice_keys, plan, twins, worst_error};
+
+#[path = "support/scratch.rs"]
+mod scratch;
+use scratch::Scratch;
 
 /// The small lattice (29 × 16) with a triggered front: the interface slips
 /// within the first 0.3 ms, so the fast interface cadence (1 µs, against
@@ -299,16 +302,16 @@ fn one_step_kernels_record_in_their_steps_with_one_finish_a_batch() {
     }
 }
 
-fn temp(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("slipfront-record-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir.join(name)
+/// A scratch folder for one test's run file (`name`).
+fn temp(name: &str) -> Scratch {
+    Scratch::new("record", name)
 }
 
 fn run_file(s: &Scenario, path: GpuPath, output: GpuOutput, name: &str) -> RunFile {
     let m = Model::from_scenario(s, false).unwrap();
     let mut e = engine(&m, path, output);
-    let path = temp(name);
+    let dir = temp(name);
+    let path = dir.join("run.mcap");
     let opts = RunOptions {
         output: Some(path.clone()),
         progress: slipfront::app::runner::ProgressMode::None,
@@ -449,7 +452,8 @@ fn a_run_file_written_while_the_device_runs_ahead_is_the_same() {
     let mut files = Vec::new();
     for ahead in [true, false] {
         let mut e = engine_running_ahead(&m, GpuPath::OneStep, ahead);
-        let path = temp(&format!("ahead-{ahead}.mcap"));
+        let dir = temp(&format!("ahead-{ahead}"));
+        let path = dir.join("run.mcap");
         let opts = RunOptions {
             output: Some(path.clone()),
             progress: slipfront::app::runner::ProgressMode::None,
@@ -498,7 +502,8 @@ fn a_blow_up_while_recording_keeps_the_samples_before_it() {
         *velocity = 5e3;
     }
     let mut e = engine(&m, GpuPath::OneStep, GpuOutput::Device);
-    let path = temp("blow-up.mcap");
+    let dir = temp("blow-up");
+    let path = dir.join("run.mcap");
     let opts = RunOptions {
         output: Some(path.clone()),
         progress: slipfront::app::runner::ProgressMode::None,

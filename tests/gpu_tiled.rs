@@ -28,11 +28,18 @@ fn driven() -> Model {
 }
 
 fn tiled(m: &Model, width: u32, halo: u32) -> GpuEngine {
-    let opts = GpuOptions {
+    tiled_with(m, width, halo, |_| {})
+}
+
+/// The tiled kernel with tiles of `width` and `halo`, its other options
+/// as `set` leaves the defaults.
+fn tiled_with(m: &Model, width: u32, halo: u32, set: impl Fn(&mut GpuOptions)) -> GpuEngine {
+    let mut opts = GpuOptions {
         path: GpuPath::Tiled,
         tile: Some(TileShape { width, halo }),
         ..GpuOptions::default()
     };
+    set(&mut opts);
     GpuEngine::with_options(m, opts)
         .unwrap_or_else(|e| panic!("a GPU adapter is required (lavapipe in CI): {e}"))
 }
@@ -416,31 +423,98 @@ fn a_large_lattice_on_the_tiled_kernel_records_its_samples_on_the_device() {
 }
 
 /// The halo copies keep their junction sums apart from their owner's
-/// (`junction_sums_slot` in `junction_tiled.wgsl`): emptied at each
-/// dispatch's start, summed at its first step, kept from the second. In a
-/// quiet stretch of driving (before the first rupture) both the scene's
-/// records and the halos' private ones hold kept sums; the one-step kernel
-/// keeps none apart. The bits are those of summing every step
-/// (`gpu_engine.rs`, `kept_junction_sums_give_the_bits_of_summing_every_step`).
+/// (`junction_sums_slot` in `junction_tiled.wgsl`). A round starts each
+/// halo block from the sums its owner published with its junctions
+/// (`GpuOptions::published_halo_sums`), or, the other way, from none:
+/// summed at the round's first step, kept from the second. In a quiet
+/// stretch of driving (before the first rupture) both the scene's records
+/// and the halos' private ones hold kept sums; the one-step kernel keeps
+/// none apart. The bits are those of summing every step (`gpu_engine.rs`,
+/// `kept_junction_sums_give_the_bits_of_summing_every_step`).
 #[test]
 fn halo_copies_keep_their_junction_sums_apart() {
     let m = driven();
     let end = m.prep_steps + 200;
-    let mut e = tiled(&m, 8, 4);
-    advance_to(&mut e, end).unwrap();
-    assert_eq!(e.snapshot().unwrap().total_ruptures(), 0, "a quiet stretch");
-    let owned = e.kept_junction_blocks(0).unwrap();
-    let halos = e.kept_halo_junction_records().unwrap();
     // 29 columns in tiles of 8: 4 tiles, 6 halo sides of 4 columns. The
     // columns a step updates shrink by one each side, so a side's
-    // outermost column is never stepped; the other three are stepped from
-    // the first step on and keep their sums.
-    assert_eq!(owned, m.nx, "every block's sums kept");
-    assert_eq!(halos, 6 * 3, "every stepped halo column's sums kept");
+    // outermost column is never stepped: it gets no junctions and no sums
+    // (`tile_steps`). The other three keep theirs.
+    for published in [true, false] {
+        let mut e = tiled_with(&m, 8, 4, |o| o.published_halo_sums = published);
+        advance_to(&mut e, end).unwrap();
+        assert_eq!(e.snapshot().unwrap().total_ruptures(), 0, "a quiet stretch");
+        let owned = e.kept_junction_blocks(0).unwrap();
+        let halos = e.kept_halo_junction_records().unwrap();
+        assert_eq!(owned, m.nx, "every block's sums kept");
+        assert_eq!(halos, 6 * 3, "published: {published}");
+    }
     let mut other = one_step(&m);
     advance_to(&mut other, end).unwrap();
     assert_eq!(other.kept_halo_junction_records().unwrap(), 0);
     assert_eq!(other.kept_junction_blocks(0).unwrap(), m.nx);
+}
+
+/// With the sums published beside the junctions, a quiet halo block keeps
+/// its sums from a round's first step: in a stretch before the first
+/// rupture no interface block, own or halo, sums its junctions
+/// (`GpuStatus::summed_junction_blocks`), where starting each round from
+/// no sums makes every stepped halo column sum once a round: three a halo
+/// side (halo 4, the outermost column never stepped). Rounds a dispatch
+/// each (tiles of 8: 6 halo sides) and chained in one dispatch (tiles of
+/// 16: 2 sides, two tiles, which lavapipe runs at once). Through ruptures
+/// both ways end in the same bits, the one-step kernel's.
+#[test]
+fn halo_blocks_keep_their_published_sums_from_a_rounds_first_step() {
+    let m = driven();
+    let quiet = (m.prep_steps + 20, m.prep_steps + 220);
+    let end = m.prep_steps + 2500;
+    // The count itself, on the one-step kernel: every interface block
+    // summed at every step of the normal-load phase (nothing is kept
+    // while the stiffnesses follow the load), and at most every block of
+    // the 20 steps after it.
+    let counted = GpuOptions {
+        path: GpuPath::OneStep,
+        count_summed_junction_blocks: true,
+        ..GpuOptions::default()
+    };
+    let mut e = GpuEngine::with_options(&m, counted).unwrap();
+    advance_to(&mut e, quiet.0).unwrap();
+    let loaded = u64::from(e.summed_junction_blocks(0).unwrap());
+    let nx = m.nx as u64;
+    assert!(
+        loaded >= nx * m.prep_steps && loaded <= nx * quiet.0,
+        "{loaded} summed in {} steps of {nx} blocks",
+        quiet.0
+    );
+    let reference = run_to(&mut one_step(&m), end);
+    assert!(reference.total_ruptures() > 100, "junctions broke");
+    for (chained, width, halo_sides) in [(false, 8, 6), (true, 16, 2)] {
+        let mut summed = Vec::new();
+        for published in [true, false] {
+            let mut e = tiled_with(&m, width, 4, |o| {
+                o.published_halo_sums = published;
+                o.count_summed_junction_blocks = true;
+                o.chained_tiles = chained;
+            });
+            advance_to(&mut e, quiet.0).unwrap();
+            let before = e.summed_junction_blocks(0).unwrap();
+            advance_to(&mut e, quiet.1).unwrap();
+            assert_eq!(e.snapshot().unwrap().total_ruptures(), 0, "a quiet stretch");
+            summed.push(e.summed_junction_blocks(0).unwrap() - before);
+            let state = run_to(&mut e, end);
+            assert!(
+                state == reference,
+                "chained {chained}, published {published}: not the one-step kernel's bits"
+            );
+        }
+        println!("chained {chained}: summed in the quiet stretch, published and not: {summed:?}");
+        assert_eq!(summed[0], 0, "chained {chained}: a halo block summed");
+        let rounds = (quiet.1 - quiet.0) as u32 / 4;
+        assert!(
+            summed[1] >= 3 * halo_sides * rounds,
+            "chained {chained}: {summed:?}"
+        );
+    }
 }
 
 /// A sample every step (the global cadence at dt): more samples than a

@@ -3,11 +3,12 @@
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
-fn dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("slipfront-hard-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+#[path = "support/scratch.rs"]
+mod scratch;
+use scratch::Scratch;
+
+fn dir(name: &str) -> Scratch {
+    Scratch::new("hard", name)
 }
 
 fn slipfront(args: &[&str], env: &[(&str, &str)]) -> Output {
@@ -815,8 +816,9 @@ fn two_resumes_of_one_file_leave_it_whole() {
     assert_whole(&out, 0.1);
 }
 
-/// A tmpfs of `kib` KiB mounted at a fresh folder, unmounted on drop.
-struct SmallDisk(PathBuf);
+/// A tmpfs of `kib` KiB mounted at a fresh folder, unmounted on drop
+/// (then the folder is removed).
+struct SmallDisk(Scratch);
 
 impl SmallDisk {
     /// None when this process may not mount (it needs root, and a
@@ -829,7 +831,6 @@ impl SmallDisk {
             .status()
             .is_ok_and(|st| st.success());
         if !ok {
-            let _ = std::fs::remove_dir(&d);
             return None;
         }
         Some(SmallDisk(d))

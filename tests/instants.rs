@@ -10,6 +10,10 @@ use slipfront::engines::cpu::PINNED;
 use slipfront::model::scenario::{Scenario, DEFAULT_SCENARIO};
 use slipfront::{advance_to, Engine, Model, Snapshot};
 
+#[path = "support/scratch.rs"]
+mod scratch;
+use scratch::Scratch;
+
 fn single_block() -> Model {
     let set: Vec<String> = [
         "geometry.nx=1",
@@ -148,8 +152,8 @@ fn a_top_force_run_reports_the_applied_ramp_as_its_drive_force() {
     set.push("time.end=0.004".into());
     let s = Scenario::parse(&text, "top force", &set).unwrap();
     let m = Model::from_scenario(&s, false).unwrap();
-    let path =
-        std::env::temp_dir().join(format!("slipfront_top_force_{}.mcap", std::process::id()));
+    let dir = Scratch::new("top-force", "run");
+    let path = dir.join("run.mcap");
     let mut e = cpu_engine(&m, Precision::F64, 1).unwrap();
     let opts = RunOptions {
         fast_forward: None,

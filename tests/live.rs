@@ -9,11 +9,14 @@
 
 #[path = "support/live_client.rs"]
 mod live_client;
+#[path = "support/scratch.rs"]
+mod scratch;
 
 use live_client::{decode, Event, LiveClient, Received};
+use scratch::Scratch;
 use std::collections::BTreeMap;
 use std::io::{BufRead, BufReader};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::{Child, Command, Stdio};
 use std::sync::mpsc;
 use std::time::{Duration, Instant};
@@ -28,30 +31,6 @@ const IMAGE_TOPICS: [&str; 4] = [
 
 fn scene(name: &str) -> String {
     format!("{}/scenarios/{name}", env!("CARGO_MANIFEST_DIR"))
-}
-
-/// A fresh folder for one test's files (removed when it passes).
-struct Scratch(PathBuf);
-
-impl Scratch {
-    fn new(test: &str) -> Scratch {
-        let dir =
-            std::env::temp_dir().join(format!("slipfront-live-{}-{test}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
-        std::fs::create_dir_all(&dir).unwrap();
-        Scratch(dir)
-    }
-    fn file(&self, name: &str) -> PathBuf {
-        self.0.join(name)
-    }
-}
-
-impl Drop for Scratch {
-    fn drop(&mut self) {
-        if !std::thread::panicking() {
-            let _ = std::fs::remove_dir_all(&self.0);
-        }
-    }
 }
 
 /// A slipfront process serving a live view, and its stderr so far.
@@ -247,8 +226,8 @@ const SMALL: [&str; 4] = ["--t-end", "0.03", "--progress", "none"];
 
 #[test]
 fn live_run_streams_what_it_writes_with_or_without_a_file() {
-    let dir = Scratch::new("streams");
-    let file = dir.file("run.mcap");
+    let dir = Scratch::new("live", "streams");
+    let file = dir.join("run.mcap");
     let scene = scene("small_stick_slip.toml");
     let mut args = vec!["run", &scene, "--backend", "cpu", "--threads", "1"];
     args.extend(SMALL);
@@ -312,8 +291,8 @@ fn live_run_streams_what_it_writes_with_or_without_a_file() {
 
 #[test]
 fn replay_is_paced_in_simulated_time() {
-    let dir = Scratch::new("paced");
-    let file = dir.file("paced.mcap");
+    let dir = Scratch::new("live", "paced");
+    let file = dir.join("paced.mcap");
     let f = file.to_str().unwrap();
     let scene = scene("small_stick_slip.toml");
     let run = Command::new(env!("CARGO_BIN_EXE_slipfront"))
@@ -341,8 +320,8 @@ fn replay_is_paced_in_simulated_time() {
 
 #[test]
 fn gpu_run_streams_its_device_records() {
-    let dir = Scratch::new("gpu");
-    let file = dir.file("gpu.mcap");
+    let dir = Scratch::new("live", "gpu");
+    let file = dir.join("gpu.mcap");
     let f = file.to_str().unwrap();
     let scene = scene("small_stick_slip.toml");
     let served = Served::start(&[
@@ -474,8 +453,8 @@ fn a_bad_or_taken_address_is_refused_clearly() {
 #[cfg(unix)]
 #[test]
 fn ctrl_c_closes_the_server_and_the_file() {
-    let dir = Scratch::new("stopped");
-    let file = dir.file("stopped.mcap");
+    let dir = Scratch::new("live", "stopped");
+    let file = dir.join("stopped.mcap");
     let f = file.to_str().unwrap();
     let served = Served::start(&[
         "run",

@@ -23,6 +23,10 @@ use slipfront::io::output::reader::RunFile;
 use slipfront::model::scenario::Scenario;
 use slipfront::Model;
 
+#[path = "support/scratch.rs"]
+mod scratch;
+use scratch::Scratch;
+
 const SCENE: &str = concat!(
     env!("CARGO_MANIFEST_DIR"),
     "/scenarios/tromborg2014_precursors.toml"
@@ -39,11 +43,8 @@ fn outcome(label: &str, precision: Precision, velocity: f64) -> RunOutcome {
     let m = Model::from_scenario(&s, false).unwrap();
     let mut e =
         make_engine(&m, Backend::Cpu, precision, 1).unwrap_or_else(|e| panic!("{label}: {e}"));
-    let path = std::env::temp_dir().join(format!(
-        "slipfront_long_run_{}_{}.mcap",
-        std::process::id(),
-        label.replace(' ', "_")
-    ));
+    let dir = Scratch::new("long-run", &label.replace(' ', "_"));
+    let path = dir.join("run.mcap");
     let opts = RunOptions {
         fast_forward: None,
         output: Some(path.clone()),

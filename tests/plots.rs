@@ -1,14 +1,15 @@
 //! `slipfront plot` end to end: every kind on a small run with an event,
 //! what a run without events gets, sizes and formats, bad options.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::{Command, Output};
 
-fn dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("slipfront-plots-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+#[path = "support/scratch.rs"]
+mod scratch;
+use scratch::Scratch;
+
+fn dir(name: &str) -> Scratch {
+    Scratch::new("plots", name)
 }
 
 fn slipfront(args: &[&str]) -> Output {

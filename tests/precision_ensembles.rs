@@ -38,6 +38,10 @@ use slipfront::app::sweeps::verdict::Members;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
+#[path = "support/scratch.rs"]
+mod scratch;
+use scratch::Scratch;
+
 const RUNS: usize = 24;
 const ALPHA: f64 = 0.01;
 
@@ -97,9 +101,7 @@ fn verdict(c: &Comparison, members: Members) -> (f64, String) {
 
 #[test]
 fn mixed_f32_gives_the_f64_outcome_distribution_and_plain_f32_and_a_bias_are_seen() {
-    let dir = std::env::temp_dir().join(format!("slipfront-precision-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = Scratch::new("precision", "run");
     let f64_a = ensemble(&dir, "f64_a", 0, "f64", "");
     let f64_b = ensemble(&dir, "f64_b", RUNS, "f64", "");
     let f32_a = ensemble(&dir, "f32_a", 0, "f32", "");

@@ -7,6 +7,10 @@ use slipfront::io::output::reader::RunFile;
 use std::path::Path;
 use std::process::Command;
 
+#[path = "support/scratch.rs"]
+mod scratch;
+use scratch::Scratch;
+
 fn run(dir: &Path, name: &str, backend: &str, probe: Option<&str>) -> RunFile {
     let out = dir.join(format!("{name}.mcap"));
     let mut cmd = Command::new(env!("CARGO_BIN_EXE_slipfront"));
@@ -33,8 +37,7 @@ fn series(r: &RunFile) -> Vec<(u64, u64, u64)> {
 
 #[test]
 fn both_engines_hold_the_same_values_and_the_probe_changes_the_run() {
-    let dir = std::env::temp_dir().join(format!("slipfront-probe-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = Scratch::new("probe", "run");
     let probe = "forces,velocities,coordinates,junctions,draws";
     let sweep = run(&dir, "sweep", "cpu", Some(probe));
     let reference = run(&dir, "reference", "cpu-reference", Some(probe));

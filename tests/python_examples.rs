@@ -6,6 +6,10 @@
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
+#[path = "support/scratch.rs"]
+mod scratch;
+use scratch::Scratch;
+
 fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
 }
@@ -42,9 +46,7 @@ fn python_reads_complete_and_recovered_run_files() {
     if !have_packages() {
         return;
     }
-    let d = std::env::temp_dir().join(format!("slipfront-py-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
+    let d = Scratch::new("py", "run");
     let run = d.join("run.mcap");
     std::fs::copy(root().join("tests/fuzz/corpus/mcap/small_run.mcap"), &run).unwrap();
     let expected = slipfront::io::output::reader::RunFile::read(&run)

@@ -17,6 +17,10 @@ use slipfront::io::output::reader::RunFile;
 use slipfront::model::scenario::Scenario;
 use slipfront::Model;
 
+#[path = "support/scratch.rs"]
+mod scratch;
+use scratch::Scratch;
+
 const TRIGGERED: &str = include_str!("../scenarios/triggered_front.toml");
 const PRECURSORS: &str = include_str!("../scenarios/tromborg2014_precursors.toml");
 
@@ -24,9 +28,8 @@ const PRECURSORS: &str = include_str!("../scenarios/tromborg2014_precursors.toml
 fn first_event(text: &str, name: &str, set: &[String]) -> (InterfaceSeries, Event) {
     let scenario = Scenario::parse(text, name, set).unwrap();
     let model = Model::from_scenario(&scenario, false).unwrap();
-    let dir = std::env::temp_dir().join(format!("slipfront-slow-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let path = dir.join(format!("{:016x}.mcap", fingerprint(set)));
+    let dir = Scratch::new("slow", &format!("{:016x}", fingerprint(set)));
+    let path = dir.join("run.mcap");
     let mut engine = cpu_engine(&model, Precision::F64, 1).unwrap();
     let opts = RunOptions {
         output: Some(path.clone()),

@@ -90,55 +90,126 @@ fn every_junction_summed(text: &str, min_seconds: f64) {
 /// gets the variants of `variants`.
 fn kept_rows(name: &str, model: &Model, as_shipped: bool, min_seconds: f64) {
     for kernel in candidates(model) {
-        for (shader_checks, bond_patches, noted_junction_blocks, chained_tiles) in
-            variants(kernel, as_shipped)
-        {
+        for way in variants(kernel, as_shipped) {
             let kept = GpuOptions {
                 keep_junction_sums: true,
-                shader_checks,
-                bond_patches,
-                noted_junction_blocks,
-                chained_tiles,
+                shader_checks: way.shader_checks,
+                bond_patches: way.bond_patches,
+                noted_junction_blocks: way.noted_junction_blocks,
+                chained_tiles: way.chained_tiles,
+                published_halo_sums: way.published_halo_sums,
                 ..options(kernel)
             };
             let figure = match solo_step_seconds(model, kept, min_seconds) {
                 Ok((s, host)) => format!("{:.2} | {host:.2}", s * 1e6),
                 Err(e) => format!("not run: {e} |"),
             };
-            let how = match (shader_checks, bond_patches, noted_junction_blocks) {
-                _ if chained_tiles => ", rounds chained in one dispatch",
-                (true, _, _) => ", wgpu's run-time checks in the kernels",
-                (_, true, _) => ", bulk forces by 2×2 patches of blocks",
-                (_, _, false) => {
-                    ", each lane and update calling junction_block for its block \
-                     (before session 33)"
-                }
-                _ => "",
-            };
-            println!("| {name}{how} | {} | {figure} |", path_name(kernel));
+            println!("| {name}{} | {} | {figure} |", way.how(), path_name(kernel));
         }
     }
 }
 
-/// The ways to run `kernel` on a scene variant: (shader checks, bond
-/// patches, lanes read the kept bit, chained tiles).
-fn variants(kernel: Kernel, as_shipped: bool) -> Vec<(bool, bool, bool, bool)> {
-    let mut variants = vec![(false, false, true, false)];
+/// A way to run a kernel on a scene variant: the options that section 7
+/// compares against the defaults.
+#[derive(Clone, Copy)]
+struct Way {
+    shader_checks: bool,
+    bond_patches: bool,
+    noted_junction_blocks: bool,
+    chained_tiles: bool,
+    published_halo_sums: bool,
+}
+
+impl Way {
+    const DEFAULT: Way = Way {
+        shader_checks: false,
+        bond_patches: false,
+        noted_junction_blocks: true,
+        chained_tiles: false,
+        published_halo_sums: true,
+    };
+
+    /// The row's label after the scene's name: how it differs from the
+    /// defaults.
+    fn how(self) -> &'static str {
+        match self {
+            Way {
+                chained_tiles: true,
+                published_halo_sums: false,
+                ..
+            } => {
+                ", rounds chained in one dispatch, halo sums made anew each round \
+                 (before session 60)"
+            }
+            Way {
+                chained_tiles: true,
+                ..
+            } => ", rounds chained in one dispatch",
+            Way {
+                published_halo_sums: false,
+                ..
+            } => ", halo sums made anew each round (before session 60)",
+            Way {
+                shader_checks: true,
+                ..
+            } => ", wgpu's run-time checks in the kernels",
+            Way {
+                bond_patches: true, ..
+            } => ", bulk forces by 2×2 patches of blocks",
+            Way {
+                noted_junction_blocks: false,
+                ..
+            } => {
+                ", each lane and update calling junction_block for its block \
+                 (before session 33)"
+            }
+            _ => "",
+        }
+    }
+}
+
+/// The ways to run `kernel` on a scene variant.
+fn variants(kernel: Kernel, as_shipped: bool) -> Vec<Way> {
+    let mut variants = vec![Way::DEFAULT];
     // The scene as shipped also with wgpu's run-time checks in the
     // kernels (`GpuOptions::shader_checks`): what leaving them out saves;
     // and with their bulk forces by patches of blocks
     // (`GpuOptions::bond_patches`).
     if as_shipped {
-        variants.push((true, false, true, false));
-        variants.push((false, true, true, false));
+        variants.push(Way {
+            shader_checks: true,
+            ..Way::DEFAULT
+        });
+        variants.push(Way {
+            bond_patches: true,
+            ..Way::DEFAULT
+        });
         if matches!(kernel, Kernel::Resident | Kernel::Tiled) {
-            variants.push((false, false, false, false));
+            variants.push(Way {
+                noted_junction_blocks: false,
+                ..Way::DEFAULT
+            });
         }
     }
     // The tiled kernel's rounds chained in one dispatch, on every
-    // scene (the bulk alone too): what a dispatch a round costs.
+    // scene (the bulk alone too): what a dispatch a round costs. On the
+    // shipped scene also each round's halo sums made anew
+    // (`GpuOptions::published_halo_sums`), both ways: what publishing the
+    // sums with the junctions saves.
     if kernel == Kernel::Tiled {
-        variants.push((false, false, true, true));
+        let chained = Way {
+            chained_tiles: true,
+            ..Way::DEFAULT
+        };
+        variants.push(chained);
+        if as_shipped {
+            for way in [Way::DEFAULT, chained] {
+                variants.push(Way {
+                    published_halo_sums: false,
+                    ..way
+                });
+            }
+        }
     }
     variants
 }

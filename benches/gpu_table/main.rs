@@ -32,7 +32,9 @@
 //!    and tiled kernels also with each junction lane and each update
 //!    calling `junction_block` for its block, as before session 33
 //!    (`GpuOptions::noted_junction_blocks`), and the tiled kernel with its
-//!    rounds chained in one dispatch (`GpuOptions::chained_tiles`);
+//!    rounds chained in one dispatch (`GpuOptions::chained_tiles`), and
+//!    (both ways) with each round's halo sums made anew, as before session
+//!    60 (`GpuOptions::published_halo_sums`);
 //! 8. what limits an ensemble: the single-workgroup kernels on one Table S1
 //!    scene and on 132, 264 and 528 (one, two and four an SM of an H200 or
 //!    an H100 SXM, 132 SMs), at 256 threads (and 1024 on the

@@ -261,5 +261,6 @@ mod tests {
         assert!(err.to_string().contains("no crossing"), "{err}");
         assert!(!path.exists());
         assert!(!dir.join("empty.png.partial").exists());
+        let _ = std::fs::remove_dir_all(&dir);
     }
 }

@@ -110,6 +110,15 @@ impl Bindings {
         self
     }
 
+    /// Storage buffer bindings, every group: what a pipeline layout of
+    /// these bindings asks of `max_storage_buffers_per_shader_stage`.
+    pub fn storage_count(&self) -> u32 {
+        self.declared
+            .iter()
+            .filter(|d| matches!(d.ty, wgpu::BufferBindingType::Storage { .. }))
+            .count() as u32
+    }
+
     /// The binding number of variable `name` (for tests and messages).
     pub fn binding(&self, name: &str) -> Option<(u32, u32)> {
         self.declared

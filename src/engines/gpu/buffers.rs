@@ -93,7 +93,7 @@ pub(super) struct Buffers {
     /// The tiled kernel's: two published copies of the blocks (u, v), of
     /// the junctions (state, spring), the ends of a batch's dispatches and each tile's rounds
     /// done; placeholders for the other kernels.
-    pub(super) tile_scratch: [Region; 6],
+    pub(super) tile_scratch: [Region; 7],
     /// Group 1: each scene's batch (`GpuBatch`), written before each batch.
     pub(super) batches: Region,
     /// Group 1: the step offsets 0..ONE_STEP_BATCH, one per dynamic-offset
@@ -141,6 +141,7 @@ impl Buffers {
             TileScratch {
                 published_blocks: 0,
                 published_junctions: 0,
+                published_sums: 0,
                 halo_junctions: 0,
                 lane_sums: shape.nx * shape.lanes,
             },
@@ -220,6 +221,11 @@ impl Buffers {
             arenas.zeros(ro, ends * 4),
             // Each tile's rounds done (chained tiles).
             arenas.zeros(rw, s * geometry.map_or(0, |g| g.tiles as usize) * 4),
+            // Published kept junction sums (empty records: zeros).
+            arenas.zeros(
+                rw,
+                s * scratch.published_sums * std::mem::size_of::<GpuJunctionCache<T>>(),
+            ),
         ];
         // One element of the largest record struct in this precision; the
         // entries and step samples are read-only bindings.
@@ -320,6 +326,7 @@ pub(super) fn state_group(
         ("tile_junction_spring", &b.tile_scratch[3]),
         ("tile_ends", &b.tile_scratch[4]),
         ("tile_progress", &b.tile_scratch[5]),
+        ("tile_junction_cache", &b.tile_scratch[6]),
     ]
     .map(|(name, region)| (name, region.binding()));
     let records = [

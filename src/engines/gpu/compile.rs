@@ -66,11 +66,12 @@ fn step_as_immediate(source: &str) -> String {
 }
 
 /// The buffers a tiled kernel's tiles publish for their neighbours' halos.
-pub const PUBLISHED_HALOS: [&str; 4] = [
+pub const PUBLISHED_HALOS: [&str; 5] = [
     "pub_disp",
     "pub_vel",
     "tile_junction_state",
     "tile_junction_spring",
+    "tile_junction_cache",
 ];
 
 /// `source` with the published halos' bindings declared `@coherent`.

@@ -299,10 +299,17 @@ gpu_struct! {
         /// storage), over the scene's dispatches.
         pub lane_levels: u32,
         /// A chained tiled kernel's tile that gave up waiting for its
-        /// neighbours, plus one (0: none; `tiles::TileChain`). Also keeps
-        /// the count of words even (the status copies are followed by
-        /// 8-byte timestamps).
+        /// neighbours, plus one (0: none; `tiles::TileChain`).
         pub stalled_tile: u32,
+        /// Interface block-steps whose junctions were summed, not kept
+        /// (`junction_friction` counts them where
+        /// `GpuOptions::count_summed_junction_blocks` asks; 0 otherwise), all
+        /// dispatches (mod 2³²): a halo block of the tiled kernel counts in
+        /// each tile that steps it.
+        pub summed_junction_blocks: u32,
+        /// Keeps the count of words even: the status copies are followed
+        /// by 8-byte timestamps.
+        pub unused: u32,
     }
 }
 

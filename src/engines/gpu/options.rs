@@ -201,6 +201,20 @@ pub struct GpuOptions {
     /// same value, so the same bits. false: the dynamic offset (the
     /// comparison in benchmarks, and adapters without immediates).
     pub step_immediates: bool,
+    /// The tiled kernel publishes its edge blocks' kept junction sums with
+    /// their junctions, and a tile starts its halo blocks from them
+    /// (`PUBLISHED_HALO_SUMS` in `shaders/junction_tiled.wgsl`): a quiet
+    /// halo block keeps its sums from a round's first step, where it
+    /// summed its junctions then (a whole lane phase a round in every
+    /// tile). Kept or made anew, sums of the same junctions have the same
+    /// bits. false: each round's halo sums made anew, as before session 60
+    /// (the comparison in benchmarks).
+    pub published_halo_sums: bool,
+    /// The kernels count the interface block-steps whose junctions they
+    /// summed (`GpuStatus::summed_junction_blocks`,
+    /// `GpuEngine::summed_junction_blocks`): an atomic each, so off (and
+    /// compiled out) unless a test or benchmark asks.
+    pub count_summed_junction_blocks: bool,
 }
 
 impl Default for GpuOptions {
@@ -223,6 +237,8 @@ impl Default for GpuOptions {
             samples: None,
             pack_arrays: true,
             step_immediates: true,
+            published_halo_sums: true,
+            count_summed_junction_blocks: false,
         }
     }
 }

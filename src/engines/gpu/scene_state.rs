@@ -4,8 +4,8 @@
 //! per-scene count of each buffer.
 
 use super::arena::Region;
-use super::buffers::{gpu_junction_springs, Shape, WORD_PAIR_BYTES};
-use super::layout::{GpuJunctionCache, GpuJunctionSpring};
+use super::buffers::{gpu_junction_springs, Shape, STATUS_BYTES, WORD_PAIR_BYTES};
+use super::layout::{GpuJunctionCache, GpuJunctionSpring, GpuStatus};
 use super::precision::{Coord, GpuReal, Packed};
 use super::readback::{cast_prefix, read_ranges, Range};
 use super::GpuEngine;
@@ -124,6 +124,18 @@ impl<T: GpuReal> GpuEngine<T> {
         let range = self.slice(&self.buffers.junction_cache, k, nx, bytes);
         let raw = read_ranges(&self.ctx, &[range])?;
         Ok(kept_records::<T>(&raw[0]))
+    }
+
+    /// Interface block-steps of scene `k` whose junctions the kernels have
+    /// summed rather than kept, since the engine was built (mod 2³²; a
+    /// halo block of the tiled kernel counts in each tile that steps it).
+    /// Counted only where `GpuOptions::count_summed_junction_blocks` asks.
+    pub fn summed_junction_blocks(&mut self, k: usize) -> Result<u32, EngineError> {
+        self.drain()?;
+        let range = self.slice(&self.buffers.status, k, 1, STATUS_BYTES);
+        let raw = read_ranges(&self.ctx, &[range])?;
+        let status: GpuStatus = bytemuck::pod_read_unaligned(&raw[0]);
+        Ok(status.summed_junction_blocks)
     }
 
     /// Kept records of the tiled kernel's halo copies (`junction_sums_slot`

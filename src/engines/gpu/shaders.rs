@@ -616,6 +616,59 @@ mod tests {
         }
     }
 
+    /// Every kernel family's pipeline layout (its modules' bindings that
+    /// their entry points use, both groups) binds at most the storage
+    /// arrays the engine asks an adapter for (`context::STORAGE_BINDINGS`),
+    /// in both precisions and both lane merges, and the tiled kernel's binds
+    /// exactly that many: an adapter that passes the check at start-up can
+    /// bind every kernel, and the check asks no more than they need.
+    #[test]
+    fn every_kernel_binds_at_most_the_storage_arrays_the_adapter_is_asked_for() {
+        use super::super::bindings::Bindings;
+        use super::super::context::STORAGE_BINDINGS;
+        fn family<T: GpuReal>(kernels: &[Kernel], lanes: LaneMerge) -> u32 {
+            kernels
+                .iter()
+                .map(|k| Bindings::reflect(&k.source_with::<T>(lanes)).unwrap())
+                .reduce(Bindings::union)
+                .unwrap()
+                .storage_count()
+        }
+        let families: [&[Kernel]; 3] = [
+            &[Kernel::OneStep, Kernel::OneStepLanes],
+            &[Kernel::Persistent, Kernel::Resident],
+            &[Kernel::Tiled],
+        ];
+        for kernels in families {
+            for lanes in [LaneMerge::Storage, LaneMerge::Shuffle] {
+                for n in [family::<f32>(kernels, lanes), family::<f64>(kernels, lanes)] {
+                    assert!(
+                        n <= STORAGE_BINDINGS,
+                        "{kernels:?} {lanes:?}: {n} storage arrays"
+                    );
+                }
+            }
+        }
+        assert_eq!(
+            family::<f32>(&[Kernel::Tiled], LaneMerge::Storage),
+            STORAGE_BINDINGS
+        );
+    }
+
+    /// The kernels' status words per scene (`STATUS_WORDS` in
+    /// `scene.wgsl`) are `GpuStatus`'s, an even count (the status copies
+    /// are followed by 8-byte timestamps).
+    #[test]
+    fn the_kernels_status_words_are_gpu_status() {
+        let words = std::mem::size_of::<super::super::layout::GpuStatus>() / 4;
+        let scene = file("scene").unwrap();
+        assert!(
+            scene.contains(&format!("const STATUS_WORDS: u32 = {words}u;")),
+            "scene.wgsl's STATUS_WORDS is not {words}"
+        );
+        assert_eq!(words % 2, 0);
+    }
+
     /// The f64 kernels need the FLOAT64 capability, so the test above
     /// validates f64 code (the mixed ones validate without it).
     #[test]

@@ -48,6 +48,10 @@ impl StepKernel {
     ) -> Vec<(&'static str, f64)> {
         let mut constants = variant.constants.clone();
         constants.push(("KEEP_JUNCTION_SUMS", opts.keep_junction_sums as u8 as f64));
+        constants.push((
+            "COUNT_SUMMED_BLOCKS",
+            opts.count_summed_junction_blocks as u8 as f64,
+        ));
         if self.kernel.is_persistent() {
             constants.push(("PERSISTENT_THREADS", self.threads as f64));
             // llvmpipe counts the iterations of every inlined loop against
@@ -116,6 +120,7 @@ impl StepKernel {
             constants.push(("TILE_HALO", g.halo as f64));
             constants.push(("TILE_BLOCKS", g.blocks as f64));
             constants.push(("TILE_THREADS", self.threads as f64));
+            constants.push(("PUBLISHED_HALO_SUMS", opts.published_halo_sums as u8 as f64));
         }
         if let Some(chain) = self.chain {
             constants.push(("TILE_CHAINED", 1.0));

@@ -162,6 +162,7 @@ impl TileGeometry {
         TileScratch {
             published_blocks: 2 * blocks,
             published_junctions: 2 * nx * ns,
+            published_sums: 2 * nx,
             halo_junctions: tiles * span * ns,
             lane_sums: tiles * span * lanes,
         }
@@ -177,6 +178,9 @@ pub struct TileScratch {
     /// Two published copies of the junctions (`tile_junction_state`,
     /// `tile_junction_spring`).
     pub published_junctions: usize,
+    /// Two published copies of the interface blocks' kept junction sums
+    /// (`tile_junction_cache`).
+    pub published_sums: usize,
     /// Each tile's private copy of its halo's junctions: the junction
     /// arrays' tail, after every scene's own junctions.
     pub halo_junctions: usize,
