@@ -8,15 +8,17 @@ use slipfront::io::output::ChunkCompression;
 use slipfront::model::scenario::{Scenario, DEFAULT_SCENARIO};
 use slipfront::{advance_to, Model};
 
+#[path = "support/scratch.rs"]
+mod scratch;
+use scratch::Scratch;
+
 /// The default scene with `set` applied, its model, and a fresh folder
 /// named `name` for its files.
-fn scene(name: &str, set: &[&str]) -> (Scenario, Model, std::path::PathBuf) {
+fn scene(name: &str, set: &[&str]) -> (Scenario, Model, Scratch) {
     let set: Vec<String> = set.iter().map(|s| s.to_string()).collect();
     let scenario = Scenario::parse(DEFAULT_SCENARIO, name, &set).unwrap();
     let model = Model::from_scenario(&scenario, false).unwrap();
-    let dir = std::env::temp_dir().join(format!("slipfront-{name}-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    (scenario, model, dir)
+    (scenario, model, Scratch::new("output", name))
 }
 
 #[test]
