@@ -51,7 +51,7 @@ fn set_junction_spring(k: u32, spring: JunctionSpring) {
 // A scene that blew up is left as it is (its status keeps the first
 // blow-up) while the others go on.
 fn scene_stopped() -> bool {
-    return atomicLoad(&status[status_base()]) != 0u;
+    return atomicLoad(&status[status_base() + STATUS_FLAG]) != 0u;
 }
 // The step offset of this dispatch in its batch: a dynamic offset into a
 // fixed table, or, where the adapter has immediates, an immediate (the
@@ -121,13 +121,13 @@ fn loads_at(i: u32) -> Loads {
 // words hold real values whatever the precision.
 fn report_blow_up(i: u32, step: u32, u: Disp, v: vec2<real>) {
     let s = status_base();
-    if atomicAdd(&status[s], 1u) == 0u {
-        atomicStore(&status[s + 1u], step);
-        atomicStore(&status[s + 2u], i);
-        atomicStore(&status[s + 3u], bitcast<u32>(coord_f32(u.x)));
-        atomicStore(&status[s + 4u], bitcast<u32>(coord_f32(u.z)));
-        atomicStore(&status[s + 5u], bitcast<u32>(f32(v.x)));
-        atomicStore(&status[s + 6u], bitcast<u32>(f32(v.y)));
+    if atomicAdd(&status[s + STATUS_FLAG], 1u) == 0u {
+        atomicStore(&status[s + STATUS_STEP], step);
+        atomicStore(&status[s + STATUS_BLOCK], i);
+        atomicStore(&status[s + STATUS_UX], bitcast<u32>(coord_f32(u.x)));
+        atomicStore(&status[s + STATUS_UZ], bitcast<u32>(coord_f32(u.z)));
+        atomicStore(&status[s + STATUS_VX], bitcast<u32>(f32(v.x)));
+        atomicStore(&status[s + STATUS_VZ], bitcast<u32>(f32(v.y)));
     }
 }
 

@@ -266,7 +266,7 @@ fn kept_lane_sum(jb: JunctionBlock) -> LaneSum {
 fn junction_friction(ix: u32, jb: JunctionBlock, lanes: LaneSum, other: real) -> real {
     let total = lanes;
     if COUNT_SUMMED_BLOCKS && !jb.kept {
-        atomicAdd(&status[status_base() + 10u], 1u);
+        atomicAdd(&status[status_base() + STATUS_SUMMED_JUNCTION_BLOCKS], 1u);
     }
     if !jb.kept && jb.keeps {
         // Kept only while every junction is pinned (stiffness_max 0: empty).

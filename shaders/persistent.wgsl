@@ -89,14 +89,14 @@ fn persistent_steps(
             batch.records,
             first_sample,
         );
-        stop = atomicLoad(&status[status_base()]);
+        stop = atomicLoad(&status[status_base() + STATUS_FLAG]);
         atomicStore(&fewest_run, 0xffffffffu);
     }
     let steps = workgroupUniformLoad(&span);
     lane_shuffle_ready();
     let stride = lane_subtree_stride();
     if t == 0u {
-        atomicMax(&status[status_base() + 8u], lane_levels_used());
+        atomicMax(&status[status_base() + STATUS_LANE_LEVELS], lane_levels_used());
     }
     var next_sample = steps.w;
     var ran = 0u;
@@ -278,7 +278,7 @@ fn persistent_steps(
         // Stop at a blow-up (checked every 16 steps: each check costs a barrier).
         if (s & 15u) == 15u {
             if t == 0u {
-                stop = atomicLoad(&status[status_base()]);
+                stop = atomicLoad(&status[status_base() + STATUS_FLAG]);
             }
             if workgroupUniformLoad(&stop) != 0u {
                 break;
@@ -298,6 +298,6 @@ fn persistent_steps(
     atomicMin(&fewest_run, ran);
     workgroupBarrier();
     if t == 0u {
-        atomicAdd(&status[status_base() + 7u], atomicLoad(&fewest_run));
+        atomicAdd(&status[status_base() + STATUS_PERSISTENT_STEPS], atomicLoad(&fewest_run));
     }
 }

@@ -46,10 +46,8 @@ fn lane_base() -> u32 {
     return scene * c.nx * min(JUNCTION_LANES, c.junction_count);
 }
 
-// GpuStatus's words (std::mem::size_of::<GpuStatus>() / 4: a unit test
-// holds them equal).
-const STATUS_WORDS: u32 = 12u;
-
+// A scene's status words start here; STATUS_WORDS and each word's
+// STATUS_<FIELD> come from GpuStatus (layout.rs wgsl_prelude).
 fn status_base() -> u32 {
     return scene * STATUS_WORDS;
 }

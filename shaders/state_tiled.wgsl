@@ -152,7 +152,30 @@ fn pub_slot(copy: u32, i: u32) -> u32 {
     return (copy * scene_count() + scene) * c.n_blocks + i;
 }
 
-// Whether this tile's column ix is in a neighbour's halo.
+// The halos of this tile's nearest neighbours: the left one's holds
+// columns ..< left_hi of this tile, the right one's right_lo.. (each as
+// tile_enter bounds a neighbour's held columns). A farther neighbour, where
+// the halo is wider than a tile, holds fewer of them, and steps a column
+// only if the nearest one does.
+fn neighbour_halos() -> vec2<u32> {
+    return vec2<u32>(min(c.nx, tile_x0 + TILE_HALO), tile_x1 - min(tile_x1, TILE_HALO));
+}
+
+// Whether this tile's column ix is in a neighbour's halo: its u and v are
+// published (the lattice's first and last tiles have a neighbour on one
+// side only).
 fn tile_edge(ix: u32) -> bool {
-    return ix < tile_x0 + TILE_HALO || ix + TILE_HALO >= tile_x1;
+    let halos = neighbour_halos();
+    return (tile_x0 > 0u && ix < halos.x) || (tile_x1 < c.nx && ix >= halos.y);
+}
+
+// Whether a neighbour steps this tile's column ix (tile_steps, there): its
+// junctions and kept sums are published. A halo's outermost column is
+// read by the stencil of the column inside it, so its u and v are
+// published, but never stepped.
+fn tile_edge_stepped(ix: u32) -> bool {
+    let halos = neighbour_halos();
+    let left = tile_x0 > 0u && (ix + 1u < halos.x || halos.x == c.nx);
+    let right = tile_x1 < c.nx && (ix > halos.y || halos.y == 0u);
+    return left || right;
 }

@@ -117,15 +117,16 @@ fn publish_edges(t: u32, copy: u32) {
     publish_edge_junctions(t, copy);
 }
 
-// The interface junctions of this tile's edge columns, and their blocks'
-// kept sums, from storage into published copy `copy`.
+// The interface junctions of this tile's edge columns that a neighbour
+// steps, and their blocks' kept sums, from storage into published copy
+// `copy`.
 fn publish_edge_junctions(t: u32, copy: u32) {
     if FRICTION_LAW != LAW_JUNCTIONS {
         return;
     }
     if PUBLISHED_HALO_SUMS {
         for (var ix = tile_x0 + t; ix < tile_x1; ix += TILE_THREADS) {
-            if tile_edge(ix) {
+            if tile_edge_stepped(ix) {
                 tile_junction_cache[pub_sums_slot(copy, ix)] = junction_cache[junction_sums_slot(ix)];
             }
         }
@@ -133,7 +134,7 @@ fn publish_edge_junctions(t: u32, copy: u32) {
     let ns = c.junction_count;
     for (var b = grid_walk(t, TILE_THREADS, ns); b.row < tile_x1 - tile_x0; grid_walk_next(&b)) {
         let ix = tile_x0 + b.row;
-        if tile_edge(ix) {
+        if tile_edge_stepped(ix) {
             let j = b.column;
             let at = pub_junction_first(copy, ix) + j;
             tile_junction_state[at] = junction_state[junction_base() + ix * ns + j];
@@ -300,7 +301,7 @@ fn tiled_steps(
     lane_shuffle_ready();
     let stride = lane_subtree_stride();
     if t == 0u && wid.x == 0u {
-        atomicMax(&status[status_base() + 8u], lane_levels_used());
+        atomicMax(&status[status_base() + STATUS_LANE_LEVELS], lane_levels_used());
     }
     var polls = 0u;
     for (var k = 0u; k < chain.x; k++) {
@@ -321,7 +322,7 @@ fn tiled_steps(
                     // They never came: this adapter does not run the scene's
                     // tiles at once. The scene stops, its neighbours go on.
                     if t == 0u {
-                        atomicMax(&status[status_base() + 9u], tile + 1u);
+                        atomicMax(&status[status_base() + STATUS_STALLED_TILE], tile + 1u);
                     }
                     break;
                 }
@@ -390,7 +391,7 @@ fn store_tile_end(t: u32, end: u32) {
 fn tile_round(t: u32, d: u32, lanes: u32, stride: u32, first: bool, last: bool) -> u32 {
     if t == 0u {
         let start = select(tile_ends[max(d, 1u) - 1u] & ~ROUND_ENDS_DISPATCH, 0u, d == 0u);
-        let stalled = atomicLoad(&status[status_base() + 9u]) != 0u;
+        let stalled = atomicLoad(&status[status_base() + STATUS_STALLED_TILE]) != 0u;
         tile_plan = vec4<u32>(start, tile_ends[d] & ~ROUND_ENDS_DISPATCH, u32(scene_stopped() || stalled), 0u);
     }
     let plan = workgroupUniformLoad(&tile_plan);

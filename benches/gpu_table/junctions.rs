@@ -90,104 +90,67 @@ fn every_junction_summed(text: &str, min_seconds: f64) {
 /// gets the variants of `variants`.
 fn kept_rows(name: &str, model: &Model, as_shipped: bool, min_seconds: f64) {
     for kernel in candidates(model) {
-        for way in variants(kernel, as_shipped) {
-            let kept = GpuOptions {
-                keep_junction_sums: true,
-                shader_checks: way.shader_checks,
-                bond_patches: way.bond_patches,
-                noted_junction_blocks: way.noted_junction_blocks,
-                chained_tiles: way.chained_tiles,
-                published_halo_sums: way.published_halo_sums,
-                ..options(kernel)
-            };
-            let figure = match solo_step_seconds(model, kept, min_seconds) {
+        let kept = GpuOptions {
+            keep_junction_sums: true,
+            ..options(kernel)
+        };
+        for way in variants(kernel, kept, as_shipped) {
+            let figure = match solo_step_seconds(model, way, min_seconds) {
                 Ok((s, host)) => format!("{:.2} | {host:.2}", s * 1e6),
                 Err(e) => format!("not run: {e} |"),
             };
-            println!("| {name}{} | {} | {figure} |", way.how(), path_name(kernel));
+            println!(
+                "| {name}{} | {} | {figure} |",
+                how(&way, &kept),
+                path_name(kernel)
+            );
         }
     }
 }
 
-/// A way to run a kernel on a scene variant: the options that section 7
-/// compares against the defaults.
-#[derive(Clone, Copy)]
-struct Way {
-    shader_checks: bool,
-    bond_patches: bool,
-    noted_junction_blocks: bool,
-    chained_tiles: bool,
-    published_halo_sums: bool,
-}
-
-impl Way {
-    const DEFAULT: Way = Way {
-        shader_checks: false,
-        bond_patches: false,
-        noted_junction_blocks: true,
-        chained_tiles: false,
-        published_halo_sums: true,
-    };
-
-    /// The row's label after the scene's name: how it differs from the
-    /// defaults.
-    fn how(self) -> &'static str {
-        match self {
-            Way {
-                chained_tiles: true,
-                published_halo_sums: false,
-                ..
-            } => {
-                ", rounds chained in one dispatch, halo sums made anew each round \
-                 (before session 60)"
-            }
-            Way {
-                chained_tiles: true,
-                ..
-            } => ", rounds chained in one dispatch",
-            Way {
-                published_halo_sums: false,
-                ..
-            } => ", halo sums made anew each round (before session 60)",
-            Way {
-                shader_checks: true,
-                ..
-            } => ", wgpu's run-time checks in the kernels",
-            Way {
-                bond_patches: true, ..
-            } => ", bulk forces by 2×2 patches of blocks",
-            Way {
-                noted_junction_blocks: false,
-                ..
-            } => {
-                ", each lane and update calling junction_block for its block \
-                 (before session 33)"
-            }
-            _ => "",
-        }
+/// A row's label after the scene's name: how its options `way` differ
+/// from the kernel's as run by default (`base`).
+fn how(way: &GpuOptions, base: &GpuOptions) -> &'static str {
+    let chained = way.chained_tiles && !base.chained_tiles;
+    let sums_anew = !way.published_halo_sums && base.published_halo_sums;
+    if chained && sums_anew {
+        ", rounds chained in one dispatch, halo sums made anew each round (before session 60)"
+    } else if chained {
+        ", rounds chained in one dispatch"
+    } else if sums_anew {
+        ", halo sums made anew each round (before session 60)"
+    } else if way.shader_checks != base.shader_checks {
+        ", wgpu's run-time checks in the kernels"
+    } else if way.bond_patches != base.bond_patches {
+        ", bulk forces by 2×2 patches of blocks"
+    } else if way.noted_junction_blocks != base.noted_junction_blocks {
+        ", each lane and update calling junction_block for its block (before session 33)"
+    } else {
+        ""
     }
 }
 
-/// The ways to run `kernel` on a scene variant.
-fn variants(kernel: Kernel, as_shipped: bool) -> Vec<Way> {
-    let mut variants = vec![Way::DEFAULT];
+/// The options to run `kernel` with on a scene variant: `base` and its
+/// edits.
+fn variants(kernel: Kernel, base: GpuOptions, as_shipped: bool) -> Vec<GpuOptions> {
+    let mut variants = vec![base];
     // The scene as shipped also with wgpu's run-time checks in the
     // kernels (`GpuOptions::shader_checks`): what leaving them out saves;
     // and with their bulk forces by patches of blocks
     // (`GpuOptions::bond_patches`).
     if as_shipped {
-        variants.push(Way {
+        variants.push(GpuOptions {
             shader_checks: true,
-            ..Way::DEFAULT
+            ..base
         });
-        variants.push(Way {
+        variants.push(GpuOptions {
             bond_patches: true,
-            ..Way::DEFAULT
+            ..base
         });
         if matches!(kernel, Kernel::Resident | Kernel::Tiled) {
-            variants.push(Way {
+            variants.push(GpuOptions {
                 noted_junction_blocks: false,
-                ..Way::DEFAULT
+                ..base
             });
         }
     }
@@ -197,14 +160,14 @@ fn variants(kernel: Kernel, as_shipped: bool) -> Vec<Way> {
     // (`GpuOptions::published_halo_sums`), both ways: what publishing the
     // sums with the junctions saves.
     if kernel == Kernel::Tiled {
-        let chained = Way {
+        let chained = GpuOptions {
             chained_tiles: true,
-            ..Way::DEFAULT
+            ..base
         };
         variants.push(chained);
         if as_shipped {
-            for way in [Way::DEFAULT, chained] {
-                variants.push(Way {
+            for way in [base, chained] {
+                variants.push(GpuOptions {
                     published_halo_sums: false,
                     ..way
                 });

@@ -500,6 +500,7 @@ pub fn wgsl_prelude<T: GpuReal>() -> String {
     ] {
         s += &format!("const {name}: u32 = {value}u;\n");
     }
+    s += &status_word_constants();
     // The friction laws' kernel codes (`FRICTION_LAW`), from the laws'
     // declarations (crate::model::friction::LAWS).
     for (code, name) in crate::model::friction::kernel_codes() {
@@ -532,6 +533,26 @@ pub fn wgsl_prelude<T: GpuReal>() -> String {
         GpuSampleSums::<T>::wgsl(),
     ] {
         s += &decl;
+    }
+    s
+}
+
+/// The status words of a scene, named from `GpuStatus`'s fields: `STATUS_WORDS`
+/// (words per scene) and `STATUS_<FIELD>` (a field's word), so the kernels
+/// index their counters by name, never by a number that could drift from
+/// the struct the host reads.
+fn status_word_constants() -> String {
+    let word = |offset: usize| offset / std::mem::size_of::<u32>();
+    let mut s = format!(
+        "const STATUS_WORDS: u32 = {}u;\n",
+        word(std::mem::size_of::<GpuStatus>())
+    );
+    for (name, _, offset) in GpuStatus::fields() {
+        s += &format!(
+            "const STATUS_{}: u32 = {}u;\n",
+            name.to_uppercase(),
+            word(offset)
+        );
     }
     s
 }

@@ -655,18 +655,40 @@ mod tests {
         );
     }
 
-    /// The kernels' status words per scene (`STATUS_WORDS` in
-    /// `scene.wgsl`) are `GpuStatus`'s, an even count (the status copies
-    /// are followed by 8-byte timestamps).
+    /// The kernels index a scene's status words by the names the prelude
+    /// gives `GpuStatus`'s fields (`STATUS_<FIELD>`), never by a number, so
+    /// a counter cannot drift from the word the host reads; the words per
+    /// scene are `GpuStatus`'s, an even count (the status copies are
+    /// followed by 8-byte timestamps).
     #[test]
-    fn the_kernels_status_words_are_gpu_status() {
-        let words = std::mem::size_of::<super::super::layout::GpuStatus>() / 4;
-        let scene = file("scene").unwrap();
-        assert!(
-            scene.contains(&format!("const STATUS_WORDS: u32 = {words}u;")),
-            "scene.wgsl's STATUS_WORDS is not {words}"
-        );
+    fn the_kernels_name_the_status_words_of_gpu_status() {
+        use super::super::layout::{GpuStatus, GpuStruct};
+        let words = std::mem::size_of::<GpuStatus>() / 4;
         assert_eq!(words % 2, 0);
+        let prelude = super::super::layout::wgsl_prelude::<f32>();
+        assert!(prelude.contains(&format!("const STATUS_WORDS: u32 = {words}u;")));
+        for (name, _, offset) in GpuStatus::fields() {
+            let line = format!(
+                "const STATUS_{}: u32 = {}u;",
+                name.to_uppercase(),
+                offset / 4
+            );
+            assert!(prelude.contains(&line), "the prelude lacks {line}");
+        }
+        // Every index into `status` adds a named word to a base.
+        let mut indexed = 0;
+        for (name, text) in all_files() {
+            for (at, _) in text.match_indices("status[") {
+                let index = &text[at + "status[".len()..];
+                let index = &index[..index.find(']').unwrap()];
+                assert!(
+                    index.contains("STATUS_") && !index.chars().any(|ch| ch.is_ascii_digit()),
+                    "{name}.wgsl indexes status[{index}]: name the word"
+                );
+                indexed += 1;
+            }
+        }
+        assert!(indexed >= 10, "{indexed} status indices found");
     }
 
     /// The f64 kernels need the FLOAT64 capability, so the test above
