@@ -59,6 +59,7 @@ const LAUNCHES: &[&str] = &[
     "persistent/256",
     "persistent/512",
     "persistent/1024",
+    "persistent/1024/2-scenes",
     "persistent/256/bond-patches",
     "persistent/256/lanes-in-storage",
     "resident/256",

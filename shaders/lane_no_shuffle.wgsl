@@ -20,3 +20,7 @@ fn lane_subtree_stride() -> u32 {
 fn lane_subtree(sum: LaneSum, lane: u32) -> LaneSum {
     return sum;
 }
+
+fn subgroup_uniform(x: u32) -> u32 {
+    return x;
+}

@@ -114,3 +114,10 @@ fn lane_level(s: LaneSum, lane: u32, mask: u32) -> LaneSum {
     let high = LaneSum(select(o.anchored, s.anchored, upper), select(o.stiffness, s.stiffness, upper), o.stretch_max, o.stiffness_max, o.slipping, 0u);
     return lane_sum_merge(low, high);
 }
+
+// x as the compiler may take it: the same on every invocation of the
+// subgroup (its first active invocation's), kept in uniform registers.
+// Exact where x is the same on the whole subgroup.
+fn subgroup_uniform(x: u32) -> u32 {
+    return subgroupBroadcastFirst(x);
+}

@@ -278,6 +278,11 @@ fn block_sample_besides_interface(
 // (REDUCTION_WIDTH).
 override REDUCTION_WIDTH: u32 = REDUCTION_SLOTS;
 var<workgroup> wg_sums: array<SampleSums, REDUCTION_WIDTH>;
+// Scenes that reduce their samples side by side in one workgroup (the
+// persistent kernel's GROUP_SCENES), each in REDUCTION_WIDTH /
+// REDUCTION_GROUPS slots from its reduction_base.
+override REDUCTION_GROUPS: u32 = 1u;
+var<private> reduction_base: u32 = 0u;
 
 // Reduces wg_sums[0..width] to wg_sums[0] (a fixed tree: the same bits
 // every run). With `whole` false only the kinetic energy is reduced, by
@@ -288,13 +293,14 @@ var<workgroup> wg_sums: array<SampleSums, REDUCTION_WIDTH>;
 // the same on every thread, but need not be uniform to the analysis: the
 // barriers are outside its branches.
 fn reduce_workgroup(local: u32, width: u32, whole: bool) {
+    let at = reduction_base + local;
     for (var half = width / 2u; half > 0u; half = half / 2u) {
         workgroupBarrier();
         if local < half {
             if whole {
-                wg_sums[local] = combine(wg_sums[local], wg_sums[local + half]);
+                wg_sums[at] = combine(wg_sums[at], wg_sums[at + half]);
             } else {
-                wg_sums[local].kinetic = wg_sums[local].kinetic + wg_sums[local + half].kinetic;
+                wg_sums[at].kinetic = wg_sums[at].kinetic + wg_sums[at + half].kinetic;
             }
         }
     }
@@ -302,8 +308,8 @@ fn reduce_workgroup(local: u32, width: u32, whole: bool) {
     // before it fills in the rest.
     if !whole && local == 0u {
         var s = no_sums();
-        s.kinetic = wg_sums[0].kinetic;
-        wg_sums[0] = s;
+        s.kinetic = wg_sums[at].kinetic;
+        wg_sums[at] = s;
     }
     workgroupBarrier();
 }
@@ -314,21 +320,22 @@ fn reduce_workgroup(local: u32, width: u32, whole: bool) {
 // width ≤ REDUCTION_WIDTH this is the tree alone. With `whole` false, the
 // kinetic energy alone (reduce_workgroup).
 fn reduce_threads(local: u32, width: u32, acc: SampleSums, whole: bool) {
-    let slots = min(width, REDUCTION_WIDTH);
+    let slots = min(width, REDUCTION_WIDTH / REDUCTION_GROUPS);
     if local < slots {
         if whole {
-            wg_sums[local] = acc;
+            wg_sums[reduction_base + local] = acc;
         } else {
-            wg_sums[local].kinetic = acc.kinetic;
+            wg_sums[reduction_base + local].kinetic = acc.kinetic;
         }
     }
     for (var base = slots; base < width; base += slots) {
         workgroupBarrier();
         if local >= base && local < base + slots {
+            let at = reduction_base + local - base;
             if whole {
-                wg_sums[local - base] = combine(wg_sums[local - base], acc);
+                wg_sums[at] = combine(wg_sums[at], acc);
             } else {
-                wg_sums[local - base].kinetic = wg_sums[local - base].kinetic + acc.kinetic;
+                wg_sums[at].kinetic = wg_sums[at].kinetic + acc.kinetic;
             }
         }
     }
@@ -340,7 +347,7 @@ fn reduce_threads(local: u32, width: u32, acc: SampleSums, whole: bool) {
 // cadence for the samples after it (the host's rule,
 // runner::outputs::Outputs::emit_sample).
 fn finish_sample(e: RecordEntry) {
-    var out = wg_sums[0];
+    var out = wg_sums[reduction_base];
     out.recorded = 1u;
     out.interface_row = select(0u, 1u, interface_due(e));
     let fast = plans[scene].every_fast != 0u && out.max_slip_speed > plans[scene].fast_slip_speed;

@@ -173,6 +173,8 @@ fn bad_input_exits_with_a_clear_message() {
         refused("gpu-tile", &["8x0", "0x4", "8x33", "8"], "1 to 32");
         // Junction lanes a thread: a power of two up to 8.
         refused("gpu-lane-run", &["0", "3", "16", "four"], "[1, 2, 4, 8]");
+        // Scenes a persistent workgroup: 1, 2 or 4.
+        refused("gpu-group-scenes", &["0", "3", "8", "two"], "[1, 2, 4]");
     }
 }
 

@@ -38,15 +38,33 @@ fn options(path: GpuPath) -> GpuOptions {
 }
 
 fn solo(m: &Model, path: GpuPath, steps: u64) -> Result<Snapshot, EngineError> {
-    let mut g = GpuEngine::with_options(m, options(path))
+    solo_with(m, options(path), steps)
+}
+
+fn solo_with(m: &Model, opts: GpuOptions, steps: u64) -> Result<Snapshot, EngineError> {
+    let mut g = GpuEngine::with_options(m, opts)
         .unwrap_or_else(|e| panic!("a GPU adapter is required (lavapipe in CI): {e}"));
     advance_to(&mut g, steps)?;
     g.snapshot()
 }
 
 fn ensemble(models: &[Model], path: GpuPath) -> GpuEnsemble {
-    GpuEnsemble::new(models, options(path))
+    ensemble_with(models, options(path))
+}
+
+fn ensemble_with(models: &[Model], opts: GpuOptions) -> GpuEnsemble {
+    GpuEnsemble::new(models, opts)
         .unwrap_or_else(|e| panic!("a GPU adapter is required (lavapipe in CI): {e}"))
+}
+
+/// The persistent kernel with `scenes` scenes side by side in a workgroup
+/// of `threads` threads.
+fn grouped(threads: u32, scenes: u32) -> GpuOptions {
+    GpuOptions {
+        persistent_threads: Some(threads),
+        group_scenes: scenes,
+        ..options(GpuPath::Persistent)
+    }
 }
 
 /// Three scenes that differ in a load, a friction coefficient and the seed.
@@ -110,6 +128,103 @@ fn each_scene_of_an_ensemble_matches_its_solo_run() {
     }
 }
 
+/// Scenes side by side in one persistent workgroup (two, and four with
+/// one absent: three scenes) each end where they end run alone with the
+/// same launch and with the persistent kernel's own workgroup, bit for
+/// bit, through ruptures: a scene's steps do not depend on the scenes
+/// beside it. Control: scene 1 is not scene 0's solo run.
+#[test]
+fn scenes_side_by_side_in_a_workgroup_match_their_solo_runs() {
+    let models = three_scenes();
+    let steps = models[0].prep_steps + 3000;
+    let alone: Vec<Snapshot> = models
+        .iter()
+        .map(|m| solo(m, GpuPath::Persistent, steps).unwrap())
+        .collect();
+    for (threads, scenes) in [(128, 2), (256, 4)] {
+        let opts = grouped(threads, scenes);
+        let mut e = ensemble_with(&models, opts);
+        e.advance(steps).unwrap();
+        assert_eq!(e.steps_done(), steps);
+        let shape = e.describe();
+        assert!(
+            shape.contains(&format!("{scenes} scenes a workgroup")),
+            "{shape}"
+        );
+        for (k, m) in models.iter().enumerate() {
+            assert!(e.failure(k).is_none());
+            assert!(alone[k].total_ruptures() > 50, "scene {k}");
+            let run = e.snapshot(k).unwrap();
+            same_run(&run, &alone[k])
+                .unwrap_or_else(|e| panic!("{scenes} a workgroup, scene {k}: {e}"));
+            let grouped_alone = solo_with(m, opts, steps).unwrap();
+            same_run(&run, &grouped_alone)
+                .unwrap_or_else(|e| panic!("{scenes} a workgroup, scene {k} alone: {e}"));
+        }
+        assert!(same_run(&e.snapshot(1).unwrap(), &alone[0]).is_err());
+    }
+}
+
+/// A grouped workgroup's threads take their scene from their subgroup's
+/// first thread (so that the compiler keeps its constants in uniform
+/// registers): a subgroup that holds two scenes' threads voids the run
+/// with an error. Three threads a scene do that on any adapter with
+/// subgroups of more than three (lavapipe's hold 8). Control: the same
+/// launch without subgroup operations (every lane's sum through storage)
+/// runs, each scene bit for bit as alone.
+#[test]
+fn a_subgroup_holding_two_scenes_voids_the_run() {
+    let models = three_scenes();
+    let steps = models[0].prep_steps + 200;
+    let straddled = grouped(12, 4);
+    let mut e = ensemble_with(&models, straddled);
+    let err = e.advance(steps).unwrap_err().to_string();
+    assert!(
+        err.contains("subgroups held threads of two scenes"),
+        "{err}"
+    );
+    assert!(err.contains("4 scenes of 3 threads"), "{err}");
+    let plain = GpuOptions {
+        lane_shuffle: false,
+        ..straddled
+    };
+    let mut e = ensemble_with(&models, plain);
+    e.advance(steps).unwrap();
+    for (k, m) in models.iter().enumerate() {
+        let alone = solo(m, GpuPath::Persistent, steps).unwrap();
+        same_run(&e.snapshot(k).unwrap(), &alone).unwrap_or_else(|e| panic!("scene {k}: {e}"));
+    }
+}
+
+/// The scenes a workgroup must split its threads evenly, and only the
+/// persistent kernel steps scenes side by side.
+#[test]
+fn scenes_side_by_side_are_refused_where_they_cannot_be() {
+    let m = model(&[]);
+    let err = |opts: GpuOptions| match GpuEngine::with_options(&m, opts) {
+        Ok(_) => panic!("{opts:?} must be refused"),
+        Err(e) => e.to_string(),
+    };
+    let text = err(grouped(90, 4));
+    assert!(text.contains("must split evenly"), "{text}");
+    let text = err(grouped(128, 3));
+    assert!(text.contains("must be one of"), "{text}");
+    let text = err(GpuOptions {
+        group_scenes: 2,
+        ..options(GpuPath::Resident)
+    });
+    assert!(text.contains("--gpu-group-scenes 2"), "{text}");
+    // `auto` takes it: only a persistent launch groups scenes.
+    GpuEngine::with_options(
+        &m,
+        GpuOptions {
+            group_scenes: 2,
+            ..options(GpuPath::Auto)
+        },
+    )
+    .expect("auto takes the option");
+}
+
 /// A state saved from one scene and loaded into another at the same step
 /// makes that scene continue exactly as the first.
 #[test]
@@ -136,7 +251,8 @@ fn a_scene_state_moves_between_slots_of_an_ensemble() {
 }
 
 /// A scene that blows up stops alone, with its step and block; the others
-/// go on and still match their solo runs.
+/// go on and still match their solo runs: also the scene beside it in a
+/// persistent workgroup of two.
 #[test]
 fn a_blow_up_stops_only_its_scene() {
     let stable = model(&["time.end=1e-3"]);
@@ -146,11 +262,18 @@ fn a_blow_up_stops_only_its_scene() {
     ]);
     let models = vec![stable.clone(), unstable.clone(), stable.clone()];
     let end = stable.total_steps();
-    for path in [GpuPath::OneStep, GpuPath::Persistent, GpuPath::Resident] {
-        let Err(EngineError::BlowUp { step: alone_at, .. }) = solo(&unstable, path, end) else {
+    for opts in [
+        options(GpuPath::OneStep),
+        options(GpuPath::Persistent),
+        options(GpuPath::Resident),
+        grouped(128, 2),
+    ] {
+        let path = opts.path;
+        let Err(EngineError::BlowUp { step: alone_at, .. }) = solo_with(&unstable, opts, end)
+        else {
             panic!("{path:?}: the unstable scene must blow up alone");
         };
-        let mut e = ensemble(&models, path);
+        let mut e = ensemble_with(&models, opts);
         e.advance(end).unwrap();
         let Some(EngineError::BlowUp { step, iz, .. }) = e.failure(1) else {
             panic!("{path:?}: scene 1 must have blown up");
@@ -277,21 +400,24 @@ fn an_ensemble_records_every_scene_on_the_device_as_its_solo_run() {
     let chunks = [m.prep_steps, 700, 1300, 1];
     // One-step-lanes records through the one-step kernel's output
     // dispatches; its own layout is held on the large lattice below.
-    for path in [
-        GpuPath::OneStep,
-        GpuPath::Persistent,
-        GpuPath::Resident,
-        GpuPath::Tiled,
+    // The persistent kernel also with two scenes side by side in a
+    // workgroup: each reduces its samples in its own slots.
+    for opts in [
+        options(GpuPath::OneStep),
+        options(GpuPath::Persistent),
+        options(GpuPath::Resident),
+        options(GpuPath::Tiled),
+        grouped(128, 2),
     ] {
-        let records =
-            ensemble_and_solo_records::<f32>(&models, options(path), &plan, &chunks, |e| {
-                let other = SamplePlan {
-                    every_bulk: plan.every_bulk + 1,
-                    ..plan
-                };
-                assert!(!e.record_samples(1, &other).unwrap(), "{path:?}");
-                assert!(e.record_samples(1, &plan).unwrap(), "{path:?}");
-            });
+        let path = opts.path;
+        let records = ensemble_and_solo_records::<f32>(&models, opts, &plan, &chunks, |e| {
+            let other = SamplePlan {
+                every_bulk: plan.every_bulk + 1,
+                ..plan
+            };
+            assert!(!e.record_samples(1, &other).unwrap(), "{path:?}");
+            assert!(e.record_samples(1, &plan).unwrap(), "{path:?}");
+        });
         let got = &records.ensemble;
         assert!(
             records.output_dispatches > 0

@@ -400,7 +400,7 @@ fn an_ensemble_times_the_single_workgroup_kernels_at_several_threads() {
     for kernel in [Kernel::Persistent, Kernel::Resident, Kernel::Tiled] {
         let threads: Vec<Option<u32>> = timed
             .iter()
-            .filter(|l| l.kernel == kernel)
+            .filter(|l| l.kernel == kernel && l.group_scenes.is_none())
             .map(|l| l.threads)
             .collect();
         assert_eq!(
@@ -408,10 +408,23 @@ fn an_ensemble_times_the_single_workgroup_kernels_at_several_threads() {
             variants.iter().map(|&t| Some(t)).collect::<Vec<_>>()
         );
     }
+    // And the persistent kernel in its largest workgroup, two scenes side
+    // by side (three scenes: not four).
+    let grouped: Vec<Launch> = timed
+        .iter()
+        .filter(|l| l.group_scenes.is_some())
+        .copied()
+        .collect();
+    let largest = *variants.last().unwrap();
+    assert_eq!(
+        grouped,
+        vec![Launch::with_threads(Kernel::Persistent, largest).with_group_scenes(2)]
+    );
     let fastest = fastest(&choice);
     assert_eq!(choice.launch, fastest);
     assert_eq!(chosen.path, GpuPath::of(fastest.kernel));
     assert_eq!(chosen.persistent_threads, fastest.threads);
+    assert_eq!(chosen.group_scenes, fastest.group_scenes.unwrap_or(1));
     let key = scenes_cache_key::<f32>(&m, 3, &ctx, opts);
     let cached = cache.lookup(&key).expect("stored");
     assert_eq!(
@@ -538,9 +551,23 @@ fn launch_names_read_back() {
             .with_chained_tiles()
             .with_lanes_in_storage()
             .with_bond_patches(),
+        Launch::with_threads(Kernel::Persistent, 1024).with_group_scenes(2),
+        Launch::of(Kernel::Persistent).with_group_scenes(4),
+        Launch::with_threads(Kernel::Persistent, 1024)
+            .with_group_scenes(2)
+            .with_lanes_in_storage()
+            .with_one_lane_a_round()
+            .with_lane_run(4),
     ] {
         assert_eq!(Launch::named(&l.name()), Some(l));
     }
+    assert_eq!(
+        Launch::with_threads(Kernel::Persistent, 1024)
+            .with_group_scenes(2)
+            .with_bond_patches()
+            .name(),
+        "persistent/1024/2-scenes/bond-patches"
+    );
     assert_eq!(
         Launch::with_threads(Kernel::Resident, 1024)
             .with_bond_patches()
@@ -608,6 +635,16 @@ fn launch_names_read_back() {
         "tiled/chained/8x4",
         "tiled/256/8x4/bond-patches/chained",
         "tiled/chained/chained",
+        // Only the persistent kernel steps scenes side by side, 1, 2 or
+        // 4 of them, after its threads.
+        "resident/1024/2-scenes",
+        "tiled/256/2-scenes",
+        "persistent/1024/3-scenes",
+        "persistent/1024/0-scenes",
+        "persistent/x-scenes",
+        "persistent/2-scenes/1024",
+        "persistent/1024/bond-patches/2-scenes",
+        "persistent/1024/2-scenes/2-scenes",
     ] {
         assert_eq!(Launch::named(bad), None, "{bad}");
     }

@@ -2,7 +2,7 @@
 
 use crate::common::counts_from_env;
 use crate::gpu_timing::ensemble_step_seconds_in;
-use slipfront::engines::gpu::kernel_choice::Launch;
+use slipfront::engines::gpu::kernel_choice::{Launch, ENSEMBLE_GROUP_SCENES};
 use slipfront::engines::gpu::options::LANE_RUN_TIMED;
 use slipfront::engines::gpu::shaders::Kernel;
 use slipfront::engines::gpu::{GpuOptions, GpuReal};
@@ -145,7 +145,18 @@ impl LimitRows<'_> {
                     .then(|| launch.with_lane_run(LANE_RUN_TIMED));
                 std::iter::once(launch).chain(one).chain(run)
             });
-        for launch in launches {
+        // Where the rows have 1024 threads, also the persistent kernel with
+        // two and four scenes side by side in them: 1024-thread
+        // workgroups fill an SM's registers, so this is how scenes share
+        // one (264 scenes in pairs: one wave of 132 workgroups).
+        let grouped = self
+            .threads
+            .contains(&1024)
+            .then_some(ENSEMBLE_GROUP_SCENES)
+            .into_iter()
+            .flatten()
+            .map(|g| Launch::with_threads(Kernel::Persistent, 1024).with_group_scenes(g));
+        for launch in launches.chain(grouped) {
             self.print_launch::<T>(launch, precision, not_run);
         }
     }

@@ -63,6 +63,14 @@ pub struct GpuLaunchArgs {
     /// given; its figures name such a launch `tiled/…/chained`).
     #[arg(long)]
     pub gpu_chained_tiles: bool,
+    /// Scenes the persistent kernel steps side by side in one workgroup
+    /// (an ensemble or sweep; 1, 2 or 4), each on an equal share of its
+    /// --gpu-threads: the same results; on GPUs that give a large
+    /// workgroup fewer registers a thread, scenes share a multiprocessor
+    /// (`auto` on a hardware GPU times 2 and 4 for an ensemble when this is
+    /// not given; its figures name such a launch `persistent/1024/2-scenes`).
+    #[arg(long, value_name = "SCENES", value_parser = group_scenes)]
+    pub gpu_group_scenes: Option<u32>,
 }
 
 impl Default for GpuLaunchArgs {
@@ -78,6 +86,7 @@ impl Default for GpuLaunchArgs {
             gpu_one_lane_a_round: false,
             gpu_lane_run: None,
             gpu_chained_tiles: false,
+            gpu_group_scenes: None,
         }
     }
 }
@@ -98,9 +107,21 @@ impl GpuLaunchArgs {
             two_lanes_a_round: !self.gpu_one_lane_a_round,
             lane_run: self.gpu_lane_run.unwrap_or(1),
             chained_tiles: self.gpu_chained_tiles,
+            group_scenes: self.gpu_group_scenes.unwrap_or(1),
             ..GpuOptions::default()
         }
     }
+}
+
+/// `--gpu-group-scenes`: one of `GROUP_SCENES_ALLOWED`.
+fn group_scenes(text: &str) -> Result<u32, String> {
+    use slipfront::engines::gpu::options::GROUP_SCENES_ALLOWED;
+    text.parse()
+        .ok()
+        .filter(|n| GROUP_SCENES_ALLOWED.contains(n))
+        .ok_or_else(|| {
+            format!("`{text}` scenes a workgroup: must be one of {GROUP_SCENES_ALLOWED:?}")
+        })
 }
 
 /// `--gpu-run-ahead`: a count of batches from 0 to

@@ -238,9 +238,11 @@ impl<T: GpuReal> GpuEngine<T> {
                     }
                 }
                 Kernel::Persistent | Kernel::Resident => {
+                    // A workgroup a group of scenes.
+                    let workgroups = scene_count.div_ceil(self.group_scenes);
                     for d in 0..steps.div_ceil(self.steps_per_dispatch) {
                         step_offsets.set(&mut pass, d);
-                        pass.dispatch_workgroups(1, 1, scene_count);
+                        pass.dispatch_workgroups(1, 1, workgroups);
                         self.dispatches += 1;
                     }
                     if let Some(m) = marks.as_mut() {
@@ -380,6 +382,18 @@ impl<T: GpuReal> GpuEngine<T> {
                 self.ctx.info.name,
                 status.stalled_tile - 1,
                 self.chain.map_or(0, |c| c.polls)
+            )));
+        }
+        if statuses.iter().any(|s| s.straddled_subgroup != 0) {
+            // Threads of one scene stepped another's: every scene's run is
+            // in doubt.
+            self.in_flight.clear();
+            return Err(EngineError::Gpu(format!(
+                "{}'s subgroups held threads of two scenes of a persistent workgroup ({} scenes \
+                 of {} threads): use --gpu-group-scenes 1, or more --gpu-threads",
+                self.ctx.info.name,
+                self.group_scenes,
+                self.persistent_threads / self.group_scenes
             )));
         }
         for (scene, status) in self.scenes.iter_mut().zip(&statuses) {

@@ -307,9 +307,12 @@ gpu_struct! {
         /// dispatches (mod 2³²): a halo block of the tiled kernel counts in
         /// each tile that steps it.
         pub summed_junction_blocks: u32,
-        /// Keeps the count of words even: the status copies are followed
-        /// by 8-byte timestamps.
-        pub unused: u32,
+        /// 1 where a subgroup held threads of two scenes of a persistent
+        /// workgroup that steps several (`GpuOptions::group_scenes`): its
+        /// threads took the subgroup's first scene (`subgroup_uniform`), so
+        /// the run is void (0: none). Also keeps the count of words even:
+        /// the status copies are followed by 8-byte timestamps.
+        pub straddled_subgroup: u32,
     }
 }
 

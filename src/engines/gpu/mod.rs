@@ -145,7 +145,11 @@ pub struct GpuEngine<T: GpuReal = f32> {
     /// The workgroups of a one-step dispatch of one scene that hold
     /// blocks (the rest of `groups`' x · y pads it): a sample's partials.
     step_workgroups: u32,
+    /// Threads of a persistent, resident or tiled workgroup.
     persistent_threads: u32,
+    /// Scenes a persistent workgroup steps, each on
+    /// `persistent_threads / group_scenes` threads.
+    group_scenes: u32,
     /// Steps per persistent dispatch (bounded on software adapters).
     steps_per_dispatch: u64,
     /// Steps the persistent kernel has been asked to run (mod 2³²).
@@ -371,6 +375,7 @@ impl<T: GpuReal> GpuEngine<T> {
             )));
         }
         let persistent_threads = step_kernel.threads;
+        let group_scenes = step_kernel.group_scenes;
         let geometry = step_kernel.geometry;
         let device = &ctx.device;
         let buffers = Buffers::new::<T>(
@@ -406,7 +411,7 @@ impl<T: GpuReal> GpuEngine<T> {
                     persistent_steps_per_dispatch(
                         model,
                         kernel,
-                        persistent_threads,
+                        step_kernel.scene_threads(),
                         opts.lane_run,
                         ctx.is_software(),
                     )
@@ -441,6 +446,7 @@ impl<T: GpuReal> GpuEngine<T> {
             groups,
             step_workgroups,
             persistent_threads,
+            group_scenes,
             steps_per_dispatch,
             persistent_steps: 0,
             variant,
@@ -527,7 +533,7 @@ impl<T: GpuReal> GpuEngine<T> {
         // reducing a sample across its workgroup: a power of two of
         // threads (shaders/record_common.wgsl).
         let in_steps = self.kernel.is_persistent() || self.kernel == Kernel::Tiled;
-        let reducible = self.persistent_threads.is_power_of_two();
+        let reducible = (self.persistent_threads / self.group_scenes).is_power_of_two();
         if self.output == GpuOutput::Host || (in_steps && !reducible) {
             return Ok(false);
         }
@@ -697,6 +703,14 @@ impl<T: GpuReal> GpuEngine<T> {
             Kernel::OneStepLanes => {
                 "one-step kernel with junction lanes, 1 dispatch per step".to_string()
             }
+            Kernel::Persistent if self.group_scenes > 1 => format!(
+                "persistent kernel, 1 dispatch per {} steps, {} threads: {} scenes a workgroup, \
+                 {} threads each",
+                self.steps_per_dispatch,
+                self.persistent_threads,
+                self.group_scenes,
+                self.persistent_threads / self.group_scenes
+            ),
             Kernel::Persistent => format!(
                 "persistent kernel, 1 dispatch per {} steps, {} threads",
                 self.steps_per_dispatch, self.persistent_threads

@@ -49,9 +49,11 @@ pub const RESIDENT_THREADS: u32 = 1024;
 /// with 256, 6.8 s with 1024); the loop budget
 /// (`persistent_steps_per_dispatch`) holds at any count.
 pub const RESIDENT_THREADS_SOFTWARE: u32 = PERSISTENT_THREADS;
-/// The resident kernel's own workgroup words (its step span, stop and
-/// sample flags, and the lane shuffles' levels: 28 bytes), rounded up.
-const RESIDENT_OWN_BYTES: u64 = 64;
+/// The resident kernel's own workgroup words (its step span, its member
+/// scenes' stop and sample flags and steps run, four of each as the
+/// persistent kernel's grouped scenes have, and the lane shuffles' levels:
+/// 68 bytes), rounded up.
+const RESIDENT_OWN_BYTES: u64 = 96;
 
 /// Which kernel steps the lattice.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
@@ -215,7 +217,18 @@ pub struct GpuOptions {
     /// `GpuEngine::summed_junction_blocks`): an atomic each, so off (and
     /// compiled out) unless a test or benchmark asks.
     pub count_summed_junction_blocks: bool,
+    /// Scenes the persistent kernel steps side by side in one workgroup,
+    /// each on `persistent_threads / group_scenes` threads (1, 2 or 4:
+    /// `GROUP_SCENES_ALLOWED`; `shaders/persistent.wgsl`). On NVIDIA a
+    /// 1024-thread workgroup is held to 64 registers a thread, so two
+    /// 512-thread scenes share a multiprocessor where a 512-thread
+    /// workgroup of its own takes more registers and runs alone. Each
+    /// scene's steps are the same arithmetic, so the same bits.
+    pub group_scenes: u32,
 }
+
+/// Scenes a persistent workgroup may step (`GpuOptions::group_scenes`).
+pub const GROUP_SCENES_ALLOWED: [u32; 3] = [1, 2, 4];
 
 impl Default for GpuOptions {
     fn default() -> Self {
@@ -239,6 +252,7 @@ impl Default for GpuOptions {
             step_immediates: true,
             published_halo_sums: true,
             count_summed_junction_blocks: false,
+            group_scenes: 1,
         }
     }
 }

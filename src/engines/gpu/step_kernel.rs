@@ -22,7 +22,12 @@ use crate::model::Model;
 #[derive(Debug, Clone, Copy)]
 pub struct StepKernel {
     pub kernel: Kernel,
+    /// Threads of a workgroup: `group_scenes` scenes' of the persistent
+    /// kernel.
     pub threads: u32,
+    /// Scenes a persistent workgroup steps (`GpuOptions::group_scenes`; 1
+    /// for every other kernel).
+    pub group_scenes: u32,
     pub geometry: Option<tiles::TileGeometry>,
     /// Bulk forces by 2×2 patches (`GpuOptions::bond_patches`, on a kernel
     /// that has them).
@@ -36,6 +41,11 @@ pub struct StepKernel {
 }
 
 impl StepKernel {
+    /// Threads each scene of a workgroup steps with.
+    pub fn scene_threads(&self) -> u32 {
+        self.threads / self.group_scenes
+    }
+
     /// The override constants of the kernel's pipeline: the scene's terms
     /// (`variant`), then what the kernel's layout needs; `shape`: the
     /// lattice's (the resident kernel's workgroup arrays).
@@ -54,6 +64,10 @@ impl StepKernel {
         ));
         if self.kernel.is_persistent() {
             constants.push(("PERSISTENT_THREADS", self.threads as f64));
+            constants.push(("SCENE_THREADS", self.scene_threads() as f64));
+            constants.push(("GROUP_SCENES", self.group_scenes as f64));
+            // Each scene reduces its samples in its own share of the slots.
+            constants.push(("REDUCTION_GROUPS", self.group_scenes as f64));
             // llvmpipe counts the iterations of every inlined loop against
             // its limit: one junction lane a round there.
             let two_lanes = !software && opts.two_lanes_a_round;
@@ -326,6 +340,7 @@ pub fn plan<T: GpuReal>(
         &adapter.limits,
         adapter.software,
     );
+    let group_scenes = group_scenes(opts, kernel, threads)?;
     let KernelFit {
         geometry,
         resident_velocities,
@@ -350,6 +365,7 @@ pub fn plan<T: GpuReal>(
     let step_kernel = StepKernel {
         kernel,
         threads,
+        group_scenes,
         geometry,
         bond_patches: opts.bond_patches,
         chain,
@@ -369,6 +385,37 @@ pub fn plan<T: GpuReal>(
         constants,
         build,
     })
+}
+
+/// Scenes a workgroup of `kernel` steps at `threads` threads: the option
+/// for the persistent kernel, where it divides the threads; 1 for the
+/// others, and an error where the option names one of them (`auto` and
+/// `measure` leave the others at one scene a workgroup).
+fn group_scenes(opts: GpuOptions, kernel: Kernel, threads: u32) -> Result<u32, EngineError> {
+    let asked = opts.group_scenes;
+    if !GROUP_SCENES_ALLOWED.contains(&asked) {
+        return Err(EngineError::Gpu(format!(
+            "GPU option group_scenes = {asked}: must be one of {GROUP_SCENES_ALLOWED:?}"
+        )));
+    }
+    if kernel != Kernel::Persistent {
+        if asked > 1 && !matches!(opts.path, GpuPath::Auto | GpuPath::Measure) {
+            return Err(EngineError::Gpu(format!(
+                "--gpu-group-scenes {asked} puts scenes side by side in the persistent kernel's \
+                 workgroup, and --gpu-path {} has none: use --gpu-path persistent, or leave the \
+                 flag out",
+                super::kernel_choice::path_name(kernel)
+            )));
+        }
+        return Ok(1);
+    }
+    if !threads.is_multiple_of(asked) {
+        return Err(EngineError::Gpu(format!(
+            "--gpu-group-scenes {asked}: the workgroup's {threads} threads (--gpu-threads, within \
+             the adapter's limit) must split evenly among its {asked} scenes"
+        )));
+    }
+    Ok(asked)
 }
 
 /// The override constants of the one-step kernels' recording variant

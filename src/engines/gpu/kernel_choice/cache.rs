@@ -204,7 +204,7 @@ pub fn scenes_cache_key<T: GpuReal>(
         String::new()
     };
     format!(
-        "{} | {:?} | {} {} | {} | {}{ensemble} | threads {} | tiles {} | lanes {} | checks {} | patches {} | lane rounds {} | lane runs {} | chained tiles {} | arrays {} | step {} | timed by {} | samples {} | kernels {:016x}",
+        "{} | {:?} | {} {} | {} | {}{ensemble} | threads {} | tiles {} | lanes {} | checks {} | patches {} | lane rounds {} | lane runs {} | chained tiles {} | scenes a workgroup {} | arrays {} | step {} | timed by {} | samples {} | kernels {:016x}",
         info.name,
         info.backend,
         info.driver,
@@ -255,6 +255,13 @@ pub fn scenes_cache_key<T: GpuReal>(
             "on"
         } else {
             "searched"
+        },
+        // Nor one that searched scenes a persistent workgroup one with
+        // them fixed.
+        if opts.group_scenes == 1 {
+            "searched".to_string()
+        } else {
+            opts.group_scenes.to_string()
         },
         // The host's cost of a dispatch grows with the buffers it binds
         // (`GpuOptions::pack_arrays`): choices timed with a buffer per

@@ -69,6 +69,16 @@ pub const PERSISTENT_MEASURE_MAX_BLOCKS: usize = 16_384;
 /// scene alone runs fastest with the most (BENCHMARKS.md, 2026-11-27).
 pub const ENSEMBLE_THREADS: [u32; 3] = [256, 512, 1024];
 
+/// Scenes a persistent workgroup is timed with side by side when an
+/// ensemble is measured (`GpuOptions::group_scenes`): on NVIDIA a
+/// 1024-thread workgroup is held to 64 registers a thread, so two or four
+/// scenes share a multiprocessor that one 512- or 256-thread scene with
+/// more registers has to itself (on an H200, 256 Table S1 scenes ran in
+/// two waves of one scene an SM).
+pub const ENSEMBLE_GROUP_SCENES: [u32; 2] = [2, 4];
+/// The fewest threads a scene of a group is timed with.
+const MIN_SCENE_THREADS: u32 = 64;
+
 /// A kernel as timed: its threads a workgroup where they were chosen
 /// (None: the kernel's default, or `--gpu-threads`), for the tiled
 /// kernel its tile shape where one was searched (None: the default, or
@@ -101,8 +111,15 @@ pub struct Launch {
     /// options': the same bits, fewer instructions a block's lanes. Only
     /// for the persistent, resident and tiled kernels.
     pub lane_run: Option<u32>,
+    /// Scenes a persistent workgroup steps side by side
+    /// (`GpuOptions::group_scenes`) where not the options': the same bits,
+    /// scenes sharing a multiprocessor.
+    pub group_scenes: Option<u32>,
 }
 
+/// The name's part (after the threads) for `Launch::group_scenes`, after
+/// its count.
+const SCENES: &str = "-scenes";
 /// The name's last part for `Launch::lanes_in_storage`.
 const LANES_IN_STORAGE: &str = "lanes-in-storage";
 /// The name's last part for `Launch::bond_patches`.
@@ -125,6 +142,7 @@ impl Launch {
             one_lane_a_round: false,
             chained_tiles: false,
             lane_run: None,
+            group_scenes: None,
         }
     }
 
@@ -182,6 +200,14 @@ impl Launch {
         self.kernel.is_persistent() || self.kernel == Kernel::Tiled
     }
 
+    /// This launch with `scenes` scenes a workgroup.
+    pub fn with_group_scenes(self, scenes: u32) -> Launch {
+        Launch {
+            group_scenes: Some(scenes),
+            ..self
+        }
+    }
+
     /// This launch with the tiled kernel's rounds chained.
     pub fn with_chained_tiles(self) -> Launch {
         Launch {
@@ -192,11 +218,15 @@ impl Launch {
 
     /// `one-step-lanes`, `resident/512`, `tiled/1024/16x4`, `tiled/256/8x4/chained`,
     /// `resident/1024/lanes-in-storage`, `persistent/1024/bond-patches`,
-    /// `resident/256/bond-patches/one-lane-a-round`, `resident/1024/lane-run-4`.
+    /// `resident/256/bond-patches/one-lane-a-round`, `resident/1024/lane-run-4`,
+    /// `persistent/1024/2-scenes`.
     pub fn name(self) -> String {
         let mut name = path_name(self.kernel);
         if let Some(t) = self.threads {
             name += &format!("/{t}");
+        }
+        if let Some(g) = self.group_scenes {
+            name += &format!("/{g}{SCENES}");
         }
         if let Some(shape) = self.tile {
             name += &format!("/{}", shape.name());
@@ -224,10 +254,18 @@ impl Launch {
         let mut parts = name.split('/');
         let mut launch = Launch::of(kernel_named(parts.next()?)?);
         let mut rest = parts.peekable();
-        if let Some(t) =
-            rest.next_if(|p| p.starts_with(|c: char| c.is_ascii_digit()) && !p.contains('x'))
-        {
+        if let Some(t) = rest.next_if(|p| {
+            p.starts_with(|c: char| c.is_ascii_digit()) && !p.contains('x') && !p.ends_with(SCENES)
+        }) {
             launch.threads = Some(t.parse().ok().filter(|&t: &u32| t > 0)?);
+        }
+        if let Some(g) = rest.next_if(|p| p.ends_with(SCENES)) {
+            let g = g[..g.len() - SCENES.len()].parse().ok();
+            let allowed = super::options::GROUP_SCENES_ALLOWED;
+            if launch.kernel != Kernel::Persistent {
+                return None;
+            }
+            launch.group_scenes = Some(g.filter(|g| allowed.contains(g))?);
         }
         if let Some(shape) = rest.next_if(|p| {
             ![CHAINED, LANES_IN_STORAGE, BOND_PATCHES, ONE_LANE_A_ROUND].contains(p)
@@ -282,6 +320,11 @@ impl Launch {
             // Only the tiled kernel has rounds to chain.
             chained_tiles: (opts.chained_tiles || self.chained_tiles)
                 && self.kernel == Kernel::Tiled,
+            // Only the persistent kernel steps scenes side by side.
+            group_scenes: match self.kernel {
+                Kernel::Persistent => self.group_scenes.unwrap_or(opts.group_scenes),
+                _ => 1,
+            },
             ..opts
         }
     }
@@ -440,7 +483,10 @@ pub fn candidates(model: &Model) -> Vec<Kernel> {
 /// most threads were fastest alone, and every variant costs a compile),
 /// but the tiled kernel is timed at each of them too: not yet measured on
 /// hardware, a tile's lanes (1,024 at Table S1's defaults) against its
-/// blocks (496) do not say which count wins.
+/// blocks (496) do not say which count wins. An ensemble also times the
+/// persistent kernel with `ENSEMBLE_GROUP_SCENES` scenes side by side in
+/// its largest workgroup (where there are that many scenes), unless the
+/// options fix the threads or the scenes a workgroup.
 pub fn launches(
     model: &Model,
     scenes: usize,
@@ -462,6 +508,22 @@ pub fn launches(
             );
         } else {
             out.push(Launch::of(kernel));
+        }
+        let grouped = kernel == Kernel::Persistent
+            && opts.persistent_threads.is_none()
+            && opts.group_scenes == 1;
+        let largest = ENSEMBLE_THREADS
+            .iter()
+            .copied()
+            .filter(|&t| t <= most)
+            .max();
+        if let Some(threads) = largest.filter(|_| grouped) {
+            out.extend(
+                ENSEMBLE_GROUP_SCENES
+                    .iter()
+                    .filter(|&&g| g as usize <= scenes && threads / g >= MIN_SCENE_THREADS)
+                    .map(|&g| Launch::with_threads(kernel, threads).with_group_scenes(g)),
+            );
         }
     }
     out
