@@ -95,14 +95,14 @@ fn persistent_steps(
     let member = select(subgroup_uniform(own_member), 0u, GROUP_SCENES == 1u);
     let t = select(wt % SCENE_THREADS, wt, GROUP_SCENES == 1u);
     let first_scene = wid.z * GROUP_SCENES;
-    if GROUP_SCENES > 1u && member != own_member {
-        atomicStore(&status[first_scene * STATUS_WORDS + STATUS_STRADDLED_SUBGROUP], 1u);
-    }
     let scenes = arrayLength(&scene_consts);
     // A member past the ensemble's last scene steps nothing and writes
     // nothing; it enters a scene only to keep its loops' bounds in range.
     let present = first_scene + member < scenes;
     enter_scene(min(first_scene + member, scenes - 1u));
+    if GROUP_SCENES > 1u && member != own_member {
+        atomicStore(&status[status_base() + STATUS_STRADDLED_SUBGROUP], 1u);
+    }
     reduction_base = member * (REDUCTION_WIDTH / REDUCTION_GROUPS);
     let lanes = min(JUNCTION_LANES, c.junction_count);
     // Before the barrier of workgroupUniformLoad below. Every invocation,

@@ -69,7 +69,7 @@ pub struct GpuLaunchArgs {
     /// workgroup fewer registers a thread, scenes share a multiprocessor
     /// (`auto` on a hardware GPU times 2 and 4 for an ensemble when this is
     /// not given; its figures name such a launch `persistent/1024/2-scenes`).
-    #[arg(long, value_name = "SCENES", value_parser = group_scenes)]
+    #[arg(long, value_name = "SCENES", value_parser = slipfront::engines::gpu::options::group_scenes)]
     pub gpu_group_scenes: Option<u32>,
 }
 
@@ -111,17 +111,6 @@ impl GpuLaunchArgs {
             ..GpuOptions::default()
         }
     }
-}
-
-/// `--gpu-group-scenes`: one of `GROUP_SCENES_ALLOWED`.
-fn group_scenes(text: &str) -> Result<u32, String> {
-    use slipfront::engines::gpu::options::GROUP_SCENES_ALLOWED;
-    text.parse()
-        .ok()
-        .filter(|n| GROUP_SCENES_ALLOWED.contains(n))
-        .ok_or_else(|| {
-            format!("`{text}` scenes a workgroup: must be one of {GROUP_SCENES_ALLOWED:?}")
-        })
 }
 
 /// `--gpu-run-ahead`: a count of batches from 0 to

@@ -393,7 +393,7 @@ impl<T: GpuReal> GpuEngine<T> {
                  of {} threads): use --gpu-group-scenes 1, or more --gpu-threads",
                 self.ctx.info.name,
                 self.group_scenes,
-                self.persistent_threads / self.group_scenes
+                self.scene_threads()
             )));
         }
         for (scene, status) in self.scenes.iter_mut().zip(&statuses) {

@@ -533,7 +533,7 @@ impl<T: GpuReal> GpuEngine<T> {
         // reducing a sample across its workgroup: a power of two of
         // threads (shaders/record_common.wgsl).
         let in_steps = self.kernel.is_persistent() || self.kernel == Kernel::Tiled;
-        let reducible = (self.persistent_threads / self.group_scenes).is_power_of_two();
+        let reducible = self.scene_threads().is_power_of_two();
         if self.output == GpuOutput::Host || (in_steps && !reducible) {
             return Ok(false);
         }
@@ -697,6 +697,12 @@ impl<T: GpuReal> GpuEngine<T> {
         text
     }
 
+    /// Threads each scene of a workgroup steps with (the persistent
+    /// kernel's grouped scenes share its workgroup's).
+    fn scene_threads(&self) -> u32 {
+        self.persistent_threads / self.group_scenes
+    }
+
     fn kernel_shape(&self) -> String {
         match self.kernel {
             Kernel::OneStep => "one-step kernel, 1 dispatch per step".to_string(),
@@ -709,7 +715,7 @@ impl<T: GpuReal> GpuEngine<T> {
                 self.steps_per_dispatch,
                 self.persistent_threads,
                 self.group_scenes,
-                self.persistent_threads / self.group_scenes
+                self.scene_threads()
             ),
             Kernel::Persistent => format!(
                 "persistent kernel, 1 dispatch per {} steps, {} threads",

@@ -334,6 +334,17 @@ pub fn lane_run(text: &str) -> Result<u32, String> {
         .ok_or_else(|| format!("lane run `{text}`: must be one of {LANE_RUNS:?}"))
 }
 
+/// `--gpu-group-scenes`: one of `GROUP_SCENES_ALLOWED`, else an error
+/// naming the value and the allowed ones.
+pub fn group_scenes(text: &str) -> Result<u32, String> {
+    text.parse()
+        .ok()
+        .filter(|n| GROUP_SCENES_ALLOWED.contains(n))
+        .ok_or_else(|| {
+            format!("`{text}` scenes a workgroup: must be one of {GROUP_SCENES_ALLOWED:?}")
+        })
+}
+
 /// Threads of `kernel`'s workgroup: the option, else the kernel's default,
 /// within the adapter's limits.
 pub fn persistent_threads(
