@@ -68,6 +68,13 @@ step() {
 #    against one at a time, output cost; in f64 (what a default run computes in on a GPU
 #    with f64 shaders) and then in mixed f32.
 step targets 310 gpu_targets
+# 1'. The phase barriers at workgroup scope (session 62's default, the engine's own SPIR-V)
+#     against naga's device scope, each launch both ways in one run (gpu_table section 10):
+#     Table S1 alone (persistent, resident, tiled, chained; f32 and f64) and 132 and 264
+#     scenes. On AMD's compiler (RADV, navi21) the two compile to the same instructions; what
+#     NVIDIA's compiler makes of a device-scope barrier (a fence to L2 each phase of a step?)
+#     only this measures.
+step barriers 120 env SLIPFRONT_GPU_TABLE_SECTIONS=10 gpu_table
 # 1a. The host's CPU a step of each launch, three ways: the default (arrays in arenas, the
 #     step as an immediate, session 56), the step by a dynamic offset (session 55), and a
 #     buffer per array as well (before 55); and a bare dispatch against the buffers it binds

@@ -32,6 +32,9 @@
 //! whatever its driver gives) into DIR, a file per kernel and form, and
 //! lists them: the instructions a kernel's loops issue, read off the
 //! hardware's own compiler.
+//! SLIPFRONT_GPU_REGISTERS_BARRIERS=device compiles the phase barriers as
+//! wgpu writes them, with device scope (`GpuOptions::workgroup_barriers`
+//! off), where the engine would give them workgroup scope.
 //! SLIPFRONT_GPU_REGISTERS_SET=TWO_LANES_A_ROUND=0,KEEP_JUNCTION_SUMS=0
 //! compiles every kernel with those override constants changed, where it
 //! has them: what a kernel's options cost in registers (TILE_RECORDS=1:
@@ -160,6 +163,8 @@ struct Table<'a> {
     traits: AdapterTraits,
     /// Override constants changed from the engine's (`SLIPFRONT_GPU_REGISTERS_SET`).
     set: Vec<(String, f64)>,
+    /// The phase barriers with naga's device scope (`SLIPFRONT_GPU_REGISTERS_BARRIERS`).
+    device_barriers: bool,
     /// Why a row did not compile, each reason once.
     not_built: Vec<String>,
     /// Where the driver's internal representations go (SLIPFRONT_GPU_REGISTERS_DUMP).
@@ -170,7 +175,10 @@ struct Table<'a> {
 
 impl Table<'_> {
     fn rows<T: GpuReal>(&mut self, scene_name: &str, model: &Model, launch: Launch) {
-        let opts = launch.options(GpuOptions::default());
+        let opts = GpuOptions {
+            workgroup_barriers: !self.device_barriers,
+            ..launch.options(GpuOptions::default())
+        };
         let sources = match GpuEngine::<T>::kernel_sources_on(model, opts, &self.traits) {
             Ok(s) => s,
             Err(e) => {
@@ -328,6 +336,13 @@ fn main() {
         device: &device,
         traits,
         set: constants_set(),
+        device_barriers: match std::env::var("SLIPFRONT_GPU_REGISTERS_BARRIERS").as_deref() {
+            Ok("device") => true,
+            Ok("workgroup") | Err(_) => false,
+            Ok(other) => {
+                panic!("SLIPFRONT_GPU_REGISTERS_BARRIERS: `{other}` is not device or workgroup")
+            }
+        },
         not_built: Vec::new(),
         dump_dir,
         dumped: Vec::new(),

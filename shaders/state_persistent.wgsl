@@ -3,7 +3,7 @@
 // the state in place. lane_partial holds the junction lane sums between
 // the force and the update phases.
 // CPU twin: src/engines/gpu/buffers.rs state_group (the host side of these bindings).
-// import: scene, state_by_index
+// import: barriers, scene, state_by_index
 
 @group(0) @binding(1) var<storage, read_write> disp: array<Disp>;
 @group(0) @binding(2) var<storage, read_write> vel: array<vec2<real>>;
@@ -37,5 +37,5 @@ fn state_enter(t: u32, threads: u32) {}
 fn state_leave(t: u32, threads: u32) {}
 
 fn state_barrier() {
-    storageBarrier();
+    workgroup_storage_barrier();
 }

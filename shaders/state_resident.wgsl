@@ -11,7 +11,7 @@
 // the persistent kernel keeps it (RESIDENT_VELOCITIES false): the same
 // values, so the same bits.
 // CPU twin: src/engines/gpu/buffers.rs state_group (the host side of these bindings).
-// import: scene, state_by_index
+// import: barriers, scene, state_by_index
 
 @group(0) @binding(1) var<storage, read_write> disp: array<Disp>;
 @group(0) @binding(2) var<storage, read_write> vel: array<vec2<real>>;
@@ -72,6 +72,6 @@ fn state_leave(t: u32, threads: u32) {
 // The lane sums and forces cross threads through storage, the blocks
 // through workgroup memory.
 fn state_barrier() {
-    storageBarrier();
+    workgroup_storage_barrier();
     workgroupBarrier();
 }

@@ -47,7 +47,7 @@
 // the lanes merged as a tree (lane_tree8), and the update. Junction friction laws
 // only (the per-block laws keep state that a halo would race on).
 // CPU twin: src/engines/cpu/mod.rs CpuEngine::one_step (each step of the loop).
-// import: bulk_forces, bulk_patch, common, coordinates, junction_store, junctions, lane_merge, lane_partials, noted_blocks, record_batch, record_buffers, record_common, scene, state, verlet
+// import: barriers, bulk_forces, bulk_patch, common, coordinates, junction_store, junctions, lane_merge, lane_partials, noted_blocks, record_batch, record_buffers, record_common, scene, state, verlet
 
 override TILE_THREADS: u32 = 64u;
 // Bulk forces by 2×2 patches of blocks (bulk_patch.wgsl;
@@ -407,7 +407,7 @@ fn tile_round(t: u32, d: u32, lanes: u32, stride: u32, first: bool, last: bool) 
         next = workgroupUniformLoad(&tile_next_sample);
     }
     load_tile(t, plan.x, d & 1u, first);
-    storageBarrier();
+    workgroup_storage_barrier();
     workgroupBarrier();
     // The first step's junction blocks, for every column the round steps
     // (noted_blocks.wgsl; a note a column from tile_lo).
@@ -488,7 +488,7 @@ fn tile_round(t: u32, d: u32, lanes: u32, stride: u32, first: bool, last: bool) 
                 }
             }
         }
-        storageBarrier();
+        workgroup_storage_barrier();
         workgroupBarrier();
         if sampling {
             sample_rows_above(t, record_entries[next.x], ready);
@@ -539,7 +539,7 @@ fn tile_round(t: u32, d: u32, lanes: u32, stride: u32, first: bool, last: bool) 
             sample_interface(t, next, s);
             next = workgroupUniformLoad(&tile_next_sample);
         }
-        storageBarrier();
+        workgroup_storage_barrier();
         workgroupBarrier();
     }
     publish_edges(t, (d + 1u) & 1u);

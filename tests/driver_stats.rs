@@ -115,6 +115,7 @@ fn the_driver_reports_each_kernels_registers() {
             checks: ShaderChecks::Trusted,
             chained_tiles: false,
             step_immediate: false,
+            workgroup_barriers: false,
         },
         entry: "store_one".into(),
         source: "@group(0) @binding(0) var<storage, read_write> out: array<u32>;\n\

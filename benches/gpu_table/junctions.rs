@@ -113,7 +113,12 @@ fn kept_rows(name: &str, model: &Model, as_shipped: bool, min_seconds: f64) {
 fn how(way: &GpuOptions, base: &GpuOptions) -> &'static str {
     let chained = way.chained_tiles && !base.chained_tiles;
     let sums_anew = !way.published_halo_sums && base.published_halo_sums;
-    if chained && sums_anew {
+    let device_barriers = !way.workgroup_barriers && base.workgroup_barriers;
+    if chained && device_barriers {
+        ", rounds chained in one dispatch, phase barriers at device scope (naga's, before session 62)"
+    } else if device_barriers {
+        ", phase barriers at device scope (naga's, before session 62)"
+    } else if chained && sums_anew {
         ", rounds chained in one dispatch, halo sums made anew each round (before session 60)"
     } else if chained {
         ", rounds chained in one dispatch"
@@ -154,6 +159,17 @@ fn variants(kernel: Kernel, base: GpuOptions, as_shipped: bool) -> Vec<GpuOption
             });
         }
     }
+    // The phase barriers with naga's device scope
+    // (`GpuOptions::workgroup_barriers` off), on every scene: what a
+    // device-scope barrier costs each phase of a step, where the engine
+    // gives them workgroup scope (not on adapters where it writes no
+    // SPIR-V of its own: there the two rows are the same module).
+    if kernel.has_phase_barriers() {
+        variants.push(GpuOptions {
+            workgroup_barriers: false,
+            ..base
+        });
+    }
     // The tiled kernel's rounds chained in one dispatch, on every
     // scene (the bulk alone too): what a dispatch a round costs. On the
     // shipped scene also each round's halo sums made anew
@@ -165,6 +181,10 @@ fn variants(kernel: Kernel, base: GpuOptions, as_shipped: bool) -> Vec<GpuOption
             ..base
         };
         variants.push(chained);
+        variants.push(GpuOptions {
+            workgroup_barriers: false,
+            ..chained
+        });
         if as_shipped {
             for way in [base, chained] {
                 variants.push(GpuOptions {

@@ -34,7 +34,10 @@
 //!    (`GpuOptions::noted_junction_blocks`), and the tiled kernel with its
 //!    rounds chained in one dispatch (`GpuOptions::chained_tiles`), and
 //!    (both ways) with each round's halo sums made anew, as before session
-//!    60 (`GpuOptions::published_halo_sums`);
+//!    60 (`GpuOptions::published_halo_sums`); the persistent, resident and
+//!    tiled kernels (chained too) on every scene also with their phase
+//!    barriers at naga's device scope, as before session 62
+//!    (`GpuOptions::workgroup_barriers`);
 //! 8. what limits an ensemble: the single-workgroup kernels on one Table S1
 //!    scene and on 132, 264 and 528 (one, two and four an SM of an H200 or
 //!    an H100 SXM, 132 SMs), at 256 threads (and 1024 on the
@@ -52,7 +55,13 @@
 //! 9. the tiled kernel with its rounds chained in one dispatch on Table S1
 //!    by tile width (2 to 16 columns), halo (1, 2, 4) and threads (256,
 //!    512, 1024), with the device's busy time a step: `auto` times
-//!    chained tiles only at the width its unchained search found.
+//!    chained tiles only at the width its unchained search found;
+//! 10. the phase barriers of the persistent, resident and tiled kernels at
+//!     workgroup scope (the default where the engine writes its own SPIR-V)
+//!     against naga's device scope (`GpuOptions::workgroup_barriers`), each
+//!     launch both ways in one run: Table S1 alone in mixed f32 and f64, and
+//!     ensembles of 132 and 264 scenes (SLIPFRONT_GPU_TABLE_LAUNCHES: those
+//!     launches instead).
 //!
 //! Sections 1–3 also print the host's CPU time per wall second of each
 //! timed span: it says whether the host (encoding dispatches, waiting) or
@@ -93,6 +102,7 @@ mod gpu_timing;
 mod thread_cpu;
 
 mod auto_choice;
+mod barriers;
 mod common;
 mod cpu;
 mod ensembles;
@@ -164,6 +174,9 @@ fn main() {
     }
     if let Some(_timer) = sections.start(9) {
         tiles::chained_on_table_s1(quick, min_seconds);
+    }
+    if let Some(_timer) = sections.start(10) {
+        barriers::scopes(&ctx, quick, min_seconds);
     }
     let _ = std::fs::remove_dir_all(&dir);
 }

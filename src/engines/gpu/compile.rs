@@ -21,6 +21,12 @@ pub struct KernelBuild {
     /// not as a dynamic offset into a table: a dispatch then sets 4 bytes
     /// rather than rebinding group 1, which costs the host less.
     pub step_immediate: bool,
+    /// The storage barriers between a step's phases with workgroup memory
+    /// scope (`GpuOptions::workgroup_barriers`, `shaders/barriers.wgsl`):
+    /// the engine writes the module's SPIR-V itself
+    /// (`spirv::scope_workgroup_barriers`) and gives it to the driver as
+    /// it is, where wgpu would write them with device scope.
+    pub workgroup_barriers: bool,
 }
 
 impl KernelBuild {
@@ -213,6 +219,7 @@ mod tests {
             checks: ShaderChecks::Trusted,
             chained_tiles,
             step_immediate,
+            workgroup_barriers: false,
         }
     }
 

@@ -4,6 +4,7 @@ use super::bindings::Bindings;
 use super::compile::KernelBuild;
 use super::precision::GpuReal;
 use super::shaders::Kernel;
+use super::spirv::{self, ZeroWorkgroupMemory};
 use crate::engines::EngineError;
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex, OnceLock};
@@ -30,6 +31,46 @@ pub struct GpuContext {
     /// Group 1: the step offset (dynamic) and the batch (or the batches).
     pub batch_layout: wgpu::BindGroupLayout,
     pipelines: Arc<Mutex<HashMap<String, wgpu::ComputePipeline>>>,
+    /// The SPIR-V the engine writes for this device itself, where it may
+    /// (`KernelBuild::workgroup_barriers`).
+    spirv: Option<SpirvTarget>,
+}
+
+/// What the engine's own SPIR-V for a device must be: the version wgpu
+/// would write for it, with workgroup memory zeroed by the driver.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct SpirvTarget {
+    pub language: (u8, u8),
+}
+
+impl SpirvTarget {
+    /// The target of `adapter` opened with `features`: a Vulkan device
+    /// that takes SPIR-V as given (PASSTHROUGH_SHADERS) and zeroes
+    /// workgroup memory itself, as Vulkan 1.3 requires of every device
+    /// (wgpu zeroes it, natively there; naga's polyfill elsewhere would
+    /// make one thread zero a tile each dispatch). None elsewhere: wgpu
+    /// writes the modules.
+    fn of(adapter: &wgpu::Adapter, features: wgpu::Features) -> Option<SpirvTarget> {
+        if !features.contains(wgpu::Features::PASSTHROUGH_SHADERS)
+            || adapter.get_info().backend != wgpu::Backend::Vulkan
+        {
+            return None;
+        }
+        // SAFETY: the handle is only read (its properties), while the
+        // adapter lives.
+        let api = unsafe {
+            adapter
+                .as_hal::<wgpu::hal::api::Vulkan>()
+                .map(|a| a.physical_device_capabilities().properties().api_version)
+        }?;
+        let (major, minor) = (
+            ash::vk::api_version_major(api),
+            ash::vk::api_version_minor(api),
+        );
+        ((major, minor) >= (1, 3)).then(|| SpirvTarget {
+            language: spirv::language_version(major, minor),
+        })
+    }
 }
 
 static SHARED: OnceLock<Result<GpuContext, String>> = OnceLock::new();
@@ -61,6 +102,9 @@ struct KernelLayout {
     pipeline: wgpu::PipelineLayout,
     /// What the kernels of this family declare (`bindings::Bindings`).
     bindings: Bindings,
+    /// Where wgpu's Vulkan backend puts each binding of the layout
+    /// (`spirv::vulkan_binding_map`): the engine's own SPIR-V must agree.
+    vulkan_bindings: naga::back::spv::BindingMap,
 }
 
 /// The batch group's binding that takes a dynamic offset per dispatch.
@@ -129,13 +173,17 @@ impl GpuContext {
         // tiled kernel's halos read within a chained dispatch.
         // Immediates (push constants) where the adapter has room for the
         // step offset: a dispatch sets it without rebinding group 1.
+        // SPIR-V as the engine writes it, where the adapter takes it: the
+        // storage barriers between a step's phases at workgroup scope
+        // (`KernelBuild::workgroup_barriers`).
         let mut features = adapter.features()
             & (wgpu::Features::SHADER_F64
                 | wgpu::Features::TIMESTAMP_QUERY
                 | wgpu::Features::TIMESTAMP_QUERY_INSIDE_PASSES
                 | wgpu::Features::SUBGROUP
                 | wgpu::Features::MEMORY_DECORATION_COHERENT
-                | wgpu::Features::IMMEDIATES);
+                | wgpu::Features::IMMEDIATES
+                | wgpu::Features::PASSTHROUGH_SHADERS);
         if limits.max_immediate_size < STEP_IMMEDIATE_BYTES {
             features.remove(wgpu::Features::IMMEDIATES);
         }
@@ -146,6 +194,7 @@ impl GpuContext {
             ..Default::default()
         }))
         .map_err(|e| EngineError::Gpu(format!("cannot open {}: {e}", info.name)))?;
+        let spirv = SpirvTarget::of(&adapter, features);
         let error = Arc::new(Mutex::new(None));
         let sink = error.clone();
         device.on_uncaptured_error(Arc::new(move |e: wgpu::Error| {
@@ -174,7 +223,8 @@ impl GpuContext {
             Bindings::reflect(&kernel.source::<f32>())
                 .expect("the kernels parse (tested with naga)")
         };
-        let batch_layout = layout("batch", &reflect(Kernel::OneStep).layout(1, &[STEP_OFFSET]));
+        let batch_entries = reflect(Kernel::OneStep).layout(1, &[STEP_OFFSET]);
+        let batch_layout = layout("batch", &batch_entries);
         let kernel_layout = |kernel: Kernel| {
             // Group 0 as the kernel's module declares it: the constants (one
             // record per scene), the state, and the record buffers. The
@@ -187,7 +237,9 @@ impl GpuContext {
                 Kernel::Persistent | Kernel::Resident => reflect(Kernel::Persistent),
                 Kernel::Tiled => reflect(Kernel::Tiled),
             };
-            let group = layout(kernel.entry_point(), &bindings.layout(0, &[]));
+            let entries = bindings.layout(0, &[]);
+            let group = layout(kernel.entry_point(), &entries);
+            let vulkan_bindings = spirv::vulkan_binding_map(&[&entries, &batch_entries]);
             let pipeline = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
                 label: Some("slipfront"),
                 bind_group_layouts: &[Some(&group), Some(&batch_layout)],
@@ -197,6 +249,7 @@ impl GpuContext {
                 group,
                 pipeline,
                 bindings,
+                vulkan_bindings,
             }
         };
         let layouts = Arc::new([
@@ -217,6 +270,7 @@ impl GpuContext {
             layouts,
             batch_layout,
             pipelines: Arc::new(Mutex::new(HashMap::new())),
+            spirv,
         })
     }
 
@@ -255,6 +309,12 @@ impl GpuContext {
         self.device.features().contains(wgpu::Features::IMMEDIATES)
     }
 
+    /// Whether the engine writes this device's SPIR-V itself where a
+    /// kernel's build asks (`KernelBuild::workgroup_barriers`).
+    pub fn has_own_spirv(&self) -> bool {
+        self.spirv.is_some()
+    }
+
     /// Whether the adapter was opened with subgroup operations.
     pub fn has_subgroups(&self) -> bool {
         self.device.features().contains(wgpu::Features::SUBGROUP)
@@ -275,20 +335,29 @@ impl GpuContext {
             checks,
             chained_tiles,
             step_immediate,
+            workgroup_barriers,
         } = build;
         let key = format!(
-            "{}{kernel:?}{lanes:?}{checks:?}{chained_tiles}{step_immediate}{entry}{constants:?}",
+            "{}{kernel:?}{lanes:?}{checks:?}{chained_tiles}{step_immediate}{workgroup_barriers}\
+             {entry}{constants:?}",
             T::NAME
         );
         let mut cache = self.pipelines.lock().expect("pipeline cache");
         cache
             .entry(key)
             .or_insert_with(|| {
-                let module = checks.module(
-                    &self.device,
-                    kernel.entry_point(),
-                    build.source::<T>(kernel),
-                );
+                let source = build.source::<T>(kernel);
+                let (module, constants) = match self.spirv.filter(|_| workgroup_barriers) {
+                    // The override constants are applied in the SPIR-V.
+                    Some(target) => (
+                        self.own_spirv_module::<T>(target, kernel, build, entry, source, constants),
+                        &[][..],
+                    ),
+                    None => (
+                        checks.module(&self.device, kernel.entry_point(), source),
+                        constants,
+                    ),
+                };
                 self.device
                     .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
                         label: Some(entry),
@@ -303,6 +372,71 @@ impl GpuContext {
                     })
             })
             .clone()
+    }
+
+    /// The module of `entry` of `kernel` as the engine writes its SPIR-V
+    /// (`spirv::kernel_spirv`, with wgpu's options for this device), given
+    /// to the driver as it is. The kernels are the engine's own, validated
+    /// by naga as they are written, and specialised for `constants` here.
+    fn own_spirv_module<T: GpuReal>(
+        &self,
+        target: SpirvTarget,
+        kernel: Kernel,
+        build: KernelBuild,
+        entry: &str,
+        source: String,
+        constants: &[(&str, f64)],
+    ) -> wgpu::ShaderModule {
+        let source = super::compile::KernelSource {
+            kernel,
+            precision: T::NAME,
+            build,
+            entry: entry.to_string(),
+            source,
+            constants: constants.iter().map(|&(n, v)| (n.to_string(), v)).collect(),
+        };
+        let bindings = &self.layouts[layout_index(kernel)].vulkan_bindings;
+        let words = match spirv::kernel_spirv(
+            &source,
+            target.language,
+            ZeroWorkgroupMemory::Native,
+            bindings,
+        ) {
+            Ok((words, _)) => words,
+            // The same module and constants validate in the unit tests; a
+            // failure here is a bug, reported as the device errors are.
+            Err(why) => {
+                self.report(format!("{entry}: the engine's SPIR-V: {why}"));
+                Vec::new()
+            }
+        };
+        let entry_points = [wgpu::PassthroughShaderEntryPoint {
+            name: entry.into(),
+            workgroup_size: (0, 0, 0),
+        }];
+        // SAFETY: the SPIR-V is naga's, written from a module naga
+        // validated, with the options wgpu's Vulkan backend uses for this
+        // device (its runtime checks as `build.checks` says); the one
+        // change, a barrier's memory scope from Device to Workgroup, keeps
+        // it valid SPIR-V (`spirv` tests parse it back).
+        unsafe {
+            self.device
+                .create_shader_module_passthrough(wgpu::ShaderModuleDescriptorPassthrough {
+                    label: Some(entry),
+                    entry_points: entry_points[..].into(),
+                    spirv: Some(words.into()),
+                    ..Default::default()
+                })
+        }
+    }
+
+    /// Records `why` as the device's first error, if none is recorded
+    /// (`check` reports it).
+    fn report(&self, why: String) {
+        let mut slot = self.error.lock().expect("error slot");
+        if slot.is_none() {
+            *slot = Some(why);
+        }
     }
 
     /// Adapter name, type and driver.

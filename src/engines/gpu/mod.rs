@@ -53,6 +53,7 @@ pub mod readback;
 mod recorder;
 mod scene_state;
 pub mod shaders;
+pub mod spirv;
 mod step_kernel;
 pub mod tiles;
 
@@ -669,6 +670,9 @@ impl<T: GpuReal> GpuEngine<T> {
         }
         if self.kernel.merges_lanes_through_storage() && self.build.lanes == LaneMerge::Shuffle {
             text.push_str(", junction lanes merged in subgroups where they fit");
+        }
+        if self.build.workgroup_barriers {
+            text.push_str(", phase barriers at workgroup scope");
         }
         let lanes_a_round = self
             .constants

@@ -225,6 +225,17 @@ pub struct GpuOptions {
     /// workgroup of its own takes more registers and runs alone. Each
     /// scene's steps are the same arithmetic, so the same bits.
     pub group_scenes: u32,
+    /// The storage barriers between a step's phases in the persistent,
+    /// resident and tiled kernels with workgroup memory scope, where the
+    /// engine may write the device's SPIR-V itself (Vulkan 1.3 and
+    /// PASSTHROUGH_SHADERS: `KernelBuild::workgroup_barriers`,
+    /// `shaders/barriers.wgsl`). naga writes WGSL's `storageBarrier` with
+    /// device scope, which on hardware may drain a multiprocessor's stores
+    /// to L2 and drop its cached storage at every phase of every step,
+    /// though only the workgroup's own threads read what it orders. The
+    /// same values in the same order, so the same bits. false: naga's
+    /// device scope (the comparison in benchmarks).
+    pub workgroup_barriers: bool,
 }
 
 /// Scenes a persistent workgroup may step (`GpuOptions::group_scenes`).
@@ -253,6 +264,7 @@ impl Default for GpuOptions {
             published_halo_sums: true,
             count_summed_junction_blocks: false,
             group_scenes: 1,
+            workgroup_barriers: true,
         }
     }
 }

@@ -33,6 +33,7 @@ macro_rules! wgsl_files {
 }
 
 wgsl_files!(
+    "barriers",
     "bulk_forces",
     "bulk_patch",
     "common",
@@ -250,6 +251,14 @@ impl Kernel {
     /// so `LaneMerge` chooses its module; the one-step kernels merge theirs
     /// in registers or workgroup memory, the same module either way.
     pub fn merges_lanes_through_storage(self) -> bool {
+        matches!(self, Kernel::Persistent | Kernel::Resident | Kernel::Tiled)
+    }
+
+    /// Separates a step's phases with `workgroup_storage_barrier`
+    /// (`barriers.wgsl`): what one thread writes to storage, another of
+    /// its workgroup reads in the next phase. The one-step kernels end a
+    /// step with their dispatch.
+    pub fn has_phase_barriers(self) -> bool {
         matches!(self, Kernel::Persistent | Kernel::Resident | Kernel::Tiled)
     }
 

@@ -201,6 +201,9 @@ pub struct AdapterTraits {
     pub coherent_storage: bool,
     /// Immediates with room for the step offset (`KernelBuild::step_immediate`).
     pub immediates: bool,
+    /// The engine writes the device's SPIR-V itself where a kernel's build
+    /// asks (`KernelBuild::workgroup_barriers`).
+    pub own_spirv: bool,
 }
 
 impl AdapterTraits {
@@ -211,6 +214,27 @@ impl AdapterTraits {
             subgroups: ctx.has_subgroups(),
             coherent_storage: ctx.has_coherent_storage(),
             immediates: ctx.has_immediates(),
+            own_spirv: ctx.has_own_spirv(),
+        }
+    }
+
+    /// A hardware adapter with every feature the engine asks for, 1024
+    /// threads and 64 KB of workgroup memory a workgroup: the unit tests'
+    /// plans, made without a device.
+    #[cfg(test)]
+    pub(crate) fn test_hardware() -> AdapterTraits {
+        AdapterTraits {
+            limits: wgpu::Limits {
+                max_compute_workgroup_storage_size: 65536,
+                max_compute_invocations_per_workgroup: 1024,
+                max_compute_workgroup_size_x: 1024,
+                ..wgpu::Limits::default()
+            },
+            software: false,
+            subgroups: true,
+            coherent_storage: true,
+            immediates: true,
+            own_spirv: true,
         }
     }
 
@@ -378,6 +402,9 @@ pub fn plan<T: GpuReal>(
         checks: ShaderChecks::of(opts.shader_checks),
         chained_tiles: chain.is_some(),
         step_immediate: adapter.immediates && opts.step_immediates,
+        workgroup_barriers: adapter.own_spirv
+            && opts.workgroup_barriers
+            && kernel.has_phase_barriers(),
     };
     Ok(KernelPlan {
         step_kernel,
@@ -547,16 +574,7 @@ mod tests {
     #[test]
     fn the_workgroup_memory_fitted_is_what_the_kernels_declare() {
         use crate::model::scenario::{built_in, Scenario};
-        let adapter = AdapterTraits {
-            limits: wgpu::Limits {
-                max_compute_workgroup_storage_size: 65536,
-                ..wgpu::Limits::default()
-            },
-            software: false,
-            subgroups: true,
-            coherent_storage: true,
-            immediates: true,
-        };
+        let adapter = AdapterTraits::test_hardware();
         let model = |name: &str, set: &[&str]| {
             let set: Vec<String> = set.iter().map(|s| s.to_string()).collect();
             let s = Scenario::parse(built_in(name).unwrap(), name, &set).unwrap();

@@ -9,12 +9,11 @@
 //! The kernel is compiled a second time, outside wgpu, from the same
 //! source and override constants the engine gave wgpu
 //! (`GpuEngine::kernel_sources`), into SPIR-V written with wgpu's options
-//! (`spirv`), on a device of its own (`vulkan`). NVIDIA's driver reports
+//! (`gpu::spirv`), on a device of its own (`vulkan`). NVIDIA's driver reports
 //! "Register Count"; Mesa's RADV reports "VGPRs" and "Subgroups per SIMD",
 //! also on its null device (`RADV_FORCE_FAMILY`, no AMD GPU needed);
 //! lavapipe reports nothing.
 
-mod spirv;
 mod vulkan;
 
 pub use vulkan::{DeviceChoice, StatsDevice};

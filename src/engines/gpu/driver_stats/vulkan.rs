@@ -4,10 +4,10 @@
 //! the driver's statistics, reads them and destroys the pipeline. It never
 //! runs anything.
 
-use super::spirv::{kernel_spirv, language_version, ZeroWorkgroupMemory};
 use super::{Executable, Representation, StatValue, Statistic};
 use crate::engines::gpu::compile::KernelSource;
 use crate::engines::gpu::context::STEP_IMMEDIATE_BYTES;
+use crate::engines::gpu::spirv::{kernel_spirv, language_version, ZeroWorkgroupMemory};
 use crate::engines::gpu::AdapterTraits;
 use ash::vk;
 use std::ffi::CStr;
@@ -242,6 +242,9 @@ impl StatsDevice {
             // And immediates (push constants) where there is room for
             // the step offset, as GpuContext::open asks for them.
             immediates: l.max_push_constants_size >= STEP_IMMEDIATE_BYTES,
+            // And writes the SPIR-V itself on a Vulkan 1.3 device
+            // (`context::SpirvTarget`).
+            own_spirv: api >= (1, 3),
         };
         let driver = format!(
             "{} {}",
@@ -277,7 +280,13 @@ impl StatsDevice {
     /// of each executable it made (a compute pipeline has one).
     pub fn compile(&self, kernel: &KernelSource) -> Result<Vec<Executable>, String> {
         let open = &self.open;
-        let (words, bindings) = kernel_spirv(kernel, open.language, open.zero)?;
+        // A layout of the module's own bindings, at their own numbers.
+        let (words, bindings) = kernel_spirv(
+            kernel,
+            open.language,
+            open.zero,
+            &naga::back::spv::BindingMap::new(),
+        )?;
         let d = &open.device;
         let mut made = Made::new(d);
         // SAFETY: every object is made on this device from valid create

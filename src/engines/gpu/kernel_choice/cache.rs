@@ -163,7 +163,8 @@ fn samples_key(samples: Option<&SamplePlan>) -> String {
 /// precision, the lattice (`lattice_key`), the persistent kernels' threads,
 /// the tile shape where one is fixed, whether the lanes' merge was
 /// searched, wgpu's run-time checks, whether the bond patches, the
-/// junction lanes a round, lane runs and chained tiles were searched, how a step was
+/// junction lanes a round, lane runs and chained tiles were searched, the
+/// phase barriers' scope, how a step was
 /// timed (`timing::TIMING`), the output cadences it was timed recording
 /// at (`GpuOptions::samples`), and the kernels' sources (a new version
 /// of slipfront measures again).
@@ -204,7 +205,7 @@ pub fn scenes_cache_key<T: GpuReal>(
         String::new()
     };
     format!(
-        "{} | {:?} | {} {} | {} | {}{ensemble} | threads {} | tiles {} | lanes {} | checks {} | patches {} | lane rounds {} | lane runs {} | chained tiles {} | scenes a workgroup {} | arrays {} | step {} | timed by {} | samples {} | kernels {:016x}",
+        "{} | {:?} | {} {} | {} | {}{ensemble} | threads {} | tiles {} | lanes {} | checks {} | patches {} | lane rounds {} | lane runs {} | chained tiles {} | scenes a workgroup {} | arrays {} | step {} | phase barriers {} | timed by {} | samples {} | kernels {:016x}",
         info.name,
         info.backend,
         info.driver,
@@ -277,6 +278,12 @@ pub fn scenes_cache_key<T: GpuReal>(
             "immediate"
         } else {
             "dynamic offset"
+        },
+        // Nor by the phase barriers' scope (`GpuOptions::workgroup_barriers`).
+        if opts.workgroup_barriers {
+            "workgroup"
+        } else {
+            "device"
         },
         // Choices timed by a span's mean step (before session 38) carry
         // each advance's fixed costs: measured again.

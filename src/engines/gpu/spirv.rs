@@ -1,0 +1,434 @@
+//! A kernel's SPIR-V as wgpu's Vulkan backend writes it: the module parsed
+//! and validated by naga, its override constants applied for its entry
+//! point, then written with the options wgpu 30 uses (its checks as the
+//! engine asked, workgroup memory zeroed, integer divisions guarded).
+//! Where the kernel's build asks for it (`KernelBuild::workgroup_barriers`),
+//! the barriers of `workgroup_storage_barrier` (`shaders/barriers.wgsl`)
+//! then get workgroup memory scope (`scope_workgroup_barriers`): the SPIR-V
+//! the engine gives the driver itself (`GpuContext::pipeline_of`) and
+//! the driver's statistics (`driver_stats`) compile.
+
+use crate::engines::gpu::compile::{KernelSource, ShaderChecks};
+use naga::back::spv;
+
+/// The SPIR-V version wgpu writes for a device of Vulkan `api` (1.0 →
+/// 1.0, 1.1 → 1.3, 1.2 → 1.5, 1.3 and later → 1.6).
+pub fn language_version(api_major: u32, api_minor: u32) -> (u8, u8) {
+    match (api_major, api_minor) {
+        (1, 0) => (1, 0),
+        (1, 1) => (1, 3),
+        (1, 2) => (1, 5),
+        _ => (1, 6),
+    }
+}
+
+/// How the device zeroes workgroup memory: natively (Vulkan 1.3's
+/// shaderZeroInitializeWorkgroupMemory) or by code naga adds.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ZeroWorkgroupMemory {
+    Native,
+    Polyfill,
+}
+
+/// A buffer binding a module declares: (group, binding, is uniform).
+pub type BufferBinding = (u32, u32, bool);
+
+/// The SPIR-V words of `kernel`'s entry point, and the buffer bindings its
+/// module declares: the pipeline layout a driver compiles it against. One
+/// parse for both.
+///
+/// `bindings`: where each (group, binding) of the module goes in the
+/// pipeline layout (`vulkan_binding_map`), as wgpu's layouts place them;
+/// empty: at the same numbers (a layout made from the module's own
+/// bindings, as `driver_stats` makes it).
+pub fn kernel_spirv(
+    kernel: &KernelSource,
+    language: (u8, u8),
+    zero: ZeroWorkgroupMemory,
+    bindings: &spv::BindingMap,
+) -> Result<(Vec<u32>, Vec<BufferBinding>), String> {
+    let layout_bindings = bindings;
+    let (module, info) = kernel.module()?;
+    let bindings = buffer_bindings(&module);
+    let (module, info) = kernel.with_constants(&module, &info)?;
+    // An entry point that reaches no phase barrier (the tiled kernel's
+    // gather) is written as wgpu writes it.
+    let scoped = kernel.build.workgroup_barriers
+        && module
+            .functions
+            .iter()
+            .any(|(_, f)| f.name.as_deref() == Some(WORKGROUP_BARRIER_FUNCTION));
+    let checked = kernel.build.checks == ShaderChecks::Checked;
+    let policy = if checked {
+        naga::proc::BoundsCheckPolicy::Restrict
+    } else {
+        naga::proc::BoundsCheckPolicy::Unchecked
+    };
+    let options = spv::Options {
+        lang_version: language,
+        // wgpu opens devices with robust buffer access, so it leaves
+        // storage buffers to the driver and clamps only array indices.
+        bounds_check_policies: naga::proc::BoundsCheckPolicies {
+            index: policy,
+            buffer: naga::proc::BoundsCheckPolicy::Unchecked,
+            image_load: naga::proc::BoundsCheckPolicy::Unchecked,
+            binding_array: naga::proc::BoundsCheckPolicy::Unchecked,
+        },
+        zero_initialize_workgroup_memory: match zero {
+            ZeroWorkgroupMemory::Native => spv::ZeroInitializeWorkgroupMemoryMode::Native,
+            ZeroWorkgroupMemory::Polyfill => spv::ZeroInitializeWorkgroupMemoryMode::Polyfill,
+        },
+        force_loop_bounding: checked,
+        emit_int_div_checks: true,
+        // No debug names: what the driver compiles for wgpu in a release
+        // build. The barriers' function is found by its name, which is
+        // then taken out with every other (`scope_workgroup_barriers`).
+        flags: match scoped {
+            true => spv::WriterFlags::DEBUG,
+            false => spv::WriterFlags::empty(),
+        },
+        // A binding the layout does not place is an error where there is
+        // a layout; at its own number where there is none.
+        fake_missing_bindings: layout_bindings.is_empty(),
+        binding_map: layout_bindings.clone(),
+        ..spv::Options::default()
+    };
+    let pipeline = spv::PipelineOptions {
+        shader_stage: naga::ShaderStage::Compute,
+        entry_point: kernel.entry.clone(),
+    };
+    let words = spv::write_vec(&module, &info, &options, Some(&pipeline))
+        .map_err(|e| format!("{}: SPIR-V: {e}", kernel.entry))?;
+    let words = match scoped {
+        true => scope_workgroup_barriers(&words, WORKGROUP_BARRIER_FUNCTION)
+            .map_err(|e| format!("{}: {e}", kernel.entry))?,
+        false => words,
+    };
+    Ok((words, bindings))
+}
+
+/// Where wgpu's Vulkan backend puts the bindings of a pipeline layout
+/// whose group g has the entries `groups[g]`: set g, and in it the
+/// entries numbered in order of their WGSL binding, from 0 (wgpu sorts a
+/// group's entries by binding and numbers them densely). So WGSL's
+/// `@binding(12)` is Vulkan's binding 12 only where the group has every
+/// binding below it.
+pub fn vulkan_binding_map(groups: &[&[wgpu::BindGroupLayoutEntry]]) -> spv::BindingMap {
+    let mut map = spv::BindingMap::new();
+    for (group, entries) in groups.iter().enumerate() {
+        let mut numbers: Vec<u32> = entries.iter().map(|e| e.binding).collect();
+        numbers.sort_unstable();
+        for (dense, &binding) in numbers.iter().enumerate() {
+            map.insert(
+                naga::ResourceBinding {
+                    group: group as u32,
+                    binding,
+                },
+                spv::BindingInfo {
+                    descriptor_set: group as u32,
+                    binding: dense as u32,
+                    binding_array_size: None,
+                },
+            );
+        }
+    }
+    map
+}
+
+/// The WGSL function whose storage barrier orders storage within the
+/// workgroup alone (`shaders/barriers.wgsl`).
+pub const WORKGROUP_BARRIER_FUNCTION: &str = "workgroup_storage_barrier";
+
+const OP_NAME: u32 = 5;
+const OP_MEMBER_NAME: u32 = 6;
+const OP_FUNCTION: u32 = 54;
+const OP_FUNCTION_END: u32 = 56;
+const OP_CONTROL_BARRIER: u32 = 224;
+/// Words of a SPIR-V module's header, before its first instruction.
+const HEADER_WORDS: usize = 5;
+
+/// `words` (a module naga wrote with debug names) with the memory scope of
+/// each control barrier in function `function` set to the barrier's
+/// execution scope, and without debug names: the release module but for
+/// those operands.
+///
+/// naga writes WGSL's `storageBarrier` as `OpControlBarrier` with
+/// execution scope Workgroup, memory scope Device and semantics
+/// AcquireRelease | UniformMemory. Its execution scope's operand is
+/// naga's constant for Workgroup, so the memory scope takes that operand:
+/// no constant is added. Fails where the function is not in the module or
+/// holds no barrier, so a renamed function cannot pass unscoped.
+pub fn scope_workgroup_barriers(words: &[u32], function: &str) -> Result<Vec<u32>, String> {
+    if words.len() < HEADER_WORDS {
+        return Err("SPIR-V: shorter than its header".into());
+    }
+    let instructions = instructions(words)?;
+    let target = instructions
+        .iter()
+        .find(|i| {
+            i.opcode == OP_NAME
+                && i.operands.len() >= 2
+                && literal_string(&i.operands[1..]) == function
+        })
+        .map(|i| i.operands[0])
+        .ok_or_else(|| {
+            format!("SPIR-V: no function named {function} (written with debug names?)")
+        })?;
+    let mut out = words[..HEADER_WORDS].to_vec();
+    let mut inside = false;
+    let mut scoped = 0usize;
+    for i in &instructions {
+        match i.opcode {
+            OP_NAME | OP_MEMBER_NAME => continue,
+            OP_FUNCTION => inside = i.operands.get(1) == Some(&target),
+            OP_FUNCTION_END => inside = false,
+            _ => {}
+        }
+        let start = out.len();
+        out.extend_from_slice(i.words);
+        if inside && i.opcode == OP_CONTROL_BARRIER {
+            // Operands: execution scope, memory scope, semantics (ids).
+            out[start + 2] = out[start + 1];
+            scoped += 1;
+        }
+    }
+    if scoped == 0 {
+        return Err(format!(
+            "SPIR-V: function {function} holds no control barrier"
+        ));
+    }
+    Ok(out)
+}
+
+/// One instruction of a module: its opcode, its words (the first holds
+/// the word count and opcode) and its operands.
+struct Instruction<'a> {
+    opcode: u32,
+    words: &'a [u32],
+    operands: &'a [u32],
+}
+
+/// The instructions of module `words`, after its header.
+fn instructions(words: &[u32]) -> Result<Vec<Instruction<'_>>, String> {
+    let mut out = Vec::new();
+    let mut at = HEADER_WORDS;
+    while at < words.len() {
+        let count = (words[at] >> 16) as usize;
+        if count == 0 || at + count > words.len() {
+            return Err(format!(
+                "SPIR-V: an instruction of {count} words at word {at}"
+            ));
+        }
+        let instruction = &words[at..at + count];
+        out.push(Instruction {
+            opcode: words[at] & 0xffff,
+            words: instruction,
+            operands: &instruction[1..],
+        });
+        at += count;
+    }
+    Ok(out)
+}
+
+/// A SPIR-V literal string: UTF-8 bytes, little-endian in words, ended by
+/// a zero byte.
+fn literal_string(words: &[u32]) -> String {
+    let bytes: Vec<u8> = words
+        .iter()
+        .flat_map(|w| w.to_le_bytes())
+        .take_while(|&b| b != 0)
+        .collect();
+    String::from_utf8_lossy(&bytes).into_owned()
+}
+
+/// The buffer bindings `module` declares.
+fn buffer_bindings(module: &naga::Module) -> Vec<BufferBinding> {
+    let mut out: Vec<BufferBinding> = module
+        .global_variables
+        .iter()
+        .filter_map(|(_, var)| {
+            let at = var.binding.as_ref()?;
+            match var.space {
+                naga::AddressSpace::Uniform => Some((at.group, at.binding, true)),
+                naga::AddressSpace::Storage { .. } => Some((at.group, at.binding, false)),
+                _ => None,
+            }
+        })
+        .collect();
+    out.sort();
+    out.dedup();
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::engines::gpu::kernel_choice::Launch;
+    use crate::engines::gpu::{AdapterTraits, GpuEngine, GpuOptions, GpuReal};
+    use crate::model::scenario::{built_in, Scenario};
+    use crate::Model;
+
+    /// Device scope's and Workgroup's values (SPIR-V's Scope).
+    const DEVICE: u32 = 1;
+    const WORKGROUP: u32 = 2;
+
+    fn table_s1() -> Model {
+        let s = Scenario::parse(built_in("tromborg2014_precursors").unwrap(), "S1", &[]).unwrap();
+        Model::from_scenario(&s, false).unwrap()
+    }
+
+    /// The step kernel's source of `launch` on Table S1, its phase
+    /// barriers scoped or not.
+    fn step_source<T: GpuReal>(launch: &str, scoped: bool) -> KernelSource {
+        let opts = GpuOptions {
+            workgroup_barriers: scoped,
+            ..Launch::named(launch)
+                .unwrap()
+                .options(GpuOptions::default())
+        };
+        GpuEngine::<T>::kernel_sources_on(&table_s1(), opts, &AdapterTraits::test_hardware())
+            .unwrap()
+            .remove(0)
+    }
+
+    fn words(k: &KernelSource) -> Vec<u32> {
+        kernel_spirv(
+            k,
+            (1, 6),
+            ZeroWorkgroupMemory::Native,
+            &spv::BindingMap::new(),
+        )
+        .unwrap()
+        .0
+    }
+
+    /// The constant ids of each value of a module's OpConstant u32s.
+    fn constant_values(words: &[u32]) -> std::collections::HashMap<u32, u32> {
+        instructions(words)
+            .unwrap()
+            .iter()
+            .filter(|i| i.opcode == 43 && i.operands.len() == 3)
+            .map(|i| (i.operands[1], i.operands[2]))
+            .collect()
+    }
+
+    /// The memory scopes of a module's control barriers, in order.
+    fn barrier_memory_scopes(words: &[u32]) -> Vec<u32> {
+        let values = constant_values(words);
+        instructions(words)
+            .unwrap()
+            .iter()
+            .filter(|i| i.opcode == OP_CONTROL_BARRIER)
+            .map(|i| values[&i.operands[1]])
+            .collect()
+    }
+
+    /// The phase barriers of the persistent, resident and tiled kernels
+    /// get workgroup scope, in both precisions, and nothing else changes:
+    /// the module is naga's release module word for word but for the one
+    /// barrier in `workgroup_storage_barrier`. The tiled kernel's barriers
+    /// between rounds, which order a tile's writes for its neighbours,
+    /// keep device scope.
+    #[test]
+    fn the_phase_barriers_get_workgroup_scope_and_nothing_else_changes() {
+        for (launch, rounds) in [
+            ("persistent/256", 0),
+            ("persistent/1024/2-scenes", 0),
+            ("resident/1024", 0),
+            // A round's end orders its publication for the tiles
+            // that read it (chained, within the dispatch).
+            ("tiled/256/8x4", 2),
+            ("tiled/256/8x4/chained", 2),
+        ] {
+            for f64 in [false, true] {
+                let (plain, scoped) = match f64 {
+                    false => (
+                        step_source::<f32>(launch, false),
+                        step_source::<f32>(launch, true),
+                    ),
+                    true => (
+                        step_source::<f64>(launch, false),
+                        step_source::<f64>(launch, true),
+                    ),
+                };
+                assert!(!plain.build.workgroup_barriers && scoped.build.workgroup_barriers);
+                let (a, b) = (words(&plain), words(&scoped));
+                assert_eq!(a.len(), b.len(), "{launch} f64 {f64}");
+                let changed: Vec<usize> = (0..a.len()).filter(|&k| a[k] != b[k]).collect();
+                assert_eq!(
+                    changed.len(),
+                    1,
+                    "{launch} f64 {f64}: words {changed:?} changed"
+                );
+                let plain_scopes = barrier_memory_scopes(&a);
+                let scoped_scopes = barrier_memory_scopes(&b);
+                let count = |scopes: &[u32], scope| scopes.iter().filter(|&&s| s == scope).count();
+                assert_eq!(
+                    count(&scoped_scopes, DEVICE) + 1,
+                    count(&plain_scopes, DEVICE),
+                    "{launch}"
+                );
+                assert_eq!(
+                    count(&scoped_scopes, DEVICE),
+                    rounds,
+                    "{launch}: device-scope barriers left"
+                );
+            }
+        }
+    }
+
+    /// The one-step kernels have no phase barriers: their builds never ask
+    /// for scoping, so wgpu writes them.
+    #[test]
+    fn only_kernels_with_phase_barriers_are_scoped() {
+        for launch in ["one-step", "one-step-lanes"] {
+            assert!(
+                !step_source::<f32>(launch, true).build.workgroup_barriers,
+                "{launch}"
+            );
+        }
+        let traits = AdapterTraits {
+            own_spirv: false,
+            ..AdapterTraits::test_hardware()
+        };
+        let opts = Launch::named("persistent/256")
+            .unwrap()
+            .options(GpuOptions::default());
+        let k = GpuEngine::<f32>::kernel_sources_on(&table_s1(), opts, &traits).unwrap();
+        assert!(
+            !k[0].build.workgroup_barriers,
+            "an adapter that writes its own SPIR-V only"
+        );
+    }
+
+    /// The pass fails, never passes a module unscoped, where the function is
+    /// not named in it (a module written without debug names) or holds no
+    /// barrier.
+    #[test]
+    fn the_pass_refuses_a_module_it_cannot_scope() {
+        let plain = words(&step_source::<f32>("persistent/256", false));
+        let err = scope_workgroup_barriers(&plain, WORKGROUP_BARRIER_FUNCTION).unwrap_err();
+        assert!(err.contains("no function named"), "{err}");
+        let k = step_source::<f32>("persistent/256", true);
+        let (module, info) = k.module().unwrap();
+        let (module, info) = k.with_constants(&module, &info).unwrap();
+        let options = spv::Options {
+            flags: spv::WriterFlags::DEBUG,
+            ..spv::Options::default()
+        };
+        let pipeline = spv::PipelineOptions {
+            shader_stage: naga::ShaderStage::Compute,
+            entry_point: k.entry.clone(),
+        };
+        let named = spv::write_vec(&module, &info, &options, Some(&pipeline)).unwrap();
+        // The entry point's own function holds barriers; one without any.
+        let err = scope_workgroup_barriers(&named, "state_enter").unwrap_err();
+        assert!(err.contains("holds no control barrier"), "{err}");
+        let scoped = scope_workgroup_barriers(&named, WORKGROUP_BARRIER_FUNCTION).unwrap();
+        assert!(barrier_memory_scopes(&scoped).contains(&WORKGROUP));
+        assert!(!instructions(&scoped)
+            .unwrap()
+            .iter()
+            .any(|i| i.opcode == OP_NAME));
+    }
+}
