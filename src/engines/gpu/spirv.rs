@@ -37,7 +37,7 @@ pub type BufferBinding = (u32, u32, bool);
 /// module declares: the pipeline layout a driver compiles it against. One
 /// parse for both.
 ///
-/// `bindings`: where each (group, binding) of the module goes in the
+/// `layout`: where each (group, binding) of the module goes in the
 /// pipeline layout (`vulkan_binding_map`), as wgpu's layouts place them;
 /// empty: at the same numbers (a layout made from the module's own
 /// bindings, as `driver_stats` makes it).
@@ -45,9 +45,8 @@ pub fn kernel_spirv(
     kernel: &KernelSource,
     language: (u8, u8),
     zero: ZeroWorkgroupMemory,
-    bindings: &spv::BindingMap,
+    layout: &spv::BindingMap,
 ) -> Result<(Vec<u32>, Vec<BufferBinding>), String> {
-    let layout_bindings = bindings;
     let (module, info) = kernel.module()?;
     let bindings = buffer_bindings(&module);
     let (module, info) = kernel.with_constants(&module, &info)?;
@@ -89,8 +88,8 @@ pub fn kernel_spirv(
         },
         // A binding the layout does not place is an error where there is
         // a layout; at its own number where there is none.
-        fake_missing_bindings: layout_bindings.is_empty(),
-        binding_map: layout_bindings.clone(),
+        fake_missing_bindings: layout.is_empty(),
+        binding_map: layout.clone(),
         ..spv::Options::default()
     };
     let pipeline = spv::PipelineOptions {
@@ -375,6 +374,33 @@ mod tests {
                 );
             }
         }
+    }
+
+    /// A group's bindings are numbered densely in order of their WGSL
+    /// numbers, as wgpu's Vulkan layouts number them: bindings 0, 2 and 5
+    /// of group 0 are Vulkan's 0, 1 and 2, however the entries are listed.
+    #[test]
+    fn bindings_are_placed_as_wgpus_vulkan_layouts_place_them() {
+        let entry = |binding| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: wgpu::ShaderStages::COMPUTE,
+            ty: wgpu::BindingType::Buffer {
+                ty: wgpu::BufferBindingType::Storage { read_only: true },
+                has_dynamic_offset: false,
+                min_binding_size: None,
+            },
+            count: None,
+        };
+        let group0 = [entry(5), entry(0), entry(2)];
+        let group1 = [entry(0), entry(1)];
+        let map = vulkan_binding_map(&[&group0, &group1]);
+        let at = |group, binding| {
+            let b = &map[&naga::ResourceBinding { group, binding }];
+            (b.descriptor_set, b.binding)
+        };
+        assert_eq!([at(0, 0), at(0, 2), at(0, 5)], [(0, 0), (0, 1), (0, 2)]);
+        assert_eq!([at(1, 0), at(1, 1)], [(1, 0), (1, 1)]);
+        assert_eq!(map.len(), 5);
     }
 
     /// The one-step kernels have no phase barriers: their builds never ask
