@@ -34,6 +34,9 @@ pub struct GpuContext {
     /// The SPIR-V the engine writes for this device itself, where it may
     /// (`KernelBuild::workgroup_barriers`).
     spirv: Option<SpirvTarget>,
+    /// Why the device refused a module of the engine's own SPIR-V, if it
+    /// did: from then on wgpu writes every module (`refuse_own_spirv`).
+    own_spirv_refused: Arc<Mutex<Option<String>>>,
 }
 
 /// What the engine's own SPIR-V for a device must be: the version wgpu
@@ -271,6 +274,7 @@ impl GpuContext {
             batch_layout,
             pipelines: Arc::new(Mutex::new(HashMap::new())),
             spirv,
+            own_spirv_refused: Arc::new(Mutex::new(None)),
         })
     }
 
@@ -312,7 +316,29 @@ impl GpuContext {
     /// Whether the engine writes this device's SPIR-V itself where a
     /// kernel's build asks (`KernelBuild::workgroup_barriers`).
     pub fn has_own_spirv(&self) -> bool {
-        self.spirv.is_some()
+        self.spirv.is_some() && self.own_spirv_refused().is_none()
+    }
+
+    /// Why the device refused the engine's own SPIR-V, where it did.
+    pub fn own_spirv_refused(&self) -> Option<String> {
+        self.own_spirv_refused.lock().expect("refusal slot").clone()
+    }
+
+    /// Stops giving the device the engine's own SPIR-V, for `why` (the
+    /// first reason is kept and printed once): the kernels already built
+    /// keep their modules, and every later build is wgpu's, with the phase
+    /// barriers at device scope. Engines built after this describe
+    /// themselves so.
+    pub fn refuse_own_spirv(&self, why: String) {
+        let mut slot = self.own_spirv_refused.lock().expect("refusal slot");
+        if slot.is_none() {
+            eprintln!(
+                "slipfront: {} refused the engine's own SPIR-V ({why}); the kernels' phase \
+                 barriers keep wgpu's device scope",
+                self.info.name
+            );
+            *slot = Some(why);
+        }
     }
 
     /// Whether the adapter was opened with subgroup operations.
@@ -347,79 +373,84 @@ impl GpuContext {
             .entry(key)
             .or_insert_with(|| {
                 let source = build.source::<T>(kernel);
-                let (module, constants) = match self.spirv.filter(|_| workgroup_barriers) {
-                    // The override constants are applied in the SPIR-V.
-                    Some(target) => (
-                        self.own_spirv_module::<T>(target, kernel, build, entry, source, constants),
-                        &[][..],
-                    ),
-                    None => (
-                        checks.module(&self.device, kernel.entry_point(), source),
-                        constants,
-                    ),
+                let own = match self
+                    .spirv
+                    .filter(|_| workgroup_barriers && self.has_own_spirv())
+                {
+                    Some(target) => {
+                        let own = super::compile::KernelSource {
+                            kernel,
+                            precision: T::NAME,
+                            build,
+                            entry: entry.to_string(),
+                            source: source.clone(),
+                            constants: constants.iter().map(|&(n, v)| (n.to_string(), v)).collect(),
+                        };
+                        let layout_bindings = &self.layouts[layout_index(kernel)].vulkan_bindings;
+                        spirv::kernel_spirv(
+                            &own,
+                            target.language,
+                            ZeroWorkgroupMemory::Native,
+                            layout_bindings,
+                        )
+                        .and_then(|(words, _)| self.pipeline_from_spirv(kernel, entry, words))
+                        .map_err(|why| self.refuse_own_spirv(format!("{entry}: {why}")))
+                        .ok()
+                    }
+                    None => None,
                 };
-                self.device
-                    .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                        label: Some(entry),
-                        layout: Some(layout),
-                        module: &module,
-                        entry_point: Some(entry),
-                        compilation_options: wgpu::PipelineCompilationOptions {
-                            constants,
-                            ..Default::default()
-                        },
-                        cache: None,
-                    })
+                own.unwrap_or_else(|| {
+                    let module = checks.module(&self.device, kernel.entry_point(), source);
+                    self.device
+                        .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                            label: Some(entry),
+                            layout: Some(layout),
+                            module: &module,
+                            entry_point: Some(entry),
+                            compilation_options: wgpu::PipelineCompilationOptions {
+                                constants,
+                                ..Default::default()
+                            },
+                            cache: None,
+                        })
+                })
             })
             .clone()
     }
 
-    /// The module of `entry` of `kernel` as the engine writes its SPIR-V
-    /// (`spirv::kernel_spirv`, with wgpu's options for this device), given
-    /// to the driver as it is. The kernels are the engine's own, validated
-    /// by naga as they are written, and specialised for `constants` here.
-    fn own_spirv_module<T: GpuReal>(
+    /// The pipeline of `entry` of `kernel` from SPIR-V `words` the engine
+    /// wrote (`spirv::kernel_spirv`: its override constants applied, its
+    /// bindings placed as `kernel`'s layout places them), given to the
+    /// driver as they are; the device's error where it refuses them
+    /// (caught in error scopes, so none is left for `check`).
+    pub fn pipeline_from_spirv(
         &self,
-        target: SpirvTarget,
         kernel: Kernel,
-        build: KernelBuild,
         entry: &str,
-        source: String,
-        constants: &[(&str, f64)],
-    ) -> wgpu::ShaderModule {
-        let source = super::compile::KernelSource {
-            kernel,
-            precision: T::NAME,
-            build,
-            entry: entry.to_string(),
-            source,
-            constants: constants.iter().map(|&(n, v)| (n.to_string(), v)).collect(),
-        };
-        let bindings = &self.layouts[layout_index(kernel)].vulkan_bindings;
-        let words = match spirv::kernel_spirv(
-            &source,
-            target.language,
-            ZeroWorkgroupMemory::Native,
-            bindings,
-        ) {
-            Ok((words, _)) => words,
-            // The same module and constants validate in the unit tests; a
-            // failure here is a bug, reported as the device errors are.
-            Err(why) => {
-                self.report(format!("{entry}: the engine's SPIR-V: {why}"));
-                Vec::new()
-            }
-        };
+        words: Vec<u32>,
+    ) -> Result<wgpu::ComputePipeline, String> {
+        // Never hand a driver words that are not SPIR-V at all.
+        if words.len() < 5 || words[0] != spirv::MAGIC {
+            return Err(format!(
+                "{entry}: not a SPIR-V module ({} words, first {:#x?})",
+                words.len(),
+                words.first()
+            ));
+        }
+        let validation = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let internal = self.device.push_error_scope(wgpu::ErrorFilter::Internal);
         let entry_points = [wgpu::PassthroughShaderEntryPoint {
             name: entry.into(),
             workgroup_size: (0, 0, 0),
         }];
         // SAFETY: the SPIR-V is naga's, written from a module naga
         // validated, with the options wgpu's Vulkan backend uses for this
-        // device (its runtime checks as `build.checks` says); the one
-        // change, a barrier's memory scope from Device to Workgroup, keeps
-        // it valid SPIR-V (`spirv` tests parse it back).
-        unsafe {
+        // device (its runtime checks as the build says); the one change,
+        // a barrier's memory scope from Device to Workgroup, keeps it
+        // valid SPIR-V (`spirv` tests). A module the driver refuses all
+        // the same is an error in the scopes above, not undefined
+        // behaviour.
+        let module = unsafe {
             self.device
                 .create_shader_module_passthrough(wgpu::ShaderModuleDescriptorPassthrough {
                     label: Some(entry),
@@ -427,15 +458,23 @@ impl GpuContext {
                     spirv: Some(words.into()),
                     ..Default::default()
                 })
-        }
-    }
-
-    /// Records `why` as the device's first error, if none is recorded
-    /// (`check` reports it).
-    fn report(&self, why: String) {
-        let mut slot = self.error.lock().expect("error slot");
-        if slot.is_none() {
-            *slot = Some(why);
+        };
+        let pipeline = self
+            .device
+            .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some(entry),
+                layout: Some(&self.layouts[layout_index(kernel)].pipeline),
+                module: &module,
+                entry_point: Some(entry),
+                // The override constants are applied in the SPIR-V.
+                compilation_options: wgpu::PipelineCompilationOptions::default(),
+                cache: None,
+            });
+        let internal = pollster::block_on(internal.pop());
+        let validation = pollster::block_on(validation.pop());
+        match internal.or(validation) {
+            Some(error) => Err(error.to_string()),
+            None => Ok(pipeline),
         }
     }
 

@@ -402,6 +402,12 @@ impl<T: GpuReal> GpuEngine<T> {
                 ),
             }
         });
+        // A device that refused the engine's own SPIR-V just now was given
+        // wgpu's modules (`GpuContext::refuse_own_spirv`).
+        let build = KernelBuild {
+            workgroup_barriers: build.workgroup_barriers && ctx.has_own_spirv(),
+            ..build
+        };
         let groups = step_kernel.groups(model);
         let step_workgroups = step_kernel.workgroups(model);
         let steps_per_dispatch = match geometry {

@@ -143,6 +143,8 @@ const OP_MEMBER_NAME: u32 = 6;
 const OP_FUNCTION: u32 = 54;
 const OP_FUNCTION_END: u32 = 56;
 const OP_CONTROL_BARRIER: u32 = 224;
+/// A SPIR-V module's first word.
+pub const MAGIC: u32 = 0x0723_0203;
 /// Words of a SPIR-V module's header, before its first instruction.
 const HEADER_WORDS: usize = 5;
 
