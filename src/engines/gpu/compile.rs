@@ -165,6 +165,24 @@ pub struct KernelSource {
 }
 
 impl KernelSource {
+    /// The source of entry point `entry` of `kernel` in precision `T`,
+    /// built with `build` and compiled with `constants`.
+    pub fn of<T: GpuReal>(
+        kernel: Kernel,
+        build: KernelBuild,
+        entry: &str,
+        constants: &[(&str, f64)],
+    ) -> KernelSource {
+        KernelSource {
+            kernel,
+            precision: T::NAME,
+            build,
+            entry: entry.to_string(),
+            source: build.source::<T>(kernel),
+            constants: constants.iter().map(|&(n, v)| (n.to_string(), v)).collect(),
+        }
+    }
+
     /// The kernel's module as naga parses and validates it.
     pub fn module(&self) -> Result<(naga::Module, naga::valid::ModuleInfo), String> {
         let src = &self.source;

@@ -1,7 +1,7 @@
 //! Adapter selection: a hardware GPU, else a software one (lavapipe).
 
 use super::bindings::Bindings;
-use super::compile::KernelBuild;
+use super::compile::{KernelBuild, KernelSource};
 use super::precision::GpuReal;
 use super::shaders::Kernel;
 use super::spirv::{self, ZeroWorkgroupMemory};
@@ -372,20 +372,12 @@ impl GpuContext {
         cache
             .entry(key)
             .or_insert_with(|| {
-                let source = build.source::<T>(kernel);
                 let own = match self
                     .spirv
                     .filter(|_| workgroup_barriers && self.has_own_spirv())
                 {
                     Some(target) => {
-                        let own = super::compile::KernelSource {
-                            kernel,
-                            precision: T::NAME,
-                            build,
-                            entry: entry.to_string(),
-                            source: source.clone(),
-                            constants: constants.iter().map(|&(n, v)| (n.to_string(), v)).collect(),
-                        };
+                        let own = KernelSource::of::<T>(kernel, build, entry, constants);
                         let layout_bindings = &self.layouts[layout_index(kernel)].vulkan_bindings;
                         spirv::kernel_spirv(
                             &own,
@@ -400,6 +392,7 @@ impl GpuContext {
                     None => None,
                 };
                 own.unwrap_or_else(|| {
+                    let source = build.source::<T>(kernel);
                     let module = checks.module(&self.device, kernel.entry_point(), source);
                     self.device
                         .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {

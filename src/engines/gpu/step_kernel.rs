@@ -268,14 +268,7 @@ pub fn kernel_sources<T: GpuReal>(
     let gather = kernel.gather_entry_point().filter(|_| tiled);
     std::iter::once(kernel.entry_point())
         .chain(gather)
-        .map(|entry| KernelSource {
-            kernel,
-            precision: T::NAME,
-            build,
-            entry: entry.to_string(),
-            source: build.source::<T>(kernel),
-            constants: constants.iter().map(|&(n, v)| (n.to_string(), v)).collect(),
-        })
+        .map(|entry| KernelSource::of::<T>(kernel, build, entry, constants))
         .collect()
 }
 
