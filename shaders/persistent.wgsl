@@ -10,7 +10,7 @@
 // start and written back at its end (state_resident.wgsl: the resident
 // kernel, for lattices that fit). Both run this same loop.
 // CPU twin: src/engines/cpu/mod.rs CpuEngine::one_step (one step of its loop).
-// import: bulk_forces, bulk_patch, common, coordinates, friction_law, junctions, lane_merge, noted_blocks, lane_partials, record_buffers, record_common, scene, state, verlet
+// import: bulk_forces, bulk_patch, common, coordinates, friction_law, junctions, lane_merge, noted_blocks, lane_partials, phase_clocks, record_buffers, record_common, scene, state, verlet
 
 // With an output file, the samples of the batch (batch.records of them,
 // in step order; src/engines/gpu/recorder.rs): a sample of step s is recorded in
@@ -83,6 +83,7 @@ fn persistent_steps(
     @builtin(local_invocation_index) wt: u32,
     @builtin(workgroup_id) wid: vec3<u32>,
 ) {
+    phase_start(wt);
     // This thread's member scene, and its place among the scene's threads.
     // One scene a workgroup: member 0, a value the compiler sees is the
     // same on every thread (its scene's constants then stay in uniform
@@ -154,6 +155,7 @@ fn persistent_steps(
         }
         workgroupBarrier();
     }
+    phase_mark(wt, PHASE_ENTER);
     for (var s = steps.x; s < steps.y; s++) {
         let ld = loads_at(s);
         let ready = batch.forces_ready != 0u && s == 0u;
@@ -253,7 +255,9 @@ fn persistent_steps(
                 }
             }
         }
+        phase_arrive(wt);
         state_barrier();
+        phase_mark(wt, PHASE_FORCES);
         // Is step s a sample (1), and is it due (2), for each member? The
         // samples' steps are the same for every scene; whether one is due
         // is each scene's (its fast cadence).
@@ -327,7 +331,9 @@ fn persistent_steps(
         if member_steps(stepping) {
             ran = ran + 1u;
         }
+        phase_arrive(wt);
         state_barrier();
+        phase_mark(wt, PHASE_UPDATES);
         // Stop at a blow-up (checked every 16 steps: each check costs a
         // barrier). A stopped member's threads wait at the barriers of the
         // others' steps; the workgroup ends when every member has stopped.
@@ -336,6 +342,7 @@ fn persistent_steps(
                 stop[member] = atomicLoad(&status[status_base() + STATUS_FLAG]);
             }
             stops = workgroupUniformLoad(&stop);
+            phase_mark(wt, PHASE_CHECKS);
             if all_stopped(stops) {
                 break;
             }
@@ -357,6 +364,8 @@ fn persistent_steps(
     if t == 0u && present {
         atomicAdd(&status[status_base() + STATUS_PERSISTENT_STEPS], atomicLoad(&fewest_run[member]));
     }
+    phase_mark(wt, PHASE_LEAVE);
+    phase_flush(wt);
 }
 
 // Whether this thread's member scene steps: always with one scene a

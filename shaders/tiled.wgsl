@@ -47,7 +47,7 @@
 // the lanes merged as a tree (lane_tree8), and the update. Junction friction laws
 // only (the per-block laws keep state that a halo would race on).
 // CPU twin: src/engines/cpu/mod.rs CpuEngine::one_step (each step of the loop).
-// import: barriers, bulk_forces, bulk_patch, common, coordinates, junction_store, junctions, lane_merge, lane_partials, noted_blocks, record_batch, record_buffers, record_common, scene, state, verlet
+// import: barriers, bulk_forces, bulk_patch, common, coordinates, junction_store, junctions, lane_merge, lane_partials, noted_blocks, phase_clocks, record_batch, record_buffers, record_common, scene, state, verlet
 
 override TILE_THREADS: u32 = 64u;
 // Bulk forces by 2×2 patches of blocks (bulk_patch.wgsl;
@@ -280,6 +280,7 @@ fn tiled_steps(
     @builtin(local_invocation_index) t: u32,
     @builtin(workgroup_id) wid: vec3<u32>,
 ) {
+    phase_start(t);
     enter_scene(wid.z);
     tile_enter(wid.x);
     let lanes = min(JUNCTION_LANES, c.junction_count);
@@ -304,6 +305,7 @@ fn tiled_steps(
         atomicMax(&status[status_base() + STATUS_LANE_LEVELS], lane_levels_used());
     }
     var polls = 0u;
+    phase_mark(t, PHASE_ENTER);
     for (var k = 0u; k < chain.x; k++) {
         if k > 0u {
             // Its neighbours' round k − 1 published what round k reads.
@@ -329,6 +331,7 @@ fn tiled_steps(
             }
             // What they published, visible to every thread here.
             storageBarrier();
+            phase_mark(t, PHASE_WAIT);
         }
         // Chained, a round's own columns stay in workgroup memory for the
         // next: loaded at the dispatch's first round, stored at its last.
@@ -341,10 +344,12 @@ fn tiled_steps(
         }
         // This round's publication before its counter, and its counter
         // before its own columns' store, which no neighbour reads.
+        phase_arrive(t);
         storageBarrier();
         if t == 0u {
             atomicStore(&tile_progress[tile_index()], chain.y + k + 1u);
         }
+        phase_mark(t, PHASE_PUBLISH);
         if update && last {
             store_tile_end(t, end - 1u);
         }
@@ -354,6 +359,8 @@ fn tiled_steps(
     if t == 0u {
         atomicStore(&tile_progress[tile_index()], chain.y + chain.x);
     }
+    phase_mark(t, PHASE_LEAVE);
+    phase_flush(t);
 }
 
 // Thread t's first lane run item of a step whose force phase has `bulk`
@@ -406,7 +413,9 @@ fn tile_round(t: u32, d: u32, lanes: u32, stride: u32, first: bool, last: bool) 
         }
         next = workgroupUniformLoad(&tile_next_sample);
     }
+    phase_mark(t, PHASE_CHECKS);
     load_tile(t, plan.x, d & 1u, first);
+    phase_arrive(t);
     workgroup_storage_barrier();
     workgroupBarrier();
     // The first step's junction blocks, for every column the round steps
@@ -420,6 +429,7 @@ fn tile_round(t: u32, d: u32, lanes: u32, stride: u32, first: bool, last: bool) 
         }
         workgroupBarrier();
     }
+    phase_mark(t, PHASE_LOAD);
     let lane_first = tile_index() * tile_span() * lanes;
     for (var s = plan.x; s < plan.y; s++) {
         // The columns this step updates: one fewer each side than the last
@@ -488,8 +498,10 @@ fn tile_round(t: u32, d: u32, lanes: u32, stride: u32, first: bool, last: bool) 
                 }
             }
         }
+        phase_arrive(t);
         workgroup_storage_barrier();
         workgroupBarrier();
+        phase_mark(t, PHASE_FORCES);
         if sampling {
             sample_rows_above(t, record_entries[next.x], ready);
         }
@@ -539,8 +551,10 @@ fn tile_round(t: u32, d: u32, lanes: u32, stride: u32, first: bool, last: bool) 
             sample_interface(t, next, s);
             next = workgroupUniformLoad(&tile_next_sample);
         }
+        phase_arrive(t);
         workgroup_storage_barrier();
         workgroupBarrier();
+        phase_mark(t, PHASE_UPDATES);
     }
     publish_edges(t, (d + 1u) & 1u);
     return plan.y + 1u;

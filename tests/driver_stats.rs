@@ -116,6 +116,7 @@ fn the_driver_reports_each_kernels_registers() {
             chained_tiles: false,
             step_immediate: false,
             workgroup_barriers: false,
+            phase_clocks: false,
         },
         entry: "store_one".into(),
         source: "@group(0) @binding(0) var<storage, read_write> out: array<u32>;\n\

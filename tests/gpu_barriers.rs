@@ -8,25 +8,13 @@
 //! the scope saves is a hardware question (`gpu_table` section 7). These
 //! tests fail, never skip, when no adapter exists.
 
-use slipfront::engines::gpu::ensemble::GpuEnsemble;
-use slipfront::engines::gpu::tiles::TileShape;
-use slipfront::engines::gpu::{GpuEngine, GpuOptions, GpuPath, GpuReal};
-use slipfront::model::scenario::{Scenario, DEFAULT_SCENARIO};
-use slipfront::{advance_to, Engine, Model, Snapshot};
+#[path = "support/phase_kernels.rs"]
+mod phase_kernels;
 
-/// The small side-driven scene of the cross-checks (29 × 16 blocks),
-/// driven fast enough that junctions break within the run.
-fn driven(velocity: f64) -> Model {
-    let small: &[&str] = &slipfront::app::verify::SMALL_SCENE;
-    let drive = format!("loading.drive.velocity={velocity}");
-    let set: Vec<String> = [small, &[drive.as_str()]]
-        .concat()
-        .iter()
-        .map(|s| s.to_string())
-        .collect();
-    let s = Scenario::parse(DEFAULT_SCENARIO, "test", &set).unwrap();
-    Model::from_scenario(&s, false).unwrap()
-}
+use phase_kernels::{driven, launches};
+use slipfront::engines::gpu::ensemble::GpuEnsemble;
+use slipfront::engines::gpu::{GpuEngine, GpuOptions, GpuPath, GpuReal};
+use slipfront::{advance_to, Engine, Model, Snapshot};
 
 fn engine<T: GpuReal>(m: &Model, opts: GpuOptions) -> GpuEngine<T> {
     GpuEngine::<T>::with_precision(m, opts)
@@ -46,21 +34,6 @@ fn run<T: GpuReal>(m: &Model, opts: GpuOptions, end: u64) -> (Snapshot, bool) {
     );
     advance_to(&mut e, end).unwrap();
     (e.snapshot().unwrap(), scoped)
-}
-
-fn launches() -> Vec<(&'static str, GpuOptions)> {
-    let with = |path, chained| GpuOptions {
-        path,
-        tile: (path == GpuPath::Tiled).then_some(TileShape { width: 16, halo: 4 }),
-        chained_tiles: chained,
-        ..GpuOptions::default()
-    };
-    vec![
-        ("persistent", with(GpuPath::Persistent, false)),
-        ("resident", with(GpuPath::Resident, false)),
-        ("tiled", with(GpuPath::Tiled, false)),
-        ("tiled, chained", with(GpuPath::Tiled, true)),
-    ]
 }
 
 /// Each kernel with phase barriers, in mixed f32 and (persistent) f64,

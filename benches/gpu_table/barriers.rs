@@ -2,16 +2,15 @@
 //! scope (`GpuOptions::workgroup_barriers`), each launch both ways in one
 //! run.
 
-use crate::common::s1_model;
-use crate::gpu_timing::{ensemble_step_seconds, solo_step_figures_in, table_s1};
+use crate::common::{s1_scene, section_launches};
+use crate::gpu_timing::{ensemble_step_seconds, solo_step_figures_in};
 use slipfront::engines::gpu::context::GpuContext;
 use slipfront::engines::gpu::kernel_choice::Launch;
 use slipfront::engines::gpu::{GpuOptions, GpuReal};
-use slipfront::model::scenario::built_in;
 use slipfront::Model;
 
 /// Launches whose step has phase barriers, timed on Table S1 alone.
-const SOLO: &[&str] = &[
+pub const SOLO: &[&str] = &[
     "persistent/256",
     "persistent/1024",
     "resident/1024",
@@ -30,21 +29,6 @@ const ENSEMBLE: &[&str] = &[
 /// lavapipe's cores, so the chained ones run at once.
 const QUICK_SOLO: &[&str] = &["persistent/256", "tiled/256/16x4", "tiled/256/16x4/chained"];
 const QUICK_ENSEMBLE: &[&str] = &["persistent/256"];
-
-/// The launches of the section: `SLIPFRONT_GPU_TABLE_LAUNCHES` where set
-/// (alone and in ensembles alike), else `full` or `quick`.
-fn launches(full: &[&str], quick_list: &[&str], quick: bool) -> Vec<String> {
-    match std::env::var("SLIPFRONT_GPU_TABLE_LAUNCHES") {
-        Ok(list) => list.split(',').map(|s| s.trim().to_string()).collect(),
-        Err(_) => match quick {
-            true => quick_list,
-            false => full,
-        }
-        .iter()
-        .map(|s| s.to_string())
-        .collect(),
-    }
-}
 
 fn launch(name: &str) -> Launch {
     Launch::named(name).unwrap_or_else(|| panic!("`{name}` is not a launch name"))
@@ -71,23 +55,12 @@ pub fn scopes(ctx: &GpuContext, quick: bool, min_seconds: f64) {
              passthrough shaders): both columns time wgpu's module.\n"
         );
     }
-    // Quick (software adapters): 29 columns, Table S1's other keys.
-    let scene = |seed: usize| match quick {
-        false => table_s1(seed),
-        true => s1_model(
-            built_in("tromborg2014_precursors").expect("shipped scene"),
-            &[
-                "geometry.nx=29",
-                "geometry.length=0.07",
-                &format!("time.seed={seed}"),
-            ],
-        ),
-    };
+    let scene = |seed: usize| s1_scene(seed, quick);
     let s1 = scene(1);
     println!("Table S1 alone (µs a step: wall, with the device's busy time in brackets):\n");
     println!("| launch | precision | workgroup scope | device scope | device / workgroup |");
     println!("| --- | --- | ---: | ---: | ---: |");
-    let solo = launches(SOLO, QUICK_SOLO, quick);
+    let solo = section_launches(SOLO, QUICK_SOLO, quick);
     for name in &solo {
         solo_row::<f32>(&s1, name, min_seconds);
     }
@@ -105,7 +78,7 @@ pub fn scopes(ctx: &GpuContext, quick: bool, min_seconds: f64) {
     println!("| --- | ---: | ---: | ---: | ---: |");
     for &n in counts {
         let models: Vec<Model> = (0..n).map(|k| scene(k + 1)).collect();
-        for name in &launches(ENSEMBLE, QUICK_ENSEMBLE, quick) {
+        for name in &section_launches(ENSEMBLE, QUICK_ENSEMBLE, quick) {
             let time = |workgroup| {
                 ensemble_step_seconds(&models, options(name, workgroup), min_seconds)
                     .map(|(s, _)| s)

@@ -69,3 +69,34 @@ pub fn counts_from_env(name: &str, default: &[usize]) -> Vec<usize> {
         Err(_) => default.to_vec(),
     }
 }
+
+/// A section's launch names: `SLIPFRONT_GPU_TABLE_LAUNCHES` where set,
+/// else `full`, or `quick_list` in the quick form.
+pub fn section_launches(full: &[&str], quick_list: &[&str], quick: bool) -> Vec<String> {
+    match std::env::var("SLIPFRONT_GPU_TABLE_LAUNCHES") {
+        Ok(list) => list.split(',').map(|s| s.trim().to_string()).collect(),
+        Err(_) => match quick {
+            true => quick_list,
+            false => full,
+        }
+        .iter()
+        .map(|s| s.to_string())
+        .collect(),
+    }
+}
+
+/// Table S1 with seed `seed`; in the quick form (software adapters), its
+/// keys on 29 columns.
+pub fn s1_scene(seed: usize, quick: bool) -> Model {
+    match quick {
+        false => crate::gpu_timing::table_s1(seed),
+        true => s1_model(
+            slipfront::model::scenario::built_in("tromborg2014_precursors").expect("shipped scene"),
+            &[
+                "geometry.nx=29",
+                "geometry.length=0.07",
+                &format!("time.seed={seed}"),
+            ],
+        ),
+    }
+}

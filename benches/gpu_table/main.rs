@@ -61,7 +61,14 @@
 //!     against naga's device scope (`GpuOptions::workgroup_barriers`), each
 //!     launch both ways in one run: Table S1 alone in mixed f32 and f64, and
 //!     ensembles of 132 and 264 scenes (SLIPFRONT_GPU_TABLE_LAUNCHES: those
-//!     launches instead).
+//!     launches instead);
+//! 11. where a step's time goes on the device (`GpuOptions::phase_clocks`,
+//!     on adapters with VK_KHR_shader_clock): each phase's cycles a
+//!     workgroup-step (forces, updates, a tiled round's load, publication
+//!     and wait, the dispatch's enter and leave), thread 0's own share, and
+//!     what the marks cost the wall time, for the persistent, resident and
+//!     tiled kernels on Table S1 alone and on 132 scenes
+//!     (SLIPFRONT_GPU_TABLE_LAUNCHES: those launches instead).
 //!
 //! Sections 1–3 also print the host's CPU time per wall second of each
 //! timed span: it says whether the host (encoding dispatches, waiting) or
@@ -110,6 +117,7 @@ mod junctions;
 mod kernels;
 mod limits;
 mod output;
+mod phases;
 mod sections;
 mod sweeps;
 mod tiles;
@@ -177,6 +185,9 @@ fn main() {
     }
     if let Some(_timer) = sections.start(10) {
         barriers::scopes(&ctx, quick, min_seconds);
+    }
+    if let Some(_timer) = sections.start(11) {
+        phases::profile(&ctx, quick, min_seconds);
     }
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -177,7 +177,7 @@ mod tests {
             .collect();
         assert_eq!(
             numbers,
-            [0, 1, 2, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16, 17, 23]
+            [0, 1, 2, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16, 17, 18, 23]
         );
         assert_eq!(persistent.binding("lane_partial"), Some((0, 12)));
         // The resident kernel shares the persistent kernel's layout.

@@ -47,6 +47,9 @@ impl Shape {
 /// precision (`GpuEngine::DISP_BYTES` and others do).
 pub(super) const WORD_PAIR_BYTES: usize = std::mem::size_of::<[u32; 2]>();
 pub(super) const STATUS_BYTES: usize = std::mem::size_of::<GpuStatus>();
+/// A scene's phase clock sums (`phase_clocks::PHASE_CLOCK_WORDS` words).
+pub(super) const PHASE_CLOCK_BYTES: usize =
+    super::phase_clocks::PHASE_CLOCK_WORDS * std::mem::size_of::<u32>();
 /// What the persistent kernel's unused record bindings hold at least (the
 /// plan of either precision, an entry, a word of rows); the sums need
 /// `GpuEngine::SUMS_BYTES`.
@@ -85,6 +88,9 @@ pub(super) struct Buffers {
     /// The friction law's state (`Shape::law_words` per scene).
     pub(super) law_state: Region,
     pub(super) status: Region,
+    /// Each scene's phase clock sums (`phase_clocks::PhaseCycles`): zeros
+    /// unless `GpuOptions::phase_clocks` asks.
+    pub(super) phase_cycles: Region,
     pub(super) lane_partial: Region,
     /// What the step kernels bind for the record buffers `[plan, sums,
     /// rows, entries, step samples]` until they record output samples
@@ -197,6 +203,7 @@ impl Buffers {
         let slide = arenas.zeros(rw, s * shape.nx * WORD_PAIR_BYTES);
         let law_state = arenas.bytes(rw, bytemuck::cast_slice(&law_state));
         let status = arenas.zeros(rw, s * STATUS_BYTES);
+        let phase_cycles = arenas.zeros(rw, s * PHASE_CLOCK_BYTES);
         // One WGSL `LaneSum` per lane (of each tile's held blocks for the
         // tiled kernel).
         let lane_partial = arenas.zeros(
@@ -250,6 +257,7 @@ impl Buffers {
             slide: built.region(slide),
             law_state: built.region(law_state),
             status: built.region(status),
+            phase_cycles: built.region(phase_cycles),
             lane_partial: built.region(lane_partial),
             record_placeholders: record_placeholders.map(|p| built.region(p)),
             tile_scratch: tile_scratch.map(|t| built.region(t)),
@@ -319,6 +327,7 @@ pub(super) fn state_group(
         ("slide", &b.slide),
         ("law_state", &b.law_state),
         ("status", &b.status),
+        ("phase_cycles", &b.phase_cycles),
         ("lane_partial", &b.lane_partial),
         ("pub_disp", &b.tile_scratch[0]),
         ("pub_vel", &b.tile_scratch[1]),

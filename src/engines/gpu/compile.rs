@@ -27,6 +27,11 @@ pub struct KernelBuild {
     /// (`spirv::scope_workgroup_barriers`) and gives it to the driver as
     /// it is, where wgpu would write them with device scope.
     pub workgroup_barriers: bool,
+    /// The kernel's phase marks read the multiprocessor's clock
+    /// (`GpuOptions::phase_clocks`): the engine writes the module's SPIR-V
+    /// itself, with `phase_clock`'s body an OpReadClockKHR
+    /// (`spirv::read_shader_clock`).
+    pub phase_clocks: bool,
 }
 
 impl KernelBuild {
@@ -238,6 +243,7 @@ mod tests {
             chained_tiles,
             step_immediate,
             workgroup_barriers: false,
+            phase_clocks: false,
         }
     }
 

@@ -37,6 +37,10 @@ pub struct GpuContext {
     /// Why the device refused a module of the engine's own SPIR-V, if it
     /// did: from then on wgpu writes every module (`refuse_own_spirv`).
     own_spirv_refused: Arc<Mutex<Option<String>>>,
+    /// The device was opened with VK_KHR_shader_clock's subgroup clock:
+    /// the engine's own SPIR-V may read the multiprocessor's cycle
+    /// counter (`KernelBuild::phase_clocks`).
+    shader_clock: bool,
 }
 
 /// What the engine's own SPIR-V for a device must be: the version wgpu
@@ -97,7 +101,7 @@ pub fn shared() -> Result<GpuContext, EngineError> {
 /// published copies and the record buffers). Held to the modules by
 /// `shaders::tests::every_kernel_binds_at_most_the_storage_arrays_the_adapter_is_asked_for`:
 /// it had stood at 21 while the kernels grew to 26.
-pub(super) const STORAGE_BINDINGS: u32 = 27;
+pub(super) const STORAGE_BINDINGS: u32 = 28;
 
 /// Group 0's layout of one kernel family and the pipeline layout using it.
 struct KernelLayout {
@@ -123,6 +127,54 @@ fn layout_index(kernel: Kernel) -> usize {
         Kernel::OneStep | Kernel::OneStepLanes => 0,
         Kernel::Persistent | Kernel::Resident => 1,
         Kernel::Tiled => 2,
+    }
+}
+
+/// `adapter` opened as `desc` asks, with VK_KHR_shader_clock's subgroup
+/// clock enabled besides, where its Vulkan device has it; None where it
+/// has not, or where opening so fails (wgpu then opens it as usual).
+fn open_with_shader_clock(
+    adapter: &wgpu::Adapter,
+    desc: &wgpu::DeviceDescriptor,
+) -> Option<(wgpu::Device, wgpu::Queue)> {
+    use ash::vk;
+    // SAFETY: the hal adapter is used while `adapter` lives; the device it
+    // opens is handed to wgpu at once, with the features and limits wgpu
+    // checks for `desc` (the ones request_device would open).
+    unsafe {
+        let hal = adapter.as_hal::<wgpu::hal::api::Vulkan>()?;
+        if !hal
+            .physical_device_capabilities()
+            .supports_extension(vk::KHR_SHADER_CLOCK_NAME)
+        {
+            return None;
+        }
+        let instance = hal.shared_instance().raw_instance();
+        let mut has = vk::PhysicalDeviceShaderClockFeaturesKHR::default();
+        let mut query = vk::PhysicalDeviceFeatures2::default().push_next(&mut has);
+        instance.get_physical_device_features2(hal.raw_physical_device(), &mut query);
+        if has.shader_subgroup_clock == vk::FALSE {
+            return None;
+        }
+        let mut enable =
+            vk::PhysicalDeviceShaderClockFeaturesKHR::default().shader_subgroup_clock(true);
+        let enable = &mut enable;
+        let callback: Box<wgpu::hal::vulkan::CreateDeviceCallback> =
+            Box::new(move |args: wgpu::hal::vulkan::CreateDeviceCallbackArgs| {
+                args.extensions.push(vk::KHR_SHADER_CLOCK_NAME);
+                let info = std::mem::take(args.create_info);
+                *args.create_info = info.push_next(enable);
+            });
+        let open = hal
+            .open_with_callback(
+                desc.required_features,
+                &desc.required_limits,
+                &desc.memory_hints,
+                Some(callback),
+            )
+            .ok()?;
+        drop(hal);
+        adapter.create_device_from_hal(open, desc).ok()
     }
 }
 
@@ -190,14 +242,26 @@ impl GpuContext {
         if limits.max_immediate_size < STEP_IMMEDIATE_BYTES {
             features.remove(wgpu::Features::IMMEDIATES);
         }
-        let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+        let desc = wgpu::DeviceDescriptor {
             label: Some("slipfront"),
             required_features: features,
             required_limits: limits.clone(),
             ..Default::default()
-        }))
-        .map_err(|e| EngineError::Gpu(format!("cannot open {}: {e}", info.name)))?;
+        };
         let spirv = SpirvTarget::of(&adapter, features);
+        // The multiprocessor's clock, where the engine writes the SPIR-V
+        // and the device has it: opened through wgpu's Vulkan backend with
+        // the extension added; elsewhere (or if that fails) as wgpu opens it.
+        let clocked = match spirv {
+            Some(_) => open_with_shader_clock(&adapter, &desc),
+            None => None,
+        };
+        let shader_clock = clocked.is_some();
+        let (device, queue) = match clocked {
+            Some(opened) => opened,
+            None => pollster::block_on(adapter.request_device(&desc))
+                .map_err(|e| EngineError::Gpu(format!("cannot open {}: {e}", info.name)))?,
+        };
         let error = Arc::new(Mutex::new(None));
         let sink = error.clone();
         device.on_uncaptured_error(Arc::new(move |e: wgpu::Error| {
@@ -275,6 +339,7 @@ impl GpuContext {
             pipelines: Arc::new(Mutex::new(HashMap::new())),
             spirv,
             own_spirv_refused: Arc::new(Mutex::new(None)),
+            shader_clock,
         })
     }
 
@@ -317,6 +382,13 @@ impl GpuContext {
     /// kernel's build asks (`KernelBuild::workgroup_barriers`).
     pub fn has_own_spirv(&self) -> bool {
         self.spirv.is_some() && self.own_spirv_refused().is_none()
+    }
+
+    /// Whether the engine's kernels may read the multiprocessor's clock
+    /// (`GpuOptions::phase_clocks`): the device opened with
+    /// VK_KHR_shader_clock, and taking the engine's own SPIR-V.
+    pub fn has_shader_clock(&self) -> bool {
+        self.shader_clock && self.has_own_spirv()
     }
 
     /// Why the device refused the engine's own SPIR-V, where it did.
@@ -362,10 +434,11 @@ impl GpuContext {
             chained_tiles,
             step_immediate,
             workgroup_barriers,
+            phase_clocks,
         } = build;
         let key = format!(
             "{}{kernel:?}{lanes:?}{checks:?}{chained_tiles}{step_immediate}{workgroup_barriers}\
-             {entry}{constants:?}",
+             {phase_clocks}{entry}{constants:?}",
             T::NAME
         );
         let mut cache = self.pipelines.lock().expect("pipeline cache");
@@ -374,7 +447,7 @@ impl GpuContext {
             .or_insert_with(|| {
                 let own = match self
                     .spirv
-                    .filter(|_| workgroup_barriers && self.has_own_spirv())
+                    .filter(|_| (workgroup_barriers || phase_clocks) && self.has_own_spirv())
                 {
                     Some(target) => {
                         let own = KernelSource::of::<T>(kernel, build, entry, constants);

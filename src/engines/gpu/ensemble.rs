@@ -155,6 +155,15 @@ impl<T: GpuReal> GpuEnsemble<T> {
         self.engine.snapshot_of(scene)
     }
 
+    /// Scene `scene`'s phase clock sums (`GpuOptions::phase_clocks`): a
+    /// workgroup stepping several scenes adds its sums to its first.
+    pub fn phase_cycles(
+        &mut self,
+        scene: usize,
+    ) -> Result<super::phase_clocks::PhaseCycles, EngineError> {
+        self.engine.phase_cycles(scene)
+    }
+
     pub fn save_state(&mut self, scene: usize) -> Result<EngineState, EngineError> {
         self.engine.save_state_of(scene)
     }

@@ -504,6 +504,7 @@ pub fn wgsl_prelude<T: GpuReal>() -> String {
         s += &format!("const {name}: u32 = {value}u;\n");
     }
     s += &status_word_constants();
+    s += &super::phase_clocks::phase_constants();
     // The friction laws' kernel codes (`FRICTION_LAW`), from the laws'
     // declarations (crate::model::friction::LAWS).
     for (code, name) in crate::model::friction::kernel_codes() {

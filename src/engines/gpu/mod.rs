@@ -48,6 +48,7 @@ pub mod layout;
 pub mod lockstep;
 mod loop_budget;
 pub mod options;
+pub mod phase_clocks;
 pub mod precision;
 pub mod readback;
 mod recorder;
@@ -408,6 +409,15 @@ impl<T: GpuReal> GpuEngine<T> {
             workgroup_barriers: build.workgroup_barriers && ctx.has_own_spirv(),
             ..build
         };
+        // Without the engine's own SPIR-V the clock reads nothing.
+        if build.phase_clocks && !ctx.has_own_spirv() {
+            return Err(EngineError::Gpu(format!(
+                "GPU option phase_clocks: {} refused the engine's own SPIR-V ({}), so its \
+                 kernels cannot read the clock",
+                ctx.info.name,
+                ctx.own_spirv_refused().unwrap_or_default()
+            )));
+        }
         let groups = step_kernel.groups(model);
         let step_workgroups = step_kernel.workgroups(model);
         let steps_per_dispatch = match geometry {
@@ -679,6 +689,9 @@ impl<T: GpuReal> GpuEngine<T> {
         }
         if self.build.workgroup_barriers {
             text.push_str(", phase barriers at workgroup scope");
+        }
+        if self.build.phase_clocks {
+            text.push_str(", phase clocks");
         }
         let lanes_a_round = self
             .constants

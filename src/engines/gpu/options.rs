@@ -236,6 +236,15 @@ pub struct GpuOptions {
     /// same values in the same order, so the same bits. false: naga's
     /// device scope (the comparison in benchmarks).
     pub workgroup_barriers: bool,
+    /// The persistent, resident and tiled kernels read their
+    /// multiprocessor's cycle counter at the barriers between phases, and
+    /// sum each phase's cycles per scene (`GpuEngine::phase_cycles`,
+    /// `shaders/phase_clocks.wgsl`): where a step's time goes on the
+    /// device. Needs the engine's own SPIR-V and VK_KHR_shader_clock
+    /// (`GpuContext::has_shader_clock`); an engine asked for it elsewhere,
+    /// or on a one-step kernel (no phases), is refused. Off by default:
+    /// the marks cost thread 0 a few shared-memory words a phase.
+    pub phase_clocks: bool,
 }
 
 /// Scenes a persistent workgroup may step (`GpuOptions::group_scenes`).
@@ -265,6 +274,7 @@ impl Default for GpuOptions {
             count_summed_junction_blocks: false,
             group_scenes: 1,
             workgroup_barriers: true,
+            phase_clocks: false,
         }
     }
 }

@@ -4,8 +4,11 @@
 //! per-scene count of each buffer.
 
 use super::arena::Region;
-use super::buffers::{gpu_junction_springs, Shape, STATUS_BYTES, WORD_PAIR_BYTES};
+use super::buffers::{
+    gpu_junction_springs, Shape, PHASE_CLOCK_BYTES, STATUS_BYTES, WORD_PAIR_BYTES,
+};
 use super::layout::{GpuJunctionCache, GpuJunctionSpring, GpuStatus};
+use super::phase_clocks::PhaseCycles;
 use super::precision::{Coord, GpuReal, Packed};
 use super::readback::{cast_prefix, read_ranges, Range};
 use super::GpuEngine;
@@ -136,6 +139,17 @@ impl<T: GpuReal> GpuEngine<T> {
         let raw = read_ranges(&self.ctx, &[range])?;
         let status: GpuStatus = bytemuck::pod_read_unaligned(&raw[0]);
         Ok(status.summed_junction_blocks)
+    }
+
+    /// Scene `k`'s phase clock sums since the engine was built: where its
+    /// kernels' steps spent their cycles (`GpuOptions::phase_clocks`; all
+    /// zero where it is off).
+    pub fn phase_cycles(&mut self, k: usize) -> Result<PhaseCycles, EngineError> {
+        self.drain()?;
+        let range = self.slice(&self.buffers.phase_cycles, k, 1, PHASE_CLOCK_BYTES);
+        let raw = read_ranges(&self.ctx, &[range])?;
+        let words: Vec<u32> = bytemuck::pod_collect_to_vec(&raw[0]);
+        Ok(PhaseCycles::from_words(&words))
     }
 
     /// Kept records of the tiled kernel's halo copies (`junction_sums_slot`

@@ -49,6 +49,7 @@ wgsl_files!(
     "one_step",
     "one_step_lanes",
     "patch_items",
+    "phase_clocks",
     "persistent",
     "record_batch",
     "record_buffers",

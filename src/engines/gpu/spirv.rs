@@ -52,11 +52,15 @@ pub fn kernel_spirv(
     let (module, info) = kernel.with_constants(&module, &info)?;
     // An entry point that reaches no phase barrier (the tiled kernel's
     // gather) is written as wgpu writes it.
-    let scoped = kernel.build.workgroup_barriers
-        && module
+    let has_function = |name: &str| {
+        module
             .functions
             .iter()
-            .any(|(_, f)| f.name.as_deref() == Some(WORKGROUP_BARRIER_FUNCTION));
+            .any(|(_, f)| f.name.as_deref() == Some(name))
+    };
+    let scoped = kernel.build.workgroup_barriers && has_function(WORKGROUP_BARRIER_FUNCTION);
+    // An entry point that marks no phase (the gather) reads no clock.
+    let clocked = kernel.build.phase_clocks && has_function(CLOCK_FUNCTION);
     let checked = kernel.build.checks == ShaderChecks::Checked;
     let policy = if checked {
         naga::proc::BoundsCheckPolicy::Restrict
@@ -82,7 +86,7 @@ pub fn kernel_spirv(
         // No debug names: what the driver compiles for wgpu in a release
         // build. The barriers' function is found by its name, which is
         // then taken out with every other (`scope_workgroup_barriers`).
-        flags: match scoped {
+        flags: match scoped || clocked {
             true => spv::WriterFlags::DEBUG,
             false => spv::WriterFlags::empty(),
         },
@@ -98,10 +102,15 @@ pub fn kernel_spirv(
     };
     let words = spv::write_vec(&module, &info, &options, Some(&pipeline))
         .map_err(|e| format!("{}: SPIR-V: {e}", kernel.entry))?;
-    let words = match scoped {
-        true => scope_workgroup_barriers(&words, WORKGROUP_BARRIER_FUNCTION)
-            .map_err(|e| format!("{}: {e}", kernel.entry))?,
+    let named = |e: String| format!("{}: {e}", kernel.entry);
+    let words = match clocked {
+        true => read_shader_clock(&words, CLOCK_FUNCTION).map_err(named)?,
         false => words,
+    };
+    let words = match (scoped, clocked) {
+        (true, _) => scope_workgroup_barriers(&words, WORKGROUP_BARRIER_FUNCTION).map_err(named)?,
+        (false, true) => without_names(&words)?,
+        (false, false) => words,
     };
     Ok((words, bindings))
 }
@@ -138,6 +147,18 @@ pub fn vulkan_binding_map(groups: &[&[wgpu::BindGroupLayoutEntry]]) -> spv::Bind
 /// workgroup alone (`shaders/barriers.wgsl`).
 pub const WORKGROUP_BARRIER_FUNCTION: &str = "workgroup_storage_barrier";
 
+/// The WGSL function whose value is the multiprocessor's clock where the
+/// engine writes the SPIR-V (`shaders/phase_clocks.wgsl`).
+pub const CLOCK_FUNCTION: &str = "phase_clock";
+
+const OP_EXTENSION: u32 = 10;
+const OP_CAPABILITY: u32 = 17;
+const OP_CONSTANT_COMPOSITE: u32 = 44;
+const OP_COMPOSITE_CONSTRUCT: u32 = 80;
+const OP_RETURN_VALUE: u32 = 254;
+const OP_READ_CLOCK_KHR: u32 = 5056;
+const CAPABILITY_SHADER_CLOCK_KHR: u32 = 5055;
+const SHADER_CLOCK_EXTENSION: &str = "SPV_KHR_shader_clock";
 const OP_NAME: u32 = 5;
 const OP_MEMBER_NAME: u32 = 6;
 const OP_FUNCTION: u32 = 54;
@@ -164,17 +185,7 @@ pub fn scope_workgroup_barriers(words: &[u32], function: &str) -> Result<Vec<u32
         return Err("SPIR-V: shorter than its header".into());
     }
     let instructions = instructions(words)?;
-    let target = instructions
-        .iter()
-        .find(|i| {
-            i.opcode == OP_NAME
-                && i.operands.len() >= 2
-                && literal_string(&i.operands[1..]) == function
-        })
-        .map(|i| i.operands[0])
-        .ok_or_else(|| {
-            format!("SPIR-V: no function named {function} (written with debug names?)")
-        })?;
+    let target = named_id(&instructions, function)?;
     let mut out = words[..HEADER_WORDS].to_vec();
     let mut inside = false;
     let mut scoped = 0usize;
@@ -199,6 +210,114 @@ pub fn scope_workgroup_barriers(words: &[u32], function: &str) -> Result<Vec<u32
         ));
     }
     Ok(out)
+}
+
+/// `words` (a module naga wrote with debug names) with the body of
+/// function `function`, which returns the constant vector (s, s), made to
+/// return OpReadClockKHR at scope s instead: the clock as a (low, high)
+/// pair of words. The capability and extension it needs are declared; the
+/// names are kept. Fails where the function is not in the module, returns
+/// anything but such a vector, or returns more than once.
+pub fn read_shader_clock(words: &[u32], function: &str) -> Result<Vec<u32>, String> {
+    if words.len() < HEADER_WORDS {
+        return Err("SPIR-V: shorter than its header".into());
+    }
+    let instructions = instructions(words)?;
+    let target = named_id(&instructions, function)?;
+    // The function's result type, and the id of the value it returns.
+    let mut inside = false;
+    let mut result_type = None;
+    let mut returned = Vec::new();
+    for i in &instructions {
+        match i.opcode {
+            OP_FUNCTION if i.operands.get(1) == Some(&target) => {
+                inside = true;
+                result_type = i.operands.first().copied();
+            }
+            OP_FUNCTION_END => inside = false,
+            OP_RETURN_VALUE if inside => returned.push(i.operands[0]),
+            _ => {}
+        }
+    }
+    let (Some(result_type), [value]) = (result_type, returned.as_slice()) else {
+        return Err(format!(
+            "SPIR-V: function {function} does not return one value ({} returns)",
+            returned.len()
+        ));
+    };
+    // (s, s): its first constituent is the scope's constant.
+    let scope = instructions
+        .iter()
+        .find(|i| {
+            matches!(i.opcode, OP_CONSTANT_COMPOSITE | OP_COMPOSITE_CONSTRUCT)
+                && i.operands.get(1) == Some(value)
+        })
+        .and_then(|i| i.operands.get(2).copied())
+        .ok_or_else(|| format!("SPIR-V: {function} returns no constant vector"))?;
+    let clock = words[3];
+    let mut out = words[..HEADER_WORDS].to_vec();
+    out[3] = clock + 1;
+    let mut inside = false;
+    let last_capability = instructions
+        .iter()
+        .rposition(|i| i.opcode == OP_CAPABILITY)
+        .ok_or("SPIR-V: no capability declared")?;
+    for (at, i) in instructions.iter().enumerate() {
+        match i.opcode {
+            OP_FUNCTION => inside = i.operands.get(1) == Some(&target),
+            OP_FUNCTION_END => inside = false,
+            _ => {}
+        }
+        if inside && i.opcode == OP_RETURN_VALUE {
+            out.extend_from_slice(&[(4 << 16) | OP_READ_CLOCK_KHR, result_type, clock, scope]);
+            out.extend_from_slice(&[(2 << 16) | OP_RETURN_VALUE, clock]);
+            continue;
+        }
+        out.extend_from_slice(i.words);
+        if at == last_capability {
+            out.extend_from_slice(&[(2 << 16) | OP_CAPABILITY, CAPABILITY_SHADER_CLOCK_KHR]);
+            let name = literal_words(SHADER_CLOCK_EXTENSION);
+            out.push(((1 + name.len() as u32) << 16) | OP_EXTENSION);
+            out.extend_from_slice(&name);
+        }
+    }
+    Ok(out)
+}
+
+/// `words` without their debug names (OpName, OpMemberName).
+pub fn without_names(words: &[u32]) -> Result<Vec<u32>, String> {
+    if words.len() < HEADER_WORDS {
+        return Err("SPIR-V: shorter than its header".into());
+    }
+    let mut out = words[..HEADER_WORDS].to_vec();
+    for i in instructions(words)? {
+        if !matches!(i.opcode, OP_NAME | OP_MEMBER_NAME) {
+            out.extend_from_slice(i.words);
+        }
+    }
+    Ok(out)
+}
+
+/// The id named `name` (OpName), as naga writes a function's.
+fn named_id(instructions: &[Instruction], name: &str) -> Result<u32, String> {
+    instructions
+        .iter()
+        .find(|i| {
+            i.opcode == OP_NAME && i.operands.len() >= 2 && literal_string(&i.operands[1..]) == name
+        })
+        .map(|i| i.operands[0])
+        .ok_or_else(|| format!("SPIR-V: no function named {name} (written with debug names?)"))
+}
+
+/// `text` as a SPIR-V literal string: its bytes and a zero, in words.
+fn literal_words(text: &str) -> Vec<u32> {
+    let mut bytes = text.as_bytes().to_vec();
+    bytes.push(0);
+    bytes.resize(bytes.len().next_multiple_of(4), 0);
+    bytes
+        .chunks_exact(4)
+        .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+        .collect()
 }
 
 /// One instruction of a module: its opcode, its words (the first holds
@@ -301,6 +420,21 @@ mod tests {
         )
         .unwrap()
         .0
+    }
+
+    /// `k`'s module as naga writes it with debug names, before any pass.
+    fn named_words(k: &KernelSource) -> Vec<u32> {
+        let (module, info) = k.module().unwrap();
+        let (module, info) = k.with_constants(&module, &info).unwrap();
+        let options = spv::Options {
+            flags: spv::WriterFlags::DEBUG,
+            ..spv::Options::default()
+        };
+        let pipeline = spv::PipelineOptions {
+            shader_stage: naga::ShaderStage::Compute,
+            entry_point: k.entry.clone(),
+        };
+        spv::write_vec(&module, &info, &options, Some(&pipeline)).unwrap()
     }
 
     /// The constant ids of each value of a module's OpConstant u32s.
@@ -438,17 +572,7 @@ mod tests {
         let err = scope_workgroup_barriers(&plain, WORKGROUP_BARRIER_FUNCTION).unwrap_err();
         assert!(err.contains("no function named"), "{err}");
         let k = step_source::<f32>("persistent/256", true);
-        let (module, info) = k.module().unwrap();
-        let (module, info) = k.with_constants(&module, &info).unwrap();
-        let options = spv::Options {
-            flags: spv::WriterFlags::DEBUG,
-            ..spv::Options::default()
-        };
-        let pipeline = spv::PipelineOptions {
-            shader_stage: naga::ShaderStage::Compute,
-            entry_point: k.entry.clone(),
-        };
-        let named = spv::write_vec(&module, &info, &options, Some(&pipeline)).unwrap();
+        let named = named_words(&k);
         // The entry point's own function holds barriers; one without any.
         let err = scope_workgroup_barriers(&named, "state_enter").unwrap_err();
         assert!(err.contains("holds no control barrier"), "{err}");
@@ -458,5 +582,74 @@ mod tests {
             .unwrap()
             .iter()
             .any(|i| i.opcode == OP_NAME));
+    }
+
+    /// The clocked source of `launch` on Table S1 (phase barriers scoped).
+    fn clocked_source(launch: &str, clocks: bool) -> KernelSource {
+        let opts = GpuOptions {
+            phase_clocks: clocks,
+            ..Launch::named(launch)
+                .unwrap()
+                .options(GpuOptions::default())
+        };
+        GpuEngine::<f32>::kernel_sources_on(&table_s1(), opts, &AdapterTraits::test_hardware())
+            .unwrap()
+            .remove(0)
+    }
+
+    fn count(words: &[u32], opcode: u32) -> usize {
+        instructions(words)
+            .unwrap()
+            .iter()
+            .filter(|i| i.opcode == opcode)
+            .count()
+    }
+
+    /// Clocked, each kernel with phases reads the clock in one place
+    /// (`phase_clock`'s body, at Subgroup scope: naga's constant 3), and
+    /// declares the capability and extension it needs; its barriers are
+    /// still scoped and its names gone. Unclocked, none of it. Word for
+    /// word, the clocked module is the unclocked one with those words
+    /// added where the constant PHASE_CLOCKS differs, so only the counts
+    /// are compared.
+    #[test]
+    fn clocked_kernels_read_the_subgroup_clock_once() {
+        for launch in ["persistent/256", "resident/1024", "tiled/512/8x4/chained"] {
+            let plain = words(&clocked_source(launch, false));
+            assert_eq!(count(&plain, OP_READ_CLOCK_KHR), 0, "{launch}");
+            let clocked = words(&clocked_source(launch, true));
+            assert_eq!(count(&clocked, OP_READ_CLOCK_KHR), 1, "{launch}");
+            assert_eq!(count(&clocked, OP_NAME), 0, "{launch}");
+            let all = instructions(&clocked).unwrap();
+            let read = all.iter().find(|i| i.opcode == OP_READ_CLOCK_KHR).unwrap();
+            let scope = constant_values(&clocked)[&read.operands[2]];
+            assert_eq!(scope, 3, "{launch}: Subgroup scope");
+            assert!(all
+                .iter()
+                .any(|i| i.opcode == OP_CAPABILITY && i.operands == [CAPABILITY_SHADER_CLOCK_KHR]));
+            assert!(all.iter().any(|i| i.opcode == OP_EXTENSION
+                && literal_string(i.operands) == SHADER_CLOCK_EXTENSION));
+            // The id bound covers the new id.
+            assert!(read.operands[1] < clocked[3], "{launch}");
+            assert!(barrier_memory_scopes(&clocked).contains(&WORKGROUP));
+        }
+    }
+
+    /// The clock pass refuses a module without names, or a function that
+    /// does not return one constant vector, rather than read nothing.
+    #[test]
+    fn the_clock_pass_refuses_what_it_cannot_rewrite() {
+        let plain = words(&clocked_source("persistent/256", false));
+        let err = read_shader_clock(&plain, CLOCK_FUNCTION).unwrap_err();
+        assert!(err.contains("no function named"), "{err}");
+        let k = clocked_source("persistent/256", true);
+        let named = named_words(&k);
+        // A function that returns nothing (a phase mark).
+        let err = read_shader_clock(&named, "phase_arrive").unwrap_err();
+        assert!(err.contains("does not return one value"), "{err}");
+        let read = read_shader_clock(&named, CLOCK_FUNCTION).unwrap();
+        assert_eq!(count(&read, OP_READ_CLOCK_KHR), 1);
+        assert!(count(&read, OP_NAME) > 0, "the names are kept");
+        assert_eq!(without_names(&read).map(|w| count(&w, OP_NAME)), Ok(0));
     }
 }

@@ -5,13 +5,15 @@
 //! statistics (`driver_stats`) compile the same kernels on another device.
 
 use super::batch_sizes::*;
+use super::buffers::{Shape, PHASE_CLOCK_BYTES};
 use super::compile::{KernelBuild, KernelSource, ShaderChecks};
 use super::context::GpuContext;
 use super::layout::{self, WORKGROUP};
 use super::options::*;
+use super::phase_clocks::PHASE_CLOCK_WORDS;
 use super::precision::GpuReal;
 use super::shaders::{Kernel, LaneMerge, Variant};
-use super::{buffers::Shape, tiles};
+use super::tiles;
 use crate::engines::EngineError;
 use crate::model::scenario::FrictionLaw;
 use crate::model::Model;
@@ -83,6 +85,14 @@ impl StepKernel {
         }
         if self.kernel.is_persistent() || self.geometry.is_some() {
             constants.push(("LANE_RUN", opts.lane_run as f64));
+        }
+        if self.kernel.has_phase_barriers() {
+            let words = match opts.phase_clocks {
+                true => PHASE_CLOCK_WORDS,
+                false => 1,
+            };
+            constants.push(("PHASE_CLOCKS", opts.phase_clocks as u8 as f64));
+            constants.push(("PHASE_SUM_WORDS", words as f64));
         }
         constants.push(("BOND_PATCHES", self.bond_patches as u8 as f64));
         if self.kernel == Kernel::Resident {
@@ -204,6 +214,9 @@ pub struct AdapterTraits {
     /// The engine writes the device's SPIR-V itself where a kernel's build
     /// asks (`KernelBuild::workgroup_barriers`).
     pub own_spirv: bool,
+    /// The kernels may read the multiprocessor's clock
+    /// (`GpuContext::has_shader_clock`, `KernelBuild::phase_clocks`).
+    pub shader_clock: bool,
 }
 
 impl AdapterTraits {
@@ -215,6 +228,7 @@ impl AdapterTraits {
             coherent_storage: ctx.has_coherent_storage(),
             immediates: ctx.has_immediates(),
             own_spirv: ctx.has_own_spirv(),
+            shader_clock: ctx.has_shader_clock(),
         }
     }
 
@@ -235,6 +249,7 @@ impl AdapterTraits {
             coherent_storage: true,
             immediates: true,
             own_spirv: true,
+            shader_clock: true,
         }
     }
 
@@ -351,6 +366,9 @@ pub fn plan<T: GpuReal>(
         )));
     }
     let kernel = choose_kernel(opts.path, adapter.software);
+    if opts.phase_clocks {
+        phase_clocks_allowed(kernel, adapter)?;
+    }
     let threads = persistent_threads(
         kernel,
         opts.persistent_threads,
@@ -361,7 +379,18 @@ pub fn plan<T: GpuReal>(
     let KernelFit {
         geometry,
         resident_velocities,
-    } = kernel_fit::<T>(model, adapter, opts, kernel, threads)?;
+    } = match opts.phase_clocks {
+        // The phases' sums take workgroup memory beside the state.
+        true => {
+            let mut fit = adapter.clone();
+            fit.limits.max_compute_workgroup_storage_size = fit
+                .limits
+                .max_compute_workgroup_storage_size
+                .saturating_sub(PHASE_CLOCK_BYTES as u32);
+            kernel_fit::<T>(model, &fit, opts, kernel, threads)?
+        }
+        false => kernel_fit::<T>(model, adapter, opts, kernel, threads)?,
+    };
     // Asked for with a kernel named that has no rounds to chain: refused
     // (auto and measure leave the other kernels unchained).
     if opts.chained_tiles
@@ -398,6 +427,7 @@ pub fn plan<T: GpuReal>(
         workgroup_barriers: adapter.own_spirv
             && opts.workgroup_barriers
             && kernel.has_phase_barriers(),
+        phase_clocks: opts.phase_clocks,
     };
     Ok(KernelPlan {
         step_kernel,
@@ -405,6 +435,28 @@ pub fn plan<T: GpuReal>(
         constants,
         build,
     })
+}
+
+/// Fails unless `kernel` on `adapter` can time its phases
+/// (`GpuOptions::phase_clocks`): a kernel with phases, on a device that
+/// takes the engine's own SPIR-V and lets it read the clock.
+fn phase_clocks_allowed(kernel: Kernel, adapter: &AdapterTraits) -> Result<(), EngineError> {
+    if !kernel.has_phase_barriers() {
+        return Err(EngineError::Gpu(format!(
+            "GPU option phase_clocks: --gpu-path {} steps once a dispatch and has no phases to \
+             time: use persistent, resident or tiled",
+            super::kernel_choice::path_name(kernel)
+        )));
+    }
+    if !adapter.shader_clock {
+        return Err(EngineError::Gpu(
+            "GPU option phase_clocks: the adapter does not let the engine read the \
+             multiprocessor's clock (it needs Vulkan 1.3 with VK_KHR_shader_clock's \
+             shaderSubgroupClock, and the engine's own SPIR-V accepted)"
+                .into(),
+        ));
+    }
+    Ok(())
 }
 
 /// Scenes a workgroup of `kernel` steps at `threads` threads: the option

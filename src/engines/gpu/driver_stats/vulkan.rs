@@ -245,6 +245,9 @@ impl StatsDevice {
             // And writes the SPIR-V itself on a Vulkan 1.3 device
             // (`context::SpirvTarget`).
             own_spirv: api >= (1, 3),
+            // Its device is opened without the clock: the registers are
+            // those of the kernels as they run unclocked.
+            shader_clock: false,
         };
         let driver = format!(
             "{} {}",

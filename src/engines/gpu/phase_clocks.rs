@@ -1,0 +1,208 @@
+//! Where a kernel's steps spend their time on the device, phase by phase
+//! (`GpuOptions::phase_clocks`, `shaders/phase_clocks.wgsl`): thread 0 of
+//! each workgroup reads its multiprocessor's cycle counter at the barriers
+//! between phases, and each scene's sums come back in one buffer. The
+//! phases, their words and the host's reading of them are defined here,
+//! once: the kernels take the constants from the prelude
+//! (`phase_constants`).
+
+/// The phases a persistent, resident or tiled kernel marks, in the order
+/// of their words.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Phase {
+    /// The dispatch's start: its plan and the state entered (workgroup
+    /// memory filled), up to the first step or round.
+    Enter,
+    /// A step's first phase: bulk forces and junction lanes.
+    Forces,
+    /// A step's second: junction blocks, lane merges, updates, samples.
+    Updates,
+    /// The persistent kernels' stop check (every 16 steps); a tiled
+    /// round's plan.
+    Checks,
+    /// A tiled round's start: its tile and halo loaded into workgroup
+    /// memory, its first step's junction blocks noted.
+    Load,
+    /// A tiled round's end: its edges published, and its counter.
+    Publish,
+    /// A chained tiled round's wait for its neighbours' publication.
+    Wait,
+    /// The dispatch's end: the state left (stored), steps counted.
+    Leave,
+}
+
+impl Phase {
+    pub const ALL: [Phase; 8] = [
+        Phase::Enter,
+        Phase::Forces,
+        Phase::Updates,
+        Phase::Checks,
+        Phase::Load,
+        Phase::Publish,
+        Phase::Wait,
+        Phase::Leave,
+    ];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Phase::Enter => "enter",
+            Phase::Forces => "forces",
+            Phase::Updates => "updates",
+            Phase::Checks => "checks",
+            Phase::Load => "load",
+            Phase::Publish => "publish",
+            Phase::Wait => "wait",
+            Phase::Leave => "leave",
+        }
+    }
+
+    fn index(self) -> usize {
+        Phase::ALL.iter().position(|&p| p == self).expect("listed")
+    }
+}
+
+/// Words a phase takes: its cycles (low, high), thread 0's own (low,
+/// high), its marks.
+pub const PHASE_WORDS: usize = 5;
+/// Words before the first phase's: the workgroup-dispatches flushed and a
+/// spare (in workgroup memory: the last mark's clock and the last
+/// arrival's).
+pub const PHASE_FIRST_WORD: usize = 2;
+/// Words a scene's sums take in the `phase_cycles` buffer (and a
+/// workgroup's in workgroup memory, where the clocks are on).
+pub const PHASE_CLOCK_WORDS: usize = PHASE_FIRST_WORD + Phase::ALL.len() * PHASE_WORDS;
+
+/// The WGSL constants of the phases' words and indices (the prelude,
+/// `layout::wgsl_prelude`).
+pub fn phase_constants() -> String {
+    let mut s = String::new();
+    for (name, value) in [
+        ("PHASE_COUNT", Phase::ALL.len()),
+        ("PHASE_WORDS", PHASE_WORDS),
+        ("PHASE_FIRST_WORD", PHASE_FIRST_WORD),
+        ("PHASE_CLOCK_WORDS", PHASE_CLOCK_WORDS),
+    ] {
+        s += &format!("const {name}: u32 = {value}u;\n");
+    }
+    for phase in Phase::ALL {
+        s += &format!(
+            "const PHASE_{}: u32 = {}u;\n",
+            phase.name().to_uppercase(),
+            phase.index()
+        );
+    }
+    s
+}
+
+/// One phase's sums over a scene's workgroups and dispatches.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct PhaseSum {
+    /// Cycles from the mark before to this phase's (past its barrier).
+    pub cycles: u64,
+    /// Thread 0's own cycles in it: to its arrival at the barrier.
+    pub own_cycles: u64,
+    /// Times the phase was marked.
+    pub marks: u32,
+}
+
+/// A scene's phase sums as its kernels left them in `phase_cycles`.
+#[derive(Debug, Clone, PartialEq, Eq, Default)]
+pub struct PhaseCycles {
+    /// Workgroup-dispatches that added their sums (a tiled scene's tiles
+    /// each count).
+    pub flushes: u32,
+    pub phases: Vec<(Phase, PhaseSum)>,
+}
+
+impl PhaseCycles {
+    /// Decodes one scene's `PHASE_CLOCK_WORDS` words.
+    pub fn from_words(words: &[u32]) -> PhaseCycles {
+        assert_eq!(words.len(), PHASE_CLOCK_WORDS, "a scene's phase words");
+        let pair = |w: usize| u64::from(words[w]) | (u64::from(words[w + 1]) << 32);
+        let phases = Phase::ALL
+            .iter()
+            .map(|&phase| {
+                let w = PHASE_FIRST_WORD + phase.index() * PHASE_WORDS;
+                let sum = PhaseSum {
+                    cycles: pair(w),
+                    own_cycles: pair(w + 2),
+                    marks: words[w + 4],
+                };
+                (phase, sum)
+            })
+            .collect();
+        PhaseCycles {
+            flushes: words[0],
+            phases,
+        }
+    }
+
+    pub fn get(&self, phase: Phase) -> PhaseSum {
+        self.phases
+            .iter()
+            .find(|(p, _)| *p == phase)
+            .map(|(_, s)| *s)
+            .unwrap_or_default()
+    }
+
+    /// The sums added since `before` (a reading of the same scene).
+    pub fn since(&self, before: &PhaseCycles) -> PhaseCycles {
+        let phases = self
+            .phases
+            .iter()
+            .map(|&(phase, now)| {
+                let then = before.get(phase);
+                let sum = PhaseSum {
+                    cycles: now.cycles.wrapping_sub(then.cycles),
+                    own_cycles: now.own_cycles.wrapping_sub(then.own_cycles),
+                    marks: now.marks.wrapping_sub(then.marks),
+                };
+                (phase, sum)
+            })
+            .collect();
+        PhaseCycles {
+            flushes: self.flushes.wrapping_sub(before.flushes),
+            phases,
+        }
+    }
+
+    /// Cycles of every phase together: the workgroups' dispatches from
+    /// their start to their last mark.
+    pub fn total_cycles(&self) -> u64 {
+        self.phases.iter().map(|(_, s)| s.cycles).sum()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_scenes_words_decode_to_its_phases_with_their_high_words() {
+        let mut words = vec![0u32; PHASE_CLOCK_WORDS];
+        words[0] = 3;
+        let updates = PHASE_FIRST_WORD + Phase::Updates.index() * PHASE_WORDS;
+        words[updates] = 7;
+        words[updates + 1] = 2;
+        words[updates + 2] = 5;
+        words[updates + 4] = 9;
+        let read = PhaseCycles::from_words(&words);
+        assert_eq!(read.flushes, 3);
+        let sum = read.get(Phase::Updates);
+        assert_eq!(sum.cycles, (2u64 << 32) + 7);
+        assert_eq!(sum.own_cycles, 5);
+        assert_eq!(sum.marks, 9);
+        assert_eq!(read.get(Phase::Forces), PhaseSum::default());
+        assert_eq!(read.total_cycles(), (2u64 << 32) + 7);
+    }
+
+    #[test]
+    fn the_constants_name_every_phase_at_its_index() {
+        let wgsl = phase_constants();
+        assert!(wgsl.contains("const PHASE_ENTER: u32 = 0u;"));
+        assert!(wgsl.contains("const PHASE_LEAVE: u32 = 7u;"));
+        assert!(wgsl.contains(&format!(
+            "const PHASE_CLOCK_WORDS: u32 = {PHASE_CLOCK_WORDS}u;"
+        )));
+    }
+}
