@@ -81,7 +81,7 @@ step barriers 120 env SLIPFRONT_GPU_TABLE_SECTIONS=10 gpu_table
 #      the SM's own clock (VK_KHR_shader_clock), for Table S1 alone and 132 scenes, with
 #      what the clock reads cost. Which phase holds the 6.84 us of chained tiles and the
 #      11 us of resident decides what to build next.
-step phases 90 env SLIPFRONT_GPU_TABLE_SECTIONS=11 gpu_table
+step phases 60 env SLIPFRONT_GPU_TABLE_SECTIONS=11 gpu_table
 # 1a. The host's CPU a step of each launch, three ways: the default (arrays in arenas, the
 #     step as an immediate, session 56), the step by a dynamic offset (session 55), and a
 #     buffer per array as well (before 55); and a bare dispatch against the buffers it binds
