@@ -67,7 +67,8 @@
 //!     workgroup-step (forces, updates, a tiled round's load, publication
 //!     and wait, the dispatch's enter and leave), thread 0's own share, and
 //!     what the marks cost the wall time, for the persistent, resident and
-//!     tiled kernels on Table S1 alone and on 132 scenes
+//!     tiled kernels on Table S1 alone (mixed f32, and f64 for persistent/1024
+//!     and the chained tiles) and on 132 scenes
 //!     (SLIPFRONT_GPU_TABLE_LAUNCHES: those launches instead).
 //!
 //! Sections 1–3 also print the host's CPU time per wall second of each

@@ -1,9 +1,9 @@
 //! Section 11: where a step's time goes on the device, phase by phase
 //! (`GpuOptions::phase_clocks`): thread 0 of each workgroup reads its
 //! multiprocessor's cycle counter at the barriers between phases. Each
-//! launch on Table S1 alone, and resident/1024 and the two-scene
-//! persistent workgroup on 132 scenes (one workgroup an SM of an H100 SXM
-//! or an H200), from the start of driving.
+//! launch on Table S1 alone (and in f64 those that lead it there), and
+//! resident/1024 and the two-scene persistent workgroup on 132 scenes (one
+//! workgroup an SM of an H100 SXM or an H200), from the start of driving.
 
 use crate::barriers;
 use crate::common::{s1_scene, section_launches};
@@ -12,7 +12,7 @@ use slipfront::engines::gpu::context::GpuContext;
 use slipfront::engines::gpu::ensemble::GpuEnsemble;
 use slipfront::engines::gpu::kernel_choice::Launch;
 use slipfront::engines::gpu::phase_clocks::{Phase, PhaseCycles};
-use slipfront::engines::gpu::{GpuEngine, GpuOptions};
+use slipfront::engines::gpu::{GpuEngine, GpuOptions, GpuReal};
 use slipfront::{advance_to, Engine, Model};
 use std::time::Instant;
 
@@ -54,10 +54,18 @@ pub fn profile(ctx: &GpuContext, quick: bool, min_seconds: f64) {
     header("launch");
     let s1 = scene(1);
     let alone: Vec<&str> = barriers::SOLO.iter().chain(SOLO_MORE).copied().collect();
-    for name in section_launches(&alone, QUICK_SOLO, quick) {
-        match solo(&s1, &name, min_seconds) {
-            Ok((clocks, wall, plain)) => row(&name, &clocks, wall, Some(plain)),
-            Err(e) => println!("| {name} | not run: {e} |"),
+    let names = section_launches(&alone, QUICK_SOLO, quick);
+    for name in &names {
+        solo_row::<f32>(&s1, name, min_seconds);
+    }
+    // f64, what a default run computes in on a GPU with f64 shaders: the
+    // launches that lead Table S1 in it.
+    if !quick && ctx.device.features().contains(f64::FEATURES) {
+        for name in names
+            .iter()
+            .filter(|n| n.starts_with("persistent/1024") || n.ends_with("chained"))
+        {
+            solo_row::<f64>(&s1, name, min_seconds);
         }
     }
     let count = if quick { 4 } else { 132 };
@@ -112,11 +120,27 @@ fn row(name: &str, clocks: &PhaseCycles, wall: f64, plain: Option<f64>) {
     );
 }
 
+/// One launch's row on Table S1 alone in precision `T`.
+fn solo_row<T: GpuReal>(model: &Model, name: &str, min_seconds: f64) {
+    let label = match T::NAME {
+        "f32" => name.to_string(),
+        other => format!("{name} ({other})"),
+    };
+    match solo::<T>(model, name, min_seconds) {
+        Ok((clocks, wall, plain)) => row(&label, &clocks, wall, Some(plain)),
+        Err(e) => println!("| {label} | not run: {e} |"),
+    }
+}
+
 /// `name` on `model` alone: its phase sums over a timed stretch of
 /// driving, its wall seconds a step clocked, and unclocked.
-fn solo(model: &Model, name: &str, min_seconds: f64) -> Result<(PhaseCycles, f64, f64), String> {
+fn solo<T: GpuReal>(
+    model: &Model,
+    name: &str,
+    min_seconds: f64,
+) -> Result<(PhaseCycles, f64, f64), String> {
     let mut e =
-        GpuEngine::<f32>::with_precision(model, options(name, true)).map_err(|e| e.to_string())?;
+        GpuEngine::<T>::with_precision(model, options(name, true)).map_err(|e| e.to_string())?;
     advance_to(&mut e, model.prep_steps + 16).map_err(|e| e.to_string())?;
     let mut sums = None;
     let (dt, steps) = timed_advance(
@@ -129,7 +153,7 @@ fn solo(model: &Model, name: &str, min_seconds: f64) -> Result<(PhaseCycles, f64
         min_seconds,
     )
     .map_err(|e| e.to_string())?;
-    let plain = solo_step_figures_in::<f32>(model, options(name, false), min_seconds)?;
+    let plain = solo_step_figures_in::<T>(model, options(name, false), min_seconds)?;
     Ok((sums.expect("timed"), dt / steps as f64, plain.seconds))
 }
 
