@@ -82,6 +82,11 @@ step barriers 120 env SLIPFRONT_GPU_TABLE_SECTIONS=10 gpu_table
 #      what the clock reads cost. Which phase holds the 6.84 us of chained tiles and the
 #      11 us of resident decides what to build next.
 step phases 60 env SLIPFRONT_GPU_TABLE_SECTIONS=11 gpu_table
+# 1'''. What the clocks cost the kernels in registers on NVIDIA's compiler (on RADV, navi21:
+#       the same VGPRs, no spills): a clocked kernel that spilled would time itself slower.
+step registers-clocked 30 env SLIPFRONT_GPU_REGISTERS_PHASE_CLOCKS=1 \
+  SLIPFRONT_GPU_REGISTERS_LAUNCHES=persistent/1024,persistent/1024/2-scenes,resident/1024,tiled/512/8x4/chained \
+  gpu_registers
 # 1a. The host's CPU a step of each launch, three ways: the default (arrays in arenas, the
 #     step as an immediate, session 56), the step by a dynamic offset (session 55), and a
 #     buffer per array as well (before 55); and a bare dispatch against the buffers it binds

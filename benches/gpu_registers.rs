@@ -35,6 +35,11 @@
 //! SLIPFRONT_GPU_REGISTERS_BARRIERS=device compiles the phase barriers as
 //! wgpu writes them, with device scope (`GpuOptions::workgroup_barriers`
 //! off), where the engine would give them workgroup scope.
+//! SLIPFRONT_GPU_REGISTERS_PHASE_CLOCKS=1 compiles the persistent, resident
+//! and tiled kernels with their phase clocks (`GpuOptions::phase_clocks`),
+//! where the device has VK_KHR_shader_clock: what timing them costs in
+//! registers (the one-step kernels, which have no phases, are listed as
+//! not built).
 //! SLIPFRONT_GPU_REGISTERS_SET=TWO_LANES_A_ROUND=0,KEEP_JUNCTION_SUMS=0
 //! compiles every kernel with those override constants changed, where it
 //! has them: what a kernel's options cost in registers (TILE_RECORDS=1:
@@ -165,6 +170,8 @@ struct Table<'a> {
     set: Vec<(String, f64)>,
     /// The phase barriers with naga's device scope (`SLIPFRONT_GPU_REGISTERS_BARRIERS`).
     device_barriers: bool,
+    /// The kernels with their phase clocks (`SLIPFRONT_GPU_REGISTERS_PHASE_CLOCKS`).
+    phase_clocks: bool,
     /// Why a row did not compile, each reason once.
     not_built: Vec<String>,
     /// Where the driver's internal representations go (SLIPFRONT_GPU_REGISTERS_DUMP).
@@ -177,6 +184,7 @@ impl Table<'_> {
     fn rows<T: GpuReal>(&mut self, scene_name: &str, model: &Model, launch: Launch) {
         let opts = GpuOptions {
             workgroup_barriers: !self.device_barriers,
+            phase_clocks: self.phase_clocks,
             ..launch.options(GpuOptions::default())
         };
         let sources = match GpuEngine::<T>::kernel_sources_on(model, opts, &self.traits) {
@@ -342,6 +350,11 @@ fn main() {
             Ok(other) => {
                 panic!("SLIPFRONT_GPU_REGISTERS_BARRIERS: `{other}` is not device or workgroup")
             }
+        },
+        phase_clocks: match std::env::var("SLIPFRONT_GPU_REGISTERS_PHASE_CLOCKS").as_deref() {
+            Ok("1") => true,
+            Ok("0") | Err(_) => false,
+            Ok(other) => panic!("SLIPFRONT_GPU_REGISTERS_PHASE_CLOCKS: `{other}` is neither 0 nor 1"),
         },
         not_built: Vec::new(),
         dump_dir,

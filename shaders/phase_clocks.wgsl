@@ -86,21 +86,42 @@ fn phase_mark(t: u32, phase: u32) {
     }
 }
 
-// Thread t adds this dispatch's sums to its scene's (64-bit sums carried
-// by hand: storage atomics are 32 bits).
-fn phase_flush(t: u32) {
-    if PHASE_CLOCKS && t == 0u {
-        let base = scene * PHASE_CLOCK_WORDS;
-        atomicAdd(&phase_cycles[base + PHASE_FLUSHES], 1u);
-        for (var p = 0u; p < PHASE_COUNT; p++) {
-            let word = PHASE_FIRST_WORD + p * PHASE_WORDS;
-            for (var w = word; w < word + 4u; w += 2u) {
+// Every thread t of the workgroup's `threads`, past thread 0's last mark:
+// this dispatch's sums added to the scene's of thread 0 (the workgroup's
+// first). A thread a sum, each a 64-bit sum carried by hand (storage
+// atomics are 32 bits), so the flush waits on one atomic, not on one per
+// sum in a row (a dispatch of the tiled kernel is as short as 2 steps).
+fn phase_flush(t: u32, threads: u32) {
+    if PHASE_CLOCKS {
+        if t == 0u {
+            // The last mark's clock is no longer needed: the scene's base.
+            phase_sums[PHASE_LAST] = scene * PHASE_CLOCK_WORDS;
+        }
+        workgroupBarrier();
+        let base = phase_sums[PHASE_LAST];
+        // Items: a pair a phase for its cycles and thread 0's own, then
+        // each phase's marks, then the flush itself.
+        let pairs = 2u * PHASE_COUNT;
+        for (var k = t; k < pairs + PHASE_COUNT + 1u; k += threads) {
+            if k < pairs {
+                let w = PHASE_FIRST_WORD + (k / 2u) * PHASE_WORDS + 2u * (k % 2u);
                 let add = phase_sums[w];
-                let before = atomicAdd(&phase_cycles[base + w], add);
-                let carry = select(0u, 1u, before + add < add);
-                atomicAdd(&phase_cycles[base + w + 1u], phase_sums[w + 1u] + carry);
+                let high = phase_sums[w + 1u];
+                if add != 0u || high != 0u {
+                    let before = atomicAdd(&phase_cycles[base + w], add);
+                    let carry = select(0u, 1u, before + add < add);
+                    if high + carry != 0u {
+                        atomicAdd(&phase_cycles[base + w + 1u], high + carry);
+                    }
+                }
+            } else if k < pairs + PHASE_COUNT {
+                let w = PHASE_FIRST_WORD + (k - pairs) * PHASE_WORDS + 4u;
+                if phase_sums[w] != 0u {
+                    atomicAdd(&phase_cycles[base + w], phase_sums[w]);
+                }
+            } else {
+                atomicAdd(&phase_cycles[base + PHASE_FLUSHES], 1u);
             }
-            atomicAdd(&phase_cycles[base + word + 4u], phase_sums[word + 4u]);
         }
     }
 }

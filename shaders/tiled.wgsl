@@ -360,7 +360,7 @@ fn tiled_steps(
         atomicStore(&tile_progress[tile_index()], chain.y + chain.x);
     }
     phase_mark(t, PHASE_LEAVE);
-    phase_flush(t);
+    phase_flush(t, TILE_THREADS);
 }
 
 // Thread t's first lane run item of a step whose force phase has `bulk`

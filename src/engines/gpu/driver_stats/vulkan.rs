@@ -153,8 +153,15 @@ impl StatsDevice {
         let mut f13 = vk::PhysicalDeviceVulkan13Features::default();
         let mut robust2 = vk::PhysicalDeviceRobustness2FeaturesEXT::default();
         let has_robust2 = has(ash::ext::robustness2::NAME);
+        // The subgroup clock, as GpuContext::open enables it: the phase
+        // clocks' kernels compile here too (their registers).
+        let mut clock = vk::PhysicalDeviceShaderClockFeaturesKHR::default();
+        let has_clock_ext = has(vk::KHR_SHADER_CLOCK_NAME);
         {
             let mut query = vk::PhysicalDeviceFeatures2::default().push_next(&mut exec_features);
+            if has_clock_ext {
+                query = query.push_next(&mut clock);
+            }
             if vulkan13 {
                 query = query.push_next(&mut f13);
             }
@@ -190,9 +197,15 @@ impl StatsDevice {
             .subgroup_size_control(varying_subgroups);
         let mut enable_robust2 = vk::PhysicalDeviceRobustness2FeaturesEXT::default()
             .robust_buffer_access2(robust2.robust_buffer_access2 == vk::TRUE);
+        let shader_clock = has_clock_ext && clock.shader_subgroup_clock == vk::TRUE;
+        let mut enable_clock =
+            vk::PhysicalDeviceShaderClockFeaturesKHR::default().shader_subgroup_clock(true);
         let mut names = vec![stats_ext.as_ptr()];
         if has_robust2 {
             names.push(ash::ext::robustness2::NAME.as_ptr());
+        }
+        if shader_clock {
+            names.push(vk::KHR_SHADER_CLOCK_NAME.as_ptr());
         }
         let mut info = vk::DeviceCreateInfo::default()
             .queue_create_infos(&queues)
@@ -204,6 +217,9 @@ impl StatsDevice {
         }
         if has_robust2 {
             info = info.push_next(&mut enable_robust2);
+        }
+        if shader_clock {
+            info = info.push_next(&mut enable_clock);
         }
         // SAFETY: every feature enabled was reported supported above.
         let device = unsafe { instance.create_device(pd, &info, None) }
@@ -245,9 +261,9 @@ impl StatsDevice {
             // And writes the SPIR-V itself on a Vulkan 1.3 device
             // (`context::SpirvTarget`).
             own_spirv: api >= (1, 3),
-            // Its device is opened without the clock: the registers are
-            // those of the kernels as they run unclocked.
-            shader_clock: false,
+            // And reads the clock where the engine writes the SPIR-V
+            // and the device has it (`GpuContext::has_shader_clock`).
+            shader_clock: api >= (1, 3) && shader_clock,
         };
         let driver = format!(
             "{} {}",
