@@ -354,7 +354,9 @@ fn main() {
         phase_clocks: match std::env::var("SLIPFRONT_GPU_REGISTERS_PHASE_CLOCKS").as_deref() {
             Ok("1") => true,
             Ok("0") | Err(_) => false,
-            Ok(other) => panic!("SLIPFRONT_GPU_REGISTERS_PHASE_CLOCKS: `{other}` is neither 0 nor 1"),
+            Ok(other) => {
+                panic!("SLIPFRONT_GPU_REGISTERS_PHASE_CLOCKS: `{other}` is neither 0 nor 1")
+            }
         },
         not_built: Vec::new(),
         dump_dir,
