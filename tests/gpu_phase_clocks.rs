@@ -95,21 +95,24 @@ fn clocked_kernels_keep_their_bits_and_time_every_phase() {
     }
 }
 
-/// Asked of a kernel with no phases (one dispatch a step), the clocks are
-/// refused with a reason naming the option.
+/// Asked of a kernel with no phases (one dispatch a step), or of `auto`
+/// (which times its candidates unclocked), the clocks are refused with a
+/// reason naming the option and the path.
 #[test]
-fn a_one_step_kernel_is_refused_phase_clocks() {
-    let opts = GpuOptions {
-        path: GpuPath::OneStep,
-        phase_clocks: true,
-        ..GpuOptions::default()
-    };
-    let err = GpuEngine::<f32>::with_precision(&driven(0.4), opts)
-        .err()
-        .expect("refused");
-    let text = err.to_string();
-    assert!(
-        text.contains("phase_clocks") && text.contains("one-step"),
-        "{text}"
-    );
+fn a_one_step_kernel_or_auto_is_refused_phase_clocks() {
+    for (path, named) in [(GpuPath::OneStep, "one-step"), (GpuPath::Auto, "auto")] {
+        let opts = GpuOptions {
+            path,
+            phase_clocks: true,
+            ..GpuOptions::default()
+        };
+        let err = GpuEngine::<f32>::with_precision(&driven(0.4), opts)
+            .err()
+            .expect("refused");
+        let text = err.to_string();
+        assert!(
+            text.contains("phase_clocks") && text.contains(named),
+            "{text}"
+        );
+    }
 }

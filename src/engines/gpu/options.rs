@@ -242,7 +242,8 @@ pub struct GpuOptions {
     /// `shaders/phase_clocks.wgsl`): where a step's time goes on the
     /// device. Needs the engine's own SPIR-V and VK_KHR_shader_clock
     /// (`GpuContext::has_shader_clock`); an engine asked for it elsewhere,
-    /// or on a one-step kernel (no phases), is refused. Off by default:
+    /// on a one-step kernel (no phases) or on `auto` (a profile names
+    /// its launch), is refused. Off by default:
     /// the marks cost thread 0 a few shared-memory words a phase.
     pub phase_clocks: bool,
 }

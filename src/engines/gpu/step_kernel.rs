@@ -367,7 +367,7 @@ pub fn plan<T: GpuReal>(
     }
     let kernel = choose_kernel(opts.path, adapter.software);
     if opts.phase_clocks {
-        phase_clocks_allowed(kernel, adapter)?;
+        phase_clocks_allowed(opts.path, kernel, adapter)?;
     }
     let threads = persistent_threads(
         kernel,
@@ -438,9 +438,21 @@ pub fn plan<T: GpuReal>(
 }
 
 /// Fails unless `kernel` on `adapter` can time its phases
-/// (`GpuOptions::phase_clocks`): a kernel with phases, on a device that
-/// takes the engine's own SPIR-V and lets it read the clock.
-fn phase_clocks_allowed(kernel: Kernel, adapter: &AdapterTraits) -> Result<(), EngineError> {
+/// (`GpuOptions::phase_clocks`): a kernel named, with phases, on a device
+/// that takes the engine's own SPIR-V and lets it read the clock.
+fn phase_clocks_allowed(
+    path: GpuPath,
+    kernel: Kernel,
+    adapter: &AdapterTraits,
+) -> Result<(), EngineError> {
+    // A profile names what it profiles: auto's pick is timed unclocked.
+    if matches!(path, GpuPath::Auto | GpuPath::Measure) {
+        return Err(EngineError::Gpu(format!(
+            "GPU option phase_clocks times a launch named: --gpu-path {} chooses one by \
+             timing; use persistent, resident or tiled",
+            path.name()
+        )));
+    }
     if !kernel.has_phase_barriers() {
         return Err(EngineError::Gpu(format!(
             "GPU option phase_clocks: --gpu-path {} steps once a dispatch and has no phases to \
