@@ -16,7 +16,7 @@
 // every mark compiles out.
 
 override PHASE_CLOCKS: bool = false;
-// Words of phase_sums: PHASE_CLOCK_WORDS (layout.rs) where the clocks are
+// Words of phase_sums: PHASE_CLOCK_WORDS (phase_clocks.rs) where the clocks are
 // on, 1 where they are off (no workgroup memory to speak of).
 override PHASE_SUM_WORDS: u32 = 1u;
 

@@ -14,7 +14,6 @@ use slipfront::engines::gpu::kernel_choice::Launch;
 use slipfront::engines::gpu::phase_clocks::{Phase, PhaseCycles};
 use slipfront::engines::gpu::{GpuEngine, GpuOptions, GpuReal};
 use slipfront::{advance_to, Engine, Model};
-use std::time::Instant;
 
 /// Beside the launches section 10 times alone: chained tiles of 4
 /// columns with halo 2, twice the rounds a step of 8x4 (what the rounds'
@@ -163,18 +162,17 @@ fn ensemble(models: &[Model], name: &str, min_seconds: f64) -> Result<(PhaseCycl
     let mut e = GpuEnsemble::new(models, options(name, true)).map_err(|e| e.to_string())?;
     e.advance(models[0].prep_steps + 16)
         .map_err(|e| e.to_string())?;
-    e.settle().map_err(|e| e.to_string())?;
-    let mut n = 16u64;
-    loop {
-        let before = e.phase_cycles(0).map_err(|e| e.to_string())?;
-        let start = Instant::now();
-        e.advance(n).map_err(|e| e.to_string())?;
-        e.settle().map_err(|e| e.to_string())?;
-        let dt = start.elapsed().as_secs_f64();
-        if dt >= min_seconds || n >= 1 << 20 {
-            let sums = e.phase_cycles(0).map_err(|e| e.to_string())?.since(&before);
-            return Ok((sums, dt / n as f64));
-        }
-        n *= 2;
-    }
+    let mut sums = None;
+    let (dt, steps) = timed_advance(
+        |n| {
+            let before = e.phase_cycles(0)?;
+            e.advance(n)?;
+            e.settle()?;
+            sums = Some(e.phase_cycles(0)?.since(&before));
+            Ok(())
+        },
+        min_seconds,
+    )
+    .map_err(|e| e.to_string())?;
+    Ok((sums.expect("timed"), dt / steps as f64))
 }

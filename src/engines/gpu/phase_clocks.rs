@@ -56,8 +56,9 @@ impl Phase {
         }
     }
 
+    /// Its place in `ALL` and in the words: the order of declaration.
     fn index(self) -> usize {
-        Phase::ALL.iter().position(|&p| p == self).expect("listed")
+        self as usize
     }
 }
 
@@ -111,7 +112,8 @@ pub struct PhaseCycles {
     /// Workgroup-dispatches that added their sums (a tiled scene's tiles
     /// each count).
     pub flushes: u32,
-    pub phases: Vec<(Phase, PhaseSum)>,
+    /// Each phase's sums, in `Phase::ALL`'s order (`get`).
+    pub phases: [PhaseSum; Phase::ALL.len()],
 }
 
 impl PhaseCycles {
@@ -119,18 +121,14 @@ impl PhaseCycles {
     pub fn from_words(words: &[u32]) -> PhaseCycles {
         assert_eq!(words.len(), PHASE_CLOCK_WORDS, "a scene's phase words");
         let pair = |w: usize| u64::from(words[w]) | (u64::from(words[w + 1]) << 32);
-        let phases = Phase::ALL
-            .iter()
-            .map(|&phase| {
-                let w = PHASE_FIRST_WORD + phase.index() * PHASE_WORDS;
-                let sum = PhaseSum {
-                    cycles: pair(w),
-                    own_cycles: pair(w + 2),
-                    marks: words[w + 4],
-                };
-                (phase, sum)
-            })
-            .collect();
+        let phases = Phase::ALL.map(|phase| {
+            let w = PHASE_FIRST_WORD + phase.index() * PHASE_WORDS;
+            PhaseSum {
+                cycles: pair(w),
+                own_cycles: pair(w + 2),
+                marks: words[w + 4],
+            }
+        });
         PhaseCycles {
             flushes: words[0],
             phases,
@@ -138,28 +136,19 @@ impl PhaseCycles {
     }
 
     pub fn get(&self, phase: Phase) -> PhaseSum {
-        self.phases
-            .iter()
-            .find(|(p, _)| *p == phase)
-            .map(|(_, s)| *s)
-            .unwrap_or_default()
+        self.phases[phase.index()]
     }
 
     /// The sums added since `before` (a reading of the same scene).
     pub fn since(&self, before: &PhaseCycles) -> PhaseCycles {
-        let phases = self
-            .phases
-            .iter()
-            .map(|&(phase, now)| {
-                let then = before.get(phase);
-                let sum = PhaseSum {
-                    cycles: now.cycles.wrapping_sub(then.cycles),
-                    own_cycles: now.own_cycles.wrapping_sub(then.own_cycles),
-                    marks: now.marks.wrapping_sub(then.marks),
-                };
-                (phase, sum)
-            })
-            .collect();
+        let phases = Phase::ALL.map(|phase| {
+            let (now, then) = (self.get(phase), before.get(phase));
+            PhaseSum {
+                cycles: now.cycles.wrapping_sub(then.cycles),
+                own_cycles: now.own_cycles.wrapping_sub(then.own_cycles),
+                marks: now.marks.wrapping_sub(then.marks),
+            }
+        });
         PhaseCycles {
             flushes: self.flushes.wrapping_sub(before.flushes),
             phases,
@@ -169,7 +158,7 @@ impl PhaseCycles {
     /// Cycles of every phase together: the workgroups' dispatches from
     /// their start to their last mark.
     pub fn total_cycles(&self) -> u64 {
-        self.phases.iter().map(|(_, s)| s.cycles).sum()
+        self.phases.iter().map(|s| s.cycles).sum()
     }
 }
 

@@ -102,16 +102,18 @@ pub fn kernel_spirv(
     };
     let words = spv::write_vec(&module, &info, &options, Some(&pipeline))
         .map_err(|e| format!("{}: SPIR-V: {e}", kernel.entry))?;
+    // Each pass finds its function by name; the names go after the last.
     let named = |e: String| format!("{}: {e}", kernel.entry);
-    let words = match clocked {
-        true => read_shader_clock(&words, CLOCK_FUNCTION).map_err(named)?,
-        false => words,
-    };
-    let words = match (scoped, clocked) {
-        (true, _) => scope_workgroup_barriers(&words, WORKGROUP_BARRIER_FUNCTION).map_err(named)?,
-        (false, true) => without_names(&words)?,
-        (false, false) => words,
-    };
+    let mut words = words;
+    if clocked {
+        words = read_shader_clock(&words, CLOCK_FUNCTION).map_err(named)?;
+    }
+    if scoped {
+        words = scope_named_barriers(&words, WORKGROUP_BARRIER_FUNCTION).map_err(named)?;
+    }
+    if scoped || clocked {
+        words = without_names(&words).map_err(named)?;
+    }
     Ok((words, bindings))
 }
 
@@ -181,9 +183,11 @@ const HEADER_WORDS: usize = 5;
 /// no constant is added. Fails where the function is not in the module or
 /// holds no barrier, so a renamed function cannot pass unscoped.
 pub fn scope_workgroup_barriers(words: &[u32], function: &str) -> Result<Vec<u32>, String> {
-    if words.len() < HEADER_WORDS {
-        return Err("SPIR-V: shorter than its header".into());
-    }
+    without_names(&scope_named_barriers(words, function)?)
+}
+
+/// `scope_workgroup_barriers` with the debug names kept, for a later pass.
+fn scope_named_barriers(words: &[u32], function: &str) -> Result<Vec<u32>, String> {
     let instructions = instructions(words)?;
     let target = named_id(&instructions, function)?;
     let mut out = words[..HEADER_WORDS].to_vec();
@@ -191,7 +195,6 @@ pub fn scope_workgroup_barriers(words: &[u32], function: &str) -> Result<Vec<u32
     let mut scoped = 0usize;
     for i in &instructions {
         match i.opcode {
-            OP_NAME | OP_MEMBER_NAME => continue,
             OP_FUNCTION => inside = i.operands.get(1) == Some(&target),
             OP_FUNCTION_END => inside = false,
             _ => {}
@@ -219,9 +222,6 @@ pub fn scope_workgroup_barriers(words: &[u32], function: &str) -> Result<Vec<u32
 /// names are kept. Fails where the function is not in the module, returns
 /// anything but such a vector, or returns more than once.
 pub fn read_shader_clock(words: &[u32], function: &str) -> Result<Vec<u32>, String> {
-    if words.len() < HEADER_WORDS {
-        return Err("SPIR-V: shorter than its header".into());
-    }
     let instructions = instructions(words)?;
     let target = named_id(&instructions, function)?;
     // The function's result type, and the id of the value it returns.
@@ -286,11 +286,9 @@ pub fn read_shader_clock(words: &[u32], function: &str) -> Result<Vec<u32>, Stri
 
 /// `words` without their debug names (OpName, OpMemberName).
 pub fn without_names(words: &[u32]) -> Result<Vec<u32>, String> {
-    if words.len() < HEADER_WORDS {
-        return Err("SPIR-V: shorter than its header".into());
-    }
+    let instructions = instructions(words)?;
     let mut out = words[..HEADER_WORDS].to_vec();
-    for i in instructions(words)? {
+    for i in instructions {
         if !matches!(i.opcode, OP_NAME | OP_MEMBER_NAME) {
             out.extend_from_slice(i.words);
         }
@@ -328,8 +326,12 @@ struct Instruction<'a> {
     operands: &'a [u32],
 }
 
-/// The instructions of module `words`, after its header.
+/// The instructions of module `words`, after its header (which every
+/// pass copies from `words`, so it must be there).
 fn instructions(words: &[u32]) -> Result<Vec<Instruction<'_>>, String> {
+    if words.len() < HEADER_WORDS {
+        return Err("SPIR-V: shorter than its header".into());
+    }
     let mut out = Vec::new();
     let mut at = HEADER_WORDS;
     while at < words.len() {
@@ -397,18 +399,29 @@ mod tests {
         Model::from_scenario(&s, false).unwrap()
     }
 
-    /// The step kernel's source of `launch` on Table S1, its phase
-    /// barriers scoped or not.
-    fn step_source<T: GpuReal>(launch: &str, scoped: bool) -> KernelSource {
-        let opts = GpuOptions {
-            workgroup_barriers: scoped,
-            ..Launch::named(launch)
+    /// The step kernel's source of `launch` on Table S1, its options then
+    /// changed by `with`.
+    fn launch_source<T: GpuReal>(
+        launch: &str,
+        with: impl FnOnce(GpuOptions) -> GpuOptions,
+    ) -> KernelSource {
+        let opts = with(
+            Launch::named(launch)
                 .unwrap()
-                .options(GpuOptions::default())
-        };
+                .options(GpuOptions::default()),
+        );
         GpuEngine::<T>::kernel_sources_on(&table_s1(), opts, &AdapterTraits::test_hardware())
             .unwrap()
             .remove(0)
+    }
+
+    /// The step kernel's source of `launch` on Table S1, its phase
+    /// barriers scoped or not.
+    fn step_source<T: GpuReal>(launch: &str, scoped: bool) -> KernelSource {
+        launch_source::<T>(launch, |o| GpuOptions {
+            workgroup_barriers: scoped,
+            ..o
+        })
     }
 
     fn words(k: &KernelSource) -> Vec<u32> {
@@ -586,15 +599,10 @@ mod tests {
 
     /// The clocked source of `launch` on Table S1 (phase barriers scoped).
     fn clocked_source(launch: &str, clocks: bool) -> KernelSource {
-        let opts = GpuOptions {
+        launch_source::<f32>(launch, |o| GpuOptions {
             phase_clocks: clocks,
-            ..Launch::named(launch)
-                .unwrap()
-                .options(GpuOptions::default())
-        };
-        GpuEngine::<f32>::kernel_sources_on(&table_s1(), opts, &AdapterTraits::test_hardware())
-            .unwrap()
-            .remove(0)
+            ..o
+        })
     }
 
     fn count(words: &[u32], opcode: u32) -> usize {

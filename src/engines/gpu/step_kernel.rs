@@ -376,21 +376,16 @@ pub fn plan<T: GpuReal>(
         adapter.software,
     );
     let group_scenes = group_scenes(opts, kernel, threads)?;
+    // The phases' sums take workgroup memory beside the state.
+    let mut fit = adapter.clone();
+    if opts.phase_clocks {
+        let room = &mut fit.limits.max_compute_workgroup_storage_size;
+        *room = room.saturating_sub(PHASE_CLOCK_BYTES as u32);
+    }
     let KernelFit {
         geometry,
         resident_velocities,
-    } = match opts.phase_clocks {
-        // The phases' sums take workgroup memory beside the state.
-        true => {
-            let mut fit = adapter.clone();
-            fit.limits.max_compute_workgroup_storage_size = fit
-                .limits
-                .max_compute_workgroup_storage_size
-                .saturating_sub(PHASE_CLOCK_BYTES as u32);
-            kernel_fit::<T>(model, &fit, opts, kernel, threads)?
-        }
-        false => kernel_fit::<T>(model, adapter, opts, kernel, threads)?,
-    };
+    } = kernel_fit::<T>(model, &fit, opts, kernel, threads)?;
     // Asked for with a kernel named that has no rounds to chain: refused
     // (auto and measure leave the other kernels unchained).
     if opts.chained_tiles
