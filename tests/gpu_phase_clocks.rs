@@ -113,3 +113,224 @@ fn a_one_step_kernel_or_auto_is_refused_phase_clocks() {
         );
     }
 }
+
+/// What a test kernel's thread 0 does before the flush: a clock reading at
+/// the dispatch's start, then marks, each `own` cycles to its arrival and
+/// `rest` more past its barrier.
+struct Script {
+    scene: u32,
+    clock_start: u32,
+    marks: Vec<(Phase, u32, u32)>,
+}
+
+/// The source's phrases the carry controls cut (asserted present, so the
+/// controls cannot pass by not changing the kernel).
+const STORAGE_CARRY: &str = "select(0u, 1u, before + add < add)";
+const WORKGROUP_CARRY: &str = "select(0u, 1u, low < cycles)";
+
+/// `phase_clocks.wgsl` with a clock the test sets (`fake_clock`) and
+/// `source_edit` (a phrase, its replacement) applied: `workgroups` workgroups of 64 threads each run
+/// `script` on thread 0 and flush into `phase_cycles` (filled with
+/// `before` first). Returns the buffer's words after.
+fn flushed(
+    script: &Script,
+    workgroups: u32,
+    before: &[u32],
+    source_edit: Option<(&str, &str)>,
+) -> Vec<u32> {
+    use slipfront::engines::gpu::context::shared;
+    use slipfront::engines::gpu::phase_clocks::{phase_constants, PHASE_CLOCK_WORDS};
+    use slipfront::engines::gpu::readback::{read_ranges, Range};
+    use slipfront::engines::gpu::shaders::file;
+    use wgpu::util::DeviceExt;
+    let ctx = shared().expect("a GPU adapter (lavapipe in CI)");
+    let snippet = file("phase_clocks").expect("phase_clocks.wgsl");
+    let constant_clock = "return vec2<u32>(3u, 3u);";
+    assert!(snippet.contains(constant_clock));
+    let mut snippet = snippet.replace(constant_clock, "return vec2<u32>(fake_clock, 0u);");
+    if let Some((phrase, replacement)) = source_edit {
+        assert!(snippet.contains(phrase), "{phrase}");
+        snippet = snippet.replace(phrase, replacement);
+    }
+    let source = format!(
+        "{}\nvar<private> scene: u32;\nvar<private> fake_clock: u32;\n{snippet}\n{}",
+        phase_constants(),
+        r#"
+@group(0) @binding(0) var<storage, read> script: array<u32>;
+
+@compute @workgroup_size(64)
+fn clock_sums(@builtin(local_invocation_index) t: u32) {
+    scene = script[0];
+    if t == 0u {
+        fake_clock = script[1];
+        phase_start(t);
+        for (var i = 0u; i < script[2]; i++) {
+            fake_clock += script[4u + 3u * i];
+            phase_arrive(t);
+            fake_clock += script[5u + 3u * i];
+            phase_mark(t, script[3u + 3u * i]);
+        }
+    }
+    workgroupBarrier();
+    phase_flush(t, 64u);
+}
+"#
+    );
+    let mut words = vec![script.scene, script.clock_start, script.marks.len() as u32];
+    for &(phase, own, rest) in &script.marks {
+        words.extend([phase as u32, own, rest]);
+    }
+    let module = ctx
+        .device
+        .create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("phase sums"),
+            source: wgpu::ShaderSource::Wgsl(source.into()),
+        });
+    let pipeline = ctx
+        .device
+        .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some("phase sums"),
+            layout: None,
+            module: &module,
+            entry_point: Some("clock_sums"),
+            compilation_options: wgpu::PipelineCompilationOptions {
+                constants: &[
+                    ("PHASE_CLOCKS", 1.0),
+                    ("PHASE_SUM_WORDS", PHASE_CLOCK_WORDS as f64),
+                ],
+                ..Default::default()
+            },
+            cache: None,
+        });
+    let init = |label, contents: &[u32], usage| {
+        ctx.device
+            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(label),
+                contents: bytemuck::cast_slice(contents),
+                usage,
+            })
+    };
+    let script_buffer = init("script", &words, wgpu::BufferUsages::STORAGE);
+    let sums = init(
+        "phase_cycles",
+        before,
+        wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+    );
+    let group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: None,
+        layout: &pipeline.get_bind_group_layout(0),
+        entries: &[
+            wgpu::BindGroupEntry {
+                binding: 0,
+                resource: script_buffer.as_entire_binding(),
+            },
+            wgpu::BindGroupEntry {
+                binding: 18,
+                resource: sums.as_entire_binding(),
+            },
+        ],
+    });
+    let mut encoder = ctx
+        .device
+        .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
+    {
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor::default());
+        pass.set_pipeline(&pipeline);
+        pass.set_bind_group(0, &group, &[]);
+        pass.dispatch_workgroups(workgroups, 1, 1);
+    }
+    ctx.queue.submit([encoder.finish()]);
+    let range = Range {
+        buffer: &sums,
+        offset: 0,
+        size: std::mem::size_of_val(before) as u64,
+    };
+    bytemuck::pod_collect_to_vec(&read_ranges(&ctx, &[range]).unwrap()[0])
+}
+
+/// The sums `script` adds from one workgroup, as the host counts them in
+/// 64 bits: the phase from mark to mark, thread 0's own to its arrival
+/// (the whole phase where it arrived on the mark's clock).
+fn expected_sums(script: &Script) -> PhaseCycles {
+    let mut sums = PhaseCycles {
+        flushes: 1,
+        ..PhaseCycles::default()
+    };
+    for &(phase, own, rest) in &script.marks {
+        let sum = &mut sums.phases[phase as usize];
+        let whole = u64::from(own) + u64::from(rest);
+        sum.cycles += whole;
+        sum.own_cycles += if own == 0 { whole } else { u64::from(own) };
+        sum.marks += 1;
+    }
+    sums
+}
+
+/// The sums carried into their high words, on the device: the clock's
+/// 32-bit reading wraps between two marks, a workgroup's sum passes 2^32
+/// in workgroup memory, and each of three workgroups' flush carries out
+/// of a storage word already near 2^32 (while the others add to it). The
+/// host reads exactly the 64-bit sums. The controls: the same kernel
+/// without either carry is caught.
+#[test]
+fn phase_sums_carry_into_their_high_words() {
+    use slipfront::engines::gpu::phase_clocks::PHASE_CLOCK_WORDS;
+    let script = Script {
+        scene: 1,
+        // Wraps within the first mark.
+        clock_start: u32::MAX - 100,
+        marks: vec![
+            (Phase::Enter, 50, 200),
+            (Phase::Forces, 0xF000_0000, 0x0800_0000),
+            (Phase::Updates, 7, 9),
+            (Phase::Forces, 0x9000_0000, 0x1000_0000),
+            (Phase::Wait, 0, 0xE000_0000),
+            (Phase::Wait, 0, 0xE000_0000),
+            (Phase::Leave, 1, 1),
+        ],
+    };
+    let workgroups = 3u32;
+    // Scene 0 is not flushed into; scene 1's sums start near 2^32, with
+    // high words of their own.
+    let words = PHASE_CLOCK_WORDS;
+    let mut before = vec![0u32; 2 * words];
+    for (w, word) in before.iter_mut().enumerate() {
+        *word = match (w / words, w % words) {
+            (0, k) => 1000 + k as u32,
+            (_, 0) => 5,
+            (_, 1) => 0,
+            (_, k) => match (k - 2) % 5 {
+                0 | 2 => u32::MAX - 0x1000 + k as u32,
+                1 | 3 => 11 + k as u32,
+                _ => 13,
+            },
+        };
+    }
+    let start = PhaseCycles::from_words(&before[words..]);
+    let one = expected_sums(&script);
+    let mut want = start.clone();
+    want.flushes += workgroups * one.flushes;
+    for (sum, add) in want.phases.iter_mut().zip(one.phases) {
+        sum.cycles += u64::from(workgroups) * add.cycles;
+        sum.own_cycles += u64::from(workgroups) * add.own_cycles;
+        sum.marks += workgroups * add.marks;
+    }
+    assert!(want.get(Phase::Wait).cycles >> 32 >= (start.get(Phase::Wait).cycles >> 32) + 5);
+
+    let after = flushed(&script, workgroups, &before, None);
+    assert_eq!(
+        after[..words],
+        before[..words],
+        "scene 0's sums are not touched"
+    );
+    assert_eq!(PhaseCycles::from_words(&after[words..]), want);
+
+    for cut in [STORAGE_CARRY, WORKGROUP_CARRY] {
+        let after = flushed(&script, workgroups, &before, Some((cut, "0u")));
+        assert_ne!(
+            PhaseCycles::from_words(&after[words..]),
+            want,
+            "a flush without `{cut}` is caught"
+        );
+    }
+}
