@@ -859,3 +859,44 @@ fn lane_shuffles_give_the_bits_of_lane_sums_through_storage() {
     let (other, _) = run(&faster, GpuPath::Persistent, true);
     assert!(base != other, "control");
 }
+
+/// The process's pipelines are compiled once a key, whichever threads ask
+/// at once: four threads asking for two builds of the one-step kernel (with
+/// and without wgpu's run-time checks) get one pipeline a build, and the
+/// two builds' pipelines differ (each key has its own slot, and the
+/// cache's map is locked only to find it).
+#[test]
+fn pipelines_asked_for_at_once_are_compiled_once_a_key() {
+    use slipfront::engines::gpu::compile::{KernelBuild, ShaderChecks};
+    use slipfront::engines::gpu::shaders::{Kernel, LaneMerge};
+    let ctx = slipfront::engines::gpu::context::shared().expect("a GPU adapter");
+    let build = |checks| KernelBuild {
+        lanes: LaneMerge::Storage,
+        checks,
+        chained_tiles: false,
+        step_immediate: false,
+        workgroup_barriers: false,
+        phase_clocks: false,
+    };
+    // A constant no other test compiles with: a key of this test's own.
+    let constants = [("DAMPING_FORM", 2.0)];
+    let asked = [
+        ShaderChecks::Trusted,
+        ShaderChecks::Checked,
+        ShaderChecks::Trusted,
+        ShaderChecks::Checked,
+    ];
+    let pipelines: Vec<wgpu::ComputePipeline> = std::thread::scope(|s| {
+        let threads: Vec<_> = asked
+            .iter()
+            .map(|&checks| {
+                let ctx = &ctx;
+                s.spawn(move || ctx.pipeline::<f32>(Kernel::OneStep, build(checks), &constants))
+            })
+            .collect();
+        threads.into_iter().map(|t| t.join().unwrap()).collect()
+    });
+    ctx.check().unwrap();
+    assert!(pipelines[0] == pipelines[2] && pipelines[1] == pipelines[3]);
+    assert!(pipelines[0] != pipelines[1], "two builds, two pipelines");
+}

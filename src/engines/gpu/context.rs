@@ -30,7 +30,10 @@ pub struct GpuContext {
     layouts: Arc<[KernelLayout; 3]>,
     /// Group 1: the step offset (dynamic) and the batch (or the batches).
     pub batch_layout: wgpu::BindGroupLayout,
-    pipelines: Arc<Mutex<HashMap<String, wgpu::ComputePipeline>>>,
+    /// Each pipeline by its key, compiled once: the map is locked only to
+    /// find a key's slot, and a slot only while its own pipeline compiles,
+    /// so threads building different pipelines compile side by side.
+    pipelines: Arc<Mutex<HashMap<String, Arc<OnceLock<wgpu::ComputePipeline>>>>>,
     /// The SPIR-V the engine writes for this device itself, where it may
     /// (`KernelBuild::workgroup_barriers`).
     spirv: Option<SpirvTarget>,
@@ -441,47 +444,51 @@ impl GpuContext {
              {phase_clocks}{entry}{constants:?}",
             T::NAME
         );
-        let mut cache = self.pipelines.lock().expect("pipeline cache");
-        cache
+        let slot = self
+            .pipelines
+            .lock()
+            .expect("pipeline cache")
             .entry(key)
-            .or_insert_with(|| {
-                let own = match self
-                    .spirv
-                    .filter(|_| (workgroup_barriers || phase_clocks) && self.has_own_spirv())
-                {
-                    Some(target) => {
-                        let own = KernelSource::of::<T>(kernel, build, entry, constants);
-                        let layout_bindings = &self.layouts[layout_index(kernel)].vulkan_bindings;
-                        spirv::kernel_spirv(
-                            &own,
-                            target.language,
-                            ZeroWorkgroupMemory::Native,
-                            layout_bindings,
-                        )
-                        .and_then(|(words, _)| self.pipeline_from_spirv(kernel, entry, words))
-                        .map_err(|why| self.refuse_own_spirv(format!("{entry}: {why}")))
-                        .ok()
-                    }
-                    None => None,
-                };
-                own.unwrap_or_else(|| {
-                    let source = build.source::<T>(kernel);
-                    let module = checks.module(&self.device, kernel.entry_point(), source);
-                    self.device
-                        .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                            label: Some(entry),
-                            layout: Some(layout),
-                            module: &module,
-                            entry_point: Some(entry),
-                            compilation_options: wgpu::PipelineCompilationOptions {
-                                constants,
-                                ..Default::default()
-                            },
-                            cache: None,
-                        })
-                })
+            .or_default()
+            .clone();
+        slot.get_or_init(|| {
+            let own = match self
+                .spirv
+                .filter(|_| (workgroup_barriers || phase_clocks) && self.has_own_spirv())
+            {
+                Some(target) => {
+                    let own = KernelSource::of::<T>(kernel, build, entry, constants);
+                    let layout_bindings = &self.layouts[layout_index(kernel)].vulkan_bindings;
+                    spirv::kernel_spirv(
+                        &own,
+                        target.language,
+                        ZeroWorkgroupMemory::Native,
+                        layout_bindings,
+                    )
+                    .and_then(|(words, _)| self.pipeline_from_spirv(kernel, entry, words))
+                    .map_err(|why| self.refuse_own_spirv(format!("{entry}: {why}")))
+                    .ok()
+                }
+                None => None,
+            };
+            own.unwrap_or_else(|| {
+                let source = build.source::<T>(kernel);
+                let module = checks.module(&self.device, kernel.entry_point(), source);
+                self.device
+                    .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                        label: Some(entry),
+                        layout: Some(layout),
+                        module: &module,
+                        entry_point: Some(entry),
+                        compilation_options: wgpu::PipelineCompilationOptions {
+                            constants,
+                            ..Default::default()
+                        },
+                        cache: None,
+                    })
             })
-            .clone()
+        })
+        .clone()
     }
 
     /// The pipeline of `entry` of `kernel` from SPIR-V `words` the engine
@@ -503,6 +510,8 @@ impl GpuContext {
                 words.first()
             ));
         }
+        // wgpu's error scopes are the calling thread's: another thread's
+        // errors meanwhile never land in these.
         let validation = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
         let internal = self.device.push_error_scope(wgpu::ErrorFilter::Internal);
         let entry_points = [wgpu::PassthroughShaderEntryPoint {
