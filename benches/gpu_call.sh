@@ -62,6 +62,19 @@ step() {
 # A step's own environment goes through `env VAR=VALUE... COMMAND`: `timeout` runs an
 # executable, so a shell function there fails with exit 127.
 
+# 0. Where a step's time goes on the device (gpu_table section 11, session 63): each
+#    phase's SM cycles a workgroup-step (forces, updates, a tiled round's load,
+#    publication and wait on its neighbours), read by thread 0 of each workgroup from
+#    the SM's own clock (VK_KHR_shader_clock), for Table S1 alone and 132 scenes, with
+#    what the clock reads cost. Which phase holds the 6.84 us of chained tiles and the
+#    11 us of resident decides what to build next; first, since a minute of it
+#    says more than any other step (the targets' figures stand from session 50).
+step phases 60 env SLIPFRONT_GPU_TABLE_SECTIONS=11 gpu_table
+# 0'. What the clocks cost the kernels in registers on NVIDIA's compiler (on RADV, navi21:
+#     the same VGPRs, no spills): a clocked kernel that spilled would time itself slower.
+step registers-clocked 30 env SLIPFRONT_GPU_REGISTERS_PHASE_CLOCKS=1 \
+  SLIPFRONT_GPU_REGISTERS_LAUNCHES=persistent/1024,persistent/1024/2-scenes,resident/1024,tiled/512/8x4/chained \
+  gpu_registers
 # 1. The targets, met or not: auto's pick against every launch timed again, Table S1
 #    µs/step, 256 scenes' aggregate and auto's pick there against the persistent and
 #    resident launches timed again (session 50's auto timed them 5-6x slow), 64 scenes
@@ -75,18 +88,6 @@ step targets 310 gpu_targets
 #     NVIDIA's compiler makes of a device-scope barrier (a fence to L2 each phase of a step?)
 #     only this measures.
 step barriers 120 env SLIPFRONT_GPU_TABLE_SECTIONS=10 gpu_table
-# 1''. Where a step's time goes on the device (gpu_table section 11, session 63): each
-#      phase's SM cycles a workgroup-step (forces, updates, a tiled round's load,
-#      publication and wait on its neighbours), read by thread 0 of each workgroup from
-#      the SM's own clock (VK_KHR_shader_clock), for Table S1 alone and 132 scenes, with
-#      what the clock reads cost. Which phase holds the 6.84 us of chained tiles and the
-#      11 us of resident decides what to build next.
-step phases 60 env SLIPFRONT_GPU_TABLE_SECTIONS=11 gpu_table
-# 1'''. What the clocks cost the kernels in registers on NVIDIA's compiler (on RADV, navi21:
-#       the same VGPRs, no spills): a clocked kernel that spilled would time itself slower.
-step registers-clocked 30 env SLIPFRONT_GPU_REGISTERS_PHASE_CLOCKS=1 \
-  SLIPFRONT_GPU_REGISTERS_LAUNCHES=persistent/1024,persistent/1024/2-scenes,resident/1024,tiled/512/8x4/chained \
-  gpu_registers
 # 1a. The host's CPU a step of each launch, three ways: the default (arrays in arenas, the
 #     step as an immediate, session 56), the step by a dynamic offset (session 55), and a
 #     buffer per array as well (before 55); and a bare dispatch against the buffers it binds
