@@ -5,8 +5,11 @@
 //! edges, the largest f64) that take `real_ln`'s exact pre-scaling branch.
 //! Fails, never skips, without an adapter with f64.
 
+#[path = "support/one_dispatch.rs"]
+mod one_dispatch;
+
+use one_dispatch::run_once;
 use slipfront::engines::gpu::context::shared;
-use slipfront::engines::gpu::readback::{read_ranges, Range};
 use slipfront::engines::gpu::shaders::file;
 use wgpu::util::DeviceExt;
 
@@ -34,22 +37,6 @@ fn ln_and_exp(@builtin(global_invocation_id) id: vec3<u32>) {
 }
 "#
     );
-    let module = ctx
-        .device
-        .create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("coord_f64 math"),
-            source: wgpu::ShaderSource::Wgsl(source.into()),
-        });
-    let pipeline = ctx
-        .device
-        .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-            label: Some("coord_f64 math"),
-            layout: None,
-            module: &module,
-            entry_point: Some("ln_and_exp"),
-            compilation_options: Default::default(),
-            cache: None,
-        });
     let input = ctx
         .device
         .create_buffer_init(&wgpu::util::BufferInitDescriptor {
@@ -57,43 +44,22 @@ fn ln_and_exp(@builtin(global_invocation_id) id: vec3<u32>) {
             contents: bytemuck::cast_slice(inputs),
             usage: wgpu::BufferUsages::STORAGE,
         });
-    let bytes = (inputs.len() * 16) as u64;
     let output = ctx.device.create_buffer(&wgpu::BufferDescriptor {
         label: Some("outputs"),
-        size: bytes,
+        size: (inputs.len() * 16) as u64,
         usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
         mapped_at_creation: false,
     });
-    let group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: None,
-        layout: &pipeline.get_bind_group_layout(0),
-        entries: &[
-            wgpu::BindGroupEntry {
-                binding: 0,
-                resource: input.as_entire_binding(),
-            },
-            wgpu::BindGroupEntry {
-                binding: 1,
-                resource: output.as_entire_binding(),
-            },
-        ],
-    });
-    let mut encoder = ctx
-        .device
-        .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
-    {
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor::default());
-        pass.set_pipeline(&pipeline);
-        pass.set_bind_group(0, &group, &[]);
-        pass.dispatch_workgroups((inputs.len() as u32).div_ceil(64), 1, 1);
-    }
-    ctx.queue.submit([encoder.finish()]);
-    let range = Range {
-        buffer: &output,
-        offset: 0,
-        size: bytes,
-    };
-    let out: Vec<f64> = bytemuck::pod_collect_to_vec(&read_ranges(&ctx, &[range]).unwrap()[0]);
+    let bytes = run_once(
+        &ctx,
+        source,
+        "ln_and_exp",
+        &[],
+        &[(0, &input), (1, &output)],
+        (inputs.len() as u32).div_ceil(64),
+        &output,
+    );
+    let out: Vec<f64> = bytemuck::pod_collect_to_vec(&bytes);
     let ln = out.iter().step_by(2).copied().collect();
     let exp = out.iter().skip(1).step_by(2).copied().collect();
     (ln, exp)

@@ -7,9 +7,12 @@
 //! kernel has is marked as often as it runs, and takes cycles. These tests
 //! fail, never skip, when no adapter exists.
 
+#[path = "support/one_dispatch.rs"]
+mod one_dispatch;
 #[path = "support/phase_kernels.rs"]
 mod phase_kernels;
 
+use one_dispatch::run_once;
 use phase_kernels::{driven, launches};
 use slipfront::engines::gpu::phase_clocks::{Phase, PhaseCycles};
 use slipfront::engines::gpu::{GpuEngine, GpuOptions, GpuPath};
@@ -140,7 +143,6 @@ fn flushed(
 ) -> Vec<u32> {
     use slipfront::engines::gpu::context::shared;
     use slipfront::engines::gpu::phase_clocks::{phase_constants, PHASE_CLOCK_WORDS};
-    use slipfront::engines::gpu::readback::{read_ranges, Range};
     use slipfront::engines::gpu::shaders::file;
     use wgpu::util::DeviceExt;
     let ctx = shared().expect("a GPU adapter (lavapipe in CI)");
@@ -180,28 +182,6 @@ fn clock_sums(@builtin(local_invocation_index) t: u32) {
     for &(phase, own, rest) in &script.marks {
         words.extend([phase as u32, own, rest]);
     }
-    let module = ctx
-        .device
-        .create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("phase sums"),
-            source: wgpu::ShaderSource::Wgsl(source.into()),
-        });
-    let pipeline = ctx
-        .device
-        .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-            label: Some("phase sums"),
-            layout: None,
-            module: &module,
-            entry_point: Some("clock_sums"),
-            compilation_options: wgpu::PipelineCompilationOptions {
-                constants: &[
-                    ("PHASE_CLOCKS", 1.0),
-                    ("PHASE_SUM_WORDS", PHASE_CLOCK_WORDS as f64),
-                ],
-                ..Default::default()
-            },
-            cache: None,
-        });
     let init = |label, contents: &[u32], usage| {
         ctx.device
             .create_buffer_init(&wgpu::util::BufferInitDescriptor {
@@ -216,36 +196,19 @@ fn clock_sums(@builtin(local_invocation_index) t: u32) {
         before,
         wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
     );
-    let group = ctx.device.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: None,
-        layout: &pipeline.get_bind_group_layout(0),
-        entries: &[
-            wgpu::BindGroupEntry {
-                binding: 0,
-                resource: script_buffer.as_entire_binding(),
-            },
-            wgpu::BindGroupEntry {
-                binding: 18,
-                resource: sums.as_entire_binding(),
-            },
+    let bytes = run_once(
+        &ctx,
+        source,
+        "clock_sums",
+        &[
+            ("PHASE_CLOCKS", 1.0),
+            ("PHASE_SUM_WORDS", PHASE_CLOCK_WORDS as f64),
         ],
-    });
-    let mut encoder = ctx
-        .device
-        .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
-    {
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor::default());
-        pass.set_pipeline(&pipeline);
-        pass.set_bind_group(0, &group, &[]);
-        pass.dispatch_workgroups(workgroups, 1, 1);
-    }
-    ctx.queue.submit([encoder.finish()]);
-    let range = Range {
-        buffer: &sums,
-        offset: 0,
-        size: std::mem::size_of_val(before) as u64,
-    };
-    bytemuck::pod_collect_to_vec(&read_ranges(&ctx, &[range]).unwrap()[0])
+        &[(0, &script_buffer), (18, &sums)],
+        workgroups,
+        &sums,
+    );
+    bytemuck::pod_collect_to_vec(&bytes)
 }
 
 /// The sums `script` adds from one workgroup, as the host counts them in
