@@ -255,7 +255,7 @@ fn persistent_steps(
                 }
             }
         }
-        phase_arrive(wt);
+        phase_arrive(wt, PHASE_FORCES);
         state_barrier();
         phase_mark(wt, PHASE_FORCES);
         // Is step s a sample (1), and is it due (2), for each member? The
@@ -331,7 +331,7 @@ fn persistent_steps(
         if member_steps(stepping) {
             ran = ran + 1u;
         }
-        phase_arrive(wt);
+        phase_arrive(wt, PHASE_UPDATES);
         state_barrier();
         phase_mark(wt, PHASE_UPDATES);
         // Stop at a blow-up (checked every 16 steps: each check costs a

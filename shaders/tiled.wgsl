@@ -344,7 +344,7 @@ fn tiled_steps(
         }
         // This round's publication before its counter, and its counter
         // before its own columns' store, which no neighbour reads.
-        phase_arrive(t);
+        phase_arrive(t, PHASE_PUBLISH);
         storageBarrier();
         if t == 0u {
             atomicStore(&tile_progress[tile_index()], chain.y + k + 1u);
@@ -415,7 +415,7 @@ fn tile_round(t: u32, d: u32, lanes: u32, stride: u32, first: bool, last: bool) 
     }
     phase_mark(t, PHASE_CHECKS);
     load_tile(t, plan.x, d & 1u, first);
-    phase_arrive(t);
+    phase_arrive(t, PHASE_LOAD);
     workgroup_storage_barrier();
     workgroupBarrier();
     // The first step's junction blocks, for every column the round steps
@@ -498,7 +498,7 @@ fn tile_round(t: u32, d: u32, lanes: u32, stride: u32, first: bool, last: bool) 
                 }
             }
         }
-        phase_arrive(t);
+        phase_arrive(t, PHASE_FORCES);
         workgroup_storage_barrier();
         workgroupBarrier();
         phase_mark(t, PHASE_FORCES);
@@ -551,7 +551,7 @@ fn tile_round(t: u32, d: u32, lanes: u32, stride: u32, first: bool, last: bool) 
             sample_interface(t, next, s);
             next = workgroupUniformLoad(&tile_next_sample);
         }
-        phase_arrive(t);
+        phase_arrive(t, PHASE_UPDATES);
         workgroup_storage_barrier();
         workgroupBarrier();
         phase_mark(t, PHASE_UPDATES);

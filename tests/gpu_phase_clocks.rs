@@ -76,7 +76,13 @@ fn clocked_kernels_keep_their_bits_and_time_every_phase() {
                 "{name}: {phase:?} marks"
             );
             assert!(sum.cycles > 0, "{name}: {phase:?} {sum:?}");
-            assert!(sum.own_cycles <= sum.cycles, "{name}: {phase:?} {sum:?}");
+            // Thread 0 is among the threads that sample the latest
+            // arrival, and the clock moves on from an arrival to the mark
+            // past its barrier.
+            assert!(
+                sum.own_cycles <= sum.slowest_cycles && sum.slowest_cycles < sum.cycles,
+                "{name}: {phase:?} {sum:?}"
+            );
         }
         let expected: &[Phase] = match (opts.path, opts.chained_tiles) {
             (GpuPath::Tiled, false) => &[Phase::Enter, Phase::Checks, Phase::Load, Phase::Publish],
@@ -117,24 +123,48 @@ fn a_one_step_kernel_or_auto_is_refused_phase_clocks() {
     }
 }
 
-/// What a test kernel's thread 0 does before the flush: a clock reading at
-/// the dispatch's start, then marks, each `own` cycles to its arrival and
-/// `rest` more past its barrier.
+/// What a test kernel's workgroup does before the flush: a clock reading
+/// at the dispatch's start, then marks.
 struct Script {
     scene: u32,
     clock_start: u32,
-    marks: Vec<(Phase, u32, u32)>,
+    marks: Vec<Mark>,
+}
+
+/// A phase as the test kernel runs it: thread 0 arrives at its barrier
+/// `own` cycles after the last mark, thread 32 (the second sampler of the
+/// arrivals) `late` cycles after thread 0, and the mark comes `rest` cycles
+/// after that; where no thread `arrives`, only the mark.
+struct Mark {
+    phase: Phase,
+    own: u32,
+    late: u32,
+    rest: u32,
+    arrives: bool,
+}
+
+fn mark(phase: Phase, own: u32, late: u32, rest: u32) -> Mark {
+    Mark {
+        phase,
+        own,
+        late,
+        rest,
+        arrives: true,
+    }
 }
 
 /// The source's phrases the carry controls cut (asserted present, so the
 /// controls cannot pass by not changing the kernel).
 const STORAGE_CARRY: &str = "select(0u, 1u, before + add < add)";
 const WORKGROUP_CARRY: &str = "select(0u, 1u, low < cycles)";
+const LATEST_CLEARED: &str = "atomicExchange(&phase_sums[base + PHASE_LATEST], 0u)";
+const LATEST_KEPT: &str = "atomicLoad(&phase_sums[base + PHASE_LATEST])";
 
 /// `phase_clocks.wgsl` with a clock the test sets (`fake_clock`) and
-/// `source_edit` (a phrase, its replacement) applied: `workgroups` workgroups of 64 threads each run
-/// `script` on thread 0 and flush into `phase_cycles` (filled with
-/// `before` first). Returns the buffer's words after.
+/// `source_edit` (a phrase, its replacement) applied: `workgroups`
+/// workgroups of 64 threads each run `script` and flush into
+/// `phase_cycles` (filled with `before` first). Returns the buffer's words
+/// after.
 fn flushed(
     script: &Script,
     workgroups: u32,
@@ -160,18 +190,31 @@ fn flushed(
         r#"
 @group(0) @binding(0) var<storage, read> script: array<u32>;
 
+var<workgroup> mark_count: u32;
+
 @compute @workgroup_size(64)
 fn clock_sums(@builtin(local_invocation_index) t: u32) {
     scene = script[0];
     if t == 0u {
-        fake_clock = script[1];
-        phase_start(t);
-        for (var i = 0u; i < script[2]; i++) {
-            fake_clock += script[4u + 3u * i];
-            phase_arrive(t);
-            fake_clock += script[5u + 3u * i];
-            phase_mark(t, script[3u + 3u * i]);
+        mark_count = script[2];
+    }
+    let marks = workgroupUniformLoad(&mark_count);
+    var clock = script[1];
+    fake_clock = clock;
+    phase_start(t);
+    for (var i = 0u; i < marks; i++) {
+        let m = 3u + 5u * i;
+        let phase = script[m];
+        let own = script[m + 1u];
+        let late = script[m + 2u];
+        if script[m + 4u] != 0u {
+            fake_clock = clock + select(own, own + late, t == 32u);
+            phase_arrive(t, phase);
         }
+        workgroupBarrier();
+        clock += own + late + script[m + 3u];
+        fake_clock = clock;
+        phase_mark(t, phase);
     }
     workgroupBarrier();
     phase_flush(t, 64u);
@@ -179,8 +222,8 @@ fn clock_sums(@builtin(local_invocation_index) t: u32) {
 "#
     );
     let mut words = vec![script.scene, script.clock_start, script.marks.len() as u32];
-    for &(phase, own, rest) in &script.marks {
-        words.extend([phase as u32, own, rest]);
+    for m in &script.marks {
+        words.extend([m.phase as u32, m.own, m.late, m.rest, m.arrives as u32]);
     }
     let init = |label, contents: &[u32], usage| {
         ctx.device
@@ -213,17 +256,23 @@ fn clock_sums(@builtin(local_invocation_index) t: u32) {
 
 /// The sums `script` adds from one workgroup, as the host counts them in
 /// 64 bits: the phase from mark to mark, thread 0's own to its arrival
-/// (the whole phase where it arrived on the mark's clock).
+/// (the whole phase where it arrived on the mark's clock, or not at all),
+/// the slowest to the latest arrival (the whole phase where none arrived).
 fn expected_sums(script: &Script) -> PhaseCycles {
     let mut sums = PhaseCycles {
         flushes: 1,
         ..PhaseCycles::default()
     };
-    for &(phase, own, rest) in &script.marks {
-        let sum = &mut sums.phases[phase as usize];
-        let whole = u64::from(own) + u64::from(rest);
+    for m in &script.marks {
+        let sum = &mut sums.phases[m.phase as usize];
+        let whole = u64::from(m.own) + u64::from(m.late) + u64::from(m.rest);
         sum.cycles += whole;
-        sum.own_cycles += if own == 0 { whole } else { u64::from(own) };
+        let arrived = m.arrives && m.own != 0;
+        sum.own_cycles += if arrived { u64::from(m.own) } else { whole };
+        sum.slowest_cycles += match m.arrives {
+            true => u64::from(m.own) + u64::from(m.late),
+            false => whole,
+        };
         sum.marks += 1;
     }
     sums
@@ -233,23 +282,34 @@ fn expected_sums(script: &Script) -> PhaseCycles {
 /// 32-bit reading wraps between two marks, a workgroup's sum passes 2^32
 /// in workgroup memory, and each of three workgroups' flush carries out
 /// of a storage word already near 2^32 (while the others add to it). The
-/// host reads exactly the 64-bit sums. The controls: the same kernel
-/// without either carry is caught.
+/// host reads exactly the 64-bit sums, the slowest warp's included (a
+/// second thread arriving later than thread 0; a phase marked twice in a
+/// dispatch keeps each turn's latest apart). The controls: the same kernel
+/// without either carry, or with the latest arrival never cleared, is
+/// caught.
 #[test]
 fn phase_sums_carry_into_their_high_words() {
-    use slipfront::engines::gpu::phase_clocks::PHASE_CLOCK_WORDS;
+    use slipfront::engines::gpu::phase_clocks::{PHASE_CLOCK_WORDS, PHASE_WORDS};
     let script = Script {
         scene: 1,
-        // Wraps within the first mark.
+        // Wraps within the first mark, after its arrivals. (Arrivals the
+        // wrap falls between keep the one before it: not tested.)
         clock_start: u32::MAX - 100,
         marks: vec![
-            (Phase::Enter, 50, 200),
-            (Phase::Forces, 0xF000_0000, 0x0800_0000),
-            (Phase::Updates, 7, 9),
-            (Phase::Forces, 0x9000_0000, 0x1000_0000),
-            (Phase::Wait, 0, 0xE000_0000),
-            (Phase::Wait, 0, 0xE000_0000),
-            (Phase::Leave, 1, 1),
+            mark(Phase::Enter, 50, 0, 200),
+            mark(Phase::Forces, 0xF000_0000, 0x0100_0000, 0x0700_0000),
+            mark(Phase::Updates, 7, 3, 9),
+            mark(Phase::Forces, 0x2000_0000, 0x7000_0000, 0x1000_0000),
+            Mark {
+                phase: Phase::Wait,
+                own: 0,
+                late: 0,
+                rest: 0xE000_0000,
+                arrives: false,
+            },
+            mark(Phase::Checks, 0, 0x7000_0000, 5),
+            mark(Phase::Wait, 0x10, 0x20, 0xE000_0000),
+            mark(Phase::Leave, 1, 1, 1),
         ],
     };
     let workgroups = 3u32;
@@ -262,9 +322,9 @@ fn phase_sums_carry_into_their_high_words() {
             (0, k) => 1000 + k as u32,
             (_, 0) => 5,
             (_, 1) => 0,
-            (_, k) => match (k - 2) % 5 {
-                0 | 2 => u32::MAX - 0x1000 + k as u32,
-                1 | 3 => 11 + k as u32,
+            (_, k) => match (k - 2) % PHASE_WORDS {
+                0 | 2 | 5 => u32::MAX - 0x1000 + k as u32,
+                1 | 3 | 6 => 11 + k as u32,
                 _ => 13,
             },
         };
@@ -276,6 +336,7 @@ fn phase_sums_carry_into_their_high_words() {
     for (sum, add) in want.phases.iter_mut().zip(one.phases) {
         sum.cycles += u64::from(workgroups) * add.cycles;
         sum.own_cycles += u64::from(workgroups) * add.own_cycles;
+        sum.slowest_cycles += u64::from(workgroups) * add.slowest_cycles;
         sum.marks += workgroups * add.marks;
     }
     assert!(want.get(Phase::Wait).cycles >> 32 >= (start.get(Phase::Wait).cycles >> 32) + 5);
@@ -288,12 +349,16 @@ fn phase_sums_carry_into_their_high_words() {
     );
     assert_eq!(PhaseCycles::from_words(&after[words..]), want);
 
-    for cut in [STORAGE_CARRY, WORKGROUP_CARRY] {
-        let after = flushed(&script, workgroups, &before, Some((cut, "0u")));
+    for (cut, by) in [
+        (STORAGE_CARRY, "0u"),
+        (WORKGROUP_CARRY, "0u"),
+        (LATEST_CLEARED, LATEST_KEPT),
+    ] {
+        let after = flushed(&script, workgroups, &before, Some((cut, by)));
         assert_ne!(
             PhaseCycles::from_words(&after[words..]),
             want,
-            "a flush without `{cut}` is caught"
+            "a kernel with `{by}` for `{cut}` is caught"
         );
     }
 }

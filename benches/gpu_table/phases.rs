@@ -43,8 +43,10 @@ pub fn profile(ctx: &GpuContext, quick: bool, min_seconds: f64) {
     }
     println!(
         "Cycles of a workgroup's step, each phase from the mark before to its own past \
-         its barrier (thread 0's own work to its arrival in brackets); phases run once a \
-         dispatch or a round are spread over its steps. `cycles/µs`: the workgroup's \
+         its barrier; in brackets, thread 0's own work (to its arrival at the barrier) \
+         and the slowest warp's (to the latest arrival: the rest of the phase is the \
+         barrier itself); phases run once a dispatch or a round are spread over its \
+         steps. `cycles/µs`: the workgroup's \
          cycles a step over the clocked run's wall µs a step (near the SM clock where \
          the device is busy throughout). `clocked / plain`: the wall time a step with the \
          clocks against without (what the marks cost).\n"
@@ -103,9 +105,10 @@ fn row(name: &str, clocks: &PhaseCycles, wall: f64, plain: Option<f64>) {
             match s.marks {
                 0 => "–".to_string(),
                 _ => format!(
-                    "{:.0} ({:.0})",
+                    "{:.0} ({:.0}; {:.0})",
                     s.cycles as f64 / steps,
-                    s.own_cycles as f64 / steps
+                    s.own_cycles as f64 / steps,
+                    s.slowest_cycles as f64 / steps
                 ),
             }
         })

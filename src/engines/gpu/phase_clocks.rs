@@ -63,8 +63,9 @@ impl Phase {
 }
 
 /// Words a phase takes: its cycles (low, high), thread 0's own (low,
-/// high), its marks.
-pub const PHASE_WORDS: usize = 5;
+/// high), its marks, the slowest warp's cycles (low, high), and a spare
+/// (in workgroup memory: the latest arrival's clock).
+pub const PHASE_WORDS: usize = 8;
 /// Words before the first phase's: the workgroup-dispatches flushed and a
 /// spare (in workgroup memory: the last mark's clock and the last
 /// arrival's).
@@ -102,6 +103,10 @@ pub struct PhaseSum {
     pub cycles: u64,
     /// Thread 0's own cycles in it: to its arrival at the barrier.
     pub own_cycles: u64,
+    /// The slowest warp's cycles in it: to the latest arrival at the
+    /// barrier of the threads that sample it (a warp's first on NVIDIA).
+    /// `cycles` less these is what the barrier took.
+    pub slowest_cycles: u64,
     /// Times the phase was marked.
     pub marks: u32,
 }
@@ -127,6 +132,7 @@ impl PhaseCycles {
                 cycles: pair(w),
                 own_cycles: pair(w + 2),
                 marks: words[w + 4],
+                slowest_cycles: pair(w + 5),
             }
         });
         PhaseCycles {
@@ -146,6 +152,7 @@ impl PhaseCycles {
             PhaseSum {
                 cycles: now.cycles.wrapping_sub(then.cycles),
                 own_cycles: now.own_cycles.wrapping_sub(then.own_cycles),
+                slowest_cycles: now.slowest_cycles.wrapping_sub(then.slowest_cycles),
                 marks: now.marks.wrapping_sub(then.marks),
             }
         });
@@ -175,12 +182,15 @@ mod tests {
         words[updates + 1] = 2;
         words[updates + 2] = 5;
         words[updates + 4] = 9;
+        words[updates + 5] = 6;
+        words[updates + 6] = 1;
         let read = PhaseCycles::from_words(&words);
         assert_eq!(read.flushes, 3);
         let sum = read.get(Phase::Updates);
         assert_eq!(sum.cycles, (2u64 << 32) + 7);
         assert_eq!(sum.own_cycles, 5);
         assert_eq!(sum.marks, 9);
+        assert_eq!(sum.slowest_cycles, (1u64 << 32) + 6);
         assert_eq!(read.get(Phase::Forces), PhaseSum::default());
         assert_eq!(read.total_cycles(), (2u64 << 32) + 7);
     }
