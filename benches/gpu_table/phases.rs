@@ -46,7 +46,8 @@ pub fn profile(ctx: &GpuContext, quick: bool, min_seconds: f64) {
          its barrier; in brackets, thread 0's own work (to its arrival at the barrier) \
          and the slowest warp's (to the latest arrival: the rest of the phase is the \
          barrier itself); phases run once a dispatch or a round are spread over its \
-         steps. `cycles/µs`: the workgroup's \
+         steps. `in barriers`: the share of the step from the slowest warp's arrival \
+         to the mark past the barrier, over every phase. `cycles/µs`: the workgroup's \
          cycles a step over the clocked run's wall µs a step (near the SM clock where \
          the device is busy throughout). `clocked / plain`: the wall time a step with the \
          clocks against without (what the marks cost).\n"
@@ -85,11 +86,11 @@ pub fn profile(ctx: &GpuContext, quick: bool, min_seconds: f64) {
 fn header(first: &str) {
     let phases: Vec<&str> = Phase::ALL.iter().map(|p| p.name()).collect();
     println!(
-        "| {first} | µs a step | cycles a step | cycles/µs | clocked / plain | {} |",
+        "| {first} | µs a step | cycles a step | cycles/µs | in barriers | clocked / plain | {} |",
         phases.join(" | ")
     );
     println!(
-        "| --- | ---: | ---: | ---: | ---: |{}",
+        "| --- | ---: | ---: | ---: | ---: | ---: |{}",
         " ---: |".repeat(phases.len())
     );
 }
@@ -114,10 +115,19 @@ fn row(name: &str, clocks: &PhaseCycles, wall: f64, plain: Option<f64>) {
         })
         .collect();
     let ratio = plain.map_or("–".into(), |p| format!("{:.3}", wall / p));
+    // From the slowest warp's arrival to the mark past the barrier, over
+    // every phase (none in a phase without arrivals).
+    let waiting: u64 = clocks
+        .phases
+        .iter()
+        .map(|s| s.cycles.saturating_sub(s.slowest_cycles))
+        .sum();
+    let share = waiting as f64 / clocks.total_cycles().max(1) as f64;
     println!(
-        "| {name} | {:.2} | {per_step:.0} | {:.0} | {ratio} | {} |",
+        "| {name} | {:.2} | {per_step:.0} | {:.0} | {:.1} % | {ratio} | {} |",
         wall * 1e6,
         per_step / (wall * 1e6),
+        100.0 * share,
         cells.join(" | ")
     );
 }
