@@ -365,7 +365,7 @@ fn persistent_steps(
         atomicAdd(&status[status_base() + STATUS_PERSISTENT_STEPS], atomicLoad(&fewest_run[member]));
     }
     phase_mark(wt, PHASE_LEAVE);
-    phase_flush(wt, PERSISTENT_THREADS);
+    phase_flush(wt, PERSISTENT_THREADS, scene);
 }
 
 // Whether this thread's member scene steps: always with one scene a

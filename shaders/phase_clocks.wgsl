@@ -23,8 +23,11 @@ override PHASE_CLOCKS: bool = false;
 // on, 1 where they are off (no workgroup memory to speak of).
 override PHASE_SUM_WORDS: u32 = 1u;
 
-// Each scene's sums over its workgroups and dispatches, PHASE_CLOCK_WORDS a
-// scene: the workgroup-dispatches flushed, a spare word, then for each
+// Each slot's sums over its workgroups and dispatches, PHASE_CLOCK_WORDS a
+// slot: a scene's (a persistent workgroup adds to its first scene's), or a
+// tile's (the tiled kernel, `tile_index()`: imbalance between a scene's
+// tiles shows). A slot holds the workgroup-dispatches flushed, a spare
+// word, then for each
 // phase (PHASE_WORDS) its cycles (low, high word), thread 0's own cycles
 // (low, high), its marks, the slowest warp's cycles (low, high) and a
 // spare.
@@ -117,15 +120,15 @@ fn phase_mark(t: u32, phase: u32) {
 }
 
 // Every thread t of the workgroup's `threads`, past thread 0's last mark:
-// this dispatch's sums added to the scene's of thread 0 (the workgroup's
-// first). A thread a sum, each a 64-bit sum carried by hand (storage
+// this dispatch's sums added to thread 0's `slot` (its scene's, or its
+// tile's). A thread a sum, each a 64-bit sum carried by hand (storage
 // atomics are 32 bits), so the flush waits on one atomic, not on one per
 // sum in a row (a dispatch of the tiled kernel is as short as 2 steps).
-fn phase_flush(t: u32, threads: u32) {
+fn phase_flush(t: u32, threads: u32, slot: u32) {
     if PHASE_CLOCKS {
         if t == 0u {
-            // The last mark's clock is no longer needed: the scene's base.
-            atomicStore(&phase_sums[PHASE_LAST], scene * PHASE_CLOCK_WORDS);
+            // The last mark's clock is no longer needed: the slot's base.
+            atomicStore(&phase_sums[PHASE_LAST], slot * PHASE_CLOCK_WORDS);
         }
         workgroupBarrier();
         let base = atomicLoad(&phase_sums[PHASE_LAST]);

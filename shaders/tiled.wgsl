@@ -360,7 +360,7 @@ fn tiled_steps(
         atomicStore(&tile_progress[tile_index()], chain.y + chain.x);
     }
     phase_mark(t, PHASE_LEAVE);
-    phase_flush(t, TILE_THREADS);
+    phase_flush(t, TILE_THREADS, tile_index());
 }
 
 // Thread t's first lane run item of a step whose force phase has `bulk`

@@ -25,26 +25,40 @@ fn engine(m: &Model, opts: GpuOptions) -> GpuEngine<f32> {
 }
 
 /// `opts`' run of `m` from `start` (not timed) to `end`: its snapshot and
-/// the phase sums of the steps from `start` on.
-fn run(m: &Model, opts: GpuOptions, start: u64, end: u64) -> (Snapshot, PhaseCycles) {
+/// the phase sums of the steps from `start` on, the scene's and each
+/// tile's (the scene's alone where the kernel has no tiles).
+fn run(
+    m: &Model,
+    opts: GpuOptions,
+    start: u64,
+    end: u64,
+) -> (Snapshot, PhaseCycles, Vec<PhaseCycles>) {
     let mut e = engine(m, opts);
     advance_to(&mut e, start).unwrap();
     let before = e.phase_cycles(0).unwrap();
+    let tiles_before = e.phase_cycles_by_tile(0).unwrap();
     advance_to(&mut e, end).unwrap();
     let after = e.phase_cycles(0).unwrap();
+    let tiles: Vec<PhaseCycles> = e
+        .phase_cycles_by_tile(0)
+        .unwrap()
+        .iter()
+        .zip(&tiles_before)
+        .map(|(now, then)| now.since(then))
+        .collect();
     assert_eq!(
         e.describe().contains("phase clocks"),
         opts.phase_clocks,
         "{}",
         e.describe()
     );
-    (e.snapshot().unwrap(), after.since(&before))
+    (e.snapshot().unwrap(), after.since(&before), tiles)
 }
 
 /// Each kernel with phases, through ruptures: clocked, the same bits as
 /// unclocked; every step marks its forces and updates once a workgroup
-/// (two tiles of 16 columns for the tiled kernel), and each phase it has
-/// took cycles. Unclocked, every sum is zero: the counter is what moves
+/// (two tiles of 16 columns for the tiled kernel, each into its own sums),
+/// and each phase it has took cycles. Unclocked, every sum is zero: the counter is what moves
 /// them (the control: a kernel that read a constant would pass the bits
 /// and fail here).
 #[test]
@@ -52,7 +66,7 @@ fn clocked_kernels_keep_their_bits_and_time_every_phase() {
     let m = driven(0.4);
     let (start, steps) = (m.prep_steps, 1500u64);
     for (name, opts) in launches() {
-        let (plain, unclocked) = run(&m, opts, start, start + steps);
+        let (plain, unclocked, _) = run(&m, opts, start, start + steps);
         assert!(
             unclocked.phases.iter().all(|s| *s == Default::default()),
             "{name}: unclocked sums {unclocked:?}"
@@ -61,7 +75,7 @@ fn clocked_kernels_keep_their_bits_and_time_every_phase() {
             phase_clocks: true,
             ..opts
         };
-        let (got, clocks) = run(&m, clocked_opts, start, start + steps);
+        let (got, clocks, tiles) = run(&m, clocked_opts, start, start + steps);
         assert!(plain.total_ruptures() > 50, "{name}: junctions broke");
         assert!(got == plain, "{name}: the clocks changed the run");
         let workgroups = match opts.path {
@@ -93,11 +107,21 @@ fn clocked_kernels_keep_their_bits_and_time_every_phase() {
             let sum = clocks.get(phase);
             assert!(sum.marks > 0 && sum.cycles > 0, "{name}: {phase:?} {sum:?}");
         }
-        // Each workgroup flushes once a dispatch.
-        assert!(
-            clocks.flushes > 0 && u64::from(clocks.flushes) % workgroups == 0,
-            "{name}: {clocks:?}"
-        );
+        // Each workgroup flushes once a dispatch, into its own tile's
+        // sums (the tiled kernel), which add up to the scene's; each tile
+        // marks each step.
+        assert_eq!(tiles.len() as u64, workgroups, "{name}");
+        let flushes = tiles[0].flushes;
+        assert!(flushes > 0, "{name}: {tiles:?}");
+        for tile in &tiles {
+            assert_eq!(tile.flushes, flushes, "{name}: {tiles:?}");
+            assert_eq!(u64::from(tile.get(Phase::Forces).marks), steps, "{name}");
+            assert!(tile.get(Phase::Forces).cycles > 0, "{name}: {tile:?}");
+        }
+        let together = tiles
+            .iter()
+            .fold(PhaseCycles::default(), |sum, tile| sum.plus(tile));
+        assert_eq!(together, clocks, "{name}");
     }
 }
 
@@ -217,7 +241,7 @@ fn clock_sums(@builtin(local_invocation_index) t: u32) {
         phase_mark(t, phase);
     }
     workgroupBarrier();
-    phase_flush(t, 64u);
+    phase_flush(t, 64u, scene);
 }
 "#
     );

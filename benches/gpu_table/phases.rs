@@ -57,8 +57,9 @@ pub fn profile(ctx: &GpuContext, quick: bool, min_seconds: f64) {
     let s1 = scene(1);
     let alone: Vec<&str> = barriers::SOLO.iter().chain(SOLO_MORE).copied().collect();
     let names = section_launches(&alone, QUICK_SOLO, quick);
+    let mut tiled = Vec::new();
     for name in &names {
-        solo_row::<f32>(&s1, name, min_seconds);
+        tiled.extend(solo_row::<f32>(&s1, name, min_seconds));
     }
     // f64, what a default run computes in on a GPU with f64 shaders: the
     // launches that lead Table S1 in it.
@@ -67,9 +68,10 @@ pub fn profile(ctx: &GpuContext, quick: bool, min_seconds: f64) {
             .iter()
             .filter(|n| n.starts_with("persistent/1024") || n.ends_with("chained"))
         {
-            solo_row::<f64>(&s1, name, min_seconds);
+            tiled.extend(solo_row::<f64>(&s1, name, min_seconds));
         }
     }
+    tile_rows(&tiled);
     let count = if quick { 4 } else { 132 };
     println!("\n{count} Table S1 scenes in one dispatch (scene 0's workgroup):\n");
     header("launch");
@@ -115,14 +117,7 @@ fn row(name: &str, clocks: &PhaseCycles, wall: f64, plain: Option<f64>) {
         })
         .collect();
     let ratio = plain.map_or("–".into(), |p| format!("{:.3}", wall / p));
-    // From the slowest warp's arrival to the mark past the barrier, over
-    // every phase (none in a phase without arrivals).
-    let waiting: u64 = clocks
-        .phases
-        .iter()
-        .map(|s| s.cycles.saturating_sub(s.slowest_cycles))
-        .sum();
-    let share = waiting as f64 / clocks.total_cycles().max(1) as f64;
+    let share = barrier_share(clocks);
     println!(
         "| {name} | {:.2} | {per_step:.0} | {:.0} | {:.1} % | {ratio} | {} |",
         wall * 1e6,
@@ -132,41 +127,105 @@ fn row(name: &str, clocks: &PhaseCycles, wall: f64, plain: Option<f64>) {
     );
 }
 
-/// One launch's row on Table S1 alone in precision `T`.
-fn solo_row<T: GpuReal>(model: &Model, name: &str, min_seconds: f64) {
+/// One launch's row on Table S1 alone in precision `T`; its label and
+/// tiles' sums where it has several tiles.
+fn solo_row<T: GpuReal>(
+    model: &Model,
+    name: &str,
+    min_seconds: f64,
+) -> Option<(String, Vec<PhaseCycles>)> {
     let label = match T::NAME {
         "f32" => name.to_string(),
         other => format!("{name} ({other})"),
     };
     match solo::<T>(model, name, min_seconds) {
-        Ok((clocks, wall, plain)) => row(&label, &clocks, wall, Some(plain)),
-        Err(e) => println!("| {label} | not run: {e} |"),
+        Ok((tiles, wall, plain)) => {
+            let clocks = tiles
+                .iter()
+                .fold(PhaseCycles::default(), |sum, tile| sum.plus(tile));
+            row(&label, &clocks, wall, Some(plain));
+            (tiles.len() > 1).then_some((label, tiles))
+        }
+        Err(e) => {
+            println!("| {label} | not run: {e} |");
+            None
+        }
     }
 }
 
-/// `name` on `model` alone: its phase sums over a timed stretch of
-/// driving, its wall seconds a step clocked, and unclocked.
+/// `name` on `model` alone: its tiles' phase sums (one for a kernel
+/// without tiles) over a timed stretch of driving, its wall seconds a step
+/// clocked, and unclocked.
 fn solo<T: GpuReal>(
     model: &Model,
     name: &str,
     min_seconds: f64,
-) -> Result<(PhaseCycles, f64, f64), String> {
+) -> Result<(Vec<PhaseCycles>, f64, f64), String> {
     let mut e =
         GpuEngine::<T>::with_precision(model, options(name, true)).map_err(|e| e.to_string())?;
     advance_to(&mut e, model.prep_steps + 16).map_err(|e| e.to_string())?;
-    let mut sums = None;
+    let mut sums = Vec::new();
     let (dt, steps) = timed_advance(
         |n| {
-            let before = e.phase_cycles(0)?;
+            let before = e.phase_cycles_by_tile(0)?;
             e.advance(n)?;
-            sums = Some(e.phase_cycles(0)?.since(&before));
+            let after = e.phase_cycles_by_tile(0)?;
+            sums = after.iter().zip(&before).map(|(a, b)| a.since(b)).collect();
             Ok(())
         },
         min_seconds,
     )
     .map_err(|e| e.to_string())?;
     let plain = solo_step_figures_in::<T>(model, options(name, false), min_seconds)?;
-    Ok((sums.expect("timed"), dt / steps as f64, plain.seconds))
+    Ok((sums, dt / steps as f64, plain.seconds))
+}
+
+/// The tiled launches' sums tile by tile, in column order: cycles a step
+/// of the phases a round runs, and the share in barriers. A tile that
+/// waits long on its neighbours is faster than they are.
+fn tile_rows(launches: &[(String, Vec<PhaseCycles>)]) {
+    if launches.is_empty() {
+        return;
+    }
+    // Those a round runs: all but the dispatch's enter and leave.
+    let phases = &Phase::ALL[Phase::Forces as usize..=Phase::Wait as usize];
+    let names: Vec<&str> = phases.iter().map(|p| p.name()).collect();
+    println!("\nThe tiled launches tile by tile (cycles a step; tiles in column order):\n");
+    println!(
+        "| launch | tile | cycles a step | in barriers | {} |",
+        names.join(" | ")
+    );
+    println!(
+        "| --- | ---: | ---: | ---: |{}",
+        " ---: |".repeat(phases.len())
+    );
+    for (label, tiles) in launches {
+        for (k, tile) in tiles.iter().enumerate() {
+            let steps = f64::from(tile.get(Phase::Forces).marks.max(1));
+            let cells: Vec<String> = phases
+                .iter()
+                .map(|&p| format!("{:.0}", tile.get(p).cycles as f64 / steps))
+                .collect();
+            println!(
+                "| {label} | {k} | {:.0} | {:.1} % | {} |",
+                tile.total_cycles() as f64 / steps,
+                100.0 * barrier_share(tile),
+                cells.join(" | ")
+            );
+        }
+    }
+}
+
+/// The share of `clocks`' cycles from the slowest warp's arrival to the
+/// mark past the barrier, over every phase (none in a phase without
+/// arrivals).
+fn barrier_share(clocks: &PhaseCycles) -> f64 {
+    let waiting: u64 = clocks
+        .phases
+        .iter()
+        .map(|s| s.cycles.saturating_sub(s.slowest_cycles))
+        .sum();
+    waiting as f64 / clocks.total_cycles().max(1) as f64
 }
 
 /// `name` on the ensemble `models`: scene 0's phase sums over a stretch of

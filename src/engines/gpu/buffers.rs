@@ -203,7 +203,9 @@ impl Buffers {
         let slide = arenas.zeros(rw, s * shape.nx * WORD_PAIR_BYTES);
         let law_state = arenas.bytes(rw, bytemuck::cast_slice(&law_state));
         let status = arenas.zeros(rw, s * STATUS_BYTES);
-        let phase_cycles = arenas.zeros(rw, s * PHASE_CLOCK_BYTES);
+        // A slot a scene, or a tile's own for the tiled kernel.
+        let phase_slots = s * geometry.map_or(1, |g| g.tiles as usize);
+        let phase_cycles = arenas.zeros(rw, phase_slots * PHASE_CLOCK_BYTES);
         // One WGSL `LaneSum` per lane (of each tile's held blocks for the
         // tiled kernel).
         let lane_partial = arenas.zeros(

@@ -164,6 +164,15 @@ impl<T: GpuReal> GpuEnsemble<T> {
         self.engine.phase_cycles(scene)
     }
 
+    /// Scene `scene`'s phase clock sums, each of its tiles' apart (the
+    /// tiled kernel; one entry for the others).
+    pub fn phase_cycles_by_tile(
+        &mut self,
+        scene: usize,
+    ) -> Result<Vec<super::phase_clocks::PhaseCycles>, EngineError> {
+        self.engine.phase_cycles_by_tile(scene)
+    }
+
     pub fn save_state(&mut self, scene: usize) -> Result<EngineState, EngineError> {
         self.engine.save_state_of(scene)
     }

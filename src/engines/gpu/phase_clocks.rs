@@ -145,19 +145,34 @@ impl PhaseCycles {
         self.phases[phase.index()]
     }
 
-    /// The sums added since `before` (a reading of the same scene).
+    /// The sums added since `before` (a reading of the same slot).
     pub fn since(&self, before: &PhaseCycles) -> PhaseCycles {
+        self.combined(before, u64::wrapping_sub, u32::wrapping_sub)
+    }
+
+    /// These sums and `other`'s together (two tiles of a scene).
+    pub fn plus(&self, other: &PhaseCycles) -> PhaseCycles {
+        self.combined(other, u64::wrapping_add, u32::wrapping_add)
+    }
+
+    /// Each sum of these with `other`'s, by `cycles` and `count`.
+    fn combined(
+        &self,
+        other: &PhaseCycles,
+        cycles: fn(u64, u64) -> u64,
+        count: fn(u32, u32) -> u32,
+    ) -> PhaseCycles {
         let phases = Phase::ALL.map(|phase| {
-            let (now, then) = (self.get(phase), before.get(phase));
+            let (a, b) = (self.get(phase), other.get(phase));
             PhaseSum {
-                cycles: now.cycles.wrapping_sub(then.cycles),
-                own_cycles: now.own_cycles.wrapping_sub(then.own_cycles),
-                slowest_cycles: now.slowest_cycles.wrapping_sub(then.slowest_cycles),
-                marks: now.marks.wrapping_sub(then.marks),
+                cycles: cycles(a.cycles, b.cycles),
+                own_cycles: cycles(a.own_cycles, b.own_cycles),
+                slowest_cycles: cycles(a.slowest_cycles, b.slowest_cycles),
+                marks: count(a.marks, b.marks),
             }
         });
         PhaseCycles {
-            flushes: self.flushes.wrapping_sub(before.flushes),
+            flushes: count(self.flushes, other.flushes),
             phases,
         }
     }
@@ -193,6 +208,25 @@ mod tests {
         assert_eq!(sum.slowest_cycles, (1u64 << 32) + 6);
         assert_eq!(read.get(Phase::Forces), PhaseSum::default());
         assert_eq!(read.total_cycles(), (2u64 << 32) + 7);
+    }
+
+    #[test]
+    fn sums_add_and_subtract_phase_by_phase() {
+        let mut words = vec![0u32; PHASE_CLOCK_WORDS];
+        words[0] = 2;
+        let wait = PHASE_FIRST_WORD + Phase::Wait.index() * PHASE_WORDS;
+        words[wait] = u32::MAX;
+        words[wait + 4] = 3;
+        words[wait + 5] = 1;
+        let a = PhaseCycles::from_words(&words);
+        let b = PhaseCycles::from_words(&words);
+        let both = a.plus(&b);
+        assert_eq!(both.flushes, 4);
+        assert_eq!(both.get(Phase::Wait).cycles, 2 * u64::from(u32::MAX));
+        assert_eq!(both.get(Phase::Wait).marks, 6);
+        assert_eq!(both.get(Phase::Wait).slowest_cycles, 2);
+        assert_eq!(both.get(Phase::Forces), PhaseSum::default());
+        assert_eq!(both.since(&b), a);
     }
 
     #[test]

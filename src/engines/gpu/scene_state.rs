@@ -8,7 +8,7 @@ use super::buffers::{
     gpu_junction_springs, Shape, PHASE_CLOCK_BYTES, STATUS_BYTES, WORD_PAIR_BYTES,
 };
 use super::layout::{GpuJunctionCache, GpuJunctionSpring, GpuStatus};
-use super::phase_clocks::PhaseCycles;
+use super::phase_clocks::{PhaseCycles, PHASE_CLOCK_WORDS};
 use super::precision::{Coord, GpuReal, Packed};
 use super::readback::{cast_prefix, read_ranges, Range};
 use super::GpuEngine;
@@ -143,13 +143,26 @@ impl<T: GpuReal> GpuEngine<T> {
 
     /// Scene `k`'s phase clock sums since the engine was built: where its
     /// kernels' steps spent their cycles (`GpuOptions::phase_clocks`; all
-    /// zero where it is off).
+    /// zero where it is off), its tiles' together.
     pub fn phase_cycles(&mut self, k: usize) -> Result<PhaseCycles, EngineError> {
+        let tiles = self.phase_cycles_by_tile(k)?;
+        Ok(tiles
+            .iter()
+            .fold(PhaseCycles::default(), |sum, tile| sum.plus(tile)))
+    }
+
+    /// Scene `k`'s phase clock sums, each of its tiles' apart in column
+    /// order (the tiled kernel), or the scene's alone (the others).
+    pub fn phase_cycles_by_tile(&mut self, k: usize) -> Result<Vec<PhaseCycles>, EngineError> {
         self.drain()?;
-        let range = self.slice(&self.buffers.phase_cycles, k, 1, PHASE_CLOCK_BYTES);
+        let tiles = self.tiles.as_ref().map_or(1, |t| t.geometry.tiles as usize);
+        let range = self.slice(&self.buffers.phase_cycles, k, tiles, PHASE_CLOCK_BYTES);
         let raw = read_ranges(&self.ctx, &[range])?;
         let words: Vec<u32> = bytemuck::pod_collect_to_vec(&raw[0]);
-        Ok(PhaseCycles::from_words(&words))
+        Ok(words
+            .chunks(PHASE_CLOCK_WORDS)
+            .map(PhaseCycles::from_words)
+            .collect())
     }
 
     /// Kept records of the tiled kernel's halo copies (`junction_sums_slot`
