@@ -118,9 +118,7 @@ fn clocked_kernels_keep_their_bits_and_time_every_phase() {
             assert_eq!(u64::from(tile.get(Phase::Forces).marks), steps, "{name}");
             assert!(tile.get(Phase::Forces).cycles > 0, "{name}: {tile:?}");
         }
-        let together = tiles
-            .iter()
-            .fold(PhaseCycles::default(), |sum, tile| sum.plus(tile));
+        let together: PhaseCycles = tiles.iter().sum();
         assert_eq!(together, clocks, "{name}");
     }
 }

@@ -140,9 +140,7 @@ fn solo_row<T: GpuReal>(
     };
     match solo::<T>(model, name, min_seconds) {
         Ok((tiles, wall, plain)) => {
-            let clocks = tiles
-                .iter()
-                .fold(PhaseCycles::default(), |sum, tile| sum.plus(tile));
+            let clocks: PhaseCycles = tiles.iter().sum();
             row(&label, &clocks, wall, Some(plain));
             (tiles.len() > 1).then_some((label, tiles))
         }
@@ -216,16 +214,9 @@ fn tile_rows(launches: &[(String, Vec<PhaseCycles>)]) {
     }
 }
 
-/// The share of `clocks`' cycles from the slowest warp's arrival to the
-/// mark past the barrier, over every phase (none in a phase without
-/// arrivals).
+/// The share of `clocks`' cycles the barriers themselves took.
 fn barrier_share(clocks: &PhaseCycles) -> f64 {
-    let waiting: u64 = clocks
-        .phases
-        .iter()
-        .map(|s| s.cycles.saturating_sub(s.slowest_cycles))
-        .sum();
-    waiting as f64 / clocks.total_cycles().max(1) as f64
+    clocks.barrier_cycles() as f64 / clocks.total_cycles().max(1) as f64
 }
 
 /// `name` on the ensemble `models`: scene 0's phase sums over a stretch of

@@ -155,6 +155,16 @@ impl PhaseCycles {
         self.combined(other, u64::wrapping_add, u32::wrapping_add)
     }
 
+    /// Cycles from the slowest warp's arrival to the mark past the
+    /// barrier, over every phase (none in a phase without arrivals): what
+    /// the barriers themselves took.
+    pub fn barrier_cycles(&self) -> u64 {
+        self.phases
+            .iter()
+            .map(|s| s.cycles.saturating_sub(s.slowest_cycles))
+            .sum()
+    }
+
     /// Each sum of these with `other`'s, by `cycles` and `count`.
     fn combined(
         &self,
@@ -181,6 +191,13 @@ impl PhaseCycles {
     /// their start to their last mark.
     pub fn total_cycles(&self) -> u64 {
         self.phases.iter().map(|s| s.cycles).sum()
+    }
+}
+
+/// Several slots' sums together (a scene's tiles).
+impl<'a> std::iter::Sum<&'a PhaseCycles> for PhaseCycles {
+    fn sum<I: Iterator<Item = &'a PhaseCycles>>(slots: I) -> PhaseCycles {
+        slots.fold(PhaseCycles::default(), |sum, slot| sum.plus(slot))
     }
 }
 
@@ -227,6 +244,8 @@ mod tests {
         assert_eq!(both.get(Phase::Wait).slowest_cycles, 2);
         assert_eq!(both.get(Phase::Forces), PhaseSum::default());
         assert_eq!(both.since(&b), a);
+        assert_eq!([a.clone(), b].iter().sum::<PhaseCycles>(), both);
+        assert_eq!(both.barrier_cycles(), 2 * u64::from(u32::MAX) - 2);
     }
 
     #[test]

@@ -146,9 +146,7 @@ impl<T: GpuReal> GpuEngine<T> {
     /// zero where it is off), its tiles' together.
     pub fn phase_cycles(&mut self, k: usize) -> Result<PhaseCycles, EngineError> {
         let tiles = self.phase_cycles_by_tile(k)?;
-        Ok(tiles
-            .iter()
-            .fold(PhaseCycles::default(), |sum, tile| sum.plus(tile)))
+        Ok(tiles.iter().sum())
     }
 
     /// Scene `k`'s phase clock sums, each of its tiles' apart in column
