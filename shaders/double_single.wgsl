@@ -49,10 +49,29 @@ fn force_sum_add(a: force_sum, x: f32) -> force_sum {
     return vec2<f32>(t, a.y + e);
 }
 
-// One bond's spring and dashpot terms: their f32 sum, whose rounding is
-// antisymmetric like the terms (CompensatedSum::add_bond).
+// One bond's spring and dashpot terms, the rotation part of a split bond
+// (q·du + dashpot: a strain's fraction of its q·r0), added to the error
+// word in plain f32: only the large q·r0 terms, which cancel across a
+// block, need the two-sum (CompensatedSum::add_bond). Their f32 sum is
+// antisymmetric like the terms, so action still equals reaction.
+// The terms go through `opaque`: a product that reaches an add directly
+// may be fused into it (an FMA: one rounding fewer), and whether a driver
+// fuses it depends on the code around it, so two kernels computing the
+// same block would round it apart (lavapipe did, in the tiled and
+// resident kernels; multiplying by c.one did not stop it: a compiler may
+// factor x·one + y·one into (x + y)·one). The two-sum tolerated that,
+// since its error term takes up a fused add's difference; a plain add
+// does not.
 fn force_sum_add_bond(a: force_sum, spring: f32, damper: f32) -> force_sum {
-    return force_sum_add(a, spring + damper);
+    return vec2<f32>(a.x, a.y + (opaque(spring) + opaque(damper)));
+}
+
+// x, with its bits passed through an integer operation whose operand is
+// zero only at run time (c.one's bits less 1.0's), so no compiler can
+// fuse or regroup the arithmetic that made x with the arithmetic that
+// uses it.
+fn opaque(x: f32) -> f32 {
+    return bitcast<f32>(bitcast<u32>(x) ^ (bitcast<u32>(c.one) ^ 0x3f800000u));
 }
 
 // Two partial sums joined (a block's junction lanes): the sums two-summed,

@@ -233,9 +233,9 @@ pub trait ForceSum<T: Real>: Copy + Send + Sync + Default + std::fmt::Debug + 's
     fn add(self, x: T) -> Self;
     /// `self + spring + damper`, one bond's two terms. Plain sums add them
     /// one at a time (the same bits as ever); the compensated sum adds
-    /// their f32 sum, whose rounding is antisymmetric like the terms (a
-    /// bond's far end gets −spring − damper = −(spring + damper) exactly),
-    /// so action still equals reaction at half the cost.
+    /// their f32 sum to its error word, whose rounding is antisymmetric
+    /// like the terms (a bond's far end gets −spring − damper =
+    /// −(spring + damper) exactly), so action still equals reaction.
     #[inline(always)]
     fn add_bond(self, spring: T, damper: T) -> Self {
         self.add(spring).add(damper)
@@ -296,9 +296,17 @@ impl ForceSum<f32> for CompensatedSum {
             err: self.err + e,
         }
     }
+    /// The rotation part of a split bond (q·du and the dashpot, a strain's
+    /// fraction of q·r0) needs no two-sum: only the large q·r0 terms
+    /// cancel across a block. Their f32 sum goes to the error word
+    /// (`force_sum_add_bond`, whose `opaque` keeps a GPU compiler from
+    /// fusing the products into it).
     #[inline(always)]
     fn add_bond(self, spring: f32, damper: f32) -> Self {
-        self.add(spring + damper)
+        CompensatedSum {
+            sum: self.sum,
+            err: self.err + (spring + damper),
+        }
     }
     #[inline(always)]
     fn merge(self, other: Self) -> Self {
@@ -364,6 +372,49 @@ mod tests {
         assert!((running as f64 - exact).abs() > 1e-5, "{running}");
         // Adding +0.0 (the sweep engine's missing bonds) changes no bit.
         assert_eq!(sum.add(0.0), sum);
+    }
+
+    /// A block's split bonds: the q·r0 terms (large, cancelling across the
+    /// block) are two-summed; each bond's q·du + dashpot (a strain's
+    /// fraction of them) goes to the error word in plain f32, leaving the
+    /// sum word as the large terms alone make it. The block's force is
+    /// still within a few ulp of the exact sum of its terms, where an f32
+    /// running sum loses the small terms to ulp(q·r0) (the control).
+    #[test]
+    fn split_bonds_add_their_small_terms_to_the_error_word() {
+        let large = [0.3125f32, -0.312_500_3, 0.1875, -0.187_499_85];
+        let small = [
+            (2.1e-6f32, -3.0e-8f32),
+            (-1.7e-6, 4.0e-8),
+            (9.0e-7, 1.0e-8),
+            (-4.0e-7, -2.0e-8),
+        ];
+        let mut sum = CompensatedSum::default();
+        let mut large_only = CompensatedSum::default();
+        let mut running = 0.0f32;
+        let mut exact = 0.0f64;
+        for (&l, &(spring, damper)) in large.iter().zip(&small) {
+            sum = sum.add(l).add_bond(spring, damper);
+            large_only = large_only.add(l);
+            running = ForceSum::add_bond(ForceSum::add(running, l), spring, damper);
+            exact += l as f64 + spring as f64 + damper as f64;
+        }
+        assert_eq!(sum.sum, large_only.sum);
+        let ulp = (exact as f32).abs() * f32::EPSILON;
+        let off = (sum.value() as f64 - exact).abs();
+        assert!(off <= 4.0 * ulp as f64, "{} against {exact}", sum.value());
+        assert!(
+            (running as f64 - exact).abs() > 1000.0 * ulp as f64,
+            "{running} {exact}"
+        );
+        // The bond seen from its other end adds exactly the negated terms.
+        let far = large
+            .iter()
+            .zip(&small)
+            .fold(CompensatedSum::default(), |s, (&l, &(spring, damper))| {
+                s.add(-l).add_bond(-spring, -damper)
+            });
+        assert_eq!(far.value(), -sum.value());
     }
 
     /// A block's junction forces are alike in size and summed in lanes
