@@ -6,10 +6,27 @@
 // c.one is a runtime 1.0 from the scene's constants. Multiplying the partial
 // sums by it is exact but opaque to the compiler, so no driver can
 // reassociate (s - hi) - s to -hi and cancel the error terms (gpuweb #2076).
+// And every term a two-sum adds passes through `opaque` first. The terms
+// are mostly products (k·(a − r), q·r0, dt·v), and SPIR-V lets a driver
+// fuse a product into the add that takes it (an FMA: naga marks nothing
+// NoContraction). A fused first add rounds the exact product while the
+// error term is made from the rounded one, so the pair no longer holds the
+// sum; and whether a driver fuses depends on the code around the add, so
+// kernels computing the same block parted (on lavapipe, where a junction
+// sum fell on a rounding tie). Guarding the product with c.one does not
+// stop it: a compiler may factor x·one + y·one into (x + y)·one.
 // import: scene
 
+// x, its bits passed through an integer operation whose operand is zero
+// only at run time (c.one's bits less 1.0's): no compiler can fuse or
+// regroup the arithmetic that made x with the arithmetic that uses it.
+fn opaque(x: f32) -> f32 {
+    return bitcast<f32>(bitcast<u32>(x) ^ (bitcast<u32>(c.one) ^ 0x3f800000u));
+}
+
 // hi + lo + d, renormalised.
-fn ds_add(a: vec2<f32>, d: f32) -> vec2<f32> {
+fn ds_add(a: vec2<f32>, increment: f32) -> vec2<f32> {
+    let d = opaque(increment);
     let s = (a.x + d) * c.one;
     let b = (s - a.x) * c.one;
     let err = (a.x - (s - b)) + (d - b);
@@ -42,7 +59,8 @@ fn force_sum_zero() -> force_sum {
     return vec2<f32>(0.0, 0.0);
 }
 
-fn force_sum_add(a: force_sum, x: f32) -> force_sum {
+fn force_sum_add(a: force_sum, term: f32) -> force_sum {
+    let x = opaque(term);
     let t = (a.x + x) * c.one;
     let b = (t - a.x) * c.one;
     let e = (a.x - (t - b)) + (x - b);
@@ -53,25 +71,10 @@ fn force_sum_add(a: force_sum, x: f32) -> force_sum {
 // (q·du + dashpot: a strain's fraction of its q·r0), added to the error
 // word in plain f32: only the large q·r0 terms, which cancel across a
 // block, need the two-sum (CompensatedSum::add_bond). Their f32 sum is
-// antisymmetric like the terms, so action still equals reaction.
-// The terms go through `opaque`: a product that reaches an add directly
-// may be fused into it (an FMA: one rounding fewer), and whether a driver
-// fuses it depends on the code around it, so two kernels computing the
-// same block would round it apart (lavapipe did, in the tiled and
-// resident kernels; multiplying by c.one did not stop it: a compiler may
-// factor x·one + y·one into (x + y)·one). The two-sum tolerated that,
-// since its error term takes up a fused add's difference; a plain add
-// does not.
+// antisymmetric like the terms, so action still equals reaction. Both
+// are products, hence `opaque` (above).
 fn force_sum_add_bond(a: force_sum, spring: f32, damper: f32) -> force_sum {
     return vec2<f32>(a.x, a.y + (opaque(spring) + opaque(damper)));
-}
-
-// x, with its bits passed through an integer operation whose operand is
-// zero only at run time (c.one's bits less 1.0's), so no compiler can
-// fuse or regroup the arithmetic that made x with the arithmetic that
-// uses it.
-fn opaque(x: f32) -> f32 {
-    return bitcast<f32>(bitcast<u32>(x) ^ (bitcast<u32>(c.one) ^ 0x3f800000u));
 }
 
 // Two partial sums joined (a block's junction lanes): the sums two-summed,

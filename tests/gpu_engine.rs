@@ -803,29 +803,33 @@ fn kept_junction_sums_give_the_bits_of_summing_every_step() {
     assert!(kept != other, "control");
 }
 
+/// The engine on `path` with every block's junctions summed every step
+/// (no kept sums), its lanes merged in subgroups where `lane_shuffle`.
+fn summing_every_step(m: &Model, path: GpuPath, lane_shuffle: bool) -> GpuEngine {
+    let opts = GpuOptions {
+        path,
+        keep_junction_sums: false,
+        lane_shuffle,
+        ..GpuOptions::default()
+    };
+    GpuEngine::with_options(m, opts).expect("a GPU adapter (lavapipe in CI)")
+}
+
 /// The persistent, resident and tiled kernels merge runs of a block's
 /// junction lanes in subgroups before storage where the adapter has
 /// subgroup operations (`GpuOptions::lane_shuffle`): the same tree of the
 /// same lane sums, so the bits of every lane's sum through storage,
 /// through the normal-load phase and the stick-slip window's first 2,000
 /// steps of driving (2,400 ruptures), with every block summed every
-/// step. Further on, the two modules part where a block's sum lands on a
-/// rounding tie, as the one-step kernels do (docs/gpu-kernels.md; on
-/// lavapipe 2,225 steps in, block 4, where the shuffled merge rounds as
-/// one-step-lanes does). The kernels must report that they merged in
-/// subgroups (lavapipe: runs of 8 lanes), or the test would pass without
-/// them; in CI the adapter must have subgroups.
+/// step (the whole window: the next test, for persistent). The kernels
+/// must report that they merged in subgroups (lavapipe: runs of 8 lanes),
+/// or the test would pass without them; in CI the adapter must have
+/// subgroups.
 #[test]
 fn lane_shuffles_give_the_bits_of_lane_sums_through_storage() {
     let m = stick_slip_scene(&[]);
     let run = |m: &Model, path, shuffle| {
-        let opts = GpuOptions {
-            path,
-            keep_junction_sums: false,
-            lane_shuffle: shuffle,
-            ..GpuOptions::default()
-        };
-        let mut g = GpuEngine::with_options(m, opts).expect("a GPU adapter (lavapipe in CI)");
+        let mut g = summing_every_step(m, path, shuffle);
         advance_to(&mut g, m.prep_steps + 2000).unwrap();
         (g.snapshot().unwrap(), g.lane_shuffle_levels())
     };
@@ -858,6 +862,57 @@ fn lane_shuffles_give_the_bits_of_lane_sums_through_storage() {
     let (base, _) = run(&m, GpuPath::Persistent, true);
     let (other, _) = run(&faster, GpuPath::Persistent, true);
     assert!(base != other, "control");
+}
+
+/// Every kernel keeps the one-step kernel's bits through the whole
+/// stick-slip window (6,000 driving steps, over 13,000 ruptures, every
+/// block summed every step), its lanes merged in subgroups or through
+/// storage, compared every 250 steps. Until session 66 every other kernel
+/// parted from one-step 3,650 steps in on lavapipe, where a block's
+/// junction sum landed on a rounding tie: a product reaching a two-sum's
+/// first add was fused into it (an FMA) in some kernels' compiles and
+/// not in others, and the two-sum's error term, made from the product
+/// rounded, then missed the difference. The terms now pass through
+/// `opaque` first (`shaders/double_single.wgsl`). Negative control: a
+/// drive 1e-9 faster is flagged.
+#[test]
+fn every_kernel_keeps_the_one_step_kernels_bits_through_the_stick_slip_window() {
+    let m = stick_slip_scene(&[]);
+    let engine = summing_every_step;
+    let mut reference = engine(&m, GpuPath::OneStep, false);
+    let mut others: Vec<(String, GpuEngine)> = KERNELS
+        .into_iter()
+        .filter(|&p| p != GpuPath::OneStep)
+        .map(|p| (format!("{p:?}"), engine(&m, p, true)))
+        .collect();
+    others.push((
+        "Persistent, lanes through storage".into(),
+        engine(&m, GpuPath::Persistent, false),
+    ));
+    let end = m.prep_steps + 6000;
+    for step in (m.prep_steps + 250..=end).step_by(250) {
+        advance_to(&mut reference, step).unwrap();
+        let expected = reference.snapshot().unwrap();
+        for (name, e) in others.iter_mut() {
+            advance_to(e, step).unwrap();
+            assert!(
+                e.snapshot().unwrap() == expected,
+                "{name}: parted from one-step by driving step {}",
+                step - m.prep_steps
+            );
+        }
+    }
+    assert!(reference.snapshot().unwrap().total_ruptures() > 10_000);
+    let mut faster = m.clone();
+    if let slipfront::model::Driver::SideSpring { velocity, .. } = &mut faster.driver {
+        *velocity *= 1.0 + 1e-9;
+    }
+    let mut other = engine(&faster, GpuPath::Resident, true);
+    advance_to(&mut other, end).unwrap();
+    assert!(
+        other.snapshot().unwrap() != reference.snapshot().unwrap(),
+        "control"
+    );
 }
 
 /// The process's pipelines are compiled once a key, whichever threads ask

@@ -114,11 +114,10 @@ fn the_tiled_kernel_is_the_one_step_kernel_bit_for_bit() {
 /// source (one-step: one thread walking the lanes; one-step-lanes:
 /// subtrees in workgroup memory; persistent and resident: partials in
 /// storage), so through the normal-load phase (every block summed every
-/// step) and ruptures they end in the bits of the one-step kernel, until
-/// a block's sum lands on a rounding tie that the driver's compiled
-/// merges round apart (docs/gpu-kernels.md: one-step-lanes, 2,274 steps
-/// into a faster stick-slip window). Negative control: a drive 1e-9
-/// faster is flagged.
+/// step) and ruptures they end in the bits of the one-step kernel (and
+/// through the whole stick-slip window since the two-sums' terms are
+/// `opaque`: gpu_engine.rs). Negative control: a drive 1e-9 faster is
+/// flagged.
 #[test]
 fn every_kernel_is_the_one_step_kernel_bit_for_bit() {
     let m = driven();
