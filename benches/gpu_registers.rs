@@ -35,6 +35,9 @@
 //! SLIPFRONT_GPU_REGISTERS_BARRIERS=device compiles the phase barriers as
 //! wgpu writes them, with device scope (`GpuOptions::workgroup_barriers`
 //! off), where the engine would give them workgroup scope.
+//! SLIPFRONT_GPU_REGISTERS_ARITHMETIC=guarded compiles mixed f32's kernels
+//! as wgpu writes them, with their fusion guards (`GpuOptions::strict_arithmetic`
+//! off), where the engine would forbid contraction instead.
 //! SLIPFRONT_GPU_REGISTERS_PHASE_CLOCKS=1 compiles the persistent, resident
 //! and tiled kernels with their phase clocks (`GpuOptions::phase_clocks`),
 //! where the device has VK_KHR_shader_clock: what timing them costs in
@@ -170,6 +173,8 @@ struct Table<'a> {
     set: Vec<(String, f64)>,
     /// The phase barriers with naga's device scope (`SLIPFRONT_GPU_REGISTERS_BARRIERS`).
     device_barriers: bool,
+    /// Mixed f32 guarded, as wgpu writes it (`SLIPFRONT_GPU_REGISTERS_ARITHMETIC`).
+    guarded: bool,
     /// The kernels with their phase clocks (`SLIPFRONT_GPU_REGISTERS_PHASE_CLOCKS`).
     phase_clocks: bool,
     /// Why a row did not compile, each reason once.
@@ -184,6 +189,7 @@ impl Table<'_> {
     fn rows<T: GpuReal>(&mut self, scene_name: &str, model: &Model, launch: Launch) {
         let opts = GpuOptions {
             workgroup_barriers: !self.device_barriers,
+            strict_arithmetic: !self.guarded,
             phase_clocks: self.phase_clocks,
             ..launch.options(GpuOptions::default())
         };
@@ -349,6 +355,13 @@ fn main() {
             Ok("workgroup") | Err(_) => false,
             Ok(other) => {
                 panic!("SLIPFRONT_GPU_REGISTERS_BARRIERS: `{other}` is not device or workgroup")
+            }
+        },
+        guarded: match std::env::var("SLIPFRONT_GPU_REGISTERS_ARITHMETIC").as_deref() {
+            Ok("guarded") => true,
+            Ok("strict") | Err(_) => false,
+            Ok(other) => {
+                panic!("SLIPFRONT_GPU_REGISTERS_ARITHMETIC: `{other}` is not strict or guarded")
             }
         },
         phase_clocks: match std::env::var("SLIPFRONT_GPU_REGISTERS_PHASE_CLOCKS").as_deref() {

@@ -15,24 +15,38 @@
 // kernels computing the same block parted (on lavapipe, where a junction
 // sum fell on a rounding tie). Guarding the product with c.one does not
 // stop it: a compiler may factor x·one + y·one into (x + y)·one.
+//
+// Both guards are for the modules wgpu writes. Where the engine writes a
+// module's SPIR-V itself (KernelBuild::strict_arithmetic) it sets
+// FUSION_GUARDS false and decorates every floating-point operation
+// NoContraction instead (spirv::forbid_contraction), which forbids the
+// driver both fusing and regrouping, everywhere, in fewer instructions.
 // import: scene
+
+override FUSION_GUARDS: bool = true;
+
+// x times the run-time 1.0 where the guards are compiled in.
+fn fenced(x: f32) -> f32 {
+    return select(x, x * c.one, FUSION_GUARDS);
+}
 
 // x, its bits passed through an integer operation whose operand is zero
 // only at run time (c.one's bits less 1.0's): no compiler can fuse or
 // regroup the arithmetic that made x with the arithmetic that uses it.
 fn opaque(x: f32) -> f32 {
-    return bitcast<f32>(bitcast<u32>(x) ^ (bitcast<u32>(c.one) ^ 0x3f800000u));
+    let hidden = bitcast<f32>(bitcast<u32>(x) ^ (bitcast<u32>(c.one) ^ 0x3f800000u));
+    return select(x, hidden, FUSION_GUARDS);
 }
 
 // hi + lo + d, renormalised.
 fn ds_add(a: vec2<f32>, increment: f32) -> vec2<f32> {
     let d = opaque(increment);
-    let s = (a.x + d) * c.one;
-    let b = (s - a.x) * c.one;
+    let s = fenced(a.x + d);
+    let b = fenced(s - a.x);
     let err = (a.x - (s - b)) + (d - b);
     let lo = a.y + err;
-    let hi = (s + lo) * c.one;
-    return vec2<f32>(hi, lo - (hi - s) * c.one);
+    let hi = fenced(s + lo);
+    return vec2<f32>(hi, lo - fenced(hi - s));
 }
 
 // a - b rounded to f32 once (exact leading difference for nearby values).
@@ -61,8 +75,8 @@ fn force_sum_zero() -> force_sum {
 
 fn force_sum_add(a: force_sum, term: f32) -> force_sum {
     let x = opaque(term);
-    let t = (a.x + x) * c.one;
-    let b = (t - a.x) * c.one;
+    let t = fenced(a.x + x);
+    let b = fenced(t - a.x);
     let e = (a.x - (t - b)) + (x - b);
     return vec2<f32>(t, a.y + e);
 }

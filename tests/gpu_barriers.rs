@@ -3,8 +3,9 @@
 //! writes the kernel's SPIR-V itself (`spirv::kernel_spirv`, the layout's
 //! bindings placed as wgpu's Vulkan backend places them) and gives it to
 //! the driver as it is. The same arithmetic in the same order, so the
-//! same bits as the modules wgpu writes, with naga's device-scope
-//! barriers. On lavapipe (CI) this checks the path, not the speed: what
+//! same bits as with naga's device-scope barriers (in mixed f32 both are
+//! the engine's own SPIR-V, for strict arithmetic; in f64 the reference
+//! is wgpu's module). On lavapipe (CI) this checks the path, not the speed: what
 //! the scope saves is a hardware question (`gpu_table` section 7). These
 //! tests fail, never skip, when no adapter exists.
 
@@ -38,11 +39,11 @@ fn run<T: GpuReal>(m: &Model, opts: GpuOptions, end: u64) -> (Snapshot, bool) {
 
 /// Each kernel with phase barriers, in mixed f32 and (persistent) f64,
 /// through the normal-load phase and into ruptures: the engine's own
-/// SPIR-V with workgroup-scoped barriers ends in the bits of wgpu's
-/// modules. The engine took its own SPIR-V (lavapipe is a Vulkan 1.3
+/// SPIR-V with workgroup-scoped barriers ends in the bits of naga's
+/// device-scoped ones. The engine took its own SPIR-V (lavapipe is a Vulkan 1.3
 /// device). Negative control: a drive 1e-9 faster, scoped, is flagged.
 #[test]
-fn workgroup_scoped_barriers_give_the_bits_of_wgpus_modules() {
+fn workgroup_scoped_barriers_give_the_bits_of_device_scoped_ones() {
     let m = driven(0.4);
     let end = m.prep_steps + 1500;
     for (name, opts) in launches() {
@@ -51,7 +52,7 @@ fn workgroup_scoped_barriers_give_the_bits_of_wgpus_modules() {
             ..opts
         };
         let (reference, unscoped) = run::<f32>(&m, device, end);
-        assert!(!unscoped, "{name}: wgpu's module");
+        assert!(!unscoped, "{name}: naga's device scope");
         assert!(reference.total_ruptures() > 50, "{name}: junctions broke");
         let (got, scoped) = run::<f32>(&m, opts, end);
         assert!(scoped, "{name}: the engine's own SPIR-V on this adapter");
@@ -79,9 +80,9 @@ fn workgroup_scoped_barriers_give_the_bits_of_wgpus_modules() {
 }
 
 /// An ensemble with two scenes side by side in a workgroup: each scene's
-/// bits with scoped barriers are its bits with wgpu's module.
+/// bits with scoped barriers are its bits with naga's device scope.
 #[test]
-fn an_ensemble_with_scoped_barriers_has_the_bits_of_wgpus_modules() {
+fn an_ensemble_with_scoped_barriers_has_the_bits_of_device_scoped_ones() {
     let models = [driven(0.4), driven(0.45), driven(0.5)];
     let end = models[0].prep_steps + 1500;
     let opts = GpuOptions {

@@ -46,13 +46,27 @@ fn run_both(m: &Model, steps: u64, path: GpuPath) -> (Snapshot, Snapshot) {
 /// The small side-driven scene of the cross-checks (29 × 16 blocks).
 const SMALL: &[&str] = &slipfront::app::verify::SMALL_SCENE;
 
+/// Every kernel against the CPU twin through the normal load and 3000
+/// steps of driving, before any junction breaks: within the rounding of
+/// division and square roots on any adapter, and bit for bit on one that
+/// rounds them as IEEE does (llvmpipe): strict arithmetic (the default
+/// where the engine writes the SPIR-V) forbids the driver any fusing or
+/// regrouping, so a kernel computes the twin's operations in the twin's
+/// order. Wgpu's guarded modules, which llvmpipe may fuse outside the
+/// guarded sums, part from the twin within ten steps there (session 67).
+/// Negative control: a drive 1e-9 faster is told apart, bit for bit.
 #[test]
 fn gpu_f32_matches_cpu_f32_field_by_field() {
-    // Normal loading and 3000 steps of driving, before any junction breaks.
     let m = model(SMALL);
+    let ieee_division = slipfront::engines::gpu::context::shared()
+        .expect("an adapter")
+        .is_software();
     for path in KERNELS {
         let (c, g) = run_both(&m, m.prep_steps + 3000, path);
         assert_eq!(c.total_ruptures(), 0);
+        if ieee_division {
+            assert!(c == g, "{path:?}: not the CPU twin's bits");
+        }
         let errors = compare_snapshots(&c, &g);
         // f32 kernels differ from the CPU twins only by the rounding of
         // division and square roots: 1e-4 of each field's scale;
@@ -65,6 +79,17 @@ fn gpu_f32_matches_cpu_f32_field_by_field() {
             "{path:?}: {errors:?}"
         );
     }
+    let mut faster = m.clone();
+    if let slipfront::model::Driver::SideSpring { velocity, .. } = &mut faster.driver {
+        *velocity *= 1.0 + 1e-9;
+    }
+    let (plain, _) = run_both(&m, m.prep_steps + 3000, GpuPath::OneStep);
+    let mut g = gpu_on(&faster, GpuPath::OneStep);
+    advance_to(&mut g, m.prep_steps + 3000).unwrap();
+    assert!(
+        g.snapshot().unwrap() != plain,
+        "control: the drive 1e-9 faster"
+    );
 }
 
 /// Per-block rupture counts and the first rupture step of each block.
@@ -806,10 +831,21 @@ fn kept_junction_sums_give_the_bits_of_summing_every_step() {
 /// The engine on `path` with every block's junctions summed every step
 /// (no kept sums), its lanes merged in subgroups where `lane_shuffle`.
 fn summing_every_step(m: &Model, path: GpuPath, lane_shuffle: bool) -> GpuEngine {
+    summing_every_step_with(m, path, lane_shuffle, true)
+}
+
+/// `summing_every_step`, with strict arithmetic or wgpu's guarded modules.
+fn summing_every_step_with(
+    m: &Model,
+    path: GpuPath,
+    lane_shuffle: bool,
+    strict_arithmetic: bool,
+) -> GpuEngine {
     let opts = GpuOptions {
         path,
         keep_junction_sums: false,
         lane_shuffle,
+        strict_arithmetic,
         ..GpuOptions::default()
     };
     GpuEngine::with_options(m, opts).expect("a GPU adapter (lavapipe in CI)")
@@ -873,44 +909,58 @@ fn lane_shuffles_give_the_bits_of_lane_sums_through_storage() {
 /// first add was fused into it (an FMA) in some kernels' compiles and
 /// not in others, and the two-sum's error term, made from the product
 /// rounded, then missed the difference. The terms now pass through
-/// `opaque` first (`shaders/double_single.wgsl`). Negative control: a
+/// `opaque` first in wgpu's modules (`shaders/double_single.wgsl`); in
+/// strict arithmetic (the default where the engine writes the SPIR-V,
+/// session 67) no operation may be fused at all. Both ways are checked:
+/// each kernel against one-step built the same way. Negative control: a
 /// drive 1e-9 faster is flagged.
 #[test]
 fn every_kernel_keeps_the_one_step_kernels_bits_through_the_stick_slip_window() {
     let m = stick_slip_scene(&[]);
-    let engine = summing_every_step;
-    let mut reference = engine(&m, GpuPath::OneStep, false);
-    let mut others: Vec<(String, GpuEngine)> = KERNELS
-        .into_iter()
-        .filter(|&p| p != GpuPath::OneStep)
-        .map(|p| (format!("{p:?}"), engine(&m, p, true)))
-        .collect();
-    others.push((
-        "Persistent, lanes through storage".into(),
-        engine(&m, GpuPath::Persistent, false),
-    ));
     let end = m.prep_steps + 6000;
-    for step in (m.prep_steps + 250..=end).step_by(250) {
-        advance_to(&mut reference, step).unwrap();
-        let expected = reference.snapshot().unwrap();
-        for (name, e) in others.iter_mut() {
-            advance_to(e, step).unwrap();
+    let mut strict_reference = None;
+    for strict in [true, false] {
+        let engine = |m: &Model, path, shuffle| summing_every_step_with(m, path, shuffle, strict);
+        let mut reference = engine(&m, GpuPath::OneStep, false);
+        let mut others: Vec<(String, GpuEngine)> = KERNELS
+            .into_iter()
+            .filter(|&p| p != GpuPath::OneStep)
+            .map(|p| (format!("{p:?}"), engine(&m, p, true)))
+            .collect();
+        others.push((
+            "Persistent, lanes through storage".into(),
+            engine(&m, GpuPath::Persistent, false),
+        ));
+        for (name, e) in &others {
             assert!(
-                e.snapshot().unwrap() == expected,
-                "{name}: parted from one-step by driving step {}",
-                step - m.prep_steps
+                e.describe().contains("strict arithmetic") == strict,
+                "{name}: {}",
+                e.describe()
             );
         }
+        for step in (m.prep_steps + 250..=end).step_by(250) {
+            advance_to(&mut reference, step).unwrap();
+            let expected = reference.snapshot().unwrap();
+            for (name, e) in others.iter_mut() {
+                advance_to(e, step).unwrap();
+                assert!(
+                    e.snapshot().unwrap() == expected,
+                    "{name} (strict {strict}): parted from one-step by driving step {}",
+                    step - m.prep_steps
+                );
+            }
+        }
+        assert!(reference.snapshot().unwrap().total_ruptures() > 10_000);
+        strict_reference.get_or_insert(reference.snapshot().unwrap());
     }
-    assert!(reference.snapshot().unwrap().total_ruptures() > 10_000);
     let mut faster = m.clone();
     if let slipfront::model::Driver::SideSpring { velocity, .. } = &mut faster.driver {
         *velocity *= 1.0 + 1e-9;
     }
-    let mut other = engine(&faster, GpuPath::Resident, true);
+    let mut other = summing_every_step(&faster, GpuPath::Resident, true);
     advance_to(&mut other, end).unwrap();
     assert!(
-        other.snapshot().unwrap() != reference.snapshot().unwrap(),
+        Some(other.snapshot().unwrap()) != strict_reference,
         "control"
     );
 }
@@ -932,6 +982,7 @@ fn pipelines_asked_for_at_once_are_compiled_once_a_key() {
         step_immediate: false,
         workgroup_barriers: false,
         phase_clocks: false,
+        strict_arithmetic: false,
     };
     // A constant no other test compiles with: a key of this test's own.
     let constants = [("DAMPING_FORM", 2.0)];

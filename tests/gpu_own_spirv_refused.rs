@@ -1,8 +1,9 @@
 //! A device that refuses the engine's own SPIR-V (`GpuContext::
 //! pipeline_from_spirv`, `refuse_own_spirv`): the refusal is caught as an
 //! error, not left for the run's device check, and every engine built
-//! after it runs wgpu's modules, with the phase barriers at device scope,
-//! and says so. One test in a binary of its own: the refusal holds for the
+//! after it runs wgpu's modules, with the phase barriers at device scope
+//! and mixed f32's fusion guards in place of strict arithmetic, and says
+//! so. One test in a binary of its own: the refusal holds for the
 //! process's shared context. It fails, never skips, when no adapter
 //! exists (lavapipe in CI).
 
@@ -40,8 +41,9 @@ fn a_refused_own_spirv_falls_back_to_wgpus_modules() {
     assert!(scoped
         .describe()
         .contains("phase barriers at workgroup scope"));
+    assert!(scoped.describe().contains("strict arithmetic"));
     let k = &scoped.kernel_sources()[0];
-    assert!(k.build.workgroup_barriers);
+    assert!(k.build.workgroup_barriers && k.build.strict_arithmetic);
     // The engine's own words with their first word lost: refused with an
     // error, never given to the driver (the layout's bindings do not matter
     // here: `kernel_spirv` places them at their WGSL numbers). (A module the driver itself
@@ -65,7 +67,9 @@ fn a_refused_own_spirv_falls_back_to_wgpus_modules() {
         "{}",
         plain.describe()
     );
-    assert!(!plain.kernel_sources()[0].build.workgroup_barriers);
+    assert!(!plain.describe().contains("strict arithmetic"));
+    let k = &plain.kernel_sources()[0];
+    assert!(!k.build.workgroup_barriers && !k.build.strict_arithmetic);
     advance_to(&mut plain, m.prep_steps + 200).unwrap();
     assert!(ctx
         .own_spirv_refused()

@@ -69,6 +69,12 @@
 //!     what the marks cost the wall time, for the persistent, resident and
 //!     tiled kernels on Table S1 alone (mixed f32, and f64 for persistent/1024
 //!     and the chained tiles) and on 132 scenes
+//!     (SLIPFRONT_GPU_TABLE_LAUNCHES: those launches instead);
+//! 12. mixed f32's strict arithmetic (every operation NoContraction, the
+//!     default where the engine writes its own SPIR-V) against wgpu's
+//!     modules with their fusion guards (`GpuOptions::strict_arithmetic`),
+//!     each launch both ways in one run: Table S1 alone, the one-step
+//!     kernels included, and ensembles of 132 and 264 scenes
 //!     (SLIPFRONT_GPU_TABLE_LAUNCHES: those launches instead).
 //!
 //! Sections 1–3 also print the host's CPU time per wall second of each
@@ -110,7 +116,7 @@ mod gpu_timing;
 mod thread_cpu;
 
 mod auto_choice;
-mod barriers;
+mod both_ways;
 mod common;
 mod cpu;
 mod ensembles;
@@ -185,10 +191,13 @@ fn main() {
         tiles::chained_on_table_s1(quick, min_seconds);
     }
     if let Some(_timer) = sections.start(10) {
-        barriers::scopes(&ctx, quick, min_seconds);
+        both_ways::BARRIERS.compare(&ctx, quick, min_seconds);
     }
     if let Some(_timer) = sections.start(11) {
         phases::profile(&ctx, quick, min_seconds);
+    }
+    if let Some(_timer) = sections.start(12) {
+        both_ways::ARITHMETIC.compare(&ctx, quick, min_seconds);
     }
     let _ = std::fs::remove_dir_all(&dir);
 }

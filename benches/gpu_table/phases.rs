@@ -5,7 +5,7 @@
 //! resident/1024 and the two-scene persistent workgroup on 132 scenes (one
 //! workgroup an SM of an H100 SXM or an H200), from the start of driving.
 
-use crate::barriers;
+use crate::both_ways;
 use crate::common::{s1_scene, section_launches};
 use crate::gpu_timing::{solo_step_figures_in, timed_advance};
 use slipfront::engines::gpu::context::GpuContext;
@@ -55,7 +55,12 @@ pub fn profile(ctx: &GpuContext, quick: bool, min_seconds: f64) {
     let scene = |seed: usize| s1_scene(seed, quick);
     header("launch");
     let s1 = scene(1);
-    let alone: Vec<&str> = barriers::SOLO.iter().chain(SOLO_MORE).copied().collect();
+    let alone: Vec<&str> = both_ways::BARRIERS
+        .solo
+        .iter()
+        .chain(SOLO_MORE)
+        .copied()
+        .collect();
     let names = section_launches(&alone, QUICK_SOLO, quick);
     let mut tiled = Vec::new();
     for name in &names {

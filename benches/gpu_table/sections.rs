@@ -22,14 +22,14 @@ impl Drop for SectionTimer {
 
 impl Sections {
     pub fn from_env() -> Self {
-        let all = (1..=11).collect();
+        let all = (1..=12).collect();
         match std::env::var("SLIPFRONT_GPU_TABLE_SECTIONS") {
             Ok(list) => Sections(
                 list.split(',')
                     .map(|s| match s.trim().parse() {
-                        Ok(n @ 1..=11) => n,
+                        Ok(n @ 1..=12) => n,
                         _ => {
-                            panic!("SLIPFRONT_GPU_TABLE_SECTIONS: `{s}` is not a section (1 to 11)")
+                            panic!("SLIPFRONT_GPU_TABLE_SECTIONS: `{s}` is not a section (1 to 12)")
                         }
                     })
                     .collect(),

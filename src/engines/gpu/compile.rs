@@ -32,7 +32,20 @@ pub struct KernelBuild {
     /// itself, with `phase_clock`'s body an OpReadClockKHR
     /// (`spirv::read_shader_clock`).
     pub phase_clocks: bool,
+    /// Mixed f32's guards against a driver fusing or regrouping its
+    /// compensated arithmetic (`shaders/double_single.wgsl`) replaced by
+    /// SPIR-V's NoContraction on every floating-point operation
+    /// (`GpuOptions::strict_arithmetic`): the engine writes the module's
+    /// SPIR-V itself with `FUSION_GUARDS` false
+    /// (`spirv::forbid_contraction`). No driver may then fuse a product
+    /// into an add anywhere in the kernel, nor regroup a sum, and the
+    /// guards' instructions go.
+    pub strict_arithmetic: bool,
 }
+
+/// The override constant that compiles mixed f32's fusion guards in
+/// (`shaders/double_single.wgsl`); strict arithmetic sets it false.
+pub const FUSION_GUARDS: &str = "FUSION_GUARDS";
 
 impl KernelBuild {
     /// The WGSL module of `kernel` built this way.
@@ -212,7 +225,14 @@ impl KernelSource {
         module: &naga::Module,
         info: &naga::valid::ModuleInfo,
     ) -> Result<(naga::Module, naga::valid::ModuleInfo), String> {
-        let constants: naga::back::PipelineConstants = self.constants.iter().cloned().collect();
+        let mut constants: naga::back::PipelineConstants = self.constants.iter().cloned().collect();
+        let guarded = module
+            .overrides
+            .iter()
+            .any(|(_, o)| o.name.as_deref() == Some(FUSION_GUARDS));
+        if self.build.strict_arithmetic && guarded {
+            constants.insert(FUSION_GUARDS.to_string(), 0.0);
+        }
         let (module, info) = naga::back::pipeline_constants::process_overrides(
             module,
             info,
@@ -244,6 +264,7 @@ mod tests {
             step_immediate,
             workgroup_barriers: false,
             phase_clocks: false,
+            strict_arithmetic: false,
         }
     }
 

@@ -438,10 +438,11 @@ impl GpuContext {
             step_immediate,
             workgroup_barriers,
             phase_clocks,
+            strict_arithmetic,
         } = build;
         let key = format!(
             "{}{kernel:?}{lanes:?}{checks:?}{chained_tiles}{step_immediate}{workgroup_barriers}\
-             {phase_clocks}{entry}{constants:?}",
+             {phase_clocks}{strict_arithmetic}{entry}{constants:?}",
             T::NAME
         );
         let slot = self
@@ -452,10 +453,9 @@ impl GpuContext {
             .or_default()
             .clone();
         slot.get_or_init(|| {
-            let own = match self
-                .spirv
-                .filter(|_| (workgroup_barriers || phase_clocks) && self.has_own_spirv())
-            {
+            let own = match self.spirv.filter(|_| {
+                (workgroup_barriers || phase_clocks || strict_arithmetic) && self.has_own_spirv()
+            }) {
                 Some(target) => {
                     let own = KernelSource::of::<T>(kernel, build, entry, constants);
                     let layout_bindings = &self.layouts[layout_index(kernel)].vulkan_bindings;

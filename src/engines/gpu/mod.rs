@@ -407,6 +407,7 @@ impl<T: GpuReal> GpuEngine<T> {
         // wgpu's modules (`GpuContext::refuse_own_spirv`).
         let build = KernelBuild {
             workgroup_barriers: build.workgroup_barriers && ctx.has_own_spirv(),
+            strict_arithmetic: build.strict_arithmetic && ctx.has_own_spirv(),
             ..build
         };
         // Without the engine's own SPIR-V the clock reads nothing.
@@ -692,6 +693,9 @@ impl<T: GpuReal> GpuEngine<T> {
         }
         if self.build.phase_clocks {
             text.push_str(", phase clocks");
+        }
+        if self.build.strict_arithmetic {
+            text.push_str(", strict arithmetic (NoContraction)");
         }
         let lanes_a_round = self
             .constants

@@ -246,6 +246,17 @@ pub struct GpuOptions {
     /// its launch), is refused. Off by default:
     /// the marks cost thread 0 a few shared-memory words a phase.
     pub phase_clocks: bool,
+    /// Mixed f32's kernels compiled with every floating-point operation
+    /// NoContraction, where the engine may write the device's SPIR-V
+    /// itself (`KernelBuild::strict_arithmetic`): no driver may fuse a
+    /// product into an add or regroup a sum anywhere in them, so every
+    /// kernel computes a block's step as the others do, and the guards
+    /// wgpu's modules need for that in the compensated sums
+    /// (`shaders/double_single.wgsl`) are compiled out (2.8-4.8 % fewer
+    /// instructions on AMD's compiler, session 67). false: wgpu's modules,
+    /// guarded (the comparison in tests and benchmarks). f64 has no guards
+    /// and is compiled as wgpu writes it either way.
+    pub strict_arithmetic: bool,
 }
 
 /// Scenes a persistent workgroup may step (`GpuOptions::group_scenes`).
@@ -276,6 +287,7 @@ impl Default for GpuOptions {
             group_scenes: 1,
             workgroup_barriers: true,
             phase_clocks: false,
+            strict_arithmetic: true,
         }
     }
 }

@@ -42,6 +42,10 @@ pub trait GpuReal: Real<Coord: Pod + WgslType> + WgslType {
     /// What naga must allow, and the device must have, for these kernels.
     const CAPABILITIES: naga::valid::Capabilities;
     const FEATURES: wgpu::Features;
+    /// Whether the kernels guard compensated arithmetic against a driver's
+    /// fusing (`FUSION_GUARDS` in `shaders/double_single.wgsl`), which
+    /// strict arithmetic replaces (`KernelBuild::strict_arithmetic`).
+    const FUSION_GUARDS: bool;
     /// The fast cadence's threshold (≥ 0) in `T`, rounded down where it is
     /// not a value of `T`: for every `x` of `T`, `x > fast_threshold(v)`
     /// exactly when `x as f64 > v` (the host's rule), where rounding to the
@@ -66,6 +70,7 @@ impl GpuReal for f32 {
     const COORDINATES: &'static str = "double_single";
     const CAPABILITIES: naga::valid::Capabilities = naga::valid::Capabilities::empty();
     const FEATURES: wgpu::Features = wgpu::Features::empty();
+    const FUSION_GUARDS: bool = true;
     fn fast_threshold(v: f64) -> f32 {
         let nearest = v as f32;
         match nearest as f64 > v {
@@ -94,6 +99,7 @@ impl GpuReal for f64 {
     const COORDINATES: &'static str = "coord_f64";
     const CAPABILITIES: naga::valid::Capabilities = naga::valid::Capabilities::FLOAT64;
     const FEATURES: wgpu::Features = wgpu::Features::SHADER_F64;
+    const FUSION_GUARDS: bool = false;
     fn fast_threshold(v: f64) -> f64 {
         v
     }

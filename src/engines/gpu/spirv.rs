@@ -4,10 +4,15 @@
 //! engine asked, workgroup memory zeroed, integer divisions guarded).
 //! Where the kernel's build asks for it (`KernelBuild::workgroup_barriers`),
 //! the barriers of `workgroup_storage_barrier` (`shaders/barriers.wgsl`)
-//! then get workgroup memory scope (`scope_workgroup_barriers`): the SPIR-V
+//! then get workgroup memory scope (`scope_workgroup_barriers`), and where
+//! it asks for strict arithmetic (`KernelBuild::strict_arithmetic`) every
+//! floating-point operation is decorated NoContraction
+//! (`forbid_contraction`): the SPIR-V
 //! the engine gives the driver itself (`GpuContext::pipeline_of`) and
 //! the driver's statistics (`driver_stats`) compile.
 
+#[cfg(test)]
+use crate::engines::gpu::compile::FUSION_GUARDS;
 use crate::engines::gpu::compile::{KernelSource, ShaderChecks};
 use naga::back::spv;
 
@@ -113,6 +118,9 @@ pub fn kernel_spirv(
     }
     if scoped || clocked {
         words = without_names(&words).map_err(named)?;
+    }
+    if kernel.build.strict_arithmetic {
+        words = forbid_contraction(&words).map_err(named)?;
     }
     Ok((words, bindings))
 }
@@ -279,6 +287,46 @@ pub fn read_shader_clock(words: &[u32], function: &str) -> Result<Vec<u32>, Stri
             let name = literal_words(SHADER_CLOCK_EXTENSION);
             out.push(((1 + name.len() as u32) << 16) | OP_EXTENSION);
             out.extend_from_slice(&name);
+        }
+    }
+    Ok(out)
+}
+
+/// SPIR-V's floating-point arithmetic opcodes, which NoContraction may
+/// decorate: OpFNegate, OpFAdd, OpFSub, OpFMul, OpFDiv, OpFRem, OpFMod,
+/// OpVectorTimesScalar, OpMatrixTimesScalar, OpVectorTimesMatrix,
+/// OpMatrixTimesVector, OpMatrixTimesMatrix, OpOuterProduct, OpDot.
+const FLOAT_ARITHMETIC: [u32; 14] = [
+    127, 129, 131, 133, 136, 140, 141, 142, 143, 144, 145, 146, 147, 148,
+];
+const OP_DECORATE: u32 = 71;
+const OP_MEMBER_DECORATE: u32 = 72;
+const DECORATION_NO_CONTRACTION: u32 = 42;
+
+/// `words` with every floating-point arithmetic result decorated
+/// NoContraction, the decorations placed after the module's last: no
+/// driver may fuse a product into the add that takes it, nor regroup a
+/// sum (SPIR-V 2.16: "such operations are not allowed to reassociate"),
+/// as GLSL's `precise`. The CPU twins' arithmetic, which Rust never
+/// fuses, operation for operation.
+pub fn forbid_contraction(words: &[u32]) -> Result<Vec<u32>, String> {
+    let instructions = instructions(words)?;
+    let last_annotation = instructions
+        .iter()
+        .rposition(|i| matches!(i.opcode, OP_DECORATE | OP_MEMBER_DECORATE))
+        .ok_or("SPIR-V: no decoration to place NoContraction after")?;
+    let arithmetic: Vec<u32> = instructions
+        .iter()
+        .filter(|i| FLOAT_ARITHMETIC.contains(&i.opcode))
+        .map(|i| i.operands[1])
+        .collect();
+    let mut out = words[..HEADER_WORDS].to_vec();
+    for (at, i) in instructions.iter().enumerate() {
+        out.extend_from_slice(i.words);
+        if at == last_annotation {
+            for &id in &arithmetic {
+                out.extend_from_slice(&[(3 << 16) | OP_DECORATE, id, DECORATION_NO_CONTRACTION]);
+            }
         }
     }
     Ok(out)
@@ -553,7 +601,7 @@ mod tests {
     }
 
     /// The one-step kernels have no phase barriers: their builds never ask
-    /// for scoping, so wgpu writes them.
+    /// for scoping (the engine writes them for strict arithmetic alone).
     #[test]
     fn only_kernels_with_phase_barriers_are_scoped() {
         for launch in ["one-step", "one-step-lanes"] {
@@ -574,6 +622,127 @@ mod tests {
             !k[0].build.workgroup_barriers,
             "an adapter that writes its own SPIR-V only"
         );
+    }
+
+    /// The ids decorated NoContraction in module `words`.
+    fn uncontracted(words: &[u32]) -> std::collections::BTreeSet<u32> {
+        instructions(words)
+            .unwrap()
+            .iter()
+            .filter(|i| i.opcode == OP_DECORATE && i.operands[1] == DECORATION_NO_CONTRACTION)
+            .map(|i| i.operands[0])
+            .collect()
+    }
+
+    /// The results of module `words`' floating-point arithmetic.
+    fn float_results(words: &[u32]) -> std::collections::BTreeSet<u32> {
+        instructions(words)
+            .unwrap()
+            .iter()
+            .filter(|i| FLOAT_ARITHMETIC.contains(&i.opcode))
+            .map(|i| i.operands[1])
+            .collect()
+    }
+
+    /// The value the module of `k` (its constants applied) gives the
+    /// fusion guards' override, where it declares it.
+    fn fusion_guards(k: &KernelSource) -> Option<bool> {
+        let (module, info) = k.module().unwrap();
+        let declared = module
+            .overrides
+            .iter()
+            .find(|(_, o)| o.name.as_deref() == Some(FUSION_GUARDS))?;
+        let (module, _) = k.with_constants(&module, &info).unwrap();
+        let constant = module
+            .constants
+            .iter()
+            .find(|(_, c)| c.name.as_deref() == Some(FUSION_GUARDS))
+            .unwrap_or_else(|| panic!("{}: {declared:?} not made a constant", k.entry));
+        match module.global_expressions[constant.1.init] {
+            naga::Expression::Literal(naga::Literal::Bool(b)) => Some(b),
+            ref other => panic!("{}: FUSION_GUARDS = {other:?}", k.entry),
+        }
+    }
+
+    /// Strict (the default where the engine writes the SPIR-V), every
+    /// mixed f32 kernel's floating-point results are decorated
+    /// NoContraction, each once and nothing else, and its fusion guards
+    /// are compiled out (FUSION_GUARDS false). Guarded, as wgpu writes it:
+    /// the guards in and no decoration. f64 has no guards and is never
+    /// decorated; nor is anything on an adapter that takes wgpu's modules.
+    #[test]
+    fn strict_arithmetic_forbids_contraction_and_compiles_the_guards_out() {
+        for launch in [
+            "one-step",
+            "one-step-lanes",
+            "persistent/256",
+            "resident/1024",
+            "tiled/256/8x4/chained",
+        ] {
+            let strict = launch_source::<f32>(launch, |o| o);
+            assert!(strict.build.strict_arithmetic, "{launch}: the default");
+            assert_eq!(fusion_guards(&strict), Some(false), "{launch}");
+            let w = words(&strict);
+            let results = float_results(&w);
+            assert!(results.len() > 100, "{launch}: {} results", results.len());
+            assert_eq!(uncontracted(&w), results, "{launch}");
+            let decorations = instructions(&w)
+                .unwrap()
+                .iter()
+                .filter(|i| i.opcode == OP_DECORATE && i.operands[1] == DECORATION_NO_CONTRACTION)
+                .count();
+            assert_eq!(decorations, results.len(), "{launch}: each once");
+            let guarded = launch_source::<f32>(launch, |o| GpuOptions {
+                strict_arithmetic: false,
+                ..o
+            });
+            assert!(!guarded.build.strict_arithmetic);
+            assert_eq!(fusion_guards(&guarded), Some(true), "{launch}");
+            assert!(uncontracted(&words(&guarded)).is_empty(), "{launch}");
+            let f64 = launch_source::<f64>(launch, |o| o);
+            assert!(!f64.build.strict_arithmetic, "{launch} f64");
+            assert_eq!(fusion_guards(&f64), None, "{launch} f64");
+        }
+        let traits = AdapterTraits {
+            own_spirv: false,
+            ..AdapterTraits::test_hardware()
+        };
+        let opts = Launch::named("one-step")
+            .unwrap()
+            .options(GpuOptions::default());
+        let k = GpuEngine::<f32>::kernel_sources_on(&table_s1(), opts, &traits).unwrap();
+        assert!(!k[0].build.strict_arithmetic, "wgpu's modules");
+    }
+
+    /// The pass decorates after the module's last decoration, and refuses a
+    /// module with none to place them after rather than misplace them.
+    #[test]
+    fn forbid_contraction_places_its_decorations_among_the_others() {
+        let w = words(&launch_source::<f32>("one-step", |o| o));
+        let all = instructions(&w).unwrap();
+        let first = all
+            .iter()
+            .position(|i| i.opcode == OP_DECORATE && i.operands[1] == DECORATION_NO_CONTRACTION)
+            .unwrap();
+        let last_other = all
+            .iter()
+            .rposition(|i| {
+                matches!(i.opcode, OP_DECORATE | OP_MEMBER_DECORATE)
+                    && i.operands.get(1) != Some(&DECORATION_NO_CONTRACTION)
+            })
+            .unwrap();
+        assert_eq!(first, last_other + 1);
+        let type_or_constant = |i: &Instruction| (19..=52).contains(&i.opcode);
+        let types = all.iter().position(type_or_constant).unwrap();
+        let last = all
+            .iter()
+            .rposition(|i| i.opcode == OP_DECORATE && i.operands[1] == DECORATION_NO_CONTRACTION)
+            .unwrap();
+        assert!(last < types, "annotations before the types");
+        let header = &w[..HEADER_WORDS];
+        let bare = [header, &[(2 << 16) | OP_CAPABILITY, 1]].concat();
+        let err = forbid_contraction(&bare).unwrap_err();
+        assert!(err.contains("no decoration"), "{err}");
     }
 
     /// The pass fails, never passes a module unscoped, where the function is

@@ -212,7 +212,7 @@ pub struct AdapterTraits {
     /// Immediates with room for the step offset (`KernelBuild::step_immediate`).
     pub immediates: bool,
     /// The engine writes the device's SPIR-V itself where a kernel's build
-    /// asks (`KernelBuild::workgroup_barriers`).
+    /// asks (`KernelBuild::workgroup_barriers`, `strict_arithmetic`).
     pub own_spirv: bool,
     /// The kernels may read the multiprocessor's clock
     /// (`GpuContext::has_shader_clock`, `KernelBuild::phase_clocks`).
@@ -423,6 +423,7 @@ pub fn plan<T: GpuReal>(
             && opts.workgroup_barriers
             && kernel.has_phase_barriers(),
         phase_clocks: opts.phase_clocks,
+        strict_arithmetic: adapter.own_spirv && opts.strict_arithmetic && T::FUSION_GUARDS,
     };
     Ok(KernelPlan {
         step_kernel,

@@ -205,7 +205,7 @@ pub fn scenes_cache_key<T: GpuReal>(
         String::new()
     };
     format!(
-        "{} | {:?} | {} {} | {} | {}{ensemble} | threads {} | tiles {} | lanes {} | checks {} | patches {} | lane rounds {} | lane runs {} | chained tiles {} | scenes a workgroup {} | arrays {} | step {} | phase barriers {} | timed by {} | samples {} | kernels {:016x}",
+        "{} | {:?} | {} {} | {} | {}{ensemble} | threads {} | tiles {} | lanes {} | checks {} | patches {} | lane rounds {} | lane runs {} | chained tiles {} | scenes a workgroup {} | arrays {} | step {} | phase barriers {} | arithmetic {} | timed by {} | samples {} | kernels {:016x}",
         info.name,
         info.backend,
         info.driver,
@@ -284,6 +284,13 @@ pub fn scenes_cache_key<T: GpuReal>(
             "workgroup"
         } else {
             "device"
+        },
+        // Nor by how mixed f32's arithmetic is kept from fusing
+        // (`GpuOptions::strict_arithmetic`).
+        if opts.strict_arithmetic {
+            "strict"
+        } else {
+            "guarded"
         },
         // Choices timed by a span's mean step (before session 38) carry
         // each advance's fixed costs: measured again.
