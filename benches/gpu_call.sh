@@ -81,23 +81,23 @@ step registers-clocked 30 env SLIPFRONT_GPU_REGISTERS_PHASE_CLOCKS=1 \
 #    against one at a time, output cost; in f64 (what a default run computes in on a GPU
 #    with f64 shaders) and then in mixed f32.
 step targets 310 gpu_targets
-# 1'. The phase barriers at workgroup scope (session 62's default, the engine's own SPIR-V)
+# 1'. Mixed f32's strict arithmetic (session 67's default: the engine's own SPIR-V with
+#     every floating-point operation NoContraction, the fusion guards compiled out) against
+#     wgpu's guarded modules, each launch both ways in one run (gpu_table section 12), the
+#     one-step launches included; and NVIDIA's registers for the guarded build (step 7's
+#     are strict's). On AMD's compiler strict issues 2.5-5 % fewer instructions; on
+#     NVIDIA it also gives up the fused multiply-adds outside the sums, so only this says
+#     which is faster there.
+step arithmetic 120 env SLIPFRONT_GPU_TABLE_SECTIONS=12 gpu_table
+step registers-guarded 30 env SLIPFRONT_GPU_REGISTERS_ARITHMETIC=guarded \
+  SLIPFRONT_GPU_REGISTERS_LAUNCHES=one-step,one-step-lanes,resident/1024,tiled/512/8x4/chained gpu_registers
+# 1''. The phase barriers at workgroup scope (session 62's default, the engine's own SPIR-V)
 #     against naga's device scope, each launch both ways in one run (gpu_table section 10):
 #     Table S1 alone (persistent, resident, tiled, chained; f32 and f64) and 132 and 264
 #     scenes. On AMD's compiler (RADV, navi21) the two compile to the same instructions; what
 #     NVIDIA's compiler makes of a device-scope barrier (a fence to L2 each phase of a step?)
 #     only this measures.
 step barriers 120 env SLIPFRONT_GPU_TABLE_SECTIONS=10 gpu_table
-# 1''. Mixed f32's strict arithmetic (session 67's default: the engine's own SPIR-V with
-#      every floating-point operation NoContraction, the fusion guards compiled out) against
-#      wgpu's guarded modules, each launch both ways in one run (gpu_table section 12), the
-#      one-step launches included; and NVIDIA's registers for the guarded build (step 7's
-#      are strict's). On AMD's compiler strict issues 2.5-5 % fewer instructions; on
-#      NVIDIA it also gives up the fused multiply-adds outside the sums, so only this says
-#      which is faster there.
-step arithmetic 120 env SLIPFRONT_GPU_TABLE_SECTIONS=12 gpu_table
-step registers-guarded 30 env SLIPFRONT_GPU_REGISTERS_ARITHMETIC=guarded \
-  SLIPFRONT_GPU_REGISTERS_LAUNCHES=one-step,one-step-lanes,resident/1024,tiled/512/8x4/chained gpu_registers
 # 1a. The host's CPU a step of each launch, three ways: the default (arrays in arenas, the
 #     step as an immediate, session 56), the step by a dynamic offset (session 55), and a
 #     buffer per array as well (before 55); and a bare dispatch against the buffers it binds
