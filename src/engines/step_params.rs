@@ -2,8 +2,64 @@
 //! count (time is never a running sum). `shaders/common.wgsl::step_params`
 //! computes the same in f32 on the GPU.
 
-use crate::model::real::Real;
+use crate::model::real::{Coordinate, Real};
 use crate::model::{Driver, Model};
+
+/// While driving, the drive target is anchored at every this many steps of
+/// driving: a step's target is the anchor's, origin + V·t rounded once to
+/// a coordinate, plus i·hi and i·lo (V·dt split, `split_drive_step`) for
+/// the i < 4096 steps since (`drive_target`). Every engine computes it so,
+/// the GPU kernels in `shaders/common.wgsl` `loads_at`, and the GPU's
+/// batches never cross an anchor, so where a run is cut into batches
+/// (output samples, snapshots, chunks sized by wall time) changes no bit.
+/// At most 4096: i · hi must stay exact.
+pub const DRIVE_ANCHOR_STEPS: u64 = 4096;
+
+/// The anchor of `step` (the step itself while preparing).
+pub fn drive_anchor<T: Real>(c: &Consts<T>, step: u64) -> u64 {
+    if step < c.prep_steps {
+        step
+    } else {
+        c.prep_steps + (step - c.prep_steps) / DRIVE_ANCHOR_STEPS * DRIVE_ANCHOR_STEPS
+    }
+}
+
+/// V·dt split as hi + lo with hi on 12 significant bits.
+pub fn split_drive_step<T: Real>(v_dt: f64) -> (T, T) {
+    if v_dt == 0.0 {
+        return (T::zero(), T::zero());
+    }
+    let scale = 2f64.powi(11 - v_dt.abs().log2().floor() as i32);
+    let hi = (v_dt * scale).round() / scale;
+    (T::from_f64(hi), T::from_f64(v_dt - hi))
+}
+
+/// Where the side spring's far end is at `step` (while driving): the
+/// anchor's target, origin + V·t in f64 rounded to a coordinate, then
+/// i·hi and i·lo added as the kernels add them (`DRIVE_ANCHOR_STEPS`).
+/// Within an ulp or two of origin + V·t; what matters is that the CPU
+/// engines and the GPU kernels take the same one, so that they can agree
+/// bit for bit (session 67: rounding origin + V·t once at every step, the
+/// CPU's target parted from the kernels' by an ulp after 320,000 driving
+/// steps of Table S1). While preparing the drive is idle: the origin.
+pub fn drive_target<T: Real, C: Coordinate<T>>(c: &Consts<T>, origin: C, step: u64) -> C {
+    if step < c.prep_steps {
+        return origin;
+    }
+    let anchor = drive_anchor(c, step);
+    let (hi, lo) = split_drive_step::<T>(c.drive_velocity_exact * c.dt_exact);
+    let i = T::from_f64((step - anchor) as f64);
+    anchored_drive_target(c, origin, step)
+        .add(i * hi)
+        .add(i * lo)
+}
+
+/// The drive target at the anchor of `step`: origin + V·t there, in f64,
+/// rounded once to a coordinate (what a GPU batch carries).
+pub fn anchored_drive_target<T: Real, C: Coordinate<T>>(c: &Consts<T>, origin: C, step: u64) -> C {
+    let at_anchor = step_params(c, drive_anchor(c, step));
+    C::from_f64(origin.as_f64() + at_anchor.drive_offset)
+}
 
 /// Constants of a run in the engine's precision.
 #[derive(Debug, Clone, Copy)]

@@ -11,7 +11,7 @@ pub use fast::SweepEngine;
 use crate::engines::kernels::bulk_forces::{bond_consts, Blocks, BondConsts};
 use crate::engines::kernels::junctions::JunctionSlots;
 use crate::engines::kernels::{block_laws, bulk_forces, junctions, verlet};
-use crate::engines::step_params::{step_params, Consts};
+use crate::engines::step_params::{drive_target, step_params, Consts};
 use crate::engines::{
     blow_up, Engine, EngineError, EngineState, FrictionState, Snapshot, StateArrays,
 };
@@ -111,7 +111,7 @@ impl<T: Real, C: Coordinate<T>> CpuEngine<T, C> {
             flags: &self.flags,
         };
         let bonds = &self.bonds;
-        let target = C::from_f64(self.drive_origin.as_f64() + p.drive_offset);
+        let target = drive_target(c, self.drive_origin, self.step);
         let rows_per_task = (PARALLEL_MIN_BLOCKS / 4 / nx).max(1);
         match &self.pool {
             Some(pool) => pool.install(|| {

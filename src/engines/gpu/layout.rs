@@ -12,7 +12,6 @@ use crate::engines::step_params::Consts;
 use crate::model::lattice::{
     FLAG_DRIVEN, FLAG_FIX_X, FLAG_FIX_Z, FLAG_INTERFACE, FLAG_PRESCRIBED_X, FLAG_TOP, STENCIL,
 };
-use crate::model::real::{Coordinate, Real};
 use bytemuck::{Pod, Zeroable};
 
 /// Threads per workgroup of the one-step kernel.
@@ -191,21 +190,7 @@ gpu_struct! {
 /// an invocation has spent its loop budget.
 pub const LOOP_PROBE_PASSES: u32 = 2;
 
-/// While driving, batches are anchored at every this many steps of
-/// driving and never cross an anchor: a step's drive time and target are
-/// then the same whatever batch it falls in, so where a run is cut into
-/// batches (output samples, snapshots, chunks sized by wall time) changes
-/// no bit. At most 4096: the kernels' `fi · hi` must stay exact.
-pub const DRIVE_ANCHOR_STEPS: u64 = 4096;
-
-/// The anchor of `step` (the step itself while preparing).
-pub fn drive_anchor<T: Real>(c: &Consts<T>, step: u64) -> u64 {
-    if step < c.prep_steps {
-        step
-    } else {
-        c.prep_steps + (step - c.prep_steps) / DRIVE_ANCHOR_STEPS * DRIVE_ANCHOR_STEPS
-    }
-}
+pub use crate::engines::step_params::{drive_anchor, DRIVE_ANCHOR_STEPS};
 
 gpu_struct! {
     /// A block's displacement, u_x and u_z: the bytes of the CPU twin's
@@ -569,15 +554,7 @@ pub fn reduction_slots<T: GpuReal>() -> u32 {
     1 << fit.min(256).ilog2()
 }
 
-/// V·dt split as hi + lo with hi on 12 significant bits.
-fn split_drive_step<T: Real>(v_dt: f64) -> (T, T) {
-    if v_dt == 0.0 {
-        return (T::zero(), T::zero());
-    }
-    let scale = 2f64.powi(11 - v_dt.abs().log2().floor() as i32);
-    let hi = (v_dt * scale).round() / scale;
-    (T::from_f64(hi), T::from_f64(v_dt - hi))
-}
+use crate::engines::step_params::split_drive_step;
 
 impl<T: GpuReal> GpuConsts<T> {
     pub fn new(c: &Consts<T>, speed_limit: T) -> Self {
@@ -638,10 +615,12 @@ impl<T: GpuReal> GpuBatch<T> {
     pub fn new(c: &Consts<T>, first: u64, steps: u32, drive_origin: Coord<T>) -> Self {
         let p = crate::engines::step_params::step_params(c, first);
         let anchor = drive_anchor(c, first);
-        let at_anchor = crate::engines::step_params::step_params(c, anchor);
-        let target = Coord::<T>::from_f64(drive_origin.as_f64() + at_anchor.drive_offset);
         GpuBatch {
-            drive_target: target,
+            drive_target: crate::engines::step_params::anchored_drive_target(
+                c,
+                drive_origin,
+                first,
+            ),
             reserved_real: T::zero(),
             first_step: first as u32,
             steps,
@@ -706,7 +685,7 @@ pub fn noted_blocks_bytes<T: GpuReal>(notes: usize) -> u64 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::model::real::DoubleSingle;
+    use crate::model::real::{Coordinate, DoubleSingle};
     use crate::model::scenario::{Scenario, DEFAULT_SCENARIO};
 
     fn table_s1() -> crate::Model {
@@ -734,6 +713,9 @@ mod tests {
                     .drive_target
                     .ds_add(fi * gc.drive_step_hi)
                     .ds_add(fi * gc.drive_step_lo);
+                // The CPU engines' target is the kernels' to the bit.
+                let cpu = crate::engines::step_params::drive_target(&c, origin, first + i as u64);
+                assert_eq!(cpu, target, "step {}", first + i as u64);
                 let t = m.time_of_step(first + i as u64);
                 let exact = origin.as_f64() + 4.0e-4 * t;
                 let got = target.as_f64();

@@ -4,7 +4,7 @@
 
 use super::rows::{ForwardBonds, RowView};
 use crate::engines::cpu::JunctionSpring;
-use crate::engines::step_params::{step_params, Consts, StepParams};
+use crate::engines::step_params::{drive_target, step_params, Consts, StepParams};
 use crate::model::real::{Coordinate, Real};
 use crate::model::scenario::FrictionLaw;
 
@@ -83,7 +83,7 @@ impl<'a, T: Real, C: Coordinate<T>> Shared<'a, T, C> {
             law: fixed.law,
             before: step_params(c, step),
             after,
-            drive_target: C::from_f64(drive_origin.as_f64() + after.drive_offset),
+            drive_target: drive_target(c, drive_origin, after_step),
             speed_limit: fixed.speed_limit,
             now: now.kin,
             now_force: now.force,
