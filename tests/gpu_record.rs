@@ -206,11 +206,8 @@ fn large_lattice_driven_at_the_top() -> Scenario {
 
 /// Timestamps inside the pass split its device time between the steps,
 /// the samples' steps (the recording variant) and the batches' record
-/// finishes (lavapipe has them): every dispatch is counted once, the parts
-/// add up to the passes' time, and a step of 16,705 blocks costs more than
-/// a finish, which a timestamp put on the wrong side of a dispatch would
-/// turn round (about 6× more on lavapipe, where the finish's workgroup a
-/// sample runs its samples one after another on two cores).
+/// finishes (lavapipe has them): every dispatch is counted once, each part
+/// is timed, and the parts add up to the passes' time.
 #[test]
 fn the_device_time_splits_between_step_and_record_dispatches() {
     let s = large_lattice();
@@ -242,11 +239,10 @@ fn the_device_time_splits_between_step_and_record_dispatches() {
     );
     assert!(t.step_seconds > 0.0 && t.finish_seconds > 0.0);
     assert!(t.sample_step_seconds > 0.0);
-    let each = |s: f64, n: u64| s / n as f64;
-    assert!(
-        each(t.step_seconds, t.steps) > each(t.finish_seconds, t.finishes),
-        "{t}"
-    );
+    // Which kind of dispatch costs more is a timing, not asserted: on
+    // lavapipe a step of 16,705 blocks and a finish each take 3-4.5 ms,
+    // and their order flipped one run in three (session 67, with strict
+    // arithmetic and with the guarded modules alike).
 }
 
 /// The one-step kernels record a sample in the sample's own step dispatch
