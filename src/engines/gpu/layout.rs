@@ -8,7 +8,7 @@
 //! the u32 fields first so that neither has padding.
 
 use super::precision::{Coord, GpuReal, Packed, WgslType};
-use crate::engines::step_params::Consts;
+use crate::engines::step_params::{split_drive_step, Consts};
 use crate::model::lattice::{
     FLAG_DRIVEN, FLAG_FIX_X, FLAG_FIX_Z, FLAG_INTERFACE, FLAG_PRESCRIBED_X, FLAG_TOP, STENCIL,
 };
@@ -553,8 +553,6 @@ pub fn reduction_slots<T: GpuReal>() -> u32 {
     let fit = (16 * 1024 / std::mem::size_of::<GpuSampleSums<T>>()) as u32;
     1 << fit.min(256).ilog2()
 }
-
-use crate::engines::step_params::split_drive_step;
 
 impl<T: GpuReal> GpuConsts<T> {
     pub fn new(c: &Consts<T>, speed_limit: T) -> Self {
