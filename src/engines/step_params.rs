@@ -47,18 +47,20 @@ pub fn drive_target<T: Real, C: Coordinate<T>>(c: &Consts<T>, origin: C, step: u
         return origin;
     }
     let anchor = drive_anchor(c, step);
-    let (hi, lo) = split_drive_step::<T>(c.drive_velocity_exact * c.dt_exact);
     let i = T::from_f64((step - anchor) as f64);
-    anchored_drive_target(c, origin, step)
-        .add(i * hi)
-        .add(i * lo)
+    drive_target_at_anchor(c, origin, anchor)
+        .add(i * c.drive_step_hi)
+        .add(i * c.drive_step_lo)
 }
 
-/// The drive target at the anchor of `step`: origin + V·t there, in f64,
-/// rounded once to a coordinate (what a GPU batch carries).
-pub fn anchored_drive_target<T: Real, C: Coordinate<T>>(c: &Consts<T>, origin: C, step: u64) -> C {
-    let at_anchor = step_params(c, drive_anchor(c, step));
-    C::from_f64(origin.as_f64() + at_anchor.drive_offset)
+/// The drive target at `anchor` (a `drive_anchor`): origin + V·t there,
+/// in f64, rounded once to a coordinate (what a GPU batch carries).
+pub fn drive_target_at_anchor<T: Real, C: Coordinate<T>>(
+    c: &Consts<T>,
+    origin: C,
+    anchor: u64,
+) -> C {
+    C::from_f64(origin.as_f64() + step_params(c, anchor).drive_offset)
 }
 
 /// Constants of a run in the engine's precision.
@@ -108,6 +110,10 @@ pub struct Consts<T> {
     /// `crate::model::real::Coordinate`), whatever the engine computes in.
     pub drive_velocity_exact: f64,
     pub dt_exact: f64,
+    /// V·dt split as hi + lo (`split_drive_step`): what every engine adds
+    /// a step to the anchor's drive target.
+    pub drive_step_hi: T,
+    pub drive_step_lo: T,
     /// Quantities held in f32 by the precision study's instrument
     /// (`crate::engines::precision_probe`); 0 in every ordinary run.
     pub f32_probe: u32,
@@ -132,6 +138,7 @@ impl<T: Real> Consts<T> {
             Driver::TopVelocity { velocity } => (0.0, velocity, 0.0),
         };
         let j = m.junctions;
+        let (drive_step_hi, drive_step_lo) = split_drive_step::<T>(drive_velocity * m.dt);
         Consts {
             nx: m.nx,
             nz: m.nz,
@@ -173,6 +180,8 @@ impl<T: Real> Consts<T> {
                 .map_or(0.0, |t| t.shear_prestress * m.normal_force)),
             drive_velocity_exact: drive_velocity,
             dt_exact: m.dt,
+            drive_step_hi,
+            drive_step_lo,
             f32_probe,
         }
     }

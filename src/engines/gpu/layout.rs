@@ -8,7 +8,7 @@
 //! the u32 fields first so that neither has padding.
 
 use super::precision::{Coord, GpuReal, Packed, WgslType};
-use crate::engines::step_params::{split_drive_step, Consts};
+use crate::engines::step_params::{drive_target_at_anchor, Consts};
 use crate::model::lattice::{
     FLAG_DRIVEN, FLAG_FIX_X, FLAG_FIX_Z, FLAG_INTERFACE, FLAG_PRESCRIBED_X, FLAG_TOP, STENCIL,
 };
@@ -556,7 +556,6 @@ pub fn reduction_slots<T: GpuReal>() -> u32 {
 
 impl<T: GpuReal> GpuConsts<T> {
     pub fn new(c: &Consts<T>, speed_limit: T) -> Self {
-        let (drive_step_hi, drive_step_lo) = split_drive_step(c.drive_velocity_exact * c.dt_exact);
         GpuConsts {
             nx: c.nx as u32,
             nz: c.nz as u32,
@@ -593,8 +592,8 @@ impl<T: GpuReal> GpuConsts<T> {
             strip_shear_force: c.strip_shear_force,
             strip_blocks: c.strip_blocks as u32,
             drive_velocity: c.drive_velocity,
-            drive_step_hi,
-            drive_step_lo,
+            drive_step_hi: c.drive_step_hi,
+            drive_step_lo: c.drive_step_lo,
             law0: c.law[0],
             law1: c.law[1],
             law2: c.law[2],
@@ -614,11 +613,7 @@ impl<T: GpuReal> GpuBatch<T> {
         let p = crate::engines::step_params::step_params(c, first);
         let anchor = drive_anchor(c, first);
         GpuBatch {
-            drive_target: crate::engines::step_params::anchored_drive_target(
-                c,
-                drive_origin,
-                first,
-            ),
+            drive_target: drive_target_at_anchor(c, drive_origin, anchor),
             reserved_real: T::zero(),
             first_step: first as u32,
             steps,
@@ -721,7 +716,7 @@ mod tests {
                 assert!(((exact as f32) as f64 - exact).abs() > 1e-12);
             }
         }
-        let (hi, lo) = split_drive_step::<f32>(4.0e-4 * m.dt);
+        let (hi, lo) = crate::engines::step_params::split_drive_step::<f32>(4.0e-4 * m.dt);
         assert_eq!((4095.0 * hi) as f64, 4095.0 * hi as f64);
         assert!(((hi as f64 + lo as f64) / (4.0e-4 * m.dt) - 1.0).abs() < 1e-12);
     }

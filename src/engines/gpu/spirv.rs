@@ -629,9 +629,13 @@ mod tests {
         instructions(words)
             .unwrap()
             .iter()
-            .filter(|i| i.opcode == OP_DECORATE && i.operands[1] == DECORATION_NO_CONTRACTION)
+            .filter(|i| is_no_contraction(i))
             .map(|i| i.operands[0])
             .collect()
+    }
+
+    fn is_no_contraction(i: &Instruction) -> bool {
+        i.opcode == OP_DECORATE && i.operands[1] == DECORATION_NO_CONTRACTION
     }
 
     /// The results of module `words`' floating-point arithmetic.
@@ -689,7 +693,7 @@ mod tests {
             let decorations = instructions(&w)
                 .unwrap()
                 .iter()
-                .filter(|i| i.opcode == OP_DECORATE && i.operands[1] == DECORATION_NO_CONTRACTION)
+                .filter(|i| is_no_contraction(i))
                 .count();
             assert_eq!(decorations, results.len(), "{launch}: each once");
             let guarded = launch_source::<f32>(launch, |o| GpuOptions {
@@ -720,24 +724,17 @@ mod tests {
     fn forbid_contraction_places_its_decorations_among_the_others() {
         let w = words(&launch_source::<f32>("one-step", |o| o));
         let all = instructions(&w).unwrap();
-        let first = all
-            .iter()
-            .position(|i| i.opcode == OP_DECORATE && i.operands[1] == DECORATION_NO_CONTRACTION)
-            .unwrap();
+        let first = all.iter().position(is_no_contraction).unwrap();
         let last_other = all
             .iter()
             .rposition(|i| {
-                matches!(i.opcode, OP_DECORATE | OP_MEMBER_DECORATE)
-                    && i.operands.get(1) != Some(&DECORATION_NO_CONTRACTION)
+                matches!(i.opcode, OP_DECORATE | OP_MEMBER_DECORATE) && !is_no_contraction(i)
             })
             .unwrap();
         assert_eq!(first, last_other + 1);
         let type_or_constant = |i: &Instruction| (19..=52).contains(&i.opcode);
         let types = all.iter().position(type_or_constant).unwrap();
-        let last = all
-            .iter()
-            .rposition(|i| i.opcode == OP_DECORATE && i.operands[1] == DECORATION_NO_CONTRACTION)
-            .unwrap();
+        let last = all.iter().rposition(is_no_contraction).unwrap();
         assert!(last < types, "annotations before the types");
         let header = &w[..HEADER_WORDS];
         let bare = [header, &[(2 << 16) | OP_CAPABILITY, 1]].concat();
