@@ -62,7 +62,7 @@ macro_rules! gpu_struct {
             fn fields() -> Vec<(&'static str, &'static str, usize)> {
                 vec![$((
                     stringify!($field),
-                    <$ty as WgslType>::WGSL,
+                    <$ty as WgslType>::FIELD,
                     std::mem::offset_of!($name<T>, $field),
                 )),*]
             }
@@ -83,7 +83,7 @@ macro_rules! gpu_struct {
             fn fields() -> Vec<(&'static str, &'static str, usize)> {
                 vec![$((
                     stringify!($field),
-                    <$ty as WgslType>::WGSL,
+                    <$ty as WgslType>::FIELD,
                     std::mem::offset_of!($name, $field),
                 )),*]
             }

@@ -10,6 +10,14 @@ use bytemuck::Pod;
 /// The WGSL name of a field type.
 pub trait WgslType {
     const WGSL: &'static str;
+    /// How a shared struct's field of this type is spelled: the type
+    /// itself, or the prelude's alias where the type is an array. naga
+    /// gives an aliased array a type of its own, so a struct field
+    /// spelled `array<f32, 2>` and a function parameter spelled
+    /// `packed_coord` would be two SPIR-V types, and passing the one where
+    /// the other is declared is invalid SPIR-V (`spirv-val`: "OpFunctionCall
+    /// Argument's type does not match").
+    const FIELD: &'static str = Self::WGSL;
 }
 impl WgslType for u32 {
     const WGSL: &'static str = "u32";
@@ -27,6 +35,7 @@ impl WgslType for DoubleSingle {
 /// A packed double-single coordinate (4-byte aligned).
 impl WgslType for [f32; 2] {
     const WGSL: &'static str = "array<f32, 2>";
+    const FIELD: &'static str = "packed_coord";
 }
 
 /// A number type the kernels compute in: f32 (mixed) or f64.

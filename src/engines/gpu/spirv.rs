@@ -434,7 +434,7 @@ fn buffer_bindings(module: &naga::Module) -> Vec<BufferBinding> {
 mod tests {
     use super::*;
     use crate::engines::gpu::kernel_choice::Launch;
-    use crate::engines::gpu::{AdapterTraits, GpuEngine, GpuOptions, GpuReal};
+    use crate::engines::gpu::{AdapterTraits, GpuEngine, GpuOptions, GpuPath, GpuReal};
     use crate::model::scenario::{built_in, Scenario};
     use crate::Model;
 
@@ -825,5 +825,170 @@ mod tests {
         assert_eq!(count(&read, OP_READ_CLOCK_KHR), 1);
         assert!(count(&read, OP_NAME) > 0, "the names are kept");
         assert_eq!(without_names(&read).map(|w| count(&w, OP_NAME)), Ok(0));
+    }
+
+    /// SPIRV-Tools' `spirv-val` (Debian's spirv-tools), or None outside CI
+    /// where it is not installed; in CI (`CI=true`) its absence fails.
+    fn spirv_val() -> Option<&'static str> {
+        let found = std::process::Command::new("spirv-val")
+            .arg("--version")
+            .output()
+            .is_ok_and(|o| o.status.success());
+        if !found {
+            assert!(
+                std::env::var("CI").map_or(true, |v| v != "true"),
+                "spirv-val is required in CI (apt-get install spirv-tools)"
+            );
+            eprintln!("skipped: spirv-val not found (apt-get install spirv-tools)");
+        }
+        found.then_some("spirv-val")
+    }
+
+    /// `spirv-val`'s verdict on `words` as Vulkan 1.3 SPIR-V: None where
+    /// valid, else its message.
+    fn invalid(val: &str, words: &[u32]) -> Option<String> {
+        use std::io::Write;
+        let mut child = std::process::Command::new(val)
+            .args(["--target-env", "vulkan1.3", "-"])
+            .stdin(std::process::Stdio::piped())
+            .stdout(std::process::Stdio::piped())
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .unwrap();
+        let bytes: Vec<u8> = words.iter().flat_map(|w| w.to_le_bytes()).collect();
+        child.stdin.take().unwrap().write_all(&bytes).unwrap();
+        let out = child.wait_with_output().unwrap();
+        (!out.status.success()).then(|| {
+            let text = String::from_utf8_lossy(&out.stderr) + String::from_utf8_lossy(&out.stdout);
+            text.lines().take(3).collect::<Vec<_>>().join(" / ")
+        })
+    }
+
+    /// The words of every entry point of `k`'s module, as `pipeline_of`
+    /// writes them for Vulkan 1.3.
+    fn every_entry_point(k: &KernelSource) -> Vec<(String, Vec<u32>)> {
+        let (module, _) = k.module().unwrap();
+        module
+            .entry_points
+            .iter()
+            .map(|e| {
+                let one = KernelSource {
+                    entry: e.name.clone(),
+                    ..k.clone()
+                };
+                let words = kernel_spirv(
+                    &one,
+                    language_version(1, 3),
+                    ZeroWorkgroupMemory::Native,
+                    &spv::BindingMap::new(),
+                )
+                .unwrap_or_else(|e| panic!("{}: {e}", one.entry))
+                .0;
+                (one.entry, words)
+            })
+            .collect()
+    }
+
+    /// Every module the engine can hand a driver is valid SPIR-V as
+    /// SPIRV-Tools judges it: each kernel's every entry point (steps,
+    /// gathers, records), in both precisions, for each friction law,
+    /// strict and guarded, barriers scoped or not, clocked, checked, lanes
+    /// in subgroups or storage, scenes grouped. naga's validator passes
+    /// modules spirv-val refuses, and a driver may refuse or miscompile
+    /// them: until session 68 every mixed f32 module passed a struct's
+    /// `array<f32, 2>` field where a function took the alias
+    /// `packed_coord`, two SPIR-V types (`WgslType::FIELD`). The control:
+    /// the same module with that field spelled out again is refused.
+    #[test]
+    fn every_module_the_engine_writes_is_valid_spirv() {
+        let Some(val) = spirv_val() else { return };
+        fn check<T: GpuReal>(
+            val: &str,
+            model: &Model,
+            launch: &str,
+            failures: &mut Vec<String>,
+        ) -> usize {
+            type Variant = (&'static str, fn(GpuOptions) -> GpuOptions);
+            let variants: [Variant; 3] = [
+                ("default", |o| o),
+                ("guarded, unscoped, lanes in storage", |o| GpuOptions {
+                    strict_arithmetic: false,
+                    workgroup_barriers: false,
+                    lane_shuffle: false,
+                    ..o
+                }),
+                ("clocked, checked", |o| GpuOptions {
+                    phase_clocks: !matches!(o.path, GpuPath::OneStep | GpuPath::OneStepLanes),
+                    shader_checks: true,
+                    ..o
+                }),
+            ];
+            let mut checked = 0;
+            for (variant, with) in variants {
+                let opts = with(
+                    Launch::named(launch)
+                        .unwrap()
+                        .options(GpuOptions::default()),
+                );
+                let traits = AdapterTraits::test_hardware();
+                let Ok(sources) = GpuEngine::<T>::kernel_sources_on(model, opts, &traits) else {
+                    continue;
+                };
+                for k in &sources {
+                    for (entry, words) in every_entry_point(k) {
+                        checked += 1;
+                        if let Some(why) = invalid(val, &words) {
+                            failures.push(format!("{launch} {} {variant} {entry}: {why}", T::NAME));
+                        }
+                    }
+                }
+            }
+            checked
+        }
+        let scene = |name: &str| {
+            let s = Scenario::parse(built_in(name).unwrap(), name, &[]).unwrap();
+            Model::from_scenario(&s, false).unwrap()
+        };
+        let mut failures = Vec::new();
+        let mut checked = 0;
+        for name in [
+            "tromborg2014_precursors",
+            "tromborg2011_coulomb_precursors",
+            "rate_state",
+        ] {
+            let model = scene(name);
+            for launch in [
+                "one-step",
+                "one-step-lanes",
+                "persistent/256",
+                "persistent/1024/2-scenes",
+                "resident/1024/lane-run-4",
+                "persistent/512/bond-patches",
+                "tiled/512",
+                "tiled/256/8x4/chained",
+            ] {
+                checked += check::<f32>(val, &model, launch, &mut failures);
+                checked += check::<f64>(val, &model, launch, &mut failures);
+            }
+        }
+        assert!(
+            failures.is_empty(),
+            "{} of {checked} invalid:\n{}",
+            failures.len(),
+            failures.join("\n")
+        );
+        assert!(checked >= 150, "{checked} modules checked");
+
+        // The control: the junction spring's anchor spelled as the array again.
+        let k = launch_source::<f32>("one-step", |o| o);
+        let spelled = KernelSource {
+            source: k
+                .source
+                .replacen("anchor: packed_coord,", "anchor: array<f32, 2>,", 1),
+            ..k.clone()
+        };
+        assert_ne!(spelled.source, k.source);
+        let why = invalid(val, &words(&spelled)).expect("the two array types refused");
+        assert!(why.contains("OpFunctionCall"), "{why}");
     }
 }
