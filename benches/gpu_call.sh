@@ -81,14 +81,15 @@ step registers-clocked 30 env SLIPFRONT_GPU_REGISTERS_PHASE_CLOCKS=1 \
 #    against one at a time, output cost; in f64 (what a default run computes in on a GPU
 #    with f64 shaders) and then in mixed f32.
 step targets 310 gpu_targets
-# 1'. Mixed f32's strict arithmetic (session 67's default: the engine's own SPIR-V with
-#     every floating-point operation NoContraction, the fusion guards compiled out) against
-#     wgpu's guarded modules, each launch both ways in one run (gpu_table section 12), the
-#     one-step launches included; and NVIDIA's registers for the guarded build (step 7's
-#     are strict's). On AMD's compiler strict issues 2.5-5 % fewer instructions; on
-#     NVIDIA it also gives up the fused multiply-adds outside the sums, so only this says
-#     which is faster there.
-step arithmetic 120 env SLIPFRONT_GPU_TABLE_SECTIONS=12 gpu_table
+# 1'. Strict arithmetic (the default: the engine's own SPIR-V with every floating-point
+#     operation NoContraction; mixed f32's fusion guards compiled out, session 67; f64
+#     decorated too since session 68, which makes every f64 kernel the CPU reference bit for
+#     bit on lavapipe) against wgpu's modules, each launch both ways in one run (gpu_table
+#     section 12: mixed f32 launches, the one-step ones included, then three in f64); and
+#     NVIDIA's registers for wgpu's build (step 7's are strict's). On AMD's compiler strict
+#     issues 2.5-5 % fewer instructions in mixed f32 and 4-7 % more in f64; on NVIDIA it
+#     also gives up the fused multiply-adds, so only this says what it costs there.
+step arithmetic 150 env SLIPFRONT_GPU_TABLE_SECTIONS=12 gpu_table
 step registers-guarded 30 env SLIPFRONT_GPU_REGISTERS_ARITHMETIC=guarded \
   SLIPFRONT_GPU_REGISTERS_LAUNCHES=one-step,one-step-lanes,resident/1024,tiled/512/8x4/chained gpu_registers
 # 1''. The phase barriers at workgroup scope (session 62's default, the engine's own SPIR-V)

@@ -35,9 +35,9 @@
 //! SLIPFRONT_GPU_REGISTERS_BARRIERS=device compiles the phase barriers as
 //! wgpu writes them, with device scope (`GpuOptions::workgroup_barriers`
 //! off), where the engine would give them workgroup scope.
-//! SLIPFRONT_GPU_REGISTERS_ARITHMETIC=guarded compiles mixed f32's kernels
-//! as wgpu writes them, with their fusion guards (`GpuOptions::strict_arithmetic`
-//! off), where the engine would forbid contraction instead.
+//! SLIPFRONT_GPU_REGISTERS_ARITHMETIC=guarded compiles the kernels as wgpu
+//! writes them (`GpuOptions::arithmetic` `Wgpu`; otherwise `Strict`): mixed f32 with its
+//! fusion guards, f64 plain, where the engine would forbid contraction.
 //! SLIPFRONT_GPU_REGISTERS_PHASE_CLOCKS=1 compiles the persistent, resident
 //! and tiled kernels with their phase clocks (`GpuOptions::phase_clocks`),
 //! where the device has VK_KHR_shader_clock: what timing them costs in
@@ -54,7 +54,7 @@ use slipfront::engines::gpu::driver_stats::{
     nvidia_workgroups_per_sm, DeviceChoice, Executable, StatsDevice, NVIDIA,
 };
 use slipfront::engines::gpu::kernel_choice::Launch;
-use slipfront::engines::gpu::{context, AdapterTraits, GpuEngine, GpuOptions, GpuReal};
+use slipfront::engines::gpu::{context, AdapterTraits, Arithmetic, GpuEngine, GpuOptions, GpuReal};
 use slipfront::model::scenario::built_in;
 use slipfront::{Model, Scenario};
 
@@ -173,7 +173,7 @@ struct Table<'a> {
     set: Vec<(String, f64)>,
     /// The phase barriers with naga's device scope (`SLIPFRONT_GPU_REGISTERS_BARRIERS`).
     device_barriers: bool,
-    /// Mixed f32 guarded, as wgpu writes it (`SLIPFRONT_GPU_REGISTERS_ARITHMETIC`).
+    /// wgpu's modules: mixed f32 guarded, f64 plain (`SLIPFRONT_GPU_REGISTERS_ARITHMETIC`).
     guarded: bool,
     /// The kernels with their phase clocks (`SLIPFRONT_GPU_REGISTERS_PHASE_CLOCKS`).
     phase_clocks: bool,
@@ -189,7 +189,10 @@ impl Table<'_> {
     fn rows<T: GpuReal>(&mut self, scene_name: &str, model: &Model, launch: Launch) {
         let opts = GpuOptions {
             workgroup_barriers: !self.device_barriers,
-            strict_arithmetic: !self.guarded,
+            arithmetic: match self.guarded {
+                true => Arithmetic::Wgpu,
+                false => Arithmetic::Strict,
+            },
             phase_clocks: self.phase_clocks,
             ..launch.options(GpuOptions::default())
         };

@@ -14,7 +14,7 @@ use slipfront::engines::gpu::compile::{KernelBuild, KernelSource, ShaderChecks};
 use slipfront::engines::gpu::driver_stats::{DeviceChoice, StatsDevice};
 use slipfront::engines::gpu::kernel_choice::Launch;
 use slipfront::engines::gpu::shaders::{Kernel, LaneMerge};
-use slipfront::engines::gpu::{GpuEngine, GpuOptions};
+use slipfront::engines::gpu::{Arithmetic, GpuEngine, GpuOptions};
 use slipfront::model::scenario::built_in;
 use slipfront::{Model, Scenario};
 
@@ -223,14 +223,18 @@ fn instructions(dev: &StatsDevice, k: &KernelSource) -> u64 {
 /// not the quarter fewer of a module with neither guards nor decorations,
 /// whose compensated sums the compiler folds away (1,163 against 1,567
 /// for one-step, measured at session 67): the decorations hold the sums.
-/// f64, which has no guards, compiles the same either way.
+/// f64, which has no guards, costs more decorated (its fused multiply-adds
+/// come apart: 4-7 % at session 68), and no more than a tenth.
 #[test]
 fn strict_arithmetic_costs_fewer_instructions_than_the_guards() {
     let Some(dev) = radv() else { return };
     let shipped = table_s1(&[]);
     let source = |launch: &str, strict: bool, f64: bool| {
         let opts = GpuOptions {
-            strict_arithmetic: strict,
+            arithmetic: match strict {
+                true => Arithmetic::Strict,
+                false => Arithmetic::Wgpu,
+            },
             ..Launch::named(launch)
                 .unwrap()
                 .options(GpuOptions::default())
@@ -255,7 +259,10 @@ fn strict_arithmetic_costs_fewer_instructions_than_the_guards() {
             instructions(&dev, &source(launch, true, true)),
             instructions(&dev, &source(launch, false, true)),
         );
-        assert_eq!(s64, g64, "{launch} f64");
+        assert!(
+            s64 > g64 && s64 * 10 < g64 * 11,
+            "{launch} f64: {s64} instructions strict, {g64} plain"
+        );
     }
 }
 

@@ -4,7 +4,7 @@
 use slipfront::app::verify::STICK_SLIP_WINDOW;
 use slipfront::engines::backend::{cpu_engine, Precision};
 use slipfront::engines::gpu::shaders::Variant;
-use slipfront::engines::gpu::{GpuEngine, GpuOptions, GpuPath};
+use slipfront::engines::gpu::{Arithmetic, GpuEngine, GpuOptions, GpuPath};
 use slipfront::io::compare::{compare_snapshots, fields_over};
 use slipfront::model::scenario::{Scenario, DEFAULT_SCENARIO};
 use slipfront::{advance_to, Engine, EngineError, Model, Snapshot};
@@ -854,7 +854,7 @@ fn kept_junction_sums_give_the_bits_of_summing_every_step() {
 /// The engine on `path` with every block's junctions summed every step
 /// (no kept sums), its lanes merged in subgroups where `lane_shuffle`.
 fn summing_every_step(m: &Model, path: GpuPath, lane_shuffle: bool) -> GpuEngine {
-    summing_every_step_with(m, path, lane_shuffle, true)
+    summing_every_step_with(m, path, lane_shuffle, Arithmetic::Leaner)
 }
 
 /// `summing_every_step`, with strict arithmetic or wgpu's guarded modules.
@@ -862,13 +862,13 @@ fn summing_every_step_with(
     m: &Model,
     path: GpuPath,
     lane_shuffle: bool,
-    strict_arithmetic: bool,
+    arithmetic: Arithmetic,
 ) -> GpuEngine {
     let opts = GpuOptions {
         path,
         keep_junction_sums: false,
         lane_shuffle,
-        strict_arithmetic,
+        arithmetic,
         ..GpuOptions::default()
     };
     GpuEngine::with_options(m, opts).expect("a GPU adapter (lavapipe in CI)")
@@ -943,7 +943,12 @@ fn every_kernel_keeps_the_one_step_kernels_bits_through_the_stick_slip_window() 
     let end = m.prep_steps + 6000;
     let mut strict_reference = None;
     for strict in [true, false] {
-        let engine = |m: &Model, path, shuffle| summing_every_step_with(m, path, shuffle, strict);
+        let arithmetic = match strict {
+            true => Arithmetic::Strict,
+            false => Arithmetic::Wgpu,
+        };
+        let engine =
+            |m: &Model, path, shuffle| summing_every_step_with(m, path, shuffle, arithmetic);
         let mut reference = engine(&m, GpuPath::OneStep, false);
         let mut others: Vec<(String, GpuEngine)> = KERNELS
             .into_iter()

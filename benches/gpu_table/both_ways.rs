@@ -3,13 +3,13 @@
 //! workgroup scope against naga's device scope
 //! (`GpuOptions::workgroup_barriers`). Section 12: mixed f32's strict
 //! arithmetic against wgpu's guarded modules
-//! (`GpuOptions::strict_arithmetic`).
+//! (`GpuOptions::arithmetic`, strict against wgpu's).
 
 use crate::common::{s1_scene, section_launches};
 use crate::gpu_timing::{ensemble_step_seconds, solo_step_figures_in};
 use slipfront::engines::gpu::context::GpuContext;
 use slipfront::engines::gpu::kernel_choice::Launch;
-use slipfront::engines::gpu::{GpuOptions, GpuReal};
+use slipfront::engines::gpu::{Arithmetic, GpuOptions, GpuReal};
 use slipfront::Model;
 
 /// An option timed both ways: on (the default) and off.
@@ -26,9 +26,10 @@ pub struct BothWays {
     pub quick_solo: &'static [&'static str],
     pub ensemble: &'static [&'static str],
     pub quick_ensemble: &'static [&'static str],
-    /// Whether f64 builds the option too (then some solo launches are
-    /// timed in f64 as well).
-    pub f64: bool,
+    /// Launches timed alone in f64 too, where f64 builds the option
+    /// (quick: on software adapters).
+    pub f64_solo: &'static [&'static str],
+    pub quick_f64_solo: &'static [&'static str],
     /// The launch's options with the option on or off.
     pub set: fn(GpuOptions, bool) -> GpuOptions,
 }
@@ -53,22 +54,24 @@ pub const BARRIERS: BothWays = BothWays {
         "persistent/256",
     ],
     quick_ensemble: &["persistent/256"],
-    f64: true,
+    f64_solo: &["persistent/1024", "tiled/512/8x4/chained"],
+    quick_f64_solo: &[],
     set: |o, on| GpuOptions {
         workgroup_barriers: on,
         ..o
     },
 };
 
-/// Section 12: every kernel's mixed f32, the one-step kernels included
-/// (strict arithmetic is the engine's own SPIR-V for them too). On AMD's
-/// compiler strict issues 2.5-5 % fewer instructions (session 67); what
-/// NVIDIA's makes of a kernel without fused multiply-adds only this times.
+/// Section 12: every kernel, the one-step kernels included (strict
+/// arithmetic is the engine's own SPIR-V for them too). On AMD's compiler
+/// strict issues 2.5-5 % fewer instructions in mixed f32 (session 67) and
+/// 4-7 % more in f64 (session 68); what NVIDIA's makes of a kernel without
+/// fused multiply-adds only this times.
 pub const ARITHMETIC: BothWays = BothWays {
     section: 12,
-    title: "Mixed f32: strict arithmetic against the fusion guards",
+    title: "Strict arithmetic against wgpu's modules (mixed f32: guarded; f64: plain)",
     on: "strict",
-    off: "guarded",
+    off: "wgpu's",
     solo: &[
         "one-step",
         "one-step-lanes",
@@ -80,9 +83,13 @@ pub const ARITHMETIC: BothWays = BothWays {
     quick_solo: &["one-step-lanes", "persistent/256", "tiled/256/16x4/chained"],
     ensemble: &["resident/1024", "resident/512", "persistent/256"],
     quick_ensemble: &["persistent/256"],
-    f64: false,
+    f64_solo: &["one-step-lanes", "persistent/1024", "tiled/512/8x4/chained"],
+    quick_f64_solo: &["one-step-lanes", "persistent/256"],
     set: |o, on| GpuOptions {
-        strict_arithmetic: on,
+        arithmetic: match on {
+            true => Arithmetic::Strict,
+            false => Arithmetic::Wgpu,
+        },
         ..o
     },
 };
@@ -117,13 +124,8 @@ impl BothWays {
         for name in &solo {
             self.solo_row::<f32>(&s1, name, min_seconds);
         }
-        if self.f64 && !quick {
-            for name in solo
-                .iter()
-                .filter(|n| n.starts_with("persistent/1024") || n.ends_with("chained"))
-            {
-                self.solo_row::<f64>(&s1, name, min_seconds);
-            }
+        for name in &section_launches(self.f64_solo, self.quick_f64_solo, quick) {
+            self.solo_row::<f64>(&s1, name, min_seconds);
         }
         let counts: &[usize] = if quick { &[4] } else { &[132, 264] };
         println!("\nEnsembles of Table S1 scenes (µs an ensemble step, mixed f32):\n");

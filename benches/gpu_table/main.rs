@@ -70,11 +70,12 @@
 //!     tiled kernels on Table S1 alone (mixed f32, and f64 for persistent/1024
 //!     and the chained tiles) and on 132 scenes
 //!     (SLIPFRONT_GPU_TABLE_LAUNCHES: those launches instead);
-//! 12. mixed f32's strict arithmetic (every operation NoContraction, the
-//!     default where the engine writes its own SPIR-V) against wgpu's
-//!     modules with their fusion guards (`GpuOptions::strict_arithmetic`),
-//!     each launch both ways in one run: Table S1 alone, the one-step
-//!     kernels included, and ensembles of 132 and 264 scenes
+//! 12. strict arithmetic (every operation NoContraction, where the engine
+//!     writes its own SPIR-V: mixed f32's default) against wgpu's modules
+//!     (mixed f32 with its fusion guards, f64 plain: f64's default)
+//!     (`GpuOptions::arithmetic`), each launch both ways in one run: Table
+//!     S1 alone, the one-step kernels included, three launches in f64 too,
+//!     and ensembles of 132 and 264 scenes
 //!     (SLIPFRONT_GPU_TABLE_LAUNCHES: those launches instead).
 //!
 //! Sections 1–3 also print the host's CPU time per wall second of each

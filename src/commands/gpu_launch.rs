@@ -71,6 +71,16 @@ pub struct GpuLaunchArgs {
     /// not given; its figures name such a launch `persistent/1024/2-scenes`).
     #[arg(long, value_name = "SCENES", value_parser = slipfront::engines::gpu::options::group_scenes)]
     pub gpu_group_scenes: Option<u32>,
+    /// How the kernels' arithmetic is compiled: `strict` forbids the
+    /// driver to fuse or regroup any operation (each kernel then computes
+    /// the CPU engine's operations as written: in f64 the CPU reference's
+    /// numbers, to the bit where the GPU rounds division and square roots
+    /// as IEEE does); `wgpu` leaves the modules as wgpu writes them;
+    /// `leaner` (the default) is strict in mixed f32, where it costs fewer
+    /// instructions, and wgpu's in f64, where strict costs more. Strict
+    /// needs a Vulkan 1.3 adapter (elsewhere the run says it is not).
+    #[arg(long, value_name = "ARITHMETIC", default_value = "leaner", value_parser = slipfront::engines::gpu::options::arithmetic)]
+    pub gpu_arithmetic: slipfront::engines::gpu::Arithmetic,
 }
 
 impl Default for GpuLaunchArgs {
@@ -87,6 +97,7 @@ impl Default for GpuLaunchArgs {
             gpu_lane_run: None,
             gpu_chained_tiles: false,
             gpu_group_scenes: None,
+            gpu_arithmetic: slipfront::engines::gpu::Arithmetic::Leaner,
         }
     }
 }
@@ -108,6 +119,7 @@ impl GpuLaunchArgs {
             lane_run: self.gpu_lane_run.unwrap_or(1),
             chained_tiles: self.gpu_chained_tiles,
             group_scenes: self.gpu_group_scenes.unwrap_or(1),
+            arithmetic: self.gpu_arithmetic,
             ..GpuOptions::default()
         }
     }

@@ -32,14 +32,14 @@ pub struct KernelBuild {
     /// itself, with `phase_clock`'s body an OpReadClockKHR
     /// (`spirv::read_shader_clock`).
     pub phase_clocks: bool,
-    /// Mixed f32's guards against a driver fusing or regrouping its
-    /// compensated arithmetic (`shaders/double_single.wgsl`) replaced by
     /// SPIR-V's NoContraction on every floating-point operation
-    /// (`GpuOptions::strict_arithmetic`): the engine writes the module's
-    /// SPIR-V itself with `FUSION_GUARDS` false
-    /// (`spirv::forbid_contraction`). No driver may then fuse a product
-    /// into an add anywhere in the kernel, nor regroup a sum, and the
-    /// guards' instructions go.
+    /// (`GpuOptions::arithmetic`, `spirv::forbid_contraction`): the
+    /// engine writes the module's SPIR-V itself. No driver may then fuse a
+    /// product into an add anywhere in the kernel, nor regroup a sum, so
+    /// the kernel computes its CPU twin's operations as they are written.
+    /// In mixed f32 it also compiles out the guards wgpu's modules need
+    /// for the compensated sums (`FUSION_GUARDS` false,
+    /// `shaders/double_single.wgsl`).
     pub strict_arithmetic: bool,
 }
 

@@ -73,7 +73,9 @@ use context::GpuContext;
 pub use device_timer::DispatchTimes;
 use layout::GpuJunctionSpring;
 use options::*;
-pub use options::{GpuOptions, GpuOutput, GpuPath, PERSISTENT_THREADS, RESIDENT_THREADS};
+pub use options::{
+    Arithmetic, GpuOptions, GpuOutput, GpuPath, PERSISTENT_THREADS, RESIDENT_THREADS,
+};
 pub use precision::GpuReal;
 use precision::{Coord, Packed};
 pub use step_kernel::AdapterTraits;

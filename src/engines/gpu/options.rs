@@ -246,17 +246,73 @@ pub struct GpuOptions {
     /// its launch), is refused. Off by default:
     /// the marks cost thread 0 a few shared-memory words a phase.
     pub phase_clocks: bool,
-    /// Mixed f32's kernels compiled with every floating-point operation
-    /// NoContraction, where the engine may write the device's SPIR-V
-    /// itself (`KernelBuild::strict_arithmetic`): no driver may fuse a
-    /// product into an add or regroup a sum anywhere in them, so every
-    /// kernel computes a block's step as the others do, and the guards
-    /// wgpu's modules need for that in the compensated sums
-    /// (`shaders/double_single.wgsl`) are compiled out (2.8-4.8 % fewer
-    /// instructions on AMD's compiler, session 67). false: wgpu's modules,
-    /// guarded (the comparison in tests and benchmarks). f64 has no guards
-    /// and is compiled as wgpu writes it either way.
-    pub strict_arithmetic: bool,
+    /// How the kernels' floating-point arithmetic is compiled: strict
+    /// (NoContraction throughout) or as wgpu writes it, per precision
+    /// (`Arithmetic`; `--gpu-arithmetic`).
+    pub arithmetic: Arithmetic,
+}
+
+/// How the kernels' floating-point arithmetic is compiled
+/// (`GpuOptions::arithmetic`). Strict: every floating-point operation
+/// NoContraction, where the engine may write the device's SPIR-V itself
+/// (`KernelBuild::strict_arithmetic`, `spirv::forbid_contraction`): no
+/// driver may fuse a product into an add or regroup a sum, so each kernel
+/// computes its CPU twin's operations as written. On a device that rounds
+/// division and square roots as IEEE does (llvmpipe), every kernel is then
+/// its twin bit for bit: mixed f32 `CpuEngine<f32>` (session 67), f64 the
+/// CPU reference `CpuEngine<f64>` itself (session 68). What it costs
+/// differs by precision (AMD's compiler, Table S1): in mixed f32 it also
+/// compiles out the guards wgpu's modules need in the compensated sums
+/// (`shaders/double_single.wgsl`), 2.5-5 % fewer instructions; f64 has no
+/// guards, and there the fused multiply-adds come apart, 4-7 % more
+/// instructions and 12-18 % more of ACO's estimated latency. NVIDIA's
+/// figures are `gpu_table` section 12's.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Arithmetic {
+    /// Each precision's leaner build: strict in mixed f32, wgpu's in f64
+    /// (the default).
+    Leaner,
+    /// Strict in both precisions: the CPU twin's operations, where a GPU
+    /// run must give the CPU reference's numbers.
+    Strict,
+    /// wgpu's modules in both: mixed f32 with its fusion guards, f64 as
+    /// naga writes it (the driver may fuse).
+    Wgpu,
+}
+
+impl Arithmetic {
+    pub const ALL: [Arithmetic; 3] = [Arithmetic::Leaner, Arithmetic::Strict, Arithmetic::Wgpu];
+
+    /// Whether precision `T`'s kernels are asked to be strict (they are
+    /// where the engine writes the device's SPIR-V).
+    pub fn strict<T: GpuReal>(self) -> bool {
+        match self {
+            Arithmetic::Leaner => T::FUSION_GUARDS,
+            Arithmetic::Strict => true,
+            Arithmetic::Wgpu => false,
+        }
+    }
+
+    /// `--gpu-arithmetic`'s word for it.
+    pub fn name(self) -> &'static str {
+        match self {
+            Arithmetic::Leaner => "leaner",
+            Arithmetic::Strict => "strict",
+            Arithmetic::Wgpu => "wgpu",
+        }
+    }
+}
+
+/// `--gpu-arithmetic`: `leaner`, `strict` or `wgpu`, else an error naming
+/// the value and the allowed ones.
+pub fn arithmetic(text: &str) -> Result<Arithmetic, String> {
+    Arithmetic::ALL
+        .into_iter()
+        .find(|a| a.name() == text)
+        .ok_or_else(|| {
+            let names: Vec<&str> = Arithmetic::ALL.iter().map(|a| a.name()).collect();
+            format!("`{text}` arithmetic: must be one of {}", names.join(", "))
+        })
 }
 
 /// Scenes a persistent workgroup may step (`GpuOptions::group_scenes`).
@@ -287,7 +343,7 @@ impl Default for GpuOptions {
             group_scenes: 1,
             workgroup_barriers: true,
             phase_clocks: false,
-            strict_arithmetic: true,
+            arithmetic: Arithmetic::Leaner,
         }
     }
 }

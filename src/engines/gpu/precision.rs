@@ -51,9 +51,10 @@ pub trait GpuReal: Real<Coord: Pod + WgslType> + WgslType {
     /// What naga must allow, and the device must have, for these kernels.
     const CAPABILITIES: naga::valid::Capabilities;
     const FEATURES: wgpu::Features;
-    /// Whether the kernels guard compensated arithmetic against a driver's
-    /// fusing (`FUSION_GUARDS` in `shaders/double_single.wgsl`), which
-    /// strict arithmetic replaces (`KernelBuild::strict_arithmetic`).
+    /// Whether wgpu's modules guard compensated arithmetic against a
+    /// driver's fusing (`FUSION_GUARDS` in `shaders/double_single.wgsl`):
+    /// then strict arithmetic, which compiles the guards out, is the
+    /// leaner build (`Arithmetic::Leaner`).
     const FUSION_GUARDS: bool;
     /// The fast cadence's threshold (≥ 0) in `T`, rounded down where it is
     /// not a value of `T`: for every `x` of `T`, `x > fast_threshold(v)`

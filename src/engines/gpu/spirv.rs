@@ -434,7 +434,7 @@ fn buffer_bindings(module: &naga::Module) -> Vec<BufferBinding> {
 mod tests {
     use super::*;
     use crate::engines::gpu::kernel_choice::Launch;
-    use crate::engines::gpu::{AdapterTraits, GpuEngine, GpuOptions, GpuPath, GpuReal};
+    use crate::engines::gpu::{AdapterTraits, Arithmetic, GpuEngine, GpuOptions, GpuPath, GpuReal};
     use crate::model::scenario::{built_in, Scenario};
     use crate::Model;
 
@@ -668,12 +668,13 @@ mod tests {
         }
     }
 
-    /// Strict (the default where the engine writes the SPIR-V), every
-    /// mixed f32 kernel's floating-point results are decorated
+    /// Strict (mixed f32's default where the engine writes the SPIR-V),
+    /// every mixed f32 kernel's floating-point results are decorated
     /// NoContraction, each once and nothing else, and its fusion guards
     /// are compiled out (FUSION_GUARDS false). Guarded, as wgpu writes it:
-    /// the guards in and no decoration. f64 has no guards and is never
-    /// decorated; nor is anything on an adapter that takes wgpu's modules.
+    /// the guards in and no decoration. f64 has no guards: by default
+    /// (`Arithmetic::Leaner`) nothing is decorated; strict, every result
+    /// is. Nothing is decorated on an adapter that takes wgpu's modules.
     #[test]
     fn strict_arithmetic_forbids_contraction_and_compiles_the_guards_out() {
         for launch in [
@@ -696,16 +697,32 @@ mod tests {
                 .filter(|i| is_no_contraction(i))
                 .count();
             assert_eq!(decorations, results.len(), "{launch}: each once");
-            let guarded = launch_source::<f32>(launch, |o| GpuOptions {
-                strict_arithmetic: false,
+            let strict = |o| GpuOptions {
+                arithmetic: Arithmetic::Strict,
                 ..o
-            });
+            };
+            let wgpu = |o| GpuOptions {
+                arithmetic: Arithmetic::Wgpu,
+                ..o
+            };
+            assert_eq!(
+                launch_source::<f32>(launch, strict),
+                launch_source::<f32>(launch, |o| o)
+            );
+            let guarded = launch_source::<f32>(launch, wgpu);
             assert!(!guarded.build.strict_arithmetic);
             assert_eq!(fusion_guards(&guarded), Some(true), "{launch}");
             assert!(uncontracted(&words(&guarded)).is_empty(), "{launch}");
-            let f64 = launch_source::<f64>(launch, |o| o);
-            assert!(!f64.build.strict_arithmetic, "{launch} f64");
+            // f64 has no guards: strict is the decorations alone.
+            let f64 = launch_source::<f64>(launch, strict);
+            assert!(f64.build.strict_arithmetic, "{launch} f64");
             assert_eq!(fusion_guards(&f64), None, "{launch} f64");
+            let w = words(&f64);
+            assert_eq!(uncontracted(&w), float_results(&w), "{launch} f64");
+            let plain = launch_source::<f64>(launch, |o| o);
+            assert!(!plain.build.strict_arithmetic, "{launch} f64: the default");
+            assert_eq!(plain, launch_source::<f64>(launch, wgpu));
+            assert!(uncontracted(&words(&plain)).is_empty(), "{launch} f64");
         }
         let traits = AdapterTraits {
             own_spirv: false,
@@ -911,13 +928,16 @@ mod tests {
             type Variant = (&'static str, fn(GpuOptions) -> GpuOptions);
             let variants: [Variant; 3] = [
                 ("default", |o| o),
-                ("guarded, unscoped, lanes in storage", |o| GpuOptions {
-                    strict_arithmetic: false,
-                    workgroup_barriers: false,
-                    lane_shuffle: false,
-                    ..o
+                ("wgpu's arithmetic, unscoped, lanes in storage", |o| {
+                    GpuOptions {
+                        arithmetic: Arithmetic::Wgpu,
+                        workgroup_barriers: false,
+                        lane_shuffle: false,
+                        ..o
+                    }
                 }),
-                ("clocked, checked", |o| GpuOptions {
+                ("strict, clocked, checked", |o| GpuOptions {
+                    arithmetic: Arithmetic::Strict,
                     phase_clocks: !matches!(o.path, GpuPath::OneStep | GpuPath::OneStepLanes),
                     shader_checks: true,
                     ..o

@@ -423,7 +423,7 @@ pub fn plan<T: GpuReal>(
             && opts.workgroup_barriers
             && kernel.has_phase_barriers(),
         phase_clocks: opts.phase_clocks,
-        strict_arithmetic: adapter.own_spirv && opts.strict_arithmetic && T::FUSION_GUARDS,
+        strict_arithmetic: adapter.own_spirv && opts.arithmetic.strict::<T>(),
     };
     Ok(KernelPlan {
         step_kernel,

@@ -285,13 +285,8 @@ pub fn scenes_cache_key<T: GpuReal>(
         } else {
             "device"
         },
-        // Nor by how mixed f32's arithmetic is kept from fusing
-        // (`GpuOptions::strict_arithmetic`).
-        if opts.strict_arithmetic {
-            "strict"
-        } else {
-            "guarded"
-        },
+        // Nor by how the arithmetic is compiled (`GpuOptions::arithmetic`).
+        opts.arithmetic.name(),
         // Choices timed by a span's mean step (before session 38) carry
         // each advance's fixed costs: measured again.
         super::timing::TIMING,
