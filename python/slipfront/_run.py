@@ -219,7 +219,8 @@ def run(scenario: ScenarioLike = None, *, backend: str = "auto",
         set: Optional[dict] = None, threads: int = 0, gpu_path: str = "auto",
         gpu_output: str = "device", force: bool = False,
         allow_unstable: bool = False, live: Optional[str] = None,
-        live_wait: bool = False, gpu_run_ahead: Optional[int] = None) -> Run:
+        live_wait: bool = False, gpu_run_ahead: Optional[int] = None,
+        gpu_arithmetic: str = "leaner") -> Run:
     """Runs a scene to its end and returns its records as a `Run`.
 
     scenario: a `Scenario`, a scenario file, a shipped scene's name, or
@@ -234,7 +235,12 @@ def run(scenario: ScenarioLike = None, *, backend: str = "auto",
     free one, and `summary["live"]` says where); live_wait: start once a
     viewer has subscribed. gpu_run_ahead: batches the GPU may run ahead of
     the output writer (as `--gpu-run-ahead`: 0 to 64, None for the
-    default 4; 0 waits for every batch).
+    default 4; 0 waits for every batch). gpu_arithmetic: as
+    `--gpu-arithmetic`: "strict" forbids the GPU driver to fuse or regroup
+    any operation (in f64 the CPU reference's numbers, to the bit where the
+    GPU rounds division and square roots as IEEE does), "wgpu" leaves the
+    kernels as wgpu writes them, "leaner" (the default) is strict in mixed
+    f32 and wgpu's in f64.
 
     Ctrl-C stops the run at its next chunk; with an output file its
     checkpoint is written, then `Interrupted` (a KeyboardInterrupt) is
@@ -254,7 +260,8 @@ def run(scenario: ScenarioLike = None, *, backend: str = "auto",
                 sc, path, backend=backend, precision=precision, threads=threads,
                 gpu_path=gpu_path, gpu_output=gpu_output,
                 allow_unstable=allow_unstable, force=force, progress=callback,
-                live=live, live_wait=live_wait, gpu_run_ahead=gpu_run_ahead)
+                live=live, live_wait=live_wait, gpu_run_ahead=gpu_run_ahead,
+                gpu_arithmetic=gpu_arithmetic)
         finally:
             close()
         result = Run(_core.read_run(path), summary=summary)

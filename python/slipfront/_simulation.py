@@ -20,18 +20,21 @@ class Simulation:
     def __init__(self, scenario: ScenarioLike = None, *, backend: str = "auto",
                  precision: Optional[str] = None, set: Optional[dict] = None,
                  threads: int = 0, gpu_path: str = "auto",
-                 allow_unstable: bool = False, _core_sim=None):
+                 allow_unstable: bool = False, gpu_arithmetic: str = "leaner",
+                 _core_sim=None):
         if _core_sim is not None:
             self._sim = _core_sim
             return
         self._sim = _core.Simulation(as_scenario(scenario, set), backend=backend,
                                      precision=precision, threads=threads,
-                                     gpu_path=gpu_path, allow_unstable=allow_unstable)
+                                     gpu_path=gpu_path, allow_unstable=allow_unstable,
+                                     gpu_arithmetic=gpu_arithmetic)
 
     @classmethod
     def from_checkpoint(cls, path: PathLike, *, backend: str = "auto",
                         precision: Optional[str] = None, threads: int = 0,
-                        gpu_path: str = "auto") -> "Simulation":
+                        gpu_path: str = "auto",
+                        gpu_arithmetic: str = "leaner") -> "Simulation":
         """Continues a saved state: a run's checkpoint (``RUN.mcap.ckpt``, or
         the run file with one beside it) or one `checkpoint` wrote."""
         path = os.fspath(path)
@@ -40,7 +43,7 @@ class Simulation:
             path = beside
         return cls(_core_sim=_core.Simulation.from_checkpoint(
             path, backend=backend, precision=precision, threads=threads,
-            gpu_path=gpu_path))
+            gpu_path=gpu_path, gpu_arithmetic=gpu_arithmetic))
 
     def advance(self, t: float) -> None:
         """Steps to time `t` (s since driving started; the normal-load phase

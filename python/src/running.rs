@@ -34,6 +34,7 @@ impl EngineChoice {
         threads: usize,
         gpu_path: &str,
         gpu_output: &str,
+        gpu_arithmetic: &str,
     ) -> PyResult<Self> {
         Ok(EngineChoice {
             backend: choice("backend", backend)?,
@@ -42,6 +43,8 @@ impl EngineChoice {
             gpu: GpuOptions {
                 path: choice::<GpuPath>("gpu_path", gpu_path)?,
                 output: choice::<GpuOutput>("gpu_output", gpu_output)?,
+                arithmetic: slipfront::engines::gpu::options::arithmetic(gpu_arithmetic)
+                    .map_err(|why| PyValueError::new_err(format!("gpu_arithmetic = {why}")))?,
                 ..GpuOptions::default()
             },
         })
@@ -138,7 +141,7 @@ fn start_live(
 #[pyo3(signature = (scenario, output, backend="auto", precision=None, threads=0,
                     gpu_path="auto", gpu_output="device", allow_unstable=false,
                     force=false, progress=None, live=None, live_wait=false,
-                    gpu_run_ahead=None))]
+                    gpu_run_ahead=None, gpu_arithmetic="leaner"))]
 #[allow(clippy::too_many_arguments)]
 pub fn run_scene<'py>(
     py: Python<'py>,
@@ -155,8 +158,16 @@ pub fn run_scene<'py>(
     live: Option<&str>,
     live_wait: bool,
     gpu_run_ahead: Option<i64>,
+    gpu_arithmetic: &str,
 ) -> PyResult<(Bound<'py, PyDict>, Option<PyErr>)> {
-    let mut choice = EngineChoice::parse(backend, precision, threads, gpu_path, gpu_output)?;
+    let mut choice = EngineChoice::parse(
+        backend,
+        precision,
+        threads,
+        gpu_path,
+        gpu_output,
+        gpu_arithmetic,
+    )?;
     if let Some(batches) = gpu_run_ahead {
         choice.gpu.run_ahead = run_ahead_batches(batches)
             .map_err(|why| PyValueError::new_err(format!("gpu_run_ahead = {why}")))?;

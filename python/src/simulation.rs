@@ -92,7 +92,8 @@ impl Simulation {
     /// phase).
     #[new]
     #[pyo3(signature = (scenario, backend="auto", precision=None, threads=0,
-                        gpu_path="auto", allow_unstable=false))]
+                        gpu_path="auto", allow_unstable=false, gpu_arithmetic="leaner"))]
+    #[allow(clippy::too_many_arguments)]
     fn new(
         py: Python<'_>,
         scenario: &Scenario,
@@ -101,8 +102,16 @@ impl Simulation {
         threads: usize,
         gpu_path: &str,
         allow_unstable: bool,
+        gpu_arithmetic: &str,
     ) -> PyResult<Self> {
-        let choice = EngineChoice::parse(backend, precision, threads, gpu_path, "device")?;
+        let choice = EngineChoice::parse(
+            backend,
+            precision,
+            threads,
+            gpu_path,
+            "device",
+            gpu_arithmetic,
+        )?;
         let model = Model::from_scenario(&scenario.inner, allow_unstable)
             .map_err(|e| PyValueError::new_err(e.to_string()))?;
         let precision = choice.precision();
@@ -126,7 +135,8 @@ impl Simulation {
     /// A simulation continued from a checkpoint: a run's (`RUN.mcap.ckpt`)
     /// or one [`checkpoint`] wrote.
     #[staticmethod]
-    #[pyo3(signature = (path, backend="auto", precision=None, threads=0, gpu_path="auto"))]
+    #[pyo3(signature = (path, backend="auto", precision=None, threads=0, gpu_path="auto",
+                        gpu_arithmetic="leaner"))]
     fn from_checkpoint(
         py: Python<'_>,
         path: PathBuf,
@@ -134,8 +144,16 @@ impl Simulation {
         precision: Option<&str>,
         threads: usize,
         gpu_path: &str,
+        gpu_arithmetic: &str,
     ) -> PyResult<Self> {
-        let choice = EngineChoice::parse(backend, precision, threads, gpu_path, "device")?;
+        let choice = EngineChoice::parse(
+            backend,
+            precision,
+            threads,
+            gpu_path,
+            "device",
+            gpu_arithmetic,
+        )?;
         let ckpt = Checkpoint::read(&path).map_err(|e| {
             PyValueError::new_err(format!("cannot read checkpoint `{}`: {e}", path.display()))
         })?;

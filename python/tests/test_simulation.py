@@ -68,3 +68,32 @@ def test_a_runs_checkpoint_continues_in_python(tmp_path):
     sim.advance(0.04)
     whole.advance(0.04)
     np.testing.assert_array_equal(sim.state()["disp"], whole.state()["disp"])
+
+
+def test_strict_gpu_arithmetic_gives_the_cpu_references_f64_numbers():
+    """`gpu_arithmetic="strict"` forbids the GPU driver to fuse or regroup
+    any operation: in f64 each kernel then computes the CPU reference's
+    operations as written, so on lavapipe (CI), which rounds division and
+    square roots as IEEE does, the GPU's state is the CPU reference's to
+    the bit through junction ruptures; elsewhere to 1e-12. The control: the
+    default f64 build, which llvmpipe fuses, differs."""
+    def state_at(t, **engine):
+        sim = slipfront.Simulation("small_stick_slip", precision="f64", **engine)
+        sim.advance(t)
+        return sim, sim.state()
+    t = 0.08  # 100,000 steps, 140 junction ruptures
+    reference, ref = state_at(t, backend="cpu-reference")
+    assert ref["ruptures"].sum() > 100
+    gpu, got = state_at(t, backend="gpu", gpu_arithmetic="strict")
+    assert "strict arithmetic" in gpu.engine
+    for field in ("disp", "vel", "friction", "anchor", "pinned", "ruptures", "slip_steps_left"):
+        if "llvmpipe" in gpu.engine:
+            np.testing.assert_array_equal(got[field], ref[field], err_msg=field)
+        else:
+            np.testing.assert_allclose(got[field], ref[field], rtol=1e-12, err_msg=field)
+    if "llvmpipe" in gpu.engine:
+        plain, other = state_at(t, backend="gpu")
+        assert "strict arithmetic" not in plain.engine
+        assert not np.array_equal(other["disp"], ref["disp"])
+    with pytest.raises(ValueError, match="gpu_arithmetic = `exact` arithmetic: must be one of leaner, strict, wgpu"):
+        slipfront.Simulation("small_stick_slip", backend="gpu", gpu_arithmetic="exact")
