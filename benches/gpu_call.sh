@@ -6,7 +6,7 @@
 #
 # On the GPU machine, after a release build and packing here:
 #   cargo build --release --bins --benches --tests
-#   ../shared/device/pack.sh gpu_registers gpu_targets gpu_ensemble gpu_chained_tiles gpu_table gpu_precision output_writer gpu_host
+#   ../shared/device/pack.sh gpu_registers gpu_targets gpu_ensemble gpu_chained_tiles gpu_f64 gpu_table gpu_precision output_writer gpu_host
 #   device call, carry [".devbin"]: bash .devbin/on-gpu.sh 'bash ../benches/gpu_call.sh 420'
 # (on-gpu.sh runs its command from .devbin/, with the packed binaries on PATH).
 #
@@ -141,6 +141,12 @@ step bits 90 gpu_ensemble --test-threads 1
 #     at once, and an ensemble of chained scenes against their solo runs (lavapipe can
 #     check only one scene at a time).
 step chained 60 gpu_chained_tiles --test-threads 1
+# 2c'. Strict f64 (`--gpu-arithmetic strict`) against the CPU reference, bit for bit, on
+#      every kernel through the stick-slip window (6,000 driving steps, 13,633 ruptures):
+#      true on lavapipe since session 68; on NVIDIA only if its f64 division and square
+#      roots round as IEEE's. A failure names the first kernel that parts.
+step f64-bits 60 env SLIPFRONT_TEST_CPU_BITS=1 gpu_f64 \
+  every_f64_kernel_built_strict --test-threads 1
 # 2d. auto's pick for a run with an output file (the default job's `-o`), in f64: timed
 #     recording Table S1's samples at its cadences, against each launch timed again
 #     recording them (output weighs on the launches unequally: BENCHMARKS.md, session 39).

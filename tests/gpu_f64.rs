@@ -110,9 +110,12 @@ fn gpu_f64_matches_cpu_f64_through_junction_ruptures_on_every_kernel() {
 /// rounds division and square roots as IEEE does (llvmpipe): the driver may
 /// not fuse, and the slip draws' ln and cos (the kernels' own f64 ones,
 /// `shaders/coord_f64.wgsl`, against libm) give every draw the same whole
-/// number of slip steps. Elsewhere, the total ruptures agree within 0.1 %.
-/// The control: the default f64 build (wgpu's module), which the driver
-/// may fuse (llvmpipe does), parts from the reference before driving.
+/// number of slip steps. Elsewhere, the total ruptures agree within 0.1 %;
+/// `SLIPFRONT_TEST_CPU_BITS=1` asks for the bits on a hardware adapter too
+/// (`gpu_call.sh`'s `f64-bits` step: whether its f64 division and square
+/// roots round as IEEE's). The control: the default f64 build (wgpu's
+/// module), which the driver may fuse (llvmpipe does), parts from the
+/// reference before driving.
 #[test]
 fn every_f64_kernel_built_strict_is_the_cpu_reference_bit_for_bit_through_the_stick_slip_window() {
     let m = model(&[]);
@@ -123,9 +126,10 @@ fn every_f64_kernel_built_strict_is_the_cpu_reference_bit_for_bit_through_the_st
         "{}",
         reference.total_ruptures()
     );
-    let ieee_division = slipfront::engines::gpu::context::shared()
+    let software = slipfront::engines::gpu::context::shared()
         .expect("an adapter")
         .is_software();
+    let bits = software || std::env::var("SLIPFRONT_TEST_CPU_BITS").is_ok_and(|v| v == "1");
     for path in GpuPath::KERNELS {
         let strict = GpuOptions {
             path,
@@ -139,7 +143,7 @@ fn every_f64_kernel_built_strict_is_the_cpu_reference_bit_for_bit_through_the_st
             g.describe()
         );
         let on_gpu = snapshot_at(&mut g, end);
-        if ieee_division {
+        if bits {
             assert!(
                 on_gpu == reference,
                 "{path:?}: not the CPU reference's bits"
@@ -151,7 +155,7 @@ fn every_f64_kernel_built_strict_is_the_cpu_reference_bit_for_bit_through_the_st
             "{path:?}: {a} ruptures, the CPU {b}"
         );
     }
-    if ieee_division {
+    if software {
         let mut g = gpu_f64(&m, GpuPath::OneStep);
         assert!(!g.describe().contains("strict arithmetic"));
         let at_load = snapshot_at(&mut CpuEngine::<f64>::new(&m, 1).unwrap(), m.prep_steps);
