@@ -175,6 +175,8 @@ fn bad_input_exits_with_a_clear_message() {
         refused("gpu-lane-run", &["0", "3", "16", "four"], "[1, 2, 4, 8]");
         // Scenes a persistent workgroup: 1, 2 or 4.
         refused("gpu-group-scenes", &["0", "3", "8", "two"], "[1, 2, 4]");
+        // How the kernels' arithmetic is compiled: one of three words.
+        refused("gpu-arithmetic", &["exact", "fast"], "leaner, strict, wgpu");
     }
 }
 

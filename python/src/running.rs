@@ -43,8 +43,7 @@ impl EngineChoice {
             gpu: GpuOptions {
                 path: choice::<GpuPath>("gpu_path", gpu_path)?,
                 output: choice::<GpuOutput>("gpu_output", gpu_output)?,
-                arithmetic: slipfront::engines::gpu::options::arithmetic(gpu_arithmetic)
-                    .map_err(|why| PyValueError::new_err(format!("gpu_arithmetic = {why}")))?,
+                arithmetic: choice("gpu_arithmetic", gpu_arithmetic)?,
                 ..GpuOptions::default()
             },
         })

@@ -86,6 +86,25 @@ fn flat2(v: &[[f64; 2]]) -> Vec<f64> {
     v.iter().flatten().copied().collect()
 }
 
+/// A simulation's engine choice: the options of `slipfront run` that a
+/// `Simulation` takes (it writes no run file, so the output's is the default).
+fn simulation_choice(
+    backend: &str,
+    precision: Option<&str>,
+    threads: usize,
+    gpu_path: &str,
+    gpu_arithmetic: &str,
+) -> PyResult<EngineChoice> {
+    EngineChoice::parse(
+        backend,
+        precision,
+        threads,
+        gpu_path,
+        "device",
+        gpu_arithmetic,
+    )
+}
+
 #[pymethods]
 impl Simulation {
     /// A simulation of `scenario` at step 0 (the start of the normal-load
@@ -104,14 +123,7 @@ impl Simulation {
         allow_unstable: bool,
         gpu_arithmetic: &str,
     ) -> PyResult<Self> {
-        let choice = EngineChoice::parse(
-            backend,
-            precision,
-            threads,
-            gpu_path,
-            "device",
-            gpu_arithmetic,
-        )?;
+        let choice = simulation_choice(backend, precision, threads, gpu_path, gpu_arithmetic)?;
         let model = Model::from_scenario(&scenario.inner, allow_unstable)
             .map_err(|e| PyValueError::new_err(e.to_string()))?;
         let precision = choice.precision();
@@ -146,14 +158,7 @@ impl Simulation {
         gpu_path: &str,
         gpu_arithmetic: &str,
     ) -> PyResult<Self> {
-        let choice = EngineChoice::parse(
-            backend,
-            precision,
-            threads,
-            gpu_path,
-            "device",
-            gpu_arithmetic,
-        )?;
+        let choice = simulation_choice(backend, precision, threads, gpu_path, gpu_arithmetic)?;
         let ckpt = Checkpoint::read(&path).map_err(|e| {
             PyValueError::new_err(format!("cannot read checkpoint `{}`: {e}", path.display()))
         })?;

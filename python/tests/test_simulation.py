@@ -95,5 +95,5 @@ def test_strict_gpu_arithmetic_gives_the_cpu_references_f64_numbers():
         plain, other = state_at(t, backend="gpu")
         assert "strict arithmetic" not in plain.engine
         assert not np.array_equal(other["disp"], ref["disp"])
-    with pytest.raises(ValueError, match="gpu_arithmetic = `exact` arithmetic: must be one of leaner, strict, wgpu"):
+    with pytest.raises(ValueError, match='gpu_arithmetic = "exact": expected one of leaner, strict, wgpu'):
         slipfront.Simulation("small_stick_slip", backend="gpu", gpu_arithmetic="exact")

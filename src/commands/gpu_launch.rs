@@ -79,7 +79,7 @@ pub struct GpuLaunchArgs {
     /// `leaner` (the default) is strict in mixed f32, where it costs fewer
     /// instructions, and wgpu's in f64, where strict costs more. Strict
     /// needs a Vulkan 1.3 adapter (elsewhere the run says it is not).
-    #[arg(long, value_name = "ARITHMETIC", default_value = "leaner", value_parser = slipfront::engines::gpu::options::arithmetic)]
+    #[arg(long, value_enum, default_value = "leaner")]
     pub gpu_arithmetic: slipfront::engines::gpu::Arithmetic,
 }
 

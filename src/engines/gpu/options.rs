@@ -267,7 +267,7 @@ pub struct GpuOptions {
 /// guards, and there the fused multiply-adds come apart, 4-7 % more
 /// instructions and 12-18 % more of ACO's estimated latency. NVIDIA's
 /// figures are `gpu_table` section 12's.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, clap::ValueEnum)]
 pub enum Arithmetic {
     /// Each precision's leaner build: strict in mixed f32, wgpu's in f64
     /// (the default).
@@ -281,8 +281,6 @@ pub enum Arithmetic {
 }
 
 impl Arithmetic {
-    pub const ALL: [Arithmetic; 3] = [Arithmetic::Leaner, Arithmetic::Strict, Arithmetic::Wgpu];
-
     /// Whether precision `T`'s kernels are asked to be strict (they are
     /// where the engine writes the device's SPIR-V).
     pub fn strict<T: GpuReal>(self) -> bool {
@@ -293,26 +291,11 @@ impl Arithmetic {
         }
     }
 
-    /// `--gpu-arithmetic`'s word for it.
-    pub fn name(self) -> &'static str {
-        match self {
-            Arithmetic::Leaner => "leaner",
-            Arithmetic::Strict => "strict",
-            Arithmetic::Wgpu => "wgpu",
-        }
+    /// The `--gpu-arithmetic` value (as the command line spells it).
+    pub fn name(self) -> String {
+        clap::ValueEnum::to_possible_value(&self)
+            .map_or_else(|| format!("{self:?}"), |v| v.get_name().to_string())
     }
-}
-
-/// `--gpu-arithmetic`: `leaner`, `strict` or `wgpu`, else an error naming
-/// the value and the allowed ones.
-pub fn arithmetic(text: &str) -> Result<Arithmetic, String> {
-    Arithmetic::ALL
-        .into_iter()
-        .find(|a| a.name() == text)
-        .ok_or_else(|| {
-            let names: Vec<&str> = Arithmetic::ALL.iter().map(|a| a.name()).collect();
-            format!("`{text}` arithmetic: must be one of {}", names.join(", "))
-        })
 }
 
 /// Scenes a persistent workgroup may step (`GpuOptions::group_scenes`).
