@@ -427,6 +427,10 @@ fn tile_round(t: u32, d: u32, lanes: u32, stride: u32, first: bool, last: bool) 
                 note_junction_block(ix - tile_lo, ix, first);
             }
         }
+        // Arrived again, at the phase's last barrier: the notes are the
+        // slowest warp's work, and the barrier before them too (the
+        // latest arrival is a maximum, so this one stands).
+        phase_arrive(t, PHASE_LOAD);
         workgroupBarrier();
     }
     phase_mark(t, PHASE_LOAD);

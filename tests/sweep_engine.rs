@@ -290,3 +290,125 @@ fn kept_junction_sums_are_bitwise_the_reference() {
     kept_sums_match::<f32, DoubleSingle>();
     kept_sums_match::<f64, f64>();
 }
+
+/// A thread-count trial (`SweepEngine::with_thread_trials`, what `--threads
+/// 0` does on a small lattice) steps the run itself on each count in turn,
+/// at the start of the normal load and again at the start of driving, and
+/// then keeps one: every switch of count (bands, pool, the interface
+/// band's kept sums carried over) must leave the reference's bits, through
+/// ruptures. Spans of the trial's fewest steps, so that both trials end
+/// within the window; calls of 37 steps, so that switches fall within
+/// calls and after odd step counts.
+#[test]
+fn thread_trials_switch_counts_on_the_reference_bits() {
+    use slipfront::engines::cpu::fast::threads::Plan;
+    // A normal load long enough for its trial (about 750 steps here).
+    let mut set = STICK_SLIP_WINDOW.to_vec();
+    set.extend([
+        "loading.normal.ramp_time=2e-4",
+        "loading.normal.relax_time=1e-4",
+    ]);
+    let m = model(&set);
+    assert!(m.prep_steps > 1000, "{} steps of normal load", m.prep_steps);
+    let plan = Plan {
+        candidates: vec![1, 3, 2],
+        span_seconds: 0.0,
+        retrial_seconds: f64::INFINITY,
+    };
+    let mut reference = CpuEngine::<f64>::new(&m, 1).unwrap();
+    let mut sweep = SweepEngine::<f64>::with_thread_trials(&m, plan).unwrap();
+    assert!(sweep.timing_threads());
+    let mut seen = std::collections::BTreeSet::new();
+    let mut timed_in_loading = None;
+    let end = m.prep_steps + 4000;
+    while sweep.steps_done() < end {
+        let at = (sweep.steps_done() + 37).min(end);
+        advance_to(&mut sweep, at).unwrap();
+        seen.insert(sweep.threads());
+        if at < m.prep_steps && !sweep.timing_threads() {
+            timed_in_loading = sweep.threads_timed().cloned();
+        }
+        if at % 250 < 37 || at == end {
+            advance_to(&mut reference, at).unwrap();
+            let (a, b) = (reference.snapshot().unwrap(), sweep.snapshot().unwrap());
+            assert!(a == b, "{}", first_difference(&a, &b));
+        }
+    }
+    assert_eq!(seen.into_iter().collect::<Vec<_>>(), vec![1, 2, 3]);
+    let loading = timed_in_loading.expect("the normal load's trial ends within it");
+    let driving = sweep.threads_timed().expect("the driving's trial ends");
+    assert!(!sweep.timing_threads());
+    for timed in [&loading, driving] {
+        let counts: Vec<usize> = timed.figures.iter().map(|f| f.0).collect();
+        assert_eq!(counts, vec![1, 3, 2]);
+        assert!(timed.figures.iter().all(|f| f.1 > 0.0 && f.1.is_finite()));
+        assert!([1, 2, 3].contains(&timed.threads));
+    }
+    assert_eq!(sweep.threads(), driving.threads);
+    assert!(
+        sweep.describe().contains("threads timed: 1: "),
+        "{}",
+        sweep.describe()
+    );
+    let ruptures = reference.snapshot().unwrap().total_ruptures();
+    assert!(ruptures > 100, "the window must hold ruptures: {ruptures}");
+}
+
+/// `--threads 0` times the thread counts on a small lattice where the
+/// machine has several cores, and on a large one takes every core.
+#[test]
+fn the_engine_times_threads_on_a_small_lattice_of_a_machine_with_cores() {
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let small = SweepEngine::<f64>::new(&model(&[]), 0).unwrap();
+    assert_eq!(small.timing_threads(), cores > 1);
+    assert_eq!(small.threads(), 1, "a trial starts on one thread");
+    let large = SweepEngine::<f64>::new(
+        &model(&[
+            "geometry.nx=160",
+            "geometry.nz=32",
+            "geometry.length=0.3975",
+            "geometry.height=0.0775",
+        ]),
+        0,
+    )
+    .unwrap();
+    assert!(!large.timing_threads());
+    assert_eq!(large.threads(), cores.min(32));
+}
+
+/// Trials back to back (a new one as soon as one ends, as after every
+/// `RETRIAL_SECONDS` of a run): the counts change all through the window,
+/// on the reference's bits.
+#[test]
+fn back_to_back_thread_trials_keep_the_reference_bits() {
+    use slipfront::engines::cpu::fast::threads::Plan;
+    let m = model(&STICK_SLIP_WINDOW);
+    let plan = Plan {
+        candidates: vec![2, 1],
+        span_seconds: 0.0,
+        retrial_seconds: 0.0,
+    };
+    let mut reference = CpuEngine::<f64>::new(&m, 1).unwrap();
+    let mut sweep = SweepEngine::<f64>::with_thread_trials(&m, plan).unwrap();
+    let mut trials = 0;
+    let mut last = None;
+    let end = m.prep_steps + 3000;
+    for at in (m.prep_steps..=end).step_by(50) {
+        advance_to(&mut sweep, at).unwrap();
+        // Each trial's figures are its own timings.
+        let timed = sweep.threads_timed().cloned();
+        if timed.is_some() && timed != last {
+            trials += 1;
+            last = timed;
+        }
+        if at % 500 == 0 {
+            advance_to(&mut reference, at).unwrap();
+            let (a, b) = (reference.snapshot().unwrap(), sweep.snapshot().unwrap());
+            assert!(a == b, "{}", first_difference(&a, &b));
+        }
+    }
+    advance_to(&mut reference, end).unwrap();
+    let (a, b) = (reference.snapshot().unwrap(), sweep.snapshot().unwrap());
+    assert!(a == b, "{}", first_difference(&a, &b));
+    assert!(trials >= 3, "{trials} trials ended in the window");
+}

@@ -47,7 +47,8 @@ pub struct RunArgs {
     /// MCAP output file.
     #[arg(short = 'o', long)]
     pub output: Option<PathBuf>,
-    /// CPU threads (0: all cores, 1: deterministic single thread).
+    /// CPU threads (0: every core on a lattice of 4096 blocks or more, the
+    /// count timed fastest on a smaller one; 1: deterministic single thread).
     #[arg(long, default_value_t = 0)]
     pub threads: usize,
     /// Run even if dt is above the computed stability limit.

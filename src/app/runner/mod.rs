@@ -480,7 +480,9 @@ pub fn run_scene(
     let skipped = ff.as_ref().map_or(0, |f| f.stats.skipped_steps) - start_skipped;
     let integrated = steps - skipped;
     Ok(RunSummary {
-        backend: describe,
+        // As it ends: an engine may have settled what it timed as it ran
+        // (the CPU engine's thread count); the file keeps the start's.
+        backend: engine.describe(),
         steps,
         simulated_time: model.time_of_step(engine.steps_done()).max(0.0),
         wall_seconds: wall,

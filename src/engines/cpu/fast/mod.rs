@@ -4,7 +4,8 @@
 //! advances a row, then computes the bonds and forces that need it, then
 //! the interface row's friction (`chunk`). The state is double-buffered
 //! (read step n, write step n + 1), so bands of rows run on several threads
-//! with one fork-join per step and the same bits as one thread.
+//! with one barrier per step and the same bits as one thread; how many
+//! threads a small lattice takes is timed on the scene (`threads`).
 //!
 //! This engine departs in structure from the WGSL kernels; `CpuEngine` (the
 //! kernels' twin) stays the reference, and the tests hold this engine to it
@@ -15,6 +16,7 @@ mod interface;
 mod persistent;
 mod rows;
 mod step;
+pub mod threads;
 
 use crate::engines::kernels::bulk_forces::bond_consts;
 use crate::engines::step_params::Consts;
@@ -29,8 +31,10 @@ use chunk::{Band, Scratch};
 use rows::{ForwardBonds, RowView};
 use step::{Advance, Fixed, Interface, InterfaceArrays, Shared, StateView};
 
-/// Lattices with fewer blocks than this run on one thread unless asked for
-/// more explicitly: measured in BENCHMARKS.md ("CPU engine: sweep").
+/// Lattices with at least this many blocks run on every core when the
+/// thread count is left to the engine; smaller ones on the count a trial
+/// on the run's own steps finds fastest (`threads`). Measured in
+/// BENCHMARKS.md ("CPU engine: sweep"; session 69 for the trial).
 pub const PARALLEL_MIN_BLOCKS: usize = 4096;
 
 /// Displacements and velocities of a set of blocks, as separate arrays.
@@ -106,34 +110,60 @@ pub struct SweepEngine<T: Real, C: Coordinate<T> = <T as Real>::Coord> {
     scratch: Vec<Scratch<T, C>>,
     pool: Option<rayon::ThreadPool>,
     isa: Isa,
+    /// What a trial times at the start of each loading phase (`threads` 0
+    /// on a small lattice and a machine of several cores), if anything.
+    thread_plan: Option<threads::Plan>,
+    /// The trial under way, if any.
+    trial: Option<threads::Trial<Option<rayon::ThreadPool>>>,
+    /// The last trial's choice and figures.
+    threads_timed: Option<threads::Timed>,
+    /// Seconds stepped since the last trial ended.
+    since_trial: f64,
 }
 
 impl<T: Real, C: Coordinate<T>> SweepEngine<T, C> {
     /// `threads`: 1 for one thread, 0 for all cores when the lattice has at
-    /// least `PARALLEL_MIN_BLOCKS` blocks (one otherwise); n > 1 for n
-    /// bands whatever the size. The results are the same bits for any
-    /// count.
+    /// least `PARALLEL_MIN_BLOCKS` blocks (for a smaller one, the count a
+    /// trial at the start of each loading phase finds fastest: `threads`);
+    /// n > 1 for n bands whatever the size. The results are the same bits
+    /// for any count.
     pub fn new(model: &Model, threads: usize) -> Result<Self, EngineError> {
+        let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+        match threads {
+            0 if model.n_blocks() >= PARALLEL_MIN_BLOCKS => Self::build(model, cores, None),
+            0 => Self::with_thread_trials(model, threads::Plan::for_machine(model.nz, cores)),
+            t => Self::build(model, t, None),
+        }
+    }
+
+    /// An engine that times `plan`'s thread counts (the first to start
+    /// on) at the start of each loading phase and steps the rest of the
+    /// phase on the fastest. Fewer than two counts: no trial.
+    pub fn with_thread_trials(model: &Model, plan: threads::Plan) -> Result<Self, EngineError> {
+        // Each count as the engine can step it (a band a row at most), once.
+        let mut counts: Vec<usize> = Vec::new();
+        for k in plan.candidates.iter().map(|&k| k.clamp(1, model.nz)) {
+            if !counts.contains(&k) {
+                counts.push(k);
+            }
+        }
+        let first = counts.first().copied().unwrap_or(1);
+        let plan = threads::Plan {
+            candidates: counts,
+            ..plan
+        };
+        Self::build(model, first, Some(plan).filter(|p| p.candidates.len() > 1))
+    }
+
+    fn build(
+        model: &Model,
+        threads: usize,
+        plan: Option<threads::Plan>,
+    ) -> Result<Self, EngineError> {
         let consts = Consts::<T>::new(model);
         let (n, nx, nz) = (model.n_blocks(), model.nx, model.nz);
-        let threads = match threads {
-            0 if n >= PARALLEL_MIN_BLOCKS => {
-                std::thread::available_parallelism().map_or(1, |n| n.get())
-            }
-            0 => 1,
-            t => t,
-        }
-        .min(nz);
-        let pool = if threads > 1 {
-            Some(
-                rayon::ThreadPoolBuilder::new()
-                    .num_threads(threads)
-                    .build()
-                    .map_err(|e| EngineError::Gpu(format!("thread pool: {e}")))?,
-            )
-        } else {
-            None
-        };
+        let threads = threads.clamp(1, nz);
+        let pool = thread_pool(threads)?;
         let bands = band_rows(nz, threads);
         let mut now = State::new(n, nx);
         for (i, u) in initial_displacement(model).into_iter().enumerate() {
@@ -158,7 +188,12 @@ impl<T: Real, C: Coordinate<T>> SweepEngine<T, C> {
             pool,
             isa: Isa::detect(),
             model: model.clone(),
+            thread_plan: plan,
+            trial: None,
+            threads_timed: None,
+            since_trial: 0.0,
         };
+        engine.start_thread_trial()?;
         if model.prep_steps == 0 {
             engine.begin_driving();
         }
@@ -168,6 +203,99 @@ impl<T: Real, C: Coordinate<T>> SweepEngine<T, C> {
 
     pub fn threads(&self) -> usize {
         self.bands.len()
+    }
+
+    /// The last finished trial's choice of thread count and its figures
+    /// (`threads` 0 on a lattice below `PARALLEL_MIN_BLOCKS`, on a machine
+    /// with more than one core).
+    pub fn threads_timed(&self) -> Option<&threads::Timed> {
+        self.threads_timed.as_ref()
+    }
+
+    /// Whether a trial of thread counts is under way.
+    pub fn timing_threads(&self) -> bool {
+        self.trial.is_some()
+    }
+
+    /// A new trial of the candidates, from the first (none where there
+    /// are fewer than two).
+    fn start_thread_trial(&mut self) -> Result<(), EngineError> {
+        let Some(plan) = &self.thread_plan else {
+            return Ok(());
+        };
+        let mut trial = threads::Trial::new(plan);
+        let first = trial.threads();
+        self.switch_threads(&mut trial, first)?;
+        self.trial = Some(trial);
+        Ok(())
+    }
+
+    /// Steps on `threads` threads from now on, setting aside the current
+    /// count's bands and pool in `trial` and taking up the new count's
+    /// where it has run before. The interface band (the first) keeps its
+    /// scratch, which holds the junctions' kept sums.
+    fn switch_threads(
+        &mut self,
+        trial: &mut threads::Trial<Option<rayon::ThreadPool>>,
+        threads: usize,
+    ) -> Result<(), EngineError> {
+        let threads = threads.clamp(1, self.model.nz);
+        if threads == self.bands.len() {
+            return Ok(());
+        }
+        let (bands, pool) = match trial.unpark(threads) {
+            Some(parked) => parked,
+            None => (band_rows(self.model.nz, threads), thread_pool(threads)?),
+        };
+        let old_bands = std::mem::replace(&mut self.bands, bands);
+        let old_pool = std::mem::replace(&mut self.pool, pool);
+        trial.park(old_bands.len(), old_bands, old_pool);
+        let nx = self.model.nx;
+        self.scratch.resize_with(threads, || Scratch::new(nx));
+        Ok(())
+    }
+
+    /// `advance_bands`, timed where the engine times its thread counts:
+    /// during a trial the steps go in the spans it asks for, each on its
+    /// count; after one, a new trial starts once the plan's seconds have
+    /// been stepped.
+    fn advance_timed(&mut self, n: u64) -> Result<Option<usize>, EngineError> {
+        let Some(retrial) = self.thread_plan.as_ref().map(|p| p.retrial_seconds) else {
+            return Ok(self.advance_bands(n));
+        };
+        let mut left = n;
+        while left > 0 {
+            if self.trial.is_none() && self.since_trial >= retrial {
+                self.start_thread_trial()?;
+            }
+            let k = self
+                .trial
+                .as_ref()
+                .map_or(left, |t| t.steps_wanted().min(left));
+            let start = std::time::Instant::now();
+            let bad = self.advance_bands(k);
+            let seconds = start.elapsed().as_secs_f64();
+            left -= k;
+            match self.trial.take() {
+                None => self.since_trial += seconds,
+                Some(mut trial) => match trial.record(k, seconds) {
+                    threads::Next::Keep => self.trial = Some(trial),
+                    threads::Next::Run(threads) => {
+                        self.switch_threads(&mut trial, threads)?;
+                        self.trial = Some(trial);
+                    }
+                    threads::Next::Chosen(timed) => {
+                        self.switch_threads(&mut trial, timed.threads)?;
+                        self.threads_timed = Some(timed);
+                        self.since_trial = 0.0;
+                    }
+                },
+            }
+            if bad.is_some() {
+                return Ok(bad);
+            }
+        }
+        Ok(None)
     }
 
     /// Interface blocks whose junction sums are kept now (all junctions
@@ -299,11 +427,13 @@ impl<T: Real, C: Coordinate<T>> SweepEngine<T, C> {
                 self.stop_if_blown_up(bad)?;
                 self.begin_driving();
                 self.sweep(Advance::Copy, true);
+                // Driving's work is not the normal load's: timed anew.
+                self.start_thread_trial()?;
                 continue;
             }
             // Up to the state before that step, or to the end.
             let until = if self.step + 1 < prep { prep - 1 } else { end };
-            let bad = self.advance_bands(until.min(end) - self.step);
+            let bad = self.advance_timed(until.min(end) - self.step)?;
             self.stop_if_blown_up(bad)?;
         }
         Ok(())
@@ -365,6 +495,19 @@ impl<T: Real, C: Coordinate<T>> SweepEngine<T, C> {
             &self.friction,
         )
     }
+}
+
+/// The pool that steps `threads` bands (none for one: the calling thread
+/// steps it).
+fn thread_pool(threads: usize) -> Result<Option<rayon::ThreadPool>, EngineError> {
+    if threads < 2 {
+        return Ok(None);
+    }
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .map(Some)
+        .map_err(|e| EngineError::Gpu(format!("thread pool: {e}")))
 }
 
 /// `threads` bands of consecutive rows, as even as the rows allow.
@@ -499,9 +642,19 @@ impl<T: Real, C: Coordinate<T>> Engine for SweepEngine<T, C> {
 
     fn describe(&self) -> String {
         format!(
-            "cpu {} ({} thread(s), sweep){}",
+            "cpu {} ({} thread(s), sweep{}){}",
             crate::model::real::precision_name::<T, C>(),
             self.threads(),
+            match (&self.trial, &self.threads_timed) {
+                (Some(_), _) => format!(
+                    "; timing {:?} threads on its steps",
+                    self.thread_plan
+                        .as_ref()
+                        .map_or(&[][..], |p| &p.candidates[..])
+                ),
+                (None, Some(t)) => format!("; threads timed: {}", t.describe()),
+                (None, None) => String::new(),
+            },
             crate::engines::precision_probe::label(self.fixed.consts.f32_probe)
         )
     }
