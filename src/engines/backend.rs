@@ -1,6 +1,10 @@
 //! Choosing and building an engine: backend and precision.
 
+use crate::engines::backend_choice::{self, BackendChoice};
 use crate::engines::cpu::{CpuEngine, SweepEngine};
+use crate::engines::gpu::context::GpuContext;
+use crate::engines::gpu::kernel_choice::ChoiceCache;
+use crate::engines::gpu::precision::GpuReal;
 use crate::engines::gpu::{GpuEngine, GpuOptions};
 use crate::engines::{Engine, EngineError};
 use crate::model::Model;
@@ -15,10 +19,11 @@ pub enum Backend {
     CpuReference,
     /// The wgpu engine (a hardware adapter, else lavapipe).
     Gpu,
-    /// A hardware GPU, else the CPU (all cores). A software adapter
-    /// (lavapipe) is never chosen: on this model it runs several times
-    /// slower than one CPU thread (BENCHMARKS.md); ask for it with
-    /// `--backend gpu`.
+    /// On a hardware GPU, the faster of the GPU and the CPU engine, both
+    /// timed on the scene (once: the figures are cached per adapter,
+    /// lattice and CPU); else the CPU. A software adapter (lavapipe) is
+    /// never chosen: on this model it runs several times slower than one
+    /// CPU thread (BENCHMARKS.md); ask for it with `--backend gpu`.
     Auto,
 }
 
@@ -207,11 +212,11 @@ pub fn make_engine_with(
                 );
                 cpu_engine(model, precision, threads)
             }
-            Ok(_) if precision == Precision::F32 => {
-                Ok(Box::new(GpuEngine::with_options(model, gpu)?))
+            Ok(ctx) if precision == Precision::F32 => {
+                auto_on_hardware::<f32>(model, ctx, gpu, precision, threads)
             }
             Ok(ctx) if precision == Precision::F64 && ctx.check_precision::<f64>().is_ok() => {
-                Ok(Box::new(GpuEngine::<f64>::with_precision(model, gpu)?))
+                auto_on_hardware::<f64>(model, ctx, gpu, precision, threads)
             }
             Ok(ctx) => {
                 if precision == Precision::F64 {
@@ -229,6 +234,46 @@ pub fn make_engine_with(
             }
         },
     }
+}
+
+/// `auto` on a hardware adapter: the GPU engine, or the CPU engine where
+/// it steps this scene faster (`backend_choice`: both timed, or the
+/// figures cached in `cache`), and the figures behind the choice.
+pub fn faster_of_gpu_and_cpu<T: GpuReal>(
+    model: &Model,
+    ctx: GpuContext,
+    gpu: GpuOptions,
+    precision: Precision,
+    threads: usize,
+    cache: &ChoiceCache,
+) -> Result<(Box<dyn Engine>, BackendChoice), EngineError>
+where
+    GpuEngine<T>: Engine,
+{
+    let engine = GpuEngine::<T>::with_precision_and_context(model, ctx.clone(), gpu)?;
+    let choice = backend_choice::resolve(model, &ctx, gpu, &engine, threads, cache)?;
+    if choice.cpu_is_faster() {
+        drop(engine);
+        return Ok((cpu_engine(model, precision, threads)?, choice));
+    }
+    Ok((Box::new(engine), choice))
+}
+
+/// `faster_of_gpu_and_cpu` with the machine's cache, saying which and why.
+fn auto_on_hardware<T: GpuReal>(
+    model: &Model,
+    ctx: GpuContext,
+    gpu: GpuOptions,
+    precision: Precision,
+    threads: usize,
+) -> Result<Box<dyn Engine>, EngineError>
+where
+    GpuEngine<T>: Engine,
+{
+    let cache = ChoiceCache::default_location();
+    let (engine, choice) = faster_of_gpu_and_cpu::<T>(model, ctx, gpu, precision, threads, &cache)?;
+    eprintln!("slipfront: --backend auto: {}", choice.describe());
+    Ok(engine)
 }
 
 /// What `auto` means for a sweep or an ensemble: the GPU when a hardware

@@ -8,6 +8,7 @@
 //! and the fast CPU engine mirror the CPU reference twin by twin.
 
 pub mod backend;
+pub mod backend_choice;
 pub mod cpu;
 mod friction_state;
 pub mod gpu;
@@ -17,6 +18,7 @@ pub mod precision_probe;
 pub mod quasistatic;
 pub mod single_block;
 pub mod step_params;
+pub mod step_timing;
 pub mod trigger;
 
 mod sample;

@@ -48,24 +48,57 @@ impl ChoiceCache {
     }
 
     pub fn file(&self) -> Option<PathBuf> {
-        self.dir.as_ref().map(|d| d.join(CACHE_FILE))
+        self.file_named(CACHE_FILE)
     }
 
-    fn lines(&self) -> Vec<String> {
-        self.file()
+    fn file_named(&self, name: &str) -> Option<PathBuf> {
+        self.dir.as_ref().map(|d| d.join(name))
+    }
+
+    fn lines_of(&self, name: &str) -> Vec<String> {
+        self.file_named(name)
             .and_then(|f| std::fs::read_to_string(f).ok())
             .map(|text| text.lines().map(str::to_string).collect())
             .unwrap_or_default()
     }
 
+    /// The fields after `key` on its line of the cache file `name` (a file
+    /// of this directory: `key <TAB> fields`), if one is stored.
+    pub fn lookup_line(&self, name: &str, key: &str) -> Option<String> {
+        self.lines_of(name).into_iter().find_map(|line| {
+            let (k, fields) = line.split_once('\t')?;
+            (k == key).then(|| fields.to_string())
+        })
+    }
+
+    /// Stores `fields` under `key` in the cache file `name`, replacing an
+    /// older line. The file is written whole and renamed into place, so a
+    /// reader never sees half of it. Failing to write only loses the
+    /// cache: returns why.
+    pub fn store_line(&self, name: &str, key: &str, fields: &str) -> Result<(), String> {
+        let (Some(dir), Some(file)) = (&self.dir, self.file_named(name)) else {
+            return Err("no cache directory (set SLIPFRONT_CACHE_DIR)".into());
+        };
+        let mut lines: Vec<String> = self
+            .lines_of(name)
+            .into_iter()
+            .filter(|l| l.split('\t').next() != Some(key))
+            .collect();
+        lines.push(format!("{key}\t{fields}"));
+        let write = || -> std::io::Result<()> {
+            std::fs::create_dir_all(dir)?;
+            let tmp = dir.join(format!("{name}.{}.tmp", std::process::id()));
+            std::fs::write(&tmp, lines.join("\n") + "\n")?;
+            std::fs::rename(&tmp, &file)
+        };
+        write().map_err(|e| format!("cannot write {}: {e}", file.display()))
+    }
+
     /// The choice stored under `key`; a line that does not parse is
     /// ignored (measured again).
     pub fn lookup(&self, key: &str) -> Option<KernelChoice> {
-        self.lines().iter().find_map(|line| {
+        self.lookup_line(CACHE_FILE, key).and_then(|line| {
             let mut fields = line.split('\t');
-            if fields.next()? != key {
-                return None;
-            }
             let launch = Launch::named(fields.next()?)?;
             let timings = fields
                 .next()?
@@ -98,33 +131,19 @@ impl ChoiceCache {
     /// written whole and renamed into place, so a reader never sees half
     /// of it. Failing to write only loses the cache: returns why.
     pub fn store(&self, key: &str, choice: &KernelChoice) -> Result<(), String> {
-        let (Some(dir), Some(file)) = (&self.dir, self.file()) else {
-            return Err("no cache directory (set SLIPFRONT_CACHE_DIR)".into());
-        };
-        let mut lines: Vec<String> = self
-            .lines()
-            .into_iter()
-            .filter(|l| l.split('\t').next() != Some(key))
-            .collect();
         let figures: Vec<String> = choice
             .timings
             .iter()
             .map(|(l, s)| format!("{}={s:e}", l.name()))
             .collect();
-        lines.push(format!(
-            "{key}\t{}\t{}\t{}\t{}",
+        let fields = format!(
+            "{}\t{}\t{}\t{}",
             choice.launch.name(),
             figures.join(","),
             choice.phase.describe().replace(['\t', '\n'], " "),
             recorded_name(choice.recorded)
-        ));
-        let write = || -> std::io::Result<()> {
-            std::fs::create_dir_all(dir)?;
-            let tmp = dir.join(format!("{CACHE_FILE}.{}.tmp", std::process::id()));
-            std::fs::write(&tmp, lines.join("\n") + "\n")?;
-            std::fs::rename(&tmp, &file)
-        };
-        write().map_err(|e| format!("cannot write {}: {e}", file.display()))
+        );
+        self.store_line(CACHE_FILE, key, &fields)
     }
 }
 

@@ -2,7 +2,7 @@
 //! scene is timed on the scene itself, and the fastest steps the run. A
 //! launch's figure is what a step costs in a run: the time a long span of
 //! steps takes beyond a short one, over the extra steps, which leaves out
-//! what each timed advance pays once (`timing::marginal_step_seconds`).
+//! what each timed advance pays once (`step_timing::marginal_step_seconds`).
 //! A run with an output file is timed recording its samples on the
 //! device at its cadences (`GpuOptions::samples`): output weighs on the
 //! launches unequally (a one-step launch adds record dispatches, a
