@@ -18,6 +18,11 @@
 //!    which of the two sets the pace).
 //!    Met when the chosen launch is within `PICK_TOLERANCE` of the fastest.
 //! 2. Table S1 in at most 3 µs a step: the fastest of those figures.
+//!    2b. `--backend auto` runs the faster of the GPU and the CPU engine:
+//!    its timing (`backend_choice::measure`: `auto`'s launch against the
+//!    CPU on all cores), then the CPU timed again over at least `SECONDS`
+//!    of driving. Met when the engine it runs is within `PICK_TOLERANCE`
+//!    of the faster, timed again.
 //! 3. 256 scenes (a seed each) in one dispatch at 2e10 block-steps/s or
 //!    more in aggregate: the launch a sweep takes (timed on that ensemble,
 //!    as `sweep --backend gpu` does), then the ensemble stepped. Beside it,
@@ -53,6 +58,8 @@
 //! adapter) runs 16 and 4 scenes and the output at 57×31, over shorter
 //! spans: not the targets' sizes, and the table says so.
 
+use slipfront::engines::backend_choice;
+use slipfront::engines::cpu::SweepEngine;
 use slipfront::engines::gpu::context::{self, GpuContext};
 use slipfront::engines::gpu::kernel_choice::{measure, KernelChoice, Launch};
 use slipfront::engines::gpu::{GpuOptions, GpuReal};
@@ -323,6 +330,72 @@ fn pick_target(
     }
 }
 
+/// 2b: `--backend auto` on Table S1 (the GPU's launch `choice` against the
+/// CPU engine on all cores, `backend_choice::measure`), against the GPU's
+/// fastest launch timed again (`fastest`) and the CPU engine timed again
+/// over at least `min_seconds` of driving: met when the engine it runs is
+/// within `PICK_TOLERANCE` of the faster of the two.
+fn backend_target<T: GpuReal>(
+    ctx: &GpuContext,
+    s1: &Model,
+    choice: &KernelChoice,
+    fastest: Option<(Launch, f64)>,
+    min_seconds: f64,
+) -> Target {
+    let what = format!(
+        "`--backend auto` runs the faster of the GPU and the CPU (within {:.0} %)",
+        PICK_TOLERANCE * 100.0
+    );
+    let Some((best, gpu_again)) = fastest else {
+        return Target::not_measured(what, NOT_AGAIN.into());
+    };
+    let picked =
+        match backend_choice::measure::<T>(s1, ctx, GpuOptions::default(), choice.launch, 0) {
+            Ok(c) => c,
+            Err(e) => return Target::not_measured(what, e.to_string()),
+        };
+    println!("`--backend auto` on Table S1: {}\n", picked.describe());
+    let (cpu_again, threads) = match cpu_timed_again::<T>(s1, min_seconds) {
+        Ok(t) => t,
+        Err(e) => return Target::not_measured(what, e.to_string()),
+    };
+    let (chosen, chosen_again) = if picked.cpu_is_faster() {
+        (format!("the CPU ({threads} thread(s))"), cpu_again)
+    } else {
+        (format!("the GPU ({})", picked.gpu_launch), gpu_again)
+    };
+    Target::new(
+        what,
+        format!(
+            "chose {chosen}: GPU {} {:.2} µs/step, CPU {threads} thread(s) {:.2} µs/step \
+             timed again",
+            best.name(),
+            gpu_again * 1e6,
+            cpu_again * 1e6
+        ),
+        chosen_again <= gpu_again.min(cpu_again) * (1.0 + PICK_TOLERANCE),
+    )
+}
+
+/// The CPU engine on all cores (`--threads 0`) on `s1`: its seconds a step
+/// over at least `min_seconds` of driving after its trial of thread
+/// counts, and the threads it kept.
+fn cpu_timed_again<T: GpuReal>(s1: &Model, min_seconds: f64) -> Result<(f64, usize), String> {
+    use slipfront::Engine;
+    let mut cpu = SweepEngine::<T>::new(s1, 0).map_err(|e| e.to_string())?;
+    let err = |e: slipfront::engines::EngineError| e.to_string();
+    cpu.advance(s1.prep_steps).map_err(err)?;
+    while cpu.timing_threads() {
+        cpu.advance(64).map_err(err)?;
+    }
+    let (t, mut steps) = (Instant::now(), 0u64);
+    while t.elapsed().as_secs_f64() < min_seconds {
+        cpu.advance(256).map_err(err)?;
+        steps += 256;
+    }
+    Ok((t.elapsed().as_secs_f64() / steps as f64, cpu.threads()))
+}
+
 /// Every target in precision `T`, in the summary's order.
 fn targets_in<T: GpuReal>(ctx: &GpuContext, quick: bool, min_seconds: f64) -> Vec<Target> {
     let s1 = table_s1(1);
@@ -356,6 +429,7 @@ fn targets_in<T: GpuReal>(ctx: &GpuContext, quick: bool, min_seconds: f64) -> Ve
                 }
                 None => Target::not_measured(speed, NOT_AGAIN.into()),
             });
+            targets.push(backend_target::<T>(ctx, &s1, &choice, fastest, min_seconds));
         }
         Some(Err(e)) => {
             targets.push(Target::not_measured(pick, e.clone()));

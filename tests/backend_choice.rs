@@ -12,7 +12,7 @@ use slipfront::engines::cpu::SweepEngine;
 use slipfront::engines::gpu::context::{self, GpuContext};
 use slipfront::engines::gpu::kernel_choice::{ChoiceCache, ChoiceSource, TimedPhase};
 use slipfront::engines::gpu::GpuOptions;
-use slipfront::Model;
+use slipfront::{Engine, Model};
 
 #[path = "support/scratch.rs"]
 mod scratch;
@@ -39,8 +39,21 @@ fn auto_times_the_gpu_against_the_cpu_from_the_same_state_and_runs_the_faster() 
     let dir = Scratch::new("backend", "choice");
     let cache = ChoiceCache::at(&dir);
     let auto = |cache: &ChoiceCache| {
-        faster_of_gpu_and_cpu::<f32>(&m, ctx(), GpuOptions::default(), Precision::F32, 1, cache)
-            .unwrap()
+        let (engine, choice) = faster_of_gpu_and_cpu::<f32>(
+            &m,
+            ctx(),
+            GpuOptions::default(),
+            Precision::F32,
+            1,
+            cache,
+        )
+        .unwrap();
+        let timed = choice
+            .timed()
+            .expect("a small scene's CPU engine fits")
+            .clone();
+        assert_eq!(choice.describe(), timed.describe());
+        (engine, timed)
     };
     let (engine, measured) = auto(&cache);
     println!("{}", measured.describe());
@@ -105,7 +118,7 @@ fn auto_times_the_gpu_against_the_cpu_from_the_same_state_and_runs_the_faster() 
 fn the_cpu_is_timed_on_the_thread_count_its_trial_keeps() {
     let m = small();
     let mut engine = SweepEngine::<f64>::new(&m, 0).unwrap();
-    let seconds = cpu_step_seconds(&mut engine, None).unwrap();
+    let seconds = cpu_step_seconds(&mut engine, None, 0.0).unwrap();
     assert!(seconds > 0.0 && seconds < 0.01, "{seconds}");
     assert!(
         !engine.timing_threads(),
@@ -118,4 +131,24 @@ fn the_cpu_is_timed_on_the_thread_count_its_trial_keeps() {
             .expect("a trial on a machine with cores");
         assert!(timed.describe().contains("µs"), "{}", timed.describe());
     }
+}
+
+/// A large lattice whose first CPU step is slower than `SLOW_STEP_SECONDS`
+/// (5 ms) and than the GPU's figure is timed over that step alone: `auto`
+/// does not spend seconds timing a CPU that has lost. Control: against a
+/// slower GPU the same CPU is timed in full.
+#[test]
+fn a_cpu_slower_than_the_gpu_on_its_first_large_step_is_not_timed_further() {
+    // Square blocks: the small scene's length over 2047 spacings.
+    let height = format!("geometry.height={}", 0.07 * 255.0 / 2047.0);
+    let s = slipfront::app::verify::small_scene(&["geometry.nx=2048", "geometry.nz=256", &height])
+        .unwrap();
+    let m = Model::from_scenario(&s, false).unwrap();
+    let mut lost = SweepEngine::<f64>::new(&m, 1).unwrap();
+    let first = cpu_step_seconds(&mut lost, None, 1e-6).unwrap();
+    assert!(first > 5e-3, "{first}");
+    assert_eq!(lost.steps_done(), 1);
+    let mut timed = SweepEngine::<f64>::new(&m, 1).unwrap();
+    cpu_step_seconds(&mut timed, None, 10.0).unwrap();
+    assert!(timed.steps_done() > 32, "{}", timed.steps_done());
 }

@@ -1,6 +1,6 @@
 //! Choosing and building an engine: backend and precision.
 
-use crate::engines::backend_choice::{self, BackendChoice};
+use crate::engines::backend_choice::{self, AutoChoice};
 use crate::engines::cpu::{CpuEngine, SweepEngine};
 use crate::engines::gpu::context::GpuContext;
 use crate::engines::gpu::kernel_choice::ChoiceCache;
@@ -238,7 +238,8 @@ pub fn make_engine_with(
 
 /// `auto` on a hardware adapter: the GPU engine, or the CPU engine where
 /// it steps this scene faster (`backend_choice`: both timed, or the
-/// figures cached in `cache`), and the figures behind the choice.
+/// figures cached in `cache`; a CPU engine that would not fit in half the
+/// memory available is not built), and what decided it.
 pub fn faster_of_gpu_and_cpu<T: GpuReal>(
     model: &Model,
     ctx: GpuContext,
@@ -246,17 +247,26 @@ pub fn faster_of_gpu_and_cpu<T: GpuReal>(
     precision: Precision,
     threads: usize,
     cache: &ChoiceCache,
-) -> Result<(Box<dyn Engine>, BackendChoice), EngineError>
+) -> Result<(Box<dyn Engine>, AutoChoice), EngineError>
 where
     GpuEngine<T>: Engine,
 {
     let engine = GpuEngine::<T>::with_precision_and_context(model, ctx.clone(), gpu)?;
+    let needed = precision.memory_bytes(model);
+    if let Err(not_timed) =
+        backend_choice::cpu_fits(needed, crate::engines::memory::available_bytes())
+    {
+        return Ok((Box::new(engine), not_timed));
+    }
     let choice = backend_choice::resolve(model, &ctx, gpu, &engine, threads, cache)?;
     if choice.cpu_is_faster() {
         drop(engine);
-        return Ok((cpu_engine(model, precision, threads)?, choice));
+        return Ok((
+            cpu_engine(model, precision, threads)?,
+            AutoChoice::Timed(choice),
+        ));
     }
-    Ok((Box::new(engine), choice))
+    Ok((Box::new(engine), AutoChoice::Timed(choice)))
 }
 
 /// `faster_of_gpu_and_cpu` with the machine's cache, saying which and why.
