@@ -385,7 +385,8 @@ fn cpu_timed_again<T: GpuReal>(s1: &Model, min_seconds: f64) -> Result<(f64, usi
     let mut cpu = SweepEngine::<T>::new(s1, 0).map_err(|e| e.to_string())?;
     let err = |e: slipfront::engines::EngineError| e.to_string();
     cpu.advance(s1.prep_steps).map_err(err)?;
-    while cpu.timing_threads() {
+    let trial = Instant::now();
+    while cpu.timing_threads() && trial.elapsed().as_secs_f64() < 10.0 {
         cpu.advance(64).map_err(err)?;
     }
     let (t, mut steps) = (Instant::now(), 0u64);
