@@ -239,7 +239,8 @@ pub fn make_engine_with(
 /// `auto` on a hardware adapter: the GPU engine, or the CPU engine where
 /// it steps this scene faster (`backend_choice`: both timed, or the
 /// figures cached in `cache`; a CPU engine that would not fit in half the
-/// memory available is not built), and what decided it.
+/// memory available is not built, and a timing that fails leaves the GPU),
+/// and what decided it.
 pub fn faster_of_gpu_and_cpu<T: GpuReal>(
     model: &Model,
     ctx: GpuContext,
@@ -258,7 +259,10 @@ where
     {
         return Ok((Box::new(engine), not_timed));
     }
-    let choice = backend_choice::resolve(model, &ctx, gpu, &engine, threads, cache)?;
+    let choice = match backend_choice::resolve(model, &ctx, gpu, &engine, threads, cache) {
+        Ok(choice) => choice,
+        Err(e) => return Ok((Box::new(engine), AutoChoice::NotCompared(e.to_string()))),
+    };
     if choice.cpu_is_faster() {
         drop(engine);
         return Ok((

@@ -54,6 +54,9 @@ pub enum AutoChoice {
     /// The CPU engine was not built: its state would need more than half
     /// the memory available (`needed` and `available` bytes).
     CpuWouldNotFit { needed: u64, available: u64 },
+    /// The timing failed (why): the GPU runs, as before there was a
+    /// comparison, and the run itself reports what fails.
+    NotCompared(String),
 }
 
 impl AutoChoice {
@@ -64,7 +67,7 @@ impl AutoChoice {
     pub fn timed(&self) -> Option<&BackendChoice> {
         match self {
             AutoChoice::Timed(c) => Some(c),
-            AutoChoice::CpuWouldNotFit { .. } => None,
+            AutoChoice::CpuWouldNotFit { .. } | AutoChoice::NotCompared(_) => None,
         }
     }
 
@@ -78,6 +81,9 @@ impl AutoChoice {
                 human(*needed),
                 human(*available)
             ),
+            AutoChoice::NotCompared(why) => {
+                format!("the GPU and the CPU could not be timed ({why}): the GPU steps the run")
+            }
         }
     }
 }
@@ -366,6 +372,18 @@ mod tests {
             too_large.describe(),
             "the CPU engine would need 4.0 GiB of the 8.0 GiB available, so it is not timed: \
              the GPU steps the run"
+        );
+    }
+
+    /// A comparison that failed leaves the GPU, and says why.
+    #[test]
+    fn a_failed_comparison_leaves_the_gpu() {
+        let failed = AutoChoice::NotCompared("GPU: device lost".into());
+        assert!(!failed.cpu_is_faster());
+        assert!(failed.timed().is_none());
+        assert_eq!(
+            failed.describe(),
+            "the GPU and the CPU could not be timed (GPU: device lost): the GPU steps the run"
         );
     }
 
