@@ -194,7 +194,8 @@ impl BackendChoice {
 }
 
 /// The launch `engine` steps with: `auto`'s measured one, else its
-/// kernel with `opts`' settings.
+/// kernel (with the options it was built with, which `Launch::options`
+/// keeps).
 pub fn launch_of<T: GpuReal>(engine: &GpuEngine<T>) -> Launch {
     engine
         .kernel_choice()
